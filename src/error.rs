@@ -1,0 +1,77 @@
+//! umbra's error type. Every message names what failed and, for input, the file.
+
+use ash::vk;
+
+/// Result with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything the library can fail with.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// No Vulkan loader, no driver, or no usable device.
+    #[error("{0}")]
+    NoDevice(String),
+    /// The device lacks a feature or extension umbra needs.
+    #[error("device '{device}' cannot run umbra: {missing}")]
+    Unsupported {
+        /// Device name.
+        device: String,
+        /// What is missing.
+        missing: String,
+    },
+    /// A Vulkan call failed.
+    #[error("Vulkan call {call} failed: {result}{}", pass_hint(.pass))]
+    Vulkan {
+        /// The entry point that failed.
+        call: &'static str,
+        /// Its result code.
+        result: vk::Result,
+        /// The last pass reached, if known.
+        pass: Option<String>,
+    },
+    /// Device memory could not be allocated.
+    #[error("GPU memory allocation for '{name}' failed: {source}")]
+    Allocation {
+        /// The resource being allocated.
+        name: String,
+        /// The allocator's reason.
+        source: gpu_allocator::AllocationError,
+    },
+    /// A kernel was not found among the embedded ones.
+    #[error("no kernel named '{0}' was compiled into this binary")]
+    MissingKernel(String),
+    /// A request outside what umbra or the device allows.
+    #[error("{0}")]
+    Invalid(String),
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// An image file could not be written or read.
+    #[error("{path}: {message}")]
+    Image {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+fn pass_hint(pass: &Option<String>) -> String {
+    pass.as_ref().map(|p| format!(" (last pass reached: {p})")).unwrap_or_default()
+}
+
+/// Turns an `ash` result into [`Error::Vulkan`] naming the call.
+pub(crate) trait VkContext<T> {
+    fn call(self, call: &'static str) -> Result<T>;
+}
+
+impl<T> VkContext<T> for std::result::Result<T, vk::Result> {
+    fn call(self, call: &'static str) -> Result<T> {
+        self.map_err(|result| Error::Vulkan { call, result, pass: None })
+    }
+}

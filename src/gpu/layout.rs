@@ -1,0 +1,71 @@
+//! Rust twins of the structs in `spirv/include/layout.glsl`. `tests/layout.rs` compares every
+//! member offset, size and array stride with the compiled SPIR-V, so neither side can drift.
+
+use bytemuck::{Pod, Zeroable};
+use std::mem::{offset_of, size_of};
+
+/// Push constants of `test_pattern.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PatternParams {
+    /// Image width and height.
+    pub size: [u32; 2],
+    /// Added to the hashed index.
+    pub seed: u32,
+    /// Added to the product channel.
+    pub frame: u32,
+}
+const _: () = assert!(size_of::<PatternParams>() == 16);
+
+/// Push constants of `test_buffer.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BufferTestParams {
+    /// Number of elements.
+    pub count: u32,
+    /// Added to each tripled element.
+    pub add: u32,
+}
+const _: () = assert!(size_of::<BufferTestParams>() == 8);
+
+/// One member of a GPU struct as the host lays it out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MemberLayout {
+    /// Field name, identical to the GLSL member name.
+    pub name: &'static str,
+    /// Byte offset.
+    pub offset: usize,
+    /// Byte size.
+    pub size: usize,
+}
+
+/// A GPU struct as the host lays it out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StructLayout {
+    /// Type name, identical to the GLSL struct name.
+    pub name: &'static str,
+    /// `size_of`, which is also the stride of an array of it.
+    pub size: usize,
+    /// Members in declaration order.
+    pub members: Vec<MemberLayout>,
+}
+
+macro_rules! layout_of {
+    ($t:ident { $($field:ident),* $(,)? }) => {{
+        let zero = <$t as Zeroable>::zeroed();
+        StructLayout {
+            name: stringify!($t),
+            size: size_of::<$t>(),
+            members: vec![$(MemberLayout {
+                name: stringify!($field),
+                offset: offset_of!($t, $field),
+                size: std::mem::size_of_val(&zero.$field),
+            }),*],
+        }
+    }};
+}
+
+/// Every host/GPU struct pair.
+pub fn gpu_layouts() -> Vec<StructLayout> {
+    vec![layout_of!(PatternParams { size, seed, frame }), layout_of!(BufferTestParams { count, add })]
+}

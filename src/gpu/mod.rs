@@ -1,0 +1,3 @@
+//! Host-side twins of GPU data.
+
+pub mod layout;

@@ -1,0 +1,13 @@
+//! umbra: physically based rendering with raw Vulkan compute kernels.
+//!
+//! The library builds on [`vk::Context`], either umbra's own headless device or a host engine's
+//! ([`vk::Context::from_host`]). Passes record into a caller's command buffer and never submit.
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod gpu;
+pub mod kernels;
+pub mod output;
+pub mod vk;
+
+pub use error::{Error, Result};

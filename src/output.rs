@@ -1,0 +1,104 @@
+//! Writing frames: linear HDR EXR with named layers (AOVs) and display-referred sRGB PNG.
+
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// One layer of an EXR: interleaved `f32` samples, `channels.len()` per pixel.
+#[derive(Debug, Clone, Copy)]
+pub struct Layer<'a> {
+    /// Layer name; `""` is the main colour layer (`R`, `G`, `B`, `A` channels, as every EXR
+    /// reader expects), others are written as `name.channel` (e.g. `albedo.R`).
+    pub name: &'a str,
+    /// Channel names, e.g. `["R", "G", "B"]` or `["Z"]`.
+    pub channels: &'a [&'a str],
+    /// `width * height * channels.len()` samples, row-major, top row first.
+    pub data: &'a [f32],
+}
+
+/// Writes a single-part EXR with every layer's channels (zip-compressed, f32).
+pub fn write_exr(path: &Path, width: usize, height: usize, layers: &[Layer<'_>]) -> Result<()> {
+    use exr::prelude::*;
+    let image_error = |message: String| crate::Error::Image { path: path.to_path_buf(), message };
+    let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for layer in layers {
+        let n = layer.channels.len();
+        if n == 0 || layer.data.len() != width * height * n {
+            return Err(image_error(format!(
+                "layer '{}' has {} samples, expected {}x{}x{}",
+                layer.name,
+                layer.data.len(),
+                width,
+                height,
+                n
+            )));
+        }
+        for (c, channel) in layer.channels.iter().enumerate() {
+            let name =
+                if layer.name.is_empty() { channel.to_string() } else { format!("{}.{channel}", layer.name) };
+            let samples: Vec<f32> = layer.data.iter().skip(c).step_by(n).copied().collect();
+            channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(samples)));
+        }
+    }
+    let layer = exr::image::Layer::new(
+        (width, height),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels),
+    );
+    Image::from_layer(layer).write().to_file(path).map_err(|e| image_error(e.to_string()))
+}
+
+/// One EXR channel: its full name (e.g. `albedo.R`) and its samples, row-major.
+pub type Channel = (String, Vec<f32>);
+
+/// Reads every channel of a single-part EXR as `(width, height, channels)`, for tests and tools.
+pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<Channel>)> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| crate::Error::Image { path: path.to_path_buf(), message: e.to_string() })?;
+    let size = image.layer_data.size;
+    let channels = image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect();
+    Ok((size.0, size.1, channels))
+}
+
+/// The sRGB transfer function of a linear value in [0, 1].
+pub fn srgb_encode(linear: f32) -> f32 {
+    if linear <= 0.003_130_8 {
+        12.92 * linear
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Linear RGBA (4 floats per pixel) scaled by `exposure`, clamped to [0, 1], sRGB-encoded to
+/// 8 bits. NaN becomes 0. Alpha is written linear.
+pub fn to_srgb8(rgba: &[f32], exposure: f32) -> Vec<u8> {
+    rgba.chunks_exact(4)
+        .flat_map(|p| {
+            let q = |v: f32, encode: bool| {
+                let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+                let v = if encode { srgb_encode(v) } else { v };
+                (v * 255.0 + 0.5) as u8
+            };
+            [q(p[0] * exposure, true), q(p[1] * exposure, true), q(p[2] * exposure, true), q(p[3], false)]
+        })
+        .collect()
+}
+
+/// Writes 8-bit sRGB RGBA as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, srgb8: &[u8]) -> Result<()> {
+    image::save_buffer(path, srgb8, width, height, image::ExtendedColorType::Rgba8)
+        .map_err(|e| Error::Image { path: path.to_path_buf(), message: e.to_string() })
+}

@@ -1,0 +1,152 @@
+//! Buffers through gpu-allocator, with an explicit staging path for upload and readback.
+
+use super::{barrier, context::Shared, Context};
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// A Vulkan buffer and its memory. Freed on drop.
+pub struct Buffer {
+    shared: Arc<Shared>,
+    /// The raw handle.
+    pub raw: vk::Buffer,
+    /// Size in bytes.
+    pub size: u64,
+    allocation: Option<Allocation>,
+    name: String,
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes (at least 4) in `location`.
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Self> {
+        let shared = &ctx.shared;
+        let limit = shared.info.max_storage_buffer_range;
+        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && size > limit {
+            return Err(Error::Invalid(format!(
+                "buffer '{name}' needs {size} bytes but device '{}' binds at most {limit} bytes \
+                 per storage buffer",
+                shared.info.name
+            )));
+        }
+        let size = size.max(4);
+        let info =
+            vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid device; the buffer is destroyed on error or in Drop.
+        let raw = unsafe { shared.device.create_buffer(&info, None) }.call("vkCreateBuffer")?;
+        let requirements = unsafe { shared.device.get_buffer_memory_requirements(raw) };
+        let allocation = shared
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| {
+                unsafe { shared.device.destroy_buffer(raw, None) };
+                Error::Allocation { name: name.into(), source }
+            })?;
+        // SAFETY: memory from the allocator for this buffer's requirements.
+        let bound =
+            unsafe { shared.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        let buffer =
+            Self { shared: shared.clone(), raw, size, allocation: Some(allocation), name: name.into() };
+        bound.call("vkBindBufferMemory")?;
+        Ok(buffer)
+    }
+
+    /// A device-local buffer filled with `data` through a staging buffer and a GPU copy (the path
+    /// a discrete GPU needs; lavapipe would also accept a direct write).
+    pub fn upload<T: bytemuck::Pod>(
+        ctx: &Context,
+        name: &str,
+        data: &[T],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Self> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let size = bytes.len() as u64;
+        let buffer =
+            Self::new(ctx, name, size, usage | vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuOnly)?;
+        if size == 0 {
+            return Ok(buffer);
+        }
+        let mut staging = Self::new(
+            ctx,
+            &format!("{name} (staging)"),
+            size,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+        ctx.submit(|cmd| {
+            let region = [vk::BufferCopy::default().size(size)];
+            // SAFETY: both buffers are at least `size` bytes.
+            unsafe { ctx.device().cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
+            barrier::transfer_to_compute(ctx, cmd);
+            Ok(())
+        })?;
+        Ok(buffer)
+    }
+
+    /// Copies the buffer back to the host through a staging buffer. Waits for the GPU.
+    pub fn read<T: bytemuck::Pod>(&self, ctx: &Context) -> Result<Vec<T>> {
+        let mut readback = Self::new(
+            ctx,
+            &format!("{} (readback)", self.name),
+            self.size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        ctx.submit(|cmd| {
+            barrier::compute_to_transfer(ctx, cmd);
+            let region = [vk::BufferCopy::default().size(self.size)];
+            // SAFETY: both buffers are `self.size` bytes.
+            unsafe { ctx.device().cmd_copy_buffer(cmd, self.raw, readback.raw, &region) };
+            barrier::transfer_to_host(ctx, cmd);
+            Ok(())
+        })?;
+        readback.read_mapped()
+    }
+
+    /// The mapped bytes of a host-visible buffer.
+    pub fn mapped_mut(&mut self) -> Result<&mut [u8]> {
+        let name = self.name.clone();
+        self.allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .ok_or_else(|| Error::Invalid(format!("buffer '{name}' is not host-visible")))
+    }
+
+    /// Reads a host-visible buffer's contents as `T`s.
+    pub fn read_mapped<T: bytemuck::Pod>(&mut self) -> Result<Vec<T>> {
+        let size = self.size as usize;
+        let bytes = &self.mapped_mut()?[..size];
+        let count = size / std::mem::size_of::<T>();
+        Ok(bytemuck::pod_collect_to_vec(&bytes[..count * std::mem::size_of::<T>()]))
+    }
+
+    /// The descriptor info for binding the whole buffer.
+    pub fn descriptor(&self) -> vk::DescriptorBufferInfo {
+        vk::DescriptorBufferInfo::default().buffer(self.raw).range(vk::WHOLE_SIZE)
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: umbra waits for its submissions; a host recording umbra's work keeps the
+        // buffer alive until its own submission has finished.
+        unsafe { self.shared.device.destroy_buffer(self.raw, None) };
+        if let Some(allocation) = self.allocation.take() {
+            let _ = self.shared.allocator().free(allocation);
+        }
+    }
+}

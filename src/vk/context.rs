@@ -1,0 +1,473 @@
+//! The Vulkan context: umbra's own headless instance and device, or a host engine's handles.
+
+use super::debug::{messenger_info, ValidationLog};
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use gpu_allocator::{AllocationSizes, AllocatorDebugSettings};
+use std::ffi::CStr;
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to create umbra's own context.
+#[derive(Debug, Clone, Default)]
+pub struct ContextDesc {
+    /// Enable `VK_LAYER_KHRONOS_validation` with a messenger that collects every warning and error.
+    /// `None` reads `UMBRA_VALIDATION=1` from the environment.
+    pub validation: Option<bool>,
+    /// Pick the first device whose name contains this (case-insensitive).
+    /// `None` reads `UMBRA_DEVICE` from the environment.
+    pub device: Option<String>,
+}
+
+/// A host engine's Vulkan objects, for building umbra on an existing device.
+/// umbra never destroys any of them. The device must have been created with Vulkan 1.3,
+/// `synchronization2` and `VK_KHR_push_descriptor` enabled.
+pub struct HostDevice {
+    /// The host's loader entry.
+    pub entry: ash::Entry,
+    /// The host's instance.
+    pub instance: ash::Instance,
+    /// The physical device behind `device`.
+    pub physical_device: vk::PhysicalDevice,
+    /// The host's logical device.
+    pub device: ash::Device,
+    /// A queue of `queue_family_index` that supports compute.
+    pub queue: vk::Queue,
+    /// The family of `queue`.
+    pub queue_family_index: u32,
+    /// The host's allocator; `None` makes umbra create one on the host's device.
+    pub allocator: Option<Arc<Mutex<Allocator>>>,
+}
+
+/// What umbra knows about the chosen device.
+#[derive(Debug, Clone)]
+pub struct DeviceInfo {
+    /// Device name as the driver reports it.
+    pub name: String,
+    /// Discrete, integrated, CPU, ...
+    pub device_type: vk::PhysicalDeviceType,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    /// Valid bits of a timestamp on umbra's queue (0: no timestamps).
+    pub timestamp_valid_bits: u32,
+    /// Largest storage-buffer binding, in bytes.
+    pub max_storage_buffer_range: u64,
+    /// Largest 2D image side.
+    pub max_image_dimension_2d: u32,
+    /// Largest workgroup count per dimension.
+    pub max_compute_work_group_count: [u32; 3],
+    /// Subgroup size (8 on lavapipe, 32 on NVIDIA): never assume one.
+    pub subgroup_size: u32,
+    /// Vulkan API version of the device.
+    pub api_version: u32,
+}
+
+/// The shared core behind a [`Context`], kept alive by every resource made from it.
+pub(crate) struct Shared {
+    /// Kept alive: dropping the entry unloads libvulkan under the instance.
+    #[allow(dead_code)]
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    #[allow(dead_code)]
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: Mutex<vk::Queue>,
+    pub queue_family: u32,
+    pub allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
+    pub push_descriptor: ash::khr::push_descriptor::Device,
+    pub pipeline_cache: vk::PipelineCache,
+    pub info: DeviceInfo,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    validation: Option<Arc<ValidationLog>>,
+    owned: bool,
+}
+
+impl Shared {
+    pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        // SAFETY: every resource holds an Arc<Shared>, so none is alive any more; wait for the
+        // queue, then destroy in reverse order of creation: cache, allocator, device, instance.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_pipeline_cache(self.pipeline_cache, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            if self.owned {
+                self.device.destroy_device(None);
+                if let Some((utils, messenger)) = self.debug.take() {
+                    utils.destroy_debug_utils_messenger(messenger, None);
+                }
+                self.instance.destroy_instance(None);
+            }
+        }
+    }
+}
+
+/// A Vulkan device ready for umbra's kernels. Cheap to clone.
+#[derive(Clone)]
+pub struct Context {
+    pub(crate) shared: Arc<Shared>,
+}
+
+fn env_flag(name: &str) -> bool {
+    std::env::var(name).is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+const NO_DRIVER: &str = "no Vulkan driver found. Install your GPU's Vulkan driver, or Mesa's \
+software device lavapipe (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers`). \
+If VK_DRIVER_FILES or VK_ICD_FILENAMES is set, check that it names an existing driver manifest \
+(lavapipe: /usr/share/vulkan/icd.d/lvp_icd.x86_64.json)";
+
+impl Context {
+    /// Creates umbra's own headless instance and device.
+    pub fn new(desc: &ContextDesc) -> Result<Self> {
+        let validation = desc.validation.unwrap_or_else(|| env_flag("UMBRA_VALIDATION"));
+        let filter = desc.device.clone().or_else(|| std::env::var("UMBRA_DEVICE").ok());
+        // SAFETY: loading the system's Vulkan loader library.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| {
+            Error::NoDevice(format!(
+                "the Vulkan loader (libvulkan.so.1) could not be loaded ({e}). Install it \
+                 (Debian/Ubuntu: `apt-get install libvulkan1 mesa-vulkan-drivers`)"
+            ))
+        })?;
+
+        let log = validation.then(|| Arc::new(ValidationLog::default()));
+        let instance = create_instance(&entry, log.as_deref())?;
+        let debug = match &log {
+            Some(log) => {
+                let utils = ash::ext::debug_utils::Instance::new(&entry, &instance);
+                // SAFETY: valid instance; `log` outlives the messenger (both owned by Shared).
+                let messenger = unsafe { utils.create_debug_utils_messenger(&messenger_info(log), None) };
+                match messenger {
+                    Ok(m) => Some((utils, m)),
+                    Err(e) => {
+                        unsafe { instance.destroy_instance(None) };
+                        return Err(e).call("vkCreateDebugUtilsMessengerEXT");
+                    }
+                }
+            }
+            None => None,
+        };
+        let destroy_instance =
+            |debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| unsafe {
+                if let Some((utils, m)) = debug {
+                    utils.destroy_debug_utils_messenger(m, None);
+                }
+                instance.destroy_instance(None);
+            };
+
+        let (physical_device, queue_family) = match pick_device(&instance, filter.as_deref()) {
+            Ok(p) => p,
+            Err(e) => {
+                destroy_instance(debug);
+                return Err(e);
+            }
+        };
+        let device = match create_device(&instance, physical_device, queue_family) {
+            Ok(d) => d,
+            Err(e) => {
+                destroy_instance(debug);
+                return Err(e);
+            }
+        };
+        // SAFETY: the family was created with one queue.
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        Self::finish(entry, instance, physical_device, device, queue, queue_family, None, debug, log, true)
+    }
+
+    /// Builds umbra on a host engine's instance and device. Nothing of the host's is destroyed
+    /// when the context is dropped; umbra's own objects (pipelines, its resources) are.
+    pub fn from_host(host: HostDevice) -> Result<Self> {
+        Self::finish(
+            host.entry,
+            host.instance,
+            host.physical_device,
+            host.device,
+            host.queue,
+            host.queue_family_index,
+            host.allocator,
+            None,
+            None,
+            false,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        physical_device: vk::PhysicalDevice,
+        device: ash::Device,
+        queue: vk::Queue,
+        queue_family: u32,
+        allocator: Option<Arc<Mutex<Allocator>>>,
+        debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+        validation: Option<Arc<ValidationLog>>,
+        owned: bool,
+    ) -> Result<Self> {
+        let info = device_info(&instance, physical_device, queue_family);
+        log::info!("umbra: using device '{}' ({:?})", info.name, info.device_type);
+        let cleanup = |device: &ash::Device| unsafe {
+            if owned {
+                device.destroy_device(None);
+                if let Some((utils, m)) = &debug {
+                    utils.destroy_debug_utils_messenger(*m, None);
+                }
+                instance.destroy_instance(None);
+            }
+        };
+        let allocator = match allocator {
+            Some(a) => a,
+            None => {
+                let created = Allocator::new(&AllocatorCreateDesc {
+                    instance: instance.clone(),
+                    device: device.clone(),
+                    physical_device,
+                    debug_settings: AllocatorDebugSettings::default(),
+                    buffer_device_address: false,
+                    allocation_sizes: AllocationSizes::new(32 << 20, 32 << 20),
+                });
+                match created {
+                    Ok(a) => Arc::new(Mutex::new(a)),
+                    Err(source) => {
+                        cleanup(&device);
+                        return Err(Error::Allocation { name: "allocator".into(), source });
+                    }
+                }
+            }
+        };
+        // SAFETY: valid device; an empty cache.
+        let pipeline_cache =
+            match unsafe { device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None) } {
+                Ok(c) => c,
+                Err(e) => {
+                    drop(allocator);
+                    cleanup(&device);
+                    return Err(e).call("vkCreatePipelineCache");
+                }
+            };
+        let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
+        Ok(Self {
+            shared: Arc::new(Shared {
+                entry,
+                instance,
+                physical_device,
+                device,
+                queue: Mutex::new(queue),
+                queue_family,
+                allocator: ManuallyDrop::new(allocator),
+                push_descriptor,
+                pipeline_cache,
+                info,
+                debug,
+                validation,
+                owned,
+            }),
+        })
+    }
+
+    /// The chosen device's properties.
+    pub fn info(&self) -> &DeviceInfo {
+        &self.shared.info
+    }
+
+    /// The logical device.
+    pub fn device(&self) -> &ash::Device {
+        &self.shared.device
+    }
+
+    /// The validation messages collected so far, when validation is on. The log outlives the
+    /// context, so messages from its destruction can be read after it is dropped.
+    pub fn validation(&self) -> Option<Arc<ValidationLog>> {
+        self.shared.validation.clone()
+    }
+
+    /// The pipeline cache's contents, for a host that wants to persist it.
+    pub fn pipeline_cache_data(&self) -> Result<Vec<u8>> {
+        // SAFETY: valid device and cache.
+        unsafe { self.shared.device.get_pipeline_cache_data(self.shared.pipeline_cache) }
+            .call("vkGetPipelineCacheData")
+    }
+
+    /// Lists every Vulkan device's name and type, for `umbra info`.
+    pub fn list_devices() -> Result<Vec<(String, vk::PhysicalDeviceType)>> {
+        // SAFETY: loading the system's Vulkan loader library.
+        let entry = unsafe { ash::Entry::load() }
+            .map_err(|e| Error::NoDevice(format!("the Vulkan loader could not be loaded: {e}")))?;
+        let instance = create_instance(&entry, None)?;
+        // SAFETY: valid instance, destroyed right after.
+        let devices = unsafe {
+            let list = instance.enumerate_physical_devices().unwrap_or_default();
+            let named = list
+                .iter()
+                .map(|&pd| {
+                    let p = instance.get_physical_device_properties(pd);
+                    (device_name(&p), p.device_type)
+                })
+                .collect();
+            instance.destroy_instance(None);
+            named
+        };
+        Ok(devices)
+    }
+}
+
+fn device_name(p: &vk::PhysicalDeviceProperties) -> String {
+    p.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_else(|_| "<unnamed>".into())
+}
+
+fn create_instance(entry: &ash::Entry, log: Option<&ValidationLog>) -> Result<ash::Instance> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"umbra")
+        .engine_name(c"umbra")
+        .api_version(vk::API_VERSION_1_3);
+    let mut layers = Vec::new();
+    let mut extensions = Vec::new();
+    let sync_validation = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync_validation);
+    let mut messenger = log.map(messenger_info);
+    if log.is_some() {
+        // SAFETY: plain enumeration.
+        let available = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
+        if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
+            return Err(Error::NoDevice(
+                "validation was requested but VK_LAYER_KHRONOS_validation is not installed \
+                 (Debian/Ubuntu: `apt-get install vulkan-validationlayers`)"
+                    .into(),
+            ));
+        }
+        layers.push(VALIDATION_LAYER.as_ptr());
+        extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        extensions.push(ash::ext::validation_features::NAME.as_ptr());
+    }
+    let mut info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&extensions);
+    if let Some(m) = messenger.as_mut() {
+        info = info.push_next(m).push_next(&mut features);
+    }
+    // SAFETY: all pointers in `info` outlive the call.
+    unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
+            Error::NoDevice(format!("{NO_DRIVER} (vkCreateInstance: {e})"))
+        }
+        vk::Result::ERROR_LAYER_NOT_PRESENT | vk::Result::ERROR_EXTENSION_NOT_PRESENT => {
+            Error::NoDevice(format!(
+                "the Vulkan validation layer could not be enabled ({e}); install vulkan-validationlayers"
+            ))
+        }
+        e => Error::Vulkan { call: "vkCreateInstance", result: e, pass: None },
+    })
+}
+
+/// The compute queue family of a device that can run umbra, or why it cannot.
+fn check_device(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<u32, String> {
+    // SAFETY: valid instance and physical device.
+    unsafe {
+        let props = instance.get_physical_device_properties(pd);
+        if props.api_version < vk::API_VERSION_1_3 {
+            return Err(format!(
+                "Vulkan 1.3 required, device offers {}.{}",
+                vk::api_version_major(props.api_version),
+                vk::api_version_minor(props.api_version)
+            ));
+        }
+        let family = instance
+            .get_physical_device_queue_family_properties(pd)
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+            .ok_or("no compute queue")? as u32;
+        let exts = instance.enumerate_device_extension_properties(pd).unwrap_or_default();
+        if !exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ash::khr::push_descriptor::NAME)) {
+            return Err("VK_KHR_push_descriptor missing".into());
+        }
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+        instance.get_physical_device_features2(pd, &mut f2);
+        if f13.synchronization2 == vk::FALSE {
+            return Err("synchronization2 missing".into());
+        }
+        Ok(family)
+    }
+}
+
+fn pick_device(instance: &ash::Instance, filter: Option<&str>) -> Result<(vk::PhysicalDevice, u32)> {
+    // SAFETY: valid instance.
+    let devices = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
+    if devices.is_empty() {
+        return Err(Error::NoDevice(format!("{NO_DRIVER} (the loader reports no physical device)")));
+    }
+    let rank = |t: vk::PhysicalDeviceType| match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    };
+    let mut candidates = Vec::new();
+    let mut rejected = Vec::new();
+    for pd in devices {
+        // SAFETY: valid physical device.
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = device_name(&props);
+        if let Some(f) = filter {
+            if !name.to_lowercase().contains(&f.to_lowercase()) {
+                rejected.push(format!("{name} (does not match UMBRA_DEVICE={f})"));
+                continue;
+            }
+        }
+        match check_device(instance, pd) {
+            Ok(family) => candidates.push((rank(props.device_type), pd, family)),
+            Err(why) => rejected.push(format!("{name} ({why})")),
+        }
+    }
+    candidates.sort_by_key(|c| c.0);
+    candidates
+        .first()
+        .map(|&(_, pd, family)| (pd, family))
+        .ok_or_else(|| Error::NoDevice(format!("no usable Vulkan device: {}", rejected.join("; "))))
+}
+
+fn create_device(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> Result<ash::Device> {
+    let priorities = [1.0];
+    let queues =
+        [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+    let extensions = [ash::khr::push_descriptor::NAME.as_ptr()];
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+    let info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .enabled_extension_names(&extensions)
+        .push_next(&mut f13);
+    // SAFETY: checked by `check_device`; pointers outlive the call.
+    unsafe { instance.create_device(pd, &info, None) }.call("vkCreateDevice")
+}
+
+fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    // SAFETY: valid physical device.
+    let families = unsafe {
+        instance.get_physical_device_properties2(pd, &mut props2);
+        instance.get_physical_device_queue_family_properties(pd)
+    };
+    let p = props2.properties;
+    DeviceInfo {
+        name: device_name(&p),
+        device_type: p.device_type,
+        timestamp_period: p.limits.timestamp_period,
+        timestamp_valid_bits: families.get(family as usize).map_or(0, |f| f.timestamp_valid_bits),
+        max_storage_buffer_range: p.limits.max_storage_buffer_range as u64,
+        max_image_dimension_2d: p.limits.max_image_dimension2_d,
+        max_compute_work_group_count: p.limits.max_compute_work_group_count,
+        subgroup_size: subgroup.subgroup_size,
+        api_version: p.api_version,
+    }
+}

@@ -1,0 +1,20 @@
+//! The thin Vulkan layer: only what umbra uses.
+
+pub mod barrier;
+mod buffer;
+mod commands;
+mod context;
+mod debug;
+mod image;
+mod pipeline;
+mod timer;
+
+pub use buffer::Buffer;
+pub use context::{Context, ContextDesc, DeviceInfo, HostDevice};
+pub use debug::ValidationLog;
+pub use image::Image;
+pub use pipeline::{ComputePipeline, Descriptor, PipelineDesc};
+pub use timer::{GpuTimer, PassTime};
+
+pub use ash::vk as raw;
+pub use gpu_allocator::MemoryLocation;

@@ -1,0 +1,223 @@
+//! Compute pipelines with push descriptors, push constants and specialization constants.
+
+use super::{context::Shared, Buffer, Context, Image};
+use crate::error::{Error, Result, VkContext};
+use crate::kernels;
+use ash::vk;
+use std::sync::Arc;
+
+/// One resource bound by [`ComputePipeline::push_descriptors`], in binding order.
+pub enum Descriptor<'a> {
+    /// A storage buffer.
+    Buffer(&'a Buffer),
+    /// A storage image in GENERAL layout.
+    StorageImage(&'a Image),
+}
+
+impl Descriptor<'_> {
+    fn ty(&self) -> vk::DescriptorType {
+        match self {
+            Descriptor::Buffer(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Descriptor::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+        }
+    }
+}
+
+/// What a kernel binds: descriptor types by binding index, push-constant size, constants.
+#[derive(Debug, Clone, Default)]
+pub struct PipelineDesc<'a> {
+    /// The type of each binding of set 0, binding 0 first.
+    pub bindings: &'a [vk::DescriptorType],
+    /// Bytes of push constants (0 for none); a multiple of 4.
+    pub push_constant_size: u32,
+    /// `(constant_id, value)` specialization constants (32-bit each).
+    pub specialization: &'a [(u32, u32)],
+}
+
+/// A compute pipeline whose set 0 is a push-descriptor set.
+pub struct ComputePipeline {
+    shared: Arc<Shared>,
+    /// The kernel's name.
+    pub name: &'static str,
+    set_layout: vk::DescriptorSetLayout,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    bindings: Vec<vk::DescriptorType>,
+    push_constant_size: u32,
+}
+
+impl ComputePipeline {
+    /// Builds the pipeline for the embedded kernel `spirv/<kernel>.comp`.
+    pub fn new(ctx: &Context, kernel: &str, desc: &PipelineDesc<'_>) -> Result<Self> {
+        let k = kernels::kernel(kernel).ok_or_else(|| Error::MissingKernel(kernel.into()))?;
+        let shared = &ctx.shared;
+        let device = &shared.device;
+        let layout_bindings: Vec<_> = desc
+            .bindings
+            .iter()
+            .enumerate()
+            .map(|(i, &ty)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let mut pipeline = Self {
+            shared: shared.clone(),
+            name: k.name,
+            set_layout: vk::DescriptorSetLayout::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+            bindings: desc.bindings.to_vec(),
+            push_constant_size: desc.push_constant_size,
+        };
+        // SAFETY: valid device; every object is destroyed in Drop (null handles are ignored).
+        unsafe {
+            pipeline.set_layout = device
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default()
+                        .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+                        .bindings(&layout_bindings),
+                    None,
+                )
+                .call("vkCreateDescriptorSetLayout")?;
+            let ranges = [vk::PushConstantRange::default()
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                .size(desc.push_constant_size)];
+            let set_layouts = [pipeline.set_layout];
+            let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+            if desc.push_constant_size > 0 {
+                layout_info = layout_info.push_constant_ranges(&ranges);
+            }
+            pipeline.layout =
+                device.create_pipeline_layout(&layout_info, None).call("vkCreatePipelineLayout")?;
+
+            let module = device
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(k.words()), None)
+                .call("vkCreateShaderModule")?;
+            let entries: Vec<_> = desc
+                .specialization
+                .iter()
+                .enumerate()
+                .map(|(i, &(id, _))| vk::SpecializationMapEntry {
+                    constant_id: id,
+                    offset: 4 * i as u32,
+                    size: 4,
+                })
+                .collect();
+            let data: Vec<u8> = desc.specialization.iter().flat_map(|&(_, v)| v.to_ne_bytes()).collect();
+            let spec = vk::SpecializationInfo::default().map_entries(&entries).data(&data);
+            let stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module)
+                .name(c"main")
+                .specialization_info(&spec);
+            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(pipeline.layout)];
+            let created = device.create_compute_pipelines(shared.pipeline_cache, &info, None);
+            device.destroy_shader_module(module, None);
+            pipeline.pipeline = created.map_err(|(_, e)| e).call("vkCreateComputePipelines")?[0];
+        }
+        Ok(pipeline)
+    }
+
+    /// Binds the pipeline.
+    pub fn bind(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: a valid pipeline recorded into a command buffer in the recording state.
+        unsafe { self.shared.device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline) };
+    }
+
+    /// Pushes set 0. The resources must match the pipeline's bindings in number and type;
+    /// a mismatch is an error, never a silently wrong binding.
+    pub fn push_descriptors(&self, cmd: vk::CommandBuffer, resources: &[Descriptor<'_>]) -> Result<()> {
+        let types: Vec<_> = resources.iter().map(Descriptor::ty).collect();
+        if types != self.bindings {
+            return Err(Error::Invalid(format!(
+                "kernel '{}' binds {:?} but was given {:?}",
+                self.name, self.bindings, types
+            )));
+        }
+        let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = resources
+            .iter()
+            .map(|r| match r {
+                Descriptor::Buffer(b) => [b.descriptor()],
+                _ => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let images: Vec<[vk::DescriptorImageInfo; 1]> = resources
+            .iter()
+            .map(|r| match r {
+                Descriptor::StorageImage(i) => [i.descriptor()],
+                _ => [vk::DescriptorImageInfo::default()],
+            })
+            .collect();
+        let writes: Vec<_> = resources
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let w = vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(r.ty());
+                match r {
+                    Descriptor::Buffer(_) => w.buffer_info(&buffers[i]),
+                    Descriptor::StorageImage(_) => w.image_info(&images[i]),
+                }
+            })
+            .collect();
+        // SAFETY: writes match the set layout (checked above).
+        unsafe {
+            self.shared.push_descriptor.cmd_push_descriptor_set(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &writes,
+            )
+        };
+        Ok(())
+    }
+
+    /// Pushes the kernel's push constants. `T` must be `Pod` and exactly the declared size.
+    pub fn push_constants<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, value: &T) -> Result<()> {
+        let bytes = bytemuck::bytes_of(value);
+        if bytes.len() as u32 != self.push_constant_size {
+            return Err(Error::Invalid(format!(
+                "kernel '{}' takes {} bytes of push constants, given {}",
+                self.name,
+                self.push_constant_size,
+                bytes.len()
+            )));
+        }
+        // SAFETY: size checked against the layout's range.
+        unsafe {
+            self.shared.device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytes)
+        };
+        Ok(())
+    }
+
+    /// Dispatches enough `local`-sized workgroups to cover `size` invocations.
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, size: [u32; 3], local: [u32; 3]) -> Result<()> {
+        let groups: [u32; 3] = std::array::from_fn(|i| size[i].div_ceil(local[i].max(1)));
+        let max = self.shared.info.max_compute_work_group_count;
+        if (0..3).any(|i| groups[i] > max[i]) {
+            return Err(Error::Invalid(format!(
+                "kernel '{}': {groups:?} workgroups exceed the device's {max:?}",
+                self.name
+            )));
+        }
+        // SAFETY: recording into a command buffer in the recording state.
+        unsafe { self.shared.device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+        Ok(())
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        // SAFETY: no pending submission uses the pipeline (umbra waits; hosts must too).
+        unsafe {
+            let d = &self.shared.device;
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}

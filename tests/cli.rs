@@ -1,0 +1,56 @@
+//! The `umbra` binary: clear errors and image output, run as a user would.
+
+use std::process::Command;
+
+fn umbra() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_umbra"))
+}
+
+#[test]
+fn missing_driver_gives_one_clear_error() {
+    let out = umbra()
+        .arg("info")
+        .env("VK_DRIVER_FILES", "/nonexistent/umbra_no_driver.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/umbra_no_driver.json")
+        .output()
+        .expect("run umbra");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("no Vulkan driver found"), "{stderr}");
+    assert!(stderr.contains("mesa-vulkan-drivers"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn pattern_writes_png_and_exr_with_validation_on() {
+    let dir = std::env::temp_dir().join(format!("umbra-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, exr) = (dir.join("p.png"), dir.join("p.exr"));
+    let out = umbra()
+        .args(["pattern", "--size", "40x24", "-o"])
+        .arg(&png)
+        .arg("--exr")
+        .arg(&exr)
+        .env("UMBRA_VALIDATION", "1")
+        .output()
+        .expect("run umbra");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("ERROR"), "validation or other errors: {stderr}");
+    let decoded = image::open(&png).expect("PNG decodes").to_rgba8();
+    assert_eq!(decoded.dimensions(), (40, 24));
+    // x/width in red: left column dark, right column bright.
+    assert!(decoded.get_pixel(0, 0)[0] < decoded.get_pixel(39, 0)[0]);
+    let (w, h, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+    assert_eq!((w, h), (40, 24));
+    let names: Vec<&str> = channels.iter().map(|c| c.0.as_str()).collect();
+    assert_eq!(names, ["A", "B", "G", "R"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_size_is_rejected_by_the_parser() {
+    let out = umbra().args(["pattern", "--size", "0x10"]).output().expect("run umbra");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("positive"));
+}

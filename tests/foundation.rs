@@ -1,0 +1,225 @@
+//! The foundation on lavapipe: kernels, buffers, images, timestamps, validation, errors, output.
+
+mod common;
+
+use common::Gpu;
+use umbra::gpu::layout::{BufferTestParams, PatternParams};
+use umbra::vk::{raw, Buffer, ComputePipeline, Descriptor, GpuTimer, Image, PipelineDesc};
+
+fn pattern_pipeline(gpu: &Gpu, multiplier: u32) -> ComputePipeline {
+    ComputePipeline::new(
+        gpu,
+        "test_pattern",
+        &PipelineDesc {
+            bindings: &[raw::DescriptorType::STORAGE_IMAGE],
+            push_constant_size: std::mem::size_of::<PatternParams>() as u32,
+            specialization: &[(0, multiplier)],
+        },
+    )
+    .expect("test_pattern pipeline")
+}
+
+/// The CPU twin of `pattern_hash` in test_pattern.comp.
+fn pattern_hash(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846ca68b);
+    x ^= x >> 16;
+    x
+}
+
+#[test]
+fn pattern_1080p_reads_back_exactly() {
+    let gpu = Gpu::new();
+    let (w, h) = (1920u32, 1080u32);
+    let params = PatternParams { size: [w, h], seed: 12345, frame: 7 };
+    let multiplier = 3;
+    let image = Image::storage_2d(&gpu, "pattern", w, h, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+    let pipeline = pattern_pipeline(&gpu, multiplier);
+    gpu.submit(|cmd| {
+        image.init_general(&gpu, cmd);
+        pipeline.bind(cmd);
+        pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image)])?;
+        pipeline.push_constants(cmd, &params)?;
+        pipeline.dispatch(cmd, [w, h, 1], [8, 8, 1])
+    })
+    .unwrap();
+    let texels: Vec<f32> = image.read(&gpu).unwrap();
+    assert_eq!(texels.len(), (4 * w * h) as usize);
+    let mut mismatches = 0usize;
+    for y in 0..h {
+        for x in 0..w {
+            let hash = pattern_hash(x.wrapping_add(y * w).wrapping_add(params.seed)) & 0xffff;
+            let expected =
+                [x as f32, y as f32, ((x * y + params.frame) % 65521) as f32, (hash * multiplier) as f32];
+            let i = 4 * (y * w + x) as usize;
+            if texels[i..i + 4] != expected {
+                if mismatches < 5 {
+                    eprintln!("({x},{y}): got {:?}, expected {expected:?}", &texels[i..i + 4]);
+                }
+                mismatches += 1;
+            }
+        }
+    }
+    assert_eq!(mismatches, 0, "{mismatches} texels differ");
+}
+
+#[test]
+fn timestamps_give_positive_durations() {
+    let gpu = Gpu::new();
+    let (w, h) = (512u32, 512u32);
+    let image = Image::storage_2d(&gpu, "timed", w, h, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+    let pipeline = pattern_pipeline(&gpu, 1);
+    let mut timer = GpuTimer::new(&gpu, 2).unwrap();
+    gpu.submit(|cmd| {
+        timer.reset(cmd);
+        image.init_general(&gpu, cmd);
+        for pass in ["first", "second"] {
+            timer.begin(cmd, pass)?;
+            pipeline.bind(cmd);
+            pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image)])?;
+            pipeline.push_constants(cmd, &PatternParams { size: [w, h], seed: 1, frame: 0 })?;
+            pipeline.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
+            timer.end(cmd)?;
+            umbra::vk::barrier::compute_to_compute(&gpu, cmd);
+        }
+        // A third pass exceeds the timer's capacity and is refused, not written out of range.
+        assert!(timer.begin(cmd, "third").is_err());
+        Ok(())
+    })
+    .unwrap();
+    let times = timer.read().unwrap();
+    assert_eq!(times.iter().map(|t| t.name.as_str()).collect::<Vec<_>>(), ["first", "second"]);
+    for t in &times {
+        assert!(t.ms > 0.0 && t.ms < 10_000.0, "{}: {} ms", t.name, t.ms);
+    }
+}
+
+#[test]
+fn buffers_round_trip_through_staging_and_a_kernel() {
+    let gpu = Gpu::new();
+    let count = 100_003u32; // not a multiple of the workgroup size
+    let input: Vec<u32> = (0..count).map(|i| i.wrapping_mul(2654435761)).collect();
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
+    let src = Buffer::upload(&gpu, "input", &input, usage).unwrap();
+    assert_eq!(src.read::<u32>(&gpu).unwrap(), input, "staging upload then readback");
+
+    let dst = Buffer::upload(&gpu, "output", &vec![0u32; count as usize], usage).unwrap();
+    let pipeline = ComputePipeline::new(
+        &gpu,
+        "test_buffer",
+        &PipelineDesc {
+            bindings: &[raw::DescriptorType::STORAGE_BUFFER; 2],
+            push_constant_size: 8,
+            specialization: &[],
+        },
+    )
+    .unwrap();
+    let params = BufferTestParams { count, add: 17 };
+    gpu.submit(|cmd| {
+        pipeline.bind(cmd);
+        pipeline.push_descriptors(cmd, &[Descriptor::Buffer(&src), Descriptor::Buffer(&dst)])?;
+        pipeline.push_constants(cmd, &params)?;
+        pipeline.dispatch(cmd, [count, 1, 1], [64, 1, 1])
+    })
+    .unwrap();
+    let out: Vec<u32> = dst.read(&gpu).unwrap();
+    let expected: Vec<u32> = input.iter().map(|v| v.wrapping_mul(3).wrapping_add(17)).collect();
+    assert_eq!(out, expected);
+}
+
+#[test]
+fn binding_mistakes_are_errors_not_silent() {
+    let gpu = Gpu::new();
+    let image = Image::storage_2d(&gpu, "img", 8, 8, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+    let buffer = Buffer::upload(&gpu, "buf", &[0u32; 16], raw::BufferUsageFlags::STORAGE_BUFFER).unwrap();
+    let pipeline = pattern_pipeline(&gpu, 1);
+    gpu.submit(|cmd| {
+        pipeline.bind(cmd);
+        let wrong_type = pipeline.push_descriptors(cmd, &[Descriptor::Buffer(&buffer)]);
+        assert!(wrong_type.unwrap_err().to_string().contains("test_pattern"));
+        let too_many =
+            pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image), Descriptor::Buffer(&buffer)]);
+        assert!(too_many.is_err());
+        let wrong_size = pipeline.push_constants(cmd, &[0u32; 3]);
+        assert!(wrong_size.unwrap_err().to_string().contains("16 bytes"));
+        Ok(())
+    })
+    .unwrap();
+    assert!(ComputePipeline::new(&gpu, "no_such_kernel", &PipelineDesc::default()).is_err());
+}
+
+#[test]
+fn device_limits_are_enforced_with_clear_errors() {
+    let gpu = Gpu::new();
+    let limit = gpu.info().max_storage_buffer_range;
+    let too_big = Buffer::new(
+        &gpu,
+        "scene vertices",
+        limit + 4,
+        raw::BufferUsageFlags::STORAGE_BUFFER,
+        umbra::vk::MemoryLocation::GpuOnly,
+    );
+    let message = too_big.err().expect("over-limit buffer refused").to_string();
+    assert!(message.contains("scene vertices") && message.contains(&limit.to_string()), "{message}");
+
+    let absurd = Image::storage_2d(&gpu, "frame", 1 << 20, 16, raw::Format::R32G32B32A32_SFLOAT);
+    let message = absurd.err().expect("absurd image refused").to_string();
+    assert!(message.contains("frame") && message.contains("1048576x16"), "{message}");
+}
+
+#[test]
+fn validation_layer_reports_invalid_usage() {
+    let gpu = Gpu::new();
+    assert!(gpu.log().is_empty());
+    // A buffer with no usage flags violates VUID-VkBufferCreateInfo-usage-requiredbitmask.
+    let info = raw::BufferCreateInfo::default().size(64).usage(raw::BufferUsageFlags::empty());
+    unsafe {
+        let buffer = gpu.device().create_buffer(&info, None).expect("lavapipe creates it anyway");
+        gpu.device().destroy_buffer(buffer, None);
+    }
+    let messages = gpu.log().take();
+    assert!(
+        messages.iter().any(|m| m.contains("VUID-VkBufferCreateInfo-usage")),
+        "the messenger did not report the invalid usage: {messages:?}"
+    );
+}
+
+#[test]
+fn contexts_coexist_across_threads() {
+    let handles: Vec<_> = (0..2)
+        .map(|seed| {
+            std::thread::spawn(move || {
+                let gpu = Gpu::new();
+                let image = Image::storage_2d(&gpu, "img", 16, 16, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+                let pipeline = pattern_pipeline(&gpu, 1);
+                gpu.submit(|cmd| {
+                    image.init_general(&gpu, cmd);
+                    pipeline.bind(cmd);
+                    pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image)])?;
+                    pipeline.push_constants(cmd, &PatternParams { size: [16, 16], seed, frame: 0 })?;
+                    pipeline.dispatch(cmd, [16, 16, 1], [8, 8, 1])
+                })
+                .unwrap();
+                let texels: Vec<f32> = image.read(&gpu).unwrap();
+                texels[3]
+            })
+        })
+        .collect();
+    let w: Vec<f32> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+    assert_eq!(w[0], (pattern_hash(0) & 0xffff) as f32);
+    assert_eq!(w[1], (pattern_hash(1) & 0xffff) as f32);
+}
+
+#[test]
+fn unknown_device_filter_names_the_devices() {
+    let err = umbra::vk::Context::new(&umbra::vk::ContextDesc {
+        validation: Some(false),
+        device: Some("no-such-gpu-9000".into()),
+    })
+    .err()
+    .expect("no device matches");
+    let message = err.to_string();
+    assert!(message.contains("no-such-gpu-9000") && message.contains("llvmpipe"), "{message}");
+}

@@ -41,7 +41,7 @@ impl IncludeHandler for Includes {
 /// reads `spirv/x.comp:LINE: ...` or `spirv/include/y.glsl:LINE: ...`.
 fn format_log(kernel: &str, log: &str) -> String {
     log.lines()
-        .filter(|l| !l.trim().is_empty())
+        .filter(|l| !l.trim().is_empty() && !l.contains("compilation errors.  No code generated"))
         .map(|line| {
             let body =
                 line.strip_prefix("ERROR: ").or_else(|| line.strip_prefix("WARNING: ")).unwrap_or(line);

@@ -51,6 +51,14 @@ pub enum Error {
         /// The OS error.
         source: std::io::Error,
     },
+    /// A scene or environment file is malformed, breaks the glTF rules, or needs what umbra lacks.
+    #[error("{path}: {message}")]
+    Scene {
+        /// The file (or the name of an embedded scene).
+        path: std::path::PathBuf,
+        /// What is wrong, precisely enough to fix it.
+        message: String,
+    },
     /// An image file could not be written or read.
     #[error("{path}: {message}")]
     Image {

@@ -4,7 +4,9 @@
 //! ([`vk::Context::from_host`]). Passes record into a caller's command buffer and never submit.
 #![warn(missing_docs)]
 
+pub mod bvh;
 pub mod error;
+pub mod geometry;
 pub mod gpu;
 pub mod kernels;
 pub mod output;

@@ -1,6 +1,7 @@
 //! Rust twins of the structs in `spirv/include/layout.glsl`. `tests/layout.rs` compares every
 //! member offset, size and array stride with the compiled SPIR-V, so neither side can drift.
 
+pub use crate::bvh::{BvhNode, BvhTri};
 use bytemuck::{Pod, Zeroable};
 use std::mem::{offset_of, size_of};
 
@@ -27,6 +28,52 @@ pub struct BufferTestParams {
     pub add: u32,
 }
 const _: () = assert!(size_of::<BufferTestParams>() == 8);
+
+/// A ray for `trace.comp`: origin and `tmin`, direction and `tmax`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TraceRay {
+    /// Origin xyz, `tmin` in w.
+    pub origin_tmin: [f32; 4],
+    /// Direction xyz (need not be normalised), `tmax` in w.
+    pub dir_tmax: [f32; 4],
+}
+const _: () = assert!(size_of::<TraceRay>() == 32);
+
+/// `trace.comp`'s answer for one ray.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TraceHit {
+    /// Hit distance (closest-hit mode); 1.0 for occluded, 0.0 for clear in any-hit mode.
+    pub t: f32,
+    /// Triangle index in BVH order, [`TraceHit::MISS`] for none.
+    pub tri: u32,
+    /// Barycentric weight of the triangle's second vertex.
+    pub u: f32,
+    /// Barycentric weight of the triangle's third vertex.
+    pub v: f32,
+}
+const _: () = assert!(size_of::<TraceHit>() == 16);
+
+impl TraceHit {
+    /// `tri` of a ray that hit nothing.
+    pub const MISS: u32 = u32::MAX;
+}
+
+/// Push constants of `trace.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TraceParams {
+    /// Number of rays.
+    pub count: u32,
+    /// Padding.
+    pub pad0: u32,
+    /// Padding.
+    pub pad1: u32,
+    /// Padding.
+    pub pad2: u32,
+}
+const _: () = assert!(size_of::<TraceParams>() == 16);
 
 /// One member of a GPU struct as the host lays it out.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -67,5 +114,13 @@ macro_rules! layout_of {
 
 /// Every host/GPU struct pair.
 pub fn gpu_layouts() -> Vec<StructLayout> {
-    vec![layout_of!(PatternParams { size, seed, frame }), layout_of!(BufferTestParams { count, add })]
+    vec![
+        layout_of!(PatternParams { size, seed, frame }),
+        layout_of!(BufferTestParams { count, add }),
+        layout_of!(BvhNode { aabb_min, left_first, aabb_max, tri_count }),
+        layout_of!(BvhTri { v0, v1, v2 }),
+        layout_of!(TraceRay { origin_tmin, dir_tmax }),
+        layout_of!(TraceHit { t, tri, u, v }),
+        layout_of!(TraceParams { count, pad0, pad1, pad2 }),
+    ]
 }

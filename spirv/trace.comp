@@ -1,0 +1,42 @@
+#version 460
+// Traces a buffer of rays through the BVH: closest hit (TRACE_ANY == 0) or any hit (1).
+// Used by the traversal tests and by umbra-bench's ray-throughput mode.
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(constant_id = 0) const bool TRACE_ANY = false;
+
+layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
+layout(set = 0, binding = 2, std430) readonly buffer Rays { TraceRay rays[]; };
+layout(set = 0, binding = 3, std430) buffer Hits { TraceHit hits[]; };
+layout(push_constant) uniform Push { TraceParams params; };
+
+#include "bvh.glsl"
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= params.count) {
+        return;
+    }
+    vec4 origin_tmin = rays[i].origin_tmin;
+    vec4 dir_tmax = rays[i].dir_tmax;
+    // Members one by one: whole-struct copies to and from buffers are OpCopyLogical (naga).
+    vec4 result = vec4(0.0, uintBitsToFloat(0xffffffffu), 0.0, 0.0);
+    if (TRACE_ANY) {
+        if (bvh_any(origin_tmin.xyz, dir_tmax.xyz, origin_tmin.w, dir_tmax.w)) {
+            result = vec4(1.0, 0.0, 0.0, 0.0);
+        }
+    } else {
+        Hit hit;
+        if (bvh_closest(origin_tmin.xyz, dir_tmax.xyz, origin_tmin.w, dir_tmax.w, hit)) {
+            result = vec4(hit.t, uintBitsToFloat(hit.tri), hit.bary);
+        }
+    }
+    hits[i].t = result.x;
+    hits[i].tri = floatBitsToUint(result.y);
+    hits[i].u = result.z;
+    hits[i].v = result.w;
+}

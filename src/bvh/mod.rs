@@ -1,0 +1,214 @@
+//! The bounding volume hierarchy: a binned-SAH build on the CPU (parallel with `rayon`), flattened
+//! depth-first into 32-byte nodes, with the triangles reordered to match the leaves.
+//!
+//! Layout (tinybvh's `BVHNode`): node 0 is the root, node 1 is unused so that every pair of
+//! siblings starts at an even index and shares one 64-byte cache line. An interior node has
+//! `tri_count == 0` and its children at `left_first` and `left_first + 1`; a leaf holds
+//! `tri_count` triangles from `tris[left_first]`. An empty BVH is a root with `tri_count == 0`
+//! and an inverted box (`aabb_min > aabb_max`), which traversal checks once per ray.
+//!
+//! The GLSL traversal in `spirv/include/bvh.glsl` and [`traverse`] here are the same algorithm,
+//! operation for operation, so the CPU can validate the GPU.
+
+mod build;
+pub mod gpu;
+pub mod reference;
+pub mod traverse;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::mem::size_of;
+
+pub use build::BuildOptions;
+pub use traverse::{Hit, Ray};
+
+/// The deepest a BVH may be; the traversal stack holds this many entries.
+pub const MAX_DEPTH: usize = 64;
+
+/// One node of the flattened BVH (`BvhNode` in `layout.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    /// Box minimum.
+    pub aabb_min: [f32; 3],
+    /// Interior: index of the left child (the right is the next). Leaf: first triangle.
+    pub left_first: u32,
+    /// Box maximum.
+    pub aabb_max: [f32; 3],
+    /// Triangles in a leaf; 0 for an interior node.
+    pub tri_count: u32,
+}
+const _: () = assert!(size_of::<BvhNode>() == 32);
+
+impl BvhNode {
+    /// Whether this node is a leaf.
+    pub fn is_leaf(&self) -> bool {
+        self.tri_count > 0
+    }
+
+    fn surface_area(&self) -> f32 {
+        let e = Vec3::from(self.aabb_max) - Vec3::from(self.aabb_min);
+        if e.min_element() < 0.0 {
+            return 0.0;
+        }
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+}
+
+/// A triangle in BVH order (`BvhTri` in `layout.glsl`): three vertices, and in `v0[3]` the bits
+/// of its index in the input.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhTri {
+    /// First vertex; `w` holds the input index as `f32` bits.
+    pub v0: [f32; 4],
+    /// Second vertex.
+    pub v1: [f32; 4],
+    /// Third vertex.
+    pub v2: [f32; 4],
+}
+const _: () = assert!(size_of::<BvhTri>() == 48);
+
+impl BvhTri {
+    fn new(v: &[Vec3; 3], input_index: u32) -> Self {
+        let w = f32::from_bits(input_index);
+        Self { v0: v[0].extend(w).into(), v1: v[1].extend(0.0).into(), v2: v[2].extend(0.0).into() }
+    }
+
+    /// The three vertices.
+    pub fn vertices(&self) -> [Vec3; 3] {
+        [Vec3::from_slice(&self.v0), Vec3::from_slice(&self.v1), Vec3::from_slice(&self.v2)]
+    }
+
+    /// This triangle's index in the builder's input.
+    pub fn input_index(&self) -> u32 {
+        self.v0[3].to_bits()
+    }
+}
+
+/// Numbers that describe a built BVH.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BvhStats {
+    /// Triangles.
+    pub triangles: usize,
+    /// Nodes in use (the unused slot 1 not counted).
+    pub nodes: usize,
+    /// Leaves.
+    pub leaves: usize,
+    /// Longest root-to-leaf path in edges.
+    pub depth: usize,
+    /// Largest leaf.
+    pub max_leaf_size: usize,
+    /// Mean triangles per leaf.
+    pub mean_leaf_size: f32,
+    /// Surface-area-heuristic cost with the build's traversal and intersection costs.
+    pub sah_cost: f32,
+    /// Wall-clock build time in milliseconds.
+    pub build_ms: f64,
+}
+
+/// A flattened BVH over a triangle soup.
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    /// Nodes, root first (see the module docs for the layout).
+    pub nodes: Vec<BvhNode>,
+    /// Triangles in leaf order.
+    pub tris: Vec<BvhTri>,
+    /// `prim_order[i]` is the input index of `tris[i]`.
+    pub prim_order: Vec<u32>,
+    /// Build statistics.
+    pub stats: BvhStats,
+}
+
+impl Bvh {
+    /// Builds with [`BuildOptions::default`]. Every vertex must be finite: a non-finite one is an
+    /// [`crate::Error::Invalid`] naming the triangle (the scene loader removes them first).
+    pub fn build(triangles: &[[Vec3; 3]]) -> crate::Result<Self> {
+        Self::build_with(triangles, &BuildOptions::default())
+    }
+
+    /// Builds with the given options.
+    pub fn build_with(triangles: &[[Vec3; 3]], options: &BuildOptions) -> crate::Result<Self> {
+        if let Some(i) = triangles.iter().position(|t| !t.iter().all(|v| v.is_finite())) {
+            return Err(crate::Error::Invalid(format!(
+                "BVH input triangle {i} has a non-finite vertex: {:?}",
+                triangles[i]
+            )));
+        }
+        if triangles.len() >= (1 << 31) {
+            return Err(crate::Error::Invalid(format!(
+                "{} triangles are more than a BVH can index",
+                triangles.len()
+            )));
+        }
+        Ok(build::build(triangles, options))
+    }
+
+    /// The BVH of no triangles: every ray misses.
+    pub fn empty() -> Self {
+        let root = BvhNode { aabb_min: [f32::MAX; 3], left_first: 0, aabb_max: [-f32::MAX; 3], tri_count: 0 };
+        Self { nodes: vec![root], tris: Vec::new(), prim_order: Vec::new(), stats: BvhStats::default() }
+    }
+
+    /// Whether there are no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
+    }
+
+    /// The root's bounds; `None` when empty.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        (!self.is_empty()).then(|| (self.nodes[0].aabb_min.into(), self.nodes[0].aabb_max.into()))
+    }
+
+    /// Checks every structural invariant: children in range and pairwise at even indices, each
+    /// triangle in exactly one leaf, child boxes inside their parent's, every triangle inside its
+    /// leaf's box, depth within [`MAX_DEPTH`]. Returns the first violation.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.is_empty() {
+            return match self.nodes.as_slice() {
+                [root] if root.tri_count == 0 && root.aabb_min[0] > root.aabb_max[0] => Ok(()),
+                _ => Err("an empty BVH must be a single inverted root".into()),
+            };
+        }
+        let mut seen = vec![false; self.tris.len()];
+        let mut stack = vec![(0usize, 0usize)];
+        while let Some((index, depth)) = stack.pop() {
+            if depth >= MAX_DEPTH {
+                return Err(format!("node {index} is at depth {depth}, beyond {MAX_DEPTH}"));
+            }
+            let node = self.nodes.get(index).ok_or(format!("node {index} out of range"))?;
+            let (lo, hi) = (Vec3::from(node.aabb_min), Vec3::from(node.aabb_max));
+            let inside = |v: Vec3| v.cmpge(lo).all() && v.cmple(hi).all();
+            if node.is_leaf() {
+                let range = node.left_first as usize..node.left_first as usize + node.tri_count as usize;
+                if range.end > self.tris.len() {
+                    return Err(format!("leaf {index} points past the triangles"));
+                }
+                for t in range {
+                    if std::mem::replace(&mut seen[t], true) {
+                        return Err(format!("triangle {t} is in two leaves"));
+                    }
+                    if !self.tris[t].vertices().iter().all(|&v| inside(v)) {
+                        return Err(format!("triangle {t} pokes out of leaf {index}"));
+                    }
+                }
+            } else {
+                let left = node.left_first as usize;
+                if left % 2 != 0 || left < 2 || left + 1 >= self.nodes.len() {
+                    return Err(format!("node {index} has children at {left}, which is invalid"));
+                }
+                for child in [left, left + 1] {
+                    let c = &self.nodes[child];
+                    if !inside(c.aabb_min.into()) || !inside(c.aabb_max.into()) {
+                        return Err(format!("child {child} is not inside its parent {index}"));
+                    }
+                    stack.push((child, depth + 1));
+                }
+            }
+        }
+        match seen.iter().position(|s| !s) {
+            Some(t) => Err(format!("triangle {t} is in no leaf")),
+            None => Ok(()),
+        }
+    }
+}

@@ -1,0 +1,271 @@
+//! BVH build and traversal: structure, CPU and GPU traversal against a brute-force reference,
+//! watertightness at shared edges and vertices, and the awkward inputs.
+
+mod common;
+
+use common::Gpu;
+use glam::Vec3;
+use umbra::bvh::gpu::{GpuBvh, Query, RayTracer};
+use umbra::bvh::reference::Reference;
+use umbra::bvh::{BuildOptions, Bvh, Hit, Ray};
+use umbra::geometry::{icosphere, random_soup, terrain, Mesh, Rng};
+use umbra::gpu::layout::{TraceHit, TraceRay};
+
+/// Rays per scene for the GPU-against-reference tests.
+const RAYS: usize = 100_000;
+
+/// A mix of rays: a third from anywhere in any direction, a third aimed at a random point of a
+/// random triangle, a third axis-aligned (zero direction components) or with a finite segment.
+/// Direction lengths vary, since t is in units of the direction.
+fn rays(triangles: &[[Vec3; 3]], count: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Rng::new(seed);
+    let (lo, hi) =
+        triangles.iter().flatten().fold((Vec3::MAX, Vec3::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
+    let pad = (hi - lo) * 0.2 + Vec3::splat(1e-3);
+    let (lo, hi) = (lo - pad, hi + pad);
+    (0..count)
+        .map(|i| {
+            let origin = rng.in_box(lo, hi);
+            let scale = rng.range(0.25, 4.0);
+            let (dir, tmin, tmax) = match i % 3 {
+                0 => (rng.on_sphere(), 0.0, f32::INFINITY),
+                1 => {
+                    let t = triangles[rng.below(triangles.len())];
+                    let (a, b) = (rng.f32(), rng.f32());
+                    let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                    let target = t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b;
+                    ((target - origin).normalize_or(Vec3::X), 0.0, f32::INFINITY)
+                }
+                _ => {
+                    let axis = Vec3::AXES[rng.below(3)] * if rng.f32() < 0.5 { -1.0 } else { 1.0 };
+                    let dir = if rng.f32() < 0.5 { axis } else { rng.on_sphere() };
+                    let tmin = rng.range(0.0, 0.5) * (hi - lo).length();
+                    (dir, tmin, tmin + rng.range(0.0, 1.0) * (hi - lo).length())
+                }
+            };
+            Ray { origin, dir: dir * scale, tmin: tmin / scale, tmax: tmax / scale }
+        })
+        .collect()
+}
+
+/// Whether `got` (BVH order) answers `ray` as the reference (input order) does: both miss, or
+/// both hit the same triangle, or (ties between triangles) the same t within 1e-5 relative.
+fn agrees(bvh: &Bvh, got: Option<Hit>, expected: Option<Hit>) -> bool {
+    match (got, expected) {
+        (None, None) => true,
+        (Some(g), Some(e)) => {
+            bvh.prim_order[g.tri as usize] == e.tri || (g.t - e.t).abs() <= 1e-5 * e.t.abs()
+        }
+        _ => false,
+    }
+}
+
+/// Traces `rays` on the GPU (closest and any), the CPU BVH and the reference, and asserts they
+/// all agree; returns the number of hits.
+fn check_scene(gpu: &Gpu, tracer: &RayTracer, name: &str, triangles: &[[Vec3; 3]], rays: &[Ray]) -> usize {
+    let bvh = Bvh::build(triangles).unwrap();
+    bvh.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
+    let device_bvh = GpuBvh::upload(gpu, &bvh).unwrap();
+    let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
+    let closest = tracer.trace(gpu, Query::Closest, &device_bvh, &trace_rays).unwrap();
+    let any = tracer.trace(gpu, Query::Any, &device_bvh, &trace_rays).unwrap();
+    let expected = Reference::new(triangles).closest_all(rays);
+
+    let mut failures = Vec::new();
+    for (i, ray) in rays.iter().enumerate() {
+        let gpu_hit = closest[i].hit();
+        let cpu_hit = bvh.closest(ray);
+        if !agrees(&bvh, gpu_hit, expected[i]) {
+            failures.push(format!("ray {i} {ray:?}: GPU {gpu_hit:?}, reference {:?}", expected[i]));
+        }
+        if !agrees(&bvh, cpu_hit, expected[i]) {
+            failures.push(format!("ray {i} {ray:?}: CPU BVH {cpu_hit:?}, reference {:?}", expected[i]));
+        }
+        if (any[i].t == 1.0) != gpu_hit.is_some() {
+            failures.push(format!("ray {i} {ray:?}: any-hit {} but closest {gpu_hit:?}", any[i].t));
+        }
+        if let Some(h) = gpu_hit {
+            let [u, v] = h.bary;
+            if !(h.t > ray.tmin && h.t < ray.tmax && u >= 0.0 && v >= 0.0 && u + v <= 1.0 + 1e-6) {
+                failures.push(format!("ray {i}: GPU hit {h:?} is outside the segment or triangle"));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{name}: {} of {} rays disagree; first:\n{}",
+        failures.len(),
+        rays.len(),
+        failures.iter().take(10).cloned().collect::<Vec<_>>().join("\n")
+    );
+    let hits = expected.iter().filter(|h| h.is_some()).count();
+    eprintln!("{name}: {} triangles, {} rays, {hits} hits, {:?}", triangles.len(), rays.len(), bvh.stats);
+    hits
+}
+
+#[test]
+fn gpu_closest_hits_match_brute_force_on_several_scenes() {
+    let gpu = Gpu::new();
+    let tracer = RayTracer::new(&gpu).unwrap();
+    let sphere = icosphere(4, Vec3::new(0.2, -0.1, 0.3), 1.5).soup();
+    let soup = random_soup(3000, Vec3::splat(-2.0), Vec3::splat(2.0), 0.6, 7);
+    let mut big = terrain(300, 100.0, 3).soup(); // 180,000 triangles
+    for k in 0..12 {
+        let c = Vec3::new(-40.0 + 7.0 * k as f32, 12.0, (k as f32 * 1.7).sin() * 30.0);
+        big.extend(icosphere(4, c, 2.0 + k as f32 * 0.3).soup()); // 5,120 each
+    }
+    assert!(big.len() >= 200_000, "{}", big.len());
+    for (name, triangles, seed) in [("icosphere", &sphere, 1), ("soup", &soup, 2), ("terrain", &big, 3)] {
+        let rays = rays(triangles, RAYS, seed);
+        let hits = check_scene(&gpu, &tracer, name, triangles, &rays);
+        assert!(hits > RAYS / 4, "{name}: only {hits} hits; the rays do not exercise the scene");
+    }
+}
+
+/// Rays from inside a closed mesh through every vertex and every edge (at several points along
+/// it) must hit: a watertight test never lets one slip between neighbouring triangles.
+#[test]
+fn rays_through_edges_and_vertices_never_leak() {
+    let gpu = Gpu::new();
+    let tracer = RayTracer::new(&gpu).unwrap();
+    let center = Vec3::new(0.31, -0.17, 0.05);
+    let mesh: Mesh = icosphere(5, center, 2.0); // 20,480 triangles
+    let mut targets: Vec<Vec3> = mesh.positions.clone();
+    for [a, b] in mesh.edges() {
+        let (a, b) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        targets.extend([0.5f32, 0.25, 0.001].iter().map(|&s| a + (b - a) * s));
+    }
+    let mut rays = Vec::new();
+    for (i, &target) in targets.iter().enumerate() {
+        // From the centre, and from points just inside towards the target (all directions).
+        let origins = [center, center + (target - center) * 0.9, center + Vec3::new(0.1, 0.2, -0.3)];
+        let o = origins[i % 3];
+        rays.push(Ray { origin: o, dir: target - o, tmin: 0.0, tmax: f32::INFINITY });
+        // From outside, straight at the target: must hit on the way in.
+        let outside = center + (target - center) * 3.0;
+        rays.push(Ray { origin: outside, dir: target - outside, tmin: 0.0, tmax: f32::INFINITY });
+    }
+    let soup = mesh.soup();
+    let bvh = Bvh::build(&soup).unwrap();
+    let device_bvh = GpuBvh::upload(&gpu, &bvh).unwrap();
+    let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
+    let closest = tracer.trace(&gpu, Query::Closest, &device_bvh, &trace_rays).unwrap();
+    let any = tracer.trace(&gpu, Query::Any, &device_bvh, &trace_rays).unwrap();
+    let gpu_leaks = closest.iter().filter(|h| h.tri == TraceHit::MISS).count();
+    let any_leaks = any.iter().filter(|h| h.t != 1.0).count();
+    let cpu_leaks = rays.iter().filter(|r| bvh.closest(r).is_none()).count();
+    let reference = Reference::new(&soup);
+    let reference_leaks = rays.iter().filter(|r| reference.closest(r).is_none()).count();
+    assert_eq!(
+        (gpu_leaks, any_leaks, cpu_leaks, reference_leaks),
+        (0, 0, 0, 0),
+        "leaks (GPU closest, GPU any, CPU BVH, brute force) out of {} rays",
+        rays.len()
+    );
+}
+
+#[test]
+fn empty_single_and_degenerate_scenes_behave() {
+    let gpu = Gpu::new();
+    let tracer = RayTracer::new(&gpu).unwrap();
+    let down = |x: f32, z: f32| Ray { origin: Vec3::new(x, 5.0, z), dir: -Vec3::Y, tmin: 0.0, tmax: 100.0 };
+
+    // Empty: everything misses, and the BVH is the documented single inverted root.
+    let empty = Bvh::build(&[]).unwrap();
+    empty.validate().unwrap();
+    let device_bvh = GpuBvh::upload(&gpu, &empty).unwrap();
+    let hits = tracer.trace(&gpu, Query::Closest, &device_bvh, &[TraceRay::from(&down(0.0, 0.0))]).unwrap();
+    assert_eq!(hits[0].tri, TraceHit::MISS);
+    assert!(empty.closest(&down(0.0, 0.0)).is_none());
+
+    // A single triangle: a leaf root; hit inside with the right t and barycentrics, miss outside.
+    let tri = [Vec3::new(0.0, 1.0, 0.0), Vec3::new(2.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 2.0)];
+    let single = Bvh::build(&[tri]).unwrap();
+    assert_eq!(single.nodes[0].tri_count, 1);
+    let device_bvh = GpuBvh::upload(&gpu, &single).unwrap();
+    let probe = [down(0.5, 0.5), down(1.5, 1.5), down(0.5, 0.5)];
+    let mut probe_rays: Vec<TraceRay> = probe.iter().map(TraceRay::from).collect();
+    probe_rays[2].dir_tmax[3] = 3.9; // the segment ends before the triangle at t = 4
+    let hits = tracer.trace(&gpu, Query::Closest, &device_bvh, &probe_rays).unwrap();
+    assert_eq!(hits[0].tri, 0);
+    assert!(
+        (hits[0].t - 4.0).abs() < 1e-6 && (hits[0].u - 0.25).abs() < 1e-6 && (hits[0].v - 0.25).abs() < 1e-6
+    );
+    assert_eq!((hits[1].tri, hits[2].tri), (TraceHit::MISS, TraceHit::MISS));
+
+    // Degenerate triangles (a point, a segment, collinear, repeated) among ordinary ones: the
+    // build stays valid, ones with coincident vertices are never hit (their determinant is exactly
+    // zero), ordinary ones still are. A collinear triangle rounds to a sliver of non-zero
+    // projected area and may be hit along its line; shading must cope with its zero normal.
+    let mut triangles = random_soup(500, Vec3::splat(-1.0), Vec3::splat(1.0), 0.3, 11);
+    let p = Vec3::new(0.1, 0.2, 0.3);
+    for k in 0..200 {
+        let q = p + Vec3::splat(k as f32 * 0.01);
+        triangles.push(match k % 4 {
+            0 => [q; 3],
+            1 => [q, q + Vec3::X, q + Vec3::X],
+            2 => [q, q + Vec3::X, q + Vec3::X * 2.0],
+            _ => triangles[k],
+        });
+    }
+    let rays = rays(&triangles, 30_000, 12);
+    check_scene(&gpu, &tracer, "degenerate", &triangles, &rays);
+    let bvh = Bvh::build(&triangles).unwrap();
+    for ray in &rays {
+        if let Some(h) = bvh.closest(ray) {
+            let [a, b, c] = bvh.tris[h.tri as usize].vertices();
+            assert!(a != b && b != c && c != a, "hit a triangle with coincident vertices: {ray:?}");
+        }
+    }
+    // Non-finite input is refused, naming the triangle.
+    let err = Bvh::build(&[tri, [Vec3::NAN, Vec3::ZERO, Vec3::ONE]]).unwrap_err();
+    assert!(err.to_string().contains("triangle 1"), "{err}");
+}
+
+/// Property test: random soups of many sizes and spreads (including all-identical triangles
+/// and huge next to tiny ones) give valid BVHs: every triangle reachable from the root exactly
+/// once, child boxes inside parents, triangles inside leaves, depth bounded.
+#[test]
+fn random_soups_build_valid_bvhs() {
+    let mut rng = Rng::new(99);
+    for case in 0..60 {
+        let n = [1, 2, 3, 5, 17, 100, 1000, 5000][case % 8];
+        let edge = [1e-4, 0.01, 0.5, 50.0][rng.below(4)];
+        let mut triangles = random_soup(n, Vec3::splat(-1.0), Vec3::splat(1.0), edge, case as u64);
+        if case % 5 == 0 {
+            let t = triangles[0];
+            triangles.iter_mut().for_each(|x| *x = t);
+        }
+        if case % 7 == 0 {
+            triangles.push([Vec3::splat(-1e4), Vec3::new(1e4, -1e4, 0.0), Vec3::new(0.0, 1e4, 1e4)]);
+        }
+        for full_sweep in [false, true] {
+            let options = BuildOptions { full_sweep, ..Default::default() };
+            let bvh = Bvh::build_with(&triangles, &options).unwrap();
+            bvh.validate().unwrap_or_else(|e| panic!("case {case} (n {n}, sweep {full_sweep}): {e}"));
+            assert_eq!(bvh.stats.triangles, triangles.len());
+            let mut order = bvh.prim_order.clone();
+            order.sort_unstable();
+            assert!(order.iter().enumerate().all(|(i, &p)| i as u32 == p), "case {case}: not a permutation");
+            for (t, &input) in bvh.tris.iter().zip(&bvh.prim_order) {
+                assert_eq!(t.input_index(), input);
+                assert_eq!(t.vertices(), triangles[input as usize]);
+            }
+        }
+    }
+}
+
+/// The binned build's SAH cost stays close to the full-sweep build's on a realistic mesh.
+#[test]
+fn binned_sah_is_close_to_full_sweep() {
+    let mut triangles = terrain(60, 20.0, 5).soup();
+    for k in 0..8 {
+        triangles.extend(icosphere(3, Vec3::new(k as f32 * 2.0 - 8.0, 2.0, 0.0), 0.7).soup());
+    }
+    let binned = Bvh::build(&triangles).unwrap();
+    let sweep =
+        Bvh::build_with(&triangles, &BuildOptions { full_sweep: true, ..Default::default() }).unwrap();
+    let ratio = binned.stats.sah_cost / sweep.stats.sah_cost;
+    eprintln!("SAH binned {} / sweep {} = {ratio}", binned.stats.sah_cost, sweep.stats.sah_cost);
+    assert!(ratio < 1.05, "binned SAH cost {ratio} × the full sweep's");
+}

@@ -5,6 +5,7 @@
 #![warn(missing_docs)]
 
 pub mod bvh;
+pub mod cli;
 pub mod error;
 pub mod geometry;
 pub mod gpu;

@@ -21,7 +21,7 @@ enum Command {
     /// Render the foundation test pattern (a known function of the pixel) to PNG and/or EXR.
     Pattern {
         /// Image size as WIDTHxHEIGHT.
-        #[arg(long, default_value = "256x256", value_parser = parse_size)]
+        #[arg(long, default_value = "256x256", value_parser = umbra::cli::parse_size)]
         size: (u32, u32),
         /// PNG output path.
         #[arg(short, long, default_value = "pattern.png")]
@@ -30,16 +30,6 @@ enum Command {
         #[arg(long)]
         exr: Option<PathBuf>,
     },
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{s}': {e}"));
-    let (w, h) = (parse(w)?, parse(h)?);
-    if w == 0 || h == 0 {
-        return Err(format!("'{s}': width and height must be positive"));
-    }
-    Ok((w, h))
 }
 
 fn main() {

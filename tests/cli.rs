@@ -54,3 +54,10 @@ fn bad_size_is_rejected_by_the_parser() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("positive"));
 }
+
+#[test]
+fn absurd_size_is_rejected_by_the_parser() {
+    let out = umbra().args(["pattern", "--size", "100000x10"]).output().expect("run umbra");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("at most 16384"));
+}

@@ -3,6 +3,7 @@
 
 use super::{Bvh, BvhNode, BvhStats, BvhTri, MAX_DEPTH};
 use glam::{Vec3, Vec3A};
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// How a BVH is built.
@@ -56,27 +57,22 @@ impl Aabb {
     }
 }
 
-/// A primitive as the builder sees it.
-struct Prim {
-    bounds: Aabb,
-    centroid: Vec3A,
+/// A primitive's box, moved with its input index as the builder partitions.
+#[derive(Clone, Copy)]
+struct PrimRef {
+    min: Vec3A,
+    max: Vec3A,
 }
 
-/// The tree before flattening.
-enum Node {
-    Leaf { bounds: Aabb, first: usize, count: usize },
-    Interior { bounds: Aabb, children: Box<[Node; 2]> },
-}
-
-impl Node {
-    fn bounds(&self) -> &Aabb {
-        match self {
-            Node::Leaf { bounds, .. } | Node::Interior { bounds, .. } => bounds,
-        }
+impl PrimRef {
+    /// Twice the centroid (the builder only compares and bins it).
+    fn centroid2(&self) -> Vec3A {
+        self.min + self.max
     }
 }
 
-/// A chosen split: primitives whose key is below `position` on `axis` go left.
+/// A chosen split, with its unnormalised cost `area(L)·n(L) + area(R)·n(R)` (times the
+/// intersection cost).
 struct Split {
     axis: usize,
     cost: f32,
@@ -84,14 +80,84 @@ struct Split {
 }
 
 enum SplitKind {
-    /// Binned: left takes bins `0..bin`.
-    Bin { bin: usize, scale: f32, origin: f32 },
+    /// Binned: left takes bins `0..bin` of `bin_of`.
+    Bin { bin: usize, binning: Binning },
     /// Sweep: left takes the first `count` primitives in centroid order.
     Sorted { count: usize },
 }
 
+/// Nodes this small are split by an exact sweep (cheaper than binning them, and better).
+const SMALL: usize = 12;
+
+/// The most bins per axis.
+pub const MAX_BINS: usize = 32;
+
+/// Maps a (doubled) centroid to a bin on each axis.
+#[derive(Clone, Copy)]
+struct Binning {
+    origin: Vec3A,
+    scale: Vec3A,
+    bins: usize,
+}
+
+impl Binning {
+    fn bins_of(&self, c2: Vec3A) -> [usize; 3] {
+        let b = ((c2 - self.origin) * self.scale).to_array();
+        [0, 1, 2].map(|axis| (b[axis] as usize).min(self.bins - 1))
+    }
+
+    /// `bins_of(c2)[axis]`, computed for that axis alone (with the same arithmetic).
+    fn bin_on(&self, c2: Vec3A, axis: usize) -> usize {
+        (((c2[axis] - self.origin[axis]) * self.scale[axis]) as usize).min(self.bins - 1)
+    }
+}
+
+/// Per-axis bin boxes and counts.
+#[derive(Clone)]
+struct Bins {
+    min: [[Vec3A; MAX_BINS]; 3],
+    max: [[Vec3A; MAX_BINS]; 3],
+    count: [[u32; MAX_BINS]; 3],
+}
+
+impl Bins {
+    fn new() -> Self {
+        Self {
+            min: [[Vec3A::splat(f32::MAX); MAX_BINS]; 3],
+            max: [[Vec3A::splat(-f32::MAX); MAX_BINS]; 3],
+            count: [[0; MAX_BINS]; 3],
+        }
+    }
+
+    fn add(mut self, binning: &Binning, refs: &[PrimRef]) -> Self {
+        for r in refs {
+            let b = binning.bins_of(r.centroid2());
+            for axis in 0..3 {
+                let bin = b[axis];
+                self.min[axis][bin] = self.min[axis][bin].min(r.min);
+                self.max[axis][bin] = self.max[axis][bin].max(r.max);
+                self.count[axis][bin] += 1;
+            }
+        }
+        self
+    }
+
+    fn merge(mut self, other: Self) -> Self {
+        for axis in 0..3 {
+            for bin in 0..MAX_BINS {
+                self.min[axis][bin] = self.min[axis][bin].min(other.min[axis][bin]);
+                self.max[axis][bin] = self.max[axis][bin].max(other.max[axis][bin]);
+                self.count[axis][bin] += other.count[axis][bin];
+            }
+        }
+        self
+    }
+}
+
+/// Nodes with at least this many primitives bin in parallel chunks.
+const PARALLEL_BINNING: usize = 1 << 16;
+
 struct Builder<'a> {
-    prims: &'a [Prim],
     options: &'a BuildOptions,
 }
 
@@ -100,46 +166,89 @@ pub(super) fn build(triangles: &[[Vec3; 3]], options: &BuildOptions) -> Bvh {
     if triangles.is_empty() {
         return Bvh::empty();
     }
-    let prims: Vec<Prim> = triangles
-        .iter()
+    let mut refs: Vec<PrimRef> = triangles
+        .par_iter()
         .map(|t| {
-            let mut bounds = Aabb::EMPTY;
-            for v in t {
-                bounds.grow_point((*v).into());
-            }
-            Prim { bounds, centroid: (bounds.min + bounds.max) * 0.5 }
+            let (a, b, c) = (Vec3A::from(t[0]), Vec3A::from(t[1]), Vec3A::from(t[2]));
+            PrimRef { min: a.min(b).min(c), max: a.max(b).max(c) }
         })
         .collect();
     let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-    let builder = Builder { prims: &prims, options };
-    let root_bounds = prims.iter().fold(Aabb::EMPTY, |mut b, p| {
-        b.grow(&p.bounds);
-        b
-    });
-    let root = builder.node(&mut order, 0, root_bounds, 0);
-
-    let mut nodes = vec![BvhNode::default(); 2];
-    flatten(&root, 0, &mut nodes);
-    let tris = order.iter().map(|&i| BvhTri::new(&triangles[i as usize], i)).collect();
+    let builder =
+        Builder { options: &BuildOptions { bins: options.bins.clamp(2, MAX_BINS), ..options.clone() } };
+    let (bounds, centroids) = bounds_of(&refs);
+    let prepared = start.elapsed();
+    // Every subtree over m primitives gets 2(m - 1) child slots; the root's start at 2.
+    let mut slots: Vec<BvhNode> = bytemuck::zeroed_vec(2 * triangles.len());
+    let (head, child_slots) = slots.split_at_mut(2);
+    head[0] = builder.node(&mut refs, &mut order, 0, bounds, centroids, 0, child_slots, 2);
+    let built = start.elapsed();
+    let nodes = compact(&slots);
+    drop(slots);
+    let flattened = start.elapsed();
+    let tris = order.par_iter().map(|&i| BvhTri::new(&triangles[i as usize], i)).collect();
     let mut bvh = Bvh { nodes, tris, prim_order: order, stats: BvhStats::default() };
+    let reordered = start.elapsed();
     bvh.stats = stats(&bvh, options);
-    bvh.stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
+    bvh.stats.build_ms = reordered.as_secs_f64() * 1e3;
+    log::debug!(
+        "BVH build phases (cumulative): prepare {prepared:?}, tree {built:?}, flatten {flattened:?}, \
+         triangles {reordered:?}, stats {:?}",
+        start.elapsed()
+    );
     bvh
 }
 
+/// The box of the primitives and the box of their (doubled) centroids.
+fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
+    let fold = |(mut b, mut c): (Aabb, Aabb), r: &PrimRef| {
+        b.grow(&Aabb { min: r.min, max: r.max });
+        c.grow_point(r.centroid2());
+        (b, c)
+    };
+    if refs.len() >= PARALLEL_BINNING {
+        refs.par_chunks(PARALLEL_BINNING / 4)
+            .map(|chunk| chunk.iter().fold((Aabb::EMPTY, Aabb::EMPTY), fold))
+            .reduce(
+                || (Aabb::EMPTY, Aabb::EMPTY),
+                |(mut a, mut b), (c, d)| {
+                    a.grow(&c);
+                    b.grow(&d);
+                    (a, b)
+                },
+            )
+    } else {
+        refs.iter().fold((Aabb::EMPTY, Aabb::EMPTY), fold)
+    }
+}
+
 impl Builder<'_> {
-    /// Builds the subtree over `order` (whose first element is primitive `first` of the final
-    /// order) with the given bounds.
-    fn node(&self, order: &mut [u32], first: usize, bounds: Aabb, depth: usize) -> Node {
-        let count = order.len();
-        let leaf = Node::Leaf { bounds, first, count };
+    /// Builds the subtree over `refs`/`order` (whose first element is primitive `first` of the
+    /// final order), given their bounds and centroid bounds, and returns its root. Descendants go
+    /// into `slots` (at absolute index `base`): this node's children first, then the left
+    /// subtree's 2(m_left - 1) slots, then the right's.
+    #[allow(clippy::too_many_arguments)]
+    fn node(
+        &self,
+        refs: &mut [PrimRef],
+        order: &mut [u32],
+        first: usize,
+        bounds: Aabb,
+        centroids: Aabb,
+        depth: usize,
+        slots: &mut [BvhNode],
+        base: usize,
+    ) -> BvhNode {
+        let count = refs.len();
+        let leaf = node_of(&bounds, first as u32, count as u32);
         if count == 1 || depth + 1 >= MAX_DEPTH {
             return leaf;
         }
         let leaf_cost = self.options.intersection_cost * count as f32;
-        let split = match self.options.full_sweep {
-            false => self.best_binned(order),
-            true => self.best_sweep(order),
+        let split = if self.options.full_sweep || count <= SMALL {
+            best_sweep(refs, self.options.intersection_cost)
+        } else {
+            self.best_binned(refs, &centroids)
         };
         let split_cost = split.as_ref().map_or(f32::INFINITY, |s| {
             self.options.traversal_cost + s.cost / bounds.half_area().max(f32::MIN_POSITIVE)
@@ -147,177 +256,223 @@ impl Builder<'_> {
         if count <= self.options.max_leaf_size && leaf_cost <= split_cost {
             return leaf;
         }
-        let left_count = match &split {
-            Some(split) => self.partition(order, split),
+        let (left_count, child_bounds) = match &split {
+            Some(split) => partition(refs, order, split),
             // All centroids coincide: any split is as good as any other.
-            None => count / 2,
+            None => (count / 2, None),
         };
-        let left_count = if left_count == 0 || left_count == count { count / 2 } else { left_count };
-        let (left, right) = order.split_at_mut(left_count);
-        let lb = self.bounds_of(left);
-        let rb = self.bounds_of(right);
+        let (left_count, child_bounds) = if left_count == 0 || left_count == count {
+            (count / 2, None)
+        } else {
+            (left_count, child_bounds)
+        };
+        let (left_refs, right_refs) = refs.split_at_mut(left_count);
+        let (left_order, right_order) = order.split_at_mut(left_count);
+        let [(lb, lc), (rb, rc)] =
+            child_bounds.unwrap_or_else(|| [bounds_of(left_refs), bounds_of(right_refs)]);
+        let (pair, rest) = slots.split_at_mut(2);
+        let (left_slots, right_slots) = rest.split_at_mut(2 * (left_count - 1));
+        let (left_base, right_base) = (base + 2, base + 2 + 2 * (left_count - 1));
+        let right_first = first + left_count;
         let (l, r) = if count >= PARALLEL_THRESHOLD {
             rayon::join(
-                || self.node(left, first, lb, depth + 1),
-                || self.node(right, first + left_count, rb, depth + 1),
+                || self.node(left_refs, left_order, first, lb, lc, depth + 1, left_slots, left_base),
+                || {
+                    self.node(
+                        right_refs,
+                        right_order,
+                        right_first,
+                        rb,
+                        rc,
+                        depth + 1,
+                        right_slots,
+                        right_base,
+                    )
+                },
             )
         } else {
-            (self.node(left, first, lb, depth + 1), self.node(right, first + left_count, rb, depth + 1))
+            (
+                self.node(left_refs, left_order, first, lb, lc, depth + 1, left_slots, left_base),
+                self.node(right_refs, right_order, right_first, rb, rc, depth + 1, right_slots, right_base),
+            )
         };
-        Node::Interior { bounds, children: Box::new([l, r]) }
+        pair[0] = l;
+        pair[1] = r;
+        node_of(&bounds, base as u32, 0)
     }
 
-    fn bounds_of(&self, order: &[u32]) -> Aabb {
-        order.iter().fold(Aabb::EMPTY, |mut b, &i| {
-            b.grow(&self.prims[i as usize].bounds);
-            b
-        })
-    }
-
-    /// The cheapest binned split over all three axes (its cost as the unnormalised
-    /// `area(L)·n(L) + area(R)·n(R)` times the intersection cost), or `None` when the centroids
-    /// do not spread on any axis.
-    fn best_binned(&self, order: &[u32]) -> Option<Split> {
-        let bins = self.options.bins;
-        let mut centroid_bounds = Aabb::EMPTY;
-        for &i in order {
-            centroid_bounds.grow_point(self.prims[i as usize].centroid);
-        }
-        let extent = centroid_bounds.max - centroid_bounds.min;
-        let origin = centroid_bounds.min;
+    /// The cheapest binned split over all three axes, or `None` when the centroids do not
+    /// spread on any axis.
+    fn best_binned(&self, refs: &[PrimRef], centroids: &Aabb) -> Option<Split> {
+        let n_bins = self.options.bins;
+        let extent = centroids.max - centroids.min;
         let scale = Vec3A::select(
             extent.cmpgt(Vec3A::ZERO),
-            Vec3A::splat(bins as f32 * (1.0 - f32::EPSILON)) / extent,
+            Vec3A::splat(n_bins as f32 * (1.0 - f32::EPSILON)) / extent,
             Vec3A::ZERO,
         );
-        let mut bin_bounds = vec![[Aabb::EMPTY; 3]; bins];
-        let mut bin_count = vec![[0u32; 3]; bins];
-        for &i in order {
-            let prim = &self.prims[i as usize];
-            let b = ((prim.centroid - origin) * scale).to_array();
-            for axis in 0..3 {
-                let bin = (b[axis] as usize).min(bins - 1);
-                bin_bounds[bin][axis].grow(&prim.bounds);
-                bin_count[bin][axis] += 1;
-            }
-        }
+        let binning = Binning { origin: centroids.min, scale, bins: n_bins };
+        let bins = if refs.len() >= PARALLEL_BINNING {
+            refs.par_chunks(PARALLEL_BINNING / 4)
+                .map(|chunk| Bins::new().add(&binning, chunk))
+                .reduce(Bins::new, Bins::merge)
+        } else {
+            Bins::new().add(&binning, refs)
+        };
         let mut best: Option<Split> = None;
-        let mut right_area = vec![0.0f32; bins];
-        let mut right_count = vec![0u32; bins];
+        let mut right_area = [0.0f32; MAX_BINS];
+        let mut right_count = [0u32; MAX_BINS];
         for axis in 0..3 {
             if extent[axis] <= 0.0 {
                 continue;
             }
-            let (mut acc, mut n) = (Aabb::EMPTY, 0);
-            for bin in (1..bins).rev() {
-                acc.grow(&bin_bounds[bin][axis]);
-                n += bin_count[bin][axis];
+            let mut acc = Aabb::EMPTY;
+            let mut n = 0;
+            for bin in (1..n_bins).rev() {
+                acc.grow(&Aabb { min: bins.min[axis][bin], max: bins.max[axis][bin] });
+                n += bins.count[axis][bin];
                 right_area[bin] = acc.half_area();
                 right_count[bin] = n;
             }
-            let (mut acc, mut n) = (Aabb::EMPTY, 0);
-            for bin in 1..bins {
-                acc.grow(&bin_bounds[bin - 1][axis]);
-                n += bin_count[bin - 1][axis];
+            let mut acc = Aabb::EMPTY;
+            let mut n = 0;
+            for bin in 1..n_bins {
+                acc.grow(&Aabb { min: bins.min[axis][bin - 1], max: bins.max[axis][bin - 1] });
+                n += bins.count[axis][bin - 1];
                 if n == 0 || right_count[bin] == 0 {
                     continue;
                 }
                 let cost = self.options.intersection_cost
                     * (acc.half_area() * n as f32 + right_area[bin] * right_count[bin] as f32);
                 if best.as_ref().is_none_or(|b| cost < b.cost) {
-                    best = Some(Split {
-                        axis,
-                        cost,
-                        kind: SplitKind::Bin { bin, scale: scale[axis], origin: origin[axis] },
-                    });
+                    best = Some(Split { axis, cost, kind: SplitKind::Bin { bin, binning } });
                 }
             }
         }
         best
     }
+}
 
-    /// The cheapest split between consecutive primitives in centroid order on any axis.
-    fn best_sweep(&self, order: &[u32]) -> Option<Split> {
-        let n = order.len();
-        let mut sorted = order.to_vec();
-        let mut right_area = vec![0.0f32; n];
-        let mut best: Option<Split> = None;
-        for axis in 0..3 {
-            sorted.sort_unstable_by(|&a, &b| self.key(a, axis).total_cmp(&self.key(b, axis)));
-            if self.key(sorted[0], axis) == self.key(sorted[n - 1], axis) {
-                continue;
+/// The cheapest split between consecutive primitives in centroid order on any axis.
+fn best_sweep(refs: &[PrimRef], intersection_cost: f32) -> Option<Split> {
+    let n = refs.len();
+    if n <= SMALL {
+        let mut keys = [(0.0f32, 0u32); SMALL];
+        sweep(refs, &mut keys[..n], &mut [0.0; SMALL][..n], intersection_cost)
+    } else {
+        sweep(refs, &mut vec![(0.0, 0); n], &mut vec![0.0; n], intersection_cost)
+    }
+}
+
+/// [`best_sweep`] with caller-provided scratch space: (centroid, index) keys and areas.
+fn sweep(refs: &[PrimRef], keys: &mut [(f32, u32)], right_area: &mut [f32], cost: f32) -> Option<Split> {
+    let n = refs.len();
+    let mut best: Option<Split> = None;
+    for axis in 0..3 {
+        for (i, (k, r)) in keys.iter_mut().zip(refs).enumerate() {
+            *k = (r.centroid2()[axis], i as u32);
+        }
+        keys.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        if keys[0].0 == keys[n - 1].0 {
+            continue;
+        }
+        let prim = |k: usize| {
+            let r = &refs[keys[k].1 as usize];
+            Aabb { min: r.min, max: r.max }
+        };
+        let mut acc = Aabb::EMPTY;
+        for k in (1..n).rev() {
+            acc.grow(&prim(k));
+            right_area[k] = acc.half_area();
+        }
+        let mut acc = Aabb::EMPTY;
+        for k in 1..n {
+            acc.grow(&prim(k - 1));
+            let c = cost * (acc.half_area() * k as f32 + right_area[k] * (n - k) as f32);
+            if best.as_ref().is_none_or(|b| c < b.cost) {
+                best = Some(Split { axis, cost: c, kind: SplitKind::Sorted { count: k } });
             }
-            let mut acc = Aabb::EMPTY;
-            for k in (1..n).rev() {
-                acc.grow(&self.prims[sorted[k] as usize].bounds);
-                right_area[k] = acc.half_area();
-            }
-            let mut acc = Aabb::EMPTY;
-            for k in 1..n {
-                acc.grow(&self.prims[sorted[k - 1] as usize].bounds);
-                let cost = self.options.intersection_cost
-                    * (acc.half_area() * k as f32 + right_area[k] * (n - k) as f32);
-                if best.as_ref().is_none_or(|b| cost < b.cost) {
-                    best = Some(Split { axis, cost, kind: SplitKind::Sorted { count: k } });
+        }
+    }
+    best
+}
+
+/// Reorders `refs` and `order` together so the left side of `split` comes first; returns its
+/// size and, when it comes for free, the (bounds, centroid bounds) of both sides.
+fn partition(refs: &mut [PrimRef], order: &mut [u32], split: &Split) -> (usize, Option<[(Aabb, Aabb); 2]>) {
+    match &split.kind {
+        SplitKind::Bin { bin, binning } => {
+            let mut left = 0;
+            let mut sides = [(Aabb::EMPTY, Aabb::EMPTY); 2];
+            for i in 0..refs.len() {
+                let r = refs[i];
+                let c2 = r.centroid2();
+                let goes_left = binning.bin_on(c2, split.axis) < *bin;
+                let side = &mut sides[usize::from(!goes_left)];
+                side.0.grow(&Aabb { min: r.min, max: r.max });
+                side.1.grow_point(c2);
+                if goes_left {
+                    refs.swap(i, left);
+                    order.swap(i, left);
+                    left += 1;
                 }
             }
+            (left, Some(sides))
         }
-        best
-    }
-
-    fn key(&self, prim: u32, axis: usize) -> f32 {
-        self.prims[prim as usize].centroid[axis]
-    }
-
-    /// Reorders `order` so the left side of `split` comes first; returns its size.
-    fn partition(&self, order: &mut [u32], split: &Split) -> usize {
-        match split.kind {
-            SplitKind::Bin { bin, scale, origin } => {
-                let bins = self.options.bins;
-                let goes_left = |i: &u32| {
-                    let c = self.key(*i, split.axis);
-                    (((c - origin) * scale) as usize).min(bins - 1) < bin
-                };
-                partition_in_place(order, goes_left)
+        SplitKind::Sorted { count } => {
+            let axis = split.axis;
+            let by_key = |a: &(PrimRef, u32), b: &(PrimRef, u32)| {
+                a.0.centroid2()[axis].total_cmp(&b.0.centroid2()[axis]).then(a.1.cmp(&b.1))
+            };
+            let n = refs.len();
+            let mut small = [(PrimRef { min: Vec3A::ZERO, max: Vec3A::ZERO }, 0u32); SMALL];
+            let mut large = Vec::new();
+            let pairs = if n <= SMALL {
+                &mut small[..n]
+            } else {
+                large.resize(n, small[0]);
+                &mut large[..]
+            };
+            for (k, p) in pairs.iter_mut().enumerate() {
+                *p = (refs[k], order[k]);
             }
-            SplitKind::Sorted { count } => {
-                order.sort_unstable_by(|&a, &b| {
-                    self.key(a, split.axis).total_cmp(&self.key(b, split.axis)).then(a.cmp(&b))
-                });
-                count
+            pairs.sort_unstable_by(by_key);
+            for (k, (r, i)) in pairs.iter().enumerate() {
+                refs[k] = *r;
+                order[k] = *i;
             }
+            (*count, None)
         }
     }
 }
 
-fn partition_in_place(order: &mut [u32], goes_left: impl Fn(&u32) -> bool) -> usize {
-    let mut left = 0;
-    for i in 0..order.len() {
-        if goes_left(&order[i]) {
-            order.swap(i, left);
-            left += 1;
-        }
+fn node_of(bounds: &Aabb, left_first: u32, tri_count: u32) -> BvhNode {
+    BvhNode {
+        aabb_min: Vec3::from(bounds.min).into(),
+        left_first,
+        aabb_max: Vec3::from(bounds.max).into(),
+        tri_count,
     }
-    left
 }
 
-/// Writes `node` at `index`, allocating each pair of children at the end (at even indices).
-fn flatten(node: &Node, index: usize, nodes: &mut Vec<BvhNode>) {
-    let b = node.bounds();
-    let (min, max) = (Vec3::from(b.min).into(), Vec3::from(b.max).into());
-    match node {
-        Node::Leaf { first, count, .. } => {
-            nodes[index] =
-                BvhNode { aabb_min: min, left_first: *first as u32, aabb_max: max, tri_count: *count as u32 };
+/// Copies the tree out of its slots (which have gaps where leaves held several primitives)
+/// depth-first, each pair of children allocated at the end, at even indices.
+fn compact(slots: &[BvhNode]) -> Vec<BvhNode> {
+    let mut nodes = Vec::with_capacity(slots.len());
+    nodes.extend_from_slice(&slots[..2]);
+    let mut stack = vec![0usize];
+    while let Some(index) = stack.pop() {
+        let node = nodes[index];
+        if node.is_leaf() {
+            continue;
         }
-        Node::Interior { children, .. } => {
-            let left = nodes.len();
-            nodes.resize(left + 2, BvhNode::default());
-            nodes[index] = BvhNode { aabb_min: min, left_first: left as u32, aabb_max: max, tri_count: 0 };
-            flatten(&children[0], left, nodes);
-            flatten(&children[1], left + 1, nodes);
-        }
+        let from = node.left_first as usize;
+        let to = nodes.len();
+        nodes.extend_from_slice(&slots[from..from + 2]);
+        nodes[index].left_first = to as u32;
+        stack.extend([to + 1, to]);
     }
+    nodes
 }
 
 fn stats(bvh: &Bvh, options: &BuildOptions) -> BvhStats {

@@ -103,7 +103,7 @@ pub struct BvhStats {
     pub mean_leaf_size: f32,
     /// Surface-area-heuristic cost with the build's traversal and intersection costs.
     pub sah_cost: f32,
-    /// Wall-clock build time in milliseconds.
+    /// Wall-clock build time in milliseconds (bounds to reordered triangles; not these stats).
     pub build_ms: f64,
 }
 

@@ -1,0 +1,149 @@
+//! `umbra-bench`: umbra's measurements. `rays` is the ray-throughput mode (BVH build statistics
+//! and Mrays/s for primary, shadow and diffuse rays, validated before timing).
+
+mod rays;
+
+use anyhow::{Context as _, Result};
+use clap::{Parser, Subcommand};
+use glam::Vec3;
+use rays::{RayReport, RayScene, RaySettings};
+use serde_json::json;
+use std::path::PathBuf;
+use umbra::geometry::{icosphere, terrain};
+use umbra::vk::{Context, ContextDesc};
+
+#[derive(Parser)]
+#[command(name = "umbra-bench", version, about = "umbra's benchmarks")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// BVH build statistics and ray throughput (Mrays/s) for primary, shadow and diffuse rays.
+    Rays {
+        /// A small, fast run (one 78k-triangle scene, 128×128 rays): checks the binary works.
+        #[arg(long)]
+        quick: bool,
+        /// Rays per kind as a WIDTHxHEIGHT primary-ray image.
+        #[arg(long, default_value = "512x512", value_parser = umbra::cli::parse_size)]
+        size: (u32, u32),
+        /// Timed repeats per ray kind (after one warm-up); the median is reported.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Also build with the full-sweep SAH to compare SAH cost (slow on large scenes).
+        #[arg(long)]
+        sweep: bool,
+        /// Where to write rays.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+    },
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info"))
+        .format_timestamp(None)
+        .init();
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+/// Generated terrain with a row of spheres on it: `2·n²` + 15,360 triangles.
+fn terrain_scene(name: &str, n: u32) -> RayScene {
+    let size = 100.0;
+    let mut triangles = terrain(n, size, 3).soup();
+    for k in 0..3 {
+        triangles.extend(icosphere(4, Vec3::new(-20.0 + 20.0 * k as f32, 8.0, 0.0), 6.0).soup());
+    }
+    RayScene {
+        name: format!("{name} ({} triangles)", triangles.len()),
+        triangles,
+        eye: Vec3::new(0.0, 30.0, 70.0),
+        target: Vec3::new(0.0, 0.0, -10.0),
+        yfov: 50f32.to_radians(),
+        light: Vec3::new(30.0, 60.0, 20.0),
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Rays { quick, size, repeats, sweep, out } => {
+            let ctx = Context::new(&ContextDesc::default())?;
+            let device = ctx.info().name.clone();
+            let (scenes, settings) = if quick {
+                (
+                    vec![terrain_scene("terrain", 177)],
+                    RaySettings { size: (128, 128), repeats: 3, builds: 1, sweep: true },
+                )
+            } else {
+                (
+                    vec![terrain_scene("terrain", 351), terrain_scene("terrain", 704)],
+                    RaySettings { size, repeats, builds: 5, sweep },
+                )
+            };
+            let mut reports = Vec::new();
+            for scene in &scenes {
+                log::info!("{}: building and validating", scene.name);
+                let report = rays::run(&ctx, scene, &settings).with_context(|| scene.name.clone())?;
+                print_report(&report);
+                reports.push(report);
+            }
+            std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+            let path = out.join("rays.json");
+            let doc = json!({
+                "device": device,
+                "threads": rayon::current_num_threads(),
+                "size": [settings.size.0, settings.size.1],
+                "repeats": settings.repeats,
+                "scenes": reports.iter().map(report_json).collect::<Vec<_>>(),
+            });
+            std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
+                .with_context(|| format!("writing {}", path.display()))?;
+            println!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+fn stats_json(s: &umbra::bvh::BvhStats) -> serde_json::Value {
+    json!({
+        "nodes": s.nodes, "leaves": s.leaves, "depth": s.depth, "max_leaf_size": s.max_leaf_size,
+        "mean_leaf_size": s.mean_leaf_size, "sah_cost": s.sah_cost, "build_ms": s.build_ms,
+    })
+}
+
+fn report_json(r: &RayReport) -> serde_json::Value {
+    json!({
+        "scene": r.scene,
+        "triangles": r.triangles,
+        "binned": stats_json(&r.binned),
+        "binned_build_ms_median": r.binned_build_ms_median,
+        "sweep": r.sweep.as_ref().map(stats_json),
+        "rays": r.kinds.iter().map(|(kind, n, ms, mrays)| json!({
+            "kind": kind, "rays": n, "median_ms": ms, "mrays_per_s": mrays,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+fn print_report(r: &RayReport) {
+    println!("\n{}", r.scene);
+    let b = &r.binned;
+    println!(
+        "  binned SAH build: {:.1} ms (median), SAH cost {:.2}, {} nodes, {} leaves (mean {:.2}, max {}), depth {}",
+        r.binned_build_ms_median, b.sah_cost, b.nodes, b.leaves, b.mean_leaf_size, b.max_leaf_size, b.depth
+    );
+    if let Some(s) = &r.sweep {
+        println!(
+            "  full-sweep SAH:   {:.1} ms, SAH cost {:.2} (binned is {:+.2} %)",
+            s.build_ms,
+            s.sah_cost,
+            100.0 * (b.sah_cost / s.sah_cost - 1.0)
+        );
+    }
+    for (kind, n, ms, mrays) in &r.kinds {
+        println!("  {kind:8} {n:>8} rays  {ms:9.3} ms  {mrays:8.2} Mrays/s");
+    }
+}

@@ -1,0 +1,233 @@
+//! Ray throughput in the style of tinybvh's speedtest: build the BVH (binned, and full-sweep SAH
+//! for the quality comparison), make primary, shadow and diffuse-bounce rays, validate the GPU's
+//! answers against the CPU traversal and a brute-force reference, then time each ray kind with
+//! GPU timestamps (warm-up, median of repeats).
+
+use anyhow::{bail, Result};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
+use umbra::bvh::gpu::{GpuBvh, Query, RayTracer};
+use umbra::bvh::reference::Reference;
+use umbra::bvh::{BuildOptions, Bvh, BvhStats, Ray};
+use umbra::geometry::Rng;
+use umbra::gpu::layout::{TraceHit, TraceRay};
+use umbra::vk::{raw, Buffer, Context, GpuTimer, MemoryLocation};
+
+/// A scene to trace: triangles and a view.
+pub struct RayScene {
+    pub name: String,
+    pub triangles: Vec<[Vec3; 3]>,
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub yfov: f32,
+    /// A point light for the shadow rays.
+    pub light: Vec3,
+}
+
+/// What one scene measured.
+pub struct RayReport {
+    pub scene: String,
+    pub triangles: usize,
+    pub binned: BvhStats,
+    pub binned_build_ms_median: f64,
+    pub sweep: Option<BvhStats>,
+    /// (kind, rays, median ms, Mrays/s)
+    pub kinds: Vec<(String, usize, f64, f64)>,
+}
+
+pub struct RaySettings {
+    pub size: (u32, u32),
+    pub repeats: usize,
+    pub builds: usize,
+    pub sweep: bool,
+}
+
+pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<RayReport> {
+    let mut build_ms = Vec::new();
+    let mut bvh = None;
+    for _ in 0..settings.builds.max(1) {
+        let b = Bvh::build(&scene.triangles)?;
+        build_ms.push(b.stats.build_ms);
+        bvh = Some(b);
+    }
+    let bvh = bvh.expect("at least one build");
+    bvh.validate().map_err(anyhow::Error::msg)?;
+    let sweep = if settings.sweep {
+        let options = BuildOptions { full_sweep: true, ..Default::default() };
+        Some(Bvh::build_with(&scene.triangles, &options)?.stats)
+    } else {
+        None
+    };
+
+    let device_bvh = GpuBvh::upload(ctx, &bvh)?;
+    let tracer = RayTracer::new(ctx)?;
+    let primary = primary_rays(scene, settings.size);
+    let primary_hits =
+        trace_validated(ctx, &tracer, &device_bvh, &bvh, &scene.triangles, Query::Closest, &primary)?;
+    let (shadow, diffuse) = secondary_rays(scene, &bvh, &primary, &primary_hits);
+    trace_validated(ctx, &tracer, &device_bvh, &bvh, &scene.triangles, Query::Any, &shadow)?;
+    trace_validated(ctx, &tracer, &device_bvh, &bvh, &scene.triangles, Query::Closest, &diffuse)?;
+
+    let mut kinds = Vec::new();
+    for (kind, query, rays) in [
+        ("primary", Query::Closest, &primary),
+        ("shadow", Query::Any, &shadow),
+        ("diffuse", Query::Closest, &diffuse),
+    ] {
+        let ms = time_trace(ctx, &tracer, &device_bvh, query, rays, settings.repeats)?;
+        kinds.push((kind.to_string(), rays.len(), ms, rays.len() as f64 / (ms * 1e3)));
+    }
+    Ok(RayReport {
+        scene: scene.name.clone(),
+        triangles: scene.triangles.len(),
+        binned: bvh.stats.clone(),
+        binned_build_ms_median: median(&mut build_ms),
+        sweep,
+        kinds,
+    })
+}
+
+fn primary_rays(scene: &RayScene, (w, h): (u32, u32)) -> Vec<Ray> {
+    let forward = (scene.target - scene.eye).normalize();
+    let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    let up = right.cross(forward);
+    let tan = (scene.yfov * 0.5).tan();
+    let aspect = w as f32 / h as f32;
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let sx = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0) * tan * aspect;
+            let sy = (1.0 - 2.0 * (y as f32 + 0.5) / h as f32) * tan;
+            Ray {
+                origin: scene.eye,
+                dir: (forward + right * sx + up * sy).normalize(),
+                tmin: 0.0,
+                tmax: f32::INFINITY,
+            }
+        })
+        .collect()
+}
+
+/// From every primary hit: a shadow ray to the light (any hit, segment ends at the light) and a
+/// cosine-distributed diffuse bounce about the geometric normal facing the camera.
+fn secondary_rays(scene: &RayScene, bvh: &Bvh, primary: &[Ray], hits: &[TraceHit]) -> (Vec<Ray>, Vec<Ray>) {
+    let (lo, hi) = bvh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+    let eps = (hi - lo).length() * 1e-5;
+    let mut rng = Rng::new(17);
+    let mut shadow = Vec::new();
+    let mut diffuse = Vec::new();
+    for (ray, hit) in primary.iter().zip(hits) {
+        let Some(hit) = hit.hit() else { continue };
+        let [a, b, c] = bvh.tris[hit.tri as usize].vertices();
+        let mut n = (b - a).cross(c - a).normalize_or(Vec3::Y);
+        if n.dot(ray.dir) > 0.0 {
+            n = -n;
+        }
+        let p = ray.origin + ray.dir * hit.t + n * eps;
+        shadow.push(Ray { origin: p, dir: scene.light - p, tmin: 0.0, tmax: 1.0 });
+        let (t, s) = n.any_orthonormal_pair();
+        let (r, phi) = (rng.f32().sqrt(), rng.range(0.0, std::f32::consts::TAU));
+        let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - r * r).max(0.0).sqrt());
+        let dir = t * local.x + s * local.y + n * local.z;
+        diffuse.push(Ray { origin: p, dir, tmin: 0.0, tmax: f32::INFINITY });
+    }
+    (shadow, diffuse)
+}
+
+/// Traces on the GPU and checks every answer against the CPU BVH traversal, and a sample against
+/// brute force; fails on any disagreement.
+fn trace_validated(
+    ctx: &Context,
+    tracer: &RayTracer,
+    device_bvh: &GpuBvh,
+    bvh: &Bvh,
+    triangles: &[[Vec3; 3]],
+    query: Query,
+    rays: &[Ray],
+) -> Result<Vec<TraceHit>> {
+    let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
+    let hits = tracer.trace(ctx, query, device_bvh, &trace_rays)?;
+    let agree = |got: Option<umbra::bvh::Hit>, want: Option<umbra::bvh::Hit>, map: &dyn Fn(u32) -> u32| match (
+        got, want,
+    ) {
+        (None, None) => true,
+        (Some(g), Some(w)) => map(g.tri) == w.tri || (g.t - w.t).abs() <= 1e-5 * w.t.abs(),
+        _ => false,
+    };
+    let bad = rays
+        .par_iter()
+        .zip(&hits)
+        .filter(|(ray, hit)| match query {
+            Query::Closest => !agree(hit.hit(), bvh.closest(ray), &|t| t),
+            Query::Any => (hit.t == 1.0) != bvh.any(ray),
+        })
+        .count();
+    let reference = Reference::new(triangles);
+    let step = (rays.len() / 2000).max(1);
+    let bad_reference = (0..rays.len())
+        .into_par_iter()
+        .step_by(step)
+        .filter(|&i| match query {
+            Query::Closest => {
+                !agree(hits[i].hit(), reference.closest(&rays[i]), &|t| bvh.prim_order[t as usize])
+            }
+            Query::Any => (hits[i].t == 1.0) != reference.any(&rays[i]),
+        })
+        .count();
+    if bad + bad_reference > 0 {
+        bail!(
+            "{query:?} validation failed: {bad} of {} rays differ from the CPU BVH, {bad_reference} of \
+             {} from brute force",
+            rays.len(),
+            rays.len().div_ceil(step)
+        );
+    }
+    Ok(hits)
+}
+
+/// Median GPU time of one trace dispatch over `repeats` timed submissions after one warm-up.
+fn time_trace(
+    ctx: &Context,
+    tracer: &RayTracer,
+    bvh: &GpuBvh,
+    query: Query,
+    rays: &[Ray],
+    repeats: usize,
+) -> Result<f64> {
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+    let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
+    let ray_buffer = Buffer::upload(ctx, "bench rays", &trace_rays, usage)?;
+    let size = (rays.len().max(1) * std::mem::size_of::<TraceHit>()) as u64;
+    let hits = Buffer::new(ctx, "bench hits", size, usage, MemoryLocation::GpuOnly)?;
+    let mut timer = GpuTimer::new(ctx, 1)?;
+    let mut times = Vec::new();
+    for i in 0..=repeats {
+        let start = Instant::now();
+        ctx.submit(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "trace")?;
+            tracer.record(cmd, query, bvh, &ray_buffer, &hits, rays.len() as u32)?;
+            timer.end(cmd)
+        })?;
+        let ms = timer.read()?[0].ms;
+        log::debug!("{query:?} repeat {i}: GPU {ms:.3} ms, wall {:?}", start.elapsed());
+        if i > 0 {
+            times.push(ms);
+        }
+    }
+    Ok(median(&mut times))
+}
+
+pub fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}

@@ -1,0 +1,15 @@
+//! Argument parsers shared by the `umbra` and `umbra-bench` binaries.
+
+/// Parses `WIDTHxHEIGHT` (both positive, at most 16384).
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{s}': {e}"));
+    let (w, h) = (parse(w)?, parse(h)?);
+    if w == 0 || h == 0 {
+        return Err(format!("'{s}': width and height must be positive"));
+    }
+    if w > 16384 || h > 16384 {
+        return Err(format!("'{s}': at most 16384 pixels on a side"));
+    }
+    Ok((w, h))
+}

@@ -8,6 +8,7 @@ pub mod error;
 pub mod gpu;
 pub mod kernels;
 pub mod output;
+pub mod scene;
 pub mod vk;
 
 pub use error::{Error, Result};

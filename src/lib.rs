@@ -11,6 +11,7 @@ pub mod geometry;
 pub mod gpu;
 pub mod kernels;
 pub mod output;
+pub mod scene;
 pub mod vk;
 
 pub use error::{Error, Result};

@@ -1,0 +1,329 @@
+//! Flattening a glTF document into a [`Scene`]: walk the node tree of the chosen scene, place every
+//! mesh primitive with its world transform, and collect cameras, lights and emitters.
+
+use super::accessor::Reader;
+use super::geometry::{read_primitive, LocalPrimitive, Wanted};
+use super::source::{self, Asset, Origin};
+use super::texture::TextureSet;
+use super::{Camera, EmissiveTable, Instance, Light, Material, Scene};
+use crate::error::Result;
+use glam::{Mat3, Mat4, Quat, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+use std::rc::Rc;
+
+/// Loads the scene in `bytes`; `base` is the folder external files are relative to.
+pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
+    let origin = Origin::new(name, base.map(Path::to_path_buf));
+    let asset = source::open(&origin, bytes)?;
+    let mut textures = TextureSet::default();
+    let materials: Vec<Material> =
+        asset.document.materials().map(|m| Material::from_gltf(&m, &mut textures)).collect();
+    let mut builder = Builder::new(&origin, &asset, materials);
+    builder.walk()?;
+    let mut scene = builder.finish()?;
+    scene.textures = textures.decode(&origin, &asset)?;
+    scene.emissive = EmissiveTable::build(
+        &scene.positions,
+        &scene.triangles,
+        &scene.triangle_material,
+        &scene.materials,
+        &scene.textures,
+    );
+    if log::log_enabled!(log::Level::Debug) {
+        log::debug!("{name}: {:?}", scene.stats());
+    }
+    Ok(scene)
+}
+
+/// Accumulates the flat scene while the node tree is walked.
+struct Builder<'a> {
+    origin: &'a Origin,
+    asset: &'a Asset<'a>,
+    reader: Reader<'a>,
+    /// Whether any material has a normal map, so every vertex needs a tangent.
+    tangents: bool,
+    /// Each (mesh, primitive) read once; `None` for primitives that are not triangles.
+    primitives: HashMap<(usize, usize), Option<Rc<LocalPrimitive>>>,
+    /// Index of the glTF default material once a primitive needed it.
+    default_material: Option<u32>,
+    /// Triangles dropped for non-finite positions, over all placements.
+    dropped: usize,
+    scene: Scene,
+}
+
+impl<'a> Builder<'a> {
+    fn new(origin: &'a Origin, asset: &'a Asset<'a>, materials: Vec<Material>) -> Self {
+        Self {
+            origin,
+            asset,
+            reader: Reader { origin, buffers: &asset.buffers },
+            tangents: materials.iter().any(|m| m.normal_texture.is_some()),
+            primitives: HashMap::new(),
+            default_material: None,
+            dropped: 0,
+            scene: Scene { name: origin.name().to_owned(), materials, ..Scene::default() },
+        }
+    }
+
+    /// Walks the default scene (or the first; or, in a file without scenes, every root node)
+    /// depth first, parents before children, in file order.
+    fn walk(&mut self) -> Result<()> {
+        let document = &self.asset.document;
+        let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
+            Some(scene) => scene.nodes().collect(),
+            None => {
+                let mut is_child = vec![false; document.nodes().len()];
+                for child in document.nodes().flat_map(|n| n.children()) {
+                    is_child[child.index()] = true;
+                }
+                document.nodes().filter(|n| !is_child[n.index()]).collect()
+            }
+        };
+        let mut visited = vec![false; document.nodes().len()];
+        let mut stack: Vec<(gltf::Node, Mat4)> =
+            roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+        while let Some((node, parent)) = stack.pop() {
+            if std::mem::replace(&mut visited[node.index()], true) {
+                return Err(self.origin.error(format!(
+                    "node {} is reached twice: the node hierarchy must be a set of disjoint trees \
+                     (a cycle, or a node with two parents)",
+                    node.index()
+                )));
+            }
+            let world = parent * local_transform(&node);
+            if !world.is_finite() {
+                return Err(self.origin.error(format!(
+                    "{}: its world transform is not finite (check its matrix, rotation and scale)",
+                    node_label(&node)
+                )));
+            }
+            self.place(&node, world)?;
+            stack.extend(node.children().collect::<Vec<_>>().into_iter().rev().map(|c| (c, world)));
+        }
+        Ok(())
+    }
+
+    /// Adds what one node carries: a camera, a light, a mesh (possibly GPU-instanced).
+    fn place(&mut self, node: &gltf::Node, world: Mat4) -> Result<()> {
+        if let Some(camera) = node.camera() {
+            let camera = Camera::from_gltf(self.origin, &self.asset.document, camera.index(), world)?;
+            self.scene.cameras.extend(camera);
+        }
+        if let Some(light) = node.light() {
+            self.scene.lights.push(Light::from_gltf(&light, world));
+        }
+        if let Some(mesh) = node.mesh() {
+            for instance in self.gpu_instances(node)? {
+                self.place_mesh(node, &mesh, world * instance)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// `EXT_mesh_gpu_instancing`: the per-instance transforms of a node (one identity without it).
+    fn gpu_instances(&self, node: &gltf::Node) -> Result<Vec<Mat4>> {
+        let Some(extension) = node.extension_value("EXT_mesh_gpu_instancing") else {
+            return Ok(vec![Mat4::IDENTITY]);
+        };
+        let label = format!("EXT_mesh_gpu_instancing of {}", node_label(node));
+        let attribute = |name: &str| -> Result<Option<gltf::Accessor>> {
+            let Some(index) = extension.get("attributes").and_then(|a| a.get(name)) else { return Ok(None) };
+            let accessor = index.as_u64().and_then(|i| self.asset.document.accessors().nth(i as usize));
+            accessor.map(Some).ok_or_else(|| {
+                self.origin.error(format!("{label}: {name} refers to accessor {index}, which does not exist"))
+            })
+        };
+        let read3 = |name: &str| -> Result<Option<Vec<Vec3>>> {
+            let Some(accessor) = attribute(name)? else { return Ok(None) };
+            let values = self.reader.vectors::<3>(&accessor, &format!("{name} of {label}"))?;
+            Ok(Some(values.into_iter().map(Vec3::from).collect()))
+        };
+        let translation = read3("TRANSLATION")?;
+        let scale = read3("SCALE")?;
+        let rotation: Option<Vec<Quat>> = match attribute("ROTATION")? {
+            Some(accessor) => {
+                let values = self.reader.vectors::<4>(&accessor, &format!("ROTATION of {label}"))?;
+                Some(values.into_iter().map(|q| Quat::from_array(q).normalize()).collect())
+            }
+            None => None,
+        };
+        let lengths: Vec<usize> = [
+            translation.as_ref().map(Vec::len),
+            rotation.as_ref().map(Vec::len),
+            scale.as_ref().map(Vec::len),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        let Some(&count) = lengths.first() else {
+            return Err(self
+                .origin
+                .error(format!("{label} has no TRANSLATION, ROTATION or SCALE attribute")));
+        };
+        if lengths.iter().any(|&l| l != count) {
+            return Err(self
+                .origin
+                .error(format!("{label}: its attributes have different counts {lengths:?}")));
+        }
+        Ok((0..count)
+            .map(|i| {
+                Mat4::from_scale_rotation_translation(
+                    scale.as_ref().map_or(Vec3::ONE, |s| s[i]),
+                    rotation.as_ref().map_or(Quat::IDENTITY, |r| r[i]),
+                    translation.as_ref().map_or(Vec3::ZERO, |t| t[i]),
+                )
+            })
+            .collect())
+    }
+
+    /// Places every primitive of `mesh` with transform `world` and records the instance.
+    fn place_mesh(&mut self, node: &gltf::Node, mesh: &gltf::Mesh, world: Mat4) -> Result<()> {
+        if !world.is_finite() {
+            return Err(self
+                .origin
+                .error(format!("{}: an instance transform is not finite", node_label(node))));
+        }
+        let first_triangle = self.scene.triangles.len();
+        for primitive in mesh.primitives() {
+            if let Some(local) = self.local_primitive(mesh, &primitive)? {
+                let material = self.material_index(local.material);
+                self.append(&local, world, material)?;
+                self.dropped += local.dropped;
+            }
+        }
+        self.scene.instances.push(Instance {
+            name: node.name().unwrap_or_default().to_owned(),
+            node: node.index() as u32,
+            mesh: mesh.index() as u32,
+            transform: world.to_cols_array_2d(),
+            first_triangle: first_triangle as u32,
+            triangle_count: (self.scene.triangles.len() - first_triangle) as u32,
+        });
+        Ok(())
+    }
+
+    /// A primitive in object space, read on first use.
+    fn local_primitive(
+        &mut self,
+        mesh: &gltf::Mesh,
+        primitive: &gltf::Primitive,
+    ) -> Result<Option<Rc<LocalPrimitive>>> {
+        let key = (mesh.index(), primitive.index());
+        if let Some(cached) = self.primitives.get(&key) {
+            return Ok(cached.clone());
+        }
+        let normal_uv_set =
+            |m: usize| self.scene.materials.get(m).and_then(|m| m.normal_texture).map(|t| t.tex_coord);
+        let wanted = Wanted {
+            tangents_from_uv: self
+                .tangents
+                .then(|| primitive.material().index().and_then(normal_uv_set).unwrap_or(0)),
+        };
+        let local = read_primitive(&self.reader, mesh, primitive, wanted)?.map(Rc::new);
+        self.primitives.insert(key, local.clone());
+        Ok(local)
+    }
+
+    /// The scene material index for a glTF material index (`None`: the default material).
+    fn material_index(&mut self, material: Option<usize>) -> u32 {
+        match material {
+            Some(m) => m as u32,
+            None => *self.default_material.get_or_insert_with(|| {
+                self.scene.materials.push(Material { name: "glTF default".into(), ..Material::default() });
+                self.scene.materials.len() as u32 - 1
+            }),
+        }
+    }
+
+    /// Appends a primitive transformed to world space. Normals go through the inverse transpose;
+    /// a mirroring transform reverses the winding (and the tangent handedness) so front faces
+    /// stay counter-clockwise.
+    fn append(&mut self, local: &LocalPrimitive, world: Mat4, material: u32) -> Result<()> {
+        let base = self.scene.positions.len();
+        if base + local.positions.len() > u32::MAX as usize {
+            return Err(self.origin.error("the scene has more than 2^32 vertices"));
+        }
+        let linear = Mat3::from_mat4(world);
+        let normal_matrix = linear.inverse().transpose();
+        let mirrored = linear.determinant() < 0.0;
+        let scene = &mut self.scene;
+        scene.positions.extend(local.positions.iter().map(|&p| world.transform_point3(p).to_array()));
+        let normals: Vec<Vec3> =
+            local.normals.iter().map(|&n| (normal_matrix * n).normalize_or(Vec3::Z)).collect();
+        if self.tangents {
+            scene.tangents.extend(local.tangents.iter().zip(&normals).map(|(t, &n)| {
+                let xyz = linear * t.truncate();
+                let xyz = (xyz - n * n.dot(xyz)).normalize_or(n.any_orthonormal_vector());
+                [xyz.x, xyz.y, xyz.z, if mirrored { -t.w } else { t.w }]
+            }));
+        }
+        scene.normals.extend(normals.iter().map(|n| n.to_array()));
+        extend_optional(&mut scene.uv0, base, local.uv0.as_deref(), [0.0; 2]);
+        extend_optional(&mut scene.uv1, base, local.uv1.as_deref(), [0.0; 2]);
+        extend_optional(&mut scene.colors, base, local.colors.as_deref(), [1.0; 4]);
+        let base = base as u32;
+        scene.triangles.extend(local.triangles.iter().map(|&[a, b, c]| {
+            let [a, b, c] = [a + base, b + base, c + base];
+            if mirrored {
+                [a, c, b]
+            } else {
+                [a, b, c]
+            }
+        }));
+        scene.triangle_material.extend(std::iter::repeat_n(material, local.triangles.len()));
+        Ok(())
+    }
+
+    /// The finished scene: optional attributes padded to every vertex, emptiness rejected.
+    fn finish(mut self) -> Result<Scene> {
+        let scene = &mut self.scene;
+        let vertices = scene.positions.len();
+        for uv in [&mut scene.uv0, &mut scene.uv1] {
+            if !uv.is_empty() {
+                uv.resize(vertices, [0.0; 2]);
+            }
+        }
+        if !scene.colors.is_empty() {
+            scene.colors.resize(vertices, [1.0; 4]);
+        }
+        if scene.triangles.is_empty() {
+            return Err(self.origin.error(match self.dropped {
+                0 => "the scene has no triangles to render".to_owned(),
+                n => format!("all {n} triangles were dropped for NaN or infinite vertex positions"),
+            }));
+        }
+        Ok(self.scene)
+    }
+}
+
+/// A node's local transform: its matrix, or translation · rotation · scale.
+fn local_transform(node: &gltf::Node) -> Mat4 {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
+        gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+            Mat4::from_scale_rotation_translation(
+                Vec3::from(scale),
+                Quat::from_array(rotation).normalize(),
+                Vec3::from(translation),
+            )
+        }
+    }
+}
+
+/// "node 4 ('Wheel')", for messages.
+fn node_label(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(name) => format!("node {} ('{name}')", node.index()),
+        None => format!("node {}", node.index()),
+    }
+}
+
+/// Appends `values` to an optional vertex attribute, first padding it with `fill` for the
+/// vertices of earlier primitives that lacked it.
+fn extend_optional<T: Copy>(out: &mut Vec<T>, base: usize, values: Option<&[T]>, fill: T) {
+    if let Some(values) = values {
+        out.resize(base, fill);
+        out.extend_from_slice(values);
+    }
+}

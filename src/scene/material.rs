@@ -1,0 +1,218 @@
+//! Materials: glTF 2.0 metallic-roughness with the emissive strength, specular, transmission and
+//! IOR extensions, and `KHR_texture_transform` on every texture slot.
+
+use super::texture::TextureSet;
+use gltf::json::Value;
+
+/// How a material's alpha (base colour alpha × texture alpha) is used.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AlphaMode {
+    /// Alpha is ignored (the glTF default).
+    #[default]
+    Opaque,
+    /// Alpha below `alpha_cutoff` is fully transparent, above fully opaque.
+    Mask,
+    /// Alpha blends with what is behind.
+    Blend,
+}
+
+/// The identity UV transform.
+pub const IDENTITY_TRANSFORM: [[f32; 3]; 2] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+/// A material's use of a texture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Index into [`super::Scene::textures`].
+    pub texture: u32,
+    /// Which UV set (`0`: `uv0`, `1`: `uv1`), after any `KHR_texture_transform` override.
+    pub tex_coord: u32,
+    /// `KHR_texture_transform` as a 2×3 affine matrix, rows first:
+    /// `u' = t[0][0]·u + t[0][1]·v + t[0][2]`, `v' = t[1][0]·u + t[1][1]·v + t[1][2]`.
+    /// See [`texture_transform`].
+    pub transform: [[f32; 3]; 2],
+    /// The normal map's `scale` or the occlusion map's `strength`; 1 for other slots.
+    pub scale: f32,
+}
+
+impl TextureRef {
+    /// Applies [`TextureRef::transform`] to a UV coordinate.
+    pub fn transform_uv(&self, [u, v]: [f32; 2]) -> [f32; 2] {
+        let [r0, r1] = self.transform;
+        [r0[0] * u + r0[1] * v + r0[2], r1[0] * u + r1[1] * v + r1[2]]
+    }
+}
+
+/// The `KHR_texture_transform` matrix `translation · rotation · scale` as 2×3, rows first.
+///
+/// `rotation` turns the UVs counter-clockwise as seen in the image (whose v axis points down):
+/// `u' = sx·cos·u + sy·sin·v + ox`, `v' = −sx·sin·u + sy·cos·v + oy`. This is the convention of
+/// the extension's worked example ("offset [0, 1], rotation π/2, scale ½ uses the lower-left
+/// quadrant"), of the Khronos sample viewer and of three.js; the GLSL snippet in the extension
+/// text, read as column-major, would rotate the other way.
+pub fn texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> [[f32; 3]; 2] {
+    let (sin, cos) = rotation.sin_cos();
+    [[scale[0] * cos, scale[1] * sin, offset[0]], [-scale[0] * sin, scale[1] * cos, offset[1]]]
+}
+
+/// A glTF 2.0 metallic-roughness material, with every factor resolved.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// The material's name (empty when it has none).
+    pub name: String,
+    /// Linear RGBA multiplier of the base colour texture.
+    pub base_color_factor: [f32; 4],
+    /// Metalness, 0 (dielectric) to 1 (metal).
+    pub metallic: f32,
+    /// Perceptual roughness (α = roughness²).
+    pub roughness: f32,
+    /// Emitted radiance, linear RGB: `emissiveFactor` × `KHR_materials_emissive_strength`.
+    pub emissive: [f32; 3],
+    /// Index of refraction (`KHR_materials_ior`, default 1.5).
+    pub ior: f32,
+    /// Specular strength (`KHR_materials_specular`, default 1).
+    pub specular_factor: f32,
+    /// Specular F0 colour (`KHR_materials_specular`, default white).
+    pub specular_color_factor: [f32; 3],
+    /// Transmission (`KHR_materials_transmission`, default 0).
+    pub transmission_factor: f32,
+    /// How alpha is used.
+    pub alpha_mode: AlphaMode,
+    /// The `Mask` threshold (default 0.5).
+    pub alpha_cutoff: f32,
+    /// Whether back faces are shaded too (with the normal flipped).
+    pub double_sided: bool,
+    /// Base colour (sRGB RGBA).
+    pub base_color_texture: Option<TextureRef>,
+    /// Roughness in G, metalness in B (linear).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// Tangent-space normal map (linear); `scale` scales its XY.
+    pub normal_texture: Option<TextureRef>,
+    /// Ambient occlusion in R (linear); `scale` is the strength.
+    pub occlusion_texture: Option<TextureRef>,
+    /// Emission (sRGB RGB), multiplied by `emissive`.
+    pub emissive_texture: Option<TextureRef>,
+    /// Specular strength in A (linear).
+    pub specular_texture: Option<TextureRef>,
+    /// Specular colour (sRGB RGB).
+    pub specular_color_texture: Option<TextureRef>,
+    /// Transmission in R (linear).
+    pub transmission_texture: Option<TextureRef>,
+}
+
+impl Default for Material {
+    /// The glTF default material: white, fully metallic, fully rough, opaque, one-sided.
+    fn default() -> Self {
+        Self {
+            name: String::new(),
+            base_color_factor: [1.0; 4],
+            metallic: 1.0,
+            roughness: 1.0,
+            emissive: [0.0; 3],
+            ior: 1.5,
+            specular_factor: 1.0,
+            specular_color_factor: [1.0; 3],
+            transmission_factor: 0.0,
+            alpha_mode: AlphaMode::Opaque,
+            alpha_cutoff: 0.5,
+            double_sided: false,
+            base_color_texture: None,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            occlusion_texture: None,
+            emissive_texture: None,
+            specular_texture: None,
+            specular_color_texture: None,
+            transmission_texture: None,
+        }
+    }
+}
+
+impl Material {
+    /// Converts a glTF material, registering the textures it uses in `textures`.
+    pub(super) fn from_gltf(material: &gltf::Material, textures: &mut TextureSet) -> Self {
+        let pbr = material.pbr_metallic_roughness();
+        let mut info = |info: Option<gltf::texture::Info>, srgb: bool| {
+            info.map(|info| {
+                let transform = info.texture_transform();
+                let tex_coord = transform.as_ref().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
+                TextureRef {
+                    texture: textures.index_of(&info.texture(), srgb),
+                    tex_coord,
+                    transform: transform.map_or(IDENTITY_TRANSFORM, |t| {
+                        texture_transform(t.offset(), t.rotation(), t.scale())
+                    }),
+                    scale: 1.0,
+                }
+            })
+        };
+        let base_color_texture = info(pbr.base_color_texture(), true);
+        let metallic_roughness_texture = info(pbr.metallic_roughness_texture(), false);
+        let emissive_texture = info(material.emissive_texture(), true);
+        let specular = material.specular();
+        let specular_texture = info(specular.as_ref().and_then(|s| s.specular_texture()), false);
+        let specular_color_texture = info(specular.as_ref().and_then(|s| s.specular_color_texture()), true);
+        let transmission = material.transmission();
+        let transmission_texture = info(transmission.as_ref().and_then(|t| t.transmission_texture()), false);
+        let normal_texture = material.normal_texture().map(|t| {
+            let (tex_coord, transform) =
+                raw_transform(t.extension_value("KHR_texture_transform"), t.tex_coord());
+            TextureRef {
+                texture: textures.index_of(&t.texture(), false),
+                tex_coord,
+                transform,
+                scale: t.scale(),
+            }
+        });
+        let occlusion_texture = material.occlusion_texture().map(|t| {
+            let (tex_coord, transform) =
+                raw_transform(t.extension_value("KHR_texture_transform"), t.tex_coord());
+            TextureRef {
+                texture: textures.index_of(&t.texture(), false),
+                tex_coord,
+                transform,
+                scale: t.strength(),
+            }
+        });
+        let strength = material.emissive_strength().unwrap_or(1.0);
+        Self {
+            name: material.name().unwrap_or_default().to_owned(),
+            base_color_factor: pbr.base_color_factor(),
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            emissive: material.emissive_factor().map(|e| e * strength),
+            ior: material.ior().unwrap_or(1.5),
+            specular_factor: specular.as_ref().map_or(1.0, |s| s.specular_factor()),
+            specular_color_factor: specular.as_ref().map_or([1.0; 3], |s| s.specular_color_factor()),
+            transmission_factor: transmission.as_ref().map_or(0.0, |t| t.transmission_factor()),
+            alpha_mode: match material.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+            },
+            alpha_cutoff: material.alpha_cutoff().unwrap_or(0.5),
+            double_sided: material.double_sided(),
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            occlusion_texture,
+            emissive_texture,
+            specular_texture,
+            specular_color_texture,
+            transmission_texture,
+        }
+    }
+}
+
+/// `KHR_texture_transform` read from raw JSON (the `gltf` crate parses it only on plain texture
+/// infos, not on normal and occlusion textures): the UV set and the matrix.
+fn raw_transform(value: Option<&Value>, tex_coord: u32) -> (u32, [[f32; 3]; 2]) {
+    let Some(value) = value else { return (tex_coord, IDENTITY_TRANSFORM) };
+    let pair = |key: &str, default: [f32; 2]| {
+        let array = value.get(key).and_then(Value::as_array);
+        let at = |i: usize| array.and_then(|a| a.get(i)).and_then(Value::as_f64).map(|x| x as f32);
+        [at(0).unwrap_or(default[0]), at(1).unwrap_or(default[1])]
+    };
+    let rotation = value.get("rotation").and_then(Value::as_f64).unwrap_or(0.0) as f32;
+    let tex_coord = value.get("texCoord").and_then(Value::as_u64).map_or(tex_coord, |t| t as u32);
+    (tex_coord, texture_transform(pair("offset", [0.0, 0.0]), rotation, pair("scale", [1.0, 1.0])))
+}

@@ -1,0 +1,1052 @@
+//! The glTF loader: every committed scene loads with the counts its JSON implies; transforms,
+//! winding, samplers, emission, cameras and the emissive table are right; bad input gives a
+//! precise `Error::Scene` and never a panic. CPU only.
+
+#[path = "support/generate.rs"]
+mod generate;
+
+use glam::{Mat4, Quat, Vec3};
+use serde_json::{json, Value};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use umbra::scene::{texture_transform, Filter, LightKind, Scene, Wrap};
+use umbra::Error;
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// Every committed scene, generated ones first.
+fn committed_scenes() -> Vec<PathBuf> {
+    let khronos = [
+        "Box",
+        "BoxTextured",
+        "SimpleInstancing",
+        "NegativeScaleTest",
+        "OrientationTest",
+        "TextureSettingsTest",
+        "EmissiveStrengthTest",
+        "TextureCoordinateTest",
+        "MultiUVTest",
+    ];
+    let generated = generate::all().into_iter().map(|(name, _)| scenes_dir().join(name));
+    generated.chain(khronos.iter().map(|n| scenes_dir().join(format!("khronos/{n}/{n}.glb")))).collect()
+}
+
+fn load(path: &Path) -> Scene {
+    Scene::load(path).unwrap_or_else(|e| panic!("loading {}: {e}", path.display()))
+}
+
+fn khronos(name: &str) -> PathBuf {
+    scenes_dir().join(format!("khronos/{name}/{name}.glb"))
+}
+
+fn read_glb(path: &Path) -> (Value, Vec<u8>) {
+    generate::split_glb(&std::fs::read(path).unwrap())
+}
+
+fn to_glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+    generate::glb(&serde_json::to_vec(json).unwrap(), bin)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Expected values computed from the JSON alone, independently of the loader.
+
+#[derive(Debug, PartialEq)]
+struct Expected {
+    triangles: usize,
+    materials: usize,
+    textures: usize,
+    instances: usize,
+}
+
+fn expected(root: &Value) -> Expected {
+    let arr = |v: &Value, key: &str| v[key].as_array().cloned().unwrap_or_default();
+    let scene = root["scene"].as_u64().unwrap_or(0) as usize;
+    let mut stack: Vec<usize> =
+        arr(&arr(root, "scenes")[scene], "nodes").iter().map(|n| n.as_u64().unwrap() as usize).collect();
+    let (mut triangles, mut instances, mut default_material) = (0, 0, false);
+    while let Some(n) = stack.pop() {
+        let node = &root["nodes"][n];
+        stack.extend(arr(node, "children").iter().map(|c| c.as_u64().unwrap() as usize));
+        let Some(mesh) = node["mesh"].as_u64() else { continue };
+        let copies = match node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"].as_object() {
+            Some(attributes) => {
+                let accessor = attributes.values().next().unwrap().as_u64().unwrap() as usize;
+                root["accessors"][accessor]["count"].as_u64().unwrap() as usize
+            }
+            None => 1,
+        };
+        instances += copies;
+        for primitive in arr(&root["meshes"][mesh as usize], "primitives") {
+            let count = |a: &Value| {
+                root["accessors"][a.as_u64().unwrap() as usize]["count"].as_u64().unwrap() as usize
+            };
+            let vertices = if primitive["indices"].is_null() {
+                count(&primitive["attributes"]["POSITION"])
+            } else {
+                count(&primitive["indices"])
+            };
+            let per_copy = match primitive["mode"].as_u64().unwrap_or(4) {
+                4 => vertices / 3,
+                5 | 6 => vertices.saturating_sub(2),
+                _ => 0,
+            };
+            triangles += per_copy * copies;
+            default_material |= primitive["material"].is_null();
+        }
+    }
+    Expected {
+        triangles,
+        materials: arr(root, "materials").len() + default_material as usize,
+        textures: texture_uses(root).len(),
+        instances,
+    }
+}
+
+/// Distinct (image, sampler settings, sRGB) over every texture slot of every material.
+fn texture_uses(root: &Value) -> HashSet<(u64, [u64; 4], bool)> {
+    let mut uses = HashSet::new();
+    for material in root["materials"].as_array().into_iter().flatten() {
+        let pbr = &material["pbrMetallicRoughness"];
+        let ext = &material["extensions"];
+        let slots = [
+            (&pbr["baseColorTexture"], true),
+            (&pbr["metallicRoughnessTexture"], false),
+            (&material["normalTexture"], false),
+            (&material["occlusionTexture"], false),
+            (&material["emissiveTexture"], true),
+            (&ext["KHR_materials_specular"]["specularTexture"], false),
+            (&ext["KHR_materials_specular"]["specularColorTexture"], true),
+            (&ext["KHR_materials_transmission"]["transmissionTexture"], false),
+        ];
+        for (info, srgb) in slots {
+            let Some(texture) = info["index"].as_u64() else { continue };
+            let texture = &root["textures"][texture as usize];
+            let sampler = &root["samplers"][texture["sampler"].as_u64().unwrap_or(u64::MAX) as usize];
+            let field = |key: &str, default: u64| sampler[key].as_u64().unwrap_or(default);
+            // Filters as the loader can express them: nearest or linear, mipmapped or not.
+            let mag = (field("magFilter", 9729) == 9728) as u64;
+            let min = field("minFilter", 9987);
+            let min =
+                u64::from([9728, 9984, 9986].contains(&min)) | u64::from(![9728, 9729].contains(&min)) << 1;
+            let settings = [field("wrapS", 10497), field("wrapT", 10497), mag, min];
+            uses.insert((texture["source"].as_u64().unwrap(), settings, srgb));
+        }
+    }
+    uses
+}
+
+// ---------------------------------------------------------------------------------------------
+// Committed scenes
+
+#[test]
+fn generated_scenes_match_the_committed_files() {
+    for (name, bytes) in generate::all() {
+        let committed = std::fs::read(scenes_dir().join(name)).unwrap();
+        assert!(
+            committed == bytes,
+            "scenes/{name} differs from what tests/support/generate.rs makes: run `cargo run --example gen_scenes`"
+        );
+    }
+}
+
+#[test]
+fn every_committed_scene_loads_with_the_counts_its_json_implies() {
+    for path in committed_scenes() {
+        let scene = load(&path);
+        let (json, _) = read_glb(&path);
+        let stats = scene.stats();
+        let got = Expected {
+            triangles: stats.triangles,
+            materials: stats.materials,
+            textures: stats.textures,
+            instances: stats.instances,
+        };
+        assert_eq!(got, expected(&json), "{}", path.display());
+        assert_eq!(scene.triangle_material.len(), scene.triangles.len());
+        assert_eq!(scene.normals.len(), scene.positions.len());
+        for attribute in [scene.uv0.len(), scene.uv1.len(), scene.colors.len(), scene.tangents.len()] {
+            assert!(attribute == 0 || attribute == scene.positions.len(), "{}", path.display());
+        }
+        assert!(scene.triangles.iter().flatten().all(|&v| (v as usize) < scene.positions.len()));
+        assert!(scene.triangle_material.iter().all(|&m| (m as usize) < scene.materials.len()));
+        assert!(scene.positions.iter().flatten().all(|x| x.is_finite()));
+        assert!(
+            scene.normals.iter().all(|&n| (Vec3::from(n).length() - 1.0).abs() < 1e-4),
+            "{}",
+            path.display()
+        );
+        for texture in &scene.textures {
+            assert_eq!(texture.rgba8.len(), (texture.width * texture.height * 4) as usize);
+        }
+    }
+}
+
+#[test]
+fn the_embedded_cornell_box_loads() {
+    let scene = Scene::cornell_box();
+    let stats = scene.stats();
+    assert_eq!((stats.triangles, stats.materials, stats.textures, stats.degenerate_triangles), (36, 4, 0, 0));
+    assert_eq!(scene.cameras.len(), 1);
+    assert_eq!(scene.emissive.triangles.len(), 2);
+    let light = scene.materials.iter().find(|m| m.name == "light").unwrap();
+    for (got, want) in light.emissive.iter().zip([17.0, 12.0, 4.0]) {
+        assert!((got - want).abs() < 1e-4, "light radiance {:?}", light.emissive);
+    }
+    assert!(scene.materials.iter().all(|m| m.roughness == 1.0 && m.metallic == 0.0));
+}
+
+#[test]
+fn bounds_are_those_of_the_geometry() {
+    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5);
+    let (lo, hi) = load(&khronos("Box")).bounds();
+    assert!(close(lo, [-0.5; 3]) && close(hi, [0.5; 3]), "{lo:?} {hi:?}");
+    let (lo, hi) = Scene::cornell_box().bounds();
+    assert!(close(lo, [0.0; 3]) && close(hi, [0.55; 3]), "{lo:?} {hi:?}");
+    let (lo, hi) = load(&scenes_dir().join("spheres.glb")).bounds();
+    assert!(close(lo, [-5.0, 0.0, -5.0]) && close(hi, [5.0, 0.8, 5.0]), "{lo:?} {hi:?}");
+    // instanced.glb: the wedge under the transforms its nodes spell out.
+    let (lo, hi) = load(&scenes_dir().join("instanced.glb")).bounds();
+    let wedge = generate::Mesh::wedge().positions;
+    let (mut want_lo, mut want_hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for transform in instanced_transforms().into_iter().map(|(_, m)| m) {
+        for &p in &wedge {
+            let p = transform.transform_point3(Vec3::from(p));
+            (want_lo, want_hi) = (want_lo.min(p), want_hi.max(p));
+        }
+    }
+    assert!(
+        Vec3::from(lo).abs_diff_eq(want_lo, 1e-5) && Vec3::from(hi).abs_diff_eq(want_hi, 1e-5),
+        "{lo:?} {hi:?}"
+    );
+}
+
+/// The world transform of every instance in instanced.glb, from the generator's description.
+fn instanced_transforms() -> Vec<(String, Mat4)> {
+    let ring = Mat4::from_quat(Quat::from_rotation_y(30f32.to_radians()));
+    let mut out: Vec<(String, Mat4)> = (0..8)
+        .map(|k| {
+            let angle = k as f32 * std::f32::consts::TAU / 8.0;
+            let place = Vec3::new(2.0 * angle.cos(), 0.0, 2.0 * angle.sin());
+            (
+                format!("ring {k}"),
+                ring * Mat4::from_scale_rotation_translation(Vec3::splat(0.5), Quat::IDENTITY, place),
+            )
+        })
+        .collect();
+    let arm = ring * Mat4::from_scale_rotation_translation(Vec3::splat(2.0), Quat::IDENTITY, Vec3::Y);
+    let hand = arm
+        * Mat4::from_rotation_translation(
+            Quat::from_rotation_x(45f32.to_radians()),
+            Vec3::new(0.0, 0.5, 0.0),
+        );
+    let finger = hand * Mat4::from_translation(Vec3::new(0.5, 0.0, 0.0));
+    let mirror = Mat4::from_scale_rotation_translation(
+        Vec3::new(-1.0, 1.0, 1.0),
+        Quat::IDENTITY,
+        Vec3::new(-3.0, 0.0, 0.0),
+    );
+    let mirror_child = mirror * Mat4::from_translation(Vec3::Y);
+    for (name, m) in [("hand", hand), ("finger", finger), ("mirror", mirror), ("mirror child", mirror_child)]
+    {
+        out.push((name.to_owned(), m));
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transforms
+
+/// Every (non-degenerate) triangle's winding agrees with its vertices' shading normals.
+fn assert_winding_agrees(scene: &Scene, triangles: std::ops::Range<usize>, what: &str) {
+    for t in triangles {
+        let [a, b, c] = scene.triangles[t].map(|v| Vec3::from(scene.positions[v as usize]));
+        let geometric = (b - a).cross(c - a);
+        if geometric.length() < 1e-9 {
+            continue;
+        }
+        let shading: Vec3 = scene.triangles[t].iter().map(|&v| Vec3::from(scene.normals[v as usize])).sum();
+        assert!(geometric.dot(shading) > 0.0, "{what}: triangle {t} is wound against its normals");
+    }
+}
+
+#[test]
+fn negatively_scaled_instances_keep_front_faces_counter_clockwise() {
+    for path in [khronos("NegativeScaleTest"), scenes_dir().join("instanced.glb")] {
+        let scene = load(&path);
+        let mirrored: Vec<_> = scene
+            .instances
+            .iter()
+            .filter(|i| Mat4::from_cols_array_2d(&i.transform).determinant() < 0.0)
+            .collect();
+        assert!(!mirrored.is_empty(), "{} has mirrored instances", path.display());
+        for instance in mirrored {
+            let range = instance.first_triangle as usize
+                ..(instance.first_triangle + instance.triangle_count) as usize;
+            assert_winding_agrees(&scene, range, &format!("{} instance '{}'", path.display(), instance.name));
+        }
+    }
+    // The generated scene's mirrored nodes are exactly the two under "mirror".
+    let scene = load(&scenes_dir().join("instanced.glb"));
+    let mut mirrored: Vec<&str> = scene
+        .instances
+        .iter()
+        .filter(|i| Mat4::from_cols_array_2d(&i.transform).determinant() < 0.0)
+        .map(|i| i.name.as_str())
+        .collect();
+    mirrored.sort();
+    assert_eq!(mirrored, ["mirror", "mirror child"]);
+    assert_winding_agrees(&scene, 0..scene.triangles.len(), "instanced.glb");
+}
+
+#[test]
+fn nested_transforms_and_the_default_scene_are_honoured() {
+    let scene = load(&scenes_dir().join("instanced.glb"));
+    assert!(scene.instances.iter().all(|i| i.name != "not in the default scene"));
+    let find = |name: &str| scene.instances.iter().find(|i| i.name == name).unwrap();
+    let want = instanced_transforms();
+    assert_eq!(scene.instances.len(), want.len());
+    for (name, want) in &want {
+        let got = Mat4::from_cols_array_2d(&find(name).transform);
+        assert!(got.abs_diff_eq(*want, 1e-5), "{name}: {got} != {want}");
+    }
+    let finger = want.iter().find(|(n, _)| n == "finger").unwrap().1;
+    // The triangles follow the transform: the instance's first vertex is the mesh's first, moved.
+    let (json, bin) = read_glb(&scenes_dir().join("instanced.glb"));
+    let local = read_vec3(
+        &json,
+        &bin,
+        json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap(),
+    );
+    let finger_instance = find("finger");
+    let v = scene.triangles[finger_instance.first_triangle as usize][0] as usize;
+    let first =
+        scene.triangles[finger_instance.first_triangle as usize..].iter().flatten().min().copied().unwrap()
+            as usize;
+    assert!(Vec3::from(scene.positions[v]).abs_diff_eq(finger.transform_point3(local[v - first]), 1e-5));
+}
+
+/// Reads a float VEC3 (or VEC4 with `N` = 4) accessor straight from the BIN chunk.
+fn read_floats<const N: usize>(json: &Value, bin: &[u8], accessor: u64) -> Vec<[f32; N]> {
+    let accessor = &json["accessors"][accessor as usize];
+    assert_eq!(accessor["componentType"], 5126);
+    let view = &json["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize
+        + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let stride = view["byteStride"].as_u64().unwrap_or(4 * N as u64) as usize;
+    (0..accessor["count"].as_u64().unwrap() as usize)
+        .map(|i| {
+            std::array::from_fn(|c| {
+                let at = start + i * stride + 4 * c;
+                f32::from_le_bytes(bin[at..at + 4].try_into().unwrap())
+            })
+        })
+        .collect()
+}
+
+fn read_vec3(json: &Value, bin: &[u8], accessor: u64) -> Vec<Vec3> {
+    read_floats::<3>(json, bin, accessor).into_iter().map(Vec3::from).collect()
+}
+
+#[test]
+fn gpu_instancing_places_every_instance_with_its_transform() {
+    let path = khronos("SimpleInstancing");
+    let scene = load(&path);
+    let (json, bin) = read_glb(&path);
+    let attributes = &json["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
+    let translations = read_vec3(&json, &bin, attributes["TRANSLATION"].as_u64().unwrap());
+    let rotations = read_floats::<4>(&json, &bin, attributes["ROTATION"].as_u64().unwrap());
+    let scales = read_vec3(&json, &bin, attributes["SCALE"].as_u64().unwrap());
+    let local = read_vec3(
+        &json,
+        &bin,
+        json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap(),
+    );
+    assert_eq!(scene.instances.len(), 125);
+    assert_eq!(translations.len(), 125);
+    for (i, instance) in scene.instances.iter().enumerate() {
+        let want = Mat4::from_scale_rotation_translation(
+            scales[i],
+            Quat::from_array(rotations[i]).normalize(),
+            translations[i],
+        );
+        assert!(Mat4::from_cols_array_2d(&instance.transform).abs_diff_eq(want, 1e-5), "instance {i}");
+        assert_eq!((instance.first_triangle, instance.triangle_count), (12 * i as u32, 12));
+        // Each instance appends the cube's 24 vertices in order.
+        for (j, &p) in local.iter().enumerate() {
+            let got = Vec3::from(scene.positions[24 * i + j]);
+            assert!(got.abs_diff_eq(want.transform_point3(p), 1e-4), "instance {i} vertex {j}");
+        }
+    }
+}
+
+#[test]
+fn orientation_test_arrows_point_at_their_targets() {
+    let scene = load(&khronos("OrientationTest"));
+    let bounds = |name: &str| {
+        let i =
+            scene.instances.iter().find(|i| i.name == name).unwrap_or_else(|| panic!("no instance {name}"));
+        let range = i.first_triangle as usize..(i.first_triangle + i.triangle_count) as usize;
+        let points =
+            scene.triangles[range].iter().flatten().map(|&v| Vec3::from(scene.positions[v as usize]));
+        points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)))
+    };
+    let touch = |(a0, a1): (Vec3, Vec3), (b0, b1): (Vec3, Vec3)| {
+        (a0 - 0.02).cmple(b1).all() && (b0 - 0.02).cmple(a1).all()
+    };
+    let pairs = ["X1", "X2", "Y1", "Y2", "Z1", "Z2"];
+    for pair in pairs {
+        let arrow = bounds(&format!("Arrow{pair}"));
+        // ArrowX1 sits on +X, ArrowX2 on -X, and so on.
+        let axis = ["X", "Y", "Z"].iter().position(|a| pair.starts_with(a)).unwrap();
+        let side = if pair.ends_with('1') { 1.0 } else { -1.0 };
+        assert!(
+            ((arrow.0 + arrow.1) * 0.5)[axis] * side > 4.0,
+            "Arrow{pair} is on the wrong side: {arrow:?}"
+        );
+        for other in pairs {
+            let hits = touch(arrow, bounds(&format!("Target{other}")));
+            assert_eq!(
+                hits,
+                other == pair,
+                "Arrow{pair} {} Target{other}",
+                if hits { "touches" } else { "misses" }
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Materials and textures
+
+#[test]
+fn texture_settings_test_samplers_are_decoded() {
+    let path = khronos("TextureSettingsTest");
+    let scene = load(&path);
+    let got: HashSet<(Wrap, Wrap)> =
+        scene.textures.iter().map(|t| (t.sampler.wrap_s, t.sampler.wrap_t)).collect();
+    let wrap = |gl: u64| match gl {
+        33071 => Wrap::ClampToEdge,
+        33648 => Wrap::MirroredRepeat,
+        _ => Wrap::Repeat,
+    };
+    let want: HashSet<(Wrap, Wrap)> =
+        texture_uses(&read_glb(&path).0).iter().map(|(_, s, _)| (wrap(s[0]), wrap(s[1]))).collect();
+    assert_eq!(got, want);
+    for pair in [
+        (Wrap::Repeat, Wrap::ClampToEdge),
+        (Wrap::ClampToEdge, Wrap::Repeat),
+        (Wrap::Repeat, Wrap::MirroredRepeat),
+        (Wrap::MirroredRepeat, Wrap::Repeat),
+    ] {
+        assert!(got.contains(&pair), "{pair:?}");
+    }
+}
+
+#[test]
+fn generated_textures_have_their_colour_space_sampler_and_transform() {
+    let scene = load(&scenes_dir().join("textured.glb"));
+    assert_eq!(scene.textures.len(), 4);
+    let floor = scene.materials.iter().find(|m| m.name == "floor").unwrap();
+    let cube = scene.materials.iter().find(|m| m.name == "cube").unwrap();
+    let base = floor.base_color_texture.unwrap();
+    let checker = &scene.textures[base.texture as usize];
+    assert!(checker.srgb && (checker.width, checker.height) == (128, 128));
+    assert_eq!(&checker.rgba8[..4], &[230, 230, 230, 255]);
+    assert_eq!((checker.sampler.wrap_s, checker.sampler.wrap_t), (Wrap::MirroredRepeat, Wrap::ClampToEdge));
+    assert_eq!(
+        (checker.sampler.mag_filter, checker.sampler.min_filter, checker.sampler.mipmaps),
+        (Filter::Nearest, Filter::Linear, false)
+    );
+    assert_eq!(base.transform, texture_transform([0.5, 0.25], 0.3, [4.0, 4.0]));
+    // The same image with the default sampler on the cube is a second texture.
+    let cube_base = cube.base_color_texture.unwrap();
+    assert_ne!(cube_base.texture, base.texture);
+    assert_eq!(scene.textures[cube_base.texture as usize].rgba8, checker.rgba8);
+    assert!(scene.textures[cube_base.texture as usize].sampler.mipmaps);
+    // Normal and metallic-roughness maps are linear; the normal map is shared by both materials.
+    let normal = floor.normal_texture.unwrap();
+    assert!(!scene.textures[normal.texture as usize].srgb);
+    assert!(!scene.textures[floor.metallic_roughness_texture.unwrap().texture as usize].srgb);
+    assert_eq!(cube.normal_texture.unwrap().texture, normal.texture);
+    assert_eq!(cube.normal_texture.unwrap().scale, 0.5);
+    assert_eq!(cube.normal_texture.unwrap().transform, texture_transform([0.0, 0.0], 0.0, [2.0, 2.0]));
+}
+
+#[test]
+fn texture_transform_matches_the_extension_example() {
+    // KHR_texture_transform's example: offset [0, 1], rotation π/2, scale ½ "utilizes only the
+    // lower left quadrant of the source image, rotated clockwise 90°".
+    let t = umbra::scene::TextureRef {
+        texture: 0,
+        tex_coord: 0,
+        transform: texture_transform([0.0, 1.0], std::f32::consts::FRAC_PI_2, [0.5, 0.5]),
+        scale: 1.0,
+    };
+    for (uv, want) in [
+        ([0.0, 0.0], [0.0, 1.0]),
+        ([1.0, 0.0], [0.0, 0.5]),
+        ([0.0, 1.0], [0.5, 1.0]),
+        ([1.0, 1.0], [0.5, 0.5]),
+    ] {
+        let got = t.transform_uv(uv);
+        assert!(
+            (got[0] - want[0]).abs() < 1e-6 && (got[1] - want[1]).abs() < 1e-6,
+            "{uv:?} -> {got:?}, want {want:?}"
+        );
+    }
+    // Offset, rotation and scale compose as translation · rotation · scale.
+    let m = texture_transform([0.25, 0.5], 0.3, [2.0, 3.0]);
+    let (s, c) = 0.3f32.sin_cos();
+    let want = [[2.0 * c, 3.0 * s, 0.25], [-2.0 * s, 3.0 * c, 0.5]];
+    assert!(m.iter().flatten().zip(want.iter().flatten()).all(|(a, b)| (a - b).abs() < 1e-6), "{m:?}");
+}
+
+#[test]
+fn emissive_strength_multiplies_the_emissive_factor() {
+    let path = khronos("EmissiveStrengthTest");
+    let scene = load(&path);
+    let (json, _) = read_glb(&path);
+    let mut strengthened = 0;
+    for (i, material) in json["materials"].as_array().unwrap().iter().enumerate() {
+        let factor = material["emissiveFactor"]
+            .as_array()
+            .map_or([0.0; 3], |f| [0, 1, 2].map(|c| f[c].as_f64().unwrap() as f32));
+        let strength = material["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"].as_f64();
+        strengthened += strength.is_some_and(|s| s > 1.0) as usize;
+        let want = factor.map(|f| f * strength.unwrap_or(1.0) as f32);
+        assert_eq!(scene.materials[i].emissive, want, "material {i}");
+    }
+    assert!(strengthened > 0);
+}
+
+#[test]
+fn tangents_are_generated_for_normal_maps_and_follow_the_uvs() {
+    assert!(load(&khronos("Box")).tangents.is_empty(), "no normal map, no tangents");
+    let scene = load(&scenes_dir().join("textured.glb"));
+    assert_eq!(scene.tangents.len(), scene.positions.len());
+    for (t, n) in scene.tangents.iter().zip(&scene.normals) {
+        let (t3, n) = (Vec3::new(t[0], t[1], t[2]), Vec3::from(*n));
+        assert!((t3.length() - 1.0).abs() < 1e-4 && t3.dot(n).abs() < 1e-4 && t[3].abs() == 1.0);
+    }
+    // The cube has no TANGENT attribute: the generated tangents must equal the generator's
+    // analytic ones (+u along each face, w = +1), rotated by the node.
+    let cube = scene.instances.iter().find(|i| i.name == "cube").unwrap();
+    let transform = Mat4::from_cols_array_2d(&cube.transform);
+    let range = cube.first_triangle as usize..(cube.first_triangle + cube.triangle_count) as usize;
+    let first = scene.triangles[range.clone()].iter().flatten().min().copied().unwrap() as usize;
+    let analytic = generate::Mesh::cuboid().tangents;
+    for &v in scene.triangles[range].iter().flatten() {
+        let want = analytic[v as usize - first];
+        let want3 = transform.transform_vector3(Vec3::new(want[0], want[1], want[2])).normalize();
+        let got = scene.tangents[v as usize];
+        assert!(
+            Vec3::new(got[0], got[1], got[2]).abs_diff_eq(want3, 1e-4) && got[3] == want[3],
+            "vertex {v}: {got:?} vs {want3}"
+        );
+    }
+}
+
+#[test]
+fn optional_vertex_attributes_are_all_or_nothing() {
+    let multi = load(&khronos("MultiUVTest"));
+    assert_eq!((multi.uv0.len(), multi.uv1.len()), (multi.positions.len(), multi.positions.len()));
+    let plain = load(&khronos("Box"));
+    assert!(plain.uv0.is_empty() && plain.uv1.is_empty() && plain.colors.is_empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cameras and lights
+
+#[test]
+fn cameras_are_selected_by_index_or_default_or_framed() {
+    let cornell = Scene::cornell_box();
+    let camera = cornell.camera(None).unwrap();
+    assert_eq!(camera, cornell.cameras[0]);
+    assert_eq!(cornell.camera(Some(0)).unwrap(), camera);
+    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5);
+    assert!(close(camera.position, [0.275, 0.275, -0.8]), "{camera:?}");
+    assert!(close(camera.forward, [0.0, 0.0, 1.0]) && close(camera.up, [0.0, 1.0, 0.0]), "{camera:?}");
+    assert!((camera.yfov.to_degrees() - 39.3).abs() < 0.1 && camera.aspect == Some(1.0));
+    match cornell.camera(Some(3)) {
+        Err(Error::Scene { path, message }) => {
+            assert!(path.to_string_lossy().contains("cornell-box.glb"));
+            assert!(message.contains("no camera 3") && message.contains("1 camera"), "{message}");
+        }
+        other => panic!("expected an error, got {other:?}"),
+    }
+
+    // Box.glb has no camera: one is made that frames the bounds from +Z with a 45° yfov.
+    let boxed = load(&khronos("Box"));
+    assert!(boxed.cameras.is_empty());
+    let framing = boxed.camera(None).unwrap();
+    let (lo, hi) = boxed.bounds();
+    let (centre, radius) =
+        ((Vec3::from(lo) + Vec3::from(hi)) * 0.5, (Vec3::from(hi) - Vec3::from(lo)).length() * 0.5);
+    assert_eq!((framing.forward, framing.up), ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0]));
+    assert!((framing.yfov.to_degrees() - 45.0).abs() < 1e-4);
+    let eye = Vec3::from(framing.position);
+    assert!(eye.x == centre.x && eye.y == centre.y && eye.z > centre.z);
+    let half_angle = (radius / (eye - centre).length()).asin();
+    assert!(half_angle <= framing.yfov * 0.5 + 1e-5, "the bounding sphere must fit");
+    assert!(framing.znear > 0.0 && framing.znear < (eye - centre).length() - radius);
+    assert!(
+        matches!(boxed.camera(Some(0)), Err(Error::Scene { message, .. }) if message.contains("0 cameras"))
+    );
+}
+
+#[test]
+fn punctual_lights_are_placed_in_world_space() {
+    let scene = load(&scenes_dir().join("textured.glb"));
+    assert_eq!(scene.lights.len(), 2);
+    let bulb = scene.lights.iter().find(|l| l.kind == LightKind::Point).unwrap();
+    assert_eq!((bulb.position, bulb.intensity, bulb.range), ([1.0, 2.0, 1.0], 20.0, Some(10.0)));
+    let spot = scene.lights.iter().find(|l| l.kind == LightKind::Spot).unwrap();
+    assert!(Vec3::from(spot.direction).abs_diff_eq(-Vec3::Y, 1e-6), "{spot:?}");
+    assert_eq!((spot.inner_cone_angle, spot.outer_cone_angle, spot.color), (0.2, 0.5, [1.0; 3]));
+    let sun = &load(&scenes_dir().join("spheres.glb")).lights[0];
+    assert_eq!(sun.kind, LightKind::Directional);
+    assert!(Vec3::from(sun.direction).abs_diff_eq(Vec3::new(-0.4, -1.0, -0.6).normalize(), 1e-5));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The emissive table
+
+#[test]
+fn the_emissive_table_holds_exactly_the_lights_triangles() {
+    let scene = Scene::cornell_box();
+    let light = scene.materials.iter().position(|m| m.name == "light").unwrap() as u32;
+    let want: Vec<u32> =
+        (0..scene.triangles.len() as u32).filter(|&t| scene.triangle_material[t as usize] == light).collect();
+    let table = &scene.emissive;
+    assert_eq!(table.triangles, want);
+    assert!(table.cdf.windows(2).all(|w| w[0] <= w[1]) && *table.cdf.last().unwrap() == 1.0);
+    let soup = scene.triangle_soup();
+    let areas: Vec<f32> = table
+        .triangles
+        .iter()
+        .map(|&t| {
+            let [a, b, c] = soup[t as usize];
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .collect();
+    let total_area: f32 = areas.iter().sum();
+    assert!((total_area - 0.13 * 0.105).abs() < 1e-6);
+    for (i, area) in areas.iter().enumerate() {
+        assert!((table.pmf(i) - area / total_area).abs() < 1e-5, "pmf of entry {i}");
+    }
+    let luminance = 0.2126 * 17.0 + 0.7152 * 12.0 + 0.0722 * 4.0;
+    assert!((table.total_power - luminance * total_area * std::f32::consts::PI).abs() < 1e-4);
+    // Sampling follows the cdf: u below the first step picks entry 0, above it entry 1.
+    assert_eq!(table.sample(0.0).0, 0);
+    assert_eq!(table.sample(table.cdf[0] * 0.99).0, 0);
+    assert_eq!(table.sample(table.cdf[0] + 1e-3).0, 1);
+    assert_eq!(table.sample(1.0).0, 1);
+    let hits = (0..1000).filter(|i| table.sample((*i as f32 + 0.5) / 1000.0).0 == 0).count();
+    assert!((hits as f32 / 1000.0 - table.pmf(0)).abs() < 2e-3);
+    assert!(load(&khronos("Box")).emissive.is_empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Primitive modes and missing normals
+
+/// A primitive for [`primitives_glb`]: mode, positions, optional indices.
+type TestPrimitive<'a> = (u32, &'a [[f32; 3]], Option<&'a [u16]>);
+
+/// A GLB whose single mesh has the given primitives (positions only).
+fn primitives_glb(primitives: &[TestPrimitive]) -> Vec<u8> {
+    let mut bin = Vec::new();
+    let (mut views, mut accessors, mut json_primitives) = (vec![], vec![], vec![]);
+    for (mode, positions, indices) in primitives {
+        let offset = bin.len();
+        bin.extend(positions.iter().flatten().flat_map(|f| f.to_le_bytes()));
+        views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset }));
+        let lo = [0, 1, 2].map(|c| positions.iter().map(|p| p[c]).fold(f32::INFINITY, f32::min));
+        let hi = [0, 1, 2].map(|c| positions.iter().map(|p| p[c]).fold(f32::NEG_INFINITY, f32::max));
+        accessors.push(json!({ "bufferView": views.len() - 1, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": lo, "max": hi }));
+        let mut primitive = json!({ "attributes": { "POSITION": accessors.len() - 1 }, "mode": mode });
+        if let Some(indices) = indices {
+            let offset = bin.len();
+            bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+            bin.resize(bin.len().div_ceil(4) * 4, 0);
+            views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": indices.len() * 2 }));
+            accessors.push(json!({ "bufferView": views.len() - 1, "componentType": 5123, "count": indices.len(), "type": "SCALAR" }));
+            primitive["indices"] = json!(accessors.len() - 1);
+        }
+        json_primitives.push(primitive);
+    }
+    let json = json!({
+        "asset": { "version": "2.0" }, "scene": 0, "scenes": [{ "nodes": [0] }], "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "name": "test", "primitives": json_primitives }],
+        "accessors": accessors, "bufferViews": views, "buffers": [{ "byteLength": bin.len() }]
+    });
+    to_glb(&json, &bin)
+}
+
+const QUAD: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+
+#[test]
+fn strips_and_fans_become_counter_clockwise_triangles_and_points_are_skipped() {
+    let fan: [[f32; 3]; 5] =
+        [[0.5, 0.5, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let bytes = primitives_glb(&[
+        (5, &QUAD, None),
+        (5, &QUAD, Some(&[0, 1, 2, 3])),
+        (6, &fan, None),
+        (6, &QUAD, Some(&[0, 1, 3, 2])),
+        (0, &QUAD, None),
+        (1, &QUAD, None),
+    ]);
+    let scene = Scene::from_glb_bytes("modes.glb", &bytes).unwrap();
+    assert_eq!(scene.triangles.len(), 2 + 2 + 3 + 2);
+    for t in scene.triangle_soup() {
+        assert!((t[1] - t[0]).cross(t[2] - t[0]).z > 0.0, "{t:?} faces -Z");
+    }
+    // No NORMAL attribute: flat normals, one vertex per triangle corner.
+    assert_eq!(scene.positions.len(), 3 * 9);
+    assert!(scene.normals.iter().all(|&n| n == [0.0, 0.0, 1.0]));
+}
+
+#[test]
+fn zero_area_triangles_are_kept_and_counted() {
+    let positions = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [2.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let scene = Scene::from_glb_bytes("sliver.glb", &primitives_glb(&[(4, &positions, None)])).unwrap();
+    assert_eq!((scene.stats().triangles, scene.stats().degenerate_triangles), (2, 1));
+    assert!(scene.normals.iter().all(|&n| (Vec3::from(n).length() - 1.0).abs() < 1e-6));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input
+
+/// Asserts `result` is an `Error::Scene` naming `file` whose message contains `phrase`.
+#[track_caller]
+fn assert_scene_error<T: std::fmt::Debug>(result: umbra::Result<T>, file: &str, phrase: &str) {
+    match result {
+        Err(error @ Error::Scene { .. }) => {
+            let text = error.to_string();
+            assert!(
+                text.contains(file) && text.contains(phrase),
+                "'{text}' should name '{file}' and say '{phrase}'"
+            );
+        }
+        other => panic!("expected Error::Scene saying '{phrase}', got {other:?}"),
+    }
+}
+
+#[test]
+fn truncated_and_foreign_bytes_are_rejected() {
+    let glb = std::fs::read(scenes_dir().join("cornell-box.glb")).unwrap();
+    assert_scene_error(Scene::from_glb_bytes("cut.glb", &glb[..glb.len() / 2]), "cut.glb", "truncated GLB");
+    assert_scene_error(Scene::from_glb_bytes("cut.glb", &glb[..7]), "cut.glb", "truncated GLB");
+    let png = b"\x89PNG\r\n\x1a\n not a scene";
+    assert_scene_error(Scene::from_glb_bytes("picture.png", png), "picture.png", "not a glTF file");
+    assert_scene_error(Scene::from_glb_bytes("empty.glb", b""), "empty.glb", "not a glTF file");
+    assert_scene_error(
+        Scene::from_glb_bytes("broken.gltf", b"{\"asset\": "),
+        "broken.gltf",
+        "invalid glTF JSON",
+    );
+}
+
+#[test]
+fn json_that_breaks_gltf_rules_is_rejected() {
+    let (json, bin) = read_glb(&khronos("Box"));
+    // Accessor 2 (POSITION) claims more vertices than its buffer view holds.
+    let mut long = json.clone();
+    long["accessors"][2]["count"] = json!(1000);
+    assert_scene_error(
+        Scene::from_glb_bytes("long.glb", &to_glb(&long, &bin)),
+        "long.glb",
+        "runs past the end of buffer view",
+    );
+    // A buffer view past the end of its buffer.
+    let mut view = json.clone();
+    view["bufferViews"][1]["byteLength"] = json!(100_000);
+    assert_scene_error(
+        Scene::from_glb_bytes("view.glb", &to_glb(&view, &bin)),
+        "view.glb",
+        "runs past the end of buffer 0",
+    );
+    // An index into a missing array (caught by glTF validation).
+    let mut material = json.clone();
+    material["meshes"][0]["primitives"][0]["material"] = json!(7);
+    assert_scene_error(Scene::from_glb_bytes("mat.glb", &to_glb(&material, &bin)), "mat.glb", "invalid glTF");
+    let mut position = json.clone();
+    position["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(9);
+    assert_scene_error(
+        Scene::from_glb_bytes("pos.glb", &to_glb(&position, &bin)),
+        "pos.glb",
+        "POSITION refers to accessor 9",
+    );
+    // A cycle in the node tree.
+    let mut cycle = json.clone();
+    cycle["nodes"][1]["children"] = json!([0]);
+    assert_scene_error(
+        Scene::from_glb_bytes("cycle.glb", &to_glb(&cycle, &bin)),
+        "cycle.glb",
+        "reached twice",
+    );
+}
+
+#[test]
+fn unsupported_required_extensions_are_named_and_optional_ones_ignored() {
+    let (mut json, bin) = read_glb(&khronos("Box"));
+    json["extensionsUsed"] = json!(["KHR_draco_mesh_compression", "EXT_unknown"]);
+    Scene::from_glb_bytes("optional.glb", &to_glb(&json, &bin)).expect("optional extensions are ignored");
+    json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    assert_scene_error(
+        Scene::from_glb_bytes("draco.glb", &to_glb(&json, &bin)),
+        "draco.glb",
+        "does not support: KHR_draco_mesh_compression",
+    );
+    json["extensionsRequired"] = json!(["KHR_texture_transform", "KHR_materials_emissive_strength"]);
+    Scene::from_glb_bytes("supported.glb", &to_glb(&json, &bin)).expect("required extensions umbra reads");
+}
+
+#[test]
+fn out_of_range_indices_are_rejected() {
+    let (json, mut bin) = read_glb(&khronos("Box"));
+    let view = &json["bufferViews"][json["accessors"][0]["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap() as usize + 2 * 5;
+    bin[at..at + 2].copy_from_slice(&99u16.to_le_bytes());
+    assert_scene_error(
+        Scene::from_glb_bytes("index.glb", &to_glb(&json, &bin)),
+        "index.glb",
+        "mesh 0 ('Mesh') primitive 0: index 99 (entry 5 of its indices) is out of range: the primitive has 24 vertices",
+    );
+}
+
+#[test]
+fn nan_vertices_drop_their_triangles() {
+    let (json, bin) = read_glb(&khronos("Box"));
+    let positions = &json["bufferViews"][json["accessors"][2]["bufferView"].as_u64().unwrap() as usize];
+    let start = positions["byteOffset"].as_u64().unwrap() as usize
+        + json["accessors"][2]["byteOffset"].as_u64().unwrap() as usize;
+    // Vertex 0 is NaN: the triangles that use it go, the rest stay.
+    let mut one = bin.clone();
+    one[start..start + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    let scene = Scene::from_glb_bytes("nan.glb", &to_glb(&json, &one)).unwrap();
+    let indices = &json["bufferViews"][json["accessors"][0]["bufferView"].as_u64().unwrap() as usize];
+    let first = indices["byteOffset"].as_u64().unwrap() as usize;
+    let using_vertex_0 = (0..12)
+        .filter(|t| (0..3).any(|c| bin[first + 6 * t + 2 * c..first + 6 * t + 2 * c + 2] == [0, 0]))
+        .count();
+    assert!(using_vertex_0 > 0);
+    assert_eq!(scene.triangles.len(), 12 - using_vertex_0);
+    assert_eq!(scene.normals.len(), scene.positions.len());
+    assert!(scene.positions.iter().flatten().all(|x| x.is_finite()));
+    assert!(scene.triangles.iter().flatten().all(|&v| (v as usize) < scene.positions.len()));
+    // Every vertex infinite: nothing is left, which is an error.
+    let mut all = bin.clone();
+    for v in 0..24 {
+        all[start + 12 * v..start + 12 * v + 4].copy_from_slice(&f32::INFINITY.to_le_bytes());
+    }
+    assert_scene_error(
+        Scene::from_glb_bytes("inf.glb", &to_glb(&json, &all)),
+        "inf.glb",
+        "all 12 triangles were dropped for NaN or infinite vertex positions",
+    );
+}
+
+/// A folder holding `textured.glb` as `scene.gltf` + `scene.bin`, optionally with edits.
+fn write_gltf(folder: &str, edit: impl FnOnce(&mut Value)) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("umbra-scene-{folder}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (mut json, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    json["buffers"][0]["uri"] = json!("scene.bin");
+    edit(&mut json);
+    std::fs::write(dir.join("scene.bin"), &bin).unwrap();
+    std::fs::write(dir.join("scene.gltf"), serde_json::to_vec_pretty(&json).unwrap()).unwrap();
+    dir.join("scene.gltf")
+}
+
+#[test]
+fn gltf_files_resolve_external_and_embedded_data() {
+    let reference = load(&scenes_dir().join("textured.glb"));
+    let path = write_gltf("external", |_| {});
+    let external = load(&path);
+    assert_eq!(
+        (external.positions.clone(), external.textures.clone()),
+        (reference.positions.clone(), reference.textures.clone())
+    );
+    // The same buffer as a base64 data: URI needs no file.
+    let bin = std::fs::read(path.with_file_name("scene.bin")).unwrap();
+    let mut json: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    json["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{}", base64(&bin)));
+    let embedded = Scene::from_glb_bytes("embedded.gltf", &serde_json::to_vec(&json).unwrap()).unwrap();
+    assert_eq!(embedded.positions, reference.positions);
+    // An in-memory scene cannot reach files.
+    assert_scene_error(
+        Scene::from_glb_bytes("memory.gltf", &std::fs::read(&path).unwrap()),
+        "memory.gltf",
+        "in-memory scene cannot read",
+    );
+    std::fs::remove_dir_all(path.parent().unwrap()).ok();
+}
+
+#[test]
+fn missing_files_are_named() {
+    let path = write_gltf("missing-bin", |_| {});
+    std::fs::remove_file(path.with_file_name("scene.bin")).unwrap();
+    assert_scene_error(Scene::load(&path), "scene.gltf", "buffer 0: cannot read");
+    assert_scene_error(Scene::load(&path), "scene.gltf", "scene.bin");
+    std::fs::remove_dir_all(path.parent().unwrap()).ok();
+
+    let path = write_gltf("missing-image", |json| json["images"][0] = json!({ "uri": "checker%20map.png" }));
+    assert_scene_error(Scene::load(&path), "scene.gltf", "image 0 ('checker%20map.png'): cannot read");
+    assert_scene_error(Scene::load(&path), "scene.gltf", "checker map.png");
+    std::fs::remove_dir_all(path.parent().unwrap()).ok();
+
+    assert_scene_error(
+        Scene::load(Path::new("/nonexistent/umbra.glb")),
+        "umbra.glb",
+        "cannot read the scene file",
+    );
+}
+
+#[test]
+fn undecodable_images_are_named() {
+    let (json, mut bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let view = &json["bufferViews"][json["images"][1]["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap() as usize;
+    bin[at..at + 8].copy_from_slice(b"garbage!");
+    assert_scene_error(
+        Scene::from_glb_bytes("bad-image.glb", &to_glb(&json, &bin)),
+        "bad-image.glb",
+        "image 1 (embedded): cannot decode the image",
+    );
+}
+
+/// Standard base64 with padding.
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let n = chunk.iter().enumerate().fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
+        for i in 0..4 {
+            out.push(if i <= chunk.len() {
+                ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    out
+}
+
+/// A small deterministic generator for the fuzz test.
+struct XorShift(u64);
+
+impl XorShift {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+}
+
+#[test]
+fn mutated_files_give_errors_not_panics() {
+    let mut rng = XorShift(0x5eed_cafe);
+    let files = [
+        khronos("Box"),
+        khronos("SimpleInstancing"),
+        scenes_dir().join("cornell-box.glb"),
+        scenes_dir().join("textured.glb"),
+    ];
+    let odd_numbers = [
+        json!(-1),
+        json!(0),
+        json!(1),
+        json!(3),
+        json!(255),
+        json!(65536),
+        json!(4_294_967_295u64),
+        json!(1e30),
+        json!(-0.5),
+    ];
+    for path in &files {
+        let bytes = std::fs::read(path).unwrap();
+        let (json, bin) = generate::split_glb(&bytes);
+        for round in 0..150 {
+            // Raw bytes: truncate, or overwrite a few bytes anywhere.
+            let mut raw = bytes.clone();
+            if round % 3 == 0 {
+                raw.truncate(rng.next() as usize % raw.len());
+            } else {
+                for _ in 0..4 {
+                    let at = rng.next() as usize % raw.len();
+                    raw[at] = rng.next() as u8;
+                }
+            }
+            let _ = Scene::from_glb_bytes("fuzz.glb", &raw);
+            // Structure: replace one number of the JSON with an awkward value.
+            let mut edited = json.clone();
+            let mut numbers = Vec::new();
+            collect_number_paths(&edited, &mut Vec::new(), &mut numbers);
+            let target = &numbers[rng.next() as usize % numbers.len()];
+            *pointer_mut(&mut edited, target) = odd_numbers[rng.next() as usize % odd_numbers.len()].clone();
+            let _ = Scene::from_glb_bytes("fuzz.glb", &to_glb(&edited, &bin));
+        }
+    }
+}
+
+fn collect_number_paths(value: &Value, path: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+    match value {
+        Value::Number(_) => out.push(path.clone()),
+        Value::Array(items) => items.iter().enumerate().for_each(|(i, v)| {
+            path.push(i.to_string());
+            collect_number_paths(v, path, out);
+            path.pop();
+        }),
+        Value::Object(map) => map.iter().for_each(|(k, v)| {
+            path.push(k.clone());
+            collect_number_paths(v, path, out);
+            path.pop();
+        }),
+        _ => {}
+    }
+}
+
+fn pointer_mut<'v>(value: &'v mut Value, path: &[String]) -> &'v mut Value {
+    path.iter().fold(value, |v, key| match v {
+        Value::Array(items) => &mut items[key.parse::<usize>().unwrap()],
+        other => &mut other[key.as_str()],
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Larger scenes from the shared assets, when present
+
+#[test]
+fn shared_asset_scenes_load_with_their_known_counts() {
+    // UMBRA_ASSETS names the assets folder; by default the checkout's sibling shared/assets.
+    let assets = std::env::var_os("UMBRA_ASSETS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets"))
+        .join("gltf");
+    if !assets.exists() {
+        eprintln!("note: {} is absent; skipping the large shared scenes", assets.display());
+        return;
+    }
+    let helmet = load(&assets.join("DamagedHelmet/DamagedHelmet.glb"));
+    assert_eq!((helmet.stats().triangles, helmet.textures.len()), (15_452, 5));
+    assert_eq!(helmet.tangents.len(), helmet.positions.len());
+    let sponza = load(&assets.join("SponzaDabrovic/sponza_dabrovic.glb"));
+    assert_eq!(sponza.stats().triangles, 66_454);
+    let path = assets.join("MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb");
+    let spheres = load(&path);
+    assert_eq!(spheres.stats().triangles, 1_040_409);
+    // 98 file materials, plus the glTF default for the label meshes that have none.
+    assert_eq!(spheres.materials.len(), 98 + 1);
+    assert_eq!(expected(&read_glb(&path).0).materials, 98 + 1);
+}

@@ -14,6 +14,12 @@ layout(set = 0, binding = 3, std430) buffer BvhTriBuffer { BvhTri bvh_tri_check[
 layout(set = 0, binding = 4, std430) buffer TraceRayBuffer { TraceRay trace_ray_check[]; };
 layout(set = 0, binding = 5, std430) buffer TraceHitBuffer { TraceHit trace_hit_check[]; };
 layout(set = 0, binding = 6, std430) buffer TraceParamsBuffer { TraceParams trace_params_check[]; };
+layout(set = 0, binding = 7, std430) buffer GpuTriangleBuffer { GpuTriangle gpu_triangle_check[]; };
+layout(set = 0, binding = 8, std430) buffer GpuVertexBuffer { GpuVertex gpu_vertex_check[]; };
+layout(set = 0, binding = 9, std430) buffer GpuMaterialBuffer { GpuMaterial gpu_material_check[]; };
+layout(set = 0, binding = 10, std430) buffer GpuLightTriBuffer { GpuLightTri gpu_light_tri_check[]; };
+layout(set = 0, binding = 11, std430) buffer PathParamsBuffer { PathParams path_params_check[]; };
+layout(set = 0, binding = 12, std430) buffer PathStatsBuffer { PathStats path_stats_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -23,4 +29,10 @@ void main() {
     trace_ray_check[0].origin_tmin.x += 1.0;
     trace_hit_check[0].tri += 1u;
     trace_params_check[0].count += 1u;
+    gpu_triangle_check[0].v0 += 1u;
+    gpu_vertex_check[0].normal_u.x += 1.0;
+    gpu_material_check[0].base_color.x += 1.0;
+    gpu_light_tri_check[0].tri += 1u;
+    path_params_check[0].cam_origin.x += 1.0;
+    path_stats_check[0].nonfinite_samples += 1u;
 }

@@ -11,6 +11,8 @@ pub mod geometry;
 pub mod gpu;
 pub mod kernels;
 pub mod output;
+pub mod passes;
+pub mod render;
 pub mod scene;
 pub mod vk;
 

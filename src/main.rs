@@ -16,6 +16,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Render a glTF scene (or, without one, the embedded Cornell box).
+    Render(RenderArgs),
     /// List the Vulkan devices and the one umbra would use.
     Info,
     /// Render the foundation test pattern (a known function of the pixel) to PNG and/or EXR.
@@ -32,6 +34,168 @@ enum Command {
     },
 }
 
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// A .gltf or .glb file; the embedded Cornell box when absent.
+    scene: Option<PathBuf>,
+    /// Rendering method.
+    #[arg(long, value_enum, default_value = "pathtrace")]
+    mode: Mode,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 64)]
+    spp: u32,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512", value_parser = umbra::cli::parse_size)]
+    size: (u32, u32),
+    /// Scattering events per path (1 = direct light only).
+    #[arg(long, default_value_t = 8)]
+    max_bounces: u32,
+    /// Russian roulette starts after this many scattering events.
+    #[arg(long, default_value_t = 3)]
+    rr_depth: u32,
+    /// Seed of the random numbers (same seed and device: identical output).
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Which of the file's cameras (0-based; default the first, or one framing the scene).
+    #[arg(long)]
+    camera: Option<usize>,
+    /// Microfacet distribution of the specular lobes.
+    #[arg(long, value_enum, default_value = "ggx")]
+    microfacet: MicrofacetArg,
+    /// MIS heuristic.
+    #[arg(long, value_enum, default_value = "power")]
+    heuristic: HeuristicArg,
+    /// Constant environment radiance, as R,G,B (linear).
+    #[arg(long, value_parser = parse_rgb, default_value = "0,0,0")]
+    env_color: [f32; 3],
+    /// Exposure in stops for the PNG.
+    #[arg(long, default_value_t = 0.0)]
+    exposure: f32,
+    /// PNG output (tonemapped sRGB).
+    #[arg(short, long, default_value = "umbra.png")]
+    output: PathBuf,
+    /// EXR output: linear colour, albedo, normal, depth and variance layers.
+    #[arg(long)]
+    exr: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Mode {
+    /// Progressive path tracing (the ground truth).
+    Pathtrace,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MicrofacetArg {
+    Ggx,
+    Beckmann,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum HeuristicArg {
+    Power,
+    Balance,
+}
+
+fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("'{s}': {e}"))?;
+    match v.as_slice() {
+        [r, g, b] if v.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok([*r, *g, *b]),
+        _ => Err(format!("'{s}' is not three non-negative numbers R,G,B")),
+    }
+}
+
+fn render(args: RenderArgs) -> Result<()> {
+    use umbra::passes::pathtrace::{Heuristic, Microfacet};
+    let scene = match &args.scene {
+        Some(path) => umbra::scene::Scene::load(path)?,
+        None => umbra::scene::Scene::cornell_box(),
+    };
+    let camera = scene.camera(args.camera)?;
+    let ctx = Context::new(&ContextDesc::default())?;
+    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &scene)?;
+    let stats = &gpu_scene.bvh_stats;
+    log::info!(
+        "{}: {} triangles, {} emissive; BVH {:.1} ms, {} nodes, SAH {:.2}",
+        scene.name,
+        stats.triangles,
+        gpu_scene.light_count,
+        stats.build_ms,
+        stats.nodes,
+        stats.sah_cost
+    );
+    let settings = umbra::render::PathSettings {
+        size: args.size,
+        spp: args.spp,
+        max_bounces: args.max_bounces,
+        rr_depth: args.rr_depth,
+        seed: args.seed,
+        microfacet: match args.microfacet {
+            MicrofacetArg::Ggx => Microfacet::Ggx,
+            MicrofacetArg::Beckmann => Microfacet::Beckmann,
+        },
+        heuristic: match args.heuristic {
+            HeuristicArg::Power => Heuristic::Power,
+            HeuristicArg::Balance => Heuristic::Balance,
+        },
+        env: args.env_color,
+    };
+    let Mode::Pathtrace = args.mode;
+    let bar = indicatif::ProgressBar::new(settings.spp as u64).with_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {per_sec}  ETA {eta}")
+            .expect("valid template"),
+    );
+    let start = std::time::Instant::now();
+    let image = umbra::render::path_trace(&ctx, &gpu_scene, &camera, &settings, |done, _| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    let pixels = (settings.size.0 * settings.size.1) as f64 * settings.spp as f64;
+    println!(
+        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s)",
+        settings.spp,
+        settings.size.0,
+        settings.size.1,
+        start.elapsed().as_secs_f64(),
+        image.gpu_ms,
+        pixels / (image.gpu_ms * 1e3)
+    );
+    if image.nonfinite_samples > 0 {
+        log::warn!("{} samples were NaN or infinite and were dropped", image.nonfinite_samples);
+    }
+    let (w, h) = settings.size;
+    let rgba: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+    umbra::output::write_png(&args.output, w, h, &umbra::output::to_srgb8(&rgba, args.exposure.exp2()))
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    println!("wrote {}", args.output.display());
+    if let Some(path) = &args.exr {
+        let colour: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let albedo: Vec<f32> = image.albedo.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let normal: Vec<f32> = image.normal_depth.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let depth: Vec<f32> = image.normal_depth.iter().map(|p| p[3]).collect();
+        let variance: Vec<f32> = image.variance_of_mean().into_iter().flatten().collect();
+        use umbra::output::Layer;
+        umbra::output::write_exr(
+            path,
+            w as usize,
+            h as usize,
+            &[
+                Layer { name: "", channels: &["R", "G", "B"], data: &colour },
+                Layer { name: "albedo", channels: &["R", "G", "B"], data: &albedo },
+                Layer { name: "normal", channels: &["X", "Y", "Z"], data: &normal },
+                Layer { name: "depth", channels: &["Z"], data: &depth },
+                Layer { name: "variance", channels: &["R", "G", "B"], data: &variance },
+            ],
+        )?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
 fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info"))
         .format_timestamp(None)
@@ -44,6 +208,7 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Render(args) => render(args)?,
         Command::Info => {
             for (name, ty) in Context::list_devices()? {
                 println!("{name} ({ty:?})");

@@ -55,4 +55,61 @@ struct TraceParams {
     uint pad2;
 };
 
+// A triangle of the GPU scene, in BVH order: vertex indices, material, and its light-selection
+// probability (0 for a triangle that does not emit).
+struct GpuTriangle {
+    uint v0;
+    uint v1;
+    uint v2;
+    uint material;
+    float light_pmf;
+    float area;
+    uint pad0;
+    uint pad1;
+};
+
+// Shading attributes of a vertex (world space): normal and uv0.
+struct GpuVertex {
+    vec4 normal_u;   // normal xyz, uv0.x
+    vec4 v_uv1;      // uv0.y, uv1.xy, unused
+};
+
+// A glTF metallic-roughness material (factors; textures come with the texture issue).
+struct GpuMaterial {
+    vec4 base_color;      // baseColorFactor
+    vec4 emissive_rough;  // emissive * emissive_strength, roughness
+    vec4 specular;        // specularColorFactor rgb, specularFactor
+    vec4 params;          // metallic, ior, transmission, alpha cutoff
+    uvec4 flags;          // x: MATERIAL_* bits
+};
+
+#define MATERIAL_DOUBLE_SIDED 1u
+
+// One emissive triangle in the light-sampling table.
+struct GpuLightTri {
+    uint tri;   // BVH order
+    float cdf;  // inclusive prefix of the normalised power
+    float pmf;
+    float area;
+};
+
+// Push constants of pathtrace.comp.
+struct PathParams {
+    vec4 cam_origin;   // xyz, unused
+    vec4 cam_forward;  // unit forward
+    vec4 cam_right;    // right * tan(yfov/2) * aspect
+    vec4 cam_up;       // up * tan(yfov/2)
+    vec4 env;          // constant environment radiance rgb, unused
+    uvec4 size_frame;  // width, height, sample index, seed
+    uvec4 settings;    // max bounces, russian roulette depth, light triangles, unused
+};
+
+// Per-render counters written by pathtrace.comp.
+struct PathStats {
+    uint nonfinite_samples;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
 #endif

@@ -75,6 +75,113 @@ pub struct TraceParams {
 }
 const _: () = assert!(size_of::<TraceParams>() == 16);
 
+/// A triangle of the GPU scene in BVH order (`GpuTriangle`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangle {
+    /// First vertex index.
+    pub v0: u32,
+    /// Second vertex index.
+    pub v1: u32,
+    /// Third vertex index.
+    pub v2: u32,
+    /// Material index.
+    pub material: u32,
+    /// Probability that light sampling picks this triangle (0 if it does not emit).
+    pub light_pmf: f32,
+    /// Area in square metres.
+    pub area: f32,
+    /// Padding.
+    pub pad0: u32,
+    /// Padding.
+    pub pad1: u32,
+}
+const _: () = assert!(size_of::<GpuTriangle>() == 32);
+
+/// Shading attributes of a vertex (`GpuVertex`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVertex {
+    /// Normal xyz, uv0.x.
+    pub normal_u: [f32; 4],
+    /// uv0.y, uv1.xy, unused.
+    pub v_uv1: [f32; 4],
+}
+const _: () = assert!(size_of::<GpuVertex>() == 32);
+
+/// A material's factors (`GpuMaterial`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// baseColorFactor.
+    pub base_color: [f32; 4],
+    /// Emission (strength applied) rgb, roughness.
+    pub emissive_rough: [f32; 4],
+    /// specularColorFactor rgb, specularFactor.
+    pub specular: [f32; 4],
+    /// metallic, ior, transmission, alpha cutoff.
+    pub params: [f32; 4],
+    /// `x`: [`GpuMaterial::DOUBLE_SIDED`] and other bits.
+    pub flags: [u32; 4],
+}
+const _: () = assert!(size_of::<GpuMaterial>() == 80);
+
+impl GpuMaterial {
+    /// `MATERIAL_DOUBLE_SIDED`.
+    pub const DOUBLE_SIDED: u32 = 1;
+}
+
+/// One entry of the emissive-triangle sampling table (`GpuLightTri`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLightTri {
+    /// Triangle in BVH order.
+    pub tri: u32,
+    /// Inclusive prefix of the normalised power.
+    pub cdf: f32,
+    /// Selection probability.
+    pub pmf: f32,
+    /// Area in square metres.
+    pub area: f32,
+}
+const _: () = assert!(size_of::<GpuLightTri>() == 16);
+
+/// Push constants of `pathtrace.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathParams {
+    /// Camera position, unused.
+    pub cam_origin: [f32; 4],
+    /// Unit forward.
+    pub cam_forward: [f32; 4],
+    /// Right × tan(yfov/2) × aspect.
+    pub cam_right: [f32; 4],
+    /// Up × tan(yfov/2).
+    pub cam_up: [f32; 4],
+    /// Constant environment radiance rgb, unused.
+    pub env: [f32; 4],
+    /// Width, height, sample index, seed.
+    pub size_frame: [u32; 4],
+    /// Max bounces, Russian-roulette depth, light triangles, unused.
+    pub settings: [u32; 4],
+}
+const _: () = assert!(size_of::<PathParams>() == 112);
+
+/// Counters written by `pathtrace.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathStats {
+    /// Samples that came out NaN or infinite (replaced by 0; must stay 0).
+    pub nonfinite_samples: u32,
+    /// Padding.
+    pub pad0: u32,
+    /// Padding.
+    pub pad1: u32,
+    /// Padding.
+    pub pad2: u32,
+}
+const _: () = assert!(size_of::<PathStats>() == 16);
+
 /// One member of a GPU struct as the host lays it out.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MemberLayout {
@@ -122,5 +229,11 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         layout_of!(TraceRay { origin_tmin, dir_tmax }),
         layout_of!(TraceHit { t, tri, u, v }),
         layout_of!(TraceParams { count, pad0, pad1, pad2 }),
+        layout_of!(GpuTriangle { v0, v1, v2, material, light_pmf, area, pad0, pad1 }),
+        layout_of!(GpuVertex { normal_u, v_uv1 }),
+        layout_of!(GpuMaterial { base_color, emissive_rough, specular, params, flags }),
+        layout_of!(GpuLightTri { tri, cdf, pmf, area }),
+        layout_of!(PathParams { cam_origin, cam_forward, cam_right, cam_up, env, size_frame, settings }),
+        layout_of!(PathStats { nonfinite_samples, pad0, pad1, pad2 }),
     ]
 }

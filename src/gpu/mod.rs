@@ -1,3 +1,4 @@
 //! Host-side twins of GPU data.
 
 pub mod layout;
+pub mod scene;

@@ -1,0 +1,27 @@
+// Counter-based random numbers: a pure hash of (pixel, sample, bounce, dimension, seed), so any
+// sample of any pixel is reproducible and accumulation is bit-identical for the same seed.
+#ifndef UMBRA_RANDOM_GLSL
+#define UMBRA_RANDOM_GLSL
+
+// PCG4D (Jarzynski and Olano 2020, "Hash Functions for GPU Rendering").
+uvec4 pcg4d(uvec4 v) {
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.w;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v.w += v.y * v.z;
+    v ^= v >> 16u;
+    v.x += v.y * v.w;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v.w += v.y * v.z;
+    return v;
+}
+
+// Four uniform numbers in [0, 1) for (pixel, sample, stream); stream = bounce * 8 + use.
+vec4 rand4(uvec2 pixel, uint sample_index, uint stream, uint seed) {
+    uvec4 h = pcg4d(uvec4(pixel, sample_index, stream ^ (seed * 0x9E3779B9u)));
+    return vec4(h >> 8u) * (1.0 / 16777216.0);
+}
+
+#endif

@@ -1,0 +1,105 @@
+// Sampling routines, each with its pdf (Mitsuba's warp convention). Local frames have z along
+// the normal.
+#ifndef UMBRA_SAMPLING_GLSL
+#define UMBRA_SAMPLING_GLSL
+
+const float PI = 3.14159265358979323846;
+const float INV_PI = 0.31830988618379067154;
+
+// An orthonormal basis around unit n (Duff et al. 2017).
+void basis(vec3 n, out vec3 t, out vec3 b) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+vec3 sample_cosine_hemisphere(vec2 u) {
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    return vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u.x)));
+}
+
+float pdf_cosine_hemisphere(vec3 w) {
+    return max(w.z, 0.0) * INV_PI;
+}
+
+// Uniform barycentrics (b1, b2) on a triangle.
+vec2 sample_triangle(vec2 u) {
+    float s = sqrt(u.x);
+    return vec2(1.0 - s, u.y * s);
+}
+
+// ---- GGX (Trowbridge-Reitz), isotropic, alpha = roughness^2 ----
+
+float ggx_d(vec3 h, float a) {
+    float a2 = a * a;
+    float c2 = h.z * h.z;
+    float d = c2 * (a2 - 1.0) + 1.0;
+    return h.z > 0.0 ? a2 / (PI * d * d) : 0.0;
+}
+
+// Smith G1 for GGX (separable form, as glTF Appendix B).
+float ggx_g1(vec3 w, float a) {
+    float c = abs(w.z);
+    return 2.0 * c / (c + sqrt(a * a + (1.0 - a * a) * c * c));
+}
+
+// Visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of Visible Normals").
+vec3 sample_ggx_vndf(vec3 wo, float a, vec2 u) {
+    vec3 vh = normalize(vec3(a * wo.x, a * wo.y, wo.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    float p1 = r * cos(phi);
+    float p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3(a * nh.x, a * nh.y, max(1e-7, nh.z)));
+}
+
+// Density of the half vector h under sample_ggx_vndf(wo): G1(wo) max(0, wo.h) D(h) / wo.z.
+float pdf_ggx_vndf(vec3 wo, vec3 h, float a) {
+    return ggx_g1(wo, a) * max(0.0, dot(wo, h)) * ggx_d(h, a) / abs(wo.z);
+}
+
+// ---- Beckmann, alpha = roughness^2 ----
+
+float beckmann_d(vec3 h, float a) {
+    if (h.z <= 0.0) {
+        return 0.0;
+    }
+    float c2 = h.z * h.z;
+    float tan2 = (1.0 - c2) / c2;
+    return exp(-tan2 / (a * a)) / (PI * a * a * c2 * c2);
+}
+
+// Smith G1 for Beckmann, Walter et al. 2007's rational approximation.
+float beckmann_g1(vec3 w, float a) {
+    float c = abs(w.z);
+    float tan_t = sqrt(max(0.0, 1.0 - c * c)) / c;
+    if (tan_t == 0.0) {
+        return 1.0;
+    }
+    float b = 1.0 / (a * tan_t);
+    return b >= 1.6 ? 1.0 : (3.535 * b + 2.181 * b * b) / (1.0 + 2.276 * b + 2.577 * b * b);
+}
+
+// Half-vector sampling proportional to D(h) cos(theta_h) (Walter et al. 2007, eq. 28-29).
+vec3 sample_beckmann(float a, vec2 u) {
+    float tan2 = -a * a * log(1.0 - u.x);
+    float c = inversesqrt(1.0 + tan2);
+    float s = sqrt(max(0.0, 1.0 - c * c));
+    float phi = 2.0 * PI * u.y;
+    return vec3(s * cos(phi), s * sin(phi), c);
+}
+
+float pdf_beckmann(vec3 h, float a) {
+    return beckmann_d(h, a) * max(h.z, 0.0);
+}
+
+#endif

@@ -1,0 +1,134 @@
+//! The scene on the GPU: the BVH, triangles in BVH order, vertex attributes, materials and the
+//! emissive-triangle sampling table, uploaded once as storage buffers.
+
+use super::layout::{GpuLightTri, GpuMaterial, GpuTriangle, GpuVertex};
+use crate::bvh::gpu::GpuBvh;
+use crate::bvh::{Bvh, BvhStats};
+use crate::error::Result;
+use crate::scene::Scene;
+use crate::vk::{raw, Buffer, Context};
+use glam::Vec3;
+
+/// Storage buffers for one scene.
+pub struct GpuScene {
+    /// BVH nodes and triangles.
+    pub bvh: GpuBvh,
+    /// `GpuTriangle`s in BVH order.
+    pub triangles: Buffer,
+    /// `GpuVertex`s.
+    pub vertices: Buffer,
+    /// `GpuMaterial`s.
+    pub materials: Buffer,
+    /// `GpuLightTri`s (one dummy entry when nothing emits).
+    pub lights: Buffer,
+    /// Emissive triangles in the sampling table.
+    pub light_count: u32,
+    /// Statistics of the BVH built for the scene.
+    pub bvh_stats: BvhStats,
+}
+
+/// The host-side arrays [`GpuScene`] uploads (also what tests inspect).
+pub struct SceneArrays {
+    /// The BVH.
+    pub bvh: Bvh,
+    /// Triangles in BVH order.
+    pub triangles: Vec<GpuTriangle>,
+    /// Vertex attributes.
+    pub vertices: Vec<GpuVertex>,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// Emissive sampling table.
+    pub lights: Vec<GpuLightTri>,
+}
+
+impl SceneArrays {
+    /// Builds the BVH and lays the scene out for the GPU.
+    pub fn new(scene: &Scene) -> Result<Self> {
+        let bvh = Bvh::build(&scene.triangle_soup())?;
+        let mut bvh_index = vec![0u32; bvh.prim_order.len()];
+        for (i, &input) in bvh.prim_order.iter().enumerate() {
+            bvh_index[input as usize] = i as u32;
+        }
+        let area = |t: [u32; 3]| {
+            let p = t.map(|i| Vec3::from(scene.positions[i as usize]));
+            0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+        };
+        let mut triangles: Vec<GpuTriangle> = bvh
+            .prim_order
+            .iter()
+            .map(|&input| {
+                let t = scene.triangles[input as usize];
+                GpuTriangle {
+                    v0: t[0],
+                    v1: t[1],
+                    v2: t[2],
+                    material: scene.triangle_material[input as usize],
+                    area: area(t),
+                    ..Default::default()
+                }
+            })
+            .collect();
+        let table = &scene.emissive;
+        let lights: Vec<GpuLightTri> = table
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(k, &input)| {
+                let tri = bvh_index[input as usize];
+                let pmf = table.pmf(k);
+                triangles[tri as usize].light_pmf = pmf;
+                GpuLightTri { tri, cdf: table.cdf[k], pmf, area: triangles[tri as usize].area }
+            })
+            .collect();
+        let vertices = (0..scene.positions.len())
+            .map(|i| {
+                let n = scene.normals.get(i).copied().unwrap_or([0.0; 3]);
+                let uv0 = scene.uv0.get(i).copied().unwrap_or([0.0; 2]);
+                let uv1 = scene.uv1.get(i).copied().unwrap_or([0.0; 2]);
+                GpuVertex { normal_u: [n[0], n[1], n[2], uv0[0]], v_uv1: [uv0[1], uv1[0], uv1[1], 0.0] }
+            })
+            .collect();
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                base_color: m.base_color_factor,
+                emissive_rough: [m.emissive[0], m.emissive[1], m.emissive[2], m.roughness],
+                specular: [
+                    m.specular_color_factor[0],
+                    m.specular_color_factor[1],
+                    m.specular_color_factor[2],
+                    m.specular_factor,
+                ],
+                params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
+                flags: [if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }, 0, 0, 0],
+            })
+            .collect();
+        Ok(Self { bvh, triangles, vertices, materials, lights })
+    }
+}
+
+impl GpuScene {
+    /// Builds the BVH and uploads everything.
+    pub fn upload(ctx: &Context, scene: &Scene) -> Result<Self> {
+        let arrays = SceneArrays::new(scene)?;
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        // A storage buffer cannot be empty: an empty list gets one zeroed placeholder entry.
+        fn nonempty<T: Default + Clone>(v: &[T]) -> Vec<T> {
+            if v.is_empty() {
+                vec![T::default()]
+            } else {
+                v.to_vec()
+            }
+        }
+        Ok(Self {
+            bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
+            triangles: Buffer::upload(ctx, "scene triangles", &nonempty(&arrays.triangles), usage)?,
+            vertices: Buffer::upload(ctx, "scene vertices", &nonempty(&arrays.vertices), usage)?,
+            materials: Buffer::upload(ctx, "scene materials", &nonempty(&arrays.materials), usage)?,
+            lights: Buffer::upload(ctx, "scene lights", &nonempty(&arrays.lights), usage)?,
+            light_count: arrays.lights.len() as u32,
+            bvh_stats: arrays.bvh.stats.clone(),
+        })
+    }
+}

@@ -1,0 +1,3 @@
+//! Render passes: each owns its pipelines and records into a caller's command buffer.
+
+pub mod pathtrace;

@@ -1,0 +1,129 @@
+//! The progressive path-tracing pass (`spirv/pathtrace.comp`): one sample per pixel per
+//! dispatch into a running mean and second moment.
+
+use crate::error::Result;
+use crate::gpu::layout::{PathParams, PathStats};
+use crate::gpu::scene::GpuScene;
+use crate::vk::{barrier, raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc};
+
+/// The microfacet distribution of the specular lobes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Microfacet {
+    /// GGX with visible-normal sampling (the glTF specification).
+    #[default]
+    Ggx,
+    /// Beckmann with Walter et al.'s half-vector sampling.
+    Beckmann,
+}
+
+/// How light sampling and BSDF sampling are combined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Heuristic {
+    /// Veach's power heuristic (β = 2).
+    #[default]
+    Power,
+    /// The balance heuristic.
+    Balance,
+}
+
+/// The per-pixel buffers a path-traced image accumulates into.
+pub struct PathTarget {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// vec4 per pixel: running mean rgb, sample count.
+    pub accum: Buffer,
+    /// vec4 per pixel: running mean of the squared samples rgb.
+    pub moment: Buffer,
+    /// vec4 per pixel: base colour at the first hit (alpha 1 where something was hit).
+    pub albedo: Buffer,
+    /// vec4 per pixel: shading normal xyz at the first hit, distance in w (inf for a miss).
+    pub normal_depth: Buffer,
+    /// [`PathStats`].
+    pub stats: Buffer,
+}
+
+impl PathTarget {
+    /// Allocates the buffers (device-local; read back through staging).
+    pub fn new(ctx: &Context, (w, h): (u32, u32)) -> Result<Self> {
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER
+            | raw::BufferUsageFlags::TRANSFER_SRC
+            | raw::BufferUsageFlags::TRANSFER_DST;
+        let bytes = w as u64 * h as u64 * 16;
+        let make = |name| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        Ok(Self {
+            size: (w, h),
+            accum: make("path accum")?,
+            moment: make("path moment")?,
+            albedo: make("path albedo")?,
+            normal_depth: make("path normal depth")?,
+            stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], usage)?,
+        })
+    }
+}
+
+/// `pathtrace.comp`, specialised for one scene's features and the chosen sampling.
+pub struct PathTracePass {
+    pipeline: ComputePipeline,
+}
+
+impl PathTracePass {
+    /// Workgroup size of the kernel.
+    pub const LOCAL: [u32; 3] = [8, 8, 1];
+
+    /// Builds the pipeline; `has_lights` drops next-event estimation when nothing emits.
+    pub fn new(
+        ctx: &Context,
+        microfacet: Microfacet,
+        heuristic: Heuristic,
+        has_lights: bool,
+    ) -> Result<Self> {
+        let pipeline = ComputePipeline::new(
+            ctx,
+            "pathtrace",
+            &PipelineDesc {
+                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 11],
+                push_constant_size: std::mem::size_of::<PathParams>() as u32,
+                specialization: &[
+                    (0, (microfacet == Microfacet::Beckmann) as u32),
+                    (1, (heuristic == Heuristic::Power) as u32),
+                    (2, has_lights as u32),
+                ],
+            },
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// Records one sample per pixel (sample `params.size_frame[2]`), then a barrier so the next
+    /// dispatch or a copy sees it. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        target: &PathTarget,
+        params: &PathParams,
+    ) -> Result<()> {
+        let p = &self.pipeline;
+        p.bind(cmd);
+        p.push_descriptors(
+            cmd,
+            &[
+                Descriptor::Buffer(&scene.bvh.nodes),
+                Descriptor::Buffer(&scene.bvh.tris),
+                Descriptor::Buffer(&scene.triangles),
+                Descriptor::Buffer(&scene.vertices),
+                Descriptor::Buffer(&scene.materials),
+                Descriptor::Buffer(&scene.lights),
+                Descriptor::Buffer(&target.accum),
+                Descriptor::Buffer(&target.moment),
+                Descriptor::Buffer(&target.albedo),
+                Descriptor::Buffer(&target.normal_depth),
+                Descriptor::Buffer(&target.stats),
+            ],
+        )?;
+        p.push_constants(cmd, params)?;
+        p.dispatch(cmd, [target.size.0, target.size.1, 1], Self::LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}

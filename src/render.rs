@@ -1,0 +1,151 @@
+//! Whole renders: the passes in order, submitted in batches, read back as linear images.
+
+use crate::error::{Error, Result};
+use crate::gpu::layout::{PathParams, PathStats};
+use crate::gpu::scene::GpuScene;
+use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
+use crate::scene::Camera;
+use crate::vk::{Context, GpuTimer};
+use glam::Vec3;
+
+/// Settings of a path-traced render.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathSettings {
+    /// Width and height in pixels.
+    pub size: (u32, u32),
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Scattering events per path (1 = direct lighting only).
+    pub max_bounces: u32,
+    /// Russian roulette starts once a path has scattered this many times.
+    pub rr_depth: u32,
+    /// Seed of the counter-based random numbers.
+    pub seed: u32,
+    /// Microfacet distribution.
+    pub microfacet: Microfacet,
+    /// MIS heuristic.
+    pub heuristic: Heuristic,
+    /// Constant environment radiance (linear rgb) seen by rays that leave the scene.
+    pub env: [f32; 3],
+}
+
+impl Default for PathSettings {
+    fn default() -> Self {
+        Self {
+            size: (256, 256),
+            spp: 64,
+            max_bounces: 8,
+            rr_depth: 3,
+            seed: 0,
+            microfacet: Microfacet::Ggx,
+            heuristic: Heuristic::Power,
+            env: [0.0; 3],
+        }
+    }
+}
+
+/// A path-traced image, linear, row-major from the top left.
+#[derive(Debug, Clone)]
+pub struct PathImage {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// Samples per pixel accumulated.
+    pub spp: u32,
+    /// Mean radiance rgb, and the sample count in alpha.
+    pub mean: Vec<[f32; 4]>,
+    /// Mean of the squared samples rgb.
+    pub moment: Vec<[f32; 4]>,
+    /// Base colour at the first hit.
+    pub albedo: Vec<[f32; 4]>,
+    /// Shading normal and distance at the first hit.
+    pub normal_depth: Vec<[f32; 4]>,
+    /// Samples that came out non-finite (replaced by zero); 0 unless something is wrong.
+    pub nonfinite_samples: u32,
+    /// GPU time of all the path-tracing dispatches, in milliseconds.
+    pub gpu_ms: f64,
+}
+
+impl PathImage {
+    /// Per pixel, the estimated variance of the mean rgb (sample variance / n).
+    pub fn variance_of_mean(&self) -> Vec<[f32; 3]> {
+        let n = self.spp.max(2) as f32;
+        self.mean
+            .iter()
+            .zip(&self.moment)
+            .map(|(m, s)| [0, 1, 2].map(|c| ((s[c] - m[c] * m[c]).max(0.0) * n / (n - 1.0)) / n))
+            .collect()
+    }
+}
+
+/// The pinhole camera as `pathtrace.comp` wants it, for an image of `size`.
+pub fn camera_params(camera: &Camera, (w, h): (u32, u32)) -> ([f32; 4], [f32; 4], [f32; 4], [f32; 4]) {
+    let forward = Vec3::from(camera.forward).normalize();
+    let right = forward.cross(Vec3::from(camera.up)).normalize();
+    let up = right.cross(forward);
+    let tan = (camera.yfov * 0.5).tan();
+    let aspect = w as f32 / h as f32;
+    (
+        Vec3::from(camera.position).extend(0.0).into(),
+        forward.extend(0.0).into(),
+        (right * tan * aspect).extend(0.0).into(),
+        (up * tan).extend(0.0).into(),
+    )
+}
+
+/// Path traces `settings.spp` samples per pixel, calling `progress(done, total)` after each
+/// submitted batch.
+pub fn path_trace(
+    ctx: &Context,
+    scene: &GpuScene,
+    camera: &Camera,
+    settings: &PathSettings,
+    mut progress: impl FnMut(u32, u32),
+) -> Result<PathImage> {
+    if settings.spp == 0 {
+        return Err(Error::Invalid("samples per pixel must be at least 1".into()));
+    }
+    let pass = PathTracePass::new(ctx, settings.microfacet, settings.heuristic, scene.light_count > 0)?;
+    let target = PathTarget::new(ctx, settings.size)?;
+    let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, settings.size);
+    let mut params = PathParams {
+        cam_origin,
+        cam_forward,
+        cam_right,
+        cam_up,
+        env: [settings.env[0], settings.env[1], settings.env[2], 0.0],
+        size_frame: [settings.size.0, settings.size.1, 0, settings.seed],
+        settings: [settings.max_bounces, settings.rr_depth, scene.light_count, 0],
+    };
+    // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
+    let pixels = settings.size.0 as u64 * settings.size.1 as u64;
+    let batch = ((1u64 << 22) / pixels.max(1)).clamp(1, 64) as u32;
+    let mut timer = GpuTimer::new(ctx, 1)?;
+    let mut gpu_ms = 0.0;
+    let mut done = 0;
+    while done < settings.spp {
+        let count = batch.min(settings.spp - done);
+        ctx.submit(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "pathtrace")?;
+            for s in done..done + count {
+                params.size_frame[2] = s;
+                pass.record(ctx, cmd, scene, &target, &params)?;
+            }
+            timer.end(cmd)
+        })?;
+        gpu_ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+        done += count;
+        progress(done, settings.spp);
+    }
+    let stats: Vec<PathStats> = target.stats.read(ctx)?;
+    Ok(PathImage {
+        size: settings.size,
+        spp: settings.spp,
+        mean: target.accum.read(ctx)?,
+        moment: target.moment.read(ctx)?,
+        albedo: target.albedo.read(ctx)?,
+        normal_depth: target.normal_depth.read(ctx)?,
+        nonfinite_samples: stats[0].nonfinite_samples,
+        gpu_ms,
+    })
+}

@@ -205,6 +205,18 @@ impl Scene {
         }
     }
 
+    /// Recomputes the emissive-triangle table from the current triangles and materials (after
+    /// building a scene in code, or changing emission).
+    pub fn update_emissive(&mut self) {
+        self.emissive = EmissiveTable::build(
+            &self.positions,
+            &self.triangles,
+            &self.triangle_material,
+            &self.materials,
+            &self.textures,
+        );
+    }
+
     /// Each triangle's three world-space vertices, in triangle order: the BVH builder's input.
     pub fn triangle_soup(&self) -> Vec<[Vec3; 3]> {
         self.triangles.iter().map(|t| t.map(|v| Vec3::from(self.positions[v as usize]))).collect()

@@ -131,9 +131,7 @@ impl Bins {
 
     fn add(mut self, binning: &Binning, refs: &[PrimRef]) -> Self {
         for r in refs {
-            let b = binning.bins_of(r.centroid2());
-            for axis in 0..3 {
-                let bin = b[axis];
+            for (axis, bin) in binning.bins_of(r.centroid2()).into_iter().enumerate() {
                 self.min[axis][bin] = self.min[axis][bin].min(r.min);
                 self.max[axis][bin] = self.max[axis][bin].max(r.max);
                 self.count[axis][bin] += 1;
@@ -386,9 +384,9 @@ fn sweep(refs: &[PrimRef], keys: &mut [(f32, u32)], right_area: &mut [f32], cost
             right_area[k] = acc.half_area();
         }
         let mut acc = Aabb::EMPTY;
-        for k in 1..n {
+        for (k, &right) in right_area.iter().enumerate().skip(1) {
             acc.grow(&prim(k - 1));
-            let c = cost * (acc.half_area() * k as f32 + right_area[k] * (n - k) as f32);
+            let c = cost * (acc.half_area() * k as f32 + right * (n - k) as f32);
             if best.as_ref().is_none_or(|b| c < b.cost) {
                 best = Some(Split { axis, cost: c, kind: SplitKind::Sorted { count: k } });
             }

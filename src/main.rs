@@ -45,7 +45,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 64)]
     spp: u32,
     /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "512x512", value_parser = umbra::cli::parse_size)]
+    #[arg(long, default_value = "256x256", value_parser = umbra::cli::parse_size)]
     size: (u32, u32),
     /// Scattering events per path (1 = direct light only).
     #[arg(long, default_value_t = 8)]

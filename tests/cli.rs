@@ -61,3 +61,61 @@ fn absurd_size_is_rejected_by_the_parser() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("at most 16384"));
 }
+
+#[test]
+fn render_cornell_box_writes_png_and_exr_layers() {
+    let dir = std::env::temp_dir().join(format!("umbra-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, exr) = (dir.join("c.png"), dir.join("c.exr"));
+    let out = umbra()
+        .args(["render", "--size", "32x24", "--spp", "2", "-o"])
+        .arg(&png)
+        .arg("--exr")
+        .arg(&exr)
+        .env("UMBRA_VALIDATION", "1")
+        .output()
+        .expect("run umbra");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("ERROR") && !stderr.contains("WARN"), "{stderr}");
+    let decoded = image::open(&png).expect("PNG decodes").to_rgba8();
+    assert_eq!(decoded.dimensions(), (32, 24));
+    let (w, h, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+    assert_eq!((w, h), (32, 24));
+    let mut names: Vec<&str> = channels.iter().map(|c| c.0.as_str()).collect();
+    names.sort_unstable();
+    let expected = [
+        "B",
+        "G",
+        "R",
+        "albedo.B",
+        "albedo.G",
+        "albedo.R",
+        "depth.Z",
+        "normal.X",
+        "normal.Y",
+        "normal.Z",
+        "variance.B",
+        "variance.G",
+        "variance.R",
+    ];
+    assert_eq!(names, expected);
+    // The Cornell box is lit: the colour layer is not black.
+    let red = &channels.iter().find(|c| c.0 == "R").unwrap().1;
+    assert!(red.iter().sum::<f32>() > 0.0);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn render_of_a_bad_file_names_it() {
+    let dir = std::env::temp_dir().join(format!("umbra-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("broken.glb");
+    std::fs::write(&bad, b"glTF\x02\x00\x00\x00garbage").unwrap();
+    let out = umbra().args(["render", "--spp", "1"]).arg(&bad).output().expect("run umbra");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("broken.glb"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}

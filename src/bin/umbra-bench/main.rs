@@ -35,6 +35,9 @@ enum Command {
         /// Also build with the full-sweep SAH to compare SAH cost (slow on large scenes).
         #[arg(long)]
         sweep: bool,
+        /// glTF scenes to measure as well (their first camera, or one framing them).
+        #[arg(long = "gltf")]
+        gltf: Vec<PathBuf>,
         /// Where to write rays.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
@@ -68,9 +71,46 @@ fn terrain_scene(name: &str, n: u32) -> RayScene {
     }
 }
 
+/// A glTF file's triangles, lit by a point light just under the top of the bounds, seen from the
+/// file's first camera or, when it has none, from inside the bounds looking along their longest
+/// horizontal axis (the classic view down Sponza's atrium; every primary ray hits).
+fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
+    let scene = umbra::scene::Scene::load(path)?;
+    let (lo, hi) = scene.bounds();
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let camera = match scene.cameras.first() {
+        Some(c) => c.clone(),
+        None => {
+            let (center, extent) = ((lo + hi) * 0.5, hi - lo);
+            let axis = if extent.x >= extent.z { Vec3::X } else { Vec3::Z };
+            let eye = Vec3::new(center.x, lo.y + 0.25 * extent.y, center.z) - axis * 0.35 * extent.dot(axis);
+            umbra::scene::Camera {
+                position: eye.into(),
+                forward: (Vec3::new(center.x, eye.y, center.z) - eye).normalize().into(),
+                up: [0.0, 1.0, 0.0],
+                yfov: 60f32.to_radians(),
+                aspect: None,
+                znear: 0.01,
+            }
+        }
+    };
+    let position = Vec3::from(camera.position);
+    let triangles = scene.triangle_soup();
+    let name =
+        path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+    Ok(RayScene {
+        name: format!("{name} ({} triangles)", triangles.len()),
+        triangles,
+        eye: position,
+        target: position + Vec3::from(camera.forward),
+        yfov: camera.yfov,
+        light: Vec3::new((lo.x + hi.x) * 0.5, hi.y - (hi.y - lo.y) * 0.05, (lo.z + hi.z) * 0.5),
+    })
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Rays { quick, size, repeats, sweep, out } => {
+        Command::Rays { quick, size, repeats, sweep, gltf, out } => {
             let ctx = Context::new(&ContextDesc::default())?;
             let device = ctx.info().name.clone();
             let (scenes, settings) = if quick {
@@ -84,6 +124,10 @@ fn run(cli: Cli) -> Result<()> {
                     RaySettings { size, repeats, builds: 5, sweep },
                 )
             };
+            let mut scenes = scenes;
+            for path in &gltf {
+                scenes.push(gltf_scene(path)?);
+            }
             let mut reports = Vec::new();
             for scene in &scenes {
                 log::info!("{}: building and validating", scene.name);

@@ -115,7 +115,20 @@ fn gpu_closest_hits_match_brute_force_on_several_scenes() {
         big.extend(icosphere(4, c, 2.0 + k as f32 * 0.3).soup()); // 5,120 each
     }
     assert!(big.len() >= 200_000, "{}", big.len());
-    for (name, triangles, seed) in [("icosphere", &sphere, 1), ("soup", &soup, 2), ("terrain", &big, 3)] {
+    let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
+    let cornell = umbra::scene::Scene::cornell_box().triangle_soup();
+    let spheres =
+        umbra::scene::Scene::load(format!("{scenes}/spheres.glb").as_ref()).unwrap().triangle_soup();
+    let instanced =
+        umbra::scene::Scene::load(format!("{scenes}/instanced.glb").as_ref()).unwrap().triangle_soup();
+    for (name, triangles, seed) in [
+        ("icosphere", &sphere, 1),
+        ("soup", &soup, 2),
+        ("terrain", &big, 3),
+        ("cornell box", &cornell, 4),
+        ("spheres.glb", &spheres, 5),
+        ("instanced.glb", &instanced, 6),
+    ] {
         let rays = rays(triangles, RAYS, seed);
         let hits = check_scene(&gpu, &tracer, name, triangles, &rays);
         assert!(hits > RAYS / 4, "{name}: only {hits} hits; the rays do not exercise the scene");

@@ -68,6 +68,9 @@ struct RenderArgs {
     /// Constant environment radiance, as R,G,B (linear).
     #[arg(long, value_parser = parse_rgb, default_value = "0,0,0")]
     env_color: [f32; 3],
+    /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
+    #[arg(long)]
+    target_error: Option<f32>,
     /// Exposure in stops for the PNG.
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
@@ -143,6 +146,7 @@ fn render(args: RenderArgs) -> Result<()> {
             HeuristicArg::Balance => Heuristic::Balance,
         },
         env: args.env_color,
+        target_error: args.target_error,
     };
     let Mode::Pathtrace = args.mode;
     let bar = indicatif::ProgressBar::new(settings.spp as u64).with_style(
@@ -154,15 +158,16 @@ fn render(args: RenderArgs) -> Result<()> {
         bar.set_position(done as u64)
     })?;
     bar.finish_and_clear();
-    let pixels = (settings.size.0 * settings.size.1) as f64 * settings.spp as f64;
+    let pixels = (settings.size.0 * settings.size.1) as f64 * image.spp as f64;
     println!(
-        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s)",
-        settings.spp,
+        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s), estimated relative error {:.4}",
+        image.spp,
         settings.size.0,
         settings.size.1,
         start.elapsed().as_secs_f64(),
         image.gpu_ms,
-        pixels / (image.gpu_ms * 1e3)
+        pixels / (image.gpu_ms * 1e3),
+        image.relative_error()
     );
     if image.nonfinite_samples > 0 {
         log::warn!("{} samples were NaN or infinite and were dropped", image.nonfinite_samples);

@@ -27,6 +27,9 @@ pub struct PathSettings {
     pub heuristic: Heuristic,
     /// Constant environment radiance (linear rgb) seen by rays that leave the scene.
     pub env: [f32; 3],
+    /// Stop before `spp` once [`PathImage::relative_error`] is at most this (checked after each
+    /// batch, from 16 samples per pixel on).
+    pub target_error: Option<f32>,
 }
 
 impl Default for PathSettings {
@@ -40,6 +43,7 @@ impl Default for PathSettings {
             microfacet: Microfacet::Ggx,
             heuristic: Heuristic::Power,
             env: [0.0; 3],
+            target_error: None,
         }
     }
 }
@@ -49,7 +53,7 @@ impl Default for PathSettings {
 pub struct PathImage {
     /// Width and height.
     pub size: (u32, u32),
-    /// Samples per pixel accumulated.
+    /// Samples per pixel accumulated (fewer than asked when a target error was reached).
     pub spp: u32,
     /// Mean radiance rgb, and the sample count in alpha.
     pub mean: Vec<[f32; 4]>,
@@ -66,6 +70,13 @@ pub struct PathImage {
 }
 
 impl PathImage {
+    /// The image's estimated relative error: √(relative MSE), the relative MSE being the mean
+    /// over pixels and channels of var(pixel mean) / (pixel mean² + 0.01), the usual metric of
+    /// the denoising literature (bright and dark regions count alike).
+    pub fn relative_error(&self) -> f32 {
+        relative_error(&self.mean, &self.moment, self.spp)
+    }
+
     /// Per pixel, the estimated variance of the mean rgb (sample variance / n).
     pub fn variance_of_mean(&self) -> Vec<[f32; 3]> {
         let n = self.spp.max(2) as f32;
@@ -76,6 +87,21 @@ impl PathImage {
             .collect()
     }
 }
+
+fn relative_error(mean: &[[f32; 4]], moment: &[[f32; 4]], spp: u32) -> f32 {
+    let n = spp.max(2) as f64;
+    let mut rel_mse = 0.0f64;
+    for (m, s) in mean.iter().zip(moment) {
+        for c in 0..3 {
+            let var = ((s[c] - m[c] * m[c]).max(0.0) as f64) / (n - 1.0);
+            rel_mse += var / ((m[c] as f64).powi(2) + RELATIVE_EPSILON);
+        }
+    }
+    (rel_mse / (mean.len().max(1) * 3) as f64).sqrt() as f32
+}
+
+/// The ε of the relative MSE, var / (mean² + ε): keeps dark pixels from dominating.
+const RELATIVE_EPSILON: f64 = 0.01;
 
 /// The pinhole camera as `pathtrace.comp` wants it, for an image of `size`.
 pub fn camera_params(camera: &Camera, (w, h): (u32, u32)) -> ([f32; 4], [f32; 4], [f32; 4], [f32; 4]) {
@@ -136,11 +162,20 @@ pub fn path_trace(
         gpu_ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
         done += count;
         progress(done, settings.spp);
+        if let Some(goal) = settings.target_error {
+            if done >= 16 && done < settings.spp {
+                let error = relative_error(&target.accum.read(ctx)?, &target.moment.read(ctx)?, done);
+                if error <= goal {
+                    log::info!("relative error {error:.4} <= {goal} after {done} spp: stopping");
+                    break;
+                }
+            }
+        }
     }
     let stats: Vec<PathStats> = target.stats.read(ctx)?;
     Ok(PathImage {
         size: settings.size,
-        spp: settings.spp,
+        spp: done,
         mean: target.accum.read(ctx)?,
         moment: target.moment.read(ctx)?,
         albedo: target.albedo.read(ctx)?,

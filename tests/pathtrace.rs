@@ -251,3 +251,26 @@ fn provoking_scene_never_accumulates_nan_or_inf() {
         assert!(image.moment.iter().flatten().all(|v| v.is_finite()), "non-finite second moment");
     }
 }
+
+/// `target_error` stops accumulating once the estimated relative error is reached: a loose
+/// target stops early, a tighter one needs more samples, and the image meets its target.
+#[test]
+fn target_error_stops_early_and_is_met() {
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let run = |target: f32| {
+        let settings =
+            PathSettings { size: (24, 24), spp: 4096, target_error: Some(target), ..Default::default() };
+        render(&gpu, &scene, &settings)
+    };
+    let (loose, tight) = (run(0.1), run(0.05));
+    eprintln!(
+        "target 0.1: {} spp, error {}; target 0.05: {} spp, error {}",
+        loose.spp,
+        loose.relative_error(),
+        tight.spp,
+        tight.relative_error()
+    );
+    assert!(loose.spp < tight.spp && tight.spp < 4096, "{} then {} spp", loose.spp, tight.spp);
+    assert!(loose.relative_error() <= 0.1 && tight.relative_error() <= 0.05);
+}

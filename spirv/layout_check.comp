@@ -20,6 +20,7 @@ layout(set = 0, binding = 9, std430) buffer GpuMaterialBuffer { GpuMaterial gpu_
 layout(set = 0, binding = 10, std430) buffer GpuLightTriBuffer { GpuLightTri gpu_light_tri_check[]; };
 layout(set = 0, binding = 11, std430) buffer PathParamsBuffer { PathParams path_params_check[]; };
 layout(set = 0, binding = 12, std430) buffer PathStatsBuffer { PathStats path_stats_check[]; };
+layout(set = 0, binding = 13, std430) buffer GpuLightBuffer { GpuLight gpu_light_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -35,4 +36,5 @@ void main() {
     gpu_light_tri_check[0].tri += 1u;
     path_params_check[0].cam_origin.x += 1.0;
     path_stats_check[0].nonfinite_samples += 1u;
+    gpu_light_check[0].intensity.x += 1.0;
 }

@@ -10,6 +10,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const bool BECKMANN = false;
 layout(constant_id = 1) const bool POWER_HEURISTIC = true;
 layout(constant_id = 2) const bool HAS_LIGHTS = true;
+layout(constant_id = 3) const bool HAS_PUNCTUAL = true;
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
@@ -22,6 +23,7 @@ layout(set = 0, binding = 7, std430) buffer Moment { vec4 moment[]; };
 layout(set = 0, binding = 8, std430) buffer Albedo { vec4 aov_albedo[]; };
 layout(set = 0, binding = 9, std430) buffer NormalDepth { vec4 aov_normal_depth[]; };
 layout(set = 0, binding = 10, std430) buffer Stats { PathStats stats; };
+layout(set = 0, binding = 11, std430) readonly buffer Punctual { GpuLight punctual[]; };
 layout(push_constant) uniform Push { PathParams params; };
 
 #include "random.glsl"
@@ -191,6 +193,48 @@ void main() {
                     vec3 f = bsdf_eval(s, wo_local, wi_local);
                     float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
                     radiance += throughput * f * wi_local.z * l_emit * (w / light_pdf);
+                }
+            }
+        }
+
+        // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
+        // KHR_lights_punctual: intensity / d^2 with the recommended range window and a smooth
+        // spot falloff.
+        if (HAS_PUNCTUAL) {
+            for (uint k = 0u; k < params.settings.w; ++k) {
+                vec4 pr = punctual[k].position_range;
+                vec4 dk = punctual[k].direction_kind;
+                vec3 wi;
+                float dist;
+                float attenuation = 1.0;
+                if (dk.w == LIGHT_DIRECTIONAL) {
+                    wi = -dk.xyz;
+                    dist = uintBitsToFloat(0x7f800000u);
+                } else {
+                    vec3 to_light = pr.xyz - p;
+                    dist = length(to_light);
+                    wi = to_light / dist;
+                    attenuation = 1.0 / (dist * dist);
+                    if (pr.w > 0.0) {
+                        float r = dist / pr.w;
+                        attenuation *= clamp(1.0 - r * r * r * r, 0.0, 1.0) * clamp(1.0 - r * r * r * r, 0.0, 1.0);
+                    }
+                    if (dk.w == LIGHT_SPOT) {
+                        vec4 cone = punctual[k].cone;
+                        float spot = clamp((dot(-wi, dk.xyz) - cone.x) * cone.y, 0.0, 1.0);
+                        attenuation *= spot * spot;
+                    }
+                }
+                vec3 wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
+                if (attenuation > 0.0 && wi_local.z > 0.0 && dot(wi, ng) > 0.0) {
+                    vec3 o = offset_ray(p, ng);
+                    bool blocked = dk.w == LIGHT_DIRECTIONAL
+                        ? bvh_any(o, wi, 0.0, uintBitsToFloat(0x7f800000u))
+                        : bvh_any(o, pr.xyz - o, 0.0, 0.9999);
+                    if (!blocked) {
+                        radiance += throughput * bsdf_eval(s, wo_local, wi_local) * wi_local.z
+                            * punctual[k].intensity.rgb * attenuation;
+                    }
                 }
             }
         }

@@ -130,7 +130,13 @@ pub fn path_trace(
     if settings.spp == 0 {
         return Err(Error::Invalid("samples per pixel must be at least 1".into()));
     }
-    let pass = PathTracePass::new(ctx, settings.microfacet, settings.heuristic, scene.light_count > 0)?;
+    let pass = PathTracePass::new(
+        ctx,
+        settings.microfacet,
+        settings.heuristic,
+        scene.light_count > 0,
+        scene.punctual_count > 0,
+    )?;
     let target = PathTarget::new(ctx, settings.size)?;
     let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, settings.size);
     let mut params = PathParams {
@@ -140,7 +146,7 @@ pub fn path_trace(
         cam_up,
         env: [settings.env[0], settings.env[1], settings.env[2], 0.0],
         size_frame: [settings.size.0, settings.size.1, 0, settings.seed],
-        settings: [settings.max_bounces, settings.rr_depth, scene.light_count, 0],
+        settings: [settings.max_bounces, settings.rr_depth, scene.light_count, scene.punctual_count],
     };
     // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
     let pixels = settings.size.0 as u64 * settings.size.1 as u64;

@@ -274,3 +274,107 @@ fn target_error_stops_early_and_is_met() {
     assert!(loose.spp < tight.spp && tight.spp < 4096, "{} then {} spp", loose.spp, tight.spp);
     assert!(loose.relative_error() <= 0.1 && tight.relative_error() <= 0.05);
 }
+
+/// Direct light from KHR_lights_punctual lights on a Lambert floor against the closed form
+/// L = albedo/π · I · cosθ / d² (point), with the spot's smooth cone falloff, and
+/// albedo/π · E · cosθ (directional).
+#[test]
+fn punctual_lights_match_closed_form() {
+    use umbra::scene::{Light, LightKind};
+    let gpu = Gpu::new();
+    let floor = Mesh {
+        positions: vec![
+            Vec3::new(-20.0, 0.0, -20.0),
+            Vec3::new(20.0, 0.0, -20.0),
+            Vec3::new(20.0, 0.0, 20.0),
+            Vec3::new(-20.0, 0.0, 20.0),
+        ],
+        triangles: vec![[0, 2, 1], [0, 3, 2]],
+    };
+    let albedo = 0.5f32;
+    let grey = Material {
+        metallic: 0.0,
+        specular_factor: 0.0,
+        base_color_factor: [albedo, albedo, albedo, 1.0],
+        ..Default::default()
+    };
+    let cam = Camera {
+        position: [0.0, 6.0, 0.0],
+        forward: [0.0, -1.0, 0.0],
+        up: [0.0, 0.0, -1.0],
+        yfov: 60f32.to_radians(),
+        aspect: None,
+        znear: 0.01,
+    };
+    let base = Light {
+        name: String::new(),
+        kind: LightKind::Point,
+        position: [0.5, 2.0, -0.3],
+        direction: [0.0, -1.0, 0.0],
+        color: [1.0, 0.8, 0.6],
+        intensity: 30.0,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: std::f32::consts::PI,
+    };
+    let spot = Light { kind: LightKind::Spot, inner_cone_angle: 0.2, outer_cone_angle: 0.9, ..base.clone() };
+    let sun = Light {
+        kind: LightKind::Directional,
+        direction: Vec3::new(0.3, -1.0, 0.2).normalize().into(),
+        intensity: 3.0,
+        ..base.clone()
+    };
+    let settings = PathSettings { size: (40, 40), spp: 16, max_bounces: 1, ..Default::default() };
+    for light in [base, spot, sun] {
+        let mut scene = scene_of(&[(&floor, grey.clone(), false)], cam);
+        scene.lights.push(light.clone());
+        let image = render(&gpu, &scene, &settings);
+        // Closed form for the floor point under pixel position (x, y) (in pixels, fractional).
+        let expected_at = |x: f32, y: f32| {
+            let (w, h) = (settings.size.0 as f32, settings.size.1 as f32);
+            let (_, f, r, u) = umbra::render::camera_params(&cam, settings.size);
+            let ndc = (2.0 * x / w - 1.0, 1.0 - 2.0 * y / h);
+            let d = (Vec3::from_slice(&f) + ndc.0 * Vec3::from_slice(&r) + ndc.1 * Vec3::from_slice(&u))
+                .normalize();
+            let p = Vec3::from(cam.position) + d * (cam.position[1] / -d.y);
+            let (wi, irradiance) = match light.kind {
+                LightKind::Directional => (-Vec3::from(light.direction), light.intensity),
+                _ => {
+                    let to = Vec3::from(light.position) - p;
+                    let mut e = light.intensity / to.length_squared();
+                    if light.kind == LightKind::Spot {
+                        let (co, ci) = (light.outer_cone_angle.cos(), light.inner_cone_angle.cos());
+                        let cos = (-to.normalize()).dot(Vec3::from(light.direction));
+                        let s = ((cos - co) / (ci - co)).clamp(0.0, 1.0);
+                        e *= s * s;
+                    }
+                    (to.normalize(), e)
+                }
+            };
+            albedo / std::f32::consts::PI * irradiance * wi.y.max(0.0) * light.color[0]
+        };
+        let mut checked = 0;
+        for y in 0..settings.size.1 {
+            for x in 0..settings.size.0 {
+                let (fx, fy) = (x as f32, y as f32);
+                let centre = expected_at(fx + 0.5, fy + 0.5);
+                // Across the pixel the closed form must be nearly constant for a fair comparison
+                // (the spot's cone edge is not): compare the corners.
+                let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                    .map(|(dx, dy)| expected_at(fx + dx, fy + dy));
+                let spread = corners.iter().map(|c| (c - centre).abs()).fold(0.0f32, f32::max);
+                if spread > 0.25 * centre.max(1e-3) {
+                    continue;
+                }
+                let got = image.mean[(y * settings.size.0 + x) as usize][0];
+                assert!(
+                    (got - centre).abs() <= 0.01 * centre + spread + 1e-5,
+                    "{:?} pixel ({x},{y}): {got} vs {centre}",
+                    light.kind
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 800, "{:?}: only {checked} pixels checked", light.kind);
+    }
+}

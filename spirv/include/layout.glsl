@@ -93,6 +93,18 @@ struct GpuLightTri {
     float area;
 };
 
+// A KHR_lights_punctual light in world space.
+struct GpuLight {
+    vec4 position_range;   // position xyz, range (0: infinite)
+    vec4 direction_kind;   // unit direction the light shines in, kind (LIGHT_*)
+    vec4 intensity;        // colour * intensity (candela, or lux for directional), unused
+    vec4 cone;             // cos(outer), 1 / max(cos(inner) - cos(outer), 1e-4), unused, unused
+};
+
+#define LIGHT_POINT 0.0
+#define LIGHT_SPOT 1.0
+#define LIGHT_DIRECTIONAL 2.0
+
 // Push constants of pathtrace.comp.
 struct PathParams {
     vec4 cam_origin;   // xyz, unused
@@ -101,7 +113,7 @@ struct PathParams {
     vec4 cam_up;       // up * tan(yfov/2)
     vec4 env;          // constant environment radiance rgb, unused
     uvec4 size_frame;  // width, height, sample index, seed
-    uvec4 settings;    // max bounces, russian roulette depth, light triangles, unused
+    uvec4 settings;    // max bounces, russian roulette depth, light triangles, punctual lights
 };
 
 // Per-render counters written by pathtrace.comp.

@@ -146,6 +146,30 @@ pub struct GpuLightTri {
 }
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 
+/// A punctual light (`GpuLight`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    /// Position xyz, range (0: infinite).
+    pub position_range: [f32; 4],
+    /// Unit direction the light shines in, kind ([`GpuLight::POINT`], ...).
+    pub direction_kind: [f32; 4],
+    /// Colour × intensity (candela; lux for directional lights), unused.
+    pub intensity: [f32; 4],
+    /// cos(outer cone), 1 / max(cos(inner) − cos(outer), 1e-4), unused, unused.
+    pub cone: [f32; 4],
+}
+const _: () = assert!(size_of::<GpuLight>() == 64);
+
+impl GpuLight {
+    /// `LIGHT_POINT`.
+    pub const POINT: f32 = 0.0;
+    /// `LIGHT_SPOT`.
+    pub const SPOT: f32 = 1.0;
+    /// `LIGHT_DIRECTIONAL`.
+    pub const DIRECTIONAL: f32 = 2.0;
+}
+
 /// Push constants of `pathtrace.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -162,7 +186,7 @@ pub struct PathParams {
     pub env: [f32; 4],
     /// Width, height, sample index, seed.
     pub size_frame: [u32; 4],
-    /// Max bounces, Russian-roulette depth, light triangles, unused.
+    /// Max bounces, Russian-roulette depth, light triangles, punctual lights.
     pub settings: [u32; 4],
 }
 const _: () = assert!(size_of::<PathParams>() == 112);
@@ -235,5 +259,6 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         layout_of!(GpuLightTri { tri, cdf, pmf, area }),
         layout_of!(PathParams { cam_origin, cam_forward, cam_right, cam_up, env, size_frame, settings }),
         layout_of!(PathStats { nonfinite_samples, pad0, pad1, pad2 }),
+        layout_of!(GpuLight { position_range, direction_kind, intensity, cone }),
     ]
 }

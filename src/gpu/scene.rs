@@ -1,7 +1,7 @@
 //! The scene on the GPU: the BVH, triangles in BVH order, vertex attributes, materials and the
 //! emissive-triangle sampling table, uploaded once as storage buffers.
 
-use super::layout::{GpuLightTri, GpuMaterial, GpuTriangle, GpuVertex};
+use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTriangle, GpuVertex};
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
 use crate::error::Result;
@@ -23,6 +23,10 @@ pub struct GpuScene {
     pub lights: Buffer,
     /// Emissive triangles in the sampling table.
     pub light_count: u32,
+    /// `GpuLight`s (one dummy entry when there are none).
+    pub punctual: Buffer,
+    /// Punctual lights.
+    pub punctual_count: u32,
     /// Statistics of the BVH built for the scene.
     pub bvh_stats: BvhStats,
 }
@@ -39,6 +43,8 @@ pub struct SceneArrays {
     pub materials: Vec<GpuMaterial>,
     /// Emissive sampling table.
     pub lights: Vec<GpuLightTri>,
+    /// Punctual lights.
+    pub punctual: Vec<GpuLight>,
 }
 
 impl SceneArrays {
@@ -104,7 +110,8 @@ impl SceneArrays {
                 flags: [if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }, 0, 0, 0],
             })
             .collect();
-        Ok(Self { bvh, triangles, vertices, materials, lights })
+        let punctual = scene.lights.iter().map(gpu_light).collect();
+        Ok(Self { bvh, triangles, vertices, materials, lights, punctual })
     }
 }
 
@@ -128,7 +135,28 @@ impl GpuScene {
             materials: Buffer::upload(ctx, "scene materials", &nonempty(&arrays.materials), usage)?,
             lights: Buffer::upload(ctx, "scene lights", &nonempty(&arrays.lights), usage)?,
             light_count: arrays.lights.len() as u32,
+            punctual: Buffer::upload(ctx, "scene punctual lights", &nonempty(&arrays.punctual), usage)?,
+            punctual_count: arrays.punctual.len() as u32,
             bvh_stats: arrays.bvh.stats.clone(),
         })
+    }
+}
+
+fn gpu_light(light: &crate::scene::Light) -> GpuLight {
+    use crate::scene::LightKind;
+    let kind = match light.kind {
+        LightKind::Point => GpuLight::POINT,
+        LightKind::Spot => GpuLight::SPOT,
+        LightKind::Directional => GpuLight::DIRECTIONAL,
+    };
+    let (cos_outer, cos_inner) = (light.outer_cone_angle.cos(), light.inner_cone_angle.cos());
+    let p = light.position;
+    let d = light.direction;
+    let c = light.color.map(|c| c * light.intensity);
+    GpuLight {
+        position_range: [p[0], p[1], p[2], light.range.unwrap_or(0.0)],
+        direction_kind: [d[0], d[1], d[2], kind],
+        intensity: [c[0], c[1], c[2], 0.0],
+        cone: [cos_outer, 1.0 / (cos_inner - cos_outer).max(1e-4), 0.0, 0.0],
     }
 }

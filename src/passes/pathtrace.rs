@@ -70,23 +70,26 @@ impl PathTracePass {
     /// Workgroup size of the kernel.
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
-    /// Builds the pipeline; `has_lights` drops next-event estimation when nothing emits.
+    /// Builds the pipeline; `has_lights` (emissive triangles) and `has_punctual` drop the
+    /// next-event estimation a scene does not need.
     pub fn new(
         ctx: &Context,
         microfacet: Microfacet,
         heuristic: Heuristic,
         has_lights: bool,
+        has_punctual: bool,
     ) -> Result<Self> {
         let pipeline = ComputePipeline::new(
             ctx,
             "pathtrace",
             &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 11],
+                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 12],
                 push_constant_size: std::mem::size_of::<PathParams>() as u32,
                 specialization: &[
                     (0, (microfacet == Microfacet::Beckmann) as u32),
                     (1, (heuristic == Heuristic::Power) as u32),
                     (2, has_lights as u32),
+                    (3, has_punctual as u32),
                 ],
             },
         )?;
@@ -119,6 +122,7 @@ impl PathTracePass {
                 Descriptor::Buffer(&target.albedo),
                 Descriptor::Buffer(&target.normal_depth),
                 Descriptor::Buffer(&target.stats),
+                Descriptor::Buffer(&scene.punctual),
             ],
         )?;
         p.push_constants(cmd, params)?;

@@ -79,7 +79,7 @@ fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
     let (lo, hi) = scene.bounds();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
     let camera = match scene.cameras.first() {
-        Some(c) => c.clone(),
+        Some(c) => *c,
         None => {
             let (center, extent) = ((lo + hi) * 0.5, hi - lo);
             let axis = if extent.x >= extent.z { Vec3::X } else { Vec3::Z };

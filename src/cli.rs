@@ -13,3 +13,15 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     }
     Ok((w, h))
 }
+
+/// A binary's `main`: logging at `info` (`RUST_LOG` overrides), then `run`; an error is printed
+/// once with its causes and the process exits with status 1 (never a panic).
+pub fn main(run: impl FnOnce() -> anyhow::Result<()>) {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info"))
+        .format_timestamp(None)
+        .init();
+    if let Err(e) = run() {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

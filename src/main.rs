@@ -202,13 +202,7 @@ fn render(args: RenderArgs) -> Result<()> {
 }
 
 fn main() {
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info"))
-        .format_timestamp(None)
-        .init();
-    if let Err(e) = run(Cli::parse()) {
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
-    }
+    umbra::cli::main(|| run(Cli::parse()));
 }
 
 fn run(cli: Cli) -> Result<()> {

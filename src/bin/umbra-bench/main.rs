@@ -45,13 +45,7 @@ enum Command {
 }
 
 fn main() {
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info"))
-        .format_timestamp(None)
-        .init();
-    if let Err(e) = run(Cli::parse()) {
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
-    }
+    umbra::cli::main(|| run(Cli::parse()));
 }
 
 /// Generated terrain with a row of spheres on it: `2·n²` + 15,360 triangles.

@@ -11,6 +11,7 @@ layout(constant_id = 0) const bool BECKMANN = false;
 layout(constant_id = 1) const bool POWER_HEURISTIC = true;
 layout(constant_id = 2) const bool HAS_LIGHTS = true;
 layout(constant_id = 3) const bool HAS_PUNCTUAL = true;
+layout(constant_id = 4) const bool HAS_ENV_MAP = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
@@ -24,11 +25,15 @@ layout(set = 0, binding = 8, std430) buffer Albedo { vec4 aov_albedo[]; };
 layout(set = 0, binding = 9, std430) buffer NormalDepth { vec4 aov_normal_depth[]; };
 layout(set = 0, binding = 10, std430) buffer Stats { PathStats stats; };
 layout(set = 0, binding = 11, std430) readonly buffer Punctual { GpuLight punctual[]; };
+layout(set = 0, binding = 12, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
+layout(set = 0, binding = 13, std430) readonly buffer EnvMarginal { float env_marginal[]; };
+layout(set = 0, binding = 14, std430) readonly buffer EnvConditional { float env_conditional[]; };
 layout(push_constant) uniform Push { PathParams params; };
 
 #include "random.glsl"
 #include "bvh.glsl"
 #include "bsdf.glsl"
+#include "environment.glsl"
 
 // Offsets a ray origin off the surface along n by a few ulps (Wächter and Binder, Ray Tracing
 // Gems ch. 6), so the new ray neither re-hits its own triangle nor tunnels through a neighbour.
@@ -120,7 +125,15 @@ void main() {
     for (uint depth = 0u;; ++depth) {
         Hit hit;
         if (!bvh_closest(origin, dir, 0.0, uintBitsToFloat(0x7f800000u), hit)) {
-            radiance += throughput * params.env.rgb;
+            if (HAS_ENV_MAP) {
+                float w = 1.0;
+                if (params.env_info.z != 0u && prev_pdf > 0.0) {
+                    w = mis_weight(prev_pdf, env_pdf(dir, params.env_info.xy));
+                }
+                radiance += throughput * env_radiance(dir, params.env_info.xy) * params.env.rgb * w;
+            } else {
+                radiance += throughput * params.env.rgb;
+            }
             break;
         }
         uint tri = hit.tri;
@@ -235,6 +248,22 @@ void main() {
                         radiance += throughput * bsdf_eval(s, wo_local, wi_local) * wi_local.z
                             * punctual[k].intensity.rgb * attenuation;
                     }
+                }
+            }
+        }
+
+        // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
+        if (HAS_ENV_MAP && params.env_info.z != 0u) {
+            vec4 u = rand4(pixel, sample_index, depth * 8u + 3u, seed);
+            float pdf;
+            vec3 wi = env_sample(u, params.env_info.xy, pdf);
+            vec3 wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
+            if (pdf > 0.0 && wi_local.z > 0.0 && dot(wi, ng) > 0.0) {
+                if (!bvh_any(offset_ray(p, ng), wi, 0.0, uintBitsToFloat(0x7f800000u))) {
+                    vec3 f = bsdf_eval(s, wo_local, wi_local);
+                    float w = mis_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
+                    vec3 le = env_radiance(wi, params.env_info.xy) * params.env.rgb;
+                    radiance += throughput * f * wi_local.z * le * (w / pdf);
                 }
             }
         }

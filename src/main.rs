@@ -65,7 +65,13 @@ struct RenderArgs {
     /// MIS heuristic.
     #[arg(long, value_enum, default_value = "power")]
     heuristic: HeuristicArg,
-    /// Constant environment radiance, as R,G,B (linear).
+    /// Equirectangular environment map (EXR or Radiance HDR), importance-sampled.
+    #[arg(long)]
+    env: Option<PathBuf>,
+    /// Multiplier of the environment map.
+    #[arg(long, default_value_t = 1.0)]
+    env_strength: f32,
+    /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
     #[arg(long, value_parser = parse_rgb, default_value = "0,0,0")]
     env_color: [f32; 3],
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
@@ -120,7 +126,12 @@ fn render(args: RenderArgs) -> Result<()> {
     };
     let camera = scene.camera(args.camera)?;
     let ctx = Context::new(&ContextDesc::default())?;
-    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &scene)?;
+    let mut gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &scene)?;
+    if let Some(path) = &args.env {
+        let map = umbra::environment::EnvironmentMap::load(path)?;
+        log::info!("{}: {}×{} environment", path.display(), map.width, map.height);
+        gpu_scene.set_environment(&ctx, &map)?;
+    }
     let stats = &gpu_scene.bvh_stats;
     log::info!(
         "{}: {} triangles, {} emissive; BVH {:.1} ms, {} nodes, SAH {:.2}",
@@ -145,7 +156,8 @@ fn render(args: RenderArgs) -> Result<()> {
             HeuristicArg::Power => Heuristic::Power,
             HeuristicArg::Balance => Heuristic::Balance,
         },
-        env: args.env_color,
+        env: if args.env.is_some() { [args.env_strength; 3] } else { args.env_color },
+        env_nee: true,
         target_error: args.target_error,
     };
     let Mode::Pathtrace = args.mode;

@@ -25,8 +25,12 @@ pub struct PathSettings {
     pub microfacet: Microfacet,
     /// MIS heuristic.
     pub heuristic: Heuristic,
-    /// Constant environment radiance (linear rgb) seen by rays that leave the scene.
+    /// Constant environment radiance (linear rgb) seen by rays that leave the scene, or, when
+    /// the scene has an environment map, the map's multiplier.
     pub env: [f32; 3],
+    /// Sample the environment map for next-event estimation (with MIS); off leaves only BSDF
+    /// sampling to find it (a check of the two strategies against each other).
+    pub env_nee: bool,
     /// Stop before `spp` once [`PathImage::relative_error`] is at most this (checked after each
     /// batch, from 16 samples per pixel on).
     pub target_error: Option<f32>,
@@ -43,6 +47,7 @@ impl Default for PathSettings {
             microfacet: Microfacet::Ggx,
             heuristic: Heuristic::Power,
             env: [0.0; 3],
+            env_nee: true,
             target_error: None,
         }
     }
@@ -136,6 +141,7 @@ pub fn path_trace(
         settings.heuristic,
         scene.light_count > 0,
         scene.punctual_count > 0,
+        scene.env_size.is_some(),
     )?;
     let target = PathTarget::new(ctx, settings.size)?;
     let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, settings.size);
@@ -147,6 +153,10 @@ pub fn path_trace(
         env: [settings.env[0], settings.env[1], settings.env[2], 0.0],
         size_frame: [settings.size.0, settings.size.1, 0, settings.seed],
         settings: [settings.max_bounces, settings.rr_depth, scene.light_count, scene.punctual_count],
+        env_info: {
+            let (w, h) = scene.env_size.unwrap_or((1, 1));
+            [w, h, settings.env_nee as u32, 0]
+        },
     };
     // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
     let pixels = settings.size.0 as u64 * settings.size.1 as u64;

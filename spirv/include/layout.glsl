@@ -111,9 +111,10 @@ struct PathParams {
     vec4 cam_forward;  // unit forward
     vec4 cam_right;    // right * tan(yfov/2) * aspect
     vec4 cam_up;       // up * tan(yfov/2)
-    vec4 env;          // constant environment radiance rgb, unused
+    vec4 env;          // constant environment radiance rgb (or the map's multiplier), unused
     uvec4 size_frame;  // width, height, sample index, seed
     uvec4 settings;    // max bounces, russian roulette depth, light triangles, punctual lights
+    uvec4 env_info;    // environment map width, height, sample it for NEE (0/1), unused
 };
 
 // Per-render counters written by pathtrace.comp.

@@ -182,14 +182,16 @@ pub struct PathParams {
     pub cam_right: [f32; 4],
     /// Up × tan(yfov/2).
     pub cam_up: [f32; 4],
-    /// Constant environment radiance rgb, unused.
+    /// Constant environment radiance rgb (or the environment map's multiplier), unused.
     pub env: [f32; 4],
     /// Width, height, sample index, seed.
     pub size_frame: [u32; 4],
     /// Max bounces, Russian-roulette depth, light triangles, punctual lights.
     pub settings: [u32; 4],
+    /// Environment map width, height, next-event estimation on it (0/1), unused.
+    pub env_info: [u32; 4],
 }
-const _: () = assert!(size_of::<PathParams>() == 112);
+const _: () = assert!(size_of::<PathParams>() == 128);
 
 /// Counters written by `pathtrace.comp`.
 #[repr(C)]
@@ -257,7 +259,16 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         layout_of!(GpuVertex { normal_u, v_uv1 }),
         layout_of!(GpuMaterial { base_color, emissive_rough, specular, params, flags }),
         layout_of!(GpuLightTri { tri, cdf, pmf, area }),
-        layout_of!(PathParams { cam_origin, cam_forward, cam_right, cam_up, env, size_frame, settings }),
+        layout_of!(PathParams {
+            cam_origin,
+            cam_forward,
+            cam_right,
+            cam_up,
+            env,
+            size_frame,
+            settings,
+            env_info
+        }),
         layout_of!(PathStats { nonfinite_samples, pad0, pad1, pad2 }),
         layout_of!(GpuLight { position_range, direction_kind, intensity, cone }),
     ]

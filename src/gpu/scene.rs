@@ -4,6 +4,7 @@
 use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTriangle, GpuVertex};
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
+use crate::environment::EnvironmentMap;
 use crate::error::Result;
 use crate::scene::Scene;
 use crate::vk::{raw, Buffer, Context};
@@ -27,6 +28,14 @@ pub struct GpuScene {
     pub punctual: Buffer,
     /// Punctual lights.
     pub punctual_count: u32,
+    /// Environment texels: rgb radiance, density over (u, v) (a dummy texel when there is none).
+    pub env_texels: Buffer,
+    /// Environment row CDF.
+    pub env_marginal: Buffer,
+    /// Environment per-row CDFs.
+    pub env_conditional: Buffer,
+    /// Width and height of the environment map, if the scene has one.
+    pub env_size: Option<(u32, u32)>,
     /// Statistics of the BVH built for the scene.
     pub bvh_stats: BvhStats,
 }
@@ -116,6 +125,21 @@ impl SceneArrays {
 }
 
 impl GpuScene {
+    /// Lights the scene with an environment map (replacing any previous one), uploading it
+    /// with its importance-sampling tables.
+    pub fn set_environment(&mut self, ctx: &Context, map: &EnvironmentMap) -> Result<()> {
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let table = map.distribution();
+        let texels: Vec<[f32; 4]> =
+            map.texels.iter().zip(&table.pdf_uv).map(|(t, &pdf)| [t[0], t[1], t[2], pdf]).collect();
+        self.env_texels = Buffer::upload(ctx, "environment texels", &texels, usage)?;
+        self.env_marginal = Buffer::upload(ctx, "environment marginal cdf", &table.marginal_cdf, usage)?;
+        self.env_conditional =
+            Buffer::upload(ctx, "environment conditional cdf", &table.conditional_cdf, usage)?;
+        self.env_size = Some((map.width as u32, map.height as u32));
+        Ok(())
+    }
+
     /// Builds the BVH and uploads everything.
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<Self> {
         let arrays = SceneArrays::new(scene)?;
@@ -137,6 +161,10 @@ impl GpuScene {
             light_count: arrays.lights.len() as u32,
             punctual: Buffer::upload(ctx, "scene punctual lights", &nonempty(&arrays.punctual), usage)?,
             punctual_count: arrays.punctual.len() as u32,
+            env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
+            env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
+            env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
+            env_size: None,
             bvh_stats: arrays.bvh.stats.clone(),
         })
     }

@@ -70,26 +70,28 @@ impl PathTracePass {
     /// Workgroup size of the kernel.
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
-    /// Builds the pipeline; `has_lights` (emissive triangles) and `has_punctual` drop the
-    /// next-event estimation a scene does not need.
+    /// Builds the pipeline; `has_lights` (emissive triangles), `has_punctual` and
+    /// `has_env_map` drop the light sampling a scene does not need.
     pub fn new(
         ctx: &Context,
         microfacet: Microfacet,
         heuristic: Heuristic,
         has_lights: bool,
         has_punctual: bool,
+        has_env_map: bool,
     ) -> Result<Self> {
         let pipeline = ComputePipeline::new(
             ctx,
             "pathtrace",
             &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 12],
+                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 15],
                 push_constant_size: std::mem::size_of::<PathParams>() as u32,
                 specialization: &[
                     (0, (microfacet == Microfacet::Beckmann) as u32),
                     (1, (heuristic == Heuristic::Power) as u32),
                     (2, has_lights as u32),
                     (3, has_punctual as u32),
+                    (4, has_env_map as u32),
                 ],
             },
         )?;
@@ -123,6 +125,9 @@ impl PathTracePass {
                 Descriptor::Buffer(&target.normal_depth),
                 Descriptor::Buffer(&target.stats),
                 Descriptor::Buffer(&scene.punctual),
+                Descriptor::Buffer(&scene.env_texels),
+                Descriptor::Buffer(&scene.env_marginal),
+                Descriptor::Buffer(&scene.env_conditional),
             ],
         )?;
         p.push_constants(cmd, params)?;

@@ -7,6 +7,7 @@ use common::Gpu;
 use glam::Vec3;
 use umbra::geometry::{icosphere, Mesh};
 use umbra::gpu::scene::GpuScene;
+use umbra::passes::pathtrace::Microfacet;
 use umbra::render::{path_trace, PathImage, PathSettings};
 use umbra::scene::{Camera, Material, Scene};
 
@@ -106,10 +107,30 @@ fn white_furnace_lambert_sphere_is_one() {
     assert!(checked > 1500, "only {checked} pixels checked");
 }
 
-/// Directional albedo of the GGX metal (F = 1) at cos θ_o = mu: ∫ D G1(o) G1(i) / (4 μ_o) dω_i
-/// over the upper hemisphere, by midpoint quadrature in (θ_i, φ_i).
-fn ggx_metal_albedo(mu: f64, alpha: f64) -> f64 {
-    let g1 = |c: f64| 2.0 * c / (c + (alpha * alpha + (1.0 - alpha * alpha) * c * c).sqrt());
+/// Directional albedo of a metal with F = 1 at cos θ_o = mu: ∫ D G1(o) G1(i) / (4 μ_o) dω_i over
+/// the upper hemisphere, by midpoint quadrature in (θ_i, φ_i), for GGX or Beckmann (with the
+/// same G1 approximations the kernel uses).
+fn metal_albedo(mu: f64, alpha: f64, microfacet: Microfacet) -> f64 {
+    use std::f64::consts::PI;
+    let a2 = alpha * alpha;
+    let d = |hz: f64| match microfacet {
+        Microfacet::Ggx => a2 / (PI * (hz * hz * (a2 - 1.0) + 1.0).powi(2)),
+        Microfacet::Beckmann => {
+            let c2 = hz * hz;
+            (-(1.0 - c2) / c2 / a2).exp() / (PI * a2 * c2 * c2)
+        }
+    };
+    let g1 = |c: f64| match microfacet {
+        Microfacet::Ggx => 2.0 * c / (c + (a2 + (1.0 - a2) * c * c).sqrt()),
+        Microfacet::Beckmann => {
+            let b = c / (alpha * (1.0 - c * c).sqrt());
+            if b >= 1.6 {
+                1.0
+            } else {
+                (3.535 * b + 2.181 * b * b) / (1.0 + 2.276 * b + 2.577 * b * b)
+            }
+        }
+    };
     let wo = [(1.0 - mu * mu).sqrt(), 0.0, mu];
     let (nt, np) = (400, 400);
     let mut sum = 0.0;
@@ -120,32 +141,41 @@ fn ggx_metal_albedo(mu: f64, alpha: f64) -> f64 {
             let phi = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
             let wi = [st * phi.cos(), st * phi.sin(), ct];
             let h = [wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]];
-            let len = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
-            let hz = h[2] / len;
-            let a2 = alpha * alpha;
-            let d = a2 / (std::f64::consts::PI * (hz * hz * (a2 - 1.0) + 1.0).powi(2));
-            let f = d * g1(mu) * g1(ct) / (4.0 * mu * ct);
-            sum += f * ct * st;
+            let hz = h[2] / (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
+            sum += d(hz) * g1(mu) * g1(ct) / (4.0 * mu * ct) * ct * st;
         }
     }
     sum * (std::f64::consts::FRAC_PI_2 / nt as f64) * (std::f64::consts::TAU / np as f64)
 }
 
-/// A GGX metal sphere (base colour 1, so F = 1) under a constant environment of 1: each pixel
+/// A metal sphere (base colour 1, so F = 1) under a constant environment of 1, GGX (VNDF
+/// sampling) and Beckmann (half-vector sampling): each pixel
 /// converges to the numerically integrated directional albedo at its view angle. A wrong pdf or
 /// sampling weight shifts the mean. Pixels are pooled in bins of view angle (single pixels at
 /// 64 spp are too skewed for a z-test: most samples are near 1 with a rare tail) and each bin
 /// is z-tested at significance 0.01 with a Šidák correction over the bins.
 #[test]
-fn ggx_metal_sphere_matches_integrated_albedo() {
+fn metal_spheres_match_integrated_albedo() {
+    for microfacet in [Microfacet::Ggx, Microfacet::Beckmann] {
+        metal_sphere_matches_integrated_albedo(microfacet);
+    }
+}
+
+fn metal_sphere_matches_integrated_albedo(microfacet: Microfacet) {
     let gpu = Gpu::new();
     let sphere = icosphere(6, Vec3::ZERO, 1.0);
     let roughness = 0.5f32;
     let metal = Material { metallic: 1.0, roughness, base_color_factor: [1.0; 4], ..Default::default() };
     let cam = camera(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 32.0);
     let scene = scene_of(&[(&sphere, metal, true)], cam);
-    let settings =
-        PathSettings { size: (40, 40), spp: 64, env: [1.0; 3], max_bounces: 1, ..Default::default() };
+    let settings = PathSettings {
+        size: (40, 40),
+        spp: 64,
+        env: [1.0; 3],
+        max_bounces: 1,
+        microfacet,
+        ..Default::default()
+    };
     let image = render(&gpu, &scene, &settings);
     let variance = image.variance_of_mean();
     let alpha = (roughness * roughness) as f64;
@@ -158,7 +188,7 @@ fn ggx_metal_sphere_matches_integrated_albedo() {
         let b = &mut bins[bin];
         b.0 += 1;
         b.1 += image.mean[i][1] as f64;
-        b.2 += ggx_metal_albedo(mu as f64, alpha);
+        b.2 += metal_albedo(mu as f64, alpha, microfacet);
         b.3 += variance[i][1] as f64;
     }
     // Two-sided critical z for α = 1 − 0.99^(1/6) ≈ 0.00167.
@@ -167,7 +197,7 @@ fn ggx_metal_sphere_matches_integrated_albedo() {
         assert!(n >= 20, "bin {k} has only {n} pixels");
         let z = (got - expected) / var.sqrt();
         eprintln!(
-            "GGX metal bin {k}: {n} px, mean {:.4} expected {:.4}, z {z:.2}",
+            "{microfacet:?} metal bin {k}: {n} px, mean {:.4} expected {:.4}, z {z:.2}",
             got / n as f64,
             expected / n as f64
         );

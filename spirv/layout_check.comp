@@ -21,6 +21,7 @@ layout(set = 0, binding = 10, std430) buffer GpuLightTriBuffer { GpuLightTri gpu
 layout(set = 0, binding = 11, std430) buffer PathParamsBuffer { PathParams path_params_check[]; };
 layout(set = 0, binding = 12, std430) buffer PathStatsBuffer { PathStats path_stats_check[]; };
 layout(set = 0, binding = 13, std430) buffer GpuLightBuffer { GpuLight gpu_light_check[]; };
+layout(set = 0, binding = 14, std430) buffer GpuTextureBuffer { GpuTexture gpu_texture_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -37,4 +38,5 @@ void main() {
     path_params_check[0].cam_origin.x += 1.0;
     path_stats_check[0].nonfinite_samples += 1u;
     gpu_light_check[0].intensity.x += 1.0;
+    gpu_texture_check[0].offset += 1u;
 }

@@ -12,6 +12,7 @@ layout(constant_id = 1) const bool POWER_HEURISTIC = true;
 layout(constant_id = 2) const bool HAS_LIGHTS = true;
 layout(constant_id = 3) const bool HAS_PUNCTUAL = true;
 layout(constant_id = 4) const bool HAS_ENV_MAP = false;
+layout(constant_id = 5) const bool HAS_TEXTURES = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
@@ -28,12 +29,15 @@ layout(set = 0, binding = 11, std430) readonly buffer Punctual { GpuLight punctu
 layout(set = 0, binding = 12, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
 layout(set = 0, binding = 13, std430) readonly buffer EnvMarginal { float env_marginal[]; };
 layout(set = 0, binding = 14, std430) readonly buffer EnvConditional { float env_conditional[]; };
+layout(set = 0, binding = 15, std430) readonly buffer Textures { GpuTexture textures[]; };
+layout(set = 0, binding = 16, std430) readonly buffer Texels { uint texels[]; };
 layout(push_constant) uniform Push { PathParams params; };
 
 #include "random.glsl"
 #include "bvh.glsl"
 #include "bsdf.glsl"
 #include "environment.glsl"
+#include "texture.glsl"
 
 // Offsets a ray origin off the surface along n by a few ulps (Wächter and Binder, Ray Tracing
 // Gems ch. 6), so the new ray neither re-hits its own triangle nor tunnels through a neighbour.
@@ -51,12 +55,32 @@ float mis_weight(float a, float b) {
     return a / (a + b);
 }
 
-Surface material_surface(uint id) {
+// Material texture `slot` (0 base colour, 1 metallic-roughness, 2 emissive) at the hit's UV
+// sets (uv.xy = uv0, uv.zw = uv1); white when the slot is empty.
+vec4 material_texture(uint id, uint slot, vec4 uv) {
+    // Spec constants only as plain `if` conditions: `!HAS_TEXTURES` or `?:` on one would be an
+    // OpSpecConstantOp, which naga rejects.
+    uint tex = 0u;
+    if (HAS_TEXTURES) {
+        tex = materials[id].textures[slot];
+    }
+    if (tex == 0u) {
+        return vec4(1.0);
+    }
+    vec4 r0 = materials[id].tex_transform[2u * slot];
+    vec4 r1 = materials[id].tex_transform[2u * slot + 1u];
+    vec2 st = r0.w != 0.0 ? uv.zw : uv.xy;
+    vec2 t = vec2(dot(r0.xyz, vec3(st, 1.0)), dot(r1.xyz, vec3(st, 1.0)));
+    return texture_sample(tex - 1u, t);
+}
+
+Surface material_surface(uint id, vec4 uv) {
     // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
     Surface s;
-    s.base = materials[id].base_color.rgb;
-    s.metallic = clamp(materials[id].params.x, 0.0, 1.0);
-    float r = clamp(materials[id].emissive_rough.w, 0.0, 1.0);
+    s.base = materials[id].base_color.rgb * material_texture(id, 0u, uv).rgb;
+    vec4 mr = material_texture(id, 1u, uv);
+    s.metallic = clamp(materials[id].params.x * mr.b, 0.0, 1.0);
+    float r = clamp(materials[id].emissive_rough.w * mr.g, 0.0, 1.0);
     s.alpha = max(r * r, ALPHA_MIN);
     float ior = materials[id].params.y;
     float f0 = (ior - 1.0) / (ior + 1.0);
@@ -75,12 +99,35 @@ vec3 tri_normal(uint tri) {
     return cross(bvh_tris[tri].v1.xyz - a, bvh_tris[tri].v2.xyz - a);
 }
 
-// Radiance the triangle emits towards a viewer on the side of `towards` (unit normal n).
-vec3 emitted(uint tri, vec3 n, vec3 towards) {
+// Both UV sets at barycentrics (b1, b2) of triangle `tri`: uv0 in xy, uv1 in zw.
+vec4 tri_uv(uint tri, vec2 bary) {
+    vec4 uv = vec4(0.0);
+    if (HAS_TEXTURES) {
+        uint i0 = triangles[tri].v0;
+        uint i1 = triangles[tri].v1;
+        uint i2 = triangles[tri].v2;
+        vec4 a = vec4(vertices[i0].normal_u.w, vertices[i0].v_uv1.xyz);
+        vec4 b = vec4(vertices[i1].normal_u.w, vertices[i1].v_uv1.xyz);
+        vec4 c = vec4(vertices[i2].normal_u.w, vertices[i2].v_uv1.xyz);
+        uv = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
+    }
+    return uv;
+}
+
+// Radiance the triangle emits at barycentrics `bary` towards a viewer on the side of `towards`
+// (unit normal n).
+vec3 emitted(uint tri, vec2 bary, vec3 n, vec3 towards) {
     uint m = triangles[tri].material;
     bool front = dot(n, towards) > 0.0;
     bool two_sided = (materials[m].flags.x & MATERIAL_DOUBLE_SIDED) != 0u;
-    return (front || two_sided) ? materials[m].emissive_rough.rgb : vec3(0.0);
+    if (!(front || two_sided)) {
+        return vec3(0.0);
+    }
+    vec3 e = materials[m].emissive_rough.rgb;
+    if (HAS_TEXTURES && any(greaterThan(e, vec3(0.0)))) {
+        e *= material_texture(m, 2u, tri_uv(tri, bary)).rgb;
+    }
+    return e;
 }
 
 // Picks an emissive triangle by power (binary search in the CDF).
@@ -144,7 +191,8 @@ void main() {
         vec3 p = origin + hit.t * dir;
 
         // Emission, weighted against the light-sampling strategy that could have found it.
-        vec3 le = emitted(tri, ng, wo);
+        vec4 uv = tri_uv(tri, hit.bary);
+        vec3 le = emitted(tri, hit.bary, ng, wo);
         if (any(greaterThan(le, vec3(0.0)))) {
             float w = 1.0;
             if (HAS_LIGHTS && prev_pdf > 0.0) {
@@ -174,7 +222,7 @@ void main() {
         basis(n, t, b);
         vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
         uint material = triangles[tri].material;
-        Surface s = material_surface(material);
+        Surface s = material_surface(material, uv);
         if (depth == 0u) {
             albedo = vec4(s.base, 1.0);
             normal_depth = vec4(n, hit.t);
@@ -195,7 +243,7 @@ void main() {
             vec3 to_light = lp - p;
             float dist2 = dot(to_light, to_light);
             vec3 wi = to_light * inversesqrt(dist2);
-            vec3 l_emit = emitted(ltri, ln, -wi);
+            vec3 l_emit = emitted(ltri, lb, ln, -wi);
             float cos_l = abs(dot(ln, wi));
             vec3 wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
             if (any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0 && wi_local.z > 0.0 && dot(wi, ng) > 0.0) {

@@ -73,6 +73,15 @@ pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<Channel>)> {
     Ok((size.0, size.1, channels))
 }
 
+/// The inverse sRGB transfer function: an encoded value in [0, 1] to linear.
+pub fn srgb_decode(encoded: f32) -> f32 {
+    if encoded <= 0.040_45 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// The sRGB transfer function of a linear value in [0, 1].
 pub fn srgb_encode(linear: f32) -> f32 {
     if linear <= 0.003_130_8 {

@@ -142,6 +142,7 @@ pub fn path_trace(
         scene.light_count > 0,
         scene.punctual_count > 0,
         scene.env_size.is_some(),
+        scene.texture_count > 0,
     )?;
     let target = PathTarget::new(ctx, settings.size)?;
     let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, settings.size);

@@ -486,3 +486,101 @@ fn environment_sampling_agrees_with_bsdf_sampling_on_a_real_hdr() {
     eprintln!("image mean: NEE+MIS {m1:.4} (var {v1:.2e}), BSDF only {m2:.4} (var {v2:.2e}), z {z:.2}");
     assert!(z.abs() < 3.29, "the strategies disagree: z = {z}");
 }
+
+/// A base-colour texture on a Lambert quad facing the camera under a constant environment of 1:
+/// each pixel is exactly the linearised texel its UV selects, through each glTF wrap mode
+/// (UVs run from −0.5 to 1.5 across the quad) and a KHR_texture_transform offset.
+#[test]
+fn textures_wrap_decode_and_transform() {
+    use umbra::scene::{Filter, Sampler, Texture, TextureRef, Wrap};
+    let gpu = Gpu::new();
+    // 2×2 texels: red, green / blue, white (sRGB 200 = linear 0.578).
+    let texels: [[u8; 4]; 4] = [[200, 0, 0, 255], [0, 200, 0, 255], [0, 0, 200, 255], [200, 200, 200, 255]];
+    let linear = |c: u8| umbra::output::srgb_decode(c as f32 / 255.0);
+    let quad = Mesh {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0); // sees x, y in about ±0.83
+    for (wrap, offset) in
+        [(Wrap::Repeat, 0.0), (Wrap::ClampToEdge, 0.0), (Wrap::MirroredRepeat, 0.0), (Wrap::Repeat, 0.5)]
+    {
+        let material = Material {
+            metallic: 0.0,
+            specular_factor: 0.0,
+            base_color_texture: Some(TextureRef {
+                texture: 0,
+                tex_coord: 0,
+                transform: umbra::scene::texture_transform([offset, 0.0], 0.0, [1.0, 1.0]),
+                scale: 1.0,
+            }),
+            ..Default::default()
+        };
+        let mut scene = scene_of(&[(&quad, material, false)], cam);
+        // UV = (x + 1) - 0.5 across, v downwards: (−0.5, −0.5) at the top left.
+        scene.uv0 = scene.positions.iter().map(|p| [p[0] + 0.5, 0.5 - p[1]]).collect();
+        scene.textures.push(Texture {
+            name: "checker".into(),
+            width: 2,
+            height: 2,
+            rgba8: texels.concat(),
+            srgb: true,
+            sampler: Sampler {
+                wrap_s: wrap,
+                wrap_t: wrap,
+                mag_filter: Filter::Nearest,
+                min_filter: Filter::Nearest,
+                mipmaps: false,
+            },
+        });
+        let settings =
+            PathSettings { size: (32, 32), spp: 4, env: [1.0; 3], max_bounces: 1, ..Default::default() };
+        let image = render(&gpu, &scene, &settings);
+        let mut checked = 0;
+        for y in 0..32u32 {
+            for x in 0..32u32 {
+                let d = pixel_ray(&cam, settings.size, x, y);
+                let p = Vec3::from(cam.position) + d * (cam.position[2] / -d.z);
+                let uv = [p.x + 0.5 + offset, 0.5 - p.y];
+                // Skip pixels whose footprint (±1 pixel) straddles a texel edge.
+                let pixel = 2.0 * 0.83 / 32.0;
+                let near_edge = uv.iter().any(|c| ((c * 2.0).round() - c * 2.0).abs() < 2.0 * pixel);
+                if near_edge {
+                    continue;
+                }
+                let wrap_coord = |c: f32| -> usize {
+                    let i = (c * 2.0).floor() as i32;
+                    let i = match wrap {
+                        Wrap::Repeat => i.rem_euclid(2),
+                        Wrap::ClampToEdge => i.clamp(0, 1),
+                        Wrap::MirroredRepeat => {
+                            let m = i.rem_euclid(4);
+                            if m < 2 {
+                                m
+                            } else {
+                                3 - m
+                            }
+                        }
+                    };
+                    i as usize
+                };
+                let t = texels[wrap_coord(uv[1]) * 2 + wrap_coord(uv[0])];
+                let got = image.mean[(y * 32 + x) as usize];
+                for c in 0..3 {
+                    let expected = linear(t[c]);
+                    assert!(
+                        (got[c] - expected).abs() < 1e-4,
+                        "{wrap:?} offset {offset} pixel ({x},{y}) uv {uv:?}: {got:?} vs texel {t:?}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 300, "{wrap:?}: only {checked} pixels checked");
+    }
+}

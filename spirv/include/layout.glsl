@@ -81,9 +81,29 @@ struct GpuMaterial {
     vec4 specular;        // specularColorFactor rgb, specularFactor
     vec4 params;          // metallic, ior, transmission, alpha cutoff
     uvec4 flags;          // x: MATERIAL_* bits
+    // Texture slots (base colour, metallic-roughness, emissive): texture index + 1 (0: none).
+    uvec4 textures;
+    // Per slot, the KHR_texture_transform rows (u' = row0 . (u, v, 1), v' = row1 . (u, v, 1));
+    // the UV set (0 or 1) in row0.w.
+    vec4 tex_transform[6];
 };
 
 #define MATERIAL_DOUBLE_SIDED 1u
+
+// A texture in the shared texel buffer (RGBA8, one uint per texel, row-major).
+struct GpuTexture {
+    uint offset;
+    uint width;
+    uint height;
+    uint flags;  // TEXTURE_* bits
+};
+
+#define TEXTURE_WRAP_S_CLAMP 1u
+#define TEXTURE_WRAP_S_MIRROR 2u
+#define TEXTURE_WRAP_T_CLAMP 4u
+#define TEXTURE_WRAP_T_MIRROR 8u
+#define TEXTURE_LINEAR 16u
+#define TEXTURE_SRGB 32u
 
 // One emissive triangle in the light-sampling table.
 struct GpuLightTri {

@@ -123,12 +123,46 @@ pub struct GpuMaterial {
     pub params: [f32; 4],
     /// `x`: [`GpuMaterial::DOUBLE_SIDED`] and other bits.
     pub flags: [u32; 4],
+    /// Base colour, metallic-roughness, emissive texture: index + 1 (0: none), unused.
+    pub textures: [u32; 4],
+    /// Per slot two rows of the UV transform; the UV set in the first row's `w`.
+    pub tex_transform: [[f32; 4]; 6],
 }
-const _: () = assert!(size_of::<GpuMaterial>() == 80);
+const _: () = assert!(size_of::<GpuMaterial>() == 192);
 
 impl GpuMaterial {
     /// `MATERIAL_DOUBLE_SIDED`.
     pub const DOUBLE_SIDED: u32 = 1;
+}
+
+/// A texture in the shared texel buffer (`GpuTexture`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    /// First texel in the texel buffer.
+    pub offset: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// `TEXTURE_*` bits ([`GpuTexture::WRAP_S_CLAMP`], ...).
+    pub flags: u32,
+}
+const _: () = assert!(size_of::<GpuTexture>() == 16);
+
+impl GpuTexture {
+    /// `TEXTURE_WRAP_S_CLAMP`.
+    pub const WRAP_S_CLAMP: u32 = 1;
+    /// `TEXTURE_WRAP_S_MIRROR`.
+    pub const WRAP_S_MIRROR: u32 = 2;
+    /// `TEXTURE_WRAP_T_CLAMP`.
+    pub const WRAP_T_CLAMP: u32 = 4;
+    /// `TEXTURE_WRAP_T_MIRROR`.
+    pub const WRAP_T_MIRROR: u32 = 8;
+    /// `TEXTURE_LINEAR` (bilinear magnification; otherwise nearest).
+    pub const LINEAR: u32 = 16;
+    /// `TEXTURE_SRGB` (decode sRGB to linear).
+    pub const SRGB: u32 = 32;
 }
 
 /// One entry of the emissive-triangle sampling table (`GpuLightTri`).
@@ -257,7 +291,16 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         layout_of!(TraceParams { count, pad0, pad1, pad2 }),
         layout_of!(GpuTriangle { v0, v1, v2, material, light_pmf, area, pad0, pad1 }),
         layout_of!(GpuVertex { normal_u, v_uv1 }),
-        layout_of!(GpuMaterial { base_color, emissive_rough, specular, params, flags }),
+        layout_of!(GpuMaterial {
+            base_color,
+            emissive_rough,
+            specular,
+            params,
+            flags,
+            textures,
+            tex_transform
+        }),
+        layout_of!(GpuTexture { offset, width, height, flags }),
         layout_of!(GpuLightTri { tri, cdf, pmf, area }),
         layout_of!(PathParams {
             cam_origin,

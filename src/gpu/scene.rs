@@ -1,7 +1,7 @@
 //! The scene on the GPU: the BVH, triangles in BVH order, vertex attributes, materials and the
 //! emissive-triangle sampling table, uploaded once as storage buffers.
 
-use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTriangle, GpuVertex};
+use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex};
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
@@ -34,6 +34,12 @@ pub struct GpuScene {
     pub env_marginal: Buffer,
     /// Environment per-row CDFs.
     pub env_conditional: Buffer,
+    /// `GpuTexture`s (a dummy entry when there are none).
+    pub textures: Buffer,
+    /// RGBA8 texels of every texture.
+    pub texels: Buffer,
+    /// Textures the materials use.
+    pub texture_count: u32,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// Statistics of the BVH built for the scene.
@@ -54,6 +60,10 @@ pub struct SceneArrays {
     pub lights: Vec<GpuLightTri>,
     /// Punctual lights.
     pub punctual: Vec<GpuLight>,
+    /// The textures the GPU materials use.
+    pub textures: Vec<GpuTexture>,
+    /// Their texels, RGBA8 packed little-endian into u32.
+    pub texels: Vec<u32>,
 }
 
 impl SceneArrays {
@@ -103,10 +113,22 @@ impl SceneArrays {
                 GpuVertex { normal_u: [n[0], n[1], n[2], uv0[0]], v_uv1: [uv0[1], uv1[0], uv1[1], 0.0] }
             })
             .collect();
+        let mut gpu_textures = GpuTextures::default();
         let materials = scene
             .materials
             .iter()
             .map(|m| GpuMaterial {
+                textures: [
+                    gpu_textures.slot(scene, m.base_color_texture.as_ref()),
+                    gpu_textures.slot(scene, m.metallic_roughness_texture.as_ref()),
+                    gpu_textures.slot(scene, m.emissive_texture.as_ref()),
+                    0,
+                ],
+                tex_transform: transforms([
+                    m.base_color_texture.as_ref(),
+                    m.metallic_roughness_texture.as_ref(),
+                    m.emissive_texture.as_ref(),
+                ]),
                 base_color: m.base_color_factor,
                 emissive_rough: [m.emissive[0], m.emissive[1], m.emissive[2], m.roughness],
                 specular: [
@@ -120,7 +142,8 @@ impl SceneArrays {
             })
             .collect();
         let punctual = scene.lights.iter().map(gpu_light).collect();
-        Ok(Self { bvh, triangles, vertices, materials, lights, punctual })
+        let GpuTextures { textures, texels, .. } = gpu_textures;
+        Ok(Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels })
     }
 }
 
@@ -161,6 +184,9 @@ impl GpuScene {
             light_count: arrays.lights.len() as u32,
             punctual: Buffer::upload(ctx, "scene punctual lights", &nonempty(&arrays.punctual), usage)?,
             punctual_count: arrays.punctual.len() as u32,
+            textures: Buffer::upload(ctx, "scene textures", &nonempty(&arrays.textures), usage)?,
+            texels: Buffer::upload(ctx, "scene texels", &nonempty(&arrays.texels), usage)?,
+            texture_count: arrays.textures.len() as u32,
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -187,4 +213,60 @@ fn gpu_light(light: &crate::scene::Light) -> GpuLight {
         intensity: [c[0], c[1], c[2], 0.0],
         cone: [cos_outer, 1.0 / (cos_inner - cos_outer).max(1e-4), 0.0, 0.0],
     }
+}
+
+/// The textures materials use, each uploaded once, in first-use order.
+#[derive(Default)]
+struct GpuTextures {
+    index: std::collections::HashMap<u32, u32>,
+    textures: Vec<GpuTexture>,
+    texels: Vec<u32>,
+}
+
+impl GpuTextures {
+    /// The GPU slot value (texture index + 1, or 0 for none) of a material's texture reference.
+    fn slot(&mut self, scene: &Scene, reference: Option<&crate::scene::TextureRef>) -> u32 {
+        let Some(r) = reference else { return 0 };
+        let Some(texture) = scene.textures.get(r.texture as usize) else { return 0 };
+        if let Some(&i) = self.index.get(&r.texture) {
+            return i + 1;
+        }
+        use crate::scene::{Filter, Wrap};
+        let wrap = |w: Wrap, clamp: u32, mirror: u32| match w {
+            Wrap::Repeat => 0,
+            Wrap::ClampToEdge => clamp,
+            Wrap::MirroredRepeat => mirror,
+        };
+        let sampler = &texture.sampler;
+        let flags = wrap(sampler.wrap_s, GpuTexture::WRAP_S_CLAMP, GpuTexture::WRAP_S_MIRROR)
+            | wrap(sampler.wrap_t, GpuTexture::WRAP_T_CLAMP, GpuTexture::WRAP_T_MIRROR)
+            | if sampler.mag_filter == Filter::Linear { GpuTexture::LINEAR } else { 0 }
+            | if texture.srgb { GpuTexture::SRGB } else { 0 };
+        let i = self.textures.len() as u32;
+        self.textures.push(GpuTexture {
+            offset: self.texels.len() as u32,
+            width: texture.width,
+            height: texture.height,
+            flags,
+        });
+        self.texels
+            .extend(texture.rgba8.chunks_exact(4).map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])));
+        self.index.insert(r.texture, i);
+        i + 1
+    }
+}
+
+/// The UV transforms of three texture slots as GPU rows (identity for an empty slot), with the
+/// UV set in the first row's `w`.
+fn transforms(slots: [Option<&crate::scene::TextureRef>; 3]) -> [[f32; 4]; 6] {
+    let mut rows = [[0.0; 4]; 6];
+    for (k, slot) in slots.iter().enumerate() {
+        let (m, set) = match slot {
+            Some(r) => (r.transform, r.tex_coord as f32),
+            None => (crate::scene::IDENTITY_TRANSFORM, 0.0),
+        };
+        rows[2 * k] = [m[0][0], m[0][1], m[0][2], set];
+        rows[2 * k + 1] = [m[1][0], m[1][1], m[1][2], 0.0];
+    }
+    rows
 }

@@ -70,8 +70,8 @@ impl PathTracePass {
     /// Workgroup size of the kernel.
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
-    /// Builds the pipeline; `has_lights` (emissive triangles), `has_punctual` and
-    /// `has_env_map` drop the light sampling a scene does not need.
+    /// Builds the pipeline; `has_lights` (emissive triangles), `has_punctual`, `has_env_map`
+    /// and `has_textures` drop what a scene does not need.
     pub fn new(
         ctx: &Context,
         microfacet: Microfacet,
@@ -79,12 +79,13 @@ impl PathTracePass {
         has_lights: bool,
         has_punctual: bool,
         has_env_map: bool,
+        has_textures: bool,
     ) -> Result<Self> {
         let pipeline = ComputePipeline::new(
             ctx,
             "pathtrace",
             &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 15],
+                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 17],
                 push_constant_size: std::mem::size_of::<PathParams>() as u32,
                 specialization: &[
                     (0, (microfacet == Microfacet::Beckmann) as u32),
@@ -92,6 +93,7 @@ impl PathTracePass {
                     (2, has_lights as u32),
                     (3, has_punctual as u32),
                     (4, has_env_map as u32),
+                    (5, has_textures as u32),
                 ],
             },
         )?;
@@ -128,6 +130,8 @@ impl PathTracePass {
                 Descriptor::Buffer(&scene.env_texels),
                 Descriptor::Buffer(&scene.env_marginal),
                 Descriptor::Buffer(&scene.env_conditional),
+                Descriptor::Buffer(&scene.textures),
+                Descriptor::Buffer(&scene.texels),
             ],
         )?;
         p.push_constants(cmd, params)?;

@@ -55,7 +55,7 @@ float mis_weight(float a, float b) {
     return a / (a + b);
 }
 
-// Material texture `slot` (0 base colour, 1 metallic-roughness, 2 emissive) at the hit's UV
+// Material texture `slot` (0 base colour, 1 metallic-roughness, 2 emissive, 3 normal) at the hit's UV
 // sets (uv.xy = uv0, uv.zw = uv1); white when the slot is empty.
 vec4 material_texture(uint id, uint slot, vec4 uv) {
     // Spec constants only as plain `if` conditions: `!HAS_TEXTURES` or `?:` on one would be an
@@ -216,6 +216,28 @@ void main() {
         n = (n_len > 0.0 && !isnan(n_len) && !isinf(n_len)) ? n / n_len : ng;
         if (dot(n, ng) < 0.0) {
             n = -n;
+        }
+        // Normal map: tangent-space normal (scaled in xy) through the interpolated TBN.
+        if (HAS_TEXTURES) {
+            uint m = triangles[tri].material;
+            if (materials[m].textures.w != 0u) {
+                vec4 ta = vertices[i0].tangent;
+                vec4 tb = vertices[i1].tangent;
+                vec4 tc = vertices[i2].tangent;
+                vec4 tg = b0 * ta + hit.bary.x * tb + hit.bary.y * tc;
+                vec3 tt = tg.xyz - n * dot(n, tg.xyz);
+                float tl = length(tt);
+                if (tl > 1e-8) {
+                    tt /= tl;
+                    vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
+                    vec3 nm = material_texture(m, 3u, uv).rgb * 2.0 - 1.0;
+                    nm.xy *= materials[m].tex_transform[7].w;
+                    vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
+                    if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
+                        n = mapped;
+                    }
+                }
+            }
         }
         vec3 t;
         vec3 b;

@@ -584,3 +584,84 @@ fn textures_wrap_decode_and_transform() {
         assert!(checked > 300, "{wrap:?}: only {checked} pixels checked");
     }
 }
+
+/// A normal map on a quad facing the camera, lit by a directional light from the +x side: the
+/// shading normal is the map's tangent-space normal through (tangent, bitangent, normal), so the
+/// Lambert radiance follows the closed form for the tilted normal, scaled as `normalTexture.scale`
+/// says; tilting towards the tangent's +x brightens, towards −x darkens.
+#[test]
+fn normal_maps_tilt_the_shading_normal() {
+    use umbra::scene::{Filter, Light, LightKind, Sampler, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM};
+    let gpu = Gpu::new();
+    let quad = Mesh {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0);
+    let light_dir = Vec3::new(1.0, 0.0, 1.0).normalize(); // towards the light
+    let albedo = 0.8f32;
+    for (tilt, scale) in [(0.5f32, 1.0f32), (-0.5, 1.0), (0.5, 0.5)] {
+        let texel = [
+            ((tilt.sin() * 0.5 + 0.5) * 255.0).round() as u8,
+            128,
+            ((tilt.cos() * 0.5 + 0.5) * 255.0).round() as u8,
+            255,
+        ];
+        let material = Material {
+            metallic: 0.0,
+            specular_factor: 0.0,
+            base_color_factor: [albedo, albedo, albedo, 1.0],
+            normal_texture: Some(TextureRef {
+                texture: 0,
+                tex_coord: 0,
+                transform: IDENTITY_TRANSFORM,
+                scale,
+            }),
+            ..Default::default()
+        };
+        let mut scene = scene_of(&[(&quad, material, false)], cam);
+        scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
+        scene.tangents = vec![[1.0, 0.0, 0.0, 1.0]; scene.positions.len()];
+        scene.textures.push(Texture {
+            name: "tilt".into(),
+            width: 1,
+            height: 1,
+            rgba8: texel.to_vec(),
+            srgb: false,
+            sampler: Sampler {
+                wrap_s: Wrap::Repeat,
+                wrap_t: Wrap::Repeat,
+                mag_filter: Filter::Nearest,
+                min_filter: Filter::Nearest,
+                mipmaps: false,
+            },
+        });
+        scene.lights.push(Light {
+            name: String::new(),
+            kind: LightKind::Directional,
+            position: [0.0; 3],
+            direction: (-light_dir).into(),
+            color: [1.0; 3],
+            intensity: 2.0,
+            range: None,
+            inner_cone_angle: 0.0,
+            outer_cone_angle: std::f32::consts::PI,
+        });
+        let settings = PathSettings { size: (16, 16), spp: 2, max_bounces: 1, ..Default::default() };
+        let image = render(&gpu, &scene, &settings);
+        let decoded = Vec3::new(texel[0] as f32, texel[1] as f32, texel[2] as f32) / 255.0 * 2.0 - Vec3::ONE;
+        let mapped = Vec3::new(decoded.x * scale, decoded.y * scale, decoded.z).normalize();
+        let expected = albedo / std::f32::consts::PI * 2.0 * mapped.dot(light_dir).max(0.0);
+        let got = image.mean[8 * 16 + 8][0];
+        eprintln!(
+            "tilt {tilt} scale {scale}: {got} (flat would be {})",
+            albedo / std::f32::consts::PI * 2.0 * light_dir.z
+        );
+        assert!((got - expected).abs() < 1e-3 * expected, "tilt {tilt} scale {scale}: {got} vs {expected}");
+    }
+}

@@ -72,6 +72,7 @@ struct GpuTriangle {
 struct GpuVertex {
     vec4 normal_u;   // normal xyz, uv0.x
     vec4 v_uv1;      // uv0.y, uv1.xy, unused
+    vec4 tangent;    // tangent xyz, bitangent sign (0 when the scene has no tangents)
 };
 
 // A glTF metallic-roughness material (factors; textures come with the texture issue).
@@ -81,11 +82,11 @@ struct GpuMaterial {
     vec4 specular;        // specularColorFactor rgb, specularFactor
     vec4 params;          // metallic, ior, transmission, alpha cutoff
     uvec4 flags;          // x: MATERIAL_* bits
-    // Texture slots (base colour, metallic-roughness, emissive): texture index + 1 (0: none).
+    // Texture slots (base colour, metallic-roughness, emissive, normal): index + 1 (0: none).
     uvec4 textures;
     // Per slot, the KHR_texture_transform rows (u' = row0 . (u, v, 1), v' = row1 . (u, v, 1));
-    // the UV set (0 or 1) in row0.w.
-    vec4 tex_transform[6];
+    // the UV set (0 or 1) in row0.w; the normal slot's row1.w is the normal scale.
+    vec4 tex_transform[8];
 };
 
 #define MATERIAL_DOUBLE_SIDED 1u

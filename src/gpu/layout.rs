@@ -106,8 +106,10 @@ pub struct GpuVertex {
     pub normal_u: [f32; 4],
     /// uv0.y, uv1.xy, unused.
     pub v_uv1: [f32; 4],
+    /// Tangent xyz, bitangent sign (all 0 when the scene has no tangents).
+    pub tangent: [f32; 4],
 }
-const _: () = assert!(size_of::<GpuVertex>() == 32);
+const _: () = assert!(size_of::<GpuVertex>() == 48);
 
 /// A material's factors (`GpuMaterial`).
 #[repr(C)]
@@ -123,12 +125,13 @@ pub struct GpuMaterial {
     pub params: [f32; 4],
     /// `x`: [`GpuMaterial::DOUBLE_SIDED`] and other bits.
     pub flags: [u32; 4],
-    /// Base colour, metallic-roughness, emissive texture: index + 1 (0: none), unused.
+    /// Base colour, metallic-roughness, emissive, normal texture: index + 1 (0: none).
     pub textures: [u32; 4],
-    /// Per slot two rows of the UV transform; the UV set in the first row's `w`.
-    pub tex_transform: [[f32; 4]; 6],
+    /// Per slot two rows of the UV transform; the UV set in the first row's `w`; the normal
+    /// slot's second row `w` is the normal scale.
+    pub tex_transform: [[f32; 4]; 8],
 }
-const _: () = assert!(size_of::<GpuMaterial>() == 192);
+const _: () = assert!(size_of::<GpuMaterial>() == 224);
 
 impl GpuMaterial {
     /// `MATERIAL_DOUBLE_SIDED`.
@@ -290,7 +293,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         layout_of!(TraceHit { t, tri, u, v }),
         layout_of!(TraceParams { count, pad0, pad1, pad2 }),
         layout_of!(GpuTriangle { v0, v1, v2, material, light_pmf, area, pad0, pad1 }),
-        layout_of!(GpuVertex { normal_u, v_uv1 }),
+        layout_of!(GpuVertex { normal_u, v_uv1, tangent }),
         layout_of!(GpuMaterial {
             base_color,
             emissive_rough,

@@ -110,7 +110,11 @@ impl SceneArrays {
                 let n = scene.normals.get(i).copied().unwrap_or([0.0; 3]);
                 let uv0 = scene.uv0.get(i).copied().unwrap_or([0.0; 2]);
                 let uv1 = scene.uv1.get(i).copied().unwrap_or([0.0; 2]);
-                GpuVertex { normal_u: [n[0], n[1], n[2], uv0[0]], v_uv1: [uv0[1], uv1[0], uv1[1], 0.0] }
+                GpuVertex {
+                    normal_u: [n[0], n[1], n[2], uv0[0]],
+                    v_uv1: [uv0[1], uv1[0], uv1[1], 0.0],
+                    tangent: scene.tangents.get(i).copied().unwrap_or([0.0; 4]),
+                }
             })
             .collect();
         let mut gpu_textures = GpuTextures::default();
@@ -122,12 +126,17 @@ impl SceneArrays {
                     gpu_textures.slot(scene, m.base_color_texture.as_ref()),
                     gpu_textures.slot(scene, m.metallic_roughness_texture.as_ref()),
                     gpu_textures.slot(scene, m.emissive_texture.as_ref()),
-                    0,
+                    if scene.tangents.is_empty() {
+                        0
+                    } else {
+                        gpu_textures.slot(scene, m.normal_texture.as_ref())
+                    },
                 ],
                 tex_transform: transforms([
                     m.base_color_texture.as_ref(),
                     m.metallic_roughness_texture.as_ref(),
                     m.emissive_texture.as_ref(),
+                    m.normal_texture.as_ref(),
                 ]),
                 base_color: m.base_color_factor,
                 emissive_rough: [m.emissive[0], m.emissive[1], m.emissive[2], m.roughness],
@@ -256,17 +265,17 @@ impl GpuTextures {
     }
 }
 
-/// The UV transforms of three texture slots as GPU rows (identity for an empty slot), with the
-/// UV set in the first row's `w`.
-fn transforms(slots: [Option<&crate::scene::TextureRef>; 3]) -> [[f32; 4]; 6] {
-    let mut rows = [[0.0; 4]; 6];
+/// The UV transforms of the four texture slots as GPU rows (identity for an empty slot), with
+/// the UV set in the first row's `w` and the slot's scale (the normal scale) in the second's.
+fn transforms(slots: [Option<&crate::scene::TextureRef>; 4]) -> [[f32; 4]; 8] {
+    let mut rows = [[0.0; 4]; 8];
     for (k, slot) in slots.iter().enumerate() {
-        let (m, set) = match slot {
-            Some(r) => (r.transform, r.tex_coord as f32),
-            None => (crate::scene::IDENTITY_TRANSFORM, 0.0),
+        let (m, set, scale) = match slot {
+            Some(r) => (r.transform, r.tex_coord as f32, r.scale),
+            None => (crate::scene::IDENTITY_TRANSFORM, 0.0, 1.0),
         };
         rows[2 * k] = [m[0][0], m[0][1], m[0][2], set];
-        rows[2 * k + 1] = [m[1][0], m[1][1], m[1][2], 0.0];
+        rows[2 * k + 1] = [m[1][0], m[1][1], m[1][2], scale];
     }
     rows
 }

@@ -35,6 +35,32 @@ fn scene_of(parts: &[(&Mesh, Material, bool)], camera: Camera) -> Scene {
     scene
 }
 
+/// A square floor at y = 0, `half` metres each way, facing +y.
+fn floor_quad(half: f32) -> Mesh {
+    Mesh {
+        positions: vec![
+            Vec3::new(-half, 0.0, -half),
+            Vec3::new(half, 0.0, -half),
+            Vec3::new(half, 0.0, half),
+            Vec3::new(-half, 0.0, half),
+        ],
+        triangles: vec![[0, 2, 1], [0, 3, 2]],
+    }
+}
+
+/// The square [−1, 1]² at z = 0, facing +z.
+fn facing_quad() -> Mesh {
+    Mesh {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    }
+}
+
 fn camera(position: Vec3, target: Vec3, yfov_degrees: f32) -> Camera {
     Camera {
         position: position.into(),
@@ -224,15 +250,7 @@ fn same_seed_same_bytes_different_seed_different() {
 #[test]
 fn provoking_scene_never_accumulates_nan_or_inf() {
     let gpu = Gpu::new();
-    let floor = Mesh {
-        positions: vec![
-            Vec3::new(-5.0, 0.0, -5.0),
-            Vec3::new(5.0, 0.0, -5.0),
-            Vec3::new(5.0, 0.0, 5.0),
-            Vec3::new(-5.0, 0.0, 5.0),
-        ],
-        triangles: vec![[0, 2, 1], [0, 3, 2]],
-    };
+    let floor = floor_quad(5.0);
     let mirror_ball = icosphere(2, Vec3::new(0.0, 0.5, 0.0), 0.5);
     let tiny_light = Mesh {
         positions: vec![Vec3::new(0.0, 2.0, 0.0), Vec3::new(1e-4, 2.0, 0.0), Vec3::new(0.0, 2.0, 1e-4)],
@@ -312,15 +330,7 @@ fn target_error_stops_early_and_is_met() {
 fn punctual_lights_match_closed_form() {
     use umbra::scene::{Light, LightKind};
     let gpu = Gpu::new();
-    let floor = Mesh {
-        positions: vec![
-            Vec3::new(-20.0, 0.0, -20.0),
-            Vec3::new(20.0, 0.0, -20.0),
-            Vec3::new(20.0, 0.0, 20.0),
-            Vec3::new(-20.0, 0.0, 20.0),
-        ],
-        triangles: vec![[0, 2, 1], [0, 3, 2]],
-    };
+    let floor = floor_quad(20.0);
     let albedo = 0.5f32;
     let grey = Material {
         metallic: 0.0,
@@ -497,15 +507,7 @@ fn textures_wrap_decode_and_transform() {
     // 2×2 texels: red, green / blue, white (sRGB 200 = linear 0.578).
     let texels: [[u8; 4]; 4] = [[200, 0, 0, 255], [0, 200, 0, 255], [0, 0, 200, 255], [200, 200, 200, 255]];
     let linear = |c: u8| umbra::output::srgb_decode(c as f32 / 255.0);
-    let quad = Mesh {
-        positions: vec![
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
-        ],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-    };
+    let quad = facing_quad();
     let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0); // sees x, y in about ±0.83
     for (wrap, offset) in
         [(Wrap::Repeat, 0.0), (Wrap::ClampToEdge, 0.0), (Wrap::MirroredRepeat, 0.0), (Wrap::Repeat, 0.5)]
@@ -593,15 +595,7 @@ fn textures_wrap_decode_and_transform() {
 fn normal_maps_tilt_the_shading_normal() {
     use umbra::scene::{Filter, Light, LightKind, Sampler, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM};
     let gpu = Gpu::new();
-    let quad = Mesh {
-        positions: vec![
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
-        ],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-    };
+    let quad = facing_quad();
     let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0);
     let light_dir = Vec3::new(1.0, 0.0, 1.0).normalize(); // towards the light
     let albedo = 0.8f32;

@@ -22,6 +22,7 @@ layout(set = 0, binding = 11, std430) buffer PathParamsBuffer { PathParams path_
 layout(set = 0, binding = 12, std430) buffer PathStatsBuffer { PathStats path_stats_check[]; };
 layout(set = 0, binding = 13, std430) buffer GpuLightBuffer { GpuLight gpu_light_check[]; };
 layout(set = 0, binding = 14, std430) buffer GpuTextureBuffer { GpuTexture gpu_texture_check[]; };
+layout(set = 0, binding = 15, std430) buffer SampleTestParamsBuffer { SampleTestParams sample_test_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -39,4 +40,5 @@ void main() {
     path_stats_check[0].nonfinite_samples += 1u;
     gpu_light_check[0].intensity.x += 1.0;
     gpu_texture_check[0].offset += 1u;
+    sample_test_check[0].config.x += 1u;
 }

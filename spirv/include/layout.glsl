@@ -146,4 +146,10 @@ struct PathStats {
     uint pad2;
 };
 
+// Push constants of sample_test.comp (the sampling tests' kernel).
+struct SampleTestParams {
+    vec4 wo_alpha;   // outgoing direction xyz (local frame), alpha
+    uvec4 config;    // mode (0 sample, 1 evaluate pdf), count, seed, sampler (0 cosine, 1 microfacet)
+};
+
 #endif

@@ -245,6 +245,17 @@ pub struct PathStats {
 }
 const _: () = assert!(size_of::<PathStats>() == 16);
 
+/// Push constants of `sample_test.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SampleTestParams {
+    /// Outgoing direction (local frame) xyz, alpha.
+    pub wo_alpha: [f32; 4],
+    /// Mode (0 sample, 1 evaluate the pdf), count, seed, sampler (0 cosine, 1 microfacet).
+    pub config: [u32; 4],
+}
+const _: () = assert!(size_of::<SampleTestParams>() == 32);
+
 /// One member of a GPU struct as the host lays it out.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MemberLayout {
@@ -304,6 +315,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
             tex_transform
         }),
         layout_of!(GpuTexture { offset, width, height, flags }),
+        layout_of!(SampleTestParams { wo_alpha, config }),
         layout_of!(GpuLightTri { tri, cdf, pmf, area }),
         layout_of!(PathParams {
             cam_origin,

@@ -1,0 +1,47 @@
+#version 460
+// Test-only: draws directions with the renderer's own sampling routines (sampling.glsl,
+// bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests.
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(constant_id = 0) const bool BECKMANN = false;
+
+layout(set = 0, binding = 0, std430) readonly buffer Directions { vec4 directions[]; };
+layout(set = 0, binding = 1, std430) buffer Results { vec4 results[]; };
+layout(push_constant) uniform Push { SampleTestParams params; };
+
+#include "random.glsl"
+#include "bsdf.glsl"
+
+float sampler_pdf(vec3 wo, vec3 wi, float alpha) {
+    if (params.config.w == 0u) {
+        return pdf_cosine_hemisphere(wi);
+    }
+    vec3 h = wo + wi;
+    float len = length(h);
+    return len > 0.0 ? micro_pdf(wo, h / len, alpha) : 0.0;
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= params.config.y) {
+        return;
+    }
+    vec3 wo = params.wo_alpha.xyz;
+    float alpha = params.wo_alpha.w;
+    if (params.config.x == 0u) {
+        vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.config.z);
+        vec3 wi;
+        if (params.config.w == 0u) {
+            wi = sample_cosine_hemisphere(u.xy);
+        } else {
+            wi = reflect(-wo, micro_sample(wo, alpha, u.xy));
+        }
+        results[i] = vec4(wi, sampler_pdf(wo, wi, alpha));
+    } else {
+        vec3 wi = directions[i].xyz;
+        results[i] = vec4(wi, sampler_pdf(wo, wi, alpha));
+    }
+}

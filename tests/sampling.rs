@@ -250,9 +250,13 @@ fn chi_square(gpu: &Gpu, kernel: &Kernel, sampler: Sampler, pdf_alpha_scale: f32
     (gamma_q(dof as f64 / 2.0, chi2 / 2.0), chi2, dof, mass)
 }
 
-/// Beckmann at 85° with α ≤ 0.2 is rejected (about 7 % more samples than the pdf predicts just
-/// below the horizon opposite wo, where the renderer discards them anyway); not yet explained,
-/// so it is kept apart in an ignored test rather than hidden.
+/// Beckmann at 85° with α ≤ 0.2 is rejected: about 7 % more samples than the integrated pdf
+/// predicts land in the cells around wi = −wo (just below the horizon, where the renderer
+/// discards them anyway). Likely cause, to be confirmed: half-vector sampling's solid-angle pdf
+/// D(h) cos θ_h / (4 wo·h) has an integrable singularity where wo·h → 0, which is exactly
+/// wi → −wo, and the fixed midpoint quadrature under-integrates it (VNDF's pdf has no such
+/// factor and passes). The fix is adaptive integration around −wo. Kept apart in an ignored test
+/// rather than hidden.
 fn open_question(beckmann: bool, alpha: f32, theta_degrees: f32) -> bool {
     beckmann && alpha <= 0.2 && theta_degrees >= 85.0
 }
@@ -272,7 +276,7 @@ fn cases() -> Vec<Sampler> {
 }
 
 #[test]
-#[ignore = "open: Beckmann at grazing incidence (85°, α ≤ 0.2) fails the chi-square test; see open_question"]
+#[ignore = "open: Beckmann at 85°, α ≤ 0.2 fails; likely the quadrature of the pdf's singularity at wi = -wo (see open_question)"]
 fn beckmann_at_grazing_incidence() {
     let gpu = Gpu::new();
     let kernel = Kernel::new(&gpu);

@@ -6,7 +6,7 @@ mod common;
 use common::Gpu;
 use glam::Vec3;
 use umbra::bvh::gpu::{GpuBvh, Query, RayTracer};
-use umbra::bvh::reference::Reference;
+use umbra::bvh::reference::{same_hit, Reference};
 use umbra::bvh::{BuildOptions, Bvh, Hit, Ray};
 use umbra::geometry::{icosphere, random_soup, terrain, Mesh, Rng};
 use umbra::gpu::layout::{TraceHit, TraceRay};
@@ -48,16 +48,9 @@ fn rays(triangles: &[[Vec3; 3]], count: usize, seed: u64) -> Vec<Ray> {
         .collect()
 }
 
-/// Whether `got` (BVH order) answers `ray` as the reference (input order) does: both miss, or
-/// both hit the same triangle, or (ties between triangles) the same t within 1e-5 relative.
+/// Whether `got` (BVH order) answers a ray as the reference (input order) does.
 fn agrees(bvh: &Bvh, got: Option<Hit>, expected: Option<Hit>) -> bool {
-    match (got, expected) {
-        (None, None) => true,
-        (Some(g), Some(e)) => {
-            bvh.prim_order[g.tri as usize] == e.tri || (g.t - e.t).abs() <= 1e-5 * e.t.abs()
-        }
-        _ => false,
-    }
+    same_hit(got, expected, |t| bvh.prim_order[t as usize])
 }
 
 /// Traces `rays` on the GPU (closest and any), the CPU BVH and the reference, and asserts they

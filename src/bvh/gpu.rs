@@ -15,14 +15,13 @@ pub struct GpuBvh {
 }
 
 impl GpuBvh {
-    /// Uploads `bvh` through staging buffers. An empty BVH still gets valid (dummy) buffers.
+    /// Uploads `bvh` through staging buffers (an empty BVH's triangle list still gets a minimal
+    /// buffer: see [`Buffer::new`]).
     pub fn upload(ctx: &Context, bvh: &Bvh) -> Result<Self> {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
-        let dummy = [super::BvhTri::default()];
-        let tris = if bvh.tris.is_empty() { &dummy[..] } else { &bvh.tris[..] };
         Ok(Self {
             nodes: Buffer::upload(ctx, "bvh nodes", &bvh.nodes, usage)?,
-            tris: Buffer::upload(ctx, "bvh triangles", tris, usage)?,
+            tris: Buffer::upload(ctx, "bvh triangles", &bvh.tris, usage)?,
         })
     }
 }
@@ -62,15 +61,13 @@ impl RayTracer {
         Ok(Self { closest: make(0)?, any: make(1)? })
     }
 
-    /// Records a trace of `count` rays from `rays` into `hits`. Never submits.
+    /// Records a trace of `batch`'s rays into its hits. Never submits.
     pub fn record(
         &self,
         cmd: raw::CommandBuffer,
         query: Query,
         bvh: &GpuBvh,
-        rays: &Buffer,
-        hits: &Buffer,
-        count: u32,
+        batch: &RayBatch,
     ) -> Result<()> {
         let pipeline = match query {
             Query::Closest => &self.closest,
@@ -82,12 +79,12 @@ impl RayTracer {
             &[
                 Descriptor::Buffer(&bvh.nodes),
                 Descriptor::Buffer(&bvh.tris),
-                Descriptor::Buffer(rays),
-                Descriptor::Buffer(hits),
+                Descriptor::Buffer(&batch.rays),
+                Descriptor::Buffer(&batch.hits),
             ],
         )?;
-        pipeline.push_constants(cmd, &TraceParams { count, ..Default::default() })?;
-        pipeline.dispatch(cmd, [count, 1, 1], [LOCAL, 1, 1])
+        pipeline.push_constants(cmd, &TraceParams { count: batch.count, ..Default::default() })?;
+        pipeline.dispatch(cmd, [batch.count, 1, 1], [LOCAL, 1, 1])
     }
 
     /// Uploads `rays`, traces them and reads the hits back (one submission; for tests).
@@ -98,19 +95,39 @@ impl RayTracer {
         bvh: &GpuBvh,
         rays: &[TraceRay],
     ) -> Result<Vec<TraceHit>> {
+        let batch = RayBatch::new(ctx, rays)?;
+        ctx.submit(|cmd| self.record(cmd, query, bvh, &batch))?;
+        batch.read_hits(ctx)
+    }
+}
+
+/// Rays on the GPU and room for their hits: traced once or many times (the benchmark).
+pub struct RayBatch {
+    /// `TraceRay`s.
+    pub rays: Buffer,
+    /// `TraceHit`s, one per ray.
+    pub hits: Buffer,
+    /// Number of rays.
+    pub count: u32,
+}
+
+impl RayBatch {
+    /// Uploads `rays` and allocates their hits.
+    pub fn new(ctx: &Context, rays: &[TraceRay]) -> Result<Self> {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
-        let ray_buffer = Buffer::upload(ctx, "rays", rays, usage)?;
-        let hits = Buffer::new(
-            ctx,
-            "hits",
-            (rays.len() * std::mem::size_of::<TraceHit>()) as u64,
-            usage,
-            MemoryLocation::GpuOnly,
-        )?;
-        ctx.submit(|cmd| self.record(cmd, query, bvh, &ray_buffer, &hits, rays.len() as u32))?;
-        let mut out: Vec<TraceHit> = hits.read(ctx)?;
-        out.truncate(rays.len());
-        Ok(out)
+        let size = (rays.len() * std::mem::size_of::<TraceHit>()) as u64;
+        Ok(Self {
+            rays: Buffer::upload(ctx, "rays", rays, usage)?,
+            hits: Buffer::new(ctx, "hits", size, usage, MemoryLocation::GpuOnly)?,
+            count: rays.len() as u32,
+        })
+    }
+
+    /// The hits of the last trace.
+    pub fn read_hits(&self, ctx: &Context) -> Result<Vec<TraceHit>> {
+        let mut hits: Vec<TraceHit> = self.hits.read(ctx)?;
+        hits.truncate(self.count as usize);
+        Ok(hits)
     }
 }
 

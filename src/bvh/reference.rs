@@ -72,6 +72,18 @@ impl<'a> Reference<'a> {
     }
 }
 
+/// Whether `got` answers a ray as `expected` does: both miss, or both hit the same triangle, or
+/// (triangles tie) both hit at the same t within 1e-5 relative. `input_index` maps `got`'s
+/// triangle index to `expected`'s numbering (e.g. BVH order to input order via
+/// [`super::Bvh::prim_order`]).
+pub fn same_hit(got: Option<Hit>, expected: Option<Hit>, input_index: impl Fn(u32) -> u32) -> bool {
+    match (got, expected) {
+        (None, None) => true,
+        (Some(g), Some(e)) => input_index(g.tri) == e.tri || (g.t - e.t).abs() <= 1e-5 * e.t.abs(),
+        _ => false,
+    }
+}
+
 /// Slab test in `f64` against an already padded box, with a little extra slack in t.
 fn slab_f64(ray: &Ray, (lo, hi): &(DVec3, DVec3), tmax: f32) -> bool {
     let o = ray.origin.as_dvec3();

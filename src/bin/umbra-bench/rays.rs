@@ -7,12 +7,12 @@ use anyhow::{bail, Result};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
-use umbra::bvh::gpu::{GpuBvh, Query, RayTracer};
-use umbra::bvh::reference::Reference;
+use umbra::bvh::gpu::{GpuBvh, Query, RayBatch, RayTracer};
+use umbra::bvh::reference::{same_hit, Reference};
 use umbra::bvh::{BuildOptions, Bvh, BvhStats, Ray};
 use umbra::geometry::Rng;
 use umbra::gpu::layout::{TraceHit, TraceRay};
-use umbra::vk::{raw, Buffer, Context, GpuTimer, MemoryLocation};
+use umbra::vk::{Context, GpuTimer};
 
 /// A scene to trace: triangles and a view.
 pub struct RayScene {
@@ -62,21 +62,24 @@ pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<Ra
 
     let device_bvh = GpuBvh::upload(ctx, &bvh)?;
     let tracer = RayTracer::new(ctx)?;
+    let reference = Reference::new(&scene.triangles);
+    let validated =
+        |query, rays: &[Ray]| trace_validated(ctx, &tracer, &device_bvh, &bvh, &reference, query, rays);
     let primary = primary_rays(scene, settings.size);
-    let primary_hits =
-        trace_validated(ctx, &tracer, &device_bvh, &bvh, &scene.triangles, Query::Closest, &primary)?;
+    let (primary_batch, primary_hits) = validated(Query::Closest, &primary)?;
     let (shadow, diffuse) = secondary_rays(scene, &bvh, &primary, &primary_hits);
-    trace_validated(ctx, &tracer, &device_bvh, &bvh, &scene.triangles, Query::Any, &shadow)?;
-    trace_validated(ctx, &tracer, &device_bvh, &bvh, &scene.triangles, Query::Closest, &diffuse)?;
+    let (shadow_batch, _) = validated(Query::Any, &shadow)?;
+    let (diffuse_batch, _) = validated(Query::Closest, &diffuse)?;
 
     let mut kinds = Vec::new();
-    for (kind, query, rays) in [
-        ("primary", Query::Closest, &primary),
-        ("shadow", Query::Any, &shadow),
-        ("diffuse", Query::Closest, &diffuse),
+    for (kind, query, batch) in [
+        ("primary", Query::Closest, &primary_batch),
+        ("shadow", Query::Any, &shadow_batch),
+        ("diffuse", Query::Closest, &diffuse_batch),
     ] {
-        let ms = time_trace(ctx, &tracer, &device_bvh, query, rays, settings.repeats)?;
-        kinds.push((kind.to_string(), rays.len(), ms, rays.len() as f64 / (ms * 1e3)));
+        let ms = time_trace(ctx, &tracer, &device_bvh, query, batch, settings.repeats)?;
+        let count = batch.count as usize;
+        kinds.push((kind.to_string(), count, ms, count as f64 / (ms * 1e3)));
     }
     Ok(RayReport {
         scene: scene.name.clone(),
@@ -135,42 +138,37 @@ fn secondary_rays(scene: &RayScene, bvh: &Bvh, primary: &[Ray], hits: &[TraceHit
     (shadow, diffuse)
 }
 
-/// Traces on the GPU and checks every answer against the CPU BVH traversal, and a sample against
-/// brute force; fails on any disagreement.
+/// Uploads and traces `rays` on the GPU and checks every answer against the CPU BVH traversal,
+/// and a sample against brute force; fails on any disagreement. Returns the uploaded batch (for
+/// timing) and its hits.
 fn trace_validated(
     ctx: &Context,
     tracer: &RayTracer,
     device_bvh: &GpuBvh,
     bvh: &Bvh,
-    triangles: &[[Vec3; 3]],
+    reference: &Reference,
     query: Query,
     rays: &[Ray],
-) -> Result<Vec<TraceHit>> {
+) -> Result<(RayBatch, Vec<TraceHit>)> {
     let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
-    let hits = tracer.trace(ctx, query, device_bvh, &trace_rays)?;
-    let agree = |got: Option<umbra::bvh::Hit>, want: Option<umbra::bvh::Hit>, map: &dyn Fn(u32) -> u32| match (
-        got, want,
-    ) {
-        (None, None) => true,
-        (Some(g), Some(w)) => map(g.tri) == w.tri || (g.t - w.t).abs() <= 1e-5 * w.t.abs(),
-        _ => false,
-    };
+    let batch = RayBatch::new(ctx, &trace_rays)?;
+    ctx.submit(|cmd| tracer.record(cmd, query, device_bvh, &batch))?;
+    let hits = batch.read_hits(ctx)?;
     let bad = rays
         .par_iter()
         .zip(&hits)
         .filter(|(ray, hit)| match query {
-            Query::Closest => !agree(hit.hit(), bvh.closest(ray), &|t| t),
+            Query::Closest => !same_hit(hit.hit(), bvh.closest(ray), |t| t),
             Query::Any => (hit.t == 1.0) != bvh.any(ray),
         })
         .count();
-    let reference = Reference::new(triangles);
     let step = (rays.len() / 2000).max(1);
     let bad_reference = (0..rays.len())
         .into_par_iter()
         .step_by(step)
         .filter(|&i| match query {
             Query::Closest => {
-                !agree(hits[i].hit(), reference.closest(&rays[i]), &|t| bvh.prim_order[t as usize])
+                !same_hit(hits[i].hit(), reference.closest(&rays[i]), |t| bvh.prim_order[t as usize])
             }
             Query::Any => (hits[i].t == 1.0) != reference.any(&rays[i]),
         })
@@ -183,7 +181,7 @@ fn trace_validated(
             rays.len().div_ceil(step)
         );
     }
-    Ok(hits)
+    Ok((batch, hits))
 }
 
 /// Median GPU time of one trace dispatch over `repeats` timed submissions after one warm-up.
@@ -192,14 +190,9 @@ fn time_trace(
     tracer: &RayTracer,
     bvh: &GpuBvh,
     query: Query,
-    rays: &[Ray],
+    batch: &RayBatch,
     repeats: usize,
 ) -> Result<f64> {
-    let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
-    let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
-    let ray_buffer = Buffer::upload(ctx, "bench rays", &trace_rays, usage)?;
-    let size = (rays.len().max(1) * std::mem::size_of::<TraceHit>()) as u64;
-    let hits = Buffer::new(ctx, "bench hits", size, usage, MemoryLocation::GpuOnly)?;
     let mut timer = GpuTimer::new(ctx, 1)?;
     let mut times = Vec::new();
     for i in 0..=repeats {
@@ -207,7 +200,7 @@ fn time_trace(
         ctx.submit(|cmd| {
             timer.reset(cmd);
             timer.begin(cmd, "trace")?;
-            tracer.record(cmd, query, bvh, &ray_buffer, &hits, rays.len() as u32)?;
+            tracer.record(cmd, query, bvh, batch)?;
             timer.end(cmd)
         })?;
         let ms = timer.read()?[0].ms;

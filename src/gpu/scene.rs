@@ -20,11 +20,11 @@ pub struct GpuScene {
     pub vertices: Buffer,
     /// `GpuMaterial`s.
     pub materials: Buffer,
-    /// `GpuLightTri`s (one dummy entry when nothing emits).
+    /// `GpuLightTri`s (an empty list still gets a minimal buffer: see [`Buffer::new`]).
     pub lights: Buffer,
     /// Emissive triangles in the sampling table.
     pub light_count: u32,
-    /// `GpuLight`s (one dummy entry when there are none).
+    /// `GpuLight`s.
     pub punctual: Buffer,
     /// Punctual lights.
     pub punctual_count: u32,
@@ -34,7 +34,7 @@ pub struct GpuScene {
     pub env_marginal: Buffer,
     /// Environment per-row CDFs.
     pub env_conditional: Buffer,
-    /// `GpuTexture`s (a dummy entry when there are none).
+    /// `GpuTexture`s.
     pub textures: Buffer,
     /// RGBA8 texels of every texture.
     pub texels: Buffer,
@@ -176,25 +176,17 @@ impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<Self> {
         let arrays = SceneArrays::new(scene)?;
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
-        // A storage buffer cannot be empty: an empty list gets one zeroed placeholder entry.
-        fn nonempty<T: Default + Clone>(v: &[T]) -> Vec<T> {
-            if v.is_empty() {
-                vec![T::default()]
-            } else {
-                v.to_vec()
-            }
-        }
         Ok(Self {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
-            triangles: Buffer::upload(ctx, "scene triangles", &nonempty(&arrays.triangles), usage)?,
-            vertices: Buffer::upload(ctx, "scene vertices", &nonempty(&arrays.vertices), usage)?,
-            materials: Buffer::upload(ctx, "scene materials", &nonempty(&arrays.materials), usage)?,
-            lights: Buffer::upload(ctx, "scene lights", &nonempty(&arrays.lights), usage)?,
+            triangles: Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?,
+            vertices: Buffer::upload(ctx, "scene vertices", &arrays.vertices, usage)?,
+            materials: Buffer::upload(ctx, "scene materials", &arrays.materials, usage)?,
+            lights: Buffer::upload(ctx, "scene lights", &arrays.lights, usage)?,
             light_count: arrays.lights.len() as u32,
-            punctual: Buffer::upload(ctx, "scene punctual lights", &nonempty(&arrays.punctual), usage)?,
+            punctual: Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?,
             punctual_count: arrays.punctual.len() as u32,
-            textures: Buffer::upload(ctx, "scene textures", &nonempty(&arrays.textures), usage)?,
-            texels: Buffer::upload(ctx, "scene texels", &nonempty(&arrays.texels), usage)?,
+            textures: Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?,
+            texels: Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?,
             texture_count: arrays.textures.len() as u32,
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,

@@ -19,7 +19,8 @@ pub struct Buffer {
 }
 
 impl Buffer {
-    /// Creates a buffer of `size` bytes (at least 4) in `location`.
+    /// Creates a buffer of `size` bytes in `location`; at least 4, so an empty list still makes a
+    /// valid binding (a kernel told it has no elements never reads it).
     pub fn new(
         ctx: &Context,
         name: &str,

@@ -84,22 +84,22 @@ impl PathImage {
 
     /// Per pixel, the estimated variance of the mean rgb (sample variance / n).
     pub fn variance_of_mean(&self) -> Vec<[f32; 3]> {
-        let n = self.spp.max(2) as f32;
-        self.mean
-            .iter()
-            .zip(&self.moment)
-            .map(|(m, s)| [0, 1, 2].map(|c| ((s[c] - m[c] * m[c]).max(0.0) * n / (n - 1.0)) / n))
-            .collect()
+        self.mean.iter().zip(&self.moment).map(|(m, s)| pixel_variance_of_mean(m, s, self.spp)).collect()
     }
 }
 
+/// A pixel's variance of the mean rgb from its running mean and second moment after `spp`
+/// samples: the unbiased sample variance n/(n−1)·(E[x²] − E[x]²), divided by n.
+fn pixel_variance_of_mean(mean: &[f32; 4], moment: &[f32; 4], spp: u32) -> [f32; 3] {
+    let n = spp.max(2) as f32;
+    [0, 1, 2].map(|c| (moment[c] - mean[c] * mean[c]).max(0.0) / (n - 1.0))
+}
+
 fn relative_error(mean: &[[f32; 4]], moment: &[[f32; 4]], spp: u32) -> f32 {
-    let n = spp.max(2) as f64;
     let mut rel_mse = 0.0f64;
     for (m, s) in mean.iter().zip(moment) {
-        for c in 0..3 {
-            let var = ((s[c] - m[c] * m[c]).max(0.0) as f64) / (n - 1.0);
-            rel_mse += var / ((m[c] as f64).powi(2) + RELATIVE_EPSILON);
+        for (c, var) in pixel_variance_of_mean(m, s, spp).into_iter().enumerate() {
+            rel_mse += var as f64 / ((m[c] as f64).powi(2) + RELATIVE_EPSILON);
         }
     }
     (rel_mse / (mean.len().max(1) * 3) as f64).sqrt() as f32

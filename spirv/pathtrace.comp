@@ -47,6 +47,18 @@ vec3 offset_ray(vec3 p, vec3 n) {
     return mix(p_i, p + (1.0 / 65536.0) * n, lessThan(abs(p), vec3(1.0 / 32.0)));
 }
 
+// Whether light arriving along wi (unit, towards the light) reaches p: wi above both the shading
+// frame (t, b, n) and the geometric surface ng, and nothing on the shadow ray, which ends just
+// short of `target` when `to_point` and is unbounded otherwise. Also gives wi in the frame.
+bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 wi, bool to_point, vec3 target, out vec3 wi_local) {
+    wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
+    if (!(wi_local.z > 0.0 && dot(wi, ng) > 0.0)) {
+        return false;
+    }
+    vec3 o = offset_ray(p, ng);
+    return to_point ? !bvh_any(o, target - o, 0.0, 0.9999) : !bvh_any(o, wi, 0.0, BVH_INF);
+}
+
 float mis_weight(float a, float b) {
     if (POWER_HEURISTIC) {
         a *= a;
@@ -167,11 +179,11 @@ void main() {
     vec3 throughput = vec3(1.0);
     float prev_pdf = 0.0;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
     vec4 albedo = vec4(params.env.rgb, 0.0);
-    vec4 normal_depth = vec4(0.0, 0.0, 0.0, uintBitsToFloat(0x7f800000u));
+    vec4 normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
 
     for (uint depth = 0u;; ++depth) {
         Hit hit;
-        if (!bvh_closest(origin, dir, 0.0, uintBitsToFloat(0x7f800000u), hit)) {
+        if (!bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
             if (HAS_ENV_MAP) {
                 float w = 1.0;
                 if (params.env_info.z != 0u && prev_pdf > 0.0) {
@@ -218,9 +230,9 @@ void main() {
             n = -n;
         }
         // Normal map: tangent-space normal (scaled in xy) through the interpolated TBN.
+        uint material = triangles[tri].material;
         if (HAS_TEXTURES) {
-            uint m = triangles[tri].material;
-            if (materials[m].textures.w != 0u) {
+            if (materials[material].textures.w != 0u) {
                 vec4 ta = vertices[i0].tangent;
                 vec4 tb = vertices[i1].tangent;
                 vec4 tc = vertices[i2].tangent;
@@ -230,8 +242,8 @@ void main() {
                 if (tl > 1e-8) {
                     tt /= tl;
                     vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
-                    vec3 nm = material_texture(m, 3u, uv).rgb * 2.0 - 1.0;
-                    nm.xy *= materials[m].tex_transform[7].w;
+                    vec3 nm = material_texture(material, 3u, uv).rgb * 2.0 - 1.0;
+                    nm.xy *= materials[material].tex_transform[7].w;
                     vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
                     if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
                         n = mapped;
@@ -243,7 +255,6 @@ void main() {
         vec3 b;
         basis(n, t, b);
         vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
-        uint material = triangles[tri].material;
         Surface s = material_surface(material, uv);
         if (depth == 0u) {
             albedo = vec4(s.base, 1.0);
@@ -267,16 +278,13 @@ void main() {
             vec3 wi = to_light * inversesqrt(dist2);
             vec3 l_emit = emitted(ltri, lb, ln, -wi);
             float cos_l = abs(dot(ln, wi));
-            vec3 wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
-            if (any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0 && wi_local.z > 0.0 && dot(wi, ng) > 0.0) {
-                vec3 o = offset_ray(p, ng);
-                vec3 seg = lp - o;
-                if (!bvh_any(o, seg, 0.0, 0.9999)) {
-                    float light_pdf = lights[k].pmf / lights[k].area * dist2 / cos_l;
-                    vec3 f = bsdf_eval(s, wo_local, wi_local);
-                    float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
-                    radiance += throughput * f * wi_local.z * l_emit * (w / light_pdf);
-                }
+            vec3 wi_local;
+            if (any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0
+                && light_reaches(p, ng, t, b, n, wi, true, lp, wi_local)) {
+                float light_pdf = lights[k].pmf / lights[k].area * dist2 / cos_l;
+                vec3 f = bsdf_eval(s, wo_local, wi_local);
+                float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
+                radiance += throughput * f * wi_local.z * l_emit * (w / light_pdf);
             }
         }
 
@@ -288,14 +296,12 @@ void main() {
                 vec4 pr = punctual[k].position_range;
                 vec4 dk = punctual[k].direction_kind;
                 vec3 wi;
-                float dist;
                 float attenuation = 1.0;
                 if (dk.w == LIGHT_DIRECTIONAL) {
                     wi = -dk.xyz;
-                    dist = uintBitsToFloat(0x7f800000u);
                 } else {
                     vec3 to_light = pr.xyz - p;
-                    dist = length(to_light);
+                    float dist = length(to_light);
                     wi = to_light / dist;
                     attenuation = 1.0 / (dist * dist);
                     if (pr.w > 0.0) {
@@ -308,16 +314,11 @@ void main() {
                         attenuation *= spot * spot;
                     }
                 }
-                vec3 wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
-                if (attenuation > 0.0 && wi_local.z > 0.0 && dot(wi, ng) > 0.0) {
-                    vec3 o = offset_ray(p, ng);
-                    bool blocked = dk.w == LIGHT_DIRECTIONAL
-                        ? bvh_any(o, wi, 0.0, uintBitsToFloat(0x7f800000u))
-                        : bvh_any(o, pr.xyz - o, 0.0, 0.9999);
-                    if (!blocked) {
-                        radiance += throughput * bsdf_eval(s, wo_local, wi_local) * wi_local.z
-                            * punctual[k].intensity.rgb * attenuation;
-                    }
+                vec3 wi_local;
+                if (attenuation > 0.0
+                    && light_reaches(p, ng, t, b, n, wi, dk.w != LIGHT_DIRECTIONAL, pr.xyz, wi_local)) {
+                    radiance += throughput * bsdf_eval(s, wo_local, wi_local) * wi_local.z
+                        * punctual[k].intensity.rgb * attenuation;
                 }
             }
         }
@@ -327,14 +328,12 @@ void main() {
             vec4 u = rand4(pixel, sample_index, depth * 8u + 3u, seed);
             float pdf;
             vec3 wi = env_sample(u, params.env_info.xy, pdf);
-            vec3 wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
-            if (pdf > 0.0 && wi_local.z > 0.0 && dot(wi, ng) > 0.0) {
-                if (!bvh_any(offset_ray(p, ng), wi, 0.0, uintBitsToFloat(0x7f800000u))) {
-                    vec3 f = bsdf_eval(s, wo_local, wi_local);
-                    float w = mis_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
-                    vec3 le = env_radiance(wi, params.env_info.xy) * params.env.rgb;
-                    radiance += throughput * f * wi_local.z * le * (w / pdf);
-                }
+            vec3 wi_local;
+            if (pdf > 0.0 && light_reaches(p, ng, t, b, n, wi, false, wi, wi_local)) {
+                vec3 f = bsdf_eval(s, wo_local, wi_local);
+                float w = mis_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
+                vec3 le = env_radiance(wi, params.env_info.xy) * params.env.rgb;
+                radiance += throughput * f * wi_local.z * le * (w / pdf);
             }
         }
 

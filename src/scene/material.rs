@@ -153,25 +153,17 @@ impl Material {
         let specular_color_texture = info(specular.as_ref().and_then(|s| s.specular_color_texture()), true);
         let transmission = material.transmission();
         let transmission_texture = info(transmission.as_ref().and_then(|t| t.transmission_texture()), false);
+        // Normal and occlusion textures are their own glTF types (with a scale or a strength), so
+        // their KHR_texture_transform is read from the raw extension value.
+        let mut raw_ref = |texture: gltf::Texture, tex_coord: u32, transform: Option<&Value>, scale: f32| {
+            let (tex_coord, transform) = raw_transform(transform, tex_coord);
+            TextureRef { texture: textures.index_of(&texture, false), tex_coord, transform, scale }
+        };
         let normal_texture = material.normal_texture().map(|t| {
-            let (tex_coord, transform) =
-                raw_transform(t.extension_value("KHR_texture_transform"), t.tex_coord());
-            TextureRef {
-                texture: textures.index_of(&t.texture(), false),
-                tex_coord,
-                transform,
-                scale: t.scale(),
-            }
+            raw_ref(t.texture(), t.tex_coord(), t.extension_value("KHR_texture_transform"), t.scale())
         });
         let occlusion_texture = material.occlusion_texture().map(|t| {
-            let (tex_coord, transform) =
-                raw_transform(t.extension_value("KHR_texture_transform"), t.tex_coord());
-            TextureRef {
-                texture: textures.index_of(&t.texture(), false),
-                tex_coord,
-                transform,
-                scale: t.strength(),
-            }
+            raw_ref(t.texture(), t.tex_coord(), t.extension_value("KHR_texture_transform"), t.strength())
         });
         let strength = material.emissive_strength().unwrap_or(1.0);
         Self {

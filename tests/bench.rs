@@ -1,20 +1,17 @@
 //! `umbra-bench` never rots: its quick runs finish, validate, and write output that parses.
 //! (Timings are recorded in BENCHMARKS.md, never asserted.)
 
+mod common;
+
+use common::run_validated;
 use std::process::Command;
 
 #[test]
 fn rays_quick_validates_and_writes_json() {
     let dir = std::env::temp_dir().join(format!("umbra-bench-{}", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
-        .args(["rays", "--quick", "--out"])
-        .arg(&dir)
-        .env("UMBRA_VALIDATION", "1")
-        .output()
-        .expect("run umbra-bench");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(!stderr.contains("ERROR"), "validation or other errors: {stderr}");
+    run_validated(
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench")).args(["rays", "--quick", "--out"]).arg(&dir),
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("rays.json")).expect("rays.json written"))
             .expect("rays.json parses");

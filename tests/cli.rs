@@ -1,5 +1,8 @@
 //! The `umbra` binary: clear errors and image output, run as a user would.
 
+mod common;
+
+use common::run_validated;
 use std::process::Command;
 
 fn umbra() -> Command {
@@ -26,17 +29,7 @@ fn pattern_writes_png_and_exr_with_validation_on() {
     let dir = std::env::temp_dir().join(format!("umbra-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (png, exr) = (dir.join("p.png"), dir.join("p.exr"));
-    let out = umbra()
-        .args(["pattern", "--size", "40x24", "-o"])
-        .arg(&png)
-        .arg("--exr")
-        .arg(&exr)
-        .env("UMBRA_VALIDATION", "1")
-        .output()
-        .expect("run umbra");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(!stderr.contains("ERROR"), "validation or other errors: {stderr}");
+    run_validated(umbra().args(["pattern", "--size", "40x24", "-o"]).arg(&png).arg("--exr").arg(&exr));
     let decoded = image::open(&png).expect("PNG decodes").to_rgba8();
     assert_eq!(decoded.dimensions(), (40, 24));
     // x/width in red: left column dark, right column bright.
@@ -67,17 +60,10 @@ fn render_cornell_box_writes_png_and_exr_layers() {
     let dir = std::env::temp_dir().join(format!("umbra-render-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (png, exr) = (dir.join("c.png"), dir.join("c.exr"));
-    let out = umbra()
-        .args(["render", "--size", "32x24", "--spp", "2", "-o"])
-        .arg(&png)
-        .arg("--exr")
-        .arg(&exr)
-        .env("UMBRA_VALIDATION", "1")
-        .output()
-        .expect("run umbra");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(!stderr.contains("ERROR") && !stderr.contains("WARN"), "{stderr}");
+    let stderr = run_validated(
+        umbra().args(["render", "--size", "32x24", "--spp", "2", "-o"]).arg(&png).arg("--exr").arg(&exr),
+    );
+    assert!(!stderr.contains("WARN"), "{stderr}");
     let decoded = image::open(&png).expect("PNG decodes").to_rgba8();
     assert_eq!(decoded.dimensions(), (32, 24));
     let (w, h, channels) = umbra::output::read_exr_channels(&exr).unwrap();

@@ -44,3 +44,13 @@ impl Drop for Gpu {
         }
     }
 }
+
+/// Runs one of umbra's binaries with `UMBRA_VALIDATION=1` and asserts that it succeeded and
+/// logged no error (validation messages are logged as errors); returns its stderr.
+pub fn run_validated(command: &mut std::process::Command) -> String {
+    let out = command.env("UMBRA_VALIDATION", "1").output().expect("run the binary");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("ERROR"), "validation or other errors: {stderr}");
+    stderr
+}

@@ -34,30 +34,9 @@ layout(set = 0, binding = 16, std430) readonly buffer Texels { uint texels[]; };
 layout(push_constant) uniform Push { PathParams params; };
 
 #include "random.glsl"
-#include "bvh.glsl"
-#include "bsdf.glsl"
+#include "camera.glsl"
 #include "environment.glsl"
-#include "texture.glsl"
-
-// Offsets a ray origin off the surface along n by a few ulps (Wächter and Binder, Ray Tracing
-// Gems ch. 6), so the new ray neither re-hits its own triangle nor tunnels through a neighbour.
-vec3 offset_ray(vec3 p, vec3 n) {
-    ivec3 of_i = ivec3(256.0 * n);
-    vec3 p_i = intBitsToFloat(floatBitsToInt(p) + mix(of_i, -of_i, lessThan(p, vec3(0.0))));
-    return mix(p_i, p + (1.0 / 65536.0) * n, lessThan(abs(p), vec3(1.0 / 32.0)));
-}
-
-// Whether light arriving along wi (unit, towards the light) reaches p: wi above both the shading
-// frame (t, b, n) and the geometric surface ng, and nothing on the shadow ray, which ends just
-// short of `target` when `to_point` and is unbounded otherwise. Also gives wi in the frame.
-bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 wi, bool to_point, vec3 target, out vec3 wi_local) {
-    wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
-    if (!(wi_local.z > 0.0 && dot(wi, ng) > 0.0)) {
-        return false;
-    }
-    vec3 o = offset_ray(p, ng);
-    return to_point ? !bvh_any(o, target - o, 0.0, 0.9999) : !bvh_any(o, wi, 0.0, BVH_INF);
-}
+#include "shading.glsl"
 
 float mis_weight(float a, float b) {
     if (POWER_HEURISTIC) {
@@ -65,96 +44,6 @@ float mis_weight(float a, float b) {
         b *= b;
     }
     return a / (a + b);
-}
-
-// Material texture `slot` (0 base colour, 1 metallic-roughness, 2 emissive, 3 normal) at the hit's UV
-// sets (uv.xy = uv0, uv.zw = uv1); white when the slot is empty.
-vec4 material_texture(uint id, uint slot, vec4 uv) {
-    // Spec constants only as plain `if` conditions: `!HAS_TEXTURES` or `?:` on one would be an
-    // OpSpecConstantOp, which naga rejects.
-    uint tex = 0u;
-    if (HAS_TEXTURES) {
-        tex = materials[id].textures[slot];
-    }
-    if (tex == 0u) {
-        return vec4(1.0);
-    }
-    vec4 r0 = materials[id].tex_transform[2u * slot];
-    vec4 r1 = materials[id].tex_transform[2u * slot + 1u];
-    vec2 st = r0.w != 0.0 ? uv.zw : uv.xy;
-    vec2 t = vec2(dot(r0.xyz, vec3(st, 1.0)), dot(r1.xyz, vec3(st, 1.0)));
-    return texture_sample(tex - 1u, t);
-}
-
-Surface material_surface(uint id, vec4 uv) {
-    // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
-    Surface s;
-    s.base = materials[id].base_color.rgb * material_texture(id, 0u, uv).rgb;
-    vec4 mr = material_texture(id, 1u, uv);
-    s.metallic = clamp(materials[id].params.x * mr.b, 0.0, 1.0);
-    float r = clamp(materials[id].emissive_rough.w * mr.g, 0.0, 1.0);
-    s.alpha = max(r * r, ALPHA_MIN);
-    float ior = materials[id].params.y;
-    float f0 = (ior - 1.0) / (ior + 1.0);
-    s.f0 = min(vec3(f0 * f0) * materials[id].specular.rgb, vec3(1.0)) * materials[id].specular.w;
-    s.f90 = materials[id].specular.w;
-    return s;
-}
-
-vec3 tri_vertex(uint tri, uint k) {
-    return k == 0u ? bvh_tris[tri].v0.xyz : (k == 1u ? bvh_tris[tri].v1.xyz : bvh_tris[tri].v2.xyz);
-}
-
-// Unnormalised geometric normal (length = 2 * area), by the winding.
-vec3 tri_normal(uint tri) {
-    vec3 a = bvh_tris[tri].v0.xyz;
-    return cross(bvh_tris[tri].v1.xyz - a, bvh_tris[tri].v2.xyz - a);
-}
-
-// Both UV sets at barycentrics (b1, b2) of triangle `tri`: uv0 in xy, uv1 in zw.
-vec4 tri_uv(uint tri, vec2 bary) {
-    vec4 uv = vec4(0.0);
-    if (HAS_TEXTURES) {
-        uint i0 = triangles[tri].v0;
-        uint i1 = triangles[tri].v1;
-        uint i2 = triangles[tri].v2;
-        vec4 a = vec4(vertices[i0].normal_u.w, vertices[i0].v_uv1.xyz);
-        vec4 b = vec4(vertices[i1].normal_u.w, vertices[i1].v_uv1.xyz);
-        vec4 c = vec4(vertices[i2].normal_u.w, vertices[i2].v_uv1.xyz);
-        uv = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
-    }
-    return uv;
-}
-
-// Radiance the triangle emits at barycentrics `bary` towards a viewer on the side of `towards`
-// (unit normal n).
-vec3 emitted(uint tri, vec2 bary, vec3 n, vec3 towards) {
-    uint m = triangles[tri].material;
-    bool front = dot(n, towards) > 0.0;
-    bool two_sided = (materials[m].flags.x & MATERIAL_DOUBLE_SIDED) != 0u;
-    if (!(front || two_sided)) {
-        return vec3(0.0);
-    }
-    vec3 e = materials[m].emissive_rough.rgb;
-    if (HAS_TEXTURES && any(greaterThan(e, vec3(0.0)))) {
-        e *= material_texture(m, 2u, tri_uv(tri, bary)).rgb;
-    }
-    return e;
-}
-
-// Picks an emissive triangle by power (binary search in the CDF).
-uint pick_light(float u) {
-    uint lo = 0u;
-    uint hi = params.settings.z - 1u;
-    while (lo < hi) {
-        uint mid = (lo + hi) / 2u;
-        if (lights[mid].cdf <= u) {
-            lo = mid + 1u;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
 }
 
 void main() {
@@ -170,10 +59,9 @@ void main() {
     uint rr_depth = params.settings.y;
 
     vec4 jitter = rand4(pixel, sample_index, 0u, seed);
-    vec2 ndc = vec2(2.0 * (float(pixel.x) + jitter.x) / float(size.x) - 1.0,
-                    1.0 - 2.0 * (float(pixel.y) + jitter.y) / float(size.y));
     vec3 origin = params.cam_origin.xyz;
-    vec3 dir = normalize(params.cam_forward.xyz + ndc.x * params.cam_right.xyz + ndc.y * params.cam_up.xyz);
+    vec3 dir = camera_ray(params.cam_forward.xyz, params.cam_right.xyz, params.cam_up.xyz,
+                          vec2(pixel) + jitter.xy, size);
 
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
@@ -214,43 +102,12 @@ void main() {
             radiance += throughput * le * w;
         }
 
-        // Shading frame: interpolated normal, on the same side as the viewer.
+        // Shading frame: interpolated, normal-mapped normal, on the same side as the viewer.
         if (dot(ng, wo) < 0.0) {
             ng = -ng;
         }
-        uint i0 = triangles[tri].v0;
-        uint i1 = triangles[tri].v1;
-        uint i2 = triangles[tri].v2;
-        float b0 = 1.0 - hit.bary.x - hit.bary.y;
-        vec3 n = b0 * vertices[i0].normal_u.xyz + hit.bary.x * vertices[i1].normal_u.xyz
-            + hit.bary.y * vertices[i2].normal_u.xyz;
-        float n_len = length(n);
-        n = (n_len > 0.0 && !isnan(n_len) && !isinf(n_len)) ? n / n_len : ng;
-        if (dot(n, ng) < 0.0) {
-            n = -n;
-        }
-        // Normal map: tangent-space normal (scaled in xy) through the interpolated TBN.
         uint material = triangles[tri].material;
-        if (HAS_TEXTURES) {
-            if (materials[material].textures.w != 0u) {
-                vec4 ta = vertices[i0].tangent;
-                vec4 tb = vertices[i1].tangent;
-                vec4 tc = vertices[i2].tangent;
-                vec4 tg = b0 * ta + hit.bary.x * tb + hit.bary.y * tc;
-                vec3 tt = tg.xyz - n * dot(n, tg.xyz);
-                float tl = length(tt);
-                if (tl > 1e-8) {
-                    tt /= tl;
-                    vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
-                    vec3 nm = material_texture(material, 3u, uv).rgb * 2.0 - 1.0;
-                    nm.xy *= materials[material].tex_transform[7].w;
-                    vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
-                    if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
-                        n = mapped;
-                    }
-                }
-            }
-        }
+        vec3 n = shading_normal(tri, hit.bary, ng, uv);
         vec3 t;
         vec3 b;
         basis(n, t, b);
@@ -267,7 +124,7 @@ void main() {
         // Next-event estimation: one emissive triangle by power, a uniform point on it.
         if (HAS_LIGHTS && params.settings.z > 0u) {
             vec4 u = rand4(pixel, sample_index, depth * 8u + 1u, seed);
-            uint k = pick_light(u.x);
+            uint k = pick_light(u.x, params.settings.z);
             uint ltri = lights[k].tri;
             vec2 lb = sample_triangle(u.yz);
             vec3 lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u)
@@ -289,36 +146,16 @@ void main() {
         }
 
         // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
-        // KHR_lights_punctual: intensity / d^2 with the recommended range window and a smooth
-        // spot falloff.
         if (HAS_PUNCTUAL) {
             for (uint k = 0u; k < params.settings.w; ++k) {
-                vec4 pr = punctual[k].position_range;
-                vec4 dk = punctual[k].direction_kind;
                 vec3 wi;
-                float attenuation = 1.0;
-                if (dk.w == LIGHT_DIRECTIONAL) {
-                    wi = -dk.xyz;
-                } else {
-                    vec3 to_light = pr.xyz - p;
-                    float dist = length(to_light);
-                    wi = to_light / dist;
-                    attenuation = 1.0 / (dist * dist);
-                    if (pr.w > 0.0) {
-                        float r = dist / pr.w;
-                        attenuation *= clamp(1.0 - r * r * r * r, 0.0, 1.0) * clamp(1.0 - r * r * r * r, 0.0, 1.0);
-                    }
-                    if (dk.w == LIGHT_SPOT) {
-                        vec4 cone = punctual[k].cone;
-                        float spot = clamp((dot(-wi, dk.xyz) - cone.x) * cone.y, 0.0, 1.0);
-                        attenuation *= spot * spot;
-                    }
-                }
+                bool to_point;
+                vec3 position;
+                vec3 li = punctual_incident(k, p, wi, to_point, position);
                 vec3 wi_local;
-                if (attenuation > 0.0
-                    && light_reaches(p, ng, t, b, n, wi, dk.w != LIGHT_DIRECTIONAL, pr.xyz, wi_local)) {
-                    radiance += throughput * bsdf_eval(s, wo_local, wi_local) * wi_local.z
-                        * punctual[k].intensity.rgb * attenuation;
+                if (any(greaterThan(li, vec3(0.0)))
+                    && light_reaches(p, ng, t, b, n, wi, to_point, position, wi_local)) {
+                    radiance += throughput * bsdf_eval(s, wo_local, wi_local) * wi_local.z * li;
                 }
             }
         }

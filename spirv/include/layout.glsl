@@ -146,6 +146,18 @@ struct PathStats {
     uint pad2;
 };
 
+// Push constants of gbuffer.comp.
+struct GBufferParams {
+    vec4 cam_origin;   // xyz, unused
+    vec4 cam_forward;  // unit forward
+    vec4 cam_right;    // right * tan(yfov/2) * aspect
+    vec4 cam_up;       // up * tan(yfov/2)
+    uvec4 size;        // width, height, unused, unused
+};
+
+// Material index in the G-buffer where no surface was hit.
+#define GBUFFER_NO_SURFACE 0xffffffffu
+
 // Push constants of sample_test.comp (the sampling tests' kernel).
 struct SampleTestParams {
     vec4 wo_alpha;   // outgoing direction xyz (local frame), alpha

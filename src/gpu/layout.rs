@@ -245,6 +245,26 @@ pub struct PathStats {
 }
 const _: () = assert!(size_of::<PathStats>() == 16);
 
+/// Push constants of `gbuffer.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GBufferParams {
+    /// Camera position, unused.
+    pub cam_origin: [f32; 4],
+    /// Unit forward.
+    pub cam_forward: [f32; 4],
+    /// Right × tan(yfov/2) × aspect.
+    pub cam_right: [f32; 4],
+    /// Up × tan(yfov/2).
+    pub cam_up: [f32; 4],
+    /// Width, height, unused, unused.
+    pub size: [u32; 4],
+}
+const _: () = assert!(size_of::<GBufferParams>() == 80);
+
+/// The G-buffer's material index where no surface was hit (`GBUFFER_NO_SURFACE`).
+pub const GBUFFER_NO_SURFACE: u32 = u32::MAX;
+
 /// Push constants of `sample_test.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -328,6 +348,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
             env_info
         }),
         layout_of!(PathStats { nonfinite_samples, pad0, pad1, pad2 }),
+        layout_of!(GBufferParams { cam_origin, cam_forward, cam_right, cam_up, size }),
         layout_of!(GpuLight { position_range, direction_kind, intensity, cone }),
     ]
 }

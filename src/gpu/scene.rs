@@ -174,7 +174,11 @@ impl GpuScene {
 
     /// Builds the BVH and uploads everything.
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<Self> {
-        let arrays = SceneArrays::new(scene)?;
+        Self::from_arrays(ctx, &SceneArrays::new(scene)?)
+    }
+
+    /// Uploads arrays already laid out (tests keep them to compare against).
+    pub fn from_arrays(ctx: &Context, arrays: &SceneArrays) -> Result<Self> {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,

@@ -1,3 +1,4 @@
 //! Render passes: each owns its pipelines and records into a caller's command buffer.
 
+pub mod gbuffer;
 pub mod pathtrace;

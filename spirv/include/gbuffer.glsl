@@ -1,0 +1,32 @@
+// The G-buffer's encoding (src/passes/gbuffer.rs documents the images): octahedral unit vectors
+// and position reconstruction from view-space depth.
+#ifndef UMBRA_GBUFFER_GLSL
+#define UMBRA_GBUFFER_GLSL
+
+#include "camera.glsl"
+
+// Octahedral encoding of a unit vector into [-1, 1]^2 (Cigolle et al. 2014, "A Survey of
+// Efficient Representations for Independent Unit Vectors").
+vec2 oct_encode(vec3 n) {
+    vec2 p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z < 0.0) {
+        p = (1.0 - abs(p.yx)) * vec2(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
+    }
+    return p;
+}
+
+vec3 oct_decode(vec2 e) {
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    float t = max(-n.z, 0.0);
+    n.x += n.x >= 0.0 ? -t : t;
+    n.y += n.y >= 0.0 ? -t : t;
+    return normalize(n);
+}
+
+// The world-space point at view-space `depth` (along forward) on pixel `pixel`'s centre ray.
+vec3 gbuffer_position(vec3 origin, vec3 forward, vec3 right, vec3 up, ivec2 pixel, uvec2 size, float depth) {
+    vec3 dir = camera_ray(forward, right, up, vec2(pixel) + 0.5, size);
+    return origin + dir * (depth / dot(dir, forward));
+}
+
+#endif

@@ -1,0 +1,159 @@
+//! The G-buffer pass (`spirv/gbuffer.comp`): one primary ray through each pixel's centre, and the
+//! first surface's attributes in storage images, for the deferred passes (SSAO, lighting).
+//!
+//! | image | format | contents |
+//! |---|---|---|
+//! | `depth` | `R32_SFLOAT` | view-space depth (distance along the camera's forward axis); 0 where no surface |
+//! | `normal` | `R16G16B16A16_SFLOAT` | world-space shading normal xyz (interpolated, normal-mapped, facing the camera's side of the geometry), perceptual roughness √α in w (α floored as the BSDF floors it) |
+//! | `base` | `R16G16B16A16_SFLOAT` | linear base colour rgb (textures applied), metallic in a |
+//! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504), 0 in a |
+//! | `material` | `R32G32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16` |
+//!
+//! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
+//! with a compute-to-compute barrier.
+
+use crate::error::Result;
+use crate::gpu::layout::GBufferParams;
+pub use crate::gpu::layout::GBUFFER_NO_SURFACE;
+use crate::gpu::scene::GpuScene;
+use crate::render::camera_params;
+use crate::scene::Camera;
+use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, Image, PipelineDesc};
+
+/// The G-buffer images (see the module documentation for their formats and contents).
+pub struct GBuffer {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// View-space depth.
+    pub depth: Image,
+    /// Shading normal and roughness.
+    pub normal: Image,
+    /// Base colour and metallic.
+    pub base: Image,
+    /// Emitted radiance.
+    pub emission: Image,
+    /// Material index and geometric normal.
+    pub material: Image,
+}
+
+impl GBuffer {
+    /// Allocates the images and moves them to `GENERAL` layout.
+    pub fn new(ctx: &Context, (w, h): (u32, u32)) -> Result<Self> {
+        let make = |name, format| Image::storage_2d(ctx, name, w, h, format);
+        let gbuffer = Self {
+            size: (w, h),
+            depth: make("gbuffer depth", raw::Format::R32_SFLOAT)?,
+            normal: make("gbuffer normal", raw::Format::R16G16B16A16_SFLOAT)?,
+            base: make("gbuffer base", raw::Format::R16G16B16A16_SFLOAT)?,
+            emission: make("gbuffer emission", raw::Format::R16G16B16A16_SFLOAT)?,
+            material: make("gbuffer material", raw::Format::R32G32_UINT)?,
+        };
+        ctx.submit(|cmd| {
+            for image in gbuffer.images() {
+                image.init_general(ctx, cmd);
+            }
+            Ok(())
+        })?;
+        Ok(gbuffer)
+    }
+
+    /// The images in binding order.
+    pub fn images(&self) -> [&Image; 5] {
+        [&self.depth, &self.normal, &self.base, &self.emission, &self.material]
+    }
+
+    /// Reads every image back (waits for the GPU).
+    pub fn read(&self, ctx: &Context) -> Result<GBufferData> {
+        let half = |image: &Image| -> Result<Vec<[f32; 4]>> {
+            let texels: Vec<[u16; 4]> = image.read(ctx)?;
+            Ok(texels.iter().map(|t| t.map(|h| half::f16::from_bits(h).to_f32())).collect())
+        };
+        Ok(GBufferData {
+            size: self.size,
+            depth: self.depth.read(ctx)?,
+            normal: half(&self.normal)?,
+            base: half(&self.base)?,
+            emission: half(&self.emission)?,
+            material: self.material.read(ctx)?,
+        })
+    }
+}
+
+/// A G-buffer on the host, row-major from the top left (the AOVs of a hybrid render).
+#[derive(Debug, Clone)]
+pub struct GBufferData {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// View-space depth; 0 where no surface.
+    pub depth: Vec<f32>,
+    /// Shading normal xyz, roughness.
+    pub normal: Vec<[f32; 4]>,
+    /// Base colour rgb, metallic.
+    pub base: Vec<[f32; 4]>,
+    /// Emitted radiance rgb.
+    pub emission: Vec<[f32; 4]>,
+    /// Material index, packed geometric normal.
+    pub material: Vec<[u32; 2]>,
+}
+
+/// `gbuffer.comp`, specialised for whether the scene has textures.
+pub struct GBufferPass {
+    pipeline: ComputePipeline,
+}
+
+impl GBufferPass {
+    /// Workgroup size of the kernel.
+    pub const LOCAL: [u32; 3] = [8, 8, 1];
+
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context, has_textures: bool) -> Result<Self> {
+        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
+        bindings[9..].fill(raw::DescriptorType::STORAGE_IMAGE);
+        let pipeline = ComputePipeline::new(
+            ctx,
+            "gbuffer",
+            &PipelineDesc {
+                bindings: &bindings,
+                push_constant_size: std::mem::size_of::<GBufferParams>() as u32,
+                specialization: &[(0, has_textures as u32)],
+            },
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// The push constants for `camera` over an image of `size`.
+    pub fn params(camera: &Camera, size: (u32, u32)) -> GBufferParams {
+        let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
+        GBufferParams { cam_origin, cam_forward, cam_right, cam_up, size: [size.0, size.1, 0, 0] }
+    }
+
+    /// Records the pass and a barrier after it. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        target: &GBuffer,
+        params: &GBufferParams,
+    ) -> Result<()> {
+        let p = &self.pipeline;
+        p.bind(cmd);
+        let mut resources = vec![
+            Descriptor::Buffer(&scene.bvh.nodes),
+            Descriptor::Buffer(&scene.bvh.tris),
+            Descriptor::Buffer(&scene.triangles),
+            Descriptor::Buffer(&scene.vertices),
+            Descriptor::Buffer(&scene.materials),
+            Descriptor::Buffer(&scene.textures),
+            Descriptor::Buffer(&scene.texels),
+            Descriptor::Buffer(&scene.lights),
+            Descriptor::Buffer(&scene.punctual),
+        ];
+        resources.extend(target.images().map(Descriptor::StorageImage));
+        p.push_descriptors(cmd, &resources)?;
+        p.push_constants(cmd, params)?;
+        p.dispatch(cmd, [target.size.0, target.size.1, 1], Self::LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}

@@ -1,0 +1,116 @@
+//! The hybrid pipeline's passes against independent answers: the G-buffer against CPU traversal
+//! of the same rays.
+
+mod common;
+
+use common::Gpu;
+use glam::Vec3;
+use umbra::bvh::traverse::Ray;
+use umbra::gpu::scene::{GpuScene, SceneArrays};
+use umbra::passes::gbuffer::{GBuffer, GBufferPass, GBUFFER_NO_SURFACE};
+use umbra::render::camera_params;
+use umbra::scene::Scene;
+
+fn scene_file(name: &str) -> Scene {
+    Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name))
+        .expect("scene loads")
+}
+
+/// The centre ray of `pixel`, computed on the CPU from the same camera parameters.
+fn centre_ray(
+    params: &([f32; 4], [f32; 4], [f32; 4], [f32; 4]),
+    (w, h): (u32, u32),
+    (x, y): (u32, u32),
+) -> Ray {
+    let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+    let ndc = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0, 1.0 - 2.0 * (y as f32 + 0.5) / h as f32);
+    let dir = (v(params.1) + ndc.0 * v(params.2) + ndc.1 * v(params.3)).normalize();
+    Ray { origin: v(params.0), dir, tmin: 0.0, tmax: f32::INFINITY }
+}
+
+/// Every pixel of the G-buffer of the sphere grid (and of the textured scene) agrees with a CPU
+/// traversal of the pixel's centre ray: surface or not, material, view depth, the interpolated
+/// normal (untextured scene) and the material's base colour, metallic and roughness.
+#[test]
+fn gbuffer_matches_cpu_traversal() {
+    let gpu = Gpu::new();
+    for (file, check_shading) in [("spheres.glb", true), ("textured.glb", false)] {
+        let scene = scene_file(file);
+        let camera = scene.camera(None).unwrap();
+        let size = (96, 64);
+        let arrays = SceneArrays::new(&scene).unwrap();
+        let gpu_scene = GpuScene::from_arrays(&gpu, &arrays).unwrap();
+        let pass = GBufferPass::new(&gpu, gpu_scene.texture_count > 0).unwrap();
+        let target = GBuffer::new(&gpu, size).unwrap();
+        let params = GBufferPass::params(&camera, size);
+        gpu.submit(|cmd| pass.record(&gpu, cmd, &gpu_scene, &target, &params)).unwrap();
+        let data = target.read(&gpu).unwrap();
+
+        let cam = camera_params(&camera, size);
+        let forward = Vec3::from(camera.forward).normalize();
+        let (mut surfaces, mut mismatched) = (0, Vec::new());
+        for y in 0..size.1 {
+            for x in 0..size.0 {
+                let i = (y * size.0 + x) as usize;
+                let ray = centre_ray(&cam, size, (x, y));
+                let material = data.material[i][0];
+                let Some(hit) = arrays.bvh.closest(&ray) else {
+                    if material != GBUFFER_NO_SURFACE || data.depth[i] != 0.0 {
+                        mismatched.push(format!("{x},{y}: CPU miss, GPU material {material}"));
+                    }
+                    continue;
+                };
+                surfaces += 1;
+                let tri = &arrays.triangles[hit.tri as usize];
+                let depth = hit.t * ray.dir.dot(forward);
+                if material != tri.material || (data.depth[i] - depth).abs() > 1e-5 * depth {
+                    mismatched.push(format!(
+                        "{x},{y}: material {material} vs {}, depth {} vs {depth}",
+                        tri.material, data.depth[i]
+                    ));
+                    continue;
+                }
+                if !check_shading {
+                    continue;
+                }
+                let [b1, b2] = hit.bary;
+                let n = |v: u32| Vec3::from_slice(&arrays.vertices[v as usize].normal_u[..3]);
+                let mut normal = ((1.0 - b1 - b2) * n(tri.v0) + b1 * n(tri.v1) + b2 * n(tri.v2)).normalize();
+                // On the viewer's side of the geometric normal (grazing hits at a silhouette can
+                // see a triangle from behind while its vertex normals face the camera).
+                let [p0, p1, p2] = arrays.bvh.tris[hit.tri as usize].vertices();
+                let mut ng = (p1 - p0).cross(p2 - p0);
+                if ng.dot(ray.dir) > 0.0 {
+                    ng = -ng;
+                }
+                if normal.dot(ng) < 0.0 {
+                    normal = -normal;
+                }
+                let m = &arrays.materials[tri.material as usize];
+                let got = data.normal[i];
+                // Half floats: 11-bit significands, so 1e-3 relative.
+                let normal_error = (Vec3::new(got[0], got[1], got[2]) - normal).length();
+                let roughness = m.emissive_rough[3].clamp(0.01, 1.0);
+                let base = data.base[i];
+                let expected = [m.base_color[0], m.base_color[1], m.base_color[2], m.params[0]];
+                if normal_error > 2e-3
+                    || (got[3] - roughness).abs() > 1e-3
+                    || base.iter().zip(expected).any(|(g, e)| (g - e).abs() > 1e-3 * e.max(1.0))
+                {
+                    mismatched.push(format!(
+                        "{x},{y}: normal {got:?} vs {normal}, base {base:?} vs {expected:?}, roughness {roughness}"
+                    ));
+                }
+            }
+        }
+        let pixels = (size.0 * size.1) as usize;
+        eprintln!("{file}: {surfaces} of {pixels} pixels on a surface, {} mismatched", mismatched.len());
+        assert!(surfaces > pixels / 4, "{file}: the camera should see the scene");
+        assert!(
+            mismatched.is_empty(),
+            "{file}: {} mismatched pixels:\n{}",
+            mismatched.len(),
+            mismatched.join("\n")
+        );
+    }
+}

@@ -24,6 +24,7 @@ layout(set = 0, binding = 13, std430) buffer GpuLightBuffer { GpuLight gpu_light
 layout(set = 0, binding = 14, std430) buffer GpuTextureBuffer { GpuTexture gpu_texture_check[]; };
 layout(set = 0, binding = 15, std430) buffer SampleTestParamsBuffer { SampleTestParams sample_test_check[]; };
 layout(set = 0, binding = 16, std430) buffer GBufferParamsBuffer { GBufferParams gbuffer_params_check[]; };
+layout(set = 0, binding = 17, std430) buffer DeferredParamsBuffer { DeferredParams deferred_params_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -43,4 +44,5 @@ void main() {
     gpu_texture_check[0].offset += 1u;
     sample_test_check[0].config.x += 1u;
     gbuffer_params_check[0].size.x += 1u;
+    deferred_params_check[0].counts.x += 1u;
 }

@@ -124,21 +124,10 @@ void main() {
         // Next-event estimation: one emissive triangle by power, a uniform point on it.
         if (HAS_LIGHTS && params.settings.z > 0u) {
             vec4 u = rand4(pixel, sample_index, depth * 8u + 1u, seed);
-            uint k = pick_light(u.x, params.settings.z);
-            uint ltri = lights[k].tri;
-            vec2 lb = sample_triangle(u.yz);
-            vec3 lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u)
-                + lb.y * tri_vertex(ltri, 2u);
-            vec3 ln = normalize(tri_normal(ltri));
-            vec3 to_light = lp - p;
-            float dist2 = dot(to_light, to_light);
-            vec3 wi = to_light * inversesqrt(dist2);
-            vec3 l_emit = emitted(ltri, lb, ln, -wi);
-            float cos_l = abs(dot(ln, wi));
             vec3 wi_local;
-            if (any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0
-                && light_reaches(p, ng, t, b, n, wi, true, lp, wi_local)) {
-                float light_pdf = lights[k].pmf / lights[k].area * dist2 / cos_l;
+            vec3 l_emit;
+            float light_pdf;
+            if (sample_emissive(p, ng, t, b, n, u.xyz, params.settings.z, wi_local, l_emit, light_pdf)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
                 radiance += throughput * f * wi_local.z * l_emit * (w / light_pdf);
@@ -147,17 +136,7 @@ void main() {
 
         // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
         if (HAS_PUNCTUAL) {
-            for (uint k = 0u; k < params.settings.w; ++k) {
-                vec3 wi;
-                bool to_point;
-                vec3 position;
-                vec3 li = punctual_incident(k, p, wi, to_point, position);
-                vec3 wi_local;
-                if (any(greaterThan(li, vec3(0.0)))
-                    && light_reaches(p, ng, t, b, n, wi, to_point, position, wi_local)) {
-                    radiance += throughput * bsdf_eval(s, wo_local, wi_local) * wi_local.z * li;
-                }
-            }
+            radiance += throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.settings.w);
         }
 
         // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.

@@ -3,9 +3,11 @@
 use crate::error::{Error, Result};
 use crate::gpu::layout::{PathParams, PathStats};
 use crate::gpu::scene::GpuScene;
+use crate::passes::deferred::{DeferredPass, LightingSettings};
+use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
 use crate::scene::Camera;
-use crate::vk::{Context, GpuTimer};
+use crate::vk::{raw, Context, GpuTimer, Image};
 use glam::Vec3;
 
 /// Settings of a path-traced render.
@@ -200,4 +202,55 @@ pub fn path_trace(
         nonfinite_samples: stats[0].nonfinite_samples,
         gpu_ms,
     })
+}
+
+/// Settings of a hybrid (deferred) render.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct HybridSettings {
+    /// Width and height in pixels.
+    pub size: (u32, u32),
+    /// The lighting pass's settings.
+    pub lighting: LightingSettings,
+}
+
+/// A hybrid render: the linear image, its G-buffer and the GPU time of each pass.
+#[derive(Debug, Clone)]
+pub struct HybridImage {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// Linear radiance rgb, alpha 1.
+    pub color: Vec<[f32; 4]>,
+    /// The G-buffer the lighting read (the AOVs).
+    pub gbuffer: GBufferData,
+    /// GPU milliseconds per pass, in order.
+    pub pass_ms: Vec<(String, f64)>,
+}
+
+/// Renders `scene` with the hybrid pipeline: G-buffer, then deferred lighting.
+pub fn hybrid(
+    ctx: &Context,
+    scene: &GpuScene,
+    camera: &Camera,
+    settings: &HybridSettings,
+) -> Result<HybridImage> {
+    let size = settings.size;
+    let gbuffer = GBuffer::new(ctx, size)?;
+    let output = Image::storage_2d(ctx, "hybrid colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
+    let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
+    let deferred = DeferredPass::new(ctx, scene)?;
+    let gbuffer_params = GBufferPass::params(camera, size);
+    let deferred_params = DeferredPass::params(scene, camera, size, &settings.lighting);
+    let mut timer = GpuTimer::new(ctx, 2)?;
+    ctx.submit(|cmd| {
+        output.init_general(ctx, cmd);
+        timer.reset(cmd);
+        timer.begin(cmd, "gbuffer")?;
+        gbuffer_pass.record(ctx, cmd, scene, &gbuffer, &gbuffer_params)?;
+        timer.end(cmd)?;
+        timer.begin(cmd, "lighting")?;
+        deferred.record(ctx, cmd, scene, &gbuffer, &output, &deferred_params)?;
+        timer.end(cmd)
+    })?;
+    let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
+    Ok(HybridImage { size, color: output.read(ctx)?, gbuffer: gbuffer.read(ctx)?, pass_ms })
 }

@@ -155,6 +155,18 @@ struct GBufferParams {
     uvec4 size;        // width, height, unused, unused
 };
 
+// Push constants of deferred.comp.
+struct DeferredParams {
+    vec4 cam_origin;   // xyz, unused
+    vec4 cam_forward;  // unit forward
+    vec4 cam_right;    // right * tan(yfov/2) * aspect
+    vec4 cam_up;       // up * tan(yfov/2)
+    vec4 env;          // constant environment radiance rgb (or the map's multiplier), unused
+    uvec4 size_frame;  // width, height, frame, seed
+    uvec4 counts;      // light triangles, punctual lights, shadow rays per pixel for area lights, unused
+    uvec4 env_info;    // environment map width, height, unused, unused
+};
+
 // Material index in the G-buffer where no surface was hit.
 #define GBUFFER_NO_SURFACE 0xffffffffu
 

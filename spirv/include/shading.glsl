@@ -55,19 +55,28 @@ vec4 material_texture(uint id, uint slot, vec4 uv) {
     return texture_sample(tex - 1u, t);
 }
 
-Surface material_surface(uint id, vec4 uv) {
+// Material `id` as a BSDF surface, given its (textured) base colour, metallic and roughness:
+// the dielectric specular terms come from the material's ior and KHR_materials_specular factors.
+Surface material_surface_from(uint id, vec3 base, float metallic, float roughness) {
     // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
     Surface s;
-    s.base = materials[id].base_color.rgb * material_texture(id, 0u, uv).rgb;
-    vec4 mr = material_texture(id, 1u, uv);
-    s.metallic = clamp(materials[id].params.x * mr.b, 0.0, 1.0);
-    float r = clamp(materials[id].emissive_rough.w * mr.g, 0.0, 1.0);
-    s.alpha = max(r * r, ALPHA_MIN);
+    s.base = base;
+    s.metallic = metallic;
+    s.alpha = max(roughness * roughness, ALPHA_MIN);
     float ior = materials[id].params.y;
     float f0 = (ior - 1.0) / (ior + 1.0);
     s.f0 = min(vec3(f0 * f0) * materials[id].specular.rgb, vec3(1.0)) * materials[id].specular.w;
     s.f90 = materials[id].specular.w;
     return s;
+}
+
+// Material `id` at the hit's UV sets, textures applied.
+Surface material_surface(uint id, vec4 uv) {
+    vec3 base = materials[id].base_color.rgb * material_texture(id, 0u, uv).rgb;
+    vec4 mr = material_texture(id, 1u, uv);
+    float metallic = clamp(materials[id].params.x * mr.b, 0.0, 1.0);
+    float roughness = clamp(materials[id].emissive_rough.w * mr.g, 0.0, 1.0);
+    return material_surface_from(id, base, metallic, roughness);
 }
 
 vec3 tri_vertex(uint tri, uint k) {
@@ -196,6 +205,44 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
         }
     }
     return punctual[k].intensity.rgb * attenuation;
+}
+
+// Next-event estimation on the emissive triangles: one of `count` by power (u.x), a uniform point
+// on it (u.yz). True when it emits towards p and nothing blocks it; then gives the direction in
+// the shading frame, the emitted radiance and the solid-angle pdf of the sample.
+bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 u, uint count,
+                     out vec3 wi_local, out vec3 l_emit, out float light_pdf) {
+    uint k = pick_light(u.x, count);
+    uint ltri = lights[k].tri;
+    vec2 lb = sample_triangle(u.yz);
+    vec3 lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u)
+        + lb.y * tri_vertex(ltri, 2u);
+    vec3 ln = normalize(tri_normal(ltri));
+    vec3 to_light = lp - p;
+    float dist2 = dot(to_light, to_light);
+    vec3 wi = to_light * inversesqrt(dist2);
+    l_emit = emitted(ltri, lb, ln, -wi);
+    float cos_l = abs(dot(ln, wi));
+    light_pdf = lights[k].pmf / lights[k].area * dist2 / cos_l;
+    return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0
+        && light_reaches(p, ng, t, b, n, wi, true, lp, wi_local);
+}
+
+// Direct light from the `count` punctual lights at p (one shadow ray each): delta distributions,
+// so light sampling is the only strategy.
+vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo_local, uint count) {
+    vec3 sum = vec3(0.0);
+    for (uint k = 0u; k < count; ++k) {
+        vec3 wi;
+        bool to_point;
+        vec3 position;
+        vec3 li = punctual_incident(k, p, wi, to_point, position);
+        vec3 wi_local;
+        if (any(greaterThan(li, vec3(0.0))) && light_reaches(p, ng, t, b, n, wi, to_point, position, wi_local)) {
+            sum += bsdf_eval(s, wo_local, wi_local) * wi_local.z * li;
+        }
+    }
+    return sum;
 }
 
 #endif

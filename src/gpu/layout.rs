@@ -262,6 +262,29 @@ pub struct GBufferParams {
 }
 const _: () = assert!(size_of::<GBufferParams>() == 80);
 
+/// Push constants of `deferred.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct DeferredParams {
+    /// Camera position, unused.
+    pub cam_origin: [f32; 4],
+    /// Unit forward.
+    pub cam_forward: [f32; 4],
+    /// Right × tan(yfov/2) × aspect.
+    pub cam_right: [f32; 4],
+    /// Up × tan(yfov/2).
+    pub cam_up: [f32; 4],
+    /// Constant environment radiance rgb (or the environment map's multiplier), unused.
+    pub env: [f32; 4],
+    /// Width, height, frame, seed.
+    pub size_frame: [u32; 4],
+    /// Light triangles, punctual lights, shadow rays per pixel for area lights, unused.
+    pub counts: [u32; 4],
+    /// Environment map width, height, unused, unused.
+    pub env_info: [u32; 4],
+}
+const _: () = assert!(size_of::<DeferredParams>() == 128);
+
 /// The G-buffer's material index where no surface was hit (`GBUFFER_NO_SURFACE`).
 pub const GBUFFER_NO_SURFACE: u32 = u32::MAX;
 
@@ -349,6 +372,16 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         }),
         layout_of!(PathStats { nonfinite_samples, pad0, pad1, pad2 }),
         layout_of!(GBufferParams { cam_origin, cam_forward, cam_right, cam_up, size }),
+        layout_of!(DeferredParams {
+            cam_origin,
+            cam_forward,
+            cam_right,
+            cam_up,
+            env,
+            size_frame,
+            counts,
+            env_info
+        }),
         layout_of!(GpuLight { position_range, direction_kind, intensity, cone }),
     ]
 }

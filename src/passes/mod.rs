@@ -1,4 +1,5 @@
 //! Render passes: each owns its pipelines and records into a caller's command buffer.
 
+pub mod deferred;
 pub mod gbuffer;
 pub mod pathtrace;

@@ -1,0 +1,122 @@
+//! Deferred lighting (`spirv/deferred.comp`): the G-buffer shaded with the path tracer's BSDF
+//! (`shading.glsl`, `bsdf.glsl`): emission, punctual lights and emissive triangles with
+//! ray-traced shadows, into a linear `R32G32B32A32_SFLOAT` image (`GENERAL` layout; alpha 1).
+//! Pixels without a surface get the environment seen directly.
+
+use super::gbuffer::GBuffer;
+use crate::error::Result;
+use crate::gpu::layout::DeferredParams;
+use crate::gpu::scene::GpuScene;
+use crate::render::camera_params;
+use crate::scene::Camera;
+use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, Image, PipelineDesc};
+
+/// What the lighting pass computes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightingSettings {
+    /// Shadow rays (light samples) per pixel for the emissive triangles; soft shadows converge as
+    /// this grows (punctual lights always take one).
+    pub shadow_rays: u32,
+    /// Frame index, decorrelating the light samples of successive frames.
+    pub frame: u32,
+    /// Seed of the light samples.
+    pub seed: u32,
+    /// Constant environment radiance, or the environment map's multiplier (rgb).
+    pub env: [f32; 3],
+}
+
+impl Default for LightingSettings {
+    fn default() -> Self {
+        Self { shadow_rays: 4, frame: 0, seed: 0, env: [0.0; 3] }
+    }
+}
+
+/// `deferred.comp`, specialised for the scene's features.
+pub struct DeferredPass {
+    pipeline: ComputePipeline,
+}
+
+impl DeferredPass {
+    /// Workgroup size of the kernel.
+    pub const LOCAL: [u32; 3] = [8, 8, 1];
+
+    /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
+    /// an environment map).
+    pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
+        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 18];
+        bindings[12..].fill(raw::DescriptorType::STORAGE_IMAGE);
+        let pipeline = ComputePipeline::new(
+            ctx,
+            "deferred",
+            &PipelineDesc {
+                bindings: &bindings,
+                push_constant_size: std::mem::size_of::<DeferredParams>() as u32,
+                specialization: &[
+                    (0, (scene.texture_count > 0) as u32),
+                    (1, (scene.light_count > 0) as u32),
+                    (2, (scene.punctual_count > 0) as u32),
+                    (3, scene.env_size.is_some() as u32),
+                    (4, 0),
+                ],
+            },
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// The push constants for `camera` over an image of `size`.
+    pub fn params(
+        scene: &GpuScene,
+        camera: &Camera,
+        size: (u32, u32),
+        settings: &LightingSettings,
+    ) -> DeferredParams {
+        let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
+        let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
+        let [r, g, b] = settings.env;
+        DeferredParams {
+            cam_origin,
+            cam_forward,
+            cam_right,
+            cam_up,
+            env: [r, g, b, 0.0],
+            size_frame: [size.0, size.1, settings.frame, settings.seed],
+            counts: [scene.light_count, scene.punctual_count, settings.shadow_rays.max(1), 0],
+            env_info: [env_w, env_h, 0, 0],
+        }
+    }
+
+    /// Records the pass (G-buffer in, `output` written) and a barrier after it. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        gbuffer: &GBuffer,
+        output: &Image,
+        params: &DeferredParams,
+    ) -> Result<()> {
+        let p = &self.pipeline;
+        p.bind(cmd);
+        let mut resources = vec![
+            Descriptor::Buffer(&scene.bvh.nodes),
+            Descriptor::Buffer(&scene.bvh.tris),
+            Descriptor::Buffer(&scene.triangles),
+            Descriptor::Buffer(&scene.vertices),
+            Descriptor::Buffer(&scene.materials),
+            Descriptor::Buffer(&scene.lights),
+            Descriptor::Buffer(&scene.punctual),
+            Descriptor::Buffer(&scene.textures),
+            Descriptor::Buffer(&scene.texels),
+            Descriptor::Buffer(&scene.env_texels),
+            Descriptor::Buffer(&scene.env_marginal),
+            Descriptor::Buffer(&scene.env_conditional),
+        ];
+        resources.extend(gbuffer.images().map(Descriptor::StorageImage));
+        resources.push(Descriptor::StorageImage(output));
+        p.push_descriptors(cmd, &resources)?;
+        p.push_constants(cmd, params)?;
+        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}

@@ -46,6 +46,19 @@ float mis_weight(float a, float b) {
     return a / (a + b);
 }
 
+// Non-finite sources (PathStats.nonfinite_sources bits): the stages whose contribution (or, for
+// BSDF sampling, weight and pdf) was NaN or Inf.
+const uint NONFINITE_ENVIRONMENT = 1u;
+const uint NONFINITE_EMISSION = 2u;
+const uint NONFINITE_EMISSIVE_NEE = 4u;
+const uint NONFINITE_PUNCTUAL = 8u;
+const uint NONFINITE_ENV_NEE = 16u;
+const uint NONFINITE_BSDF_SAMPLE = 32u;
+
+uint nonfinite_bit(vec3 v, uint bit) {
+    return (any(isnan(v)) || any(isinf(v))) ? bit : 0u;
+}
+
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     uvec2 size = params.size_frame.xy;
@@ -65,6 +78,7 @@ void main() {
 
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
+    uint nonfinite = 0u;  // NONFINITE_* bits of the stages that produced a non-finite value
     float prev_pdf = 0.0;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
     vec4 albedo = vec4(params.env.rgb, 0.0);
     vec4 normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
@@ -77,7 +91,9 @@ void main() {
                 if (params.env_info.z != 0u && prev_pdf > 0.0) {
                     w = mis_weight(prev_pdf, env_pdf(dir, params.env_info.xy));
                 }
-                radiance += throughput * env_radiance(dir, params.env_info.xy) * params.env.rgb * w;
+                vec3 c = throughput * env_radiance(dir, params.env_info.xy) * params.env.rgb * w;
+                radiance += c;
+                nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
             } else {
                 radiance += throughput * params.env.rgb;
             }
@@ -99,7 +115,9 @@ void main() {
                 float light_pdf = triangles[tri].light_pmf / area * hit.t * hit.t / abs(dot(ng, wo));
                 w = mis_weight(prev_pdf, light_pdf);
             }
-            radiance += throughput * le * w;
+            vec3 c = throughput * le * w;
+            radiance += c;
+            nonfinite |= nonfinite_bit(c, NONFINITE_EMISSION);
         }
 
         // Shading frame: interpolated, normal-mapped normal, on the same side as the viewer.
@@ -130,13 +148,17 @@ void main() {
             if (sample_emissive(p, ng, t, b, n, u.xyz, params.settings.z, wi_local, l_emit, light_pdf)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
-                radiance += throughput * f * wi_local.z * l_emit * (w / light_pdf);
+                vec3 c = throughput * f * wi_local.z * l_emit * (w / light_pdf);
+                radiance += c;
+                nonfinite |= nonfinite_bit(c, NONFINITE_EMISSIVE_NEE);
             }
         }
 
         // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
         if (HAS_PUNCTUAL) {
-            radiance += throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.settings.w);
+            vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.settings.w);
+            radiance += c;
+            nonfinite |= nonfinite_bit(c, NONFINITE_PUNCTUAL);
         }
 
         // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
@@ -149,7 +171,9 @@ void main() {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = mis_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
                 vec3 le = env_radiance(wi, params.env_info.xy) * params.env.rgb;
-                radiance += throughput * f * wi_local.z * le * (w / pdf);
+                vec3 c = throughput * f * wi_local.z * le * (w / pdf);
+                radiance += c;
+                nonfinite |= nonfinite_bit(c, NONFINITE_ENV_NEE);
             }
         }
 
@@ -165,6 +189,7 @@ void main() {
         if (dot(wi, ng) <= 0.0) {
             break;  // the shading normal let the sample through the geometry
         }
+        nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
         throughput *= weight;
         prev_pdf = pdf;
         if (depth + 1u >= rr_depth) {
@@ -180,6 +205,7 @@ void main() {
 
     if (any(isnan(radiance)) || any(isinf(radiance))) {
         atomicAdd(stats.nonfinite_samples, 1u);
+        atomicOr(stats.nonfinite_sources, nonfinite);
         radiance = vec3(0.0);
     }
     float n_samples = float(sample_index + 1u);

@@ -182,7 +182,11 @@ fn render(args: RenderArgs) -> Result<()> {
         image.relative_error()
     );
     if image.nonfinite_samples > 0 {
-        log::warn!("{} samples were NaN or infinite and were dropped", image.nonfinite_samples);
+        log::warn!(
+            "{} samples were NaN or infinite and were dropped (arising in: {})",
+            image.nonfinite_samples,
+            umbra::gpu::layout::nonfinite_source_names(image.nonfinite_sources).join(", ")
+        );
     }
     let (w, h) = settings.size;
     let rgba: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();

@@ -72,6 +72,8 @@ pub struct PathImage {
     pub normal_depth: Vec<[f32; 4]>,
     /// Samples that came out non-finite (replaced by zero); 0 unless something is wrong.
     pub nonfinite_samples: u32,
+    /// Where they arose (see [`crate::gpu::layout::nonfinite_source_names`]).
+    pub nonfinite_sources: u32,
     /// GPU time of all the path-tracing dispatches, in milliseconds.
     pub gpu_ms: f64,
 }
@@ -200,6 +202,7 @@ pub fn path_trace(
         albedo: target.albedo.read(ctx)?,
         normal_depth: target.normal_depth.read(ctx)?,
         nonfinite_samples: stats[0].nonfinite_samples,
+        nonfinite_sources: stats[0].nonfinite_sources,
         gpu_ms,
     })
 }

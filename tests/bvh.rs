@@ -53,8 +53,21 @@ fn agrees(bvh: &Bvh, got: Option<Hit>, expected: Option<Hit>) -> bool {
     same_hit(got, expected, |t| bvh.prim_order[t as usize])
 }
 
+/// Whether a triangle has zero area in exact arithmetic (checked in f64: its float vertices are
+/// exact there): collinear or with coincident vertices.
+fn zero_area(t: &[Vec3; 3]) -> bool {
+    let [a, b, c] = t.map(|v| v.as_dvec3());
+    (b - a).cross(c - a) == glam::DVec3::ZERO
+}
+
 /// Traces `rays` on the GPU (closest and any), the CPU BVH and the reference, and asserts they
 /// all agree; returns the number of hits.
+///
+/// One tolerance, for the GPU only: a triangle of zero area (collinear vertices) is hit or missed
+/// by rounding alone (its sheared projection is a sliver of rounding-error width), and GPUs may
+/// divide with up to 2.5 ulp of error (Vulkan's precision rules; the ray's shear is a division),
+/// where the CPU rounds correctly. So the GPU may also answer as if zero-area triangles were not
+/// there, or hit one of them before the reference's hit; every other triangle must agree exactly.
 fn check_scene(gpu: &Gpu, tracer: &RayTracer, name: &str, triangles: &[[Vec3; 3]], rays: &[Ray]) -> usize {
     let bvh = Bvh::build(triangles).unwrap();
     bvh.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -63,12 +76,27 @@ fn check_scene(gpu: &Gpu, tracer: &RayTracer, name: &str, triangles: &[[Vec3; 3]
     let closest = tracer.trace(gpu, Query::Closest, &device_bvh, &trace_rays).unwrap();
     let any = tracer.trace(gpu, Query::Any, &device_bvh, &trace_rays).unwrap();
     let expected = Reference::new(triangles).closest_all(rays);
+    let degenerate: Vec<bool> = triangles.iter().map(zero_area).collect();
+    // The reference without the zero-area triangles (each replaced by a point, never hit).
+    let without: Vec<[Vec3; 3]> =
+        triangles.iter().zip(&degenerate).map(|(t, &d)| if d { [t[0]; 3] } else { *t }).collect();
+    let expected_without = if degenerate.contains(&true) {
+        Reference::new(&without).closest_all(rays)
+    } else {
+        expected.clone()
+    };
+    let gpu_agrees = |got: Option<Hit>, i: usize| {
+        let on_degenerate = got.is_some_and(|h| degenerate[bvh.prim_order[h.tri as usize] as usize]);
+        agrees(&bvh, got, expected[i])
+            || agrees(&bvh, got, expected_without[i])
+            || (on_degenerate && got.unwrap().t <= expected_without[i].map_or(f32::INFINITY, |h| h.t))
+    };
 
     let mut failures = Vec::new();
     for (i, ray) in rays.iter().enumerate() {
         let gpu_hit = closest[i].hit();
         let cpu_hit = bvh.closest(ray);
-        if !agrees(&bvh, gpu_hit, expected[i]) {
+        if !gpu_agrees(gpu_hit, i) {
             failures.push(format!("ray {i} {ray:?}: GPU {gpu_hit:?}, reference {:?}", expected[i]));
         }
         if !agrees(&bvh, cpu_hit, expected[i]) {

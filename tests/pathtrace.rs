@@ -75,7 +75,12 @@ fn camera(position: Vec3, target: Vec3, yfov_degrees: f32) -> Camera {
 fn render(gpu: &Gpu, scene: &Scene, settings: &PathSettings) -> PathImage {
     let device_scene = GpuScene::upload(gpu, scene).unwrap();
     let image = path_trace(gpu, &device_scene, &scene.camera(None).unwrap(), settings, |_, _| {}).unwrap();
-    assert_eq!(image.nonfinite_samples, 0, "NaN/Inf samples");
+    assert_eq!(
+        image.nonfinite_samples,
+        0,
+        "NaN/Inf samples, arising in {:?}",
+        umbra::gpu::layout::nonfinite_source_names(image.nonfinite_sources)
+    );
     image
 }
 

@@ -42,8 +42,12 @@ float micro_d(vec3 h, float a) {
     return BECKMANN ? beckmann_d(h, a) : ggx_d(h, a);
 }
 
-float micro_g1(vec3 w, float a) {
-    return BECKMANN ? beckmann_g1(w, a) : ggx_g1(w, a);
+// The specular term's G1(wo) G1(wi) / (4 |wo.z| |wi.z|), evaluated without the 0/0 that the
+// quotient gives at grazing angles once the cosines' product flushes to zero.
+float micro_visibility(vec3 wo, vec3 wi, float a) {
+    float v = BECKMANN ? beckmann_g1_over_cos(wo, a) * beckmann_g1_over_cos(wi, a)
+                       : ggx_g1_over_cos(wo, a) * ggx_g1_over_cos(wi, a);
+    return 0.25 * v;
 }
 
 // A half vector for wo: GGX visible normals, or Beckmann D(h) cos(theta_h).
@@ -67,7 +71,7 @@ vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
     }
     vec3 h = normalize(wo + wi);
     float oh = max(dot(wo, h), 0.0);
-    float spec = micro_d(h, s.alpha) * micro_g1(wo, s.alpha) * micro_g1(wi, s.alpha) / (4.0 * wo.z * wi.z);
+    float spec = micro_d(h, s.alpha) * micro_visibility(wo, wi, s.alpha);
     vec3 f_dielectric = fresnel_schlick(s.f0, vec3(s.f90), oh);
     vec3 dielectric = (1.0 - max3(f_dielectric)) * s.base * INV_PI + f_dielectric * spec;
     vec3 metal = fresnel_schlick(s.base, vec3(1.0), oh) * spec;

@@ -141,7 +141,7 @@ struct PathParams {
 // Per-render counters written by pathtrace.comp.
 struct PathStats {
     uint nonfinite_samples;
-    uint pad0;
+    uint nonfinite_sources;  // bits of pathtrace.comp's NONFINITE_* stages where they arose
     uint pad1;
     uint pad2;
 };

@@ -33,10 +33,12 @@ vec2 sample_triangle(vec2 u) {
 
 // ---- GGX (Trowbridge-Reitz), isotropic, alpha = roughness^2 ----
 
+// D(h) = a^2 / (pi (sin^2 + a^2 cos^2)^2), with sin^2 as h.x^2 + h.y^2: the textbook
+// cos^2 (a^2 - 1) + 1 cancels catastrophically for small a and goes to zero or negative once h's
+// length rounds above 1 (approximate normalize on GPUs), giving Inf and then NaN.
 float ggx_d(vec3 h, float a) {
     float a2 = a * a;
-    float c2 = h.z * h.z;
-    float d = c2 * (a2 - 1.0) + 1.0;
+    float d = h.x * h.x + h.y * h.y + a2 * h.z * h.z;
     return h.z > 0.0 ? a2 / (PI * d * d) : 0.0;
 }
 
@@ -44,6 +46,13 @@ float ggx_d(vec3 h, float a) {
 float ggx_g1(vec3 w, float a) {
     float c = abs(w.z);
     return 2.0 * c / (c + sqrt(a * a + (1.0 - a * a) * c * c));
+}
+
+// G1(w) / |w.z| for GGX, finite as w.z goes to 0 (where the quotient of the two would be 0/0
+// once w.z * w.z flushes to zero).
+float ggx_g1_over_cos(vec3 w, float a) {
+    float c = abs(w.z);
+    return 2.0 / (c + sqrt(a * a + (1.0 - a * a) * c * c));
 }
 
 // Visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of Visible Normals").
@@ -64,7 +73,7 @@ vec3 sample_ggx_vndf(vec3 wo, float a, vec2 u) {
 
 // Density of the half vector h under sample_ggx_vndf(wo): G1(wo) max(0, wo.h) D(h) / wo.z.
 float pdf_ggx_vndf(vec3 wo, vec3 h, float a) {
-    return ggx_g1(wo, a) * max(0.0, dot(wo, h)) * ggx_d(h, a) / abs(wo.z);
+    return ggx_g1_over_cos(wo, a) * max(0.0, dot(wo, h)) * ggx_d(h, a);
 }
 
 // ---- Beckmann, alpha = roughness^2 ----
@@ -74,19 +83,25 @@ float beckmann_d(vec3 h, float a) {
         return 0.0;
     }
     float c2 = h.z * h.z;
-    float tan2 = (1.0 - c2) / c2;
+    float tan2 = (h.x * h.x + h.y * h.y) / c2;  // not (1 - c2) / c2: see ggx_d
     return exp(-tan2 / (a * a)) / (PI * a * a * c2 * c2);
 }
 
-// Smith G1 for Beckmann, Walter et al. 2007's rational approximation.
-float beckmann_g1(vec3 w, float a) {
+// Smith G1 for Beckmann, Walter et al. 2007's rational approximation, divided by |w.z|
+// (finite as w.z goes to 0): with b = cot(theta) / a, G1 = b (3.535 + 2.181 b) / (1 + 2.276 b +
+// 2.577 b^2) below b = 1.6, and 1 above.
+float beckmann_g1_over_cos(vec3 w, float a) {
     float c = abs(w.z);
-    float tan_t = sqrt(max(0.0, 1.0 - c * c)) / c;
-    if (tan_t == 0.0) {
-        return 1.0;
+    float s = sqrt(w.x * w.x + w.y * w.y);
+    if (c >= 1.6 * a * s) {
+        return 1.0 / c;
     }
-    float b = 1.0 / (a * tan_t);
-    return b >= 1.6 ? 1.0 : (3.535 * b + 2.181 * b * b) / (1.0 + 2.276 * b + 2.577 * b * b);
+    float b = c / (a * s);
+    return (3.535 + 2.181 * b) / (a * s * (1.0 + 2.276 * b + 2.577 * b * b));
+}
+
+float beckmann_g1(vec3 w, float a) {
+    return beckmann_g1_over_cos(w, a) * abs(w.z);
 }
 
 // Half-vector sampling proportional to D(h) cos(theta_h) (Walter et al. 2007, eq. 28-29).

@@ -230,14 +230,24 @@ pub struct PathParams {
 }
 const _: () = assert!(size_of::<PathParams>() == 128);
 
+/// The stages of `pathtrace.comp` whose value first went NaN or infinite, bit 0 first
+/// ([`PathStats::nonfinite_sources`]).
+pub const NONFINITE_SOURCES: [&str; 6] =
+    ["environment", "emission", "emissive NEE", "punctual lights", "environment NEE", "BSDF sample weight"];
+
+/// The names of the stages set in a `nonfinite_sources` mask.
+pub fn nonfinite_source_names(mask: u32) -> Vec<&'static str> {
+    NONFINITE_SOURCES.iter().enumerate().filter(|(i, _)| mask & (1 << i) != 0).map(|(_, n)| *n).collect()
+}
+
 /// Counters written by `pathtrace.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PathStats {
     /// Samples that came out NaN or infinite (replaced by 0; must stay 0).
     pub nonfinite_samples: u32,
-    /// Padding.
-    pub pad0: u32,
+    /// Where they arose: bits of [`NONFINITE_SOURCES`].
+    pub nonfinite_sources: u32,
     /// Padding.
     pub pad1: u32,
     /// Padding.
@@ -370,7 +380,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
             settings,
             env_info
         }),
-        layout_of!(PathStats { nonfinite_samples, pad0, pad1, pad2 }),
+        layout_of!(PathStats { nonfinite_samples, nonfinite_sources, pad1, pad2 }),
         layout_of!(GBufferParams { cam_origin, cam_forward, cam_right, cam_up, size }),
         layout_of!(DeferredParams {
             cam_origin,

@@ -1,6 +1,7 @@
 //! `umbra-bench`: umbra's measurements. `rays` is the ray-throughput mode (BVH build statistics
 //! and Mrays/s for primary, shadow and diffuse rays, validated before timing).
 
+mod passes;
 mod rays;
 
 use anyhow::{Context as _, Result};
@@ -42,6 +43,24 @@ enum Command {
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
     },
+    /// GPU time per pass (G-buffer, deferred lighting, one path-traced sample per pixel) on one
+    /// scene, median over repeats after a warm-up.
+    Passes {
+        /// A glTF scene (its first camera, or one framing it); the Cornell box when absent.
+        scene: Option<PathBuf>,
+        /// Image size.
+        #[arg(long, default_value = "256x256", value_parser = umbra::cli::parse_size)]
+        size: (u32, u32),
+        /// Timed repeats (after one warm-up).
+        #[arg(long, default_value_t = 10)]
+        repeats: usize,
+        /// Shadow rays per pixel for emissive triangles in the lighting pass.
+        #[arg(long, default_value_t = 4)]
+        shadow_rays: u32,
+        /// Where to write passes.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+    },
 }
 
 fn main() {
@@ -65,14 +84,12 @@ fn terrain_scene(name: &str, n: u32) -> RayScene {
     }
 }
 
-/// A glTF file's triangles, lit by a point light just under the top of the bounds, seen from the
-/// file's first camera or, when it has none, from inside the bounds looking along their longest
-/// horizontal axis (the classic view down Sponza's atrium; every primary ray hits).
-fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
-    let scene = umbra::scene::Scene::load(path)?;
+/// The file's first camera or, when it has none, one inside the bounds looking along their
+/// longest horizontal axis (the classic view down Sponza's atrium; every primary ray hits).
+fn bench_camera(scene: &umbra::scene::Scene) -> umbra::scene::Camera {
     let (lo, hi) = scene.bounds();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    let camera = match scene.cameras.first() {
+    match scene.cameras.first() {
         Some(c) => *c,
         None => {
             let (center, extent) = ((lo + hi) * 0.5, hi - lo);
@@ -87,7 +104,16 @@ fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
                 znear: 0.01,
             }
         }
-    };
+    }
+}
+
+/// A glTF file's triangles, lit by a point light just under the top of the bounds, seen from
+/// [`bench_camera`].
+fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
+    let scene = umbra::scene::Scene::load(path)?;
+    let (lo, hi) = scene.bounds();
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let camera = bench_camera(&scene);
     let position = Vec3::from(camera.position);
     let triangles = scene.triangle_soup();
     let name =
@@ -142,7 +168,61 @@ fn run(cli: Cli) -> Result<()> {
                 .with_context(|| format!("writing {}", path.display()))?;
             println!("wrote {}", path.display());
         }
+        Command::Passes { scene, size, repeats, shadow_rays, out } => {
+            run_passes(scene, size, repeats, shadow_rays, out)?
+        }
     }
+    Ok(())
+}
+
+fn run_passes(
+    scene: Option<PathBuf>,
+    size: (u32, u32),
+    repeats: usize,
+    shadow_rays: u32,
+    out: PathBuf,
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    let loaded = match &scene {
+        Some(path) => umbra::scene::Scene::load(path)?,
+        None => umbra::scene::Scene::cornell_box(),
+    };
+    let camera = bench_camera(&loaded);
+    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
+    let lighting = umbra::passes::deferred::LightingSettings { shadow_rays, ..Default::default() };
+    let timings = passes::run(&ctx, &gpu_scene, &camera, size, repeats, &lighting)?;
+    let pixels = size.0 as f64 * size.1 as f64;
+    println!(
+        "{} ({} triangles) at {}x{} on {}:",
+        loaded.name,
+        gpu_scene.bvh_stats.triangles,
+        size.0,
+        size.1,
+        ctx.info().name
+    );
+    for t in &timings {
+        println!(
+            "  {:18} {:9.3} ms median  {:9.3} ms min  {:9.1} Mpixels/s",
+            t.name,
+            t.median_ms,
+            t.min_ms,
+            pixels / (t.median_ms * 1e3)
+        );
+    }
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let path = out.join("passes.json");
+    let doc = json!({
+        "device": ctx.info().name,
+        "scene": loaded.name,
+        "triangles": gpu_scene.bvh_stats.triangles,
+        "size": [size.0, size.1],
+        "repeats": repeats,
+        "shadow_rays": shadow_rays,
+        "passes": timings.iter().map(|t| json!({"pass": t.name, "median_ms": t.median_ms, "min_ms": t.min_ms})).collect::<Vec<_>>(),
+    });
+    std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
     Ok(())
 }
 

@@ -1,0 +1,100 @@
+//! GPU time per pass of each method on one scene: the hybrid passes (G-buffer, deferred
+//! lighting) and one path-traced sample per pixel, each a median over repeats after a warm-up,
+//! from GPU timestamps.
+
+use anyhow::Result;
+use umbra::gpu::scene::GpuScene;
+use umbra::passes::deferred::{DeferredPass, LightingSettings};
+use umbra::passes::gbuffer::{GBuffer, GBufferPass};
+use umbra::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
+use umbra::render::camera_params;
+use umbra::scene::Camera;
+use umbra::vk::{raw, Context, GpuTimer, Image};
+
+/// A pass's median GPU time.
+pub struct PassTiming {
+    /// The pass.
+    pub name: String,
+    /// Median GPU milliseconds over the repeats.
+    pub median_ms: f64,
+    /// Fastest repeat.
+    pub min_ms: f64,
+}
+
+/// Times every pass at `size`, `repeats` times after one warm-up submission.
+pub fn run(
+    ctx: &Context,
+    scene: &GpuScene,
+    camera: &Camera,
+    size: (u32, u32),
+    repeats: usize,
+    lighting: &LightingSettings,
+) -> Result<Vec<PassTiming>> {
+    let gbuffer = GBuffer::new(ctx, size)?;
+    let output = Image::storage_2d(ctx, "bench colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
+    let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
+    let deferred = DeferredPass::new(ctx, scene)?;
+    let pathtrace = PathTracePass::new(
+        ctx,
+        Microfacet::Ggx,
+        Heuristic::Power,
+        scene.light_count > 0,
+        scene.punctual_count > 0,
+        scene.env_size.is_some(),
+        scene.texture_count > 0,
+    )?;
+    let target = PathTarget::new(ctx, size)?;
+    let gbuffer_params = GBufferPass::params(camera, size);
+    let deferred_params = DeferredPass::params(scene, camera, size, lighting);
+    let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
+    let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
+    let mut path_params = umbra::gpu::layout::PathParams {
+        cam_origin,
+        cam_forward,
+        cam_right,
+        cam_up,
+        env: [lighting.env[0], lighting.env[1], lighting.env[2], 0.0],
+        size_frame: [size.0, size.1, 0, 0],
+        settings: [8, 3, scene.light_count, scene.punctual_count],
+        env_info: [env_w, env_h, 1, 0],
+    };
+    ctx.submit(|cmd| {
+        output.init_general(ctx, cmd);
+        Ok(())
+    })?;
+    let mut timer = GpuTimer::new(ctx, 3)?;
+    let mut samples: Vec<Vec<f64>> = vec![Vec::new(); 3];
+    let mut names = Vec::new();
+    for repeat in 0..=repeats {
+        path_params.size_frame[2] = repeat as u32;
+        ctx.submit(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "gbuffer")?;
+            gbuffer_pass.record(ctx, cmd, scene, &gbuffer, &gbuffer_params)?;
+            timer.end(cmd)?;
+            timer.begin(cmd, "lighting")?;
+            deferred.record(ctx, cmd, scene, &gbuffer, &output, &deferred_params)?;
+            timer.end(cmd)?;
+            timer.begin(cmd, "pathtrace 1 spp")?;
+            pathtrace.record(ctx, cmd, scene, &target, &path_params)?;
+            timer.end(cmd)
+        })?;
+        let times = timer.read()?;
+        if repeat == 0 {
+            names = times.iter().map(|t| t.name.clone()).collect();
+            continue; // warm-up
+        }
+        for (k, t) in times.iter().enumerate() {
+            samples[k].push(t.ms);
+        }
+    }
+    Ok(names
+        .into_iter()
+        .zip(samples)
+        .map(|(name, mut ms)| PassTiming {
+            name,
+            min_ms: ms.iter().copied().fold(f64::INFINITY, f64::min),
+            median_ms: super::rays::median(&mut ms),
+        })
+        .collect())
+}

@@ -25,6 +25,7 @@ layout(set = 0, binding = 14, std430) buffer GpuTextureBuffer { GpuTexture gpu_t
 layout(set = 0, binding = 15, std430) buffer SampleTestParamsBuffer { SampleTestParams sample_test_check[]; };
 layout(set = 0, binding = 16, std430) buffer GBufferParamsBuffer { GBufferParams gbuffer_params_check[]; };
 layout(set = 0, binding = 17, std430) buffer DeferredParamsBuffer { DeferredParams deferred_params_check[]; };
+layout(set = 0, binding = 18, std430) buffer TonemapParamsBuffer { TonemapParams tonemap_params_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -45,4 +46,5 @@ void main() {
     sample_test_check[0].config.x += 1u;
     gbuffer_params_check[0].size.x += 1u;
     deferred_params_check[0].counts.x += 1u;
+    tonemap_params_check[0].curve += 1u;
 }

@@ -15,6 +15,7 @@ pub mod output;
 pub mod passes;
 pub mod render;
 pub mod scene;
+pub mod tonemap;
 pub mod vk;
 
 pub use error::{Error, Result};

@@ -80,6 +80,12 @@ struct RenderArgs {
     /// Exposure in stops for the PNG.
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
+    /// Tone curve for the PNG.
+    #[arg(long, value_enum, default_value = "neutral")]
+    tonemap: ToneArg,
+    /// Hybrid: shadow rays (light samples) per pixel for emissive triangles.
+    #[arg(long, default_value_t = 4)]
+    shadow_rays: u32,
     /// PNG output (tonemapped sRGB).
     #[arg(short, long, default_value = "umbra.png")]
     output: PathBuf,
@@ -88,10 +94,33 @@ struct RenderArgs {
     exr: Option<PathBuf>,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum)]
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 enum Mode {
     /// Progressive path tracing (the ground truth).
     Pathtrace,
+    /// Ray-cast G-buffer, deferred lighting with ray-traced shadows, tonemap (real-time style).
+    Hybrid,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ToneArg {
+    /// Clamp to [0, 1].
+    Clamp,
+    /// Hill's fit of ACES.
+    Aces,
+    /// Khronos PBR Neutral.
+    Neutral,
+}
+
+impl ToneArg {
+    fn curve(self) -> umbra::tonemap::ToneCurve {
+        use umbra::tonemap::ToneCurve;
+        match self {
+            ToneArg::Clamp => ToneCurve::Clamp,
+            ToneArg::Aces => ToneCurve::Aces,
+            ToneArg::Neutral => ToneCurve::KhronosPbrNeutral,
+        }
+    }
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -160,7 +189,9 @@ fn render(args: RenderArgs) -> Result<()> {
         env_nee: true,
         target_error: args.target_error,
     };
-    let Mode::Pathtrace = args.mode;
+    if args.mode == Mode::Hybrid {
+        return render_hybrid(&ctx, &gpu_scene, &camera, &args, settings.env);
+    }
     let bar = indicatif::ProgressBar::new(settings.spp as u64).with_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {per_sec}  ETA {eta}")
             .expect("valid template"),
@@ -190,7 +221,8 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     let (w, h) = settings.size;
     let rgba: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
-    umbra::output::write_png(&args.output, w, h, &umbra::output::to_srgb8(&rgba, args.exposure.exp2()))
+    let display = umbra::tonemap::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
+    umbra::output::write_png(&args.output, w, h, &display)
         .with_context(|| format!("writing {}", args.output.display()))?;
     println!("wrote {}", args.output.display());
     if let Some(path) = &args.exr {
@@ -210,6 +242,74 @@ fn render(args: RenderArgs) -> Result<()> {
                 Layer { name: "normal", channels: &["X", "Y", "Z"], data: &normal },
                 Layer { name: "depth", channels: &["Z"], data: &depth },
                 Layer { name: "variance", channels: &["R", "G", "B"], data: &variance },
+            ],
+        )?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn render_hybrid(
+    ctx: &Context,
+    scene: &umbra::gpu::scene::GpuScene,
+    camera: &umbra::scene::Camera,
+    args: &RenderArgs,
+    env: [f32; 3],
+) -> Result<()> {
+    let settings = umbra::render::HybridSettings {
+        size: args.size,
+        lighting: umbra::passes::deferred::LightingSettings {
+            shadow_rays: args.shadow_rays,
+            seed: args.seed,
+            env,
+            ..Default::default()
+        },
+        exposure: args.exposure,
+        curve: args.tonemap.curve(),
+    };
+    let image = umbra::render::hybrid(ctx, scene, camera, &settings)?;
+    let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();
+    println!("hybrid: {}x{}; GPU {}", args.size.0, args.size.1, times.join(", "));
+    let (w, h) = args.size;
+    let bytes: Vec<u8> = image.display.iter().flatten().copied().collect();
+    umbra::output::write_png(&args.output, w, h, &bytes)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    println!("wrote {}", args.output.display());
+    if let Some(path) = &args.exr {
+        let g = &image.gbuffer;
+        let rgb = |v: &[[f32; 4]]| -> Vec<f32> { v.iter().flat_map(|p| [p[0], p[1], p[2]]).collect() };
+        let colour = rgb(&image.color);
+        let normal = rgb(&g.normal);
+        let base = rgb(&g.base);
+        let emission = rgb(&g.emission);
+        let metal_rough: Vec<f32> = g.base.iter().zip(&g.normal).flat_map(|(b, n)| [b[3], n[3]]).collect();
+        let material: Vec<f32> = g
+            .material
+            .iter()
+            .map(|m| if m[0] == umbra::passes::gbuffer::GBUFFER_NO_SURFACE { -1.0 } else { m[0] as f32 })
+            .collect();
+        use umbra::output::Layer;
+        umbra::output::write_exr(
+            path,
+            w as usize,
+            h as usize,
+            &[
+                Layer { name: "", channels: &["R", "G", "B"], data: &colour },
+                Layer { name: "depth", channels: &["Z"], data: &g.depth },
+                Layer { name: "normal", channels: &["X", "Y", "Z"], data: &normal },
+                Layer { name: "albedo", channels: &["R", "G", "B"], data: &base },
+                Layer {
+                    name: "material",
+                    channels: &["metallic", "roughness", "id"],
+                    data: &{
+                        metal_rough
+                            .chunks(2)
+                            .zip(&material)
+                            .flat_map(|(mr, id)| [mr[0], mr[1], *id])
+                            .collect::<Vec<f32>>()
+                    },
+                },
+                Layer { name: "emission", channels: &["R", "G", "B"], data: &emission },
             ],
         )?;
         println!("wrote {}", path.display());

@@ -6,6 +6,7 @@ use crate::gpu::scene::GpuScene;
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
+use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
 use crate::vk::{raw, Context, GpuTimer, Image};
 use glam::Vec3;
@@ -214,6 +215,10 @@ pub struct HybridSettings {
     pub size: (u32, u32),
     /// The lighting pass's settings.
     pub lighting: LightingSettings,
+    /// Exposure of the display image, in stops.
+    pub exposure: f32,
+    /// Tone curve of the display image.
+    pub curve: ToneCurve,
 }
 
 /// A hybrid render: the linear image, its G-buffer and the GPU time of each pass.
@@ -223,13 +228,15 @@ pub struct HybridImage {
     pub size: (u32, u32),
     /// Linear radiance rgb, alpha 1.
     pub color: Vec<[f32; 4]>,
+    /// The display image from the GPU tonemap pass: sRGB RGBA8.
+    pub display: Vec<[u8; 4]>,
     /// The G-buffer the lighting read (the AOVs).
     pub gbuffer: GBufferData,
     /// GPU milliseconds per pass, in order.
     pub pass_ms: Vec<(String, f64)>,
 }
 
-/// Renders `scene` with the hybrid pipeline: G-buffer, then deferred lighting.
+/// Renders `scene` with the hybrid pipeline: G-buffer, deferred lighting, tonemap.
 pub fn hybrid(
     ctx: &Context,
     scene: &GpuScene,
@@ -240,20 +247,32 @@ pub fn hybrid(
     let gbuffer = GBuffer::new(ctx, size)?;
     let output = Image::storage_2d(ctx, "hybrid colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
     let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
+    let display = Image::storage_2d(ctx, "hybrid display", size.0, size.1, raw::Format::R8G8B8A8_UNORM)?;
     let deferred = DeferredPass::new(ctx, scene)?;
+    let tonemap = TonemapPass::new(ctx)?;
     let gbuffer_params = GBufferPass::params(camera, size);
     let deferred_params = DeferredPass::params(scene, camera, size, &settings.lighting);
-    let mut timer = GpuTimer::new(ctx, 2)?;
+    let mut timer = GpuTimer::new(ctx, 3)?;
     ctx.submit(|cmd| {
         output.init_general(ctx, cmd);
+        display.init_general(ctx, cmd);
         timer.reset(cmd);
         timer.begin(cmd, "gbuffer")?;
         gbuffer_pass.record(ctx, cmd, scene, &gbuffer, &gbuffer_params)?;
         timer.end(cmd)?;
         timer.begin(cmd, "lighting")?;
         deferred.record(ctx, cmd, scene, &gbuffer, &output, &deferred_params)?;
+        timer.end(cmd)?;
+        timer.begin(cmd, "tonemap")?;
+        tonemap.record(ctx, cmd, &output, &display, settings.exposure, settings.curve)?;
         timer.end(cmd)
     })?;
     let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
-    Ok(HybridImage { size, color: output.read(ctx)?, gbuffer: gbuffer.read(ctx)?, pass_ms })
+    Ok(HybridImage {
+        size,
+        color: output.read(ctx)?,
+        display: display.read(ctx)?,
+        gbuffer: gbuffer.read(ctx)?,
+        pass_ms,
+    })
 }

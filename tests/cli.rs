@@ -55,6 +55,55 @@ fn absurd_size_is_rejected_by_the_parser() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("at most 16384"));
 }
 
+/// `--mode hybrid` writes the tonemapped PNG and an EXR with the colour and every G-buffer AOV;
+/// the PNG is the EXR's colour through the default tone curve (the GPU pass and its CPU twin).
+#[test]
+fn render_hybrid_writes_png_and_gbuffer_aovs() {
+    let dir = std::env::temp_dir().join(format!("umbra-hybrid-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, exr) = (dir.join("h.png"), dir.join("h.exr"));
+    let stderr = run_validated(
+        umbra()
+            .args(["render", "--mode", "hybrid", "--size", "40x30", "-o"])
+            .arg(&png)
+            .arg("--exr")
+            .arg(&exr),
+    );
+    assert!(!stderr.contains("WARN"), "{stderr}");
+    let decoded = image::open(&png).expect("PNG decodes").to_rgba8();
+    let (w, h, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+    assert_eq!((w, h), (40, 30));
+    let mut names: Vec<&str> = channels.iter().map(|c| c.0.as_str()).collect();
+    names.sort_unstable();
+    let expected = [
+        "B",
+        "G",
+        "R",
+        "albedo.B",
+        "albedo.G",
+        "albedo.R",
+        "depth.Z",
+        "emission.B",
+        "emission.G",
+        "emission.R",
+        "material.id",
+        "material.metallic",
+        "material.roughness",
+        "normal.X",
+        "normal.Y",
+        "normal.Z",
+    ];
+    assert_eq!(names, expected);
+    let channel = |n: &str| &channels.iter().find(|c| c.0 == n).unwrap().1;
+    let rgba: Vec<f32> =
+        (0..w * h).flat_map(|i| [channel("R")[i], channel("G")[i], channel("B")[i], 1.0]).collect();
+    let expected_png = umbra::tonemap::to_display8(&rgba, 1.0, umbra::tonemap::ToneCurve::default());
+    let worst = decoded.as_raw().iter().zip(&expected_png).map(|(&a, &b)| (a as i32 - b as i32).abs()).max();
+    assert!(worst <= Some(1), "PNG differs from the tonemapped EXR colour by {worst:?} steps");
+    assert!(channel("R").iter().sum::<f32>() > 0.0, "the Cornell box is lit");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn render_cornell_box_writes_png_and_exr_layers() {
     let dir = std::env::temp_dir().join(format!("umbra-render-{}", std::process::id()));

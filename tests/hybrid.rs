@@ -184,3 +184,55 @@ fn deferred_direct_light_equals_path_traced_direct_light() {
     // curvature of the shading inside a pixel (box filter vs centre sample).
     assert!(outliers * 200 <= compared, "{outliers} of {compared} pixels differ (worst |z| {worst:.2})");
 }
+
+/// The tonemap kernel equals its CPU twin (src/tonemap.rs) to one 8-bit step on every curve, over
+/// values from 0 to far above white, negative, NaN and Inf; and the twin has the curves' known
+/// values (worked by hand from their definitions).
+#[test]
+fn tonemap_kernel_matches_its_cpu_twin() {
+    use umbra::passes::tonemap::{ToneCurve, TonemapPass};
+    use umbra::tonemap::tone_curve;
+    // Known values. PBR Neutral: grey 0.5 loses the 0.04 offset and is otherwise untouched; grey
+    // 1.0 -> 0.96 -> compressed to 1 - 0.24² / 0.44. ACES fit: black stays black; both matrices'
+    // rows sum to 1, so grey 1 maps to the fit at 1: (1.0245786 - 0.000090537) / (0.983729 +
+    // 0.432951 + 0.238081).
+    let close = |a: [f32; 3], b: f32| a.iter().all(|v| (v - b).abs() < 1e-5);
+    assert!(close(tone_curve([0.5; 3], ToneCurve::KhronosPbrNeutral), 0.46));
+    assert!(close(tone_curve([1.0; 3], ToneCurve::KhronosPbrNeutral), 1.0 - 0.0576 / 0.44));
+    assert!(close(tone_curve([0.0; 3], ToneCurve::Aces), 0.0));
+    let white = tone_curve([1.0; 3], ToneCurve::Aces);
+    let fit = (1.0245786 - 0.000090537) / (0.983729 + 0.432951 + 0.238081);
+    assert!(white.iter().all(|v| (v - fit).abs() < 1e-4), "{white:?}");
+    assert_eq!(tone_curve([0.25, 2.0, -1.0], ToneCurve::Clamp), [0.25, 1.0, 0.0]);
+
+    let gpu = Gpu::new();
+    let (w, h) = (64u32, 8u32);
+    let mut texels = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let v = 0.02 * (x as f32).powf(1.5) * (1.0 + y as f32 * 0.37);
+            texels.push([v, v * 0.5 + 0.01 * y as f32, (x as f32 * 0.31).sin() * 3.0, 1.0]);
+        }
+    }
+    texels[5] = [f32::NAN, f32::INFINITY, -1.0, f32::NAN];
+    let src =
+        umbra::vk::Image::storage_2d(&gpu, "tonemap src", w, h, umbra::vk::raw::Format::R32G32B32A32_SFLOAT)
+            .unwrap();
+    let dst = umbra::vk::Image::storage_2d(&gpu, "tonemap dst", w, h, umbra::vk::raw::Format::R8G8B8A8_UNORM)
+        .unwrap();
+    src.write(&gpu, &texels).unwrap();
+    let pass = TonemapPass::new(&gpu).unwrap();
+    for curve in [ToneCurve::Clamp, ToneCurve::Aces, ToneCurve::KhronosPbrNeutral] {
+        gpu.submit(|cmd| {
+            dst.init_general(&gpu, cmd);
+            pass.record(&gpu, cmd, &src, &dst, 0.5, curve)
+        })
+        .unwrap();
+        let got: Vec<[u8; 4]> = dst.read(&gpu).unwrap();
+        let flat: Vec<f32> = texels.iter().flatten().copied().collect();
+        let expected = umbra::tonemap::to_display8(&flat, 0.5f32.exp2(), curve);
+        let worst =
+            got.iter().flatten().zip(&expected).map(|(&g, &e)| (g as i32 - e as i32).abs()).max().unwrap();
+        assert!(worst <= 1, "{curve:?}: GPU and CPU differ by {worst} steps");
+    }
+}

@@ -167,6 +167,13 @@ struct DeferredParams {
     uvec4 env_info;    // environment map width, height, unused, unused
 };
 
+// Push constants of tonemap.comp.
+struct TonemapParams {
+    uvec2 size;
+    float exposure;  // linear multiplier (2^stops)
+    uint curve;      // 0 clamp, 1 ACES (Hill's fit), 2 Khronos PBR Neutral
+};
+
 // Material index in the G-buffer where no surface was hit.
 #define GBUFFER_NO_SURFACE 0xffffffffu
 

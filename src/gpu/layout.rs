@@ -295,6 +295,19 @@ pub struct DeferredParams {
 }
 const _: () = assert!(size_of::<DeferredParams>() == 128);
 
+/// Push constants of `tonemap.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TonemapParams {
+    /// Width, height.
+    pub size: [u32; 2],
+    /// Linear multiplier (2^stops).
+    pub exposure: f32,
+    /// [`crate::tonemap::ToneCurve::code`].
+    pub curve: u32,
+}
+const _: () = assert!(size_of::<TonemapParams>() == 16);
+
 /// The G-buffer's material index where no surface was hit (`GBUFFER_NO_SURFACE`).
 pub const GBUFFER_NO_SURFACE: u32 = u32::MAX;
 
@@ -382,6 +395,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         }),
         layout_of!(PathStats { nonfinite_samples, nonfinite_sources, pad1, pad2 }),
         layout_of!(GBufferParams { cam_origin, cam_forward, cam_right, cam_up, size }),
+        layout_of!(TonemapParams { size, exposure, curve }),
         layout_of!(DeferredParams {
             cam_origin,
             cam_forward,

@@ -3,3 +3,4 @@
 pub mod deferred;
 pub mod gbuffer;
 pub mod pathtrace;
+pub mod tonemap;

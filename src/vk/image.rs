@@ -140,6 +140,67 @@ impl Image {
         readback.read_mapped()
     }
 
+    /// Fills the image (GENERAL layout afterwards) with texels of `T`, tightly packed, row-major,
+    /// through a staging buffer. Waits for the GPU.
+    pub fn write<T: bytemuck::Pod>(&self, ctx: &Context, texels: &[T]) -> Result<()> {
+        let texel = texel_size(self.format).ok_or_else(|| {
+            Error::Invalid(format!("image '{}': upload of {:?} unsupported", self.name, self.format))
+        })?;
+        let size = texel * self.extent.width as u64 * self.extent.height as u64;
+        if std::mem::size_of_val(texels) as u64 != size {
+            return Err(Error::Invalid(format!(
+                "image '{}': {} bytes given for {size}",
+                self.name,
+                std::mem::size_of_val(texels)
+            )));
+        }
+        let staging = Buffer::upload(
+            ctx,
+            &format!("{} (upload)", self.name),
+            texels,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+        )?;
+        ctx.submit(|cmd| {
+            barrier::image(
+                ctx,
+                cmd,
+                self.raw,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                access::NONE,
+                access::TRANSFER_WRITE,
+            );
+            // SAFETY: the staging buffer holds the whole image (checked above).
+            unsafe {
+                ctx.device().cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    self.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[self.copy_region()],
+                )
+            };
+            barrier::image(
+                ctx,
+                cmd,
+                self.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::ImageLayout::GENERAL,
+                access::TRANSFER_WRITE,
+                access::COMPUTE_RW,
+            );
+            Ok(())
+        })
+    }
+
+    fn copy_region(&self) -> vk::BufferImageCopy {
+        vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width: self.extent.width, height: self.extent.height, depth: 1 })
+    }
+
     /// Records a copy of the image (GENERAL layout, written by kernels) into `buffer`, tightly
     /// packed, through TRANSFER_SRC_OPTIMAL and back to GENERAL.
     pub fn record_copy_to(&self, ctx: &Context, cmd: vk::CommandBuffer, buffer: vk::Buffer) {
@@ -152,11 +213,7 @@ impl Image {
             access::COMPUTE_RW,
             access::TRANSFER_READ,
         );
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
-            )
-            .image_extent(vk::Extent3D { width: self.extent.width, height: self.extent.height, depth: 1 })];
+        let region = [self.copy_region()];
         // SAFETY: the buffer holds the whole image (checked by the caller's size).
         unsafe {
             ctx.device().cmd_copy_image_to_buffer(

@@ -42,6 +42,9 @@ enum Command {
         /// Where to write rays.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
+        /// Primary rays in row order instead of 8×8 tiles (what ray order costs).
+        #[arg(long)]
+        row_order: bool,
     },
     /// GPU time per pass (G-buffer, deferred lighting, one path-traced sample per pixel) on one
     /// scene, median over repeats after a warm-up.
@@ -130,18 +133,18 @@ fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Rays { quick, size, repeats, sweep, gltf, out } => {
+        Command::Rays { quick, size, repeats, sweep, gltf, out, row_order } => {
             let ctx = Context::new(&ContextDesc::default())?;
             let device = ctx.info().name.clone();
             let (scenes, settings) = if quick {
                 (
                     vec![terrain_scene("terrain", 177)],
-                    RaySettings { size: (128, 128), repeats: 3, builds: 1, sweep: true },
+                    RaySettings { size: (128, 128), repeats: 3, builds: 1, sweep: true, row_order },
                 )
             } else {
                 (
                     vec![terrain_scene("terrain", 351), terrain_scene("terrain", 704)],
-                    RaySettings { size, repeats, builds: 5, sweep },
+                    RaySettings { size, repeats, builds: 5, sweep, row_order },
                 )
             };
             let mut scenes = scenes;

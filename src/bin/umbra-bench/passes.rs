@@ -1,5 +1,6 @@
 //! GPU time per pass of each method on one scene: the hybrid passes (G-buffer, deferred
-//! lighting) and one path-traced sample per pixel, each a median over repeats after a warm-up,
+//! lighting) and one path-traced sample per pixel, each a median over repeats after a warm-up
+//! ([`super::rays::warm_up`]),
 //! from GPU timestamps.
 
 use anyhow::Result;
@@ -61,6 +62,13 @@ pub fn run(
     ctx.submit(|cmd| {
         output.init_general(ctx, cmd);
         Ok(())
+    })?;
+    super::rays::warm_up(|| {
+        ctx.submit(|cmd| {
+            gbuffer_pass.record(ctx, cmd, scene, &gbuffer, &gbuffer_params)?;
+            deferred.record(ctx, cmd, scene, &gbuffer, &output, &deferred_params)?;
+            pathtrace.record(ctx, cmd, scene, &target, &path_params)
+        })
     })?;
     let mut timer = GpuTimer::new(ctx, 3)?;
     let mut samples: Vec<Vec<f64>> = vec![Vec::new(); 3];

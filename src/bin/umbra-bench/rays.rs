@@ -41,6 +41,8 @@ pub struct RaySettings {
     pub repeats: usize,
     pub builds: usize,
     pub sweep: bool,
+    /// Primary rays in row order instead of 8×8 tiles (to measure what ray order costs).
+    pub row_order: bool,
 }
 
 pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<RayReport> {
@@ -65,7 +67,7 @@ pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<Ra
     let reference = Reference::new(&scene.triangles);
     let validated =
         |query, rays: &[Ray]| trace_validated(ctx, &tracer, &device_bvh, &bvh, &reference, query, rays);
-    let primary = primary_rays(scene, settings.size);
+    let primary = primary_rays(scene, settings.size, settings.row_order);
     let (primary_batch, primary_hits) = validated(Query::Closest, &primary)?;
     let (shadow, diffuse) = secondary_rays(scene, &bvh, &primary, &primary_hits);
     let (shadow_batch, _) = validated(Query::Any, &shadow)?;
@@ -91,15 +93,26 @@ pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<Ra
     })
 }
 
-fn primary_rays(scene: &RayScene, (w, h): (u32, u32)) -> Vec<Ray> {
+fn primary_rays(scene: &RayScene, (w, h): (u32, u32), row_order: bool) -> Vec<Ray> {
     let forward = (scene.target - scene.eye).normalize();
     let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
     let up = right.cross(forward);
     let tan = (scene.yfov * 0.5).tan();
     let aspect = w as f32 / h as f32;
-    (0..w * h)
+    // In 8×8 tiles, row-major inside each: with trace.comp's 64-wide workgroups each workgroup
+    // is one tile (a 32-lane warp an 8×4 block), as in the renderer's 8×8 kernels. Row order
+    // (a warp on a 32×1 strip) measured 3.9× slower on Sponza on an H100 (BENCHMARKS.md).
+    let tiles = (w.div_ceil(8), h.div_ceil(8));
+    (0..tiles.0 * tiles.1 * 64)
         .map(|i| {
-            let (x, y) = (i % w, i / w);
+            if row_order {
+                return (i % w, i / w);
+            }
+            let (tile, k) = (i / 64, i % 64);
+            ((tile % tiles.0) * 8 + k % 8, (tile / tiles.0) * 8 + k / 8)
+        })
+        .filter(|&(x, y)| x < w && y < h)
+        .map(|(x, y)| {
             let sx = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0) * tan * aspect;
             let sy = (1.0 - 2.0 * (y as f32 + 0.5) / h as f32) * tan;
             Ray {
@@ -184,7 +197,8 @@ fn trace_validated(
     Ok((batch, hits))
 }
 
-/// Median GPU time of one trace dispatch over `repeats` timed submissions after one warm-up.
+/// Median GPU time of one trace dispatch over `repeats` timed submissions after a warm-up
+/// ([`warm_up`]).
 fn time_trace(
     ctx: &Context,
     tracer: &RayTracer,
@@ -194,6 +208,7 @@ fn time_trace(
     repeats: usize,
 ) -> Result<f64> {
     let mut timer = GpuTimer::new(ctx, 1)?;
+    warm_up(|| ctx.submit(|cmd| tracer.record(cmd, query, bvh, batch)))?;
     let mut times = Vec::new();
     for i in 0..=repeats {
         let start = Instant::now();
@@ -210,6 +225,17 @@ fn time_trace(
         }
     }
     Ok(median(&mut times))
+}
+
+/// Repeats `submit` (one submission, waited for) for at least half a second of wall time, so a
+/// GPU that idles at low clocks has ramped up before anything is timed: on an H100 fresh from
+/// idle, sub-millisecond dispatches timed 1.5–3.6× slower than the same dispatches warm.
+pub fn warm_up(mut submit: impl FnMut() -> umbra::Result<()>) -> Result<()> {
+    let start = Instant::now();
+    while start.elapsed().as_secs_f64() < 0.5 {
+        submit()?;
+    }
+    Ok(())
 }
 
 pub fn median(values: &mut [f64]) -> f64 {

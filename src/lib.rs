@@ -6,6 +6,7 @@
 
 pub mod bvh;
 pub mod cli;
+pub mod embed;
 pub mod environment;
 pub mod error;
 pub mod geometry;

@@ -258,13 +258,13 @@ pub fn hybrid(
         display.init_general(ctx, cmd);
         timer.reset(cmd);
         timer.begin(cmd, "gbuffer")?;
-        gbuffer_pass.record(ctx, cmd, scene, &gbuffer, &gbuffer_params)?;
+        gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
         timer.end(cmd)?;
         timer.begin(cmd, "lighting")?;
-        deferred.record(ctx, cmd, scene, &gbuffer, &output, &deferred_params)?;
+        deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &deferred_params)?;
         timer.end(cmd)?;
         timer.begin(cmd, "tonemap")?;
-        tonemap.record(ctx, cmd, &output, &display, settings.exposure, settings.curve)?;
+        tonemap.record(ctx, cmd, output.view, display.view, size, settings.exposure, settings.curve)?;
         timer.end(cmd)
     })?;
     let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();

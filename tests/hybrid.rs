@@ -43,7 +43,7 @@ fn gbuffer_matches_cpu_traversal() {
         let pass = GBufferPass::new(&gpu, gpu_scene.texture_count > 0).unwrap();
         let target = GBuffer::new(&gpu, size).unwrap();
         let params = GBufferPass::params(&camera, size);
-        gpu.submit(|cmd| pass.record(&gpu, cmd, &gpu_scene, &target, &params)).unwrap();
+        gpu.submit(|cmd| pass.record(&gpu, cmd, &gpu_scene, &target.views(), &params)).unwrap();
         let data = target.read(&gpu).unwrap();
 
         let cam = camera_params(&camera, size);
@@ -225,7 +225,7 @@ fn tonemap_kernel_matches_its_cpu_twin() {
     for curve in [ToneCurve::Clamp, ToneCurve::Aces, ToneCurve::KhronosPbrNeutral] {
         gpu.submit(|cmd| {
             dst.init_general(&gpu, cmd);
-            pass.record(&gpu, cmd, &src, &dst, 0.5, curve)
+            pass.record(&gpu, cmd, src.view, dst.view, (w, h), 0.5, curve)
         })
         .unwrap();
         let got: Vec<[u8; 4]> = dst.read(&gpu).unwrap();

@@ -5,7 +5,7 @@ use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle,
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::vk::{raw, Buffer, Context};
 use glam::Vec3;
@@ -44,6 +44,8 @@ pub struct GpuScene {
     pub env_size: Option<(u32, u32)>,
     /// Statistics of the BVH built for the scene.
     pub bvh_stats: BvhStats,
+    /// `prim_order[i]`: the scene triangle at BVH position i (kept for [`GpuScene::update`]).
+    prim_order: Vec<u32>,
 }
 
 /// The host-side arrays [`GpuScene`] uploads (also what tests inspect).
@@ -69,17 +71,40 @@ pub struct SceneArrays {
 impl SceneArrays {
     /// Builds the BVH and lays the scene out for the GPU.
     pub fn new(scene: &Scene) -> Result<Self> {
-        let bvh = Bvh::build(&scene.triangle_soup())?;
-        let mut bvh_index = vec![0u32; bvh.prim_order.len()];
-        for (i, &input) in bvh.prim_order.iter().enumerate() {
+        Ok(Self::with_bvh(scene, Bvh::build(&scene.triangle_soup())?))
+    }
+
+    /// Lays the scene out for the GPU around a BVH already built for its triangles.
+    pub fn with_bvh(scene: &Scene, bvh: Bvh) -> Self {
+        let shading = ShadingArrays::new(scene, &bvh.prim_order);
+        let ShadingArrays { triangles, vertices, materials, lights, punctual, textures, texels } = shading;
+        Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels }
+    }
+}
+
+/// Everything of a scene's GPU layout but its BVH: what changes when materials or lights do.
+struct ShadingArrays {
+    triangles: Vec<GpuTriangle>,
+    vertices: Vec<GpuVertex>,
+    materials: Vec<GpuMaterial>,
+    lights: Vec<GpuLightTri>,
+    punctual: Vec<GpuLight>,
+    textures: Vec<GpuTexture>,
+    texels: Vec<u32>,
+}
+
+impl ShadingArrays {
+    /// `prim_order[i]`: the scene triangle at BVH position i.
+    fn new(scene: &Scene, prim_order: &[u32]) -> Self {
+        let mut bvh_index = vec![0u32; prim_order.len()];
+        for (i, &input) in prim_order.iter().enumerate() {
             bvh_index[input as usize] = i as u32;
         }
         let area = |t: [u32; 3]| {
             let p = t.map(|i| Vec3::from(scene.positions[i as usize]));
             0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
         };
-        let mut triangles: Vec<GpuTriangle> = bvh
-            .prim_order
+        let mut triangles: Vec<GpuTriangle> = prim_order
             .iter()
             .map(|&input| {
                 let t = scene.triangles[input as usize];
@@ -152,7 +177,7 @@ impl SceneArrays {
             .collect();
         let punctual = scene.lights.iter().map(gpu_light).collect();
         let GpuTextures { textures, texels, .. } = gpu_textures;
-        Ok(Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels })
+        Self { triangles, vertices, materials, lights, punctual, textures, texels }
     }
 }
 
@@ -197,7 +222,36 @@ impl GpuScene {
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
             env_size: None,
             bvh_stats: arrays.bvh.stats.clone(),
+            prim_order: arrays.bvh.prim_order.clone(),
         })
+    }
+
+    /// Re-uploads what shading reads (materials, textures, vertex attributes, the emissive and
+    /// punctual lights) from `scene`, keeping the BVH: for materials or lights changed after
+    /// loading. The geometry must be the same (same triangles and positions). Replaces buffers, so
+    /// no command buffer using this scene may be pending (wait for the host's frame fence first).
+    pub fn update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        if scene.triangles.len() != self.prim_order.len() {
+            return Err(Error::Invalid(format!(
+                "scene '{}' has {} triangles but was uploaded with {}: geometry changes need a new upload",
+                scene.name,
+                scene.triangles.len(),
+                self.prim_order.len()
+            )));
+        }
+        let arrays = ShadingArrays::new(scene, &self.prim_order);
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        self.triangles = Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?;
+        self.vertices = Buffer::upload(ctx, "scene vertices", &arrays.vertices, usage)?;
+        self.materials = Buffer::upload(ctx, "scene materials", &arrays.materials, usage)?;
+        self.lights = Buffer::upload(ctx, "scene lights", &arrays.lights, usage)?;
+        self.light_count = arrays.lights.len() as u32;
+        self.punctual = Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?;
+        self.punctual_count = arrays.punctual.len() as u32;
+        self.textures = Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?;
+        self.texels = Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?;
+        self.texture_count = arrays.textures.len() as u32;
+        Ok(())
     }
 }
 

@@ -3,13 +3,13 @@
 //! ray-traced shadows, into a linear `R32G32B32A32_SFLOAT` image (`GENERAL` layout; alpha 1).
 //! Pixels without a surface get the environment seen directly.
 
-use super::gbuffer::GBuffer;
+use super::gbuffer::GBufferViews;
 use crate::error::Result;
 use crate::gpu::layout::DeferredParams;
 use crate::gpu::scene::GpuScene;
 use crate::render::camera_params;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, Image, PipelineDesc};
+use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, PipelineDesc};
 
 /// What the lighting pass computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,14 +85,16 @@ impl DeferredPass {
         }
     }
 
-    /// Records the pass (G-buffer in, `output` written) and a barrier after it. Never submits.
+    /// Records the pass (G-buffer in, `output` written: an `R32G32B32A32_SFLOAT` storage image in
+    /// `GENERAL` layout of the G-buffer's size) and a compute-to-compute barrier after it. Never
+    /// submits.
     pub fn record(
         &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
         scene: &GpuScene,
-        gbuffer: &GBuffer,
-        output: &Image,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
         params: &DeferredParams,
     ) -> Result<()> {
         let p = &self.pipeline;
@@ -111,8 +113,8 @@ impl DeferredPass {
             Descriptor::Buffer(&scene.env_marginal),
             Descriptor::Buffer(&scene.env_conditional),
         ];
-        resources.extend(gbuffer.images().map(Descriptor::StorageImage));
-        resources.push(Descriptor::StorageImage(output));
+        resources.extend(gbuffer.in_order().map(Descriptor::StorageView));
+        resources.push(Descriptor::StorageView(output));
         p.push_descriptors(cmd, &resources)?;
         p.push_constants(cmd, params)?;
         p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;

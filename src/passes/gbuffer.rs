@@ -62,6 +62,18 @@ impl GBuffer {
         [&self.depth, &self.normal, &self.base, &self.emission, &self.material]
     }
 
+    /// Views of the images, for the passes that read a G-buffer.
+    pub fn views(&self) -> GBufferViews {
+        GBufferViews {
+            size: self.size,
+            depth: self.depth.view,
+            normal: self.normal.view,
+            base: self.base.view,
+            emission: self.emission.view,
+            material: self.material.view,
+        }
+    }
+
     /// Reads every image back (waits for the GPU).
     pub fn read(&self, ctx: &Context) -> Result<GBufferData> {
         let half = |image: &Image| -> Result<Vec<[f32; 4]>> {
@@ -76,6 +88,33 @@ impl GBuffer {
             emission: half(&self.emission)?,
             material: self.material.read(ctx)?,
         })
+    }
+}
+
+/// A G-buffer as image views: umbra's own ([`GBuffer::views`]) or a host engine's images in the
+/// formats and layout of the module documentation (`GENERAL`, written before the reading pass
+/// with a barrier that makes compute-shader writes visible to compute-shader reads). umbra never
+/// destroys the images behind them.
+#[derive(Debug, Clone, Copy)]
+pub struct GBufferViews {
+    /// Width and height of every image.
+    pub size: (u32, u32),
+    /// `R32_SFLOAT` view depth.
+    pub depth: raw::ImageView,
+    /// `R16G16B16A16_SFLOAT` shading normal and roughness.
+    pub normal: raw::ImageView,
+    /// `R16G16B16A16_SFLOAT` base colour and metallic.
+    pub base: raw::ImageView,
+    /// `R16G16B16A16_SFLOAT` emission.
+    pub emission: raw::ImageView,
+    /// `R32G32_UINT` material index and geometric normal.
+    pub material: raw::ImageView,
+}
+
+impl GBufferViews {
+    /// The views in binding order.
+    pub fn in_order(&self) -> [raw::ImageView; 5] {
+        [self.depth, self.normal, self.base, self.emission, self.material]
     }
 }
 
@@ -127,13 +166,14 @@ impl GBufferPass {
         GBufferParams { cam_origin, cam_forward, cam_right, cam_up, size: [size.0, size.1, 0, 0] }
     }
 
-    /// Records the pass and a barrier after it. Never submits.
+    /// Records the pass into `target` (umbra's [`GBuffer::views`] or a host's images in the same
+    /// formats, `GENERAL` layout) and a compute-to-compute barrier after it. Never submits.
     pub fn record(
         &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
         scene: &GpuScene,
-        target: &GBuffer,
+        target: &GBufferViews,
         params: &GBufferParams,
     ) -> Result<()> {
         let p = &self.pipeline;
@@ -149,7 +189,7 @@ impl GBufferPass {
             Descriptor::Buffer(&scene.lights),
             Descriptor::Buffer(&scene.punctual),
         ];
-        resources.extend(target.images().map(Descriptor::StorageImage));
+        resources.extend(target.in_order().map(Descriptor::StorageView));
         p.push_descriptors(cmd, &resources)?;
         p.push_constants(cmd, params)?;
         p.dispatch(cmd, [target.size.0, target.size.1, 1], Self::LOCAL)?;

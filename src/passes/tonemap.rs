@@ -5,7 +5,7 @@
 use crate::error::Result;
 use crate::gpu::layout::TonemapParams;
 pub use crate::tonemap::ToneCurve;
-use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, Image, PipelineDesc};
+use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, PipelineDesc};
 
 /// `tonemap.comp`.
 pub struct TonemapPass {
@@ -30,20 +30,23 @@ impl TonemapPass {
         Ok(Self { pipeline })
     }
 
-    /// Records `dst = sRGB(curve(src × 2^stops))` and a barrier after it. Never submits.
+    /// Records `dst = sRGB(curve(src × 2^stops))` over `size` pixels and a barrier after it:
+    /// `src` an `R32G32B32A32_SFLOAT` and `dst` an `R8G8B8A8_UNORM` storage image, both in
+    /// `GENERAL` layout. Never submits.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
-        src: &Image,
-        dst: &Image,
+        src: raw::ImageView,
+        dst: raw::ImageView,
+        (w, h): (u32, u32),
         exposure_stops: f32,
         curve: ToneCurve,
     ) -> Result<()> {
-        let (w, h) = (src.extent.width, src.extent.height);
         let p = &self.pipeline;
         p.bind(cmd);
-        p.push_descriptors(cmd, &[Descriptor::StorageImage(src), Descriptor::StorageImage(dst)])?;
+        p.push_descriptors(cmd, &[Descriptor::StorageView(src), Descriptor::StorageView(dst)])?;
         p.push_constants(
             cmd,
             &TonemapParams { size: [w, h], exposure: exposure_stops.exp2(), curve: curve.code() },

@@ -12,13 +12,15 @@ pub enum Descriptor<'a> {
     Buffer(&'a Buffer),
     /// A storage image in GENERAL layout.
     StorageImage(&'a Image),
+    /// A view of a storage image in GENERAL layout that umbra does not own (a host engine's).
+    StorageView(vk::ImageView),
 }
 
 impl Descriptor<'_> {
     fn ty(&self) -> vk::DescriptorType {
         match self {
             Descriptor::Buffer(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Descriptor::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Descriptor::StorageImage(_) | Descriptor::StorageView(_) => vk::DescriptorType::STORAGE_IMAGE,
         }
     }
 }
@@ -149,6 +151,9 @@ impl ComputePipeline {
             .iter()
             .map(|r| match r {
                 Descriptor::StorageImage(i) => [i.descriptor()],
+                Descriptor::StorageView(view) => [vk::DescriptorImageInfo::default()
+                    .image_view(*view)
+                    .image_layout(vk::ImageLayout::GENERAL)],
                 _ => [vk::DescriptorImageInfo::default()],
             })
             .collect();
@@ -159,7 +164,7 @@ impl ComputePipeline {
                 let w = vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(r.ty());
                 match r {
                     Descriptor::Buffer(_) => w.buffer_info(&buffers[i]),
-                    Descriptor::StorageImage(_) => w.image_info(&images[i]),
+                    Descriptor::StorageImage(_) | Descriptor::StorageView(_) => w.image_info(&images[i]),
                 }
             })
             .collect();

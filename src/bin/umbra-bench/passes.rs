@@ -65,8 +65,8 @@ pub fn run(
     })?;
     super::rays::warm_up(|| {
         ctx.submit(|cmd| {
-            gbuffer_pass.record(ctx, cmd, scene, &gbuffer, &gbuffer_params)?;
-            deferred.record(ctx, cmd, scene, &gbuffer, &output, &deferred_params)?;
+            gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
+            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &deferred_params)?;
             pathtrace.record(ctx, cmd, scene, &target, &path_params)
         })
     })?;
@@ -78,10 +78,10 @@ pub fn run(
         ctx.submit(|cmd| {
             timer.reset(cmd);
             timer.begin(cmd, "gbuffer")?;
-            gbuffer_pass.record(ctx, cmd, scene, &gbuffer, &gbuffer_params)?;
+            gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
             timer.end(cmd)?;
             timer.begin(cmd, "lighting")?;
-            deferred.record(ctx, cmd, scene, &gbuffer, &output, &deferred_params)?;
+            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &deferred_params)?;
             timer.end(cmd)?;
             timer.begin(cmd, "pathtrace 1 spp")?;
             pathtrace.record(ctx, cmd, scene, &target, &path_params)?;

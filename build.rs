@@ -39,14 +39,14 @@ impl IncludeHandler for Includes {
 
 /// glslang names the top-level source `0`; name the kernel's file instead so every message
 /// reads `spirv/x.comp:LINE: ...` or `spirv/include/y.glsl:LINE: ...`.
-fn format_log(kernel: &str, log: &str) -> String {
+fn format_log(label: &str, log: &str) -> String {
     log.lines()
         .filter(|l| !l.trim().is_empty() && !l.contains("compilation errors.  No code generated"))
         .map(|line| {
             let body =
                 line.strip_prefix("ERROR: ").or_else(|| line.strip_prefix("WARNING: ")).unwrap_or(line);
             let body = match body.strip_prefix("0:") {
-                Some(rest) => format!("spirv/{kernel}:{rest}"),
+                Some(rest) => format!("{label}:{rest}"),
                 None if body.starts_with("include/") => format!("spirv/{body}"),
                 None => body.to_string(),
             };
@@ -56,14 +56,17 @@ fn format_log(kernel: &str, log: &str) -> String {
         .join("\n")
 }
 
-fn compile(compiler: &Compiler, dir: &Path, file: &str) -> Result<Vec<u32>, String> {
-    let text = std::fs::read_to_string(dir.join(file)).map_err(|e| format!("spirv/{file}: {e}"))?;
+/// Compiles `dir/file`; includes resolve against the includer's folder, then `include_dir`.
+fn compile(compiler: &Compiler, dir: &Path, include_dir: &Path, file: &str) -> Result<Vec<u32>, String> {
+    let folder = dir.file_name().map_or("spirv".into(), |f| f.to_string_lossy().into_owned());
+    let label = format!("{folder}/{file}");
+    let text = std::fs::read_to_string(dir.join(file)).map_err(|e| format!("{label}: {e}"))?;
     let source = ShaderSource::from(text);
     let options = CompilerOptions {
         target: Target::Vulkan { version: VulkanVersion::Vulkan1_3, spirv_version: SpirvVersion::SPIRV1_6 },
         ..CompilerOptions::default()
     };
-    let mut includes = Includes { include_dir: dir.join("include"), kernel_dir: dir.to_path_buf() };
+    let mut includes = Includes { include_dir: include_dir.to_path_buf(), kernel_dir: dir.to_path_buf() };
     let input = ShaderInput::new(
         &source,
         ShaderStage::Compute,
@@ -71,14 +74,14 @@ fn compile(compiler: &Compiler, dir: &Path, file: &str) -> Result<Vec<u32>, Stri
         None::<&[(&str, Option<&str>)]>,
         Some(&mut includes),
     )
-    .map_err(|e| format!("spirv/{file}: {e}"))?;
+    .map_err(|e| format!("{label}: {e}"))?;
     let describe = |e: glslang::error::GlslangError| -> String {
         use glslang::error::GlslangError as G;
         match e {
             G::PreprocessError(log) | G::ParseError(log) | G::LinkError(log) | G::MapIoError(log) => {
-                format_log(file, &log.log)
+                format_log(&label, &log.log)
             }
-            other => format!("spirv/{file}: {other}"),
+            other => format!("{label}: {other}"),
         }
     };
     let shader = compiler.create_shader(input).map_err(describe)?;
@@ -105,8 +108,10 @@ fn main() {
     let compiler = Compiler::acquire().expect("glslang initialises");
     // Kernels are independent: compile them on all cores.
     let results: Vec<(String, Result<Vec<u32>, String>)> = std::thread::scope(|s| {
-        let handles: Vec<_> =
-            kernels.iter().map(|k| (k.clone(), s.spawn(|| compile(compiler, &dir, k)))).collect();
+        let handles: Vec<_> = kernels
+            .iter()
+            .map(|k| (k.clone(), s.spawn(|| compile(compiler, &dir, &dir.join("include"), k))))
+            .collect();
         handles
             .into_iter()
             .map(|(k, h)| (k, h.join().unwrap_or_else(|_| Err("glslang panicked".into()))))
@@ -145,6 +150,26 @@ fn main() {
     }
     table.push_str("];\n");
     std::fs::write(out.join("kernels.rs"), table).expect("write kernels.rs");
+
+    // The example host engine's own kernels (examples/*.comp): compiled here too, since the
+    // example is plain `ash` with no compiler of its own; written to OUT_DIR, not embedded in umbra.
+    let examples = root.join("examples");
+    println!("cargo:rerun-if-changed=examples");
+    for entry in std::fs::read_dir(&examples).into_iter().flatten().flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        if let Some(name) = file.strip_suffix(".comp") {
+            match compile(compiler, &examples, &dir.join("include"), &file) {
+                Ok(words) => std::fs::write(out.join(format!("{name}.spv")), bytemuck_bytes(&words))
+                    .expect("write SPIR-V to OUT_DIR"),
+                Err(e) => {
+                    for line in e.lines() {
+                        println!("cargo:warning={line}");
+                    }
+                    std::process::exit(1);
+                }
+            }
+        }
+    }
 }
 
 fn bytemuck_bytes(words: &[u32]) -> Vec<u8> {

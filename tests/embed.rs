@@ -1,0 +1,106 @@
+//! The host-engine example (`examples/embed.rs`) as a test: a pure-`ash` host with its own
+//! device, images, G-buffer kernel, command buffer and fence asks umbra to record lighting and
+//! tone mapping; validation on (the host's own messenger counts every message).
+
+#[path = "../examples/embed.rs"]
+mod embed;
+
+/// Mean over pixels of the per-pixel largest 8-bit channel difference, and the share of pixels
+/// that differ by more than `tolerance` steps.
+fn compare(a: &[u8], b: &[u8], tolerance: u8) -> (f64, f64) {
+    let mut sum = 0.0;
+    let mut over = 0;
+    let n = a.len() / 4;
+    for (p, q) in a.chunks(4).zip(b.chunks(4)) {
+        let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0);
+        sum += d as f64;
+        over += (d > tolerance) as usize;
+    }
+    (sum / n as f64, over as f64 / n as f64)
+}
+
+/// The host's G-buffer (its own kernel, its own images) lit by umbra gives the same frame as
+/// umbra's own ray-cast G-buffer: the two differ only where the two ray casts pick different
+/// triangles at shared edges and in the light samples' noise, which uses the same seeds.
+#[test]
+fn host_gbuffer_lit_by_umbra_matches_umbra_gbuffer() {
+    let frames = embed::run((96, 96), true).expect("the example host runs");
+    assert_eq!(frames.validation_messages, 0, "validation messages (printed above)");
+    let (mean, share) = compare(&frames.host_gbuffer, &frames.umbra_gbuffer, 8);
+    eprintln!(
+        "host vs umbra G-buffer: mean max-channel difference {mean:.3} steps, {:.2} % of pixels over 8 steps",
+        share * 100.0
+    );
+    assert!(share < 0.01, "{:.2} % of pixels differ by more than 8 steps", share * 100.0);
+    assert!(mean < 0.5, "mean difference {mean:.3} steps");
+
+    // The frame is the lit Cornell box, not black or flat: the light (top centre) is the
+    // brightest region, and the red and green walls show their colours on the left and right.
+    let px = |x: u32, y: u32| {
+        let i = ((y * frames.size.0 + x) * 4) as usize;
+        [frames.host_gbuffer[i], frames.host_gbuffer[i + 1], frames.host_gbuffer[i + 2]]
+    };
+    let (w, h) = frames.size;
+    let dominant = |c: [u8; 3], k: usize| (0..3).all(|j| j == k || c[k] as f32 > 1.5 * c[j] as f32);
+    let left = px(w / 16 + 2, h / 2);
+    let right = px(w - w / 16 - 3, h / 2);
+    assert!(dominant(left, 0), "left wall should be red: {left:?}");
+    assert!(dominant(right, 1), "right wall should be green: {right:?}");
+    let floor = px(w / 2, h - 4);
+    let light = px(w / 2, h * 15 / 100);
+    let sum = |c: [u8; 3]| c.iter().map(|&v| v as u32).sum::<u32>();
+    assert!(sum(floor) > 90, "the floor is lit: {floor:?}");
+    assert!(sum(light) > 600, "the light is the brightest thing in view: {light:?}");
+}
+
+mod common;
+
+/// A scene update (materials and lights changed, same geometry) through `Renderer::update_scene`
+/// renders exactly what a renderer built from scratch on the changed scene renders, from a moved
+/// camera too, and differs from the frame before the update.
+#[test]
+fn update_scene_equals_a_fresh_renderer() {
+    use umbra::embed::Renderer;
+    use umbra::passes::deferred::LightingSettings;
+    use umbra::passes::gbuffer::GBuffer;
+    use umbra::scene::Scene;
+    use umbra::vk::{raw, Image};
+
+    let gpu = common::Gpu::new();
+    let size = (48, 48);
+    let render = |renderer: &Renderer, camera: &umbra::scene::Camera| -> Vec<[f32; 4]> {
+        let gbuffer = GBuffer::new(&gpu, size).unwrap();
+        let hdr = Image::storage_2d(&gpu, "hdr", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+        gpu.submit(|cmd| {
+            hdr.init_general(&gpu, cmd);
+            renderer.record_gbuffer(cmd, camera, &gbuffer.views())?;
+            renderer.record_lighting(cmd, camera, &gbuffer.views(), hdr.view, &LightingSettings::default())
+        })
+        .unwrap();
+        hdr.read(&gpu).unwrap()
+    };
+    let mut scene = Scene::cornell_box();
+    let mut camera = scene.camera(None).unwrap();
+    let mut renderer = Renderer::new(&gpu, &scene).unwrap();
+    let before = render(&renderer, &camera);
+
+    // Recolour every material, double the light, and move the camera.
+    for m in &mut scene.materials {
+        m.base_color_factor = [m.base_color_factor[2], m.base_color_factor[0], m.base_color_factor[1], 1.0];
+        m.emissive = m.emissive.map(|e| 2.0 * e);
+    }
+    scene.update_emissive();
+    camera.position[0] += 0.05;
+    renderer.update_scene(&scene).unwrap();
+    let updated = render(&renderer, &camera);
+    let fresh = render(&Renderer::new(&gpu, &scene).unwrap(), &camera);
+    assert!(updated == fresh, "an updated renderer differs from a fresh one");
+    assert!(updated != before, "the update changed nothing");
+
+    // A different triangle count is refused with a clear error, not a stale BVH.
+    let mut other = scene.clone();
+    other.triangles.pop();
+    other.triangle_material.pop();
+    let err = renderer.update_scene(&other).unwrap_err().to_string();
+    assert!(err.contains("geometry changes need a new upload"), "{err}");
+}

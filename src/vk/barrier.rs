@@ -91,7 +91,7 @@ pub fn color_range() -> vk::ImageSubresourceRange {
         .layer_count(1)
 }
 
-/// Stage/access pairs, for callers of [`image`] and [`memory`].
+/// Stage/access pairs, for callers of [`image()`] and [`memory()`].
 pub mod access {
     use ash::vk;
     /// Nothing before (undefined contents).

@@ -11,6 +11,9 @@
 //! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;   // or the host writes its own
 //! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, &lighting)?;
 //! renderer.record_tonemap(cmd, hdr_view, ldr_view, size, 0.0, ToneCurve::KhronosPbrNeutral)?;
+//! // or progressive path tracing, a few samples per frame, resolved into the host's image:
+//! renderer.record_path_samples(cmd, &camera, &target, &path_settings, first_sample, count)?;
+//! renderer.record_path_resolve(cmd, &target, hdr_view)?;
 //! ```
 //!
 //! Contract:
@@ -32,11 +35,13 @@
 //!   the context's queue and wait; call them while no command buffer using the renderer is
 //!   pending (after the host's frame fence).
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::scene::GpuScene;
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBufferPass, GBufferViews};
+use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
+use crate::render::PathSettings;
 use crate::scene::{Camera, Scene};
 use crate::vk::{raw, Context};
 
@@ -47,6 +52,9 @@ pub struct Renderer {
     gbuffer: GBufferPass,
     deferred: DeferredPass,
     tonemap: TonemapPass,
+    path: PathTracePass,
+    path_options: (Microfacet, Heuristic),
+    resolve: ResolvePass,
 }
 
 impl Renderer {
@@ -57,6 +65,9 @@ impl Renderer {
             gbuffer: GBufferPass::new(ctx, gpu_scene.texture_count > 0)?,
             deferred: DeferredPass::new(ctx, &gpu_scene)?,
             tonemap: TonemapPass::new(ctx)?,
+            path: PathTracePass::for_scene(ctx, &gpu_scene, Microfacet::Ggx, Heuristic::Power)?,
+            path_options: (Microfacet::Ggx, Heuristic::Power),
+            resolve: ResolvePass::new(ctx)?,
             scene: gpu_scene,
             ctx: ctx.clone(),
         })
@@ -73,7 +84,68 @@ impl Renderer {
         self.scene.update(&self.ctx, scene)?;
         self.gbuffer = GBufferPass::new(&self.ctx, self.scene.texture_count > 0)?;
         self.deferred = DeferredPass::new(&self.ctx, &self.scene)?;
+        self.path =
+            PathTracePass::for_scene(&self.ctx, &self.scene, self.path_options.0, self.path_options.1)?;
         Ok(())
+    }
+
+    /// Chooses the path tracer's microfacet model and MIS heuristic (GGX and the power
+    /// heuristic by default); rebuilds its pipeline.
+    pub fn set_path_tracer(&mut self, microfacet: Microfacet, heuristic: Heuristic) -> Result<()> {
+        self.path = PathTracePass::for_scene(&self.ctx, &self.scene, microfacet, heuristic)?;
+        self.path_options = (microfacet, heuristic);
+        Ok(())
+    }
+
+    /// Accumulation buffers for progressive path tracing at `size` (owned by umbra, freed on
+    /// drop).
+    pub fn path_target(&self, size: (u32, u32)) -> Result<PathTarget> {
+        PathTarget::new(&self.ctx, size)
+    }
+
+    /// Records path-traced samples `first .. first + count` into `target` (sample 0 restarts
+    /// the running mean; a moved camera or changed scene restarts at 0). `settings.size` must be
+    /// the target's; its microfacet and heuristic those of [`Self::set_path_tracer`].
+    pub fn record_path_samples(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        target: &PathTarget,
+        settings: &PathSettings,
+        first: u32,
+        count: u32,
+    ) -> Result<()> {
+        if settings.size != target.size {
+            return Err(Error::Invalid(format!(
+                "path settings are for {:?} but the target is {:?}",
+                settings.size, target.size
+            )));
+        }
+        if (settings.microfacet, settings.heuristic) != self.path_options {
+            return Err(Error::Invalid(format!(
+                "the renderer's path tracer is built for {:?}; call set_path_tracer for {:?}",
+                self.path_options,
+                (settings.microfacet, settings.heuristic)
+            )));
+        }
+        let mut params = PathTracePass::params(&self.scene, camera, settings);
+        for sample in first..first + count {
+            params.size_frame[2] = sample;
+            self.path.record(&self.ctx, cmd, &self.scene, target, &params)?;
+        }
+        Ok(())
+    }
+
+    /// Records the copy of `target`'s running mean into `output`: the host's
+    /// `R32G32B32A32_SFLOAT` storage image of the target's size, in `GENERAL` layout (then, like
+    /// every `record_*`, a compute → compute barrier).
+    pub fn record_path_resolve(
+        &self,
+        cmd: raw::CommandBuffer,
+        target: &PathTarget,
+        output: raw::ImageView,
+    ) -> Result<()> {
+        self.resolve.record(&self.ctx, cmd, target, output)
     }
 
     /// Records umbra's ray-cast G-buffer for `camera` into `target`.

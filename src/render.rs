@@ -1,7 +1,7 @@
 //! Whole renders: the passes in order, submitted in batches, read back as linear images.
 
 use crate::error::{Error, Result};
-use crate::gpu::layout::{PathParams, PathStats};
+use crate::gpu::layout::PathStats;
 use crate::gpu::scene::GpuScene;
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
@@ -140,30 +140,9 @@ pub fn path_trace(
     if settings.spp == 0 {
         return Err(Error::Invalid("samples per pixel must be at least 1".into()));
     }
-    let pass = PathTracePass::new(
-        ctx,
-        settings.microfacet,
-        settings.heuristic,
-        scene.light_count > 0,
-        scene.punctual_count > 0,
-        scene.env_size.is_some(),
-        scene.texture_count > 0,
-    )?;
+    let pass = PathTracePass::for_scene(ctx, scene, settings.microfacet, settings.heuristic)?;
     let target = PathTarget::new(ctx, settings.size)?;
-    let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, settings.size);
-    let mut params = PathParams {
-        cam_origin,
-        cam_forward,
-        cam_right,
-        cam_up,
-        env: [settings.env[0], settings.env[1], settings.env[2], 0.0],
-        size_frame: [settings.size.0, settings.size.1, 0, settings.seed],
-        settings: [settings.max_bounces, settings.rr_depth, scene.light_count, scene.punctual_count],
-        env_info: {
-            let (w, h) = scene.env_size.unwrap_or((1, 1));
-            [w, h, settings.env_nee as u32, 0]
-        },
-    };
+    let mut params = PathTracePass::params(scene, camera, settings);
     // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
     let pixels = settings.size.0 as u64 * settings.size.1 as u64;
     let batch = ((1u64 << 22) / pixels.max(1)).clamp(1, 64) as u32;

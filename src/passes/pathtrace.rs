@@ -4,6 +4,8 @@
 use crate::error::Result;
 use crate::gpu::layout::{PathParams, PathStats};
 use crate::gpu::scene::GpuScene;
+use crate::render::{camera_params, PathSettings};
+use crate::scene::Camera;
 use crate::vk::{barrier, raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc};
 
 /// The microfacet distribution of the specular lobes.
@@ -99,6 +101,41 @@ impl PathTracePass {
         )?;
         Ok(Self { pipeline })
     }
+    /// The pipeline for what `scene` has (emissive triangles, punctual lights, an environment
+    /// map, textures).
+    pub fn for_scene(
+        ctx: &Context,
+        scene: &GpuScene,
+        microfacet: Microfacet,
+        heuristic: Heuristic,
+    ) -> Result<Self> {
+        Self::new(
+            ctx,
+            microfacet,
+            heuristic,
+            scene.light_count > 0,
+            scene.punctual_count > 0,
+            scene.env_size.is_some(),
+            scene.texture_count > 0,
+        )
+    }
+
+    /// The push constants for sample 0 of `settings` seen from `camera` (`size_frame[2]` is the
+    /// sample index: set it per dispatch).
+    pub fn params(scene: &GpuScene, camera: &Camera, settings: &PathSettings) -> PathParams {
+        let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, settings.size);
+        let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
+        PathParams {
+            cam_origin,
+            cam_forward,
+            cam_right,
+            cam_up,
+            env: [settings.env[0], settings.env[1], settings.env[2], 0.0],
+            size_frame: [settings.size.0, settings.size.1, 0, settings.seed],
+            settings: [settings.max_bounces, settings.rr_depth, scene.light_count, scene.punctual_count],
+            env_info: [env_w, env_h, settings.env_nee as u32, 0],
+        }
+    }
 
     /// Records one sample per pixel (sample `params.size_frame[2]`), then a barrier so the next
     /// dispatch or a copy sees it. Never submits.
@@ -136,6 +173,45 @@ impl PathTracePass {
         )?;
         p.push_constants(cmd, params)?;
         p.dispatch(cmd, [target.size.0, target.size.1, 1], Self::LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}
+
+/// `resolve.comp`: a [`PathTarget`]'s running mean into an `R32G32B32A32_SFLOAT` storage image.
+pub struct ResolvePass {
+    pipeline: ComputePipeline,
+}
+
+impl ResolvePass {
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let pipeline = ComputePipeline::new(
+            ctx,
+            "resolve",
+            &PipelineDesc {
+                bindings: &[raw::DescriptorType::STORAGE_BUFFER, raw::DescriptorType::STORAGE_IMAGE],
+                push_constant_size: 16,
+                specialization: &[],
+            },
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// Records the copy of `target`'s mean into `output` (a storage image of the target's size
+    /// in `GENERAL` layout) and a compute-to-compute barrier after it. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        target: &PathTarget,
+        output: raw::ImageView,
+    ) -> Result<()> {
+        let p = &self.pipeline;
+        p.bind(cmd);
+        p.push_descriptors(cmd, &[Descriptor::Buffer(&target.accum), Descriptor::StorageView(output)])?;
+        p.push_constants(cmd, &[target.size.0, target.size.1, 0, 0])?;
+        p.dispatch(cmd, [target.size.0, target.size.1, 1], [8, 8, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

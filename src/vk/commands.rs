@@ -20,6 +20,7 @@ impl Context {
         // SAFETY: valid device; the pool, fence and command buffer are destroyed below.
         unsafe {
             let pool = device.create_command_pool(&pool_info, None).call("vkCreateCommandPool")?;
+            let mut still_running = false;
             let result = (|| {
                 let cmd = device
                     .allocate_command_buffers(
@@ -57,12 +58,14 @@ impl Context {
                 });
                 if matches!(waited, Err(Error::Invalid(_))) {
                     // Still running: leak the fence and pool rather than free them under the GPU.
+                    still_running = true;
                     return Err(waited.err().unwrap_or_else(|| Error::Invalid("timeout".into())));
                 }
                 device.destroy_fence(fence, None);
                 waited.map(|()| value)
             })();
-            if !matches!(result, Err(Error::Invalid(_))) {
+            // A recording that failed never reached the queue: its pool goes too.
+            if !still_running {
                 device.destroy_command_pool(pool, None);
             }
             result

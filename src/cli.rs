@@ -14,6 +14,19 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// Parses `R,G,B` (three finite, non-negative numbers).
+pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("'{s}': {e}"))?;
+    match v.as_slice() {
+        [r, g, b] if v.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok([*r, *g, *b]),
+        _ => Err(format!("'{s}' is not three non-negative numbers R,G,B")),
+    }
+}
+
 /// A binary's `main`: logging at `info` (`RUST_LOG` overrides), then `run`; an error is printed
 /// once with its causes and the process exits with status 1 (never a panic).
 pub fn main(run: impl FnOnce() -> anyhow::Result<()>) {

@@ -72,7 +72,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1.0)]
     env_strength: f32,
     /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
-    #[arg(long, value_parser = parse_rgb, default_value = "0,0,0")]
+    #[arg(long, value_parser = umbra::cli::parse_rgb, default_value = "0,0,0")]
     env_color: [f32; 3],
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
     #[arg(long)]
@@ -133,18 +133,6 @@ enum MicrofacetArg {
 enum HeuristicArg {
     Power,
     Balance,
-}
-
-fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|c| c.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("'{s}': {e}"))?;
-    match v.as_slice() {
-        [r, g, b] if v.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok([*r, *g, *b]),
-        _ => Err(format!("'{s}' is not three non-negative numbers R,G,B")),
-    }
 }
 
 fn render(args: RenderArgs) -> Result<()> {

@@ -29,3 +29,53 @@ fn rays_quick_validates_and_writes_json() {
     assert!(binned <= sweep * 1.02, "binned SAH {binned} vs sweep {sweep}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `umbra-bench suite --quick` runs every method, writes JSON, CSV and charts that parse, and
+/// its errors behave: path tracing's relative MSE falls with samples (32 spp has 1/32 of the
+/// variance of 1 spp; the test asks for a quarter) and every error is finite.
+#[test]
+fn suite_quick_writes_json_csv_and_charts() {
+    let dir = std::env::temp_dir().join(format!("umbra-suite-{}", std::process::id()));
+    run_validated(
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["suite", "--quick", "--out"])
+            .arg(&dir),
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("suite.json")).expect("suite.json written"))
+            .expect("suite.json parses");
+    let scenes = json["scenes"].as_array().unwrap();
+    assert!(scenes.len() >= 2, "the Cornell box and the sphere grid");
+    let mut rows = 0;
+    for scene in scenes {
+        let points = scene["points"].as_array().unwrap();
+        rows += points.len();
+        for method in ["pathtrace", "hybrid"] {
+            assert!(points.iter().any(|p| p["method"] == method), "{method} missing in {}", scene["scene"]);
+        }
+        for p in points {
+            for key in ["gpu_ms", "rmse", "rel_mse"] {
+                let v = p[key].as_f64().unwrap_or(f64::NAN);
+                assert!(v.is_finite() && v >= 0.0, "{key} of {p}");
+            }
+        }
+    }
+    let cornell = scenes[0]["points"].as_array().unwrap();
+    let path: Vec<f64> = cornell
+        .iter()
+        .filter(|p| p["method"] == "pathtrace")
+        .map(|p| p["rel_mse"].as_f64().unwrap())
+        .collect();
+    assert!(path[path.len() - 1] < path[0] / 4.0, "path tracing error does not fall with spp: {path:?}");
+
+    let csv = std::fs::read_to_string(dir.join("suite.csv")).expect("suite.csv written");
+    assert_eq!(csv.lines().count(), rows + 1, "one CSV row per point plus the header");
+    for key in ["cornell", "spheres"] {
+        let svg = std::fs::read_to_string(dir.join(format!("suite-{key}.svg"))).expect("SVG chart");
+        assert!(svg.contains("<svg") && svg.contains("pathtrace"), "SVG chart of {key}");
+        let png = image::open(dir.join(format!("suite-{key}.png"))).expect("PNG chart decodes");
+        assert_eq!((png.width(), png.height()), (900, 600));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

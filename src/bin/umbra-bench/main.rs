@@ -1,8 +1,11 @@
-//! `umbra-bench`: umbra's measurements. `rays` is the ray-throughput mode (BVH build statistics
-//! and Mrays/s for primary, shadow and diffuse rays, validated before timing).
+//! `umbra-bench`: umbra's measurements. `suite` charts every method's GPU time against its error
+//! to a converged reference; `rays` is the ray-throughput mode (BVH build statistics and Mrays/s
+//! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass.
 
+mod chart;
 mod passes;
 mod rays;
+mod suite;
 
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
@@ -22,6 +25,38 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Speed against accuracy: every method on each scene, GPU time against error to a converged
+    /// path-traced reference; JSON, CSV and one chart (SVG, PNG) per scene.
+    Suite {
+        /// A small run (Cornell box and sphere grid at 64×64, 256-spp references): a minute or
+        /// two on lavapipe.
+        #[arg(long)]
+        quick: bool,
+        /// Image size.
+        #[arg(long, default_value = "128x128", value_parser = umbra::cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of each reference (cached in the output folder).
+        #[arg(long, default_value_t = 2048)]
+        reference_spp: u32,
+        /// Largest path-traced sample count measured (1, 2, 4, … up to it).
+        #[arg(long, default_value_t = 256)]
+        max_spp: u32,
+        /// Shadow-ray counts of the hybrid sweep.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32")]
+        shadow_rays: Vec<u32>,
+        /// Timed repeats of each hybrid setting (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Constant environment radiance (r,g,b) for scenes without lights of their own.
+        #[arg(long, value_parser = umbra::cli::parse_rgb, default_value = "1,1,1")]
+        env_color: [f32; 3],
+        /// glTF scenes to run as well (their first camera, or one framing them).
+        #[arg(long = "gltf")]
+        gltf: Vec<PathBuf>,
+        /// Where to write suite.json, suite.csv, the charts and the cached references.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+    },
     /// BVH build statistics and ray throughput (Mrays/s) for primary, shadow and diffuse rays.
     Rays {
         /// A small, fast run (one 78k-triangle scene, 128×128 rays): checks the binary works.
@@ -174,7 +209,108 @@ fn run(cli: Cli) -> Result<()> {
         Command::Passes { scene, size, repeats, shadow_rays, out } => {
             run_passes(scene, size, repeats, shadow_rays, out)?
         }
+        Command::Suite {
+            quick,
+            size,
+            reference_spp,
+            max_spp,
+            shadow_rays,
+            repeats,
+            env_color,
+            gltf,
+            out,
+        } => {
+            let settings = if quick {
+                suite::SuiteSettings {
+                    size: (64, 64),
+                    reference_spp: 256,
+                    max_spp: 32,
+                    shadow_rays: vec![1, 4, 16],
+                    repeats: 3,
+                    env: env_color,
+                    out,
+                }
+            } else {
+                suite::SuiteSettings {
+                    size,
+                    reference_spp,
+                    max_spp,
+                    shadow_rays,
+                    repeats,
+                    env: env_color,
+                    out,
+                }
+            };
+            run_suite(&settings, quick, &gltf)?
+        }
     }
+    Ok(())
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{msg:28} {bar:40} {pos}/{len}  ETA {eta}") {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}
+
+fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
+    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
+    let repo_scenes: &[&str] = if quick { &["spheres"] } else { &["spheres", "textured"] };
+    for name in repo_scenes {
+        let path = PathBuf::from("scenes").join(format!("{name}.glb"));
+        match umbra::scene::Scene::load(&path) {
+            Ok(scene) => scenes.push((name.to_string(), scene)),
+            Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
+        }
+    }
+    for path in gltf {
+        let key = path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+        scenes.push((key, umbra::scene::Scene::load(path)?));
+    }
+    let mut results = Vec::new();
+    for (key, scene) in &scenes {
+        let camera = bench_camera(scene);
+        let result =
+            suite::run_scene(&ctx, key, scene, &camera, settings).with_context(|| scene.name.clone())?;
+        println!(
+            "\n{} ({} triangles), reference noise floor {:.2e}:",
+            result.name, result.triangles, result.reference_rel_mse_floor
+        );
+        for p in &result.points {
+            println!(
+                "  {:10} {:16} {:10.3} ms  RMSE {:.4e}  relMSE {:.4e}",
+                p.method, p.setting, p.ms, p.rmse, p.rel_mse
+            );
+        }
+        results.push(result);
+    }
+    let doc = json!({
+        "device": ctx.info().name,
+        "size": [settings.size.0, settings.size.1],
+        "reference_spp": settings.reference_spp,
+        "repeats": settings.repeats,
+        "scenes": results.iter().map(|r| json!({
+            "scene": r.name,
+            "triangles": r.triangles,
+            "reference_rel_mse_floor": r.reference_rel_mse_floor,
+            "points": r.points.iter().map(|p| json!({
+                "method": p.method, "setting": p.setting, "value": p.value, "gpu_ms": p.ms,
+                "rmse": p.rmse, "rel_mse": p.rel_mse,
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    });
+    let path = settings.out.join("suite.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let csv = settings.out.join("suite.csv");
+    std::fs::write(&csv, suite::csv(&results)).with_context(|| format!("writing {}", csv.display()))?;
+    println!("wrote {}, {} and suite-<scene>.svg/.png", path.display(), csv.display());
     Ok(())
 }
 

@@ -8,7 +8,7 @@ use umbra::gpu::scene::GpuScene;
 use umbra::passes::deferred::{DeferredPass, LightingSettings};
 use umbra::passes::gbuffer::{GBuffer, GBufferPass};
 use umbra::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
-use umbra::render::camera_params;
+use umbra::render::PathSettings;
 use umbra::scene::Camera;
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
@@ -35,30 +35,12 @@ pub fn run(
     let output = Image::storage_2d(ctx, "bench colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
     let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
     let deferred = DeferredPass::new(ctx, scene)?;
-    let pathtrace = PathTracePass::new(
-        ctx,
-        Microfacet::Ggx,
-        Heuristic::Power,
-        scene.light_count > 0,
-        scene.punctual_count > 0,
-        scene.env_size.is_some(),
-        scene.texture_count > 0,
-    )?;
+    let pathtrace = PathTracePass::for_scene(ctx, scene, Microfacet::Ggx, Heuristic::Power)?;
     let target = PathTarget::new(ctx, size)?;
     let gbuffer_params = GBufferPass::params(camera, size);
     let deferred_params = DeferredPass::params(scene, camera, size, lighting);
-    let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
-    let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
-    let mut path_params = umbra::gpu::layout::PathParams {
-        cam_origin,
-        cam_forward,
-        cam_right,
-        cam_up,
-        env: [lighting.env[0], lighting.env[1], lighting.env[2], 0.0],
-        size_frame: [size.0, size.1, 0, 0],
-        settings: [8, 3, scene.light_count, scene.punctual_count],
-        env_info: [env_w, env_h, 1, 0],
-    };
+    let path_settings = PathSettings { size, env: lighting.env, ..PathSettings::default() };
+    let mut path_params = PathTracePass::params(scene, camera, &path_settings);
     ctx.submit(|cmd| {
         output.init_general(ctx, cmd);
         Ok(())

@@ -13,6 +13,8 @@ layout(constant_id = 1) const bool HAS_LIGHTS = false;
 layout(constant_id = 2) const bool HAS_PUNCTUAL = false;
 layout(constant_id = 3) const bool HAS_ENV_MAP = false;
 layout(constant_id = 4) const bool BECKMANN = false;
+// The hybrid passes shade reflection only (see src/passes/deferred.rs).
+const bool HAS_TRANSMISSION = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };

@@ -10,6 +10,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(constant_id = 0) const bool HAS_TEXTURES = false;
 const bool BECKMANN = false;
+// The hybrid passes shade reflection only (see src/passes/deferred.rs).
+const bool HAS_TRANSMISSION = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };

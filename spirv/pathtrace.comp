@@ -13,6 +13,7 @@ layout(constant_id = 2) const bool HAS_LIGHTS = true;
 layout(constant_id = 3) const bool HAS_PUNCTUAL = true;
 layout(constant_id = 4) const bool HAS_ENV_MAP = false;
 layout(constant_id = 5) const bool HAS_TEXTURES = false;
+layout(constant_id = 6) const bool HAS_TRANSMISSION = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
@@ -121,7 +122,8 @@ void main() {
         }
 
         // Shading frame: interpolated, normal-mapped normal, on the same side as the viewer.
-        if (dot(ng, wo) < 0.0) {
+        bool front = dot(ng, wo) >= 0.0;
+        if (!front) {
             ng = -ng;
         }
         uint material = triangles[tri].material;
@@ -131,6 +133,11 @@ void main() {
         basis(n, t, b);
         vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
         Surface s = material_surface(material, uv);
+        if (HAS_TRANSMISSION) {
+            // A refracting boundary: glass (ior) behind the front face, air behind the back.
+            float ior = materials[material].params.y;
+            s.eta = front ? ior : 1.0 / ior;
+        }
         if (depth == 0u) {
             albedo = vec4(s.base, 1.0);
             normal_depth = vec4(n, hit.t);
@@ -186,12 +193,16 @@ void main() {
             break;
         }
         vec3 wi = wi_local.x * t + wi_local.y * b + wi_local.z * n;
-        if (dot(wi, ng) <= 0.0) {
-            break;  // the shading normal let the sample through the geometry
+        bool transmitted = wi_local.z < 0.0;
+        float side = dot(wi, ng);
+        if (transmitted ? side >= 0.0 : side <= 0.0) {
+            break;  // the shading normal and the geometry disagree about the side
         }
         nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
         throughput *= weight;
-        prev_pdf = pdf;
+        // Light sampling covers only the reflection side, so an emitter or the environment
+        // reached through a transmission is weighted 1 (prev_pdf 0).
+        prev_pdf = transmitted ? 0.0 : pdf;
         if (depth + 1u >= rr_depth) {
             float q = clamp(max3(throughput), 0.05, 1.0);
             if (u.w >= q) {
@@ -199,7 +210,7 @@ void main() {
             }
             throughput /= q;
         }
-        origin = offset_ray(p, ng);
+        origin = offset_ray(p, transmitted ? -ng : ng);
         dir = wi;
     }
 

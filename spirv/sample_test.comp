@@ -15,9 +15,28 @@ layout(push_constant) uniform Push { SampleTestParams params; };
 #include "random.glsl"
 #include "bsdf.glsl"
 
+// Samplers 2-4: the whole BSDF of a white transmissive dielectric (reflection + transmission,
+// through bsdf_sample / bsdf_pdf): 2 entering glass (eta 1.5), 3 leaving it (eta 1/1.5),
+// 4 thin-walled.
+Surface dielectric(float alpha) {
+    Surface s;
+    s.base = vec3(1.0);
+    s.metallic = 0.0;
+    s.f0 = vec3(0.04);
+    s.f90 = 1.0;
+    s.alpha = alpha;
+    s.transmission = 1.0;
+    s.eta = params.config.w == 3u ? 1.0 / 1.5 : 1.5;
+    s.thin = params.config.w == 4u;
+    return s;
+}
+
 float sampler_pdf(vec3 wo, vec3 wi, float alpha) {
     if (params.config.w == 0u) {
         return pdf_cosine_hemisphere(wi);
+    }
+    if (params.config.w >= 2u) {
+        return bsdf_pdf(dielectric(alpha), wo, wi);
     }
     vec3 h = wo + wi;
     float len = length(h);
@@ -34,7 +53,15 @@ void main() {
     if (params.config.x == 0u) {
         vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.config.z);
         vec3 wi;
-        if (params.config.w == 0u) {
+        if (params.config.w >= 2u) {
+            vec3 weight;
+            float pdf;
+            // A failed sample (outside its lobe's side, or beyond the critical angle) reports pdf 0.
+            if (!bsdf_sample(dielectric(alpha), wo, u.xyz, wi, weight, pdf)) {
+                results[i] = vec4(0.0);
+                return;
+            }
+        } else if (params.config.w == 0u) {
             wi = sample_cosine_hemisphere(u.xy);
         } else {
             wi = reflect(-wo, micro_sample(wo, alpha, u.xy));

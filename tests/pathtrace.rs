@@ -664,3 +664,100 @@ fn normal_maps_tilt_the_shading_normal() {
         assert!((got - expected).abs() < 1e-3 * expected, "tilt {tilt} scale {scale}: {got} vs {expected}");
     }
 }
+
+/// A clear, smooth glass sphere (KHR_materials_transmission; refracting with
+/// KHR_materials_volume, or thin-walled) under a constant environment of 1 is 1 on average: at
+/// every interface reflection and transmission share the energy (F + (1 − F)), radiance scales
+/// by η² inside and back on the way out, and total internal reflection keeps what cannot leave.
+/// z-test of the mean over the sphere's interior pixels against 1 at significance 1e-4, plus a
+/// 1 % bound. (A sphere whose `front` or η were inverted still conserves energy: the lens test
+/// below catches that.)
+#[test]
+fn white_furnace_glass_spheres_are_one() {
+    let gpu = Gpu::new();
+    let sphere = icosphere(4, Vec3::ZERO, 1.0);
+    let cam = camera(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 35.0);
+    for volume in [true, false] {
+        let glass = Material {
+            base_color_factor: [1.0; 4],
+            metallic: 0.0,
+            roughness: 0.0,
+            transmission_factor: 1.0,
+            ior: 1.5,
+            volume,
+            double_sided: true,
+            ..Default::default()
+        };
+        let scene = scene_of(&[(&sphere, glass, true)], cam);
+        let settings =
+            PathSettings { size: (40, 40), spp: 64, env: [1.0; 3], max_bounces: 64, ..Default::default() };
+        let image = render(&gpu, &scene, &settings);
+        let cosines = sphere_cosines(&cam, settings.size);
+        let variance = image.variance_of_mean();
+        let (mut sum, mut var, mut n) = (0.0f64, 0.0f64, 0usize);
+        for (i, p) in image.mean.iter().enumerate() {
+            if cosines[i].is_some_and(|c| c > 0.3) {
+                sum += p[1] as f64;
+                var += variance[i][1] as f64;
+                n += 1;
+            }
+        }
+        let mean = sum / n as f64;
+        // The standard error, floored at 1e-5 for the f32 running mean's own rounding (the thin
+        // sphere transmits almost every sample with weight exactly 1, so its variance is tiny).
+        let z = (mean - 1.0) / (var / (n * n) as f64 + 1e-10).sqrt();
+        eprintln!("glass furnace (volume {volume}): {n} pixels, mean {mean:.4}, z {z:.2}");
+        assert!(n > 400, "only {n} pixels");
+        assert!(z.abs() < 3.89 && (mean - 1.0).abs() < 0.01, "volume {volume}: mean {mean}, z {z}");
+    }
+}
+
+/// Refraction bends light: a solid glass ball (η = 1.5) is a lens that images the environment
+/// upside down (its focus lies 1.5 radii from the centre, so rays through its upper half leave
+/// heading down), while a thin-walled ball lets rays through unbent. Under a sky that is red above
+/// the horizon and blue below, pixels just above the ball's centre are blue through solid glass
+/// and red through a thin wall.
+#[test]
+fn solid_glass_inverts_the_sky_and_thin_glass_does_not() {
+    let gpu = Gpu::new();
+    let sphere = icosphere(5, Vec3::ZERO, 1.0);
+    let cam = camera(Vec3::new(0.0, 0.0, 6.0), Vec3::ZERO, 25.0);
+    // Equirectangular, row 0 at the top: red above the horizon, blue below.
+    let texels = [vec![[1.0, 0.0, 0.0]; 8], vec![[0.0, 0.0, 1.0]; 8]].concat();
+    let map = umbra::environment::EnvironmentMap::from_texels("red over blue", 8, 2, texels).unwrap();
+    let size = (48, 48);
+    let mut colour_above_centre = Vec::new();
+    for volume in [true, false] {
+        let glass = Material {
+            base_color_factor: [1.0; 4],
+            metallic: 0.0,
+            roughness: 0.0,
+            transmission_factor: 1.0,
+            ior: 1.5,
+            volume,
+            double_sided: true,
+            ..Default::default()
+        };
+        let scene = scene_of(&[(&sphere, glass, true)], cam);
+        let mut device_scene = GpuScene::upload(&gpu, &scene).unwrap();
+        device_scene.set_environment(&gpu, &map).unwrap();
+        let settings = PathSettings { size, spp: 32, env: [1.0; 3], max_bounces: 16, ..Default::default() };
+        let image = path_trace(&gpu, &device_scene, &cam, &settings, |_, _| {}).unwrap();
+        assert_eq!(image.nonfinite_samples, 0);
+        // The ball spans about ±13 pixels around the centre: rows 3–8 above it, columns ±3.
+        let (mut red, mut blue) = (0.0, 0.0);
+        for y in size.1 / 2 - 8..size.1 / 2 - 3 {
+            for x in size.0 / 2 - 3..size.0 / 2 + 3 {
+                let p = image.mean[(y * size.0 + x) as usize];
+                red += p[0];
+                blue += p[2];
+            }
+        }
+        eprintln!("volume {volume}: red {red:.2}, blue {blue:.2} above the centre");
+
+        colour_above_centre.push((red, blue));
+    }
+    let (solid, thin) = (colour_above_centre[0], colour_above_centre[1]);
+    assert!(solid.1 > 4.0 * solid.0, "solid glass should show the blue ground above its centre: {solid:?}");
+    assert!(thin.0 > 4.0 * thin.1, "thin glass should show the red sky above its centre: {thin:?}");
+}

@@ -20,7 +20,28 @@ const SAMPLES: u32 = 400_000;
 #[derive(Clone, Copy, Debug)]
 enum Sampler {
     Cosine,
-    Microfacet { beckmann: bool, alpha: f32, theta_degrees: f32 },
+    Microfacet {
+        beckmann: bool,
+        alpha: f32,
+        theta_degrees: f32,
+    },
+    /// The whole BSDF of a white transmissive dielectric (GGX): reflection + transmission.
+    Dielectric {
+        kind: Dielectric,
+        alpha: f32,
+        theta_degrees: f32,
+    },
+}
+
+/// The transmissive dielectrics of `sample_test.comp` (its sampler numbers).
+#[derive(Clone, Copy, Debug)]
+enum Dielectric {
+    /// Refracting into glass, η = 1.5.
+    Entering = 2,
+    /// Refracting out of glass, η = 1/1.5 (total internal reflection beyond 41.8°).
+    Leaving = 3,
+    /// Thin-walled: transmission without bending.
+    Thin = 4,
 }
 
 struct Kernel {
@@ -61,6 +82,10 @@ impl Kernel {
                 let t = theta_degrees.to_radians();
                 let p = if beckmann { &self.beckmann } else { &self.ggx };
                 (p, Vec3::new(t.sin(), 0.0, t.cos()), alpha, 1)
+            }
+            Sampler::Dielectric { kind, alpha, theta_degrees } => {
+                let t = theta_degrees.to_radians();
+                (&self.ggx, Vec3::new(t.sin(), 0.0, t.cos()), alpha, kind as u32)
             }
         };
         // A deliberately wrong pdf evaluates with a scaled alpha (sampling keeps the true one).
@@ -198,9 +223,10 @@ fn chi_square(gpu: &Gpu, kernel: &Kernel, sampler: Sampler, pdf_alpha_scale: f32
     }
     let mass: f64 = expected.iter().sum();
     let n = samples.len() as f64;
-    // Only Beckmann's half-vector sampling can discard; VNDF sampling never may. The discarded
+    // Only Beckmann's half-vector sampling and the dielectric (a reflection leaving its side, a
+    // refraction beyond the critical angle) can discard; VNDF sampling never may. The discarded
     // fraction is the pdf's missing mass (checked loosely: the mass comes from quadrature).
-    if matches!(sampler, Sampler::Microfacet { beckmann: true, .. }) {
+    if matches!(sampler, Sampler::Microfacet { beckmann: true, .. } | Sampler::Dielectric { .. }) {
         let missing = 1.0 - mass;
         assert!(
             (discarded / n - missing).abs() < 0.02,
@@ -272,6 +298,13 @@ fn cases() -> Vec<Sampler> {
             }
         }
     }
+    for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin] {
+        for alpha in [0.1, 0.5] {
+            for theta_degrees in [30.0, 60.0] {
+                cases.push(Sampler::Dielectric { kind, alpha, theta_degrees });
+            }
+        }
+    }
     cases
 }
 
@@ -318,6 +351,7 @@ fn a_wrong_pdf_is_rejected() {
     for case in [
         Sampler::Microfacet { beckmann: false, alpha: 0.5, theta_degrees: 30.0 },
         Sampler::Microfacet { beckmann: true, alpha: 0.2, theta_degrees: 60.0 },
+        Sampler::Dielectric { kind: Dielectric::Entering, alpha: 0.5, theta_degrees: 30.0 },
     ] {
         let (p, chi2, dof, _) = chi_square(&gpu, &kernel, case, 1.1);
         eprintln!("wrong pdf {case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.2e}");

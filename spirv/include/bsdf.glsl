@@ -3,8 +3,15 @@
 //
 //   material   = mix(dielectric, metal, metallic)
 //   metal      = F_schlick(baseColor, 1, V.H) * D G1(V) G1(L) / (4 |N.V| |N.L|)
-//   dielectric = (1 - max(F)) * baseColor / pi + F * D G1(V) G1(L) / (4 |N.V| |N.L|)
+//   dielectric = (1 - max(F)) * mix(baseColor / pi, baseColor * btdf, transmission)
+//                + F * D G1(V) G1(L) / (4 |N.V| |N.L|)
 //   F          = F_schlick(min(f0(ior) * specularColor, 1) * specular, specular, V.H)
+//
+// KHR_materials_transmission's btdf is a rough dielectric on the other side of the surface:
+// thin-walled (the glTF default: the reflection lobe mirrored through the surface, no bending),
+// or, for a KHR_materials_volume boundary, Walter et al. 2007's refraction BTDF (Snell's law
+// through the microfacet, eq. 21, with the glTF Fresnel; leaving the denser side, Schlick takes
+// the transmitted angle and total internal reflection gives F = 1).
 //
 // The microfacet distribution is GGX (the specification) or, for comparison, Beckmann: the
 // including kernel declares `const bool BECKMANN` (a specialization constant).
@@ -22,6 +29,9 @@ struct Surface {
     vec3 f0;      // dielectric F0 (ior, specular colour and factor applied)
     float f90;    // dielectric F90 (the specular factor)
     float alpha;
+    float transmission;  // share of the dielectric's diffuse lobe that transmits instead
+    float eta;           // refracting boundary: index below the surface (-z) / index above (+z, wo's side)
+    bool thin;           // thin-walled transmission (no refraction); also every opaque surface
 };
 
 float max3(vec3 v) {
@@ -55,65 +65,159 @@ vec3 micro_sample(vec3 wo, float a, vec2 u) {
     return BECKMANN ? sample_beckmann(a, u) : sample_ggx_vndf(wo, a, u);
 }
 
+// Density of the half vector h under micro_sample(wo).
+float micro_pdf_h(vec3 wo, vec3 h, float a) {
+    return BECKMANN ? pdf_beckmann(h, a) : pdf_ggx_vndf(wo, h, a);
+}
+
 // Solid-angle density of wi = reflect(-wo, h) under micro_sample.
 float micro_pdf(vec3 wo, vec3 h, float a) {
     float oh = dot(wo, h);
     if (oh <= 0.0) {
         return 0.0;
     }
-    float pdf_h = BECKMANN ? pdf_beckmann(h, a) : pdf_ggx_vndf(wo, h, a);
-    return pdf_h / (4.0 * oh);
+    return micro_pdf_h(wo, h, a) / (4.0 * oh);
+}
+
+// The dielectric layer's Fresnel at a microfacet with cos(wo, h) = c. Leaving the denser side
+// of a refracting boundary (eta < 1), Schlick's form takes the transmitted angle's cosine, and
+// beyond the critical angle reflection is total.
+vec3 dielectric_fresnel(Surface s, float c) {
+    if (!s.thin && s.eta < 1.0) {
+        float sin2_t = (1.0 - c * c) / (s.eta * s.eta);
+        if (sin2_t >= 1.0) {
+            return vec3(1.0);
+        }
+        c = sqrt(1.0 - sin2_t);
+    }
+    return fresnel_schlick(s.f0, vec3(s.f90), c);
+}
+
+// The generalized half vector of a refraction from wo (above) to wi (below), facing +z
+// (Walter et al. 2007, eq. 16).
+vec3 refraction_half_vector(Surface s, vec3 wo, vec3 wi) {
+    vec3 h = -(wo + s.eta * wi);
+    float len = length(h);
+    h = len > 0.0 ? h / len : vec3(0.0, 0.0, 1.0);
+    return h.z < 0.0 ? -h : h;
+}
+
+// The transmission lobe for wi below the surface (wi.z < 0).
+vec3 bsdf_eval_transmission(Surface s, vec3 wo, vec3 wi) {
+    float weight = (1.0 - s.metallic) * s.transmission;
+    if (!(weight > 0.0)) {
+        return vec3(0.0);
+    }
+    if (s.thin) {
+        vec3 wm = vec3(wi.xy, -wi.z);  // mirrored to wo's side
+        vec3 h = normalize(wo + wm);
+        vec3 f = dielectric_fresnel(s, max(dot(wo, h), 0.0));
+        return weight * (1.0 - max3(f)) * s.base * micro_d(h, s.alpha) * micro_visibility(wo, wm, s.alpha);
+    }
+    vec3 h = refraction_half_vector(s, wo, wi);
+    float oh = dot(wo, h);
+    float ih = dot(wi, h);
+    if (oh <= 0.0 || ih >= 0.0) {
+        return vec3(0.0);
+    }
+    vec3 f = dielectric_fresnel(s, oh);
+    float denom = s.eta * ih + oh;
+    // |i.h| |o.h| (1 - F) D G1(o) G1(i) / (|i.n| |o.n| (eta i.h + o.h)^2); micro_visibility
+    // carries G1 G1 / (4 |i.n| |o.n|).
+    float btdf = -ih * oh * micro_d(h, s.alpha) * 4.0 * micro_visibility(wo, wi, s.alpha) / (denom * denom);
+    return weight * (1.0 - max3(f)) * s.base * btdf;
 }
 
 vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
-    if (wo.z <= 0.0 || wi.z <= 0.0) {
+    if (wo.z <= 0.0 || wi.z == 0.0) {
         return vec3(0.0);
+    }
+    if (wi.z < 0.0) {
+        return bsdf_eval_transmission(s, wo, wi);
     }
     vec3 h = normalize(wo + wi);
     float oh = max(dot(wo, h), 0.0);
     float spec = micro_d(h, s.alpha) * micro_visibility(wo, wi, s.alpha);
-    vec3 f_dielectric = fresnel_schlick(s.f0, vec3(s.f90), oh);
-    vec3 dielectric = (1.0 - max3(f_dielectric)) * s.base * INV_PI + f_dielectric * spec;
+    vec3 f_dielectric = dielectric_fresnel(s, oh);
+    vec3 dielectric = (1.0 - max3(f_dielectric)) * (1.0 - s.transmission) * s.base * INV_PI + f_dielectric * spec;
     vec3 metal = fresnel_schlick(s.base, vec3(1.0), oh) * spec;
     return mix(dielectric, metal, s.metallic);
 }
 
-// Probability of sampling the specular lobe: its share of the Fresnel-weighted albedo at wo.
-float specular_probability(Surface s, vec3 wo) {
-    float f = max3(fresnel_schlick(s.f0, vec3(s.f90), wo.z));
+// Probabilities of the specular reflection (x), transmission (y) and diffuse (z) lobes: their
+// shares of the Fresnel-weighted albedo at wo.
+vec3 lobe_probabilities(Surface s, vec3 wo) {
+    float f = max3(dielectric_fresnel(s, wo.z));
     float specular = mix(f, 1.0, s.metallic);
-    float diffuse = (1.0 - s.metallic) * (1.0 - f) * luminance(s.base);
-    float total = specular + diffuse;
-    return total > 0.0 ? specular / total : 0.5;
+    float rest = (1.0 - s.metallic) * (1.0 - f) * luminance(s.base);
+    float transmission = rest * s.transmission;
+    float diffuse = rest * (1.0 - s.transmission);
+    float total = specular + transmission + diffuse;
+    float p_spec = total > 0.0 ? specular / total : 0.5;
+    float p_trans = total > 0.0 ? transmission / total : 0.0;
+    return vec3(p_spec, p_trans, 1.0 - p_spec - p_trans);
+}
+
+// Solid-angle density of wi (below the surface) under the transmission lobe's sampling.
+float transmission_pdf(Surface s, vec3 wo, vec3 wi) {
+    if (s.thin) {
+        vec3 wm = vec3(wi.xy, -wi.z);
+        return micro_pdf(wo, normalize(wo + wm), s.alpha);
+    }
+    vec3 h = refraction_half_vector(s, wo, wi);
+    float oh = dot(wo, h);
+    float ih = dot(wi, h);
+    if (oh <= 0.0 || ih >= 0.0) {
+        return 0.0;
+    }
+    // Walter et al. 2007, eq. 17: |dh/dwi| = eta^2 |i.h| / (eta i.h + o.h)^2.
+    float denom = s.eta * ih + oh;
+    return micro_pdf_h(wo, h, s.alpha) * s.eta * s.eta * -ih / (denom * denom);
 }
 
 float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
-    if (wo.z <= 0.0 || wi.z <= 0.0) {
+    if (wo.z <= 0.0 || wi.z == 0.0) {
         return 0.0;
     }
-    float p = specular_probability(s, wo);
+    vec3 p = lobe_probabilities(s, wo);
+    if (wi.z < 0.0) {
+        return p.y > 0.0 ? p.y * transmission_pdf(s, wo, wi) : 0.0;
+    }
     vec3 h = normalize(wo + wi);
-    return p * micro_pdf(wo, h, s.alpha) + (1.0 - p) * pdf_cosine_hemisphere(wi);
+    return p.x * micro_pdf(wo, h, s.alpha) + p.z * pdf_cosine_hemisphere(wi);
 }
 
-// Samples wi; weight = f cos / pdf. False when the sample is below the surface or has no density.
+// Samples wi; weight = f |cos| / pdf. False when the sample leaves its lobe's side of the surface
+// (or cannot refract) or has no density.
 bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out float pdf) {
     weight = vec3(0.0);
     pdf = 0.0;
-    if (u.x < specular_probability(s, wo)) {
+    vec3 p = lobe_probabilities(s, wo);
+    if (u.x < p.x) {
         vec3 h = micro_sample(wo, s.alpha, u.yz);
         wi = reflect(-wo, h);
+    } else if (u.x < p.x + p.y) {
+        vec3 h = micro_sample(wo, s.alpha, u.yz);
+        if (s.thin) {
+            wi = reflect(-wo, h);
+            wi.z = -wi.z;
+        } else {
+            wi = refract(-wo, h, 1.0 / s.eta);  // (0, 0, 0) beyond the critical angle
+        }
+        if (!(wi.z < 0.0)) {
+            return false;
+        }
     } else {
         wi = sample_cosine_hemisphere(u.yz);
     }
-    if (wi.z <= 0.0) {
+    if (wi.z == 0.0 || (wi.z < 0.0 && !(u.x >= p.x && u.x < p.x + p.y))) {
         return false;
     }
     pdf = bsdf_pdf(s, wo, wi);
     if (!(pdf > 0.0)) {
         return false;
     }
-    weight = bsdf_eval(s, wo, wi) * wi.z / pdf;
+    weight = bsdf_eval(s, wo, wi) * abs(wi.z) / pdf;
     return true;
 }
 

@@ -90,6 +90,8 @@ struct GpuMaterial {
 };
 
 #define MATERIAL_DOUBLE_SIDED 1u
+// KHR_materials_volume with a thickness: transmission refracts (else it is thin-walled).
+#define MATERIAL_VOLUME 2u
 
 // A texture in the shared texel buffer (RGBA8, one uint per texel, row-major).
 struct GpuTexture {
@@ -180,7 +182,7 @@ struct TonemapParams {
 // Push constants of sample_test.comp (the sampling tests' kernel).
 struct SampleTestParams {
     vec4 wo_alpha;   // outgoing direction xyz (local frame), alpha
-    uvec4 config;    // mode (0 sample, 1 evaluate pdf), count, seed, sampler (0 cosine, 1 microfacet)
+    uvec4 config;    // mode (0 sample, 1 evaluate pdf), count, seed, sampler (0 cosine, 1 microfacet, 2-4 dielectric BSDF)
 };
 
 #endif

@@ -67,6 +67,15 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     float f0 = (ior - 1.0) / (ior + 1.0);
     s.f0 = min(vec3(f0 * f0) * materials[id].specular.rgb, vec3(1.0)) * materials[id].specular.w;
     s.f90 = materials[id].specular.w;
+    // Transmission only where the kernel is specialised for it (HAS_TRANSMISSION); a refracting
+    // boundary's eta depends on the side the ray arrives from, so the caller sets it.
+    s.transmission = 0.0;
+    s.eta = 1.0;
+    s.thin = true;
+    if (HAS_TRANSMISSION) {
+        s.transmission = clamp(materials[id].params.z, 0.0, 1.0);
+        s.thin = (materials[id].flags.x & MATERIAL_VOLUME) == 0u;
+    }
     return s;
 }
 

@@ -136,6 +136,8 @@ const _: () = assert!(size_of::<GpuMaterial>() == 224);
 impl GpuMaterial {
     /// `MATERIAL_DOUBLE_SIDED`.
     pub const DOUBLE_SIDED: u32 = 1;
+    /// `MATERIAL_VOLUME`: transmission refracts (`KHR_materials_volume`).
+    pub const VOLUME: u32 = 2;
 }
 
 /// A texture in the shared texel buffer (`GpuTexture`).

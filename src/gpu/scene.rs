@@ -40,6 +40,9 @@ pub struct GpuScene {
     pub texels: Buffer,
     /// Textures the materials use.
     pub texture_count: u32,
+    /// Whether some material transmits (`KHR_materials_transmission`): the path tracer is
+    /// specialised for it only then.
+    pub has_transmission: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// Statistics of the BVH built for the scene.
@@ -172,7 +175,13 @@ impl ShadingArrays {
                     m.specular_factor,
                 ],
                 params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
-                flags: [if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }, 0, 0, 0],
+                flags: [
+                    if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
+                        | if m.volume { GpuMaterial::VOLUME } else { 0 },
+                    0,
+                    0,
+                    0,
+                ],
             })
             .collect();
         let punctual = scene.lights.iter().map(gpu_light).collect();
@@ -217,6 +226,7 @@ impl GpuScene {
             textures: Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?,
             texels: Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?,
             texture_count: arrays.textures.len() as u32,
+            has_transmission: transmits(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -251,8 +261,13 @@ impl GpuScene {
         self.textures = Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?;
         self.texels = Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?;
         self.texture_count = arrays.textures.len() as u32;
+        self.has_transmission = transmits(&arrays.materials);
         Ok(())
     }
+}
+
+fn transmits(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.params[2] > 0.0)
 }
 
 fn gpu_light(light: &crate::scene::Light) -> GpuLight {

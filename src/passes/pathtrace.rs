@@ -73,7 +73,7 @@ impl PathTracePass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// Builds the pipeline; `has_lights` (emissive triangles), `has_punctual`, `has_env_map`
-    /// and `has_textures` drop what a scene does not need.
+    /// `has_textures` and `has_transmission` drop what a scene does not need.
     pub fn new(
         ctx: &Context,
         microfacet: Microfacet,
@@ -82,6 +82,7 @@ impl PathTracePass {
         has_punctual: bool,
         has_env_map: bool,
         has_textures: bool,
+        has_transmission: bool,
     ) -> Result<Self> {
         let pipeline = ComputePipeline::new(
             ctx,
@@ -96,6 +97,7 @@ impl PathTracePass {
                     (3, has_punctual as u32),
                     (4, has_env_map as u32),
                     (5, has_textures as u32),
+                    (6, has_transmission as u32),
                 ],
             },
         )?;
@@ -117,6 +119,7 @@ impl PathTracePass {
             scene.punctual_count > 0,
             scene.env_size.is_some(),
             scene.texture_count > 0,
+            scene.has_transmission,
         )
     }
 

@@ -75,6 +75,10 @@ pub struct Material {
     pub specular_color_factor: [f32; 3],
     /// Transmission (`KHR_materials_transmission`, default 0).
     pub transmission_factor: f32,
+    /// `KHR_materials_volume` with a thickness above 0: the surface bounds a volume and
+    /// transmission refracts (Snell's law, total internal reflection); otherwise it is
+    /// thin-walled, as glTF specifies. Thickness and attenuation are not modelled.
+    pub volume: bool,
     /// How alpha is used.
     pub alpha_mode: AlphaMode,
     /// The `Mask` threshold (default 0.5).
@@ -112,6 +116,7 @@ impl Default for Material {
             specular_factor: 1.0,
             specular_color_factor: [1.0; 3],
             transmission_factor: 0.0,
+            volume: false,
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
@@ -176,6 +181,7 @@ impl Material {
             specular_factor: specular.as_ref().map_or(1.0, |s| s.specular_factor()),
             specular_color_factor: specular.as_ref().map_or([1.0; 3], |s| s.specular_color_factor()),
             transmission_factor: transmission.as_ref().map_or(0.0, |t| t.transmission_factor()),
+            volume: material.volume().is_some_and(|v| v.thickness_factor() > 0.0),
             alpha_mode: match material.alpha_mode() {
                 gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
                 gltf::material::AlphaMode::Mask => AlphaMode::Mask,

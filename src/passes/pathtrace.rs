@@ -72,17 +72,13 @@ impl PathTracePass {
     /// Workgroup size of the kernel.
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
-    /// Builds the pipeline; `has_lights` (emissive triangles), `has_punctual`, `has_env_map`
-    /// `has_textures` and `has_transmission` drop what a scene does not need.
-    pub fn new(
+    /// The pipeline for `scene`: specialised so that what the scene lacks (emissive triangles,
+    /// punctual lights, an environment map, textures, transmission) costs nothing.
+    pub fn for_scene(
         ctx: &Context,
+        scene: &GpuScene,
         microfacet: Microfacet,
         heuristic: Heuristic,
-        has_lights: bool,
-        has_punctual: bool,
-        has_env_map: bool,
-        has_textures: bool,
-        has_transmission: bool,
     ) -> Result<Self> {
         let pipeline = ComputePipeline::new(
             ctx,
@@ -93,34 +89,15 @@ impl PathTracePass {
                 specialization: &[
                     (0, (microfacet == Microfacet::Beckmann) as u32),
                     (1, (heuristic == Heuristic::Power) as u32),
-                    (2, has_lights as u32),
-                    (3, has_punctual as u32),
-                    (4, has_env_map as u32),
-                    (5, has_textures as u32),
-                    (6, has_transmission as u32),
+                    (2, (scene.light_count > 0) as u32),
+                    (3, (scene.punctual_count > 0) as u32),
+                    (4, scene.env_size.is_some() as u32),
+                    (5, (scene.texture_count > 0) as u32),
+                    (6, scene.has_transmission as u32),
                 ],
             },
         )?;
         Ok(Self { pipeline })
-    }
-    /// The pipeline for what `scene` has (emissive triangles, punctual lights, an environment
-    /// map, textures).
-    pub fn for_scene(
-        ctx: &Context,
-        scene: &GpuScene,
-        microfacet: Microfacet,
-        heuristic: Heuristic,
-    ) -> Result<Self> {
-        Self::new(
-            ctx,
-            microfacet,
-            heuristic,
-            scene.light_count > 0,
-            scene.punctual_count > 0,
-            scene.env_size.is_some(),
-            scene.texture_count > 0,
-            scene.has_transmission,
-        )
     }
 
     /// The push constants for sample 0 of `settings` seen from `camera` (`size_frame[2]` is the

@@ -451,3 +451,51 @@ fn blur_does_not_cross_silhouettes() {
     assert!(boxed > 0.03, "the scene has too little contrast across the silhouette ({boxed})");
     assert!(bilateral < 0.1 * boxed, "the blur bleeds across the silhouette: {bilateral} vs box {boxed}");
 }
+
+/// `umbra render --mode ao|rtao`: the grey PNG holds the sRGB encoding of the EXR's AO (the same
+/// deterministic render), each pass's GPU time is printed, and a bad radius is one clear error.
+#[test]
+fn cli_writes_ao_png_and_exr() {
+    let dir = std::env::temp_dir().join(format!("umbra-ao-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let umbra = || std::process::Command::new(env!("CARGO_BIN_EXE_umbra"));
+    let (png, exr) = (dir.join("ao.png"), dir.join("ao.exr"));
+    let args = ["render", "--size", "32x24", "--ao-samples", "8", "--ao-radius", "0.2"];
+    for (mode, passes) in
+        [("ao", ["gbuffer", "ssao", "ao_blur"].as_slice()), ("rtao", ["gbuffer", "rtao"].as_slice())]
+    {
+        let mut stdout = String::new();
+        for out in [&png, &exr] {
+            let output = umbra()
+                .args(args)
+                .args(["--mode", mode, "-o"])
+                .arg(out)
+                .env("UMBRA_VALIDATION", "1")
+                .output()
+                .unwrap();
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(output.status.success() && !stderr.contains("ERROR"), "{stderr}");
+            stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+        }
+        for pass in passes {
+            assert!(stdout.contains(&format!("{pass} ")), "{mode}: no time for {pass}: {stdout}");
+        }
+        let grey = image::open(&png).unwrap().to_rgba8();
+        assert_eq!(grey.dimensions(), (32, 24));
+        let (w, h, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+        assert_eq!((w, h), (32, 24));
+        let ao = &channels.iter().find(|c| c.0 == "Y").expect("a Y channel").1;
+        assert!(ao.iter().any(|&v| v < 0.9), "{mode}: the Cornell box shows no occlusion");
+        for (pixel, &v) in grey.pixels().zip(ao) {
+            let expected = umbra::output::srgb_encode(v.clamp(0.0, 1.0)) * 255.0;
+            assert!((pixel[0] as f32 - expected).abs() <= 0.5 + 1e-3, "{mode}: PNG {} vs EXR {v}", pixel[0]);
+        }
+    }
+    let output = umbra().args(["render", "--mode", "ao", "--ao-radius=-1", "-o"]).arg(&png).output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("radius") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -365,20 +365,19 @@ fn ssao_misses_occluders_outside_the_frustum() {
 /// (within r = 0.4), seen obliquely. The depth buffer reads the pole as solid all the way back
 /// to the wall, so SSAO darkens the wall beside the pole's image far more than the thin pole
 /// occludes it (RTAO). Mean (RTAO − SSAO) over the wall within r of the pole: above the 0.05
-/// SSAO meets in the room, where its assumptions hold.
+/// SSAO meets in the room, where its assumptions hold. The same pole 2r in front of the wall
+/// occludes nothing, and SSAO's range check must discard it (both 1).
 #[test]
 fn ssao_fails_on_thin_geometry() {
     let gpu = Gpu::new();
     let (size, r, gap, width) = (64u32, 0.4f32, 0.2f32, 0.06f32);
-    let wall = Quads::new().quad(Vec3::new(-3.0, -3.0, 0.0), 6.0 * Vec3::X, 6.0 * Vec3::Y);
-    let with_pole = Quads::new().quad(Vec3::new(-3.0, -3.0, 0.0), 6.0 * Vec3::X, 6.0 * Vec3::Y).quad(
-        Vec3::new(-width / 2.0, -3.0, gap),
-        width * Vec3::X,
-        6.0 * Vec3::Y,
-    );
+    let wall = || Quads::new().quad(Vec3::new(-3.0, -3.0, 0.0), 6.0 * Vec3::X, 6.0 * Vec3::Y);
+    let pole = |gap: f32| wall().quad(Vec3::new(-width / 2.0, -3.0, gap), width * Vec3::X, 6.0 * Vec3::Y);
     let cam = camera(Vec3::new(0.8, 0.0, 1.6), Vec3::ZERO, Vec3::Y, 40.0);
     let mut results = Vec::new();
-    for (name, quads) in [("wall", wall), ("wall and thin pole", with_pole)] {
+    let cases =
+        [("wall", wall()), ("wall and thin pole", pole(gap)), ("wall and thin pole beyond r", pole(2.0 * r))];
+    for (name, quads) in cases {
         let scene = quads.upload(&gpu);
         let (ssao, rtao) = ssao_and_reference(&gpu, &scene, &cam, size, r);
         dump(&format!("thin_{}_ssao", results.len()), size, &ssao.values);
@@ -400,6 +399,8 @@ fn ssao_fails_on_thin_geometry() {
     assert!(results[0].1 < 0.01, "a bare wall: SSAO and RTAO should both be 1: {:?}", results[0]);
     // Beyond the 0.05 that SSAO meets where its assumptions hold (the room), and darker.
     assert!(results[1].0 > 0.05, "SSAO should be darker than RTAO beside a thin pole: {:?}", results[1]);
+    // A pole 2r in front of the wall occludes nothing; SSAO's range check must ignore it.
+    assert!(results[2].1 < 0.01, "the range check let a distant pole occlude: {:?}", results[2]);
 }
 
 /// The blur is depth-aware: a box seen from above over a floor 1 m farther away. Over the

@@ -26,6 +26,8 @@ layout(set = 0, binding = 15, std430) buffer SampleTestParamsBuffer { SampleTest
 layout(set = 0, binding = 16, std430) buffer GBufferParamsBuffer { GBufferParams gbuffer_params_check[]; };
 layout(set = 0, binding = 17, std430) buffer DeferredParamsBuffer { DeferredParams deferred_params_check[]; };
 layout(set = 0, binding = 18, std430) buffer TonemapParamsBuffer { TonemapParams tonemap_params_check[]; };
+layout(set = 0, binding = 19, std430) buffer AoParamsBuffer { AoParams ao_params_check[]; };
+layout(set = 0, binding = 20, std430) buffer AoBlurParamsBuffer { AoBlurParams ao_blur_params_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -47,4 +49,6 @@ void main() {
     gbuffer_params_check[0].size.x += 1u;
     deferred_params_check[0].counts.x += 1u;
     tonemap_params_check[0].curve += 1u;
+    ao_params_check[0].counts.x += 1u;
+    ao_blur_params_check[0].size.x += 1u;
 }

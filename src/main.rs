@@ -86,6 +86,15 @@ struct RenderArgs {
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles.
     #[arg(long, default_value_t = 4)]
     shadow_rays: u32,
+    /// AO modes: kernel directions (ao) or rays (rtao) per pixel.
+    #[arg(long, default_value_t = 16)]
+    ao_samples: u32,
+    /// AO modes: the occlusion radius in scene units (metres).
+    #[arg(long, default_value_t = 0.5)]
+    ao_radius: f32,
+    /// AO modes: skip the depth-aware blur (ao blurs by default, rtao never does).
+    #[arg(long)]
+    ao_no_blur: bool,
     /// PNG output (tonemapped sRGB).
     #[arg(short, long, default_value = "umbra.png")]
     output: PathBuf,
@@ -100,6 +109,10 @@ enum Mode {
     Pathtrace,
     /// Ray-cast G-buffer, deferred lighting with ray-traced shadows, tonemap (real-time style).
     Hybrid,
+    /// Screen-space ambient occlusion of the ray-cast G-buffer, blurred (grey image, 1 = open).
+    Ao,
+    /// Ray-traced ambient occlusion (the ground truth for ao).
+    Rtao,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -179,6 +192,9 @@ fn render(args: RenderArgs) -> Result<()> {
     };
     if args.mode == Mode::Hybrid {
         return render_hybrid(&ctx, &gpu_scene, &camera, &args, settings.env);
+    }
+    if matches!(args.mode, Mode::Ao | Mode::Rtao) {
+        return render_ao(&ctx, &gpu_scene, &camera, &args);
     }
     let bar = indicatif::ProgressBar::new(settings.spp as u64).with_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {per_sec}  ETA {eta}")
@@ -298,6 +314,61 @@ fn render_hybrid(
                     },
                 },
                 Layer { name: "emission", channels: &["R", "G", "B"], data: &emission },
+            ],
+        )?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn render_ao(
+    ctx: &Context,
+    scene: &umbra::gpu::scene::GpuScene,
+    camera: &umbra::scene::Camera,
+    args: &RenderArgs,
+) -> Result<()> {
+    use umbra::render::AoMethod;
+    let (method, name) = match args.mode {
+        Mode::Rtao => (AoMethod::Rtao, "rtao"),
+        _ => (AoMethod::Ssao, "ao"),
+    };
+    let settings = umbra::passes::ao::AoSettings {
+        samples: args.ao_samples,
+        radius: args.ao_radius,
+        blur: method == AoMethod::Ssao && !args.ao_no_blur,
+        seed: args.seed,
+        ..Default::default()
+    };
+    let image = umbra::render::ambient_occlusion(ctx, scene, camera, args.size, method, &settings)?;
+    let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();
+    println!("{name}: {}x{}; GPU {}", args.size.0, args.size.1, times.join(", "));
+    let (w, h) = args.size;
+    // AO is a linear fraction: stored as sRGB grey so the PNG shows the value it holds.
+    let bytes: Vec<u8> = image
+        .values
+        .iter()
+        .flat_map(|&v| {
+            let g = (umbra::output::srgb_encode(v.clamp(0.0, 1.0)) * 255.0).round() as u8;
+            [g, g, g, 255]
+        })
+        .collect();
+    let is_exr = |p: &std::path::Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let exr_path = args.exr.clone().or_else(|| is_exr(&args.output).then(|| args.output.clone()));
+    if !is_exr(&args.output) {
+        umbra::output::write_png(&args.output, w, h, &bytes)
+            .with_context(|| format!("writing {}", args.output.display()))?;
+        println!("wrote {}", args.output.display());
+    }
+    if let Some(path) = exr_path {
+        use umbra::output::Layer;
+        umbra::output::write_exr(
+            &path,
+            w as usize,
+            h as usize,
+            &[
+                Layer { name: "", channels: &["Y"], data: &image.values },
+                Layer { name: "unblurred", channels: &["Y"], data: &image.unblurred },
+                Layer { name: "depth", channels: &["Z"], data: &image.gbuffer.depth },
             ],
         )?;
         println!("wrote {}", path.display());

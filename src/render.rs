@@ -3,6 +3,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::layout::PathStats;
 use crate::gpu::scene::GpuScene;
+use crate::passes::ao::{ao_params, AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
@@ -254,4 +255,84 @@ pub fn hybrid(
         gbuffer: gbuffer.read(ctx)?,
         pass_ms,
     })
+}
+
+/// Which ambient occlusion estimator [`ambient_occlusion`] runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AoMethod {
+    /// Screen-space AO from the G-buffer ([`crate::passes::ao::SsaoPass`]).
+    Ssao,
+    /// Ray-traced AO through the BVH ([`crate::passes::ao::RtaoPass`]), the ground truth.
+    Rtao,
+}
+
+/// An ambient occlusion image (1 = unoccluded), its G-buffer and the GPU time of each pass.
+#[derive(Debug, Clone)]
+pub struct AoImage {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// AO per pixel, row-major from the top left: blurred when the settings asked for it.
+    pub values: Vec<f32>,
+    /// The AO before the blur (equal to `values` when there was none).
+    pub unblurred: Vec<f32>,
+    /// The G-buffer the AO was computed from.
+    pub gbuffer: GBufferData,
+    /// GPU milliseconds per pass, in order (`gbuffer`, `ssao` or `rtao`, and `ao_blur`).
+    pub pass_ms: Vec<(String, f64)>,
+}
+
+/// Renders the G-buffer of `scene` seen by `camera` at `size` and its ambient occlusion by
+/// `method` (see [`crate::passes::ao`] for the definition both estimate), blurred when
+/// `settings.blur`.
+pub fn ambient_occlusion(
+    ctx: &Context,
+    scene: &GpuScene,
+    camera: &Camera,
+    size: (u32, u32),
+    method: AoMethod,
+    settings: &AoSettings,
+) -> Result<AoImage> {
+    settings.validate()?;
+    let gbuffer = GBuffer::new(ctx, size)?;
+    let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
+    let raw_ao = make("ambient occlusion")?;
+    let blurred = make("ambient occlusion blurred")?;
+    let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
+    let ssao = SsaoPass::new(ctx)?;
+    let rtao = RtaoPass::new(ctx)?;
+    let blur = AoBlurPass::new(ctx)?;
+    let gbuffer_params = GBufferPass::params(camera, size);
+    let params = ao_params(camera, size, settings);
+    let blur_params = AoBlurPass::params(camera, size);
+    let views = gbuffer.views();
+    let mut timer = GpuTimer::new(ctx, 3)?;
+    ctx.submit(|cmd| {
+        raw_ao.init_general(ctx, cmd);
+        blurred.init_general(ctx, cmd);
+        timer.reset(cmd);
+        timer.begin(cmd, "gbuffer")?;
+        gbuffer_pass.record(ctx, cmd, scene, &views, &gbuffer_params)?;
+        timer.end(cmd)?;
+        match method {
+            AoMethod::Ssao => {
+                timer.begin(cmd, "ssao")?;
+                ssao.record(ctx, cmd, &views, raw_ao.view, &params)?;
+            }
+            AoMethod::Rtao => {
+                timer.begin(cmd, "rtao")?;
+                rtao.record(ctx, cmd, scene, &views, raw_ao.view, &params)?;
+            }
+        }
+        timer.end(cmd)?;
+        if settings.blur {
+            timer.begin(cmd, "ao_blur")?;
+            blur.record(ctx, cmd, &views, raw_ao.view, blurred.view, &blur_params)?;
+            timer.end(cmd)?;
+        }
+        Ok(())
+    })?;
+    let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
+    let unblurred: Vec<f32> = raw_ao.read(ctx)?;
+    let values = if settings.blur { blurred.read(ctx)? } else { unblurred.clone() };
+    Ok(AoImage { size, values, unblurred, gbuffer: gbuffer.read(ctx)?, pass_ms })
 }

@@ -185,4 +185,24 @@ struct SampleTestParams {
     uvec4 config;    // mode (0 sample, 1 evaluate pdf), count, seed, sampler (0 cosine, 1 microfacet, 2-4 dielectric BSDF)
 };
 
+// Push constants of ssao.comp and rtao.comp.
+struct AoParams {
+    vec4 cam_origin;   // xyz, unused
+    vec4 cam_forward;  // unit forward
+    vec4 cam_right;    // right * tan(yfov/2) * aspect
+    vec4 cam_up;       // up * tan(yfov/2)
+    vec4 radius_bias;  // AO radius r (world units), SSAO plane bias (world units), unused, unused
+    uvec4 size_frame;  // width, height, frame, seed
+    uvec4 counts;      // directions (SSAO) or rays (RTAO) per pixel, SSAO steps per direction, unused, unused
+};
+
+// Push constants of ao_blur.comp.
+struct AoBlurParams {
+    vec4 cam_forward;  // unit forward
+    vec4 cam_right;    // right * tan(yfov/2) * aspect
+    vec4 cam_up;       // up * tan(yfov/2)
+    vec4 weights;      // plane-distance sigma (fraction of the depth), normal exponent, unused, unused
+    uvec4 size;        // width, height, unused, unused
+};
+
 #endif

@@ -310,6 +310,44 @@ pub struct TonemapParams {
 }
 const _: () = assert!(size_of::<TonemapParams>() == 16);
 
+/// Push constants of `ssao.comp` and `rtao.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AoParams {
+    /// Camera position, unused.
+    pub cam_origin: [f32; 4],
+    /// Unit forward.
+    pub cam_forward: [f32; 4],
+    /// Right × tan(yfov/2) × aspect.
+    pub cam_right: [f32; 4],
+    /// Up × tan(yfov/2).
+    pub cam_up: [f32; 4],
+    /// AO radius r (world units), SSAO plane bias (world units), unused, unused.
+    pub radius_bias: [f32; 4],
+    /// Width, height, frame, seed.
+    pub size_frame: [u32; 4],
+    /// Directions (SSAO) or rays (RTAO) per pixel, SSAO steps per direction, unused, unused.
+    pub counts: [u32; 4],
+}
+const _: () = assert!(size_of::<AoParams>() == 112);
+
+/// Push constants of `ao_blur.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AoBlurParams {
+    /// Unit forward.
+    pub cam_forward: [f32; 4],
+    /// Right × tan(yfov/2) × aspect.
+    pub cam_right: [f32; 4],
+    /// Up × tan(yfov/2).
+    pub cam_up: [f32; 4],
+    /// Plane-distance sigma (a fraction of the view depth), normal exponent, unused, unused.
+    pub weights: [f32; 4],
+    /// Width, height, unused, unused.
+    pub size: [u32; 4],
+}
+const _: () = assert!(size_of::<AoBlurParams>() == 80);
+
 /// The G-buffer's material index where no surface was hit (`GBUFFER_NO_SURFACE`).
 pub const GBUFFER_NO_SURFACE: u32 = u32::MAX;
 
@@ -409,5 +447,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
             env_info
         }),
         layout_of!(GpuLight { position_range, direction_kind, intensity, cone }),
+        layout_of!(AoParams { cam_origin, cam_forward, cam_right, cam_up, radius_bias, size_frame, counts }),
+        layout_of!(AoBlurParams { cam_forward, cam_right, cam_up, weights, size }),
     ]
 }

@@ -1,5 +1,6 @@
 //! Render passes: each owns its pipelines and records into a caller's command buffer.
 
+pub mod ao;
 pub mod deferred;
 pub mod gbuffer;
 pub mod pathtrace;

@@ -1,0 +1,64 @@
+#version 460
+// Depth-aware (bilateral) blur of an AO image over the 4x4 tile of ssao.comp's rotation pattern:
+// the taps at offsets -2..1 in x and y cover each of the 16 rotations once, so on a plane the
+// pattern averages away. Each tap is weighted by how close its surface lies to the centre's plane
+// (distance along the centre's normal, relative to the centre's view depth: a Gaussian of sigma
+// `weights.x`) and by the agreement of the normals (max(n·n0, 0)^`weights.y`), so AO does not
+// bleed across silhouettes or creases. Taps without a surface are skipped; so is a pixel
+// without a surface (written 1).
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0, r32f) uniform readonly image2D ao_in;
+layout(set = 0, binding = 1, r32f) uniform readonly image2D gb_depth;
+layout(set = 0, binding = 2, rgba16f) uniform readonly image2D gb_normal;
+layout(set = 0, binding = 3, r32f) uniform writeonly image2D out_ao;
+layout(push_constant) uniform Push { AoBlurParams params; };
+
+#include "camera.glsl"
+
+// The view-space position (camera at the origin) of `pixel`'s surface at `depth`.
+vec3 view_position(ivec2 pixel, float depth) {
+    vec3 forward = params.cam_forward.xyz;
+    vec3 dir = camera_ray(forward, params.cam_right.xyz, params.cam_up.xyz, vec2(pixel) + 0.5, params.size.xy);
+    return dir * (depth / dot(dir, forward));
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = ivec2(params.size.xy);
+    if (any(greaterThanEqual(pixel, size))) {
+        return;
+    }
+    float d0 = imageLoad(gb_depth, pixel).x;
+    if (d0 <= 0.0) {
+        imageStore(out_ao, pixel, vec4(1.0));
+        return;
+    }
+    vec3 p0 = view_position(pixel, d0);
+    vec3 n0 = normalize(imageLoad(gb_normal, pixel).xyz);
+    float inv_sigma = 1.0 / (params.weights.x * d0);
+    float sum = 0.0;
+    float weight = 0.0;
+    for (int dy = -2; dy <= 1; ++dy) {
+        for (int dx = -2; dx <= 1; ++dx) {
+            ivec2 q = pixel + ivec2(dx, dy);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
+                continue;
+            }
+            float d = imageLoad(gb_depth, q).x;
+            if (d <= 0.0) {
+                continue;
+            }
+            float plane = dot(view_position(q, d) - p0, n0) * inv_sigma;
+            float w = exp(-0.5 * plane * plane);
+            w *= pow(max(dot(normalize(imageLoad(gb_normal, q).xyz), n0), 0.0), params.weights.y);
+            sum += w * imageLoad(ao_in, q).x;
+            weight += w;
+        }
+    }
+    // The centre tap has weight 1, so weight > 0.
+    imageStore(out_ao, pixel, vec4(sum / weight));
+}

@@ -1,0 +1,68 @@
+#version 460
+// Ray-traced ambient occlusion over a G-buffer: the ground truth ssao.comp approximates.
+//
+// AO(p) = (1/π) ∫ V_r(p, ω) cos θ dω: the cosine-weighted fraction of the hemisphere around the
+// shading normal whose rays leave p without meeting geometry within the radius r. `counts.x`
+// cosine-distributed rays per pixel (random numbers from (pixel, frame * rays + i, seed)), each an
+// any-hit query through the BVH over (0, r) from the origin offset off the geometric surface as
+// shadow rays are (shading.glsl). A direction below the geometric surface counts as occluded (the
+// surface itself blocks it). The output is the fraction of unoccluded rays, an unbiased estimate
+// of AO(p) with variance AO(1 − AO) / rays. Pixels without a surface get 1.
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
+layout(set = 0, binding = 2, r32f) uniform readonly image2D gb_depth;
+layout(set = 0, binding = 3, rgba16f) uniform readonly image2D gb_normal;
+layout(set = 0, binding = 4, rg32ui) uniform readonly uimage2D gb_material;
+layout(set = 0, binding = 5, r32f) uniform writeonly image2D out_ao;
+layout(push_constant) uniform Push { AoParams params; };
+
+#include "random.glsl"
+#include "sampling.glsl"
+#include "gbuffer.glsl"
+#include "bvh.glsl"
+
+// shading.glsl's offset_ray (Wächter and Binder, Ray Tracing Gems ch. 6), repeated here because
+// shading.glsl needs the whole scene's buffers.
+vec3 ao_offset_ray(vec3 p, vec3 n) {
+    ivec3 of_i = ivec3(256.0 * n);
+    vec3 p_i = intBitsToFloat(floatBitsToInt(p) + mix(of_i, -of_i, lessThan(p, vec3(0.0))));
+    return mix(p_i, p + (1.0 / 65536.0) * n, lessThan(abs(p), vec3(1.0 / 32.0)));
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    uvec2 size = params.size_frame.xy;
+    if (any(greaterThanEqual(uvec2(pixel), size))) {
+        return;
+    }
+    float depth = imageLoad(gb_depth, pixel).x;
+    if (depth <= 0.0) {
+        imageStore(out_ao, pixel, vec4(1.0));
+        return;
+    }
+    vec3 p = gbuffer_position(params.cam_origin.xyz, params.cam_forward.xyz, params.cam_right.xyz,
+                              params.cam_up.xyz, pixel, size, depth);
+    vec3 n = normalize(imageLoad(gb_normal, pixel).xyz);
+    vec3 ng = oct_decode(unpackSnorm2x16(imageLoad(gb_material, pixel).y));
+    vec3 o = ao_offset_ray(p, ng);
+    float radius = params.radius_bias.x;
+    uint rays = max(params.counts.x, 1u);
+    vec3 t;
+    vec3 b;
+    basis(n, t, b);
+    uint open = 0u;
+    for (uint i = 0u; i < rays; ++i) {
+        vec2 u = rand4(uvec2(pixel), params.size_frame.z * rays + i, 0u, params.size_frame.w).xy;
+        vec3 w = sample_cosine_hemisphere(u);
+        vec3 dir = w.x * t + w.y * b + w.z * n;
+        if (dot(dir, ng) > 0.0 && !bvh_any(o, dir, 0.0, radius)) {
+            open += 1u;
+        }
+    }
+    imageStore(out_ao, pixel, vec4(float(open) / float(rays)));
+}

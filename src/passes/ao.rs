@@ -1,0 +1,269 @@
+//! Ambient occlusion over a G-buffer: screen-space (`spirv/ssao.comp`), its depth-aware blur
+//! (`spirv/ao_blur.comp`) and ray-traced (`spirv/rtao.comp`), the ground truth SSAO approximates.
+//!
+//! Both estimate one quantity: **AO(p) = (1/π) ∫ V_r(p, ω) cos θ dω**, the cosine-weighted
+//! fraction of the hemisphere around the shading normal whose rays leave p without meeting
+//! geometry within the radius r (1 = unoccluded, 0 = fully occluded).
+//!
+//! - **RTAO** casts `samples` cosine-distributed any-hit rays of length r through the BVH (origin
+//!   offset off the geometric surface as shadow rays are); its value is the fraction that escape,
+//!   unbiased with variance AO(1 − AO)/samples.
+//! - **SSAO** sees only the G-buffer: `samples` directions of a fixed cosine-weighted kernel,
+//!   rotated about the normal per pixel by a 4×4 tiled pattern (which [`AoBlurPass`] averages
+//!   away), each marched at `steps` points at distances r·f² (more near p, the last at r). A point
+//!   is occluded when it lies behind the surface seen at its pixel (depth read as the front of
+//!   solid matter, tested against that surface's plane), unless that surface is more than r in
+//!   front of p (the range check). Points that project **off screen**, behind the camera or onto
+//!   the background count as **unoccluded** (the usual choice; it brightens AO at the screen's
+//!   edges and misses occluders outside the frustum, two of SSAO's failure modes, with thin
+//!   objects read as thick the third).
+//!
+//! Every pass reads G-buffer views (umbra's or a host's, formats of [`super::gbuffer`]) and writes
+//! an `R32_SFLOAT` storage image in `GENERAL` layout; each records a compute-to-compute barrier
+//! after itself and never submits.
+
+use super::gbuffer::GBufferViews;
+use crate::error::{Error, Result};
+use crate::gpu::layout::{AoBlurParams, AoParams};
+use crate::gpu::scene::GpuScene;
+use crate::render::camera_params;
+use crate::scene::Camera;
+use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, PipelineDesc};
+
+/// What the AO passes compute.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AoSettings {
+    /// SSAO: kernel directions per pixel; RTAO: rays per pixel.
+    pub samples: u32,
+    /// The AO radius r in world units (metres): occluders farther away do not count.
+    pub radius: f32,
+    /// Blur the result with [`AoBlurPass`] (removes SSAO's 4×4 rotation pattern).
+    pub blur: bool,
+    /// SSAO: points marched along each direction.
+    pub steps: u32,
+    /// SSAO: how far (world units) a point must be behind a surface's plane to count as occluded.
+    pub bias: f32,
+    /// Frame index: decorrelates RTAO's rays (and rotates SSAO's kernel) between frames.
+    pub frame: u32,
+    /// Seed of the random numbers.
+    pub seed: u32,
+}
+
+impl Default for AoSettings {
+    fn default() -> Self {
+        Self { samples: 16, radius: 0.5, blur: true, steps: 4, bias: 1e-3, frame: 0, seed: 0 }
+    }
+}
+
+impl AoSettings {
+    /// Checks the settings: at least one sample and one step, a finite positive radius, a finite
+    /// non-negative bias.
+    pub fn validate(&self) -> Result<()> {
+        if self.samples == 0 || self.steps == 0 {
+            return Err(Error::Invalid(format!(
+                "ambient occlusion needs at least one sample and one step (got {} samples, {} steps)",
+                self.samples, self.steps
+            )));
+        }
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return Err(Error::Invalid(format!("ambient occlusion radius {} must be positive", self.radius)));
+        }
+        if !(self.bias.is_finite() && self.bias >= 0.0) {
+            return Err(Error::Invalid(format!("SSAO bias {} must be non-negative", self.bias)));
+        }
+        Ok(())
+    }
+}
+
+/// The push constants of both AO kernels for `camera` over an image of `size`.
+pub fn ao_params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> AoParams {
+    let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
+    AoParams {
+        cam_origin,
+        cam_forward,
+        cam_right,
+        cam_up,
+        radius_bias: [settings.radius, settings.bias, 0.0, 0.0],
+        size_frame: [size.0, size.1, settings.frame, settings.seed],
+        counts: [settings.samples, settings.steps, 0, 0],
+    }
+}
+
+const LOCAL: [u32; 3] = [8, 8, 1];
+
+/// `ssao.comp`: screen-space AO from depth and normals.
+pub struct SsaoPass {
+    pipeline: ComputePipeline,
+}
+
+impl SsaoPass {
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let pipeline = ComputePipeline::new(
+            ctx,
+            "ssao",
+            &PipelineDesc {
+                bindings: &[raw::DescriptorType::STORAGE_IMAGE; 3],
+                push_constant_size: std::mem::size_of::<AoParams>() as u32,
+                specialization: &[],
+            },
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// The push constants (see [`ao_params`]).
+    pub fn params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> AoParams {
+        ao_params(camera, size, settings)
+    }
+
+    /// Records the pass: G-buffer depth and normal in, `output` (`R32_SFLOAT`, `GENERAL`, the
+    /// G-buffer's size) written, then a compute-to-compute barrier. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        params: &AoParams,
+    ) -> Result<()> {
+        let p = &self.pipeline;
+        p.bind(cmd);
+        p.push_descriptors(
+            cmd,
+            &[
+                Descriptor::StorageView(gbuffer.depth),
+                Descriptor::StorageView(gbuffer.normal),
+                Descriptor::StorageView(output),
+            ],
+        )?;
+        p.push_constants(cmd, params)?;
+        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}
+
+/// `ao_blur.comp`: a bilateral 4×4 blur of an AO image, weighted by plane distance and normals.
+pub struct AoBlurPass {
+    pipeline: ComputePipeline,
+}
+
+impl AoBlurPass {
+    /// Sigma of the plane-distance weight, as a fraction of the centre's view depth.
+    pub const PLANE_SIGMA: f32 = 0.02;
+    /// Exponent of the normal weight max(n·n0, 0)^k.
+    pub const NORMAL_POWER: f32 = 8.0;
+
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let pipeline = ComputePipeline::new(
+            ctx,
+            "ao_blur",
+            &PipelineDesc {
+                bindings: &[raw::DescriptorType::STORAGE_IMAGE; 4],
+                push_constant_size: std::mem::size_of::<AoBlurParams>() as u32,
+                specialization: &[],
+            },
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// The push constants for `camera` over an image of `size`.
+    pub fn params(camera: &Camera, size: (u32, u32)) -> AoBlurParams {
+        let (_, cam_forward, cam_right, cam_up) = camera_params(camera, size);
+        AoBlurParams {
+            cam_forward,
+            cam_right,
+            cam_up,
+            weights: [Self::PLANE_SIGMA, Self::NORMAL_POWER, 0.0, 0.0],
+            size: [size.0, size.1, 0, 0],
+        }
+    }
+
+    /// Records the blur of `input` into `output` (both `R32_SFLOAT`, `GENERAL`, the G-buffer's
+    /// size; distinct images), then a compute-to-compute barrier. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        gbuffer: &GBufferViews,
+        input: raw::ImageView,
+        output: raw::ImageView,
+        params: &AoBlurParams,
+    ) -> Result<()> {
+        let p = &self.pipeline;
+        p.bind(cmd);
+        p.push_descriptors(
+            cmd,
+            &[
+                Descriptor::StorageView(input),
+                Descriptor::StorageView(gbuffer.depth),
+                Descriptor::StorageView(gbuffer.normal),
+                Descriptor::StorageView(output),
+            ],
+        )?;
+        p.push_constants(cmd, params)?;
+        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}
+
+/// `rtao.comp`: ray-traced AO, the ground truth.
+pub struct RtaoPass {
+    pipeline: ComputePipeline,
+}
+
+impl RtaoPass {
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let mut bindings = [raw::DescriptorType::STORAGE_IMAGE; 6];
+        bindings[..2].fill(raw::DescriptorType::STORAGE_BUFFER);
+        let pipeline = ComputePipeline::new(
+            ctx,
+            "rtao",
+            &PipelineDesc {
+                bindings: &bindings,
+                push_constant_size: std::mem::size_of::<AoParams>() as u32,
+                specialization: &[],
+            },
+        )?;
+        Ok(Self { pipeline })
+    }
+
+    /// The push constants (see [`ao_params`]).
+    pub fn params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> AoParams {
+        ao_params(camera, size, settings)
+    }
+
+    /// Records the pass: the scene's BVH and the G-buffer's depth, normal and material (for the
+    /// geometric normal) in, `output` (`R32_SFLOAT`, `GENERAL`) written, then a
+    /// compute-to-compute barrier. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        params: &AoParams,
+    ) -> Result<()> {
+        let p = &self.pipeline;
+        p.bind(cmd);
+        p.push_descriptors(
+            cmd,
+            &[
+                Descriptor::Buffer(&scene.bvh.nodes),
+                Descriptor::Buffer(&scene.bvh.tris),
+                Descriptor::StorageView(gbuffer.depth),
+                Descriptor::StorageView(gbuffer.normal),
+                Descriptor::StorageView(gbuffer.material),
+                Descriptor::StorageView(output),
+            ],
+        )?;
+        p.push_constants(cmd, params)?;
+        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}

@@ -183,4 +183,11 @@ struct SampleTestParams {
     uvec4 config;    // mode (0 sample, 1 evaluate pdf), count, seed, sampler (0 cosine, 1 microfacet)
 };
 
+// Push constants of the IBL precomputation kernels (ibl_*.comp).
+struct IblParams {
+    uvec4 src;     // source width, height (the environment map), level read (chain kernels), unused
+    uvec4 dst;     // level width, height, texel offset of the level written, samples (per axis for the LUT)
+    vec4 values;   // perceptual roughness of the level (prefilter), unused, unused, unused
+};
+
 #endif

@@ -322,6 +322,19 @@ pub struct SampleTestParams {
 }
 const _: () = assert!(size_of::<SampleTestParams>() == 32);
 
+/// Push constants of the IBL precomputation kernels (`ibl_*.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct IblParams {
+    /// Source width, height (the environment map), level read (chain kernels), unused.
+    pub src: [u32; 4],
+    /// Level width, height, texel offset of the level written, samples (per axis for the LUT).
+    pub dst: [u32; 4],
+    /// Perceptual roughness of the level (prefilter), unused ×3.
+    pub values: [f32; 4],
+}
+const _: () = assert!(size_of::<IblParams>() == 48);
+
 /// One member of a GPU struct as the host lays it out.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MemberLayout {
@@ -407,5 +420,6 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
             env_info
         }),
         layout_of!(GpuLight { position_range, direction_kind, intensity, cone }),
+        layout_of!(IblParams { src, dst, values }),
     ]
 }

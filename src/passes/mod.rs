@@ -2,5 +2,6 @@
 
 pub mod deferred;
 pub mod gbuffer;
+pub mod ibl;
 pub mod pathtrace;
 pub mod tonemap;

@@ -1,7 +1,6 @@
 #version 460
 // SH9 irradiance of the environment map (ibl.glsl): one workgroup; each invocation projects
-// whole rows (texel solid angle (2 pi / W)(cos theta0 - cos theta1), direction at the centre),
-// then a tree reduction per coefficient; the result is multiplied by A_l.
+// whole rows (the basis integrated exactly over each texel, sh9_cell), then a tree reduction per coefficient; the result is multiplied by A_l.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -27,23 +26,17 @@ void main() {
         c[k] = vec3(0.0);
     }
     for (uint y = tid; y < size.y; y += 128u) {
-        float d_omega = 2.0 * PI / float(size.x) *
-                        (cos(PI * float(y) / float(size.y)) - cos(PI * float(y + 1u) / float(size.y)));
-        vec3 row[9];
-        for (uint k = 0u; k < 9u; ++k) {
-            row[k] = vec3(0.0);
-        }
+        float t0 = PI * float(y) / float(size.y);
+        float t1 = PI * float(y + 1u) / float(size.y);
         for (uint x = 0u; x < size.x; ++x) {
-            vec3 d = env_direction((vec2(x, y) + 0.5) / vec2(size));
+            float p0 = (float(x) / float(size.x) - 0.5) * 2.0 * PI;
+            float p1 = (float(x + 1u) / float(size.x) - 0.5) * 2.0 * PI;
+            float cell[9];
+            sh9_cell(t0, t1, p0, p1, cell);
             vec3 l = env_texels[y * size.x + x].rgb;
-            float basis_y[9];
-            sh9_basis(d, basis_y);
             for (uint k = 0u; k < 9u; ++k) {
-                row[k] += l * basis_y[k];
+                c[k] += l * cell[k];
             }
-        }
-        for (uint k = 0u; k < 9u; ++k) {
-            c[k] += row[k] * d_omega;
         }
     }
     for (uint k = 0u; k < 9u; ++k) {

@@ -26,6 +26,7 @@ layout(set = 0, binding = 15, std430) buffer SampleTestParamsBuffer { SampleTest
 layout(set = 0, binding = 16, std430) buffer GBufferParamsBuffer { GBufferParams gbuffer_params_check[]; };
 layout(set = 0, binding = 17, std430) buffer DeferredParamsBuffer { DeferredParams deferred_params_check[]; };
 layout(set = 0, binding = 18, std430) buffer TonemapParamsBuffer { TonemapParams tonemap_params_check[]; };
+layout(set = 0, binding = 19, std430) buffer IblParamsBuffer { IblParams ibl_params_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -47,4 +48,5 @@ void main() {
     gbuffer_params_check[0].size.x += 1u;
     deferred_params_check[0].counts.x += 1u;
     tonemap_params_check[0].curve += 1u;
+    ibl_params_check[0].dst.x += 1u;
 }

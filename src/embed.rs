@@ -36,6 +36,7 @@ use crate::error::Result;
 use crate::gpu::scene::GpuScene;
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBufferPass, GBufferViews};
+use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::{Camera, Scene};
 use crate::vk::{raw, Context};
@@ -46,6 +47,7 @@ pub struct Renderer {
     scene: GpuScene,
     gbuffer: GBufferPass,
     deferred: DeferredPass,
+    ibl: IblResources,
     tonemap: TonemapPass,
 }
 
@@ -56,6 +58,7 @@ impl Renderer {
         Ok(Self {
             gbuffer: GBufferPass::new(ctx, gpu_scene.texture_count > 0)?,
             deferred: DeferredPass::new(ctx, &gpu_scene)?,
+            ibl: IblResources::build(ctx, &gpu_scene, &IblSettings::default())?,
             tonemap: TonemapPass::new(ctx)?,
             scene: gpu_scene,
             ctx: ctx.clone(),
@@ -98,7 +101,7 @@ impl Renderer {
         settings: &LightingSettings,
     ) -> Result<()> {
         let params = DeferredPass::params(&self.scene, camera, gbuffer.size, settings);
-        self.deferred.record(&self.ctx, cmd, &self.scene, gbuffer, output, &params)
+        self.deferred.record(&self.ctx, cmd, &self.scene, gbuffer, output, &self.ibl, None, &params)
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`

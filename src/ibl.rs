@@ -173,16 +173,46 @@ pub fn texel_direction(x: usize, y: usize, w: usize, h: usize) -> ([f64; 3], f64
     ([s * phi.sin(), theta.cos(), -s * phi.cos()], d_omega)
 }
 
+/// The SH basis integrated exactly over the lat-long cell [θ0, θ1] × [φ0, φ1] (`sh9_cell` in
+/// ibl.glsl), so a piecewise-constant map projects exactly.
+pub fn sh9_cell(t0: f64, t1: f64, p0: f64, p1: f64) -> [f64; 9] {
+    let dp = p1 - p0;
+    let (ps, pc) = (p0.cos() - p1.cos(), p1.sin() - p0.sin());
+    let s2 = 0.25 * ((2.0 * p1).sin() - (2.0 * p0).sin());
+    let (pss, pcc) = (0.5 * dp - s2, 0.5 * dp + s2);
+    let psc = 0.5 * (p1.sin().powi(2) - p0.sin().powi(2));
+    let (c0, c1, n0, n1) = (t0.cos(), t1.cos(), t0.sin(), t1.sin());
+    let t1_ = c0 - c1;
+    let ts = 0.5 * (t1 - t0) - 0.25 * ((2.0 * t1).sin() - (2.0 * t0).sin());
+    let tc = 0.5 * (n1 * n1 - n0 * n0);
+    let tss = (c0 - c0.powi(3) / 3.0) - (c1 - c1.powi(3) / 3.0);
+    let tcc = (c0.powi(3) - c1.powi(3)) / 3.0;
+    let tsc = (n1.powi(3) - n0.powi(3)) / 3.0;
+    [
+        0.282_094_791_773_878_1 * t1_ * dp,
+        0.488_602_511_902_919_9 * tc * dp,
+        -0.488_602_511_902_919_9 * ts * pc,
+        0.488_602_511_902_919_9 * ts * ps,
+        1.092_548_430_592_079_2 * tsc * ps,
+        -1.092_548_430_592_079_2 * tsc * pc,
+        0.315_391_565_252_520_05 * (3.0 * tss * pcc - t1_ * dp),
+        -1.092_548_430_592_079_2 * tss * psc,
+        0.546_274_215_296_039_6 * (tss * pss - tcc * dp),
+    ]
+}
+
 /// SH9 irradiance coefficients of `map` (× A_l), as `ibl_sh.comp` computes them, in f64.
 pub fn sh9_irradiance_coefficients(map: &EnvironmentMap) -> [[f64; 3]; 9] {
+    let (w, h) = (map.width as f64, map.height as f64);
     let mut c = [[0.0; 3]; 9];
     for y in 0..map.height {
+        let (t0, t1) = (PI * y as f64 / h, PI * (y + 1) as f64 / h);
         for x in 0..map.width {
-            let (d, d_omega) = texel_direction(x, y, map.width, map.height);
+            let (p0, p1) = ((x as f64 / w - 0.5) * 2.0 * PI, ((x + 1) as f64 / w - 0.5) * 2.0 * PI);
             let l = map.texels[y * map.width + x];
-            for (k, b) in sh9_basis(d).into_iter().enumerate() {
+            for (k, b) in sh9_cell(t0, t1, p0, p1).into_iter().enumerate() {
                 for ch in 0..3 {
-                    c[k][ch] += l[ch] as f64 * b * d_omega;
+                    c[k][ch] += l[ch] as f64 * b;
                 }
             }
         }

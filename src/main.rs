@@ -266,6 +266,7 @@ fn render_hybrid(
         },
         exposure: args.exposure,
         curve: args.tonemap.curve(),
+        ibl: Default::default(),
     };
     let image = umbra::render::hybrid(ctx, scene, camera, &settings)?;
     let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();

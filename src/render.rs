@@ -5,6 +5,7 @@ use crate::gpu::layout::{PathParams, PathStats};
 use crate::gpu::scene::GpuScene;
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
+use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
@@ -219,6 +220,8 @@ pub struct HybridSettings {
     pub exposure: f32,
     /// Tone curve of the display image.
     pub curve: ToneCurve,
+    /// The image-based lighting precomputation.
+    pub ibl: IblSettings,
 }
 
 /// A hybrid render: the linear image, its G-buffer and the GPU time of each pass.
@@ -236,7 +239,8 @@ pub struct HybridImage {
     pub pass_ms: Vec<(String, f64)>,
 }
 
-/// Renders `scene` with the hybrid pipeline: G-buffer, deferred lighting, tonemap.
+/// Renders `scene` with the hybrid pipeline: the IBL precomputation (BRDF table, prefiltered
+/// environment, SH irradiance), G-buffer, deferred lighting, tonemap.
 pub fn hybrid(
     ctx: &Context,
     scene: &GpuScene,
@@ -252,16 +256,30 @@ pub fn hybrid(
     let tonemap = TonemapPass::new(ctx)?;
     let gbuffer_params = GBufferPass::params(camera, size);
     let deferred_params = DeferredPass::params(scene, camera, size, &settings.lighting);
-    let mut timer = GpuTimer::new(ctx, 3)?;
+    let ibl = IblResources::new(ctx, scene, &settings.ibl)?;
+    // Ambient occlusion: none yet (1 everywhere), an image of the G-buffer's size for SSAO to fill.
+    let ao = Image::storage_2d(ctx, "hybrid ambient occlusion", size.0, size.1, raw::Format::R32_SFLOAT)?;
+    ao.write(ctx, &vec![1.0f32; size.0 as usize * size.1 as usize])?;
+    let mut timer = GpuTimer::new(ctx, 6)?;
     ctx.submit(|cmd| {
         output.init_general(ctx, cmd);
         display.init_general(ctx, cmd);
         timer.reset(cmd);
+        ibl.record(ctx, cmd, scene, Some(&mut timer))?;
         timer.begin(cmd, "gbuffer")?;
         gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
         timer.end(cmd)?;
         timer.begin(cmd, "lighting")?;
-        deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &deferred_params)?;
+        deferred.record(
+            ctx,
+            cmd,
+            scene,
+            &gbuffer.views(),
+            output.view,
+            &ibl,
+            Some(ao.view),
+            &deferred_params,
+        )?;
         timer.end(cmd)?;
         timer.begin(cmd, "tonemap")?;
         tonemap.record(ctx, cmd, output.view, display.view, size, settings.exposure, settings.curve)?;

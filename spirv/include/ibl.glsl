@@ -99,6 +99,35 @@ void sh9_basis(vec3 d, out float y[9]) {
     y[8] = 0.546274215 * (d.x * d.x - d.y * d.y);
 }
 
+// The SH basis integrated exactly over the lat-long cell [theta0, theta1] x [phi0, phi1]
+// (direction (sin t sin p, cos t, -sin t cos p) as env_direction), so a piecewise-constant map
+// projects exactly (a constant map has no band 1 or 2).
+void sh9_cell(float t0, float t1, float p0, float p1, out float y[9]) {
+    float dp = p1 - p0;
+    float ps = cos(p0) - cos(p1);
+    float pc = sin(p1) - sin(p0);
+    float s2 = 0.25 * (sin(2.0 * p1) - sin(2.0 * p0));
+    float pss = 0.5 * dp - s2;
+    float pcc = 0.5 * dp + s2;
+    float psc = 0.5 * (sin(p1) * sin(p1) - sin(p0) * sin(p0));
+    float c0 = cos(t0), c1 = cos(t1), n0 = sin(t0), n1 = sin(t1);
+    float t1_ = c0 - c1;
+    float ts = 0.5 * (t1 - t0) - 0.25 * (sin(2.0 * t1) - sin(2.0 * t0));
+    float tc = 0.5 * (n1 * n1 - n0 * n0);
+    float tss = (c0 - c0 * c0 * c0 / 3.0) - (c1 - c1 * c1 * c1 / 3.0);
+    float tcc = (c0 * c0 * c0 - c1 * c1 * c1) / 3.0;
+    float tsc = (n1 * n1 * n1 - n0 * n0 * n0) / 3.0;
+    y[0] = 0.282094792 * t1_ * dp;
+    y[1] = 0.488602512 * tc * dp;
+    y[2] = -0.488602512 * ts * pc;
+    y[3] = 0.488602512 * ts * ps;
+    y[4] = 1.092548431 * tsc * ps;
+    y[5] = -1.092548431 * tsc * pc;
+    y[6] = 0.315391565 * (3.0 * tss * pcc - t1_ * dp);
+    y[7] = -1.092548431 * tss * psc;
+    y[8] = 0.546274215 * (tss * pss - tcc * dp);
+}
+
 // Clamped-cosine convolution factors A_l of band l (Ramamoorthi and Hanrahan 2001).
 float sh9_band_factor(uint i) {
     return i == 0u ? PI : (i < 4u ? 2.0 * PI / 3.0 : 0.25 * PI);

@@ -288,7 +288,7 @@ pub struct DeferredParams {
     pub env: [f32; 4],
     /// Width, height, frame, seed.
     pub size_frame: [u32; 4],
-    /// Light triangles, punctual lights, shadow rays per pixel for area lights, unused.
+    /// Light triangles, punctual lights, shadow rays per pixel for area lights, flags (1: IBL).
     pub counts: [u32; 4],
     /// Environment map width, height, unused, unused.
     pub env_info: [u32; 4],

@@ -314,7 +314,7 @@ fn split_sum_error_grows_with_roughness_and_grazing_angle() {
     let spheres = per_material(&hyb.gbuffer, &hyb.color, &pt, &view, |_| true);
     // Error and its standard error (from the path tracer's noise) of one material's sums.
     let rel = |e: &[f64; 4]| ((e[0] - e[1]).abs() / e[1], e[2].sqrt() * e[0] / (e[1] * e[1]));
-    let mut columns = vec![(0.0, 0.0, 0); 7];
+    let mut columns = [(0.0, 0.0, 0); 7];
     eprintln!("roughness metallic  pixels  hybrid    path      rel. error");
     for (&m, e) in &spheres {
         let mat = &scene.materials[m as usize];

@@ -104,6 +104,7 @@ impl DeferredPass {
     /// `GENERAL` layout of the G-buffer's size) and a compute-to-compute barrier after it. Never
     /// submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `ao` is an
     /// `R32_SFLOAT` image of the G-buffer's size in `GENERAL` layout (1 = unoccluded), or none.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,

@@ -1,7 +1,7 @@
 //! A small host engine, written only with `ash` and `gpu-allocator`, that uses umbra on its own
 //! device: it creates its instance, device, allocator, images and command buffer, writes a
-//! G-buffer with its own kernel (`examples/embed_gbuffer.comp`), asks umbra to record deferred
-//! lighting and tone mapping into its command buffer, submits with its own fence and writes a PNG.
+//! G-buffer with its own kernel (`examples/embed_gbuffer.comp`), asks umbra to record SSAO,
+//! deferred lighting and tone mapping into its command buffer, submits with its own fence and writes a PNG.
 //!
 //! ```sh
 //! cargo run --example embed -- embed.png          # UMBRA_VALIDATION=1 turns the layer on
@@ -21,6 +21,7 @@ use std::ffi::c_void;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use umbra::embed::Renderer;
+use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::gbuffer::GBufferViews;
 use umbra::passes::tonemap::ToneCurve;
@@ -390,9 +391,12 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         }
         images.push(host.image(&format!("{set} hdr"), size, vk::Format::R32G32B32A32_SFLOAT)?);
         images.push(host.image(&format!("{set} ldr"), size, vk::Format::R8G8B8A8_UNORM)?);
+        images.push(host.image(&format!("{set} ssao"), size, vk::Format::R32_SFLOAT)?);
+        images.push(host.image(&format!("{set} ssao blurred"), size, vk::Format::R32_SFLOAT)?);
     }
+    const SET: usize = 9; // images per set: 5 G-buffer, hdr, ldr, ssao, ssao blurred
     let views = |set: usize| {
-        let v = |i: usize| images[set * 7 + i].view;
+        let v = |i: usize| images[set * SET + i].view;
         GBufferViews { size, depth: v(0), normal: v(1), base: v(2), emission: v(3), material: v(4) }
     };
     let (host_views, umbra_views) = (views(0), views(1));
@@ -550,19 +554,26 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)];
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&written));
 
-        // 2. umbra lights the host's G-buffer and tone-maps it into the host's images.
-        let lighting = LightingSettings { shadow_rays: 16, ..LightingSettings::default() };
+        // 2. umbra computes SSAO on the host's G-buffer, lights it (a dim constant sky as
+        // image-based light, occluded by the SSAO) and tone-maps it into the host's images.
+        let lighting = LightingSettings { shadow_rays: 16, env: [0.3; 3], ..LightingSettings::default() };
+        let ao_settings = AoSettings { radius: 0.1, ..AoSettings::default() };
         let curve = ToneCurve::KhronosPbrNeutral;
-        renderer.record_lighting(cmd, &camera, &host_views, images[5].view, &lighting)?;
-        renderer.record_tonemap(cmd, images[5].view, images[6].view, size, 0.0, curve)?;
-        // 3. For comparison: umbra's own G-buffer, lit and tone-mapped the same way.
-        renderer.record_gbuffer(cmd, &camera, &umbra_views)?;
-        renderer.record_lighting(cmd, &camera, &umbra_views, images[12].view, &lighting)?;
-        renderer.record_tonemap(cmd, images[12].view, images[13].view, size, 0.0, curve)?;
+        for (set, gbuffer) in [(0, &host_views), (1, &umbra_views)] {
+            let image = |i: usize| &images[set * SET + i];
+            if set == 1 {
+                // 3. For comparison: umbra's own G-buffer, then the same passes.
+                renderer.record_gbuffer(cmd, &camera, gbuffer)?;
+            }
+            let ao =
+                renderer.record_ssao(cmd, &camera, gbuffer, image(7).view, image(8).view, &ao_settings)?;
+            renderer.record_lighting(cmd, &camera, gbuffer, image(5).view, Some(ao), &lighting)?;
+            renderer.record_tonemap(cmd, image(5).view, image(6).view, size, 0.0, curve)?;
+        }
 
         // The host copies its LDR images out: its own barrier from umbra's compute writes, and
         // its own layout change (umbra leaves every image in GENERAL).
-        let to_copy: Vec<_> = [&images[6], &images[13]]
+        let to_copy: Vec<_> = [&images[6], &images[SET + 6]]
             .iter()
             .map(|i| {
                 vk::ImageMemoryBarrier2::default()
@@ -577,7 +588,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             })
             .collect();
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_copy));
-        for (image, buffer) in [&images[6], &images[13]].into_iter().zip(&readback) {
+        for (image, buffer) in [&images[6], &images[SET + 6]].into_iter().zip(&readback) {
             let region = vk::BufferImageCopy::default()
                 .image_subresource(vk::ImageSubresourceLayers {
                     aspect_mask: vk::ImageAspectFlags::COLOR,

@@ -1,12 +1,15 @@
 #version 460
 // Deferred lighting of the G-buffer (gbuffer.comp) with the path tracer's BSDF and lights:
 // emission, punctual lights and emissive triangles with ray-traced shadows (area lights sampled,
-// `counts.z` shadow rays per pixel, so shadows are soft), and image-based lighting, multiplied by
-// ambient occlusion. One bounce: no indirect light beyond what IBL approximates.
+// `counts.z` shadow rays per pixel, so shadows are soft), and split-sum image-based lighting
+// (ibl.glsl; counts.w bit 0) multiplied by ambient occlusion. One bounce: no indirect light beyond what IBL approximates.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
+
+// Bits of params.counts.w.
+const uint DEFERRED_IBL = 1u;
 
 layout(constant_id = 0) const bool HAS_TEXTURES = false;
 layout(constant_id = 1) const bool HAS_LIGHTS = false;
@@ -34,12 +37,73 @@ layout(set = 0, binding = 14, rgba16f) uniform readonly image2D gb_base;
 layout(set = 0, binding = 15, rgba16f) uniform readonly image2D gb_emission;
 layout(set = 0, binding = 16, rg32ui) uniform readonly uimage2D gb_material;
 layout(set = 0, binding = 17, rgba32f) uniform writeonly image2D out_color;
+layout(set = 0, binding = 18, std430) readonly buffer IblLut { vec4 ibl_lut[]; };
+layout(set = 0, binding = 19, std430) readonly buffer IblPrefiltered { vec4 ibl_prefiltered[]; };
+layout(set = 0, binding = 20, std430) readonly buffer IblSh { vec4 ibl_sh[]; };
+// Ambient occlusion multiplying the IBL term (1 = unoccluded); a 1x1 image means none.
+layout(set = 0, binding = 21, r32f) uniform readonly image2D ao_image;
 layout(push_constant) uniform Push { DeferredParams params; };
 
 #include "random.glsl"
 #include "gbuffer.glsl"
 #include "environment.glsl"
 #include "shading.glsl"
+#include "ibl.glsl"
+
+// The BRDF table (A, B, C, D) at (n.v, perceptual roughness), bilinear between texel centres.
+vec4 ibl_table(float nv, float roughness) {
+    float n = float(IBL_LUT_SIZE);
+    vec2 p = clamp(vec2(nv, roughness) * n - 0.5, vec2(0.0), vec2(n - 1.0));
+    uvec2 i0 = uvec2(p);
+    uvec2 i1 = min(i0 + 1u, uvec2(IBL_LUT_SIZE - 1u));
+    vec2 f = p - vec2(i0);
+    vec4 a = mix(ibl_lut[i0.y * IBL_LUT_SIZE + i0.x], ibl_lut[i0.y * IBL_LUT_SIZE + i1.x], f.x);
+    vec4 b = mix(ibl_lut[i1.y * IBL_LUT_SIZE + i0.x], ibl_lut[i1.y * IBL_LUT_SIZE + i1.x], f.x);
+    return mix(a, b, f.y);
+}
+
+// Prefiltered level k at direction r: level 0 is the map itself (nearest, as env_radiance).
+vec3 ibl_level(uint k, vec3 r) {
+    uvec2 src = params.env_info.xy;
+    if (k == 0u) {
+        return env_radiance(r, src);
+    }
+    uvec4 idx;
+    vec4 w;
+    equirect_taps(env_uv(r), ibl_level_size(k, src), idx, w);
+    uint o = ibl_level_offset(k, src);
+    return w.x * ibl_prefiltered[o + idx.x].rgb + w.y * ibl_prefiltered[o + idx.y].rgb +
+           w.z * ibl_prefiltered[o + idx.z].rgb + w.w * ibl_prefiltered[o + idx.w].rgb;
+}
+
+// Split-sum image-based lighting of surface s at shading normal n seen along wo (world), nv =
+// n.wo > 0: the prefiltered environment times the table's specular albedo, plus the diffuse
+// colour times irradiance / pi times the table's diffuse Fresnel weighting, blended by metallic
+// as bsdf_eval blends.
+vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
+    vec3 r = reflect(-wo, n);
+    vec4 table = ibl_table(nv, roughness);
+    vec3 specular_light = params.env.rgb;
+    vec3 irradiance_over_pi = params.env.rgb;
+    if (HAS_ENV_MAP) {
+        float lod = clamp(roughness, 0.0, 1.0) * float(IBL_LEVELS - 1u);
+        uint k0 = min(uint(lod), IBL_LEVELS - 1u);
+        uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
+        specular_light *= mix(ibl_level(k0, r), ibl_level(k1, r), lod - float(k0));
+        float y[9];
+        sh9_basis(n, y);
+        vec3 e = vec3(0.0);
+        for (uint k = 0u; k < 9u; ++k) {
+            e += ibl_sh[k].rgb * y[k];
+        }
+        irradiance_over_pi *= max(e, vec3(0.0)) * INV_PI;
+    }
+    vec3 dielectric_spec = s.f0 * table.x + s.f90 * table.y;
+    float diffuse_weight = 1.0 - max3(s.f0) * table.z - s.f90 * table.w;
+    vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * irradiance_over_pi;
+    vec3 metal = (s.base * table.x + table.y) * specular_light;
+    return mix(dielectric, metal, s.metallic);
+}
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
@@ -74,6 +138,12 @@ void main() {
     vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
     if (wo_local.z > 0.0) {
         Surface s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w);
+
+        // Image-based lighting (split sum), times ambient occlusion.
+        if ((params.counts.w & DEFERRED_IBL) != 0u) {
+            float ao = imageLoad(ao_image, min(pixel, imageSize(ao_image) - 1)).x;
+            radiance += ao * ibl_lighting(s, normal_rough.w, n, wo, wo_local.z);
+        }
 
         // Punctual lights: one shadow ray each.
         if (HAS_PUNCTUAL) {

@@ -28,6 +28,7 @@ layout(set = 0, binding = 17, std430) buffer DeferredParamsBuffer { DeferredPara
 layout(set = 0, binding = 18, std430) buffer TonemapParamsBuffer { TonemapParams tonemap_params_check[]; };
 layout(set = 0, binding = 19, std430) buffer AoParamsBuffer { AoParams ao_params_check[]; };
 layout(set = 0, binding = 20, std430) buffer AoBlurParamsBuffer { AoBlurParams ao_blur_params_check[]; };
+layout(set = 0, binding = 21, std430) buffer IblParamsBuffer { IblParams ibl_params_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -51,4 +52,5 @@ void main() {
     tonemap_params_check[0].curve += 1u;
     ao_params_check[0].counts.x += 1u;
     ao_blur_params_check[0].size.x += 1u;
+    ibl_params_check[0].dst.x += 1u;
 }

@@ -9,7 +9,8 @@
 //! let mut renderer = Renderer::new(&ctx, &scene)?;          // uploads the scene once
 //! // per frame, inside the host's command buffer:
 //! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;   // or the host writes its own
-//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, &lighting)?;
+//! let ao = renderer.record_ssao(cmd, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
+//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, Some(ao), &lighting)?;
 //! renderer.record_tonemap(cmd, hdr_view, ldr_view, size, 0.0, ToneCurve::KhronosPbrNeutral)?;
 //! // or progressive path tracing, a few samples per frame, resolved into the host's image:
 //! renderer.record_path_samples(cmd, &camera, &target, &path_settings, first_sample, count)?;
@@ -37,8 +38,10 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::scene::GpuScene;
+use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBufferPass, GBufferViews};
+use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::render::PathSettings;
@@ -51,6 +54,10 @@ pub struct Renderer {
     scene: GpuScene,
     gbuffer: GBufferPass,
     deferred: DeferredPass,
+    ibl: IblResources,
+    ssao: SsaoPass,
+    ao_blur: AoBlurPass,
+    rtao: RtaoPass,
     tonemap: TonemapPass,
     path: PathTracePass,
     path_options: (Microfacet, Heuristic),
@@ -64,6 +71,10 @@ impl Renderer {
         Ok(Self {
             gbuffer: GBufferPass::new(ctx, gpu_scene.texture_count > 0)?,
             deferred: DeferredPass::new(ctx, &gpu_scene)?,
+            ibl: IblResources::build(ctx, &gpu_scene, &IblSettings::default())?,
+            ssao: SsaoPass::new(ctx)?,
+            ao_blur: AoBlurPass::new(ctx)?,
+            rtao: RtaoPass::new(ctx)?,
             tonemap: TonemapPass::new(ctx)?,
             path: PathTracePass::for_scene(ctx, &gpu_scene, Microfacet::Ggx, Heuristic::Power)?,
             path_options: (Microfacet::Ggx, Heuristic::Power),
@@ -159,6 +170,46 @@ impl Renderer {
         self.gbuffer.record(&self.ctx, cmd, &self.scene, target, &params)
     }
 
+    /// Records SSAO of `gbuffer` (umbra's or the host's) into `raw_ao` and, when `settings.blur`,
+    /// its depth-aware blur into `blurred`: both `R32_SFLOAT` storage images of the G-buffer's
+    /// size in `GENERAL` layout (1 = unoccluded). Returns the view holding the result, for
+    /// [`Self::record_lighting`].
+    pub fn record_ssao(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        raw_ao: raw::ImageView,
+        blurred: raw::ImageView,
+        settings: &AoSettings,
+    ) -> Result<raw::ImageView> {
+        settings.validate()?;
+        let params = SsaoPass::params(camera, gbuffer.size, settings);
+        self.ssao.record(&self.ctx, cmd, gbuffer, raw_ao, &params)?;
+        if !settings.blur {
+            return Ok(raw_ao);
+        }
+        let blur_params = AoBlurPass::params(camera, gbuffer.size);
+        self.ao_blur.record(&self.ctx, cmd, gbuffer, raw_ao, blurred, &blur_params)?;
+        Ok(blurred)
+    }
+
+    /// Records ray-traced ambient occlusion of `gbuffer` (SSAO's ground truth: `settings.samples`
+    /// rays of length `settings.radius` per pixel) into `output`, an `R32_SFLOAT` storage image of
+    /// the G-buffer's size in `GENERAL` layout.
+    pub fn record_rtao(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        settings: &AoSettings,
+    ) -> Result<()> {
+        settings.validate()?;
+        let params = RtaoPass::params(camera, gbuffer.size, settings);
+        self.rtao.record(&self.ctx, cmd, &self.scene, gbuffer, output, &params)
+    }
+
     /// Records deferred lighting of `gbuffer` (umbra's or the host's own) seen from `camera` into
     /// `output` (`R32G32B32A32_SFLOAT`, the G-buffer's size).
     pub fn record_lighting(
@@ -167,10 +218,11 @@ impl Renderer {
         camera: &Camera,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
+        ao: Option<raw::ImageView>,
         settings: &LightingSettings,
     ) -> Result<()> {
         let params = DeferredPass::params(&self.scene, camera, gbuffer.size, settings);
-        self.deferred.record(&self.ctx, cmd, &self.scene, gbuffer, output, &params)
+        self.deferred.record(&self.ctx, cmd, &self.scene, gbuffer, output, &self.ibl, ao, &params)
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`

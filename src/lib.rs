@@ -11,6 +11,7 @@ pub mod environment;
 pub mod error;
 pub mod geometry;
 pub mod gpu;
+pub mod ibl;
 pub mod kernels;
 pub mod output;
 pub mod passes;

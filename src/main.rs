@@ -86,10 +86,16 @@ struct RenderArgs {
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles.
     #[arg(long, default_value_t = 4)]
     shadow_rays: u32,
-    /// AO modes: kernel directions (ao) or rays (rtao) per pixel.
+    /// Hybrid: no SSAO (the image-based light is not occluded).
+    #[arg(long)]
+    no_ao: bool,
+    /// Hybrid: no image-based lighting (split-sum specular, SH9 diffuse).
+    #[arg(long)]
+    no_ibl: bool,
+    /// AO modes and hybrid SSAO: kernel directions (ao) or rays (rtao) per pixel.
     #[arg(long, default_value_t = 16)]
     ao_samples: u32,
-    /// AO modes: the occlusion radius in scene units (metres).
+    /// AO modes and hybrid SSAO: the occlusion radius in scene units (metres).
     #[arg(long, default_value_t = 0.5)]
     ao_radius: f32,
     /// AO modes: skip the depth-aware blur (ao blurs by default, rtao never does).
@@ -266,10 +272,19 @@ fn render_hybrid(
             shadow_rays: args.shadow_rays,
             seed: args.seed,
             env,
+            ibl: !args.no_ibl,
             ..Default::default()
         },
         exposure: args.exposure,
         curve: args.tonemap.curve(),
+        ibl: Default::default(),
+        ao: (!args.no_ao).then(|| umbra::passes::ao::AoSettings {
+            samples: args.ao_samples,
+            radius: args.ao_radius,
+            blur: !args.ao_no_blur,
+            seed: args.seed,
+            ..Default::default()
+        }),
     };
     let image = umbra::render::hybrid(ctx, scene, camera, &settings)?;
     let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();

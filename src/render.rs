@@ -6,6 +6,7 @@ use crate::gpu::scene::GpuScene;
 use crate::passes::ao::{ao_params, AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
+use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
@@ -199,6 +200,10 @@ pub struct HybridSettings {
     pub exposure: f32,
     /// Tone curve of the display image.
     pub curve: ToneCurve,
+    /// The image-based lighting precomputation.
+    pub ibl: IblSettings,
+    /// SSAO (and its blur) multiplying the image-based (ambient) light; `None`: no occlusion.
+    pub ao: Option<AoSettings>,
 }
 
 /// A hybrid render: the linear image, its G-buffer and the GPU time of each pass.
@@ -216,7 +221,8 @@ pub struct HybridImage {
     pub pass_ms: Vec<(String, f64)>,
 }
 
-/// Renders `scene` with the hybrid pipeline: G-buffer, deferred lighting, tonemap.
+/// Renders `scene` with the hybrid pipeline: the IBL precomputation (BRDF table, prefiltered
+/// environment, SH irradiance), G-buffer, deferred lighting, tonemap.
 pub fn hybrid(
     ctx: &Context,
     scene: &GpuScene,
@@ -232,16 +238,48 @@ pub fn hybrid(
     let tonemap = TonemapPass::new(ctx)?;
     let gbuffer_params = GBufferPass::params(camera, size);
     let deferred_params = DeferredPass::params(scene, camera, size, &settings.lighting);
-    let mut timer = GpuTimer::new(ctx, 3)?;
+    let ibl = IblResources::new(ctx, scene, &settings.ibl)?;
+    // SSAO into `ao_raw`, blurred into `ao` (when the settings ask for it).
+    let ao_images = match &settings.ao {
+        Some(ao) => {
+            ao.validate()?;
+            let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
+            Some((
+                make("hybrid ssao")?,
+                make("hybrid ssao blurred")?,
+                SsaoPass::new(ctx)?,
+                AoBlurPass::new(ctx)?,
+            ))
+        }
+        None => None,
+    };
+    let mut timer = GpuTimer::new(ctx, 8)?;
     ctx.submit(|cmd| {
         output.init_general(ctx, cmd);
         display.init_general(ctx, cmd);
         timer.reset(cmd);
+        ibl.record(ctx, cmd, scene, Some(&mut timer))?;
         timer.begin(cmd, "gbuffer")?;
         gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
         timer.end(cmd)?;
+        let mut ao_view = None;
+        if let (Some(ao), Some((ao_raw, ao_blurred, ssao, blur))) = (&settings.ao, &ao_images) {
+            ao_raw.init_general(ctx, cmd);
+            ao_blurred.init_general(ctx, cmd);
+            timer.begin(cmd, "ssao")?;
+            ssao.record(ctx, cmd, &gbuffer.views(), ao_raw.view, &SsaoPass::params(camera, size, ao))?;
+            timer.end(cmd)?;
+            ao_view = Some(ao_raw.view);
+            if ao.blur {
+                timer.begin(cmd, "ao_blur")?;
+                let blur_params = AoBlurPass::params(camera, size);
+                blur.record(ctx, cmd, &gbuffer.views(), ao_raw.view, ao_blurred.view, &blur_params)?;
+                timer.end(cmd)?;
+                ao_view = Some(ao_blurred.view);
+            }
+        }
         timer.begin(cmd, "lighting")?;
-        deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &deferred_params)?;
+        deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &ibl, ao_view, &deferred_params)?;
         timer.end(cmd)?;
         timer.begin(cmd, "tonemap")?;
         tonemap.record(ctx, cmd, output.view, display.view, size, settings.exposure, settings.curve)?;

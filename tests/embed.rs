@@ -74,7 +74,14 @@ fn update_scene_equals_a_fresh_renderer() {
         gpu.submit(|cmd| {
             hdr.init_general(&gpu, cmd);
             renderer.record_gbuffer(cmd, camera, &gbuffer.views())?;
-            renderer.record_lighting(cmd, camera, &gbuffer.views(), hdr.view, &LightingSettings::default())
+            renderer.record_lighting(
+                cmd,
+                camera,
+                &gbuffer.views(),
+                hdr.view,
+                None,
+                &LightingSettings::default(),
+            )
         })
         .unwrap();
         hdr.read(&gpu).unwrap()

@@ -165,7 +165,7 @@ struct DeferredParams {
     vec4 cam_up;       // up * tan(yfov/2)
     vec4 env;          // constant environment radiance rgb (or the map's multiplier), unused
     uvec4 size_frame;  // width, height, frame, seed
-    uvec4 counts;      // light triangles, punctual lights, shadow rays per pixel for area lights, unused
+    uvec4 counts;      // light triangles, punctual lights, shadow rays per pixel for area lights, flags (1: IBL)
     uvec4 env_info;    // environment map width, height, unused, unused
 };
 
@@ -203,6 +203,13 @@ struct AoBlurParams {
     vec4 cam_up;       // up * tan(yfov/2)
     vec4 weights;      // plane-distance sigma (fraction of the depth), normal exponent, unused, unused
     uvec4 size;        // width, height, unused, unused
+};
+
+// Push constants of the IBL precomputation kernels (ibl_*.comp).
+struct IblParams {
+    uvec4 src;     // source width, height (the environment map), level read (chain kernels), unused
+    uvec4 dst;     // level width, height, texel offset of the level written, samples (per axis for the LUT)
+    vec4 values;   // perceptual roughness of the level (prefilter), unused, unused, unused
 };
 
 #endif

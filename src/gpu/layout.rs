@@ -290,7 +290,7 @@ pub struct DeferredParams {
     pub env: [f32; 4],
     /// Width, height, frame, seed.
     pub size_frame: [u32; 4],
-    /// Light triangles, punctual lights, shadow rays per pixel for area lights, unused.
+    /// Light triangles, punctual lights, shadow rays per pixel for area lights, flags (1: IBL).
     pub counts: [u32; 4],
     /// Environment map width, height, unused, unused.
     pub env_info: [u32; 4],
@@ -361,6 +361,19 @@ pub struct SampleTestParams {
     pub config: [u32; 4],
 }
 const _: () = assert!(size_of::<SampleTestParams>() == 32);
+
+/// Push constants of the IBL precomputation kernels (`ibl_*.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct IblParams {
+    /// Source width, height (the environment map), level read (chain kernels), unused.
+    pub src: [u32; 4],
+    /// Level width, height, texel offset of the level written, samples (per axis for the LUT).
+    pub dst: [u32; 4],
+    /// Perceptual roughness of the level (prefilter), unused ×3.
+    pub values: [f32; 4],
+}
+const _: () = assert!(size_of::<IblParams>() == 48);
 
 /// One member of a GPU struct as the host lays it out.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -449,5 +462,6 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         layout_of!(GpuLight { position_range, direction_kind, intensity, cone }),
         layout_of!(AoParams { cam_origin, cam_forward, cam_right, cam_up, radius_bias, size_frame, counts }),
         layout_of!(AoBlurParams { cam_forward, cam_right, cam_up, weights, size }),
+        layout_of!(IblParams { src, dst, values }),
     ]
 }

@@ -1,15 +1,18 @@
 //! Deferred lighting (`spirv/deferred.comp`): the G-buffer shaded with the path tracer's BSDF
 //! (`shading.glsl`, `bsdf.glsl`): emission, punctual lights and emissive triangles with
 //! ray-traced shadows, into a linear `R32G32B32A32_SFLOAT` image (`GENERAL` layout; alpha 1).
-//! Pixels without a surface get the environment seen directly.
+//! Pixels without a surface get the environment seen directly. Split-sum image-based lighting
+//! ([`IblResources`], precomputed once per scene) times an ambient-occlusion image lights every
+//! surface with the environment (a constant or the scene's map).
 
 use super::gbuffer::GBufferViews;
+use super::ibl::IblResources;
 use crate::error::Result;
 use crate::gpu::layout::DeferredParams;
 use crate::gpu::scene::GpuScene;
 use crate::render::camera_params;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, PipelineDesc};
+use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, Image, PipelineDesc};
 
 /// What the lighting pass computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,17 +26,21 @@ pub struct LightingSettings {
     pub seed: u32,
     /// Constant environment radiance, or the environment map's multiplier (rgb).
     pub env: [f32; 3],
+    /// Split-sum image-based lighting of the environment (times ambient occlusion).
+    pub ibl: bool,
 }
 
 impl Default for LightingSettings {
     fn default() -> Self {
-        Self { shadow_rays: 4, frame: 0, seed: 0, env: [0.0; 3] }
+        Self { shadow_rays: 4, frame: 0, seed: 0, env: [0.0; 3], ibl: true }
     }
 }
 
 /// `deferred.comp`, specialised for the scene's features.
 pub struct DeferredPass {
     pipeline: ComputePipeline,
+    /// 1×1 `R32_SFLOAT` of 1.0: the ambient occlusion when the caller has none.
+    no_ao: Image,
 }
 
 impl DeferredPass {
@@ -43,8 +50,9 @@ impl DeferredPass {
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
     /// an environment map).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 18];
-        bindings[12..].fill(raw::DescriptorType::STORAGE_IMAGE);
+        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 22];
+        bindings[12..18].fill(raw::DescriptorType::STORAGE_IMAGE);
+        bindings[21] = raw::DescriptorType::STORAGE_IMAGE;
         let pipeline = ComputePipeline::new(
             ctx,
             "deferred",
@@ -60,7 +68,9 @@ impl DeferredPass {
                 ],
             },
         )?;
-        Ok(Self { pipeline })
+        let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
+        no_ao.write(ctx, &[1.0f32])?;
+        Ok(Self { pipeline, no_ao })
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -80,14 +90,21 @@ impl DeferredPass {
             cam_up,
             env: [r, g, b, 0.0],
             size_frame: [size.0, size.1, settings.frame, settings.seed],
-            counts: [scene.light_count, scene.punctual_count, settings.shadow_rays.max(1), 0],
+            counts: [
+                scene.light_count,
+                scene.punctual_count,
+                settings.shadow_rays.max(1),
+                settings.ibl as u32,
+            ],
             env_info: [env_w, env_h, 0, 0],
         }
     }
 
     /// Records the pass (G-buffer in, `output` written: an `R32G32B32A32_SFLOAT` storage image in
     /// `GENERAL` layout of the G-buffer's size) and a compute-to-compute barrier after it. Never
-    /// submits.
+    /// submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `ao` is an
+    /// `R32_SFLOAT` image of the G-buffer's size in `GENERAL` layout (1 = unoccluded), or none.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,
@@ -95,6 +112,8 @@ impl DeferredPass {
         scene: &GpuScene,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
+        ibl: &IblResources,
+        ao: Option<raw::ImageView>,
         params: &DeferredParams,
     ) -> Result<()> {
         let p = &self.pipeline;
@@ -115,6 +134,10 @@ impl DeferredPass {
         ];
         resources.extend(gbuffer.in_order().map(Descriptor::StorageView));
         resources.push(Descriptor::StorageView(output));
+        resources.push(Descriptor::Buffer(&ibl.lut));
+        resources.push(Descriptor::Buffer(&ibl.prefiltered));
+        resources.push(Descriptor::Buffer(&ibl.sh));
+        resources.push(Descriptor::StorageView(ao.unwrap_or(self.no_ao.view)));
         p.push_descriptors(cmd, &resources)?;
         p.push_constants(cmd, params)?;
         p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;

@@ -3,5 +3,6 @@
 pub mod ao;
 pub mod deferred;
 pub mod gbuffer;
+pub mod ibl;
 pub mod pathtrace;
 pub mod tonemap;

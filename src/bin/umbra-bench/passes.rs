@@ -35,6 +35,7 @@ pub fn run(
     let output = Image::storage_2d(ctx, "bench colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
     let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
     let deferred = DeferredPass::new(ctx, scene)?;
+    let ibl = umbra::passes::ibl::IblResources::build(ctx, scene, &Default::default())?;
     let pathtrace = PathTracePass::for_scene(ctx, scene, Microfacet::Ggx, Heuristic::Power)?;
     let target = PathTarget::new(ctx, size)?;
     let gbuffer_params = GBufferPass::params(camera, size);
@@ -48,7 +49,7 @@ pub fn run(
     super::rays::warm_up(|| {
         ctx.submit(|cmd| {
             gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
-            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &deferred_params)?;
+            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &ibl, None, &deferred_params)?;
             pathtrace.record(ctx, cmd, scene, &target, &path_params)
         })
     })?;
@@ -63,7 +64,7 @@ pub fn run(
             gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
             timer.end(cmd)?;
             timer.begin(cmd, "lighting")?;
-            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &deferred_params)?;
+            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &ibl, None, &deferred_params)?;
             timer.end(cmd)?;
             timer.begin(cmd, "pathtrace 1 spp")?;
             pathtrace.record(ctx, cmd, scene, &target, &path_params)?;

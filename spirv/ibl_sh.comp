@@ -1,0 +1,56 @@
+#version 460
+// SH9 irradiance of the environment map (ibl.glsl): one workgroup; each invocation projects
+// whole rows (the basis integrated exactly over each texel, sh9_cell), then a tree reduction per coefficient; the result is multiplied by A_l.
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = 128) in;
+
+layout(set = 0, binding = 0, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
+layout(set = 0, binding = 1, std430) buffer Sh { vec4 sh[]; };
+layout(push_constant) uniform Push { IblParams params; };
+
+// Only env_uv / env_direction are used; the sampling tables environment.glsl names are stubs.
+const float env_marginal[1] = float[1](1.0);
+const float env_conditional[1] = float[1](1.0);
+#include "environment.glsl"
+#include "ibl.glsl"
+
+shared vec3 partial[128];
+
+void main() {
+    uint tid = gl_LocalInvocationID.x;
+    uvec2 size = params.src.xy;
+    vec3 c[9];
+    for (uint k = 0u; k < 9u; ++k) {
+        c[k] = vec3(0.0);
+    }
+    for (uint y = tid; y < size.y; y += 128u) {
+        float t0 = PI * float(y) / float(size.y);
+        float t1 = PI * float(y + 1u) / float(size.y);
+        for (uint x = 0u; x < size.x; ++x) {
+            float p0 = (float(x) / float(size.x) - 0.5) * 2.0 * PI;
+            float p1 = (float(x + 1u) / float(size.x) - 0.5) * 2.0 * PI;
+            float cell[9];
+            sh9_cell(t0, t1, p0, p1, cell);
+            vec3 l = env_texels[y * size.x + x].rgb;
+            for (uint k = 0u; k < 9u; ++k) {
+                c[k] += l * cell[k];
+            }
+        }
+    }
+    for (uint k = 0u; k < 9u; ++k) {
+        partial[tid] = c[k];
+        barrier();
+        for (uint s = 64u; s > 0u; s >>= 1u) {
+            if (tid < s) {
+                partial[tid] += partial[tid + s];
+            }
+            barrier();
+        }
+        if (tid == 0u) {
+            sh[k] = vec4(partial[0] * sh9_band_factor(k), 0.0);
+        }
+        barrier();
+    }
+}

@@ -1,0 +1,188 @@
+//! Split-sum image-based lighting, precomputed once per scene and environment (layouts in
+//! `spirv/include/ibl.glsl`): the BRDF table (`ibl_lut.comp`), the box chain of the environment
+//! map (`ibl_downsample.comp`), its GGX-prefiltered roughness levels with filtered importance
+//! sampling (`ibl_prefilter.comp`) and its SH9 irradiance (`ibl_sh.comp`). Without an
+//! environment map (a constant environment) only the table is computed: the prefiltered
+//! radiance and the irradiance of a constant are the constant (and π times it).
+
+use crate::error::Result;
+use crate::gpu::layout::IblParams;
+use crate::gpu::scene::GpuScene;
+use crate::ibl::{chain_level_sizes, prefiltered_level_sizes, IBL_LEVELS, LUT_SIZE};
+use crate::vk::{barrier, raw, Buffer, ComputePipeline, Context, Descriptor, GpuTimer, PipelineDesc};
+use gpu_allocator::MemoryLocation;
+
+/// What the precomputation spends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IblSettings {
+    /// Midpoint samples per axis of each BRDF-table entry (the table is [`LUT_SIZE`]²).
+    pub lut_samples: u32,
+    /// GGX samples per prefiltered texel.
+    pub prefilter_samples: u32,
+}
+
+impl Default for IblSettings {
+    fn default() -> Self {
+        Self { lut_samples: 128, prefilter_samples: 64 }
+    }
+}
+
+/// The split-sum tables of one scene's environment, bound by the deferred lighting pass.
+pub struct IblResources {
+    /// BRDF table: [`LUT_SIZE`]² vec4 (A, B, C, D), see `ibl.glsl`.
+    pub lut: Buffer,
+    /// Prefiltered levels 1.. (level 0 is the scene's `env_texels`), vec4 rgb.
+    pub prefiltered: Buffer,
+    /// Box chain levels 1.. of the map, vec4 rgb.
+    pub chain: Buffer,
+    /// SH9 irradiance coefficients (× A_l), vec4 rgb.
+    pub sh: Buffer,
+    /// The environment map's size, or none for a constant environment.
+    pub env_size: Option<(u32, u32)>,
+    settings: IblSettings,
+    lut_pipeline: ComputePipeline,
+    downsample: ComputePipeline,
+    prefilter: ComputePipeline,
+    sh_pipeline: ComputePipeline,
+}
+
+fn storage(ctx: &Context, name: &str, texels: usize) -> Result<Buffer> {
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER
+        | raw::BufferUsageFlags::TRANSFER_SRC
+        | raw::BufferUsageFlags::TRANSFER_DST;
+    Buffer::new(ctx, name, 16 * texels.max(1) as u64, usage, MemoryLocation::GpuOnly)
+}
+
+fn pipeline(ctx: &Context, kernel: &str, buffers: usize) -> Result<ComputePipeline> {
+    ComputePipeline::new(
+        ctx,
+        kernel,
+        &PipelineDesc {
+            bindings: &vec![raw::DescriptorType::STORAGE_BUFFER; buffers],
+            push_constant_size: std::mem::size_of::<IblParams>() as u32,
+            specialization: &[],
+        },
+    )
+}
+
+impl IblResources {
+    /// Allocates the tables for `scene`'s environment (none when it has no map) and builds the
+    /// pipelines; [`Self::record`] fills them.
+    pub fn new(ctx: &Context, scene: &GpuScene, settings: &IblSettings) -> Result<Self> {
+        let env_size = scene.env_size;
+        let (chain_texels, prefiltered_texels) = match env_size {
+            Some(size) => (
+                chain_level_sizes(size).iter().skip(1).map(|&(w, h)| (w * h) as usize).sum(),
+                prefiltered_level_sizes(size).iter().skip(1).map(|&(w, h)| (w * h) as usize).sum(),
+            ),
+            None => (1, 1),
+        };
+        Ok(Self {
+            lut: storage(ctx, "ibl lut", (LUT_SIZE * LUT_SIZE) as usize)?,
+            prefiltered: storage(ctx, "ibl prefiltered", prefiltered_texels)?,
+            chain: storage(ctx, "ibl chain", chain_texels)?,
+            sh: storage(ctx, "ibl sh", 9)?,
+            env_size,
+            settings: *settings,
+            lut_pipeline: pipeline(ctx, "ibl_lut", 1)?,
+            downsample: pipeline(ctx, "ibl_downsample", 2)?,
+            prefilter: pipeline(ctx, "ibl_prefilter", 3)?,
+            sh_pipeline: pipeline(ctx, "ibl_sh", 2)?,
+        })
+    }
+
+    /// [`Self::new`], then records the precomputation and waits for it.
+    pub fn build(ctx: &Context, scene: &GpuScene, settings: &IblSettings) -> Result<Self> {
+        let ibl = Self::new(ctx, scene, settings)?;
+        ctx.submit(|cmd| ibl.record(ctx, cmd, scene, None))?;
+        Ok(ibl)
+    }
+
+    /// Records the precomputation (`scene` must be the one given to [`Self::new`]), timing the
+    /// table ("ibl lut"), the chain and prefiltered levels ("ibl prefilter") and the SH
+    /// projection ("ibl sh") on `timer` when given (three passes). Never submits; ends with a
+    /// compute-to-compute barrier.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        let begin = |timer: &mut Option<&mut GpuTimer>, name: &str| match timer {
+            Some(t) => t.begin(cmd, name),
+            None => Ok(()),
+        };
+        let end = |timer: &mut Option<&mut GpuTimer>| match timer {
+            Some(t) => t.end(cmd),
+            None => Ok(()),
+        };
+        begin(&mut timer, "ibl lut")?;
+        let p = &self.lut_pipeline;
+        p.bind(cmd);
+        p.push_descriptors(cmd, &[Descriptor::Buffer(&self.lut)])?;
+        let params = IblParams {
+            dst: [LUT_SIZE, LUT_SIZE, 0, self.settings.lut_samples.max(1)],
+            ..Default::default()
+        };
+        p.push_constants(cmd, &params)?;
+        p.dispatch(cmd, [LUT_SIZE, LUT_SIZE, 1], [8, 8, 1])?;
+        barrier::compute_to_compute(ctx, cmd);
+        end(&mut timer)?;
+        let Some(size) = self.env_size else {
+            return Ok(());
+        };
+        if scene.env_size != Some(size) {
+            return Err(crate::Error::Invalid(format!(
+                "IBL tables made for a {size:?} environment map, scene has {:?}",
+                scene.env_size
+            )));
+        }
+        let src = [size.0, size.1, 0, 0];
+
+        begin(&mut timer, "ibl prefilter")?;
+        let p = &self.downsample;
+        p.bind(cmd);
+        p.push_descriptors(cmd, &[Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.chain)])?;
+        for (k, &(w, h)) in chain_level_sizes(size).iter().enumerate().skip(1) {
+            p.push_constants(cmd, &IblParams { src: [size.0, size.1, k as u32, 0], ..Default::default() })?;
+            p.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
+            barrier::compute_to_compute(ctx, cmd);
+        }
+        let p = &self.prefilter;
+        p.bind(cmd);
+        p.push_descriptors(
+            cmd,
+            &[
+                Descriptor::Buffer(&scene.env_texels),
+                Descriptor::Buffer(&self.chain),
+                Descriptor::Buffer(&self.prefiltered),
+            ],
+        )?;
+        let mut offset = 0;
+        for (k, &(w, h)) in prefiltered_level_sizes(size).iter().enumerate().skip(1) {
+            let roughness = k as f32 / (IBL_LEVELS - 1) as f32;
+            p.push_constants(
+                cmd,
+                &IblParams {
+                    src,
+                    dst: [w, h, offset, self.settings.prefilter_samples.max(1)],
+                    values: [roughness, 0.0, 0.0, 0.0],
+                },
+            )?;
+            p.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
+            offset += w * h;
+        }
+        barrier::compute_to_compute(ctx, cmd);
+        end(&mut timer)?;
+
+        begin(&mut timer, "ibl sh")?;
+        let p = &self.sh_pipeline;
+        p.bind(cmd);
+        p.push_descriptors(cmd, &[Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.sh)])?;
+        p.push_constants(cmd, &IblParams { src, ..Default::default() })?;
+        p.dispatch(cmd, [128, 1, 1], [128, 1, 1])?;
+        barrier::compute_to_compute(ctx, cmd);
+        end(&mut timer)
+    }
+}

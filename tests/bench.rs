@@ -32,7 +32,7 @@ fn rays_quick_validates_and_writes_json() {
 
 /// `umbra-bench suite --quick` runs every method, writes JSON, CSV and charts that parse, and
 /// its errors behave: path tracing's relative MSE falls with samples (32 spp has 1/32 of the
-/// variance of 1 spp; the test asks for a quarter) and every error is finite.
+/// variance of 1 spp; the test asks for a quarter), RTAO's with rays, and every error is finite.
 #[test]
 fn suite_quick_writes_json_csv_and_charts() {
     let dir = std::env::temp_dir().join(format!("umbra-suite-{}", std::process::id()));
@@ -50,16 +50,32 @@ fn suite_quick_writes_json_csv_and_charts() {
     let mut rows = 0;
     for scene in scenes {
         let points = scene["points"].as_array().unwrap();
-        rows += points.len();
-        for method in ["pathtrace", "hybrid"] {
+        let ao_points = scene["ao_points"].as_array().unwrap();
+        rows += points.len() + ao_points.len();
+        for method in ["pathtrace", "hybrid", "hybrid, no SSAO", "hybrid, no IBL", "hybrid, SSAO sweep"] {
             assert!(points.iter().any(|p| p["method"] == method), "{method} missing in {}", scene["scene"]);
         }
-        for p in points {
-            for key in ["gpu_ms", "rmse", "rel_mse"] {
+        for method in ["ssao", "rtao"] {
+            assert!(
+                ao_points.iter().any(|p| p["method"] == method),
+                "{method} missing in {}",
+                scene["scene"]
+            );
+        }
+        for (p, keys) in points
+            .iter()
+            .map(|p| (p, &["gpu_ms", "rmse", "rel_mse"][..]))
+            .chain(ao_points.iter().map(|p| (p, &["gpu_ms", "mse"][..])))
+        {
+            for key in keys {
                 let v = p[key].as_f64().unwrap_or(f64::NAN);
                 assert!(v.is_finite() && v >= 0.0, "{key} of {p}");
             }
         }
+        // RTAO converges to its reference: 16 rays have less error than 1 (expected 1/16).
+        let rtao: Vec<f64> =
+            ao_points.iter().filter(|p| p["method"] == "rtao").map(|p| p["mse"].as_f64().unwrap()).collect();
+        assert!(rtao[rtao.len() - 1] < rtao[0] / 4.0, "RTAO error does not fall with rays: {rtao:?}");
     }
     let cornell = scenes[0]["points"].as_array().unwrap();
     let path: Vec<f64> = cornell
@@ -71,9 +87,11 @@ fn suite_quick_writes_json_csv_and_charts() {
 
     let csv = std::fs::read_to_string(dir.join("suite.csv")).expect("suite.csv written");
     assert_eq!(csv.lines().count(), rows + 1, "one CSV row per point plus the header");
-    for key in ["cornell", "spheres"] {
+    for (key, series) in
+        [("cornell", "pathtrace"), ("spheres", "pathtrace"), ("cornell-ao", "rtao"), ("spheres-ao", "ssao")]
+    {
         let svg = std::fs::read_to_string(dir.join(format!("suite-{key}.svg"))).expect("SVG chart");
-        assert!(svg.contains("<svg") && svg.contains("pathtrace"), "SVG chart of {key}");
+        assert!(svg.contains("<svg") && svg.contains(series), "SVG chart of {key}");
         let png = image::open(dir.join(format!("suite-{key}.png"))).expect("PNG chart decodes");
         assert_eq!((png.width(), png.height()), (900, 600));
     }

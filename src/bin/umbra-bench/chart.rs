@@ -1,7 +1,6 @@
 //! One chart per scene: error (relative MSE, log) against GPU time (ms, log), every method a
 //! series, as SVG and PNG (plotters; text drawn with the embedded DejaVu Sans).
 
-use super::suite::Point;
 use anyhow::{anyhow, Context as _, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -23,16 +22,40 @@ const COLOURS: [RGBColor; 6] = [
     RGBColor(23, 190, 207),
 ];
 
+/// One point of a chart: a method at one setting.
+pub struct ChartPoint<'a> {
+    /// The series (method) it belongs to.
+    pub method: &'a str,
+    /// What the point label counts (`spp`, `shadow_rays`, ...).
+    pub unit: &'a str,
+    /// The label.
+    pub value: u32,
+    /// GPU milliseconds (x).
+    pub ms: f64,
+    /// Error (y).
+    pub error: f64,
+}
+
+/// A chart: title, y-axis description and an optional horizontal noise floor.
+pub struct Chart<'a> {
+    /// Title.
+    pub title: &'a str,
+    /// What the y axis measures.
+    pub y_desc: &'a str,
+    /// A horizontal line (the reference's own error), if positive.
+    pub floor: f64,
+}
+
 /// Writes `<stem>.svg` and `<stem>.png`.
-pub fn write(stem: &Path, title: &str, points: &[Point], floor: f64) -> Result<()> {
+pub fn write(stem: &Path, chart: &Chart, points: &[ChartPoint]) -> Result<()> {
     // Registering twice is harmless; the font is valid (it is compiled in).
     plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
         .map_err(|_| anyhow!("the embedded font does not load"))?;
     let svg = stem.with_extension("svg");
-    draw(SVGBackend::new(&svg, SIZE).into_drawing_area(), title, points, floor)
+    draw(SVGBackend::new(&svg, SIZE).into_drawing_area(), chart, points)
         .with_context(|| format!("drawing {}", svg.display()))?;
     let mut pixels = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    draw(BitMapBackend::with_buffer(&mut pixels, SIZE).into_drawing_area(), title, points, floor)
+    draw(BitMapBackend::with_buffer(&mut pixels, SIZE).into_drawing_area(), chart, points)
         .context("drawing the PNG chart")?;
     let png = stem.with_extension("png");
     image::RgbImage::from_raw(SIZE.0, SIZE.1, pixels)
@@ -42,21 +65,17 @@ pub fn write(stem: &Path, title: &str, points: &[Point], floor: f64) -> Result<(
     Ok(())
 }
 
-fn draw<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    title: &str,
-    points: &[Point],
-    floor: f64,
-) -> Result<()>
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, spec: &Chart, points: &[ChartPoint]) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("{e}");
     root.fill(&WHITE).map_err(err)?;
-    let finite: Vec<&Point> = points.iter().filter(|p| p.ms > 0.0 && p.rel_mse > 0.0).collect();
+    let floor = spec.floor;
+    let finite: Vec<&ChartPoint> = points.iter().filter(|p| p.ms > 0.0 && p.error > 0.0).collect();
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for p in &finite {
-        (x0, x1, y0, y1) = (x0.min(p.ms), x1.max(p.ms), y0.min(p.rel_mse), y1.max(p.rel_mse));
+        (x0, x1, y0, y1) = (x0.min(p.ms), x1.max(p.ms), y0.min(p.error), y1.max(p.error));
     }
     if floor > 0.0 {
         (y0, y1) = (y0.min(floor), y1.max(floor));
@@ -65,7 +84,7 @@ where
         (x0, x1, y0, y1) = (0.1, 1.0, 0.1, 1.0);
     }
     let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
+        .caption(spec.title, ("sans-serif", 18))
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(72)
@@ -74,7 +93,7 @@ where
     chart
         .configure_mesh()
         .x_desc("GPU time per frame (ms, log)")
-        .y_desc("relative MSE vs converged path tracing (log)")
+        .y_desc(spec.y_desc)
         .label_style(("sans-serif", 13))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
@@ -89,29 +108,28 @@ where
     }
     let mut methods: Vec<&str> = Vec::new();
     for p in &finite {
-        if !methods.contains(&p.method.as_str()) {
-            methods.push(&p.method);
+        if !methods.contains(&p.method) {
+            methods.push(p.method);
         }
     }
     for (k, method) in methods.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()];
-        let mut series: Vec<&&Point> = finite.iter().filter(|p| p.method == *method).collect();
+        let mut series: Vec<&&ChartPoint> = finite.iter().filter(|p| p.method == *method).collect();
         series.sort_by(|a, b| a.ms.total_cmp(&b.ms));
         // The legend names what the point labels count (`spp`, `shadow_rays`, ...).
-        let unit = series[0].setting.split('=').next().unwrap_or_default();
-        let label = format!("{method} (labels: {unit})");
+        let label = format!("{method} (labels: {})", series[0].unit);
         chart
-            .draw_series(LineSeries::new(series.iter().map(|p| (p.ms, p.rel_mse)), colour.stroke_width(2)))
+            .draw_series(LineSeries::new(series.iter().map(|p| (p.ms, p.error)), colour.stroke_width(2)))
             .map_err(err)?
             .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2)));
         chart
-            .draw_series(series.iter().map(|p| Circle::new((p.ms, p.rel_mse), 4, colour.filled())))
+            .draw_series(series.iter().map(|p| Circle::new((p.ms, p.error), 4, colour.filled())))
             .map_err(err)?;
         chart
             .draw_series(series.iter().map(|p| {
                 let style = ("sans-serif", 12).into_font().color(&colour);
-                EmptyElement::at((p.ms, p.rel_mse)) + Text::new(format!("{}", p.value), (6, -16), style)
+                EmptyElement::at((p.ms, p.error)) + Text::new(format!("{}", p.value), (6, -16), style)
             }))
             .map_err(err)?;
     }

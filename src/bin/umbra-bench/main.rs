@@ -47,9 +47,13 @@ enum Command {
         /// Timed repeats of each hybrid setting (after a warm-up); the median is reported.
         #[arg(long, default_value_t = 5)]
         repeats: usize,
-        /// Constant environment radiance (r,g,b) for scenes without lights of their own.
-        #[arg(long, value_parser = umbra::cli::parse_rgb, default_value = "1,1,1")]
+        /// Constant environment (sky) radiance r,g,b around every scene, lighting it besides its
+        /// own lights (the hybrid approximates it with split-sum IBL and SSAO).
+        #[arg(long, value_parser = umbra::cli::parse_rgb, default_value = "0.5,0.5,0.5")]
         env_color: [f32; 3],
+        /// AO radius in scene units for SSAO and RTAO.
+        #[arg(long, default_value_t = 0.5)]
+        ao_radius: f32,
         /// glTF scenes to run as well (their first camera, or one framing them).
         #[arg(long = "gltf")]
         gltf: Vec<PathBuf>,
@@ -217,6 +221,7 @@ fn run(cli: Cli) -> Result<()> {
             shadow_rays,
             repeats,
             env_color,
+            ao_radius,
             gltf,
             out,
         } => {
@@ -226,6 +231,10 @@ fn run(cli: Cli) -> Result<()> {
                     reference_spp: 256,
                     max_spp: 32,
                     shadow_rays: vec![1, 4, 16],
+                    ssao_samples: vec![4, 16],
+                    rtao_rays: vec![1, 4, 16],
+                    ao_reference_rays: 256,
+                    ao_radius,
                     repeats: 3,
                     env: env_color,
                     out,
@@ -236,6 +245,10 @@ fn run(cli: Cli) -> Result<()> {
                     reference_spp,
                     max_spp,
                     shadow_rays,
+                    ssao_samples: vec![4, 8, 16, 32],
+                    rtao_rays: vec![1, 2, 4, 8, 16, 32, 64],
+                    ao_reference_rays: 1024,
+                    ao_radius,
                     repeats,
                     env: env_color,
                     out,
@@ -283,10 +296,22 @@ fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> 
             result.name, result.triangles, result.reference_rel_mse_floor
         );
         for p in &result.points {
+            let setting = format!("{}={}", p.unit, p.value);
             println!(
-                "  {:10} {:16} {:10.3} ms  RMSE {:.4e}  relMSE {:.4e}",
-                p.method, p.setting, p.ms, p.rmse, p.rel_mse
+                "  {:20} {:16} {:10.3} ms  RMSE {:.4e}  relMSE {:.4e}",
+                p.method, setting, p.ms, p.rmse, p.rel_mse
             );
+        }
+        println!(
+            "  ambient occlusion vs RTAO reference (noise floor {:.2e}):",
+            result.ao_reference_mse_floor
+        );
+        for p in &result.ao_points {
+            let setting = format!("{}={}", p.unit, p.value);
+            println!("  {:20} {:16} {:10.3} ms  MSE {:.4e}", p.method, setting, p.ms, p.rel_mse);
+        }
+        for (pass, ms) in &result.precompute_ms {
+            println!("  once per scene: {pass} {ms:.3} ms");
         }
         results.push(result);
     }
@@ -300,9 +325,14 @@ fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> 
             "triangles": r.triangles,
             "reference_rel_mse_floor": r.reference_rel_mse_floor,
             "points": r.points.iter().map(|p| json!({
-                "method": p.method, "setting": p.setting, "value": p.value, "gpu_ms": p.ms,
+                "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms,
                 "rmse": p.rmse, "rel_mse": p.rel_mse,
             })).collect::<Vec<_>>(),
+            "ao_reference_mse_floor": r.ao_reference_mse_floor,
+            "ao_points": r.ao_points.iter().map(|p| json!({
+                "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms, "mse": p.rel_mse,
+            })).collect::<Vec<_>>(),
+            "precompute_ms": r.precompute_ms.iter().map(|(pass, ms)| json!({"pass": pass, "ms": ms})).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
     });
     let path = settings.out.join("suite.json");

@@ -5,20 +5,24 @@
 //! Methods:
 //! - `pathtrace`: progressive path tracing, the error read at 1, 2, 4, … samples per pixel of
 //!   one accumulation; the time is the accumulated GPU time of the samples so far.
-//! - `hybrid`: G-buffer + deferred lighting (direct light with ray-traced shadows) at a sweep of
-//!   shadow rays per pixel; the time is the median over repeats of the sum of its passes.
+//! - `hybrid`: G-buffer, SSAO, deferred lighting (direct light with ray-traced shadows, split-sum
+//!   IBL × AO) at a sweep of shadow rays per pixel, also without SSAO and without IBL, and at a
+//!   sweep of SSAO kernel sizes; the time is the median over repeats of the sum of its per-frame
+//!   passes (the IBL precomputation, once per scene, is reported apart).
+//! - `ssao` and `rtao` on a second chart: ambient occlusion against a many-ray RTAO reference.
 //!
 //! The reference uses another seed than the measured runs, so its remaining noise is
 //! independent of theirs: with `R` reference samples a method's relative MSE has a floor of
 //! about the path tracer's relative MSE at `R` spp (reported as `reference_rel_mse_floor`).
 
-use super::chart;
+use super::chart::{self, Chart, ChartPoint};
 use super::rays::{median, warm_up};
 use anyhow::{bail, Context as _, Result};
 use std::path::{Path, PathBuf};
 use umbra::embed::Renderer;
+use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
-use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
+use umbra::render::{ambient_occlusion, hybrid, path_trace, AoMethod, HybridSettings, PathSettings};
 use umbra::scene::{Camera, Scene};
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
@@ -30,11 +34,20 @@ pub struct SuiteSettings {
     pub reference_spp: u32,
     /// Largest path-traced sample count measured (a power of two).
     pub max_spp: u32,
-    /// Shadow-ray counts of the hybrid sweep.
+    /// Shadow-ray counts of the hybrid sweeps.
     pub shadow_rays: Vec<u32>,
+    /// SSAO kernel sizes of the hybrid's SSAO sweep and of the AO chart.
+    pub ssao_samples: Vec<u32>,
+    /// RTAO ray counts of the AO chart.
+    pub rtao_rays: Vec<u32>,
+    /// Rays per pixel of the RTAO reference.
+    pub ao_reference_rays: u32,
+    /// AO radius (scene units) for SSAO and RTAO.
+    pub ao_radius: f32,
     /// Timed repeats of each hybrid setting (after the warm-up).
     pub repeats: usize,
-    /// Constant environment radiance for scenes without lights of their own.
+    /// Constant environment (sky) radiance around every scene: what the hybrid's image-based
+    /// lighting and SSAO approximate.
     pub env: [f32; 3],
     /// Where JSON, CSV, charts and cached references go.
     pub out: PathBuf,
@@ -43,17 +56,17 @@ pub struct SuiteSettings {
 /// One measured point: a method at one setting.
 #[derive(Clone, Debug)]
 pub struct Point {
-    /// Method (`pathtrace`, `hybrid`).
+    /// Method (`pathtrace`, `hybrid`, `ssao`, `rtao`, ...).
     pub method: String,
-    /// The setting, e.g. `spp=16` or `shadow_rays=4`.
-    pub setting: String,
-    /// The setting's number (spp, shadow rays): the chart's point label.
+    /// What `value` counts (`spp`, `shadow_rays`, `ssao_samples`, `rays`).
+    pub unit: &'static str,
+    /// The setting's number: the chart's point label.
     pub value: u32,
-    /// GPU milliseconds.
+    /// GPU milliseconds per frame (precomputation excluded).
     pub ms: f64,
-    /// Root-mean-square error over pixels and channels (linear radiance).
+    /// Root-mean-square error over pixels and channels (linear radiance, or AO).
     pub rmse: f64,
-    /// Mean over pixels and channels of (x − ref)² / (ref² + 0.01).
+    /// Images: mean over pixels and channels of (x − ref)² / (ref² + 0.01). AO: plain MSE.
     pub rel_mse: f64,
 }
 
@@ -63,10 +76,16 @@ pub struct SceneResult {
     pub name: String,
     /// Triangles.
     pub triangles: usize,
-    /// Every measured point.
+    /// Every measured point of the image chart.
     pub points: Vec<Point>,
     /// The reference's own expected relative MSE (its per-pixel variance of the mean, relative).
     pub reference_rel_mse_floor: f64,
+    /// Ambient occlusion: SSAO and RTAO against an RTAO reference (MSE over surface pixels).
+    pub ao_points: Vec<Point>,
+    /// The AO reference's own expected MSE (Bernoulli variance a(1 − a)/N per pixel, averaged).
+    pub ao_reference_mse_floor: f64,
+    /// One-off GPU work per scene (IBL tables and prefiltering), milliseconds by pass.
+    pub precompute_ms: Vec<(String, f64)>,
 }
 
 /// Relative MSE's ε: keeps dark pixels from dominating (as in the denoising literature).
@@ -133,8 +152,7 @@ pub fn run_scene(
     camera: &Camera,
     s: &SuiteSettings,
 ) -> Result<SceneResult> {
-    let has_lights = !scene.emissive.is_empty() || !scene.lights.is_empty();
-    let env = if has_lights { [0.0; 3] } else { s.env };
+    let env = s.env;
     let renderer = Renderer::new(ctx, scene)?;
     let path_settings =
         PathSettings { size: s.size, spp: s.reference_spp, seed: 0x5eed, env, ..PathSettings::default() };
@@ -172,7 +190,7 @@ pub fn run_scene(
         let (rmse, rel_mse) = errors(&output.read(ctx)?, &reference);
         points.push(Point {
             method: "pathtrace".into(),
-            setting: format!("spp={level}"),
+            unit: "spp",
             value: level,
             ms: elapsed_ms,
             rmse,
@@ -182,11 +200,31 @@ pub fn run_scene(
     }
     bar.finish_and_clear();
 
-    // Hybrid: a sweep of shadow rays.
+    // Hybrid: sweeps of shadow rays (with SSAO and IBL, without SSAO, without IBL) and of the
+    // SSAO kernel size at 4 shadow rays.
+    let ssao = |samples| AoSettings { samples, radius: s.ao_radius, seed: 1, ..AoSettings::default() };
+    let mut precompute_ms = Vec::new();
+    let mut sweeps: Vec<(&str, &'static str, u32, Option<AoSettings>, bool)> = Vec::new();
     for &rays in &s.shadow_rays {
+        sweeps.push(("hybrid", "shadow_rays", rays, Some(ssao(16)), true));
+        sweeps.push(("hybrid, no SSAO", "shadow_rays", rays, None, true));
+        sweeps.push(("hybrid, no IBL", "shadow_rays", rays, Some(ssao(16)), false));
+    }
+    for &samples in &s.ssao_samples {
+        sweeps.push(("hybrid, SSAO sweep", "ssao_samples", samples, Some(ssao(samples)), true));
+    }
+    for (method, unit, value, ao, ibl) in sweeps {
+        let rays = if unit == "shadow_rays" { value } else { 4 };
         let settings = HybridSettings {
             size: s.size,
-            lighting: LightingSettings { shadow_rays: rays, seed: 1, env, ..LightingSettings::default() },
+            lighting: LightingSettings {
+                shadow_rays: rays,
+                seed: 1,
+                env,
+                ibl,
+                ..LightingSettings::default()
+            },
+            ao,
             ..HybridSettings::default()
         };
         warm_up(|| hybrid(ctx, renderer.scene(), camera, &settings).map(|_| ()))?;
@@ -194,49 +232,131 @@ pub fn run_scene(
         let mut last = None;
         for _ in 0..s.repeats.max(1) {
             let image = hybrid(ctx, renderer.scene(), camera, &settings)?;
-            times.push(image.pass_ms.iter().map(|(_, ms)| ms).sum::<f64>());
+            // The IBL tables and prefiltered maps are computed once per scene, not per frame.
+            let (once, frame): (Vec<_>, Vec<_>) =
+                image.pass_ms.iter().partition(|(name, _)| name.starts_with("ibl"));
+            times.push(frame.iter().map(|(_, ms)| ms).sum::<f64>());
+            if precompute_ms.is_empty() {
+                precompute_ms = once.into_iter().cloned().collect();
+            }
             last = Some(image);
         }
         let Some(image) = last else { bail!("no hybrid run") };
         let (rmse, rel_mse) = errors(&image.color, &reference);
-        points.push(Point {
-            method: "hybrid".into(),
-            setting: format!("shadow_rays={rays}"),
-            value: rays,
-            ms: median(&mut times),
-            rmse,
-            rel_mse,
-        });
+        points.push(Point { method: method.into(), unit, value, ms: median(&mut times), rmse, rel_mse });
     }
+    let title = format!("{} — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name);
     let stem = s.out.join(format!("suite-{key}"));
-    chart::write(
-        &stem,
-        &format!("{} — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name),
-        &points,
-        floor,
-    )?;
+    let chart = Chart { title: &title, y_desc: "relative MSE vs converged path tracing (log)", floor };
+    chart::write(&stem, &chart, &chart_points(&points))?;
+
+    // Ambient occlusion: SSAO (blurred) and RTAO against a many-ray RTAO reference.
+    let (ao_points, ao_floor) = ambient_occlusion_sweep(ctx, renderer.scene(), camera, s)?;
+    let ao_title =
+        format!("ambient occlusion, r = {} — {} — {}×{}", s.ao_radius, scene.name, s.size.0, s.size.1);
+    let ao_chart =
+        Chart { title: &ao_title, y_desc: "MSE vs ray-traced AO reference (log)", floor: ao_floor };
+    chart::write(&s.out.join(format!("suite-{key}-ao")), &ao_chart, &chart_points(&ao_points))?;
+
     Ok(SceneResult {
         name: scene.name.clone(),
         triangles: renderer.scene().bvh_stats.triangles,
         points,
         reference_rel_mse_floor: floor,
+        ao_points,
+        ao_reference_mse_floor: ao_floor,
+        precompute_ms,
     })
+}
+
+fn chart_points(points: &[Point]) -> Vec<ChartPoint<'_>> {
+    points
+        .iter()
+        .map(|p| ChartPoint { method: &p.method, unit: p.unit, value: p.value, ms: p.ms, error: p.rel_mse })
+        .collect()
+}
+
+/// SSAO at each kernel size and RTAO at each ray count against an RTAO reference; the error is
+/// the MSE over pixels with a surface, the time the AO passes' (G-buffer excluded).
+fn ambient_occlusion_sweep(
+    ctx: &Context,
+    scene: &umbra::gpu::scene::GpuScene,
+    camera: &Camera,
+    s: &SuiteSettings,
+) -> Result<(Vec<Point>, f64)> {
+    let settings = |samples, seed| AoSettings { samples, radius: s.ao_radius, seed, ..AoSettings::default() };
+    let reference =
+        ambient_occlusion(ctx, scene, camera, s.size, AoMethod::Rtao, &settings(s.ao_reference_rays, 99))?;
+    let surface: Vec<bool> = reference.gbuffer.depth.iter().map(|&d| d > 0.0).collect();
+    let count = surface.iter().filter(|&&x| x).count().max(1) as f64;
+    let floor = reference
+        .values
+        .iter()
+        .zip(&surface)
+        .filter(|(_, &on)| on)
+        .map(|(&a, _)| (a as f64 * (1.0 - a as f64)) / s.ao_reference_rays as f64)
+        .sum::<f64>()
+        / count;
+    let mut runs: Vec<(&str, &'static str, u32, AoMethod)> = Vec::new();
+    for &n in &s.ssao_samples {
+        runs.push(("ssao", "ssao_samples", n, AoMethod::Ssao));
+    }
+    for &n in &s.rtao_rays {
+        runs.push(("rtao", "rays", n, AoMethod::Rtao));
+    }
+    let mut points = Vec::new();
+    for (method, unit, value, ao_method) in runs {
+        let mut run_settings = settings(value, 1);
+        run_settings.blur = ao_method == AoMethod::Ssao;
+        warm_up(|| ambient_occlusion(ctx, scene, camera, s.size, ao_method, &run_settings).map(|_| ()))?;
+        let mut times = Vec::new();
+        let mut last = None;
+        for _ in 0..s.repeats.max(1) {
+            let image = ambient_occlusion(ctx, scene, camera, s.size, ao_method, &run_settings)?;
+            times.push(
+                image.pass_ms.iter().filter(|(name, _)| name != "gbuffer").map(|(_, ms)| ms).sum::<f64>(),
+            );
+            last = Some(image);
+        }
+        let Some(image) = last else { bail!("no AO run") };
+        let mse = image
+            .values
+            .iter()
+            .zip(&reference.values)
+            .zip(&surface)
+            .filter(|(_, &on)| on)
+            .map(|((&a, &r), _)| (a as f64 - r as f64).powi(2))
+            .sum::<f64>()
+            / count;
+        points.push(Point {
+            method: method.into(),
+            unit,
+            value,
+            ms: median(&mut times),
+            rmse: mse.sqrt(),
+            rel_mse: mse,
+        });
+    }
+    Ok((points, floor))
 }
 
 /// The CSV of every scene's points.
 pub fn csv(results: &[SceneResult]) -> String {
-    let mut text = String::from("scene,method,setting,gpu_ms,rmse,rel_mse\n");
+    let mut text = String::from("scene,chart,method,unit,value,gpu_ms,rmse,error\n");
     for r in results {
-        for p in &r.points {
-            text.push_str(&format!(
-                "{},{},{},{:.6},{:.6e},{:.6e}\n",
-                r.name.replace(',', ";"),
-                p.method,
-                p.setting,
-                p.ms,
-                p.rmse,
-                p.rel_mse
-            ));
+        for (chart, points) in [("image", &r.points), ("ao", &r.ao_points)] {
+            for p in points {
+                text.push_str(&format!(
+                    "{},{chart},{},{},{},{:.6},{:.6e},{:.6e}\n",
+                    r.name.replace(',', ";"),
+                    p.method.replace(',', ";"),
+                    p.unit,
+                    p.value,
+                    p.ms,
+                    p.rmse,
+                    p.rel_mse
+                ));
+            }
         }
     }
     text

@@ -1,10 +1,12 @@
-//! GPU time per pass of each method on one scene: the hybrid passes (G-buffer, deferred
-//! lighting) and one path-traced sample per pixel, each a median over repeats after a warm-up
+//! GPU time per pass of each method on one scene: the hybrid passes (G-buffer, SSAO (16
+//! directions × 4 steps, radius 0.5) and its blur, deferred lighting with IBL × AO) and one
+//! path-traced sample per pixel, each a median over repeats after a warm-up
 //! ([`super::rays::warm_up`]),
 //! from GPU timestamps.
 
 use anyhow::Result;
 use umbra::gpu::scene::GpuScene;
+use umbra::passes::ao::{AoBlurPass, AoSettings, SsaoPass};
 use umbra::passes::deferred::{DeferredPass, LightingSettings};
 use umbra::passes::gbuffer::{GBuffer, GBufferPass};
 use umbra::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
@@ -42,29 +44,47 @@ pub fn run(
     let deferred_params = DeferredPass::params(scene, camera, size, lighting);
     let path_settings = PathSettings { size, env: lighting.env, ..PathSettings::default() };
     let mut path_params = PathTracePass::params(scene, camera, &path_settings);
+    let ao_settings = AoSettings::default();
+    let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
+    let (ao_raw, ao_blurred) = (make("bench ssao")?, make("bench ssao blurred")?);
+    let (ssao, blur) = (SsaoPass::new(ctx)?, AoBlurPass::new(ctx)?);
+    let ssao_params = SsaoPass::params(camera, size, &ao_settings);
+    let blur_params = AoBlurPass::params(camera, size);
     ctx.submit(|cmd| {
         output.init_general(ctx, cmd);
+        ao_raw.init_general(ctx, cmd);
+        ao_blurred.init_general(ctx, cmd);
         Ok(())
     })?;
+    let views = gbuffer.views();
+    let ao_view = Some(ao_blurred.view);
     super::rays::warm_up(|| {
         ctx.submit(|cmd| {
-            gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
-            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &ibl, None, &deferred_params)?;
+            gbuffer_pass.record(ctx, cmd, scene, &views, &gbuffer_params)?;
+            ssao.record(ctx, cmd, &views, ao_raw.view, &ssao_params)?;
+            blur.record(ctx, cmd, &views, ao_raw.view, ao_blurred.view, &blur_params)?;
+            deferred.record(ctx, cmd, scene, &views, output.view, &ibl, ao_view, &deferred_params)?;
             pathtrace.record(ctx, cmd, scene, &target, &path_params)
         })
     })?;
-    let mut timer = GpuTimer::new(ctx, 3)?;
-    let mut samples: Vec<Vec<f64>> = vec![Vec::new(); 3];
+    let mut timer = GpuTimer::new(ctx, 5)?;
+    let mut samples: Vec<Vec<f64>> = vec![Vec::new(); 5];
     let mut names = Vec::new();
     for repeat in 0..=repeats {
         path_params.size_frame[2] = repeat as u32;
         ctx.submit(|cmd| {
             timer.reset(cmd);
             timer.begin(cmd, "gbuffer")?;
-            gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
+            gbuffer_pass.record(ctx, cmd, scene, &views, &gbuffer_params)?;
+            timer.end(cmd)?;
+            timer.begin(cmd, "ssao")?;
+            ssao.record(ctx, cmd, &views, ao_raw.view, &ssao_params)?;
+            timer.end(cmd)?;
+            timer.begin(cmd, "ao_blur")?;
+            blur.record(ctx, cmd, &views, ao_raw.view, ao_blurred.view, &blur_params)?;
             timer.end(cmd)?;
             timer.begin(cmd, "lighting")?;
-            deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &ibl, None, &deferred_params)?;
+            deferred.record(ctx, cmd, scene, &views, output.view, &ibl, ao_view, &deferred_params)?;
             timer.end(cmd)?;
             timer.begin(cmd, "pathtrace 1 spp")?;
             pathtrace.record(ctx, cmd, scene, &target, &path_params)?;

@@ -666,3 +666,93 @@ fn split_sum_error_is_largest_at_grazing_angles() {
         );
     }
 }
+
+/// Prefiltered levels against brute force: a 64 × 32 grey map (a dim gradient and a disc of
+/// radiance 20 and radius 12°), every texel of the levels for roughness 0.4 (16 × 8) and 1.0
+/// (8 × 4) against the f64 integral the kernel estimates, ∫ L(l) D(h)/4 (r·l) dl / ∫ D(h)/4 (r·l) dl
+/// with n = v = r (the source taken piecewise constant, 4 × 4 exact-solid-angle cells per texel).
+/// Expected error: the kernel's 64 Hammersley samples with filtered importance sampling should do
+/// no worse than 64 independent samples of the same pdf D/4, whose ratio estimator has standard
+/// error σ = √(∫ q (r·l)² (L − μ)² dl / 64) / ∫ q (r·l) dl (q = D/4; computed per texel by the
+/// same quadrature). Tested: every texel within 3 σ (plus 1e-3 of its value for the texel
+/// reconstruction: the kernel reads the source bilinearly).
+///
+/// FAILS on the current kernel, so ignored until filtered importance sampling is fixed: its box
+/// chain blurs the disc far beyond the lobe (mean error 50 σ at roughness 0.4, 15 σ at 1.0; worst
+/// texel 0.327 against 0.201, +63 %); without the `+ 1` lod bias 12.5 σ and 3 σ (worst +16 %);
+/// with plain sampling (lod 0) 0.3 σ, inside the bound.
+#[test]
+#[ignore = "finds a bug: the prefilter's filtered importance sampling is biased by up to 63 %"]
+fn prefiltered_levels_match_brute_force() {
+    use std::f64::consts::PI;
+    let (w, h) = (64usize, 32usize);
+    let disc = unit([0.8, 0.5, -0.3]);
+    let radiance = |d: [f64; 3]| {
+        let cos = d[0] * disc[0] + d[1] * disc[1] + d[2] * disc[2];
+        let l = if cos > 12f64.to_radians().cos() { 20.0 } else { 0.2 + 0.3 * d[1].max(0.0) };
+        [l; 3]
+    };
+    let map = synthetic_map(w, h, radiance);
+    let gpu = Gpu::new();
+    let mut scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
+    scene.set_environment(&gpu, &map).unwrap();
+    let settings = IblSettings::default();
+    let ibl = IblResources::build(&gpu, &scene, &settings).unwrap();
+    let levels: Vec<[f32; 4]> = ibl.prefiltered.read(&gpu).unwrap();
+    let sizes = umbra::ibl::prefiltered_level_sizes((w as u32, h as u32));
+    // Source cells: direction, solid angle, radiance.
+    let sub = 4usize;
+    let mut cells = Vec::with_capacity(w * h * sub * sub);
+    for y in 0..h * sub {
+        let (t0, t1) = (PI * y as f64 / (h * sub) as f64, PI * (y + 1) as f64 / (h * sub) as f64);
+        let d_omega = 2.0 * PI / (w * sub) as f64 * (t0.cos() - t1.cos());
+        for x in 0..w * sub {
+            let d = texel_direction(x, y, w * sub, h * sub).0;
+            cells.push((d, d_omega, map.texels[(y / sub) * w + x / sub][0] as f64));
+        }
+    }
+    let mut worst_ratio: f64 = 0.0;
+    for (k, roughness) in [(2usize, 0.4f64), (5, 1.0)] {
+        let a = roughness * roughness;
+        let offset: u32 = sizes[1..k].iter().map(|&(w, h)| w * h).sum();
+        let (lw, lh) = (sizes[k].0 as usize, sizes[k].1 as usize);
+        let (mut worst, mut sum_ratio) = ((0.0f64, 0.0, 0.0, 0.0), 0.0);
+        for t in 0..lw * lh {
+            let r = texel_direction(t % lw, t / lw, lw, lh).0;
+            let (mut wsum, mut lsum) = (0.0, 0.0);
+            let weights: Vec<(f64, f64)> = cells
+                .iter()
+                .filter_map(|&(l, d_omega, radiance)| {
+                    let c = r[0] * l[0] + r[1] * l[1] + r[2] * l[2];
+                    if c <= 0.0 {
+                        return None;
+                    }
+                    // n·h for h = (r + l)/|r + l| with r·l = c.
+                    let nh2 = (1.0 + c) / 2.0;
+                    let d = a * a / (PI * (nh2 * (a * a - 1.0) + 1.0).powi(2));
+                    let q = d / 4.0 * d_omega;
+                    wsum += q * c;
+                    lsum += q * c * radiance;
+                    Some((q * c * c, radiance))
+                })
+                .collect();
+            let mu = lsum / wsum;
+            let var: f64 = weights.iter().map(|&(qc2, l)| qc2 * (l - mu).powi(2)).sum::<f64>()
+                / settings.prefilter_samples as f64;
+            let sigma = var.sqrt() / wsum;
+            let g = levels[offset as usize + t][1] as f64;
+            let ratio = (g - mu).abs() / (3.0 * sigma + 1e-3 * mu);
+            sum_ratio += (g - mu).abs() / sigma;
+            if ratio > worst.0 {
+                worst = (ratio, g, mu, sigma);
+            }
+        }
+        let (ratio, g, mu, sigma) = worst;
+        eprintln!(
+            "roughness {roughness}: mean |GPU − brute| / σ {:.2}; worst texel GPU {g:.4} vs {mu:.4} (σ {sigma:.4}, |error| / (3σ + 1e-3 μ) = {ratio:.2})",
+            sum_ratio / (lw * lh) as f64
+        );
+        worst_ratio = worst_ratio.max(ratio);
+    }
+    assert!(worst_ratio <= 1.0, "a prefiltered texel is further than 3σ from the brute-force integral");
+}

@@ -50,10 +50,11 @@ layout(push_constant) uniform Push { DeferredParams params; };
 #include "shading.glsl"
 #include "ibl.glsl"
 
-// The BRDF table (A, B, C, D) at (n.v, perceptual roughness), bilinear between texel centres.
+// The BRDF table (A, B, C, D) at (n.v, perceptual roughness), bilinear between its entries (n.v
+// at texel centres, roughness j / (N - 1)).
 vec4 ibl_table(float nv, float roughness) {
     float n = float(IBL_LUT_SIZE);
-    vec2 p = clamp(vec2(nv, roughness) * n - 0.5, vec2(0.0), vec2(n - 1.0));
+    vec2 p = clamp(vec2(nv * n - 0.5, roughness * (n - 1.0)), vec2(0.0), vec2(n - 1.0));
     uvec2 i0 = uvec2(p);
     uvec2 i1 = min(i0 + 1u, uvec2(IBL_LUT_SIZE - 1u));
     vec2 f = p - vec2(i0);

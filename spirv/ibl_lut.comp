@@ -19,7 +19,9 @@ void main() {
         return;
     }
     float nv = (float(ij.x) + 0.5) / float(n);
-    float roughness = (float(ij.y) + 0.5) / float(n);
+    // Roughness spans 0..1 edge to edge (roughness 1 is common and steep in A + B); n.v at
+    // texel centres (n.v = 0 is degenerate and flat near 1).
+    float roughness = float(ij.y) / float(n - 1u);
     float a = max(roughness * roughness, 1e-4);
     vec3 wo = vec3(sqrt(1.0 - nv * nv), 0.0, nv);
     uint m = params.dst.w;

@@ -7,7 +7,8 @@ use std::f64::consts::PI;
 
 /// Prefiltered levels: level k holds perceptual roughness k / (IBL_LEVELS − 1).
 pub const IBL_LEVELS: u32 = 6;
-/// The BRDF table is LUT_SIZE × LUT_SIZE over (n·v, perceptual roughness) at texel centres.
+/// The BRDF table is LUT_SIZE × LUT_SIZE over (n·v, perceptual roughness): n·v at texel
+/// centres, roughness edge to edge (see [`lut_coordinates`]).
 pub const LUT_SIZE: u32 = 32;
 /// Prefiltered level 1 is at most half this wide (the source is halved until it fits).
 pub const IBL_MAX_WIDTH: u32 = 1024;
@@ -128,12 +129,21 @@ pub fn lut_entry(nv: f64, roughness: f64, n: usize) -> [f64; 4] {
     [spec_a, spec_b, dc, dd]
 }
 
-/// The whole BRDF table by [`lut_entry`], entry j · LUT_SIZE + i at n·v = (i + ½) / LUT_SIZE and
-/// roughness (j + ½) / LUT_SIZE.
+/// The (n·v, perceptual roughness) of BRDF-table entry j · LUT_SIZE + i: n·v = (i + ½) / LUT_SIZE
+/// (n·v = 0 is degenerate) and roughness j / (LUT_SIZE − 1), so roughness 1, common and where
+/// A + B falls fastest, is an entry rather than clamped to the last texel centre.
+pub fn lut_coordinates(i: usize, j: usize) -> (f64, f64) {
+    ((i as f64 + 0.5) / LUT_SIZE as f64, j as f64 / (LUT_SIZE - 1) as f64)
+}
+
+/// The whole BRDF table by [`lut_entry`], entry j · LUT_SIZE + i at [`lut_coordinates`]`(i, j)`.
 pub fn lut_reference(n: usize) -> Vec<[f64; 4]> {
     let s = LUT_SIZE as usize;
     (0..s * s)
-        .map(|k| lut_entry(((k % s) as f64 + 0.5) / s as f64, ((k / s) as f64 + 0.5) / s as f64, n))
+        .map(|k| {
+            let (nv, roughness) = lut_coordinates(k % s, k / s);
+            lut_entry(nv, roughness, n)
+        })
         .collect()
 }
 

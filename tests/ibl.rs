@@ -5,7 +5,7 @@ mod common;
 
 use common::Gpu;
 use umbra::gpu::scene::GpuScene;
-use umbra::ibl::{lut_entry, lut_reference, LUT_SIZE};
+use umbra::ibl::{lut_coordinates, lut_entry, lut_reference, LUT_SIZE};
 use umbra::passes::ibl::{IblResources, IblSettings};
 use umbra::scene::Scene;
 
@@ -26,7 +26,7 @@ fn brdf_lut_matches_cpu_quadrature() {
     let mut self_error: f64 = 0.0;
     for j in (0..s).step_by(5).chain([s - 1]) {
         for i in (0..s).step_by(5).chain([s - 1]) {
-            let (nv, r) = ((i as f64 + 0.5) / s as f64, (j as f64 + 0.5) / s as f64);
+            let (nv, r) = lut_coordinates(i, j);
             let (a, b) = (lut_entry(nv, r, 64), lut_entry(nv, r, 128));
             self_error = self_error.max((0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0, f64::max));
         }
@@ -50,9 +50,8 @@ fn brdf_lut_matches_cpu_quadrature() {
     }
     let (e, k, c) = worst;
     eprintln!(
-        "GPU LUT vs reference: max |error| {e:.2e} at n·v {:.3}, roughness {:.3}, channel {c} (GPU {:?}, CPU {:?})",
-        ((k % s) as f64 + 0.5) / s as f64,
-        ((k / s) as f64 + 0.5) / s as f64,
+        "GPU LUT vs reference: max |error| {e:.2e} at (n·v, roughness) {:.3?}, channel {c} (GPU {:?}, CPU {:?})",
+        lut_coordinates(k % s, k / s),
         lut[k],
         reference[k]
     );
@@ -245,8 +244,9 @@ fn per_material(
     out
 }
 
-/// Hybrid (IBL only; colour box-filtered from 4×4 samples per pixel) and path-traced (one scattering event: direct environment light) renders of
-/// the IBL sphere grid under `env`, with the per-pixel view directions.
+/// Hybrid (IBL only, no AO; with `supersample` the colour is box-filtered from 4×4 samples per
+/// pixel) and path-traced (one scattering event: direct environment light) renders of `scene`
+/// under `env`, with the per-pixel view directions.
 fn render_pair(
     gpu: &Gpu,
     scene: &Scene,
@@ -254,6 +254,7 @@ fn render_pair(
     env: [f32; 3],
     size: (u32, u32),
     spp: u32,
+    supersample: bool,
 ) -> (umbra::render::HybridImage, umbra::render::PathImage, Vec<glam::Vec3>) {
     let camera = scene.camera(None).unwrap();
     let mut gpu_scene = GpuScene::upload(gpu, scene).unwrap();
@@ -266,14 +267,19 @@ fn render_pair(
     // The colour box-filtered like the path tracer's pixels: 4×4 centre samples per pixel (a
     // mirror's sharp reflections would otherwise differ by the pixel filter alone).
     let big = (4 * size.0, 4 * size.1);
-    let fine =
-        hybrid(gpu, &gpu_scene, &camera, &HybridSettings { size: big, lighting, ..Default::default() })
-            .unwrap();
-    for (i, c) in hyb.color.iter_mut().enumerate() {
+    let fine = match supersample {
+        true => {
+            hybrid(gpu, &gpu_scene, &camera, &HybridSettings { size: big, lighting, ..Default::default() })
+                .unwrap()
+                .color
+        }
+        false => Vec::new(),
+    };
+    for (i, c) in hyb.color.iter_mut().enumerate().filter(|_| supersample) {
         let (x, y) = (4 * (i as u32 % size.0), 4 * (i as u32 / size.0));
         let mut sum = [0.0f32; 4];
         for k in 0..16 {
-            let f = fine.color[((y + k / 4) * big.0 + x + k % 4) as usize];
+            let f = fine[((y + k / 4) * big.0 + x + k % 4) as usize];
             for ch in 0..4 {
                 sum[ch] += f[ch] / 16.0;
             }
@@ -309,7 +315,7 @@ fn split_sum_error_grows_with_roughness_and_grazing_angle() {
     let map = synthetic_map(128, 64, sky);
     let start = std::time::Instant::now();
     let (size, spp) = ((160, 112), 128);
-    let (hyb, pt, view) = render_pair(&gpu, &scene, Some(&map), [1.0; 3], size, spp);
+    let (hyb, pt, view) = render_pair(&gpu, &scene, Some(&map), [1.0; 3], size, spp, true);
     eprintln!("renders: {:.1} s", start.elapsed().as_secs_f64());
     let spheres = per_material(&hyb.gbuffer, &hyb.color, &pt, &view, |_| true);
     // Error and its standard error (from the path tracer's noise) of one material's sums.
@@ -369,4 +375,384 @@ fn split_sum_error_grows_with_roughness_and_grazing_angle() {
         grazing - frontal > 3.0 * (f_se * f_se + g_se * g_se).sqrt(),
         "grazing error {grazing:.4} should exceed frontal {frontal:.4}"
     );
+}
+
+use umbra::scene::Camera;
+
+/// One sphere of radius 1 at the origin (a 160 × 80 UV sphere, so facets stay below 1.2°) of one
+/// material, nothing else, no lights, seen from distance 3 along +z, filling most of the image.
+fn sphere_scene(base: [f32; 3], metallic: f32, roughness: f32) -> Scene {
+    let mut scene = scene_file("spheres.glb");
+    scene.lights.clear();
+    let mut m = scene.materials[0].clone();
+    m.name = format!("metallic {metallic} roughness {roughness}");
+    m.base_color_factor = [base[0], base[1], base[2], 1.0];
+    (m.metallic, m.roughness) = (metallic, roughness);
+    scene.materials = vec![m];
+    let (segments, rings) = (160u32, 80u32);
+    scene.positions.clear();
+    scene.normals.clear();
+    for r in 0..=rings {
+        let theta = std::f64::consts::PI * r as f64 / rings as f64;
+        for s in 0..=segments {
+            let phi = std::f64::consts::TAU * s as f64 / segments as f64;
+            let n = [theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin()].map(|c| c as f32);
+            scene.positions.push(n);
+            scene.normals.push(n);
+        }
+    }
+    let row = segments + 1;
+    scene.triangles.clear();
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            if r != 0 {
+                scene.triangles.push([a, b, a + 1]);
+            }
+            if r != rings - 1 {
+                scene.triangles.push([a + 1, b, b + 1]);
+            }
+        }
+    }
+    scene.triangle_material = vec![0; scene.triangles.len()];
+    scene.tangents.clear();
+    scene.uv0.clear();
+    scene.uv1.clear();
+    scene.colors.clear();
+    scene.instances.clear();
+    scene.update_emissive();
+    let yfov = 2.0 * (1.0f32 / 3.0).asin() * 1.05;
+    scene.cameras = vec![Camera {
+        position: [0.0, 0.0, 3.0],
+        forward: [0.0, 0.0, -1.0],
+        up: [0.0, 1.0, 0.0],
+        yfov,
+        aspect: None,
+        znear: 0.01,
+    }];
+    scene
+}
+
+/// Interior surface pixels (the 3×3 neighbourhood is the same material) with their n·v.
+fn interior_pixels(g: &umbra::passes::gbuffer::GBufferData, view: &[glam::Vec3]) -> Vec<(usize, f64)> {
+    let (w, h) = (g.size.0 as usize, g.size.1 as usize);
+    let mut out = Vec::new();
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let i = y * w + x;
+            let m = g.material[i][0];
+            let interior = (0..9).all(|k| g.material[(y + k / 3 - 1) * w + x + k % 3 - 1][0] == m);
+            if m != umbra::passes::gbuffer::GBUFFER_NO_SURFACE && interior {
+                let n = glam::Vec3::from_slice(&g.normal[i][..3]).normalize();
+                out.push((i, -n.dot(view[i]) as f64));
+            }
+        }
+    }
+    out
+}
+
+/// The table's bilinear interpolation at (n·v, roughness), as `ibl_table` in deferred.comp reads
+/// it (entries at [`lut_coordinates`]).
+fn table_bilinear(table: &[[f64; 4]], nv: f64, roughness: f64) -> [f64; 4] {
+    let n = LUT_SIZE as usize;
+    let p = [nv * n as f64 - 0.5, roughness * (n - 1) as f64].map(|c| c.clamp(0.0, (n - 1) as f64));
+    let i0 = p.map(|c| c as usize);
+    let i1 = i0.map(|i| (i + 1).min(n - 1));
+    let f = [p[0] - i0[0] as f64, p[1] - i0[1] as f64];
+    std::array::from_fn(|c| {
+        let at = |i: usize, j: usize| table[j * n + i][c];
+        let a = at(i0[0], i0[1]) * (1.0 - f[0]) + at(i1[0], i0[1]) * f[0];
+        let b = at(i0[0], i1[1]) * (1.0 - f[0]) + at(i1[0], i1[1]) * f[0];
+        a * (1.0 - f[1]) + b * f[1]
+    })
+}
+
+/// The white furnace's reflected radiance (environment 1, white base colour) from the table's
+/// entries (A, B, C, D): a metal's directional albedo A + B; a dielectric's F0 A + F90 B plus the
+/// diffuse lobe's 1 − F0 C − F90 D (the path tracer's BSDF weights its diffuse lobe by
+/// 1 − max3(F(v·h)) and its specular lobe is Schlick-Fresnel GGX with separable Smith G, which is
+/// exactly what the table integrates).
+fn furnace_albedo(e: [f64; 4], metallic: f64, f0: f64, f90: f64) -> f64 {
+    let dielectric = f0 * e[0] + f90 * e[1] + 1.0 - f0 * e[2] - f90 * e[3];
+    let metal = e[0] + e[1];
+    dielectric + (metal - dielectric) * metallic
+}
+
+/// White furnace: a constant environment of 1 and one white sphere per render (metal at
+/// roughness 0, ½, 1; dielectric at 0, 1), hybrid (IBL only, no AO) against the path tracer with
+/// one scattering event. For a constant environment the split sum is exact but for its table: the
+/// hybrid gives T(n·v), the bilinearly interpolated 32² table, the path tracer's expectation is
+/// E(n·v), the exact single-scattering albedo (f64 quadrature, box-filtered over each pixel).
+/// Expected and tested, per sphere and per n·v bin (< 0.3, 0.3–0.7, > 0.7; ≥ 50 pixels each):
+/// (a) every interior hybrid pixel equals T at its n·v within 1e-3 (the GPU table's tolerance in
+///     `brdf_lut_matches_cpu_quadrature`);
+/// (b) the path tracer's mean equals the mean of E within z·se + 1e-4 (se from its per-pixel
+///     variance of the mean; z = 3.40: two-sided 0.01 with a Šidák correction over the 15 bins;
+///     1e-4 for f32 accumulation);
+/// (c) the table's interpolation error |T − E| is below 2e-3 in every bin (the table spans
+///     roughness 0..1 edge to edge; one sampled at roughness texel centres clamps roughness 1 to
+///     0.984 and is 1.6e-2 too bright on a rough metal), so hybrid and path tracer agree within
+///     z·se + 1e-4 + 1e-3 + 2e-3;
+/// (d) the metal's albedo A + B falls below 1 as roughness grows (single-scattering energy loss):
+///     frontal means strictly decreasing with roughness in both renderers, and at roughness 1
+///     below 1 by more than 10 standard errors in the path tracer.
+#[test]
+fn white_furnace_split_sum_matches_path_tracer() {
+    let start = std::time::Instant::now();
+    let gpu = Gpu::new();
+    let nodes = 48;
+    let table = lut_reference(nodes);
+    let (size, spp) = ((96, 96), 32);
+    let cases: [(f32, f32); 5] = [(1.0, 0.0), (1.0, 0.5), (1.0, 1.0), (0.0, 0.0), (0.0, 1.0)];
+    let z = 3.40;
+    let bins: [(f64, f64); 3] = [(0.0, 0.3), (0.3, 0.7), (0.7, 1.01)];
+    let mut frontal_metal = Vec::new();
+    eprintln!("metallic roughness  n·v bin    pixels  hybrid    path      E (exact)  T (table)  path−E     se      max|hyb−T|");
+    for (metallic, roughness) in cases {
+        let scene = sphere_scene([1.0; 3], metallic, roughness);
+        let mat = &scene.materials[0];
+        let f0 = (((mat.ior - 1.0) / (mat.ior + 1.0)).powi(2) * mat.specular_factor) as f64;
+        let f90 = mat.specular_factor as f64;
+        let (hyb, pt, view) = render_pair(&gpu, &scene, None, [1.0; 3], size, spp, false);
+        let var = pt.variance_of_mean();
+        // E on a fine n·v grid (linear interpolation error below 1e-6 here).
+        let grid: Vec<f64> = (0..=256)
+            .map(|k| {
+                furnace_albedo(
+                    lut_entry((k as f64 / 256.0).max(1e-4), roughness as f64, nodes),
+                    metallic as f64,
+                    f0,
+                    f90,
+                )
+            })
+            .collect();
+        let exact = |nv: f64| {
+            let p = nv.clamp(0.0, 1.0) * 256.0;
+            let k = (p as usize).min(255);
+            grid[k] + (grid[k + 1] - grid[k]) * (p - k as f64)
+        };
+        // E box-filtered over each pixel as the path tracer's pixels are (8×8 rays against the
+        // exact sphere): Fresnel's curvature in n·v makes the centre value alone ~5e-4 low.
+        let cam = umbra::render::camera_params(&scene.camera(None).unwrap(), size);
+        let c64 = |a: [f32; 4]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+        let (origin, forward, right, up) = (c64(cam.0), c64(cam.1), c64(cam.2), c64(cam.3));
+        let exact_box = |i: usize| {
+            let (x, y) = ((i % size.0 as usize) as f64, (i / size.0 as usize) as f64);
+            let mut sum = 0.0;
+            for k in 0..64 {
+                let (sx, sy) = (x + ((k % 8) as f64 + 0.5) / 8.0, y + ((k / 8) as f64 + 0.5) / 8.0);
+                let ndc = (2.0 * sx / size.0 as f64 - 1.0, 1.0 - 2.0 * sy / size.1 as f64);
+                let d = (forward + ndc.0 * right + ndc.1 * up).normalize();
+                let b = origin.dot(d);
+                let t = -b - (b * b - origin.length_squared() + 1.0).max(0.0).sqrt();
+                sum += exact(-(origin + t * d).dot(d));
+            }
+            sum / 64.0
+        };
+        let pixels = interior_pixels(&hyb.gbuffer, &view);
+        assert!(pixels.len() > 2000, "the sphere should fill the image ({} interior pixels)", pixels.len());
+        for &(lo, hi) in &bins {
+            let (mut n, mut sh, mut sp, mut se2, mut s_e, mut s_t, mut worst) =
+                (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64);
+            for &(i, nv) in pixels.iter().filter(|p| p.1 >= lo && p.1 < hi) {
+                let t =
+                    furnace_albedo(table_bilinear(&table, nv, roughness as f64), metallic as f64, f0, f90);
+                // The channels are equal (white), so one channel's noise is the pixel's.
+                worst = (0..3).map(|c| (hyb.color[i][c] as f64 - t).abs()).fold(worst, f64::max);
+                sh += hyb.color[i][1] as f64;
+                sp += pt.mean[i][1] as f64;
+                se2 += var[i][1] as f64;
+                s_e += exact_box(i);
+                s_t += t;
+                n += 1.0;
+            }
+            let se = se2.sqrt() / n;
+            let (h, p, e, t) = (sh / n, sp / n, s_e / n, s_t / n);
+            eprintln!(
+                "{metallic:8.2} {roughness:9.2}  {lo:.1}–{:.1}  {:7} {h:9.5} {p:9.5} {e:9.5}  {t:9.5}  {:+9.5} {se:8.5} {worst:9.2e}",
+                hi.min(1.0),
+                n as usize,
+                p - e
+            );
+            assert!(n >= 50.0, "too few pixels in n·v bin {lo}–{hi}: {n}");
+            assert!(
+                worst < 1e-3,
+                "hybrid differs from the table's prediction by {worst:e} (m {metallic} r {roughness})"
+            );
+            assert!(
+                (p - e).abs() <= z * se + 1e-4,
+                "path tracer {p} vs exact single-scattering albedo {e} ± {se} (m {metallic} r {roughness}, n·v {lo}–{hi})"
+            );
+            assert!(
+                (t - e).abs() < 2e-3,
+                "the table's interpolation T {t} differs from the exact albedo E {e} (m {metallic} r {roughness}, n·v {lo}–{hi})"
+            );
+            assert!(
+                (h - p).abs() <= z * se + 1e-4 + 1e-3 + 2e-3,
+                "hybrid {h} vs path tracer {p} ± {se} (m {metallic} r {roughness}, n·v {lo}–{hi})"
+            );
+            if metallic == 1.0 && lo == 0.7 {
+                frontal_metal.push((roughness, h, p, se, e));
+            }
+        }
+    }
+    for w in frontal_metal.windows(2) {
+        let ((r0, h0, p0, s0, _), (r1, h1, p1, s1, _)) = (w[0], w[1]);
+        assert!(h1 < h0, "hybrid metal albedo should fall with roughness: {h0} at {r0}, {h1} at {r1}");
+        assert!(
+            p0 - p1 > z * (s0 * s0 + s1 * s1).sqrt(),
+            "path-traced metal albedo should fall with roughness: {p0} at {r0}, {p1} at {r1}"
+        );
+    }
+    let &(_, h, p, se, e) = frontal_metal.last().unwrap();
+    eprintln!(
+        "rough metal (n·v > 0.7): 1 − E = {:.4}, 1 − path = {:.4} ± {se:.4}, 1 − hybrid = {:.4}",
+        1.0 - e,
+        1.0 - p,
+        1.0 - h
+    );
+    assert!(1.0 - p > 10.0 * se, "the roughest metal should lose energy: path {p} ± {se}");
+    eprintln!("white furnace: {:.1} s", start.elapsed().as_secs_f64());
+}
+
+/// Grazing angles: one rough metal sphere (roughness 0.75, the grid's orange)
+/// filling a 96² image under the sky with a bright disc, hybrid (4×4 supersampled) against the
+/// path tracer's direct environment light. Per n·v bin (grazing < 0.3, frontal > 0.8; at least
+/// 150 interior pixels each), the split sum's relative mean squared error in luminance, with the
+/// path tracer's noise removed: R = Σ[(h − p)² − var(p)] / Σ p², var(p) its per-pixel variance of
+/// the mean; se(R) from var[(h − p)²] ≈ 4 (h − p)² var(p) + 2 var(p)² (Gaussian pixel means).
+/// The grazing bin's R exceeds the frontal bin's by more than 3.09 standard errors (one-sided,
+/// significance 0.001). (A dielectric of the same roughness is not tested: its error, ~6.5 % RMS
+/// in every bin, is dominated by SH9's truncation of the disc in the diffuse term, flat in n·v.)
+#[test]
+fn split_sum_error_is_largest_at_grazing_angles() {
+    let gpu = Gpu::new();
+    let map = synthetic_map(128, 64, sky);
+    let lum = |c: &[f32]| (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]) as f64;
+    {
+        let metallic = 1.0;
+        let scene = sphere_scene([0.9, 0.5, 0.2], metallic, 0.75);
+        let (hyb, pt, view) = render_pair(&gpu, &scene, Some(&map), [1.0; 3], (96, 96), 64, true);
+        let var = pt.variance_of_mean();
+        let pixels = interior_pixels(&hyb.gbuffer, &view);
+        let bin = |lo: f64, hi: f64| {
+            let (mut num, mut den, mut var_num, mut n) = (0.0, 0.0, 0.0, 0);
+            for &(i, _) in pixels.iter().filter(|p| p.1 >= lo && p.1 < hi) {
+                let (h, p) = (lum(&hyb.color[i]), lum(&pt.mean[i]));
+                let v = 0.2126f64.powi(2) * var[i][0] as f64
+                    + 0.7152f64.powi(2) * var[i][1] as f64
+                    + 0.0722f64.powi(2) * var[i][2] as f64;
+                let d2 = (h - p).powi(2);
+                num += d2 - v;
+                den += p * p;
+                var_num += 4.0 * (d2 - v).max(0.0) * v + 2.0 * v * v;
+                n += 1;
+            }
+            (num / den, var_num.sqrt() / den, n)
+        };
+        let (grazing, g_se, ng) = bin(0.0, 0.3);
+        let (frontal, f_se, nf) = bin(0.8, 1.01);
+        let (middle, m_se, nm) = bin(0.3, 0.8);
+        eprintln!(
+            "metallic {metallic}, roughness 0.75: RMS relative error (noise removed) n·v < 0.3: {:.4} ({ng} px), 0.3–0.8: {:.4} ({nm} px), > 0.8: {:.4} ({nf} px); R = {grazing:.2e} ± {g_se:.1e}, {middle:.2e} ± {m_se:.1e}, {frontal:.2e} ± {f_se:.1e}",
+            grazing.max(0.0).sqrt(),
+            middle.max(0.0).sqrt(),
+            frontal.max(0.0).sqrt()
+        );
+        assert!(ng >= 150 && nf >= 150, "too few pixels: {ng} grazing, {nf} frontal");
+        assert!(
+            grazing - frontal > 3.09 * (g_se * g_se + f_se * f_se).sqrt(),
+            "metallic {metallic}: grazing R {grazing:e} ± {g_se:e} should exceed frontal {frontal:e} ± {f_se:e}"
+        );
+    }
+}
+
+/// Prefiltered levels against brute force: a 64 × 32 grey map (a dim gradient and a disc of
+/// radiance 20 and radius 12°), every texel of the levels for roughness 0.4 (16 × 8) and 1.0
+/// (8 × 4) against the f64 integral the kernel estimates, ∫ L(l) D(h)/4 (r·l) dl / ∫ D(h)/4 (r·l) dl
+/// with n = v = r (the source taken piecewise constant, 4 × 4 exact-solid-angle cells per texel).
+/// Expected error: the kernel's 64 Hammersley samples with filtered importance sampling should do
+/// no worse than 64 independent samples of the same pdf D/4, whose ratio estimator has standard
+/// error σ = √(∫ q (r·l)² (L − μ)² dl / 64) / ∫ q (r·l) dl (q = D/4; computed per texel by the
+/// same quadrature). Tested: every texel within 3 σ (plus 1e-3 of its value for the texel
+/// reconstruction: the kernel reads the source bilinearly).
+///
+/// FAILS on the current kernel, so ignored until filtered importance sampling is fixed: its box
+/// chain blurs the disc far beyond the lobe (mean error 50 σ at roughness 0.4, 15 σ at 1.0; worst
+/// texel 0.327 against 0.201, +63 %); without the `+ 1` lod bias 12.5 σ and 3 σ (worst +16 %);
+/// with plain sampling (lod 0) 0.3 σ, inside the bound.
+#[test]
+#[ignore = "finds a bug: the prefilter's filtered importance sampling is biased by up to 63 %"]
+fn prefiltered_levels_match_brute_force() {
+    use std::f64::consts::PI;
+    let (w, h) = (64usize, 32usize);
+    let disc = unit([0.8, 0.5, -0.3]);
+    let radiance = |d: [f64; 3]| {
+        let cos = d[0] * disc[0] + d[1] * disc[1] + d[2] * disc[2];
+        let l = if cos > 12f64.to_radians().cos() { 20.0 } else { 0.2 + 0.3 * d[1].max(0.0) };
+        [l; 3]
+    };
+    let map = synthetic_map(w, h, radiance);
+    let gpu = Gpu::new();
+    let mut scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
+    scene.set_environment(&gpu, &map).unwrap();
+    let settings = IblSettings::default();
+    let ibl = IblResources::build(&gpu, &scene, &settings).unwrap();
+    let levels: Vec<[f32; 4]> = ibl.prefiltered.read(&gpu).unwrap();
+    let sizes = umbra::ibl::prefiltered_level_sizes((w as u32, h as u32));
+    // Source cells: direction, solid angle, radiance.
+    let sub = 4usize;
+    let mut cells = Vec::with_capacity(w * h * sub * sub);
+    for y in 0..h * sub {
+        let (t0, t1) = (PI * y as f64 / (h * sub) as f64, PI * (y + 1) as f64 / (h * sub) as f64);
+        let d_omega = 2.0 * PI / (w * sub) as f64 * (t0.cos() - t1.cos());
+        for x in 0..w * sub {
+            let d = texel_direction(x, y, w * sub, h * sub).0;
+            cells.push((d, d_omega, map.texels[(y / sub) * w + x / sub][0] as f64));
+        }
+    }
+    let mut worst_ratio: f64 = 0.0;
+    for (k, roughness) in [(2usize, 0.4f64), (5, 1.0)] {
+        let a = roughness * roughness;
+        let offset: u32 = sizes[1..k].iter().map(|&(w, h)| w * h).sum();
+        let (lw, lh) = (sizes[k].0 as usize, sizes[k].1 as usize);
+        let (mut worst, mut sum_ratio) = ((0.0f64, 0.0, 0.0, 0.0), 0.0);
+        for t in 0..lw * lh {
+            let r = texel_direction(t % lw, t / lw, lw, lh).0;
+            let (mut wsum, mut lsum) = (0.0, 0.0);
+            let weights: Vec<(f64, f64)> = cells
+                .iter()
+                .filter_map(|&(l, d_omega, radiance)| {
+                    let c = r[0] * l[0] + r[1] * l[1] + r[2] * l[2];
+                    if c <= 0.0 {
+                        return None;
+                    }
+                    // n·h for h = (r + l)/|r + l| with r·l = c.
+                    let nh2 = (1.0 + c) / 2.0;
+                    let d = a * a / (PI * (nh2 * (a * a - 1.0) + 1.0).powi(2));
+                    let q = d / 4.0 * d_omega;
+                    wsum += q * c;
+                    lsum += q * c * radiance;
+                    Some((q * c * c, radiance))
+                })
+                .collect();
+            let mu = lsum / wsum;
+            let var: f64 = weights.iter().map(|&(qc2, l)| qc2 * (l - mu).powi(2)).sum::<f64>()
+                / settings.prefilter_samples as f64;
+            let sigma = var.sqrt() / wsum;
+            let g = levels[offset as usize + t][1] as f64;
+            let ratio = (g - mu).abs() / (3.0 * sigma + 1e-3 * mu);
+            sum_ratio += (g - mu).abs() / sigma;
+            if ratio > worst.0 {
+                worst = (ratio, g, mu, sigma);
+            }
+        }
+        let (ratio, g, mu, sigma) = worst;
+        eprintln!(
+            "roughness {roughness}: mean |GPU − brute| / σ {:.2}; worst texel GPU {g:.4} vs {mu:.4} (σ {sigma:.4}, |error| / (3σ + 1e-3 μ) = {ratio:.2})",
+            sum_ratio / (lw * lh) as f64
+        );
+        worst_ratio = worst_ratio.max(ratio);
+    }
+    assert!(worst_ratio <= 1.0, "a prefiltered texel is further than 3σ from the brute-force integral");
 }

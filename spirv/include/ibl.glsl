@@ -1,7 +1,7 @@
 // Image-based lighting with the split-sum approximation (src/ibl.rs, src/passes/ibl.rs).
 //
-// - BRDF LUT: IBL_LUT_SIZE x IBL_LUT_SIZE vec4s over (n.v, perceptual roughness) at texel centres
-//   ((i + 0.5) / N, (j + 0.5) / N), entry j * N + i:
+// - BRDF LUT: IBL_LUT_SIZE x IBL_LUT_SIZE vec4s over (n.v, perceptual roughness) at
+//   ((i + 0.5) / N, j / (N - 1)) (roughness edge to edge: roughness 1 is not clamped), entry j * N + i:
 //     x = A, y = B: the specular term's directional albedo = F0 A + F90 B (Schlick split),
 //     z = C, w = D: the cosine-weighted average of the diffuse lobe's Fresnel weighting,
 //                   1 - max3(F) = 1 - max3(F0) C - F90 D (C + D = 1).

@@ -389,3 +389,31 @@ fn ten_thousand_samples_equal_a_float64_accumulation() {
     }
     eprintln!("worst error / rounding bound: {worst_ratio:.4}; worst CPU-float32 drift / its tolerance: {worst_tight:.4}");
 }
+
+/// Absurd output sizes are one clear CLI error each, never a panic: refused by the parser, or
+/// (16384×16384, which parses) by the device's buffer limit naming the buffer.
+#[test]
+fn absurd_output_sizes_are_clear_cli_errors() {
+    let umbra = || std::process::Command::new(env!("CARGO_BIN_EXE_umbra"));
+    let cases = [
+        ("100000x100000", "at most 16384"),
+        ("0x10", "positive"),
+        ("10x0", "positive"),
+        ("-4x4", "-4x4"),
+        ("4294967296x1", "4294967296x1"),
+        ("x", "'x'"),
+        ("64", "WIDTHxHEIGHT"),
+    ];
+    for (size, phrase) in cases {
+        let out = umbra().args(["render", "--spp", "1", &format!("--size={size}")]).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(phrase), "--size {size}: {stderr}");
+        assert!(!stderr.contains("panicked"), "--size {size}: {stderr}");
+    }
+    let out = umbra().args(["render", "--spp", "1", "--size", "16384x16384"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    eprintln!("{stderr}");
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("path accum") && stderr.contains("binds at most"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -26,7 +26,7 @@ pub enum Error {
         call: &'static str,
         /// Its result code.
         result: vk::Result,
-        /// The last pass reached, if known.
+        /// The last pass recorded into the failed submission, if known (the pass marker).
         pass: Option<String>,
     },
     /// Device memory could not be allocated.
@@ -70,7 +70,7 @@ pub enum Error {
 }
 
 fn pass_hint(pass: &Option<String>) -> String {
-    pass.as_ref().map(|p| format!(" (last pass reached: {p})")).unwrap_or_default()
+    pass.as_ref().map(|p| format!(" (last pass recorded: {p})")).unwrap_or_default()
 }
 
 /// Turns an `ash` result into [`Error::Vulkan`] naming the call.

@@ -7,7 +7,7 @@ use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::vk::{raw, Buffer, Context};
+use crate::vk::{raw, Buffer, Context, DeviceInfo};
 use glam::Vec3;
 
 /// Storage buffers for one scene.
@@ -77,11 +77,64 @@ impl SceneArrays {
         Ok(Self::with_bvh(scene, Bvh::build(&scene.triangle_soup())?))
     }
 
+    /// The name and size in bytes of each storage buffer [`GpuScene::from_arrays`] uploads.
+    pub fn buffer_sizes(&self) -> [(&'static str, u64); 8] {
+        fn bytes<T>(v: &[T]) -> u64 {
+            std::mem::size_of_val(v) as u64
+        }
+        [
+            ("bvh nodes", bytes(&self.bvh.nodes)),
+            ("bvh triangles", bytes(&self.bvh.tris)),
+            ("scene triangles", bytes(&self.triangles)),
+            ("scene vertices", bytes(&self.vertices)),
+            ("scene materials", bytes(&self.materials)),
+            ("scene lights", bytes(&self.lights)),
+            ("scene punctual lights", bytes(&self.punctual)),
+            ("scene texels", bytes(&self.texels)),
+        ]
+    }
+
+    /// Checks that every buffer of the scene `name` fits `device`'s `maxStorageBufferRange`
+    /// (128 MiB on lavapipe): one error naming the scene, the buffer, both sizes and what to
+    /// reduce, before anything is allocated. [`GpuScene::upload`] calls it; a test can pass a
+    /// [`DeviceInfo`] with a lowered limit.
+    pub fn check_limits(&self, name: &str, device: &DeviceInfo) -> Result<()> {
+        fits(name, &self.buffer_sizes(), device)
+    }
+
     /// Lays the scene out for the GPU around a BVH already built for its triangles.
     pub fn with_bvh(scene: &Scene, bvh: Bvh) -> Self {
         let shading = ShadingArrays::new(scene, &bvh.prim_order);
         let ShadingArrays { triangles, vertices, materials, lights, punctual, textures, texels } = shading;
         Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels }
+    }
+}
+
+/// What each buffer holds, for the error of [`fits`].
+fn remedy(buffer: &str) -> &'static str {
+    match buffer {
+        "scene texels" => "use smaller or fewer textures",
+        "environment texels" => "downsample the environment map",
+        _ => "split the scene or simplify its meshes",
+    }
+}
+
+/// Checks `(buffer, bytes)` pairs of `name` against `device`'s storage-buffer limit.
+fn fits(name: &str, buffers: &[(&'static str, u64)], device: &DeviceInfo) -> Result<()> {
+    let limit = device.max_storage_buffer_range;
+    match buffers.iter().find(|(_, bytes)| *bytes > limit) {
+        Some(&(buffer, bytes)) => Err(Error::Scene {
+            path: name.into(),
+            message: format!(
+                "too large for device '{}': its {buffer} need {bytes} bytes ({:.1} MiB) in one storage \
+                 buffer, but the device binds at most {limit} bytes ({:.1} MiB, maxStorageBufferRange); {}",
+                device.name,
+                bytes as f64 / 1048576.0,
+                limit as f64 / 1048576.0,
+                remedy(buffer)
+            ),
+        }),
+        None => Ok(()),
     }
 }
 
@@ -194,6 +247,8 @@ impl GpuScene {
     /// Lights the scene with an environment map (replacing any previous one), uploading it
     /// with its importance-sampling tables.
     pub fn set_environment(&mut self, ctx: &Context, map: &EnvironmentMap) -> Result<()> {
+        let texel_bytes = (map.width * map.height * std::mem::size_of::<[f32; 4]>()) as u64;
+        fits(&map.name, &[("environment texels", texel_bytes)], ctx.info())?;
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         let table = map.distribution();
         let texels: Vec<[f32; 4]> =
@@ -207,8 +262,11 @@ impl GpuScene {
     }
 
     /// Builds the BVH and uploads everything.
+    /// A scene too large for the device's storage buffers is one [`Error::Scene`] naming it.
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<Self> {
-        Self::from_arrays(ctx, &SceneArrays::new(scene)?)
+        let arrays = SceneArrays::new(scene)?;
+        arrays.check_limits(&scene.name, ctx.info())?;
+        Self::from_arrays(ctx, &arrays)
     }
 
     /// Uploads arrays already laid out (tests keep them to compare against).

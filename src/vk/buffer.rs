@@ -41,7 +41,16 @@ impl Buffer {
         let info =
             vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid device; the buffer is destroyed on error or in Drop.
-        let raw = unsafe { shared.device.create_buffer(&info, None) }.call("vkCreateBuffer")?;
+        let raw = match unsafe { shared.device.create_buffer(&info, None) } {
+            // A size no heap can hold: name the buffer, as an allocator failure would.
+            Err(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY) => {
+                return Err(Error::Allocation {
+                    name: format!("{name} ({size} bytes)"),
+                    source: gpu_allocator::AllocationError::OutOfMemory,
+                })
+            }
+            other => other.call("vkCreateBuffer")?,
+        };
         let requirements = unsafe { shared.device.get_buffer_memory_requirements(raw) };
         let allocation = shared
             .allocator()

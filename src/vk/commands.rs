@@ -21,6 +21,7 @@ impl Context {
         unsafe {
             let pool = device.create_command_pool(&pool_info, None).call("vkCreateCommandPool")?;
             let mut still_running = false;
+            let mut recorded = None;
             let result = (|| {
                 let cmd = device
                     .allocate_command_buffers(
@@ -30,6 +31,7 @@ impl Context {
                             .command_buffer_count(1),
                     )
                     .call("vkAllocateCommandBuffers")?[0];
+                recorded = Some(cmd);
                 device
                     .begin_command_buffer(
                         cmd,
@@ -43,9 +45,13 @@ impl Context {
                     device.create_fence(&vk::FenceCreateInfo::default(), None).call("vkCreateFence")?;
                 let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
                 let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-                let submitted = {
-                    let queue = self.shared.queue.lock().unwrap_or_else(|p| p.into_inner());
-                    device.queue_submit2(*queue, &submit, fence).call("vkQueueSubmit2")
+                let injected = self.shared.injected_fault.lock().unwrap_or_else(|p| p.into_inner()).take();
+                let submitted = match injected {
+                    Some(fault) => Err(fault).call("vkQueueSubmit2"),
+                    None => {
+                        let queue = self.shared.queue.lock().unwrap_or_else(|p| p.into_inner());
+                        device.queue_submit2(*queue, &submit, fence).call("vkQueueSubmit2")
+                    }
                 };
                 let waited = submitted.and_then(|()| {
                     match device.wait_for_fences(&[fence], true, SUBMIT_TIMEOUT_NS) {
@@ -56,14 +62,28 @@ impl Context {
                         other => other.call("vkWaitForFences"),
                     }
                 });
-                if matches!(waited, Err(Error::Invalid(_))) {
+                if let Err(Error::Invalid(message)) = waited {
                     // Still running: leak the fence and pool rather than free them under the GPU.
                     still_running = true;
-                    return Err(waited.err().unwrap_or_else(|| Error::Invalid("timeout".into())));
+                    return Err(Error::Invalid(match self.last_pass(cmd) {
+                        Some(pass) => format!("{message} (last pass recorded: {pass})"),
+                        None => message,
+                    }));
                 }
                 device.destroy_fence(fence, None);
                 waited.map(|()| value)
             })();
+            // The pass marker: a Vulkan error names the last pass recorded before it.
+            let pass = recorded.and_then(|cmd| self.last_pass(cmd));
+            let result = result.map_err(|e| match e {
+                Error::Vulkan { call, result, pass: None } => {
+                    Error::Vulkan { call, result, pass: pass.map(String::from) }
+                }
+                other => other,
+            });
+            if let Some(cmd) = recorded {
+                self.clear_pass(cmd);
+            }
             // A recording that failed never reached the queue: its pool goes too.
             if !still_running {
                 device.destroy_command_pool(pool, None);

@@ -5,6 +5,7 @@ use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::{AllocationSizes, AllocatorDebugSettings};
+use std::collections::HashMap;
 use std::ffi::CStr;
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -83,11 +84,21 @@ pub(crate) struct Shared {
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     validation: Option<Arc<ValidationLog>>,
     owned: bool,
+    /// The pass marker: the last kernel dispatched into each command buffer still being
+    /// recorded or submitted, so a failed submission names the pass (see [`Context::last_pass`]).
+    pub passes: Mutex<HashMap<vk::CommandBuffer, &'static str>>,
+    /// A failure the next [`Context::submit`] reports instead of submitting (tests only).
+    pub injected_fault: Mutex<Option<vk::Result>>,
 }
 
 impl Shared {
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Notes that `pass` is the latest kernel recorded into `cmd`.
+    pub fn mark_pass(&self, cmd: vk::CommandBuffer, pass: &'static str) {
+        self.passes.lock().unwrap_or_else(|p| p.into_inner()).insert(cmd, pass);
     }
 }
 
@@ -269,6 +280,8 @@ impl Context {
                 debug,
                 validation,
                 owned,
+                passes: Mutex::new(HashMap::new()),
+                injected_fault: Mutex::new(None),
             }),
         })
     }
@@ -276,6 +289,28 @@ impl Context {
     /// The chosen device's properties.
     pub fn info(&self) -> &DeviceInfo {
         &self.shared.info
+    }
+
+    /// The pass marker of `cmd`: the kernel of the last pass recorded into it (each
+    /// [`super::ComputePipeline::dispatch`] sets it). A host that records umbra's passes into its
+    /// own command buffer can name the pass when its submission fails; umbra's own
+    /// [`Context::submit`] puts it into every Vulkan error it returns.
+    pub fn last_pass(&self, cmd: vk::CommandBuffer) -> Option<&'static str> {
+        self.shared.passes.lock().unwrap_or_else(|p| p.into_inner()).get(&cmd).copied()
+    }
+
+    /// Forgets `cmd`'s pass marker (for a host that frees or resets its command buffer).
+    pub fn clear_pass(&self, cmd: vk::CommandBuffer) {
+        self.shared.passes.lock().unwrap_or_else(|p| p.into_inner()).remove(&cmd);
+    }
+
+    /// Fault injection for tests of the reporting path: the next [`Context::submit`] records its
+    /// work as usual but, instead of submitting it, fails with `result` as `vkQueueSubmit2` would
+    /// (`ERROR_DEVICE_LOST`, `ERROR_OUT_OF_DEVICE_MEMORY`, ...). Nothing reaches the queue, so
+    /// the context stays usable.
+    #[doc(hidden)]
+    pub fn inject_submit_fault(&self, result: vk::Result) {
+        *self.shared.injected_fault.lock().unwrap_or_else(|p| p.into_inner()) = Some(result);
     }
 
     /// The logical device.

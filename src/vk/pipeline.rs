@@ -209,6 +209,7 @@ impl ComputePipeline {
                 self.name
             )));
         }
+        self.shared.mark_pass(cmd, self.name);
         // SAFETY: recording into a command buffer in the recording state.
         unsafe { self.shared.device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
         Ok(())

@@ -1,0 +1,419 @@
+//! Reliability (issue 8): bad input that the other suites do not cover (environment maps with
+//! NaN/Inf/negative texels, scenes over the device's buffer limits, absurd output sizes), faults
+//! that name the pass, determinism of the hybrid mode, and a long run that loses nothing.
+
+mod common;
+
+use common::Gpu;
+use std::sync::Mutex;
+use umbra::environment::EnvironmentMap;
+use umbra::gpu::scene::{GpuScene, SceneArrays};
+
+use umbra::passes::ao::AoSettings;
+use umbra::passes::pathtrace::{PathTarget, PathTracePass};
+use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
+use umbra::scene::{Material, Sampler, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
+
+use umbra::vk::{barrier, raw, Buffer, MemoryLocation};
+use umbra::Error;
+
+/// Every warning logged in this test binary (tests run in parallel: filter by a unique name).
+static WARNINGS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+struct Capture;
+
+impl log::Log for Capture {
+    fn enabled(&self, metadata: &log::Metadata) -> bool {
+        metadata.level() <= log::Level::Warn
+    }
+    fn log(&self, record: &log::Record) {
+        if self.enabled(record.metadata()) {
+            WARNINGS.lock().unwrap().push(record.args().to_string());
+        }
+    }
+    fn flush(&self) {}
+}
+
+fn warnings_naming(name: &str) -> Vec<String> {
+    static LOGGER: Capture = Capture;
+    let _ = log::set_logger(&LOGGER).map(|()| log::set_max_level(log::LevelFilter::Warn));
+    WARNINGS.lock().unwrap().iter().filter(|w| w.contains(name)).cloned().collect()
+}
+
+/// NaN, ±Inf and negative texels become 0 with one warning that counts them; the other texels
+/// and the sampling tables are untouched by them (finite, a valid CDF).
+#[test]
+fn environment_nan_inf_and_negative_texels_are_zeroed_with_one_warning() {
+    warnings_naming("");
+    let (w, h) = (8, 4);
+    let mut texels: Vec<[f32; 3]> = (0..w * h).map(|i| [0.1 * i as f32, 1.0, 2.0]).collect();
+    texels[3] = [f32::NAN, 1.0, 1.0];
+    texels[7] = [1.0, f32::INFINITY, 1.0];
+    texels[12] = [1.0, 1.0, f32::NEG_INFINITY];
+    texels[20] = [-0.5, -1e30, 1.0];
+    let map = EnvironmentMap::from_texels("bad-sky-texels", w, h, texels.clone()).unwrap();
+    let warnings = warnings_naming("bad-sky-texels");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("5 NaN, infinite or negative"), "{warnings:?}");
+    for (i, (got, was)) in map.texels.iter().zip(&texels).enumerate() {
+        for c in 0..3 {
+            let expected = if was[c].is_finite() && was[c] >= 0.0 { was[c] } else { 0.0 };
+            assert_eq!(got[c], expected, "texel {i} channel {c}");
+        }
+    }
+    let table = map.distribution();
+    assert!(table
+        .pdf_uv
+        .iter()
+        .chain(&table.marginal_cdf)
+        .chain(&table.conditional_cdf)
+        .all(|v| v.is_finite()));
+    assert_eq!(table.marginal_cdf.last(), Some(&1.0));
+    // A map with nothing valid left is black, and samples uniformly rather than dividing by 0.
+    let all_nan = EnvironmentMap::from_texels("all-nan-sky", 4, 2, vec![[f32::NAN; 3]; 8]).unwrap();
+    assert!(all_nan.texels.iter().flatten().all(|&v| v == 0.0));
+    assert!(all_nan.distribution().pdf_uv.iter().all(|&p| p == 1.0));
+    assert_eq!(warnings_naming("all-nan-sky").len(), 1);
+    // A clean map warns about nothing.
+    EnvironmentMap::from_texels("clean-sky", 2, 1, vec![[1.0; 3]; 2]).unwrap();
+    assert!(warnings_naming("clean-sky").is_empty());
+}
+
+/// The same from a file: the warning names the file, and a path-traced render lit by the
+/// sanitised map stays finite.
+#[test]
+fn environment_file_with_bad_texels_is_named_and_renders_finite() {
+    warnings_naming("");
+    let dir = std::env::temp_dir().join(format!("umbra-rel-env-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("poisoned-sky.exr");
+    let (w, h) = (16, 8);
+    let mut rgb: Vec<f32> = (0..w * h * 3).map(|i| 0.5 + (i % 7) as f32 * 0.1).collect();
+    for (k, bad) in [f32::NAN, f32::INFINITY, -3.0, f32::NEG_INFINITY].into_iter().enumerate() {
+        rgb[k * 37] = bad;
+    }
+    let layer = umbra::output::Layer { name: "", channels: &["R", "G", "B"], data: &rgb };
+    umbra::output::write_exr(&path, w, h, &[layer]).unwrap();
+    let map = EnvironmentMap::load(&path).unwrap();
+    let warnings = warnings_naming("poisoned-sky.exr");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("4 NaN, infinite or negative"), "{warnings:?}");
+
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let mut device_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    device_scene.set_environment(&gpu, &map).unwrap();
+    let settings = PathSettings { size: (8, 8), spp: 4, env: [1.0; 3], ..Default::default() };
+    let image = path_trace(&gpu, &device_scene, &scene.camera(None).unwrap(), &settings, |_, _| {}).unwrap();
+    assert_eq!(image.nonfinite_samples, 0);
+    assert!(image.mean.iter().flatten().all(|v| v.is_finite()));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn assert_too_large(result: umbra::Result<impl Sized>, name: &str, buffer: &str, limit: u64) {
+    match result {
+        Err(e @ Error::Scene { .. }) => {
+            let message = e.to_string();
+            eprintln!("{message}");
+            assert!(message.starts_with(name), "{message}");
+            assert!(message.contains(buffer), "{message}");
+            assert!(message.contains(&format!("at most {limit} bytes")), "{message}");
+            assert!(message.contains("maxStorageBufferRange"), "{message}");
+        }
+        Err(e) => panic!("expected a scene error naming {name}, got: {e}"),
+        Ok(_) => panic!("{name} fits under {limit} bytes"),
+    }
+}
+
+/// The size check against a lowered `maxStorageBufferRange` (the hook: a [`DeviceInfo`] of our
+/// own): the largest buffer fits at its exact size and is refused one byte below.
+#[test]
+fn scene_buffer_sizes_are_checked_against_the_device_limit() {
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let arrays = SceneArrays::new(&scene).unwrap();
+    let sizes = arrays.buffer_sizes();
+    let (largest, bytes) = sizes.iter().copied().max_by_key(|s| s.1).unwrap();
+    let triangles = sizes.iter().find(|s| s.0 == "scene triangles").unwrap().1;
+    assert_eq!(triangles, std::mem::size_of_val(arrays.triangles.as_slice()) as u64);
+    let vertices = sizes.iter().find(|s| s.0 == "scene vertices").unwrap().1;
+    assert_eq!(vertices, std::mem::size_of_val(arrays.vertices.as_slice()) as u64);
+    let mut info = gpu.info().clone();
+    info.max_storage_buffer_range = bytes;
+    arrays.check_limits(&scene.name, &info).unwrap();
+    info.max_storage_buffer_range = bytes - 1;
+    assert_too_large(arrays.check_limits(&scene.name, &info), &scene.name, largest, bytes - 1);
+    // Each buffer is checked, not just the largest.
+    for (buffer, size) in sizes.into_iter().filter(|s| s.1 > 0) {
+        info.max_storage_buffer_range = size - 1;
+        let message = arrays.check_limits(&scene.name, &info).unwrap_err().to_string();
+        assert!(sizes.iter().any(|(b, s)| message.contains(b) && *s >= size), "{buffer}: {message}");
+    }
+}
+
+/// Just over the real device's limit, through the real upload: a scene whose one texture needs a
+/// row more than `maxStorageBufferRange` holds, and an environment map likewise. One clear error
+/// each, before anything is allocated, and no validation message.
+#[test]
+fn scenes_over_the_device_buffer_limit_are_one_clear_error() {
+    let gpu = Gpu::new();
+    let limit = gpu.info().max_storage_buffer_range;
+    if limit > 512 << 20 {
+        eprintln!("skipped: the device binds {limit} bytes per buffer; too much to allocate in a test");
+        return;
+    }
+    let width = 4096u32;
+    let height = (limit / (width as u64 * 4) + 1) as u32;
+    let mut scene = Scene::cornell_box();
+    scene.name = "huge-texture.glb".into();
+    scene.textures.push(Texture {
+        name: "huge".into(),
+        width,
+        height,
+        rgba8: vec![128; width as usize * height as usize * 4],
+        srgb: true,
+        sampler: Sampler::default(),
+    });
+    scene.materials[0].base_color_texture =
+        Some(TextureRef { texture: 0, tex_coord: 0, transform: IDENTITY_TRANSFORM, scale: 1.0 });
+    assert_too_large(GpuScene::upload(&gpu, &scene), "huge-texture.glb", "scene texels", limit);
+    drop(scene);
+
+    let mut device_scene = GpuScene::upload(&gpu, &Scene::cornell_box()).unwrap();
+    let (w, h) = (4096, (limit / (4096 * 16) + 1) as usize);
+    let map = EnvironmentMap::from_texels("huge-sky.exr", w, h, vec![[0.5; 3]; w * h]).unwrap();
+    assert_too_large(device_scene.set_environment(&gpu, &map), "huge-sky.exr", "environment texels", limit);
+    let _ = Material::default();
+}
+
+/// The pass marker: a submission that fails (here by fault injection, as a lost device or an
+/// exhausted heap would) names the last pass recorded into it; nothing reached the queue, so the
+/// context goes on working and is destroyed without a validation message. A real allocation
+/// larger than any heap is one clear error naming the buffer.
+#[test]
+fn failed_submissions_name_the_last_pass() {
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    let camera = scene.camera(None).unwrap();
+    let settings = PathSettings { size: (8, 8), spp: 1, ..Default::default() };
+    let pass = PathTracePass::for_scene(&gpu, &device_scene, Default::default(), Default::default()).unwrap();
+    let resolve = umbra::passes::pathtrace::ResolvePass::new(&gpu).unwrap();
+    let target = PathTarget::new(&gpu, settings.size).unwrap();
+    let output =
+        umbra::vk::Image::storage_2d(&gpu, "resolved", 8, 8, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+    let params = PathTracePass::params(&device_scene, &camera, &settings);
+    let cases = [
+        (raw::Result::ERROR_DEVICE_LOST, false, "pathtrace"),
+        (raw::Result::ERROR_OUT_OF_DEVICE_MEMORY, true, "resolve"),
+    ];
+    for (fault, then_resolve, expected) in cases {
+        gpu.inject_submit_fault(fault);
+        let mut recorded = raw::CommandBuffer::null();
+        let err = gpu
+            .submit(|cmd| {
+                recorded = cmd;
+                output.init_general(&gpu, cmd);
+                pass.record(&gpu, cmd, &device_scene, &target, &params)?;
+                if then_resolve {
+                    resolve.record(&gpu, cmd, &target, output.view)?;
+                }
+                Ok(())
+            })
+            .unwrap_err();
+        let message = err.to_string();
+        eprintln!("{message}");
+        match &err {
+            Error::Vulkan { call: "vkQueueSubmit2", result, pass: Some(pass) } => {
+                assert_eq!((*result, pass.as_str()), (fault, expected), "{message}");
+            }
+            other => panic!("expected a Vulkan error naming {expected}: {other}"),
+        }
+        assert!(message.contains(&format!("{fault}")) && message.contains(expected), "{message}");
+        assert_eq!(gpu.last_pass(recorded), None, "the marker outlives its submission");
+    }
+    // A submission that never dispatched names no pass.
+    gpu.inject_submit_fault(raw::Result::ERROR_DEVICE_LOST);
+    match gpu.submit(|_| Ok(())) {
+        Err(Error::Vulkan { pass: None, .. }) => {}
+        other => panic!("expected a Vulkan error without a pass, got {:?}", other.err()),
+    }
+    // The context still renders.
+    let image = path_trace(&gpu, &device_scene, &camera, &settings, |_, _| {}).unwrap();
+    assert!(image.mean.iter().any(|p| p[0] > 0.0));
+    // Out of memory for real: more than any heap holds.
+    let heap_total = 1u64 << 50;
+    let usage = raw::BufferUsageFlags::TRANSFER_DST;
+    match Buffer::new(&gpu, "absurd readback", heap_total, usage, MemoryLocation::GpuToCpu) {
+        Err(e @ Error::Allocation { .. }) => {
+            eprintln!("{e}");
+            assert!(e.to_string().contains("absurd readback"), "{e}");
+        }
+        Err(e) => panic!("expected an allocation error, got {e}"),
+        Ok(_) => panic!("allocated 2^50 bytes"),
+    }
+}
+
+/// Hybrid renders are deterministic: the same seeds give the same bytes (colour and display),
+/// another shadow-ray or SSAO seed gives other bytes.
+#[test]
+fn hybrid_same_seed_same_bytes_different_seed_different() {
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    let camera = scene.camera(None).unwrap();
+    let mut settings =
+        HybridSettings { size: (32, 32), ao: Some(AoSettings::default()), ..Default::default() };
+    settings.lighting.env = [0.5; 3];
+    let render = |s: &HybridSettings| {
+        let image = hybrid(&gpu, &device_scene, &camera, s).unwrap();
+        let mut bytes = bytemuck::cast_slice::<[f32; 4], u8>(&image.color).to_vec();
+        bytes.extend(image.display.iter().flatten());
+        bytes
+    };
+    let a = render(&settings);
+    assert!(a == render(&settings), "same seeds, different output");
+    let mut shadow_seed = settings.clone();
+    shadow_seed.lighting.seed = 7;
+    assert!(a != render(&shadow_seed), "another shadow-ray seed, identical output");
+    let mut ao_seed = settings.clone();
+    ao_seed.ao.as_mut().unwrap().seed = 7;
+    assert!(a != render(&ao_seed), "another SSAO seed, identical output");
+}
+
+/// A long run loses nothing: 10,000 samples per pixel of a 4×4 Cornell box through
+/// [`path_trace`] (its batching, its float32 running mean) equal the float64 mean of the same
+/// 10,000 per-sample radiances to float rounding. The per-sample radiance of sample s is read
+/// by running the kernel for sample s alone on a zeroed accumulator, which then holds
+/// fl(radiance / (s + 1)). The bound is the worst case of the running mean's roundings,
+/// u·Σ (3·|r_n − m_(n−1)|/n + |m_n|) with u = 2⁻²⁴, plus 2u·mean |r| for the reconstruction; it is
+/// deterministic (no significance level). Also checked: the float32 running mean recomputed on
+/// the CPU from the same samples agrees much more tightly (a dropped or repeated sample is caught).
+#[test]
+fn ten_thousand_samples_equal_a_float64_accumulation() {
+    const N: u32 = 10_000;
+    const PIXELS: usize = 16;
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    let camera = scene.camera(None).unwrap();
+    let settings = PathSettings { size: (4, 4), spp: N, ..Default::default() };
+    let start = std::time::Instant::now();
+    let image = path_trace(&gpu, &device_scene, &camera, &settings, |_, _| {}).unwrap();
+    let long_run = start.elapsed();
+    assert_eq!(image.spp, N);
+    assert_eq!(image.nonfinite_samples, 0);
+
+    // Every sample alone: zero the accumulator, trace sample s, copy the result out.
+    let start = std::time::Instant::now();
+    let pass =
+        PathTracePass::for_scene(&gpu, &device_scene, settings.microfacet, settings.heuristic).unwrap();
+    let target = PathTarget::new(&gpu, settings.size).unwrap();
+    let mut params = PathTracePass::params(&device_scene, &camera, &settings);
+    let row = (PIXELS * 16) as u64;
+    let samples = Buffer::new(
+        &gpu,
+        "per-sample radiance",
+        row * N as u64,
+        raw::BufferUsageFlags::STORAGE_BUFFER
+            | raw::BufferUsageFlags::TRANSFER_DST
+            | raw::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::GpuOnly,
+    )
+    .unwrap();
+    let transfer = (
+        raw::PipelineStageFlags2::ALL_TRANSFER,
+        raw::AccessFlags2::TRANSFER_READ | raw::AccessFlags2::TRANSFER_WRITE,
+    );
+    for first in (0..N).step_by(1000) {
+        gpu.submit(|cmd| {
+            for s in first..first + 1000 {
+                // SAFETY: valid buffers, recording command buffer.
+                unsafe { gpu.device().cmd_fill_buffer(cmd, target.accum.raw, 0, raw::WHOLE_SIZE, 0) };
+                barrier::transfer_to_compute(&gpu, cmd);
+                params.size_frame[2] = s;
+                pass.record(&gpu, cmd, &device_scene, &target, &params)?;
+                barrier::compute_to_transfer(&gpu, cmd);
+                let region = [raw::BufferCopy::default().dst_offset(s as u64 * row).size(row)];
+                unsafe { gpu.device().cmd_copy_buffer(cmd, target.accum.raw, samples.raw, &region) };
+                barrier::memory(&gpu, cmd, transfer, transfer);
+            }
+            Ok(())
+        })
+        .unwrap();
+    }
+    let per_sample: Vec<[f32; 4]> = samples.read(&gpu).unwrap();
+    eprintln!("10,000 spp: {long_run:.2?}; the samples one by one: {:.2?}", start.elapsed());
+
+    let u = f64::powi(2.0, -24);
+    let (mut worst_ratio, mut worst_tight) = (0.0f64, 0.0f64);
+    for p in 0..PIXELS {
+        for c in 0..3 {
+            let r: Vec<f64> = (0..N as usize)
+                .map(|s| {
+                    let v = per_sample[s * PIXELS + p];
+                    assert_eq!(v[3], (s + 1) as f32, "sample {s} pixel {p}: count");
+                    v[c] as f64 * (s + 1) as f64
+                })
+                .collect();
+            let exact = r.iter().sum::<f64>() / N as f64;
+            // The worst-case bound of the float32 running mean's roundings.
+            let (mut m, mut bound) = (0.0f64, 0.0f64);
+            let mut m32 = 0.0f32;
+            for (k, &rk) in r.iter().enumerate() {
+                let n = (k + 1) as f64;
+                let next = m + (rk - m) / n;
+                bound += u * (3.0 * (rk - m).abs() / n + next.abs());
+                m = next;
+                m32 += (rk as f32 - m32) / n as f32;
+            }
+            bound += 2.0 * u * r.iter().map(|v| v.abs()).sum::<f64>() / N as f64 + f64::MIN_POSITIVE;
+            let got = image.mean[p][c] as f64;
+            let error = (got - exact).abs();
+            assert!(
+                error <= bound,
+                "pixel {p} channel {c}: {got} vs float64 {exact}: error {error:e} > bound {bound:e}"
+            );
+            worst_ratio = worst_ratio.max(error / bound);
+            // The same running mean on the CPU: only the reconstruction (≤ 2 ulp per sample) and
+            // the rounding drift it starts differ; a sample dropped or repeated is ~|r − m|/N.
+            let tight = 64.0 * u * exact.abs().max(1e-30)
+                + 2.0 * u * r.iter().map(|v| v.abs()).sum::<f64>() / N as f64;
+            let drift = (got - m32 as f64).abs();
+            worst_tight = worst_tight.max(drift / tight);
+            assert!(
+                drift <= tight,
+                "pixel {p} channel {c}: {got} vs CPU float32 running mean {m32}: {drift:e} > {tight:e}"
+            );
+        }
+    }
+    eprintln!("worst error / rounding bound: {worst_ratio:.4}; worst CPU-float32 drift / its tolerance: {worst_tight:.4}");
+}
+
+/// Absurd output sizes are one clear CLI error each, never a panic: refused by the parser, or
+/// (16384×16384, which parses) by the device's buffer limit naming the buffer.
+#[test]
+fn absurd_output_sizes_are_clear_cli_errors() {
+    let umbra = || std::process::Command::new(env!("CARGO_BIN_EXE_umbra"));
+    let cases = [
+        ("100000x100000", "at most 16384"),
+        ("0x10", "positive"),
+        ("10x0", "positive"),
+        ("-4x4", "-4x4"),
+        ("4294967296x1", "4294967296x1"),
+        ("x", "'x'"),
+        ("64", "WIDTHxHEIGHT"),
+    ];
+    for (size, phrase) in cases {
+        let out = umbra().args(["render", "--spp", "1", &format!("--size={size}")]).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(phrase), "--size {size}: {stderr}");
+        assert!(!stderr.contains("panicked"), "--size {size}: {stderr}");
+    }
+    let out = umbra().args(["render", "--spp", "1", "--size", "16384x16384"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    eprintln!("{stderr}");
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("path accum") && stderr.contains("binds at most"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

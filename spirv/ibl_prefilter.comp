@@ -62,7 +62,12 @@ void main() {
         // With v = n the visible-normal density of l is D(h) / 4.
         float pdf = 0.25 * ggx_d(h, a);
         float sin_theta = max(sqrt(max(0.0, 1.0 - lw.y * lw.y)), 1e-4);
-        float lod = 0.5 * log2(1.0 / (float(count) * pdf * texel * sin_theta)) + 1.0;
+        // The level whose texels match the sample's solid angle 1 / (count pdf), minus 1.5: a
+        // bilinear read of level k already averages a tent two texels wide (4 texels' area,
+        // one level), and the blend between levels half a level more on average. (Krivanek
+        // and Colbert's +1 bias blurred a bright disc up to 63 % beyond the GGX integral;
+        // tests/ibl.rs prefiltered_levels_match_brute_force measures this choice.)
+        float lod = 0.5 * log2(1.0 / (float(count) * pdf * texel * sin_theta)) - 1.5;
         lod = clamp(lod, 0.0, float(levels - 1u));
         uint k0 = uint(lod);
         uint k1 = min(k0 + 1u, levels - 1u);

@@ -10,6 +10,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 // Bits of params.counts.w.
 const uint DEFERRED_IBL = 1u;
+const uint DEFERRED_IBL_DOMINANT = 2u;  // read the prefiltered map along the dominant direction
 
 layout(constant_id = 0) const bool HAS_TEXTURES = false;
 layout(constant_id = 1) const bool HAS_LIGHTS = false;
@@ -82,7 +83,14 @@ vec3 ibl_level(uint k, vec3 r) {
 // colour times irradiance / pi times the table's diffuse Fresnel weighting, blended by metallic
 // as bsdf_eval blends.
 vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
+    // The prefiltered map assumed n = v = r; a rough lobe actually leans from the mirror direction
+    // towards the normal: look up along the dominant direction (Lagarde and de Rousiers 2014,
+    // "Moving Frostbite to PBR", eq. 56, with alpha as their linear roughness).
     vec3 r = reflect(-wo, n);
+    if ((params.counts.w & DEFERRED_IBL_DOMINANT) != 0u) {
+        float smooth_ = clamp(1.0 - s.alpha, 0.0, 1.0);
+        r = normalize(mix(n, r, smooth_ * (sqrt(smooth_) + s.alpha)));
+    }
     vec4 table = ibl_table(nv, roughness);
     vec3 specular_light = params.env.rgb;
     vec3 irradiance_over_pi = params.env.rgb;

@@ -165,7 +165,7 @@ struct DeferredParams {
     vec4 cam_up;       // up * tan(yfov/2)
     vec4 env;          // constant environment radiance rgb (or the map's multiplier), unused
     uvec4 size_frame;  // width, height, frame, seed
-    uvec4 counts;      // light triangles, punctual lights, shadow rays per pixel for area lights, flags (1: IBL)
+    uvec4 counts;      // light triangles, punctual lights, shadow rays per pixel for area lights, flags (1: IBL, 2: IBL along the dominant direction)
     uvec4 env_info;    // environment map width, height, unused, unused
 };
 

@@ -28,12 +28,25 @@ pub struct LightingSettings {
     pub env: [f32; 3],
     /// Split-sum image-based lighting of the environment (times ambient occlusion).
     pub ibl: bool,
+    /// Which direction the prefiltered environment is read along.
+    pub ibl_lookup: IblLookup,
 }
 
 impl Default for LightingSettings {
     fn default() -> Self {
-        Self { shadow_rays: 4, frame: 0, seed: 0, env: [0.0; 3], ibl: true }
+        Self { shadow_rays: 4, frame: 0, seed: 0, env: [0.0; 3], ibl: true, ibl_lookup: IblLookup::Dominant }
     }
+}
+
+/// The direction along which the split sum reads its prefiltered environment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum IblLookup {
+    /// The mirror direction: the prefiltering's own n = v = r assumption (the textbook split sum).
+    Mirror,
+    /// The lobe's dominant direction, leaning from the mirror direction towards the normal as
+    /// roughness grows (Lagarde and de Rousiers 2014): much closer for rough surfaces.
+    #[default]
+    Dominant,
 }
 
 /// `deferred.comp`, specialised for the scene's features.
@@ -94,7 +107,7 @@ impl DeferredPass {
                 scene.light_count,
                 scene.punctual_count,
                 settings.shadow_rays.max(1),
-                settings.ibl as u32,
+                settings.ibl as u32 | ((settings.ibl_lookup == IblLookup::Dominant) as u32) << 1,
             ],
             env_info: [env_w, env_h, 0, 0],
         }

@@ -17,6 +17,7 @@ layout(constant_id = 1) const bool HAS_LIGHTS = false;
 layout(constant_id = 2) const bool HAS_PUNCTUAL = false;
 layout(constant_id = 3) const bool HAS_ENV_MAP = false;
 layout(constant_id = 4) const bool BECKMANN = false;
+layout(constant_id = 5) const bool HAS_ALPHA = false;
 // The hybrid passes shade reflection only (see src/passes/deferred.rs).
 const bool HAS_TRANSMISSION = false;
 

@@ -9,6 +9,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(constant_id = 0) const bool HAS_TEXTURES = false;
+layout(constant_id = 1) const bool HAS_ALPHA = false;
 const bool BECKMANN = false;
 // The hybrid passes shade reflection only (see src/passes/deferred.rs).
 const bool HAS_TRANSMISSION = false;

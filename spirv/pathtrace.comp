@@ -14,6 +14,7 @@ layout(constant_id = 3) const bool HAS_PUNCTUAL = true;
 layout(constant_id = 4) const bool HAS_ENV_MAP = false;
 layout(constant_id = 5) const bool HAS_TEXTURES = false;
 layout(constant_id = 6) const bool HAS_TRANSMISSION = false;
+layout(constant_id = 7) const bool HAS_ALPHA = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };

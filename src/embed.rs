@@ -69,7 +69,7 @@ impl Renderer {
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
         let gpu_scene = GpuScene::upload(ctx, scene)?;
         Ok(Self {
-            gbuffer: GBufferPass::new(ctx, gpu_scene.texture_count > 0)?,
+            gbuffer: GBufferPass::new(ctx, &gpu_scene)?,
             deferred: DeferredPass::new(ctx, &gpu_scene)?,
             ibl: IblResources::build(ctx, &gpu_scene, &IblSettings::default())?,
             ssao: SsaoPass::new(ctx)?,
@@ -93,7 +93,7 @@ impl Renderer {
     /// the BVH, and re-specialises the lighting pipeline for them.
     pub fn update_scene(&mut self, scene: &Scene) -> Result<()> {
         self.scene.update(&self.ctx, scene)?;
-        self.gbuffer = GBufferPass::new(&self.ctx, self.scene.texture_count > 0)?;
+        self.gbuffer = GBufferPass::new(&self.ctx, &self.scene)?;
         self.deferred = DeferredPass::new(&self.ctx, &self.scene)?;
         self.path =
             PathTracePass::for_scene(&self.ctx, &self.scene, self.path_options.0, self.path_options.1)?;

@@ -232,7 +232,7 @@ pub fn hybrid(
     let size = settings.size;
     let gbuffer = GBuffer::new(ctx, size)?;
     let output = Image::storage_2d(ctx, "hybrid colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
-    let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
+    let gbuffer_pass = GBufferPass::new(ctx, scene)?;
     let display = Image::storage_2d(ctx, "hybrid display", size.0, size.1, raw::Format::R8G8B8A8_UNORM)?;
     let deferred = DeferredPass::new(ctx, scene)?;
     let tonemap = TonemapPass::new(ctx)?;
@@ -335,7 +335,7 @@ pub fn ambient_occlusion(
     let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
     let raw_ao = make("ambient occlusion")?;
     let blurred = make("ambient occlusion blurred")?;
-    let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
+    let gbuffer_pass = GBufferPass::new(ctx, scene)?;
     let ssao = SsaoPass::new(ctx)?;
     let rtao = RtaoPass::new(ctx)?;
     let blur = AoBlurPass::new(ctx)?;

@@ -40,7 +40,7 @@ fn gbuffer_matches_cpu_traversal() {
         let size = (96, 64);
         let arrays = SceneArrays::new(&scene).unwrap();
         let gpu_scene = GpuScene::from_arrays(&gpu, &arrays).unwrap();
-        let pass = GBufferPass::new(&gpu, gpu_scene.texture_count > 0).unwrap();
+        let pass = GBufferPass::new(&gpu, &gpu_scene).unwrap();
         let target = GBuffer::new(&gpu, size).unwrap();
         let params = GBufferPass::params(&camera, size);
         gpu.submit(|cmd| pass.record(&gpu, cmd, &gpu_scene, &target.views(), &params)).unwrap();

@@ -103,6 +103,14 @@ bool bvh_is_empty() {
 }
 
 // Front-to-back traversal with t in (tmin, tmax); any_hit stops at the first hit found.
+#ifdef UMBRA_ALPHA_TEST
+// Whether a hit at barycentrics `bary` of triangle `tri` (in BVH order), whose material is
+// alpha-masked or blended (bvh_tris[tri].v1.w's bits: 1 mask, 2 blend), is opaque for a ray from
+// `origin` along `dir`. Defined by shading.glsl; only kernels that shade the scene define UMBRA_ALPHA_TEST
+// (and the specialization constant HAS_ALPHA), the others see every triangle as opaque.
+bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir);
+#endif
+
 bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
     hit = Hit(tmax, 0xffffffffu, vec2(0.0));
     if (bvh_is_empty()) {
@@ -121,6 +129,11 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
                 float t;
                 vec2 bary;
                 if (bvh_intersect(r, i, tmin, tmax, t, bary)) {
+#ifdef UMBRA_ALPHA_TEST
+                    if (HAS_ALPHA && floatBitsToUint(bvh_tris[i].v1.w) != 0u && !bvh_alpha_opaque(i, bary, origin, dir)) {
+                        continue;
+                    }
+#endif
                     found = true;
                     tmax = t;
                     hit = Hit(t, i, bary);

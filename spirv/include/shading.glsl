@@ -4,7 +4,7 @@
 // gbuffer.comp, deferred.comp), so all of umbra's methods see the same surface.
 //
 // The including kernel declares, before including this file:
-//   const bool HAS_TEXTURES (a specialization constant);
+//   const bool HAS_TEXTURES, HAS_ALPHA (specialization constants);
 //   readonly buffers bvh_nodes[], bvh_tris[] (bvh.glsl), triangles[] (GpuTriangle),
 //   vertices[] (GpuVertex), materials[] (GpuMaterial), lights[] (GpuLightTri),
 //   punctual[] (GpuLight), textures[] (GpuTexture), texels[] (uint);
@@ -12,6 +12,8 @@
 #ifndef UMBRA_SHADING_GLSL
 #define UMBRA_SHADING_GLSL
 
+#define UMBRA_ALPHA_TEST
+#include "random.glsl"
 #include "bvh.glsl"
 #include "bsdf.glsl"
 #include "texture.glsl"
@@ -252,6 +254,20 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
         }
     }
     return sum;
+}
+
+// glTF alpha: base colour factor × base colour texture alpha at the hit. MASK: opaque from the
+// cutoff up. BLEND: opaque with probability alpha (stochastic transparency), decided by a hash of
+// the ray (origin and direction) and the triangle, so each ray draws afresh (jittered camera
+// rays, each path vertex) and the mean over samples is the blend.
+bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir) {
+    uint m = triangles[tri].material;
+    float alpha = materials[m].base_color.a * material_texture(m, 0u, tri_uv(tri, bary)).a;
+    if (floatBitsToUint(bvh_tris[tri].v1.w) == 1u) {
+        return alpha >= materials[m].params.w;
+    }
+    uvec4 h = pcg4d(uvec4(floatBitsToUint(origin) ^ floatBitsToUint(dir).yzx, tri));
+    return float(h.x >> 8) * (1.0 / 16777216.0) < alpha;
 }
 
 #endif

@@ -6,7 +6,7 @@ use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
-use crate::scene::Scene;
+use crate::scene::{AlphaMode, Scene};
 use crate::vk::{raw, Buffer, Context, DeviceInfo};
 use glam::Vec3;
 
@@ -43,12 +43,17 @@ pub struct GpuScene {
     /// Whether some material transmits (`KHR_materials_transmission`): the path tracer is
     /// specialised for it only then.
     pub has_transmission: bool,
+    /// Whether some triangle's material is alpha-masked or blended: the traversal in the shading
+    /// kernels is specialised for the alpha test only then.
+    pub has_alpha: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// Statistics of the BVH built for the scene.
     pub bvh_stats: BvhStats,
     /// `prim_order[i]`: the scene triangle at BVH position i (kept for [`GpuScene::update`]).
     prim_order: Vec<u32>,
+    /// Each triangle's alpha bits in BVH order, as uploaded in the BVH (kept for `update`).
+    alpha_modes: Vec<u32>,
 }
 
 /// The host-side arrays [`GpuScene`] uploads (also what tests inspect).
@@ -103,7 +108,13 @@ impl SceneArrays {
     }
 
     /// Lays the scene out for the GPU around a BVH already built for its triangles.
-    pub fn with_bvh(scene: &Scene, bvh: Bvh) -> Self {
+    pub fn with_bvh(scene: &Scene, mut bvh: Bvh) -> Self {
+        // The traversal's alpha test reads each triangle's alpha mode from v1.w (bits: 0 opaque,
+        // 1 mask, 2 blend), so opaque triangles never pay for it.
+        for (tri, &input) in bvh.tris.iter_mut().zip(&bvh.prim_order) {
+            let mode = scene.triangle_material.get(input as usize).map_or(0, |&m| alpha_bits(scene, m));
+            tri.v1[3] = f32::from_bits(mode);
+        }
         let shading = ShadingArrays::new(scene, &bvh.prim_order);
         let ShadingArrays { triangles, vertices, materials, lights, punctual, textures, texels } = shading;
         Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels }
@@ -285,12 +296,14 @@ impl GpuScene {
             texels: Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?,
             texture_count: arrays.textures.len() as u32,
             has_transmission: transmits(&arrays.materials),
+            has_alpha: arrays.bvh.tris.iter().any(|t| t.v1[3].to_bits() != 0),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
             env_size: None,
             bvh_stats: arrays.bvh.stats.clone(),
             prim_order: arrays.bvh.prim_order.clone(),
+            alpha_modes: scene_alpha_modes(&arrays.bvh.tris),
         })
     }
 
@@ -307,6 +320,17 @@ impl GpuScene {
                 self.prim_order.len()
             )));
         }
+        let modes: Vec<u32> = self
+            .prim_order
+            .iter()
+            .map(|&p| scene.triangle_material.get(p as usize).map_or(0, |&m| alpha_bits(scene, m)))
+            .collect();
+        if modes != self.alpha_modes {
+            return Err(Error::Invalid(format!(
+                "scene '{}' changes a material's alpha mode (opaque, mask, blend): that needs a new upload",
+                scene.name
+            )));
+        }
         let arrays = ShadingArrays::new(scene, &self.prim_order);
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         self.triangles = Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?;
@@ -321,6 +345,19 @@ impl GpuScene {
         self.texture_count = arrays.textures.len() as u32;
         self.has_transmission = transmits(&arrays.materials);
         Ok(())
+    }
+}
+
+fn scene_alpha_modes(tris: &[crate::bvh::BvhTri]) -> Vec<u32> {
+    tris.iter().map(|t| t.v1[3].to_bits()).collect()
+}
+
+/// The alpha mode of material `m` as the traversal's bits (0 opaque, 1 mask, 2 blend).
+fn alpha_bits(scene: &Scene, m: u32) -> u32 {
+    match scene.materials.get(m as usize).map(|m| m.alpha_mode) {
+        Some(AlphaMode::Mask) => 1,
+        Some(AlphaMode::Blend) => 2,
+        _ => 0,
     }
 }
 

@@ -78,6 +78,7 @@ impl DeferredPass {
                     (2, (scene.punctual_count > 0) as u32),
                     (3, scene.env_size.is_some() as u32),
                     (4, 0),
+                    (5, scene.has_alpha as u32),
                 ],
             },
         )?;

@@ -135,7 +135,7 @@ pub struct GBufferData {
     pub material: Vec<[u32; 2]>,
 }
 
-/// `gbuffer.comp`, specialised for whether the scene has textures.
+/// `gbuffer.comp`, specialised for whether the scene has textures and alpha-tested materials.
 pub struct GBufferPass {
     pipeline: ComputePipeline,
 }
@@ -144,8 +144,8 @@ impl GBufferPass {
     /// Workgroup size of the kernel.
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
-    /// Builds the pipeline.
-    pub fn new(ctx: &Context, has_textures: bool) -> Result<Self> {
+    /// Builds the pipeline for what `scene` has (textures, alpha-tested materials).
+    pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
         let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
         bindings[9..].fill(raw::DescriptorType::STORAGE_IMAGE);
         let pipeline = ComputePipeline::new(
@@ -154,7 +154,7 @@ impl GBufferPass {
             &PipelineDesc {
                 bindings: &bindings,
                 push_constant_size: std::mem::size_of::<GBufferParams>() as u32,
-                specialization: &[(0, has_textures as u32)],
+                specialization: &[(0, (scene.texture_count > 0) as u32), (1, scene.has_alpha as u32)],
             },
         )?;
         Ok(Self { pipeline })

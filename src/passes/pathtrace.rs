@@ -73,7 +73,7 @@ impl PathTracePass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// The pipeline for `scene`: specialised so that what the scene lacks (emissive triangles,
-    /// punctual lights, an environment map, textures, transmission) costs nothing.
+    /// punctual lights, an environment map, textures, transmission, alpha) costs nothing.
     pub fn for_scene(
         ctx: &Context,
         scene: &GpuScene,
@@ -94,6 +94,7 @@ impl PathTracePass {
                     (4, scene.env_size.is_some() as u32),
                     (5, (scene.texture_count > 0) as u32),
                     (6, scene.has_transmission as u32),
+                    (7, scene.has_alpha as u32),
                 ],
             },
         )?;

@@ -35,7 +35,7 @@ pub fn run(
 ) -> Result<Vec<PassTiming>> {
     let gbuffer = GBuffer::new(ctx, size)?;
     let output = Image::storage_2d(ctx, "bench colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
-    let gbuffer_pass = GBufferPass::new(ctx, scene.texture_count > 0)?;
+    let gbuffer_pass = GBufferPass::new(ctx, scene)?;
     let deferred = DeferredPass::new(ctx, scene)?;
     let ibl = umbra::passes::ibl::IblResources::build(ctx, scene, &Default::default())?;
     let pathtrace = PathTracePass::for_scene(ctx, scene, Microfacet::Ggx, Heuristic::Power)?;

@@ -64,7 +64,7 @@ fn suite_quick_writes_json_csv_and_charts() {
         }
         for (p, keys) in points
             .iter()
-            .map(|p| (p, &["gpu_ms", "rmse", "rel_mse"][..]))
+            .map(|p| (p, &["gpu_ms", "rmse", "rel_mse", "flip"][..]))
             .chain(ao_points.iter().map(|p| (p, &["gpu_ms", "mse"][..])))
         {
             for key in keys {
@@ -87,9 +87,13 @@ fn suite_quick_writes_json_csv_and_charts() {
 
     let csv = std::fs::read_to_string(dir.join("suite.csv")).expect("suite.csv written");
     assert_eq!(csv.lines().count(), rows + 1, "one CSV row per point plus the header");
-    for (key, series) in
-        [("cornell", "pathtrace"), ("spheres", "pathtrace"), ("cornell-ao", "rtao"), ("spheres-ao", "ssao")]
-    {
+    for (key, series) in [
+        ("cornell", "pathtrace"),
+        ("spheres", "pathtrace"),
+        ("cornell-ao", "rtao"),
+        ("spheres-ao", "ssao"),
+        ("cornell-flip", "hybrid"),
+    ] {
         let svg = std::fs::read_to_string(dir.join(format!("suite-{key}.svg"))).expect("SVG chart");
         assert!(svg.contains("<svg") && svg.contains(series), "SVG chart of {key}");
         let png = image::open(dir.join(format!("suite-{key}.png"))).expect("PNG chart decodes");

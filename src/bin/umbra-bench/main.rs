@@ -298,8 +298,13 @@ fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> 
         for p in &result.points {
             let setting = format!("{}={}", p.unit, p.value);
             println!(
-                "  {:20} {:16} {:10.3} ms  RMSE {:.4e}  relMSE {:.4e}",
-                p.method, setting, p.ms, p.rmse, p.rel_mse
+                "  {:20} {:16} {:10.3} ms  RMSE {:.4e}  relMSE {:.4e}  FLIP {:.4}",
+                p.method,
+                setting,
+                p.ms,
+                p.rmse,
+                p.rel_mse,
+                p.flip.unwrap_or(f64::NAN)
             );
         }
         println!(
@@ -326,7 +331,7 @@ fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> 
             "reference_rel_mse_floor": r.reference_rel_mse_floor,
             "points": r.points.iter().map(|p| json!({
                 "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms,
-                "rmse": p.rmse, "rel_mse": p.rel_mse,
+                "rmse": p.rmse, "rel_mse": p.rel_mse, "flip": p.flip,
             })).collect::<Vec<_>>(),
             "ao_reference_mse_floor": r.ao_reference_mse_floor,
             "ao_points": r.ao_points.iter().map(|p| json!({

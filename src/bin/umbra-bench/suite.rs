@@ -11,6 +11,9 @@
 //!   passes (the IBL precomputation, once per scene, is reported apart).
 //! - `ssao` and `rtao` on a second chart: ambient occlusion against a many-ray RTAO reference.
 //!
+//! A third chart per scene plots the mean LDR-FLIP (NVIDIA's perceptual difference of the
+//! tone-mapped images) instead of the relative MSE: the two can disagree.
+//!
 //! The reference uses another seed than the measured runs, so its remaining noise is
 //! independent of theirs: with `R` reference samples a method's relative MSE has a floor of
 //! about the path tracer's relative MSE at `R` spp (reported as `reference_rel_mse_floor`).
@@ -68,6 +71,9 @@ pub struct Point {
     pub rmse: f64,
     /// Images: mean over pixels and channels of (x − ref)² / (ref² + 0.01). AO: plain MSE.
     pub rel_mse: f64,
+    /// Images: mean LDR-FLIP (NVIDIA's perceptual difference, 0–1) of the tone-mapped image
+    /// (Khronos PBR Neutral, sRGB) against the tone-mapped reference. AO: none.
+    pub flip: Option<f64>,
 }
 
 /// One scene's results.
@@ -90,6 +96,20 @@ pub struct SceneResult {
 
 /// Relative MSE's ε: keeps dark pixels from dominating (as in the denoising literature).
 const REL_EPSILON: f64 = 0.01;
+
+/// Mean LDR-FLIP of `image` against `reference` (both linear RGBA of `size`), each tone-mapped
+/// with Khronos PBR Neutral and sRGB-encoded first; 67 pixels per degree (a 0.7 m wide monitor of
+/// 3840 pixels seen from 0.7 m, FLIP's default).
+pub fn flip_mean(image: &[[f32; 4]], reference: &[[f32; 4]], (w, h): (u32, u32)) -> f64 {
+    let rgb8 = |v: &[[f32; 4]]| -> nv_flip::FlipImageRgb8 {
+        let flat: Vec<f32> = v.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        let rgba = umbra::tonemap::to_display8(&flat, 1.0, umbra::tonemap::ToneCurve::KhronosPbrNeutral);
+        let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        nv_flip::FlipImageRgb8::with_data(w, h, &rgb)
+    };
+    let map = nv_flip::flip(rgb8(reference), rgb8(image), nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&map).mean() as f64
+}
 
 /// (RMSE, relative MSE) of `image` against `reference` (RGBA, alpha ignored).
 pub fn errors(image: &[[f32; 4]], reference: &[[f32; 4]]) -> (f64, f64) {
@@ -187,7 +207,9 @@ pub fn run_scene(
             bar.set_position(done as u64);
         }
         ctx.submit(|cmd| renderer.record_path_resolve(cmd, &target, output.view))?;
-        let (rmse, rel_mse) = errors(&output.read(ctx)?, &reference);
+        let image = output.read(ctx)?;
+        let (rmse, rel_mse) = errors(&image, &reference);
+        let flip = Some(flip_mean(&image, &reference, s.size));
         points.push(Point {
             method: "pathtrace".into(),
             unit: "spp",
@@ -195,6 +217,7 @@ pub fn run_scene(
             ms: elapsed_ms,
             rmse,
             rel_mse,
+            flip,
         });
         level *= 2;
     }
@@ -243,12 +266,36 @@ pub fn run_scene(
         }
         let Some(image) = last else { bail!("no hybrid run") };
         let (rmse, rel_mse) = errors(&image.color, &reference);
-        points.push(Point { method: method.into(), unit, value, ms: median(&mut times), rmse, rel_mse });
+        let flip = Some(flip_mean(&image.color, &reference, s.size));
+        points.push(Point {
+            method: method.into(),
+            unit,
+            value,
+            ms: median(&mut times),
+            rmse,
+            rel_mse,
+            flip,
+        });
     }
     let title = format!("{} — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name);
     let stem = s.out.join(format!("suite-{key}"));
     let chart = Chart { title: &title, y_desc: "relative MSE vs converged path tracing (log)", floor };
     chart::write(&stem, &chart, &chart_points(&points))?;
+    let flip_points: Vec<ChartPoint> = points
+        .iter()
+        .filter_map(|p| {
+            p.flip.map(|flip| ChartPoint {
+                method: &p.method,
+                unit: p.unit,
+                value: p.value,
+                ms: p.ms,
+                error: flip,
+            })
+        })
+        .collect();
+    let flip_chart =
+        Chart { title: &title, y_desc: "mean LDR-FLIP vs converged path tracing (log)", floor: 0.0 };
+    chart::write(&s.out.join(format!("suite-{key}-flip")), &flip_chart, &flip_points)?;
 
     // Ambient occlusion: SSAO (blurred) and RTAO against a many-ray RTAO reference.
     let (ao_points, ao_floor) = ambient_occlusion_sweep(ctx, renderer.scene(), camera, s)?;
@@ -335,6 +382,7 @@ fn ambient_occlusion_sweep(
             ms: median(&mut times),
             rmse: mse.sqrt(),
             rel_mse: mse,
+            flip: None,
         });
     }
     Ok((points, floor))
@@ -342,19 +390,20 @@ fn ambient_occlusion_sweep(
 
 /// The CSV of every scene's points.
 pub fn csv(results: &[SceneResult]) -> String {
-    let mut text = String::from("scene,chart,method,unit,value,gpu_ms,rmse,error\n");
+    let mut text = String::from("scene,chart,method,unit,value,gpu_ms,rmse,error,flip\n");
     for r in results {
         for (chart, points) in [("image", &r.points), ("ao", &r.ao_points)] {
             for p in points {
                 text.push_str(&format!(
-                    "{},{chart},{},{},{},{:.6},{:.6e},{:.6e}\n",
+                    "{},{chart},{},{},{},{:.6},{:.6e},{:.6e},{}\n",
                     r.name.replace(',', ";"),
                     p.method.replace(',', ";"),
                     p.unit,
                     p.value,
                     p.ms,
                     p.rmse,
-                    p.rel_mse
+                    p.rel_mse,
+                    p.flip.map_or(String::new(), |f| format!("{f:.5}"))
                 ));
             }
         }

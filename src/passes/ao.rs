@@ -126,18 +126,17 @@ impl SsaoPass {
         output: raw::ImageView,
         params: &AoParams,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
-        p.push_descriptors(
+        self.pipeline.record(
             cmd,
             &[
                 Descriptor::StorageView(gbuffer.depth),
                 Descriptor::StorageView(gbuffer.normal),
                 Descriptor::StorageView(output),
             ],
+            params,
+            [gbuffer.size.0, gbuffer.size.1, 1],
+            LOCAL,
         )?;
-        p.push_constants(cmd, params)?;
-        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }
@@ -191,9 +190,7 @@ impl AoBlurPass {
         output: raw::ImageView,
         params: &AoBlurParams,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
-        p.push_descriptors(
+        self.pipeline.record(
             cmd,
             &[
                 Descriptor::StorageView(input),
@@ -201,9 +198,10 @@ impl AoBlurPass {
                 Descriptor::StorageView(gbuffer.normal),
                 Descriptor::StorageView(output),
             ],
+            params,
+            [gbuffer.size.0, gbuffer.size.1, 1],
+            LOCAL,
         )?;
-        p.push_constants(cmd, params)?;
-        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }
@@ -248,9 +246,7 @@ impl RtaoPass {
         output: raw::ImageView,
         params: &AoParams,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
-        p.push_descriptors(
+        self.pipeline.record(
             cmd,
             &[
                 Descriptor::Buffer(&scene.bvh.nodes),
@@ -260,9 +256,10 @@ impl RtaoPass {
                 Descriptor::StorageView(gbuffer.material),
                 Descriptor::StorageView(output),
             ],
+            params,
+            [gbuffer.size.0, gbuffer.size.1, 1],
+            LOCAL,
         )?;
-        p.push_constants(cmd, params)?;
-        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

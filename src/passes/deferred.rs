@@ -130,8 +130,6 @@ impl DeferredPass {
         ao: Option<raw::ImageView>,
         params: &DeferredParams,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
         let mut resources = vec![
             Descriptor::Buffer(&scene.bvh.nodes),
             Descriptor::Buffer(&scene.bvh.tris),
@@ -152,9 +150,7 @@ impl DeferredPass {
         resources.push(Descriptor::Buffer(&ibl.prefiltered));
         resources.push(Descriptor::Buffer(&ibl.sh));
         resources.push(Descriptor::StorageView(ao.unwrap_or(self.no_ao.view)));
-        p.push_descriptors(cmd, &resources)?;
-        p.push_constants(cmd, params)?;
-        p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
+        self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

@@ -176,8 +176,6 @@ impl GBufferPass {
         target: &GBufferViews,
         params: &GBufferParams,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
         let mut resources = vec![
             Descriptor::Buffer(&scene.bvh.nodes),
             Descriptor::Buffer(&scene.bvh.tris),
@@ -190,9 +188,7 @@ impl GBufferPass {
             Descriptor::Buffer(&scene.punctual),
         ];
         resources.extend(target.in_order().map(Descriptor::StorageView));
-        p.push_descriptors(cmd, &resources)?;
-        p.push_constants(cmd, params)?;
-        p.dispatch(cmd, [target.size.0, target.size.1, 1], Self::LOCAL)?;
+        self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

@@ -118,15 +118,12 @@ impl IblResources {
             None => Ok(()),
         };
         begin(&mut timer, "ibl lut")?;
-        let p = &self.lut_pipeline;
-        p.bind(cmd);
-        p.push_descriptors(cmd, &[Descriptor::Buffer(&self.lut)])?;
         let params = IblParams {
             dst: [LUT_SIZE, LUT_SIZE, 0, self.settings.lut_samples.max(1)],
             ..Default::default()
         };
-        p.push_constants(cmd, &params)?;
-        p.dispatch(cmd, [LUT_SIZE, LUT_SIZE, 1], [8, 8, 1])?;
+        let lut = [Descriptor::Buffer(&self.lut)];
+        self.lut_pipeline.record(cmd, &lut, &params, [LUT_SIZE, LUT_SIZE, 1], [8, 8, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         end(&mut timer)?;
         let Some(size) = self.env_size else {
@@ -177,11 +174,14 @@ impl IblResources {
         end(&mut timer)?;
 
         begin(&mut timer, "ibl sh")?;
-        let p = &self.sh_pipeline;
-        p.bind(cmd);
-        p.push_descriptors(cmd, &[Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.sh)])?;
-        p.push_constants(cmd, &IblParams { src, ..Default::default() })?;
-        p.dispatch(cmd, [128, 1, 1], [128, 1, 1])?;
+        let sh = [Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.sh)];
+        self.sh_pipeline.record(
+            cmd,
+            &sh,
+            &IblParams { src, ..Default::default() },
+            [128, 1, 1],
+            [128, 1, 1],
+        )?;
         barrier::compute_to_compute(ctx, cmd);
         end(&mut timer)
     }

@@ -128,9 +128,7 @@ impl PathTracePass {
         target: &PathTarget,
         params: &PathParams,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
-        p.push_descriptors(
+        self.pipeline.record(
             cmd,
             &[
                 Descriptor::Buffer(&scene.bvh.nodes),
@@ -151,9 +149,10 @@ impl PathTracePass {
                 Descriptor::Buffer(&scene.textures),
                 Descriptor::Buffer(&scene.texels),
             ],
+            params,
+            [target.size.0, target.size.1, 1],
+            Self::LOCAL,
         )?;
-        p.push_constants(cmd, params)?;
-        p.dispatch(cmd, [target.size.0, target.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }
@@ -188,11 +187,13 @@ impl ResolvePass {
         target: &PathTarget,
         output: raw::ImageView,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
-        p.push_descriptors(cmd, &[Descriptor::Buffer(&target.accum), Descriptor::StorageView(output)])?;
-        p.push_constants(cmd, &[target.size.0, target.size.1, 0, 0])?;
-        p.dispatch(cmd, [target.size.0, target.size.1, 1], [8, 8, 1])?;
+        self.pipeline.record(
+            cmd,
+            &[Descriptor::Buffer(&target.accum), Descriptor::StorageView(output)],
+            &[target.size.0, target.size.1, 0, 0],
+            [target.size.0, target.size.1, 1],
+            [8, 8, 1],
+        )?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

@@ -44,14 +44,13 @@ impl TonemapPass {
         exposure_stops: f32,
         curve: ToneCurve,
     ) -> Result<()> {
-        let p = &self.pipeline;
-        p.bind(cmd);
-        p.push_descriptors(cmd, &[Descriptor::StorageView(src), Descriptor::StorageView(dst)])?;
-        p.push_constants(
+        self.pipeline.record(
             cmd,
+            &[Descriptor::StorageView(src), Descriptor::StorageView(dst)],
             &TonemapParams { size: [w, h], exposure: exposure_stops.exp2(), curve: curve.code() },
+            [w, h, 1],
+            Self::LOCAL,
         )?;
-        p.dispatch(cmd, [w, h, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

@@ -199,6 +199,23 @@ impl ComputePipeline {
         Ok(())
     }
 
+    /// Records one dispatch of the kernel: binds the pipeline, pushes `resources` and the push
+    /// constants `push`, and dispatches enough `local`-sized workgroups to cover `size`
+    /// invocations. The caller records the barrier that orders it with what follows.
+    pub fn record<T: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        resources: &[Descriptor<'_>],
+        push: &T,
+        size: [u32; 3],
+        local: [u32; 3],
+    ) -> Result<()> {
+        self.bind(cmd);
+        self.push_descriptors(cmd, resources)?;
+        self.push_constants(cmd, push)?;
+        self.dispatch(cmd, size, local)
+    }
+
     /// Dispatches enough `local`-sized workgroups to cover `size` invocations.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, size: [u32; 3], local: [u32; 3]) -> Result<()> {
         let groups: [u32; 3] = std::array::from_fn(|i| size[i].div_ceil(local[i].max(1)));

@@ -39,7 +39,8 @@ layout(push_constant) uniform Push { LightTestParams params; };
 #include "environment.glsl"
 #include "shading.glsl"
 
-// What pathtrace.comp weighs emission found by a BSDF ray with: the light pdf of the triangle hit.
+// What pathtrace.comp weighs emission found by a BSDF ray with: the light pdf of the triangle hit
+// (the same hit handling and the same emissive_pdf).
 float mis_light_pdf(vec3 p, vec3 n, vec3 dir) {
     vec3 origin = offset_ray(p, n);
     Hit hit;
@@ -54,7 +55,7 @@ float mis_light_pdf(vec3 p, vec3 n, vec3 dir) {
     if (!any(greaterThan(emitted(tri, hit.bary, ng, wo), vec3(0.0)))) {
         return 0.0;
     }
-    float light_pdf = triangles[tri].light_pmf / area * hit.t * hit.t / abs(dot(ng, wo));
+    float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
     // The wrong variant forgets the cosine at the light (an area density scaled by distance²).
     return params.config.w == 1u ? light_pdf * abs(dot(ng, wo)) : light_pdf;
 }

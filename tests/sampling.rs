@@ -3,6 +3,10 @@
 //! `bsdf.glsl`: the histogram of sampled directions must match the pdf the same code reports,
 //! integrated over each cell (Mitsuba's chi2 test, pbrt's bsdfs_test). Cells with an expected
 //! count below 5 are pooled; significance 0.01 with a Šidák correction over all cases.
+//! Light sampling goes through a second test kernel (`spirv/light_sample_test.comp`, the
+//! renderer's environment.glsl and shading.glsl): `env_sample` against `env_pdf` on a real HDR
+//! sky, and next-event estimation on emissive triangles against the light pdf the path tracer's
+//! MIS uses, with their own Šidák family of four.
 //! `UMBRA_CHI2_DEBUG=1` prints each case's worst cells.
 
 mod common;

@@ -29,6 +29,7 @@ layout(set = 0, binding = 18, std430) buffer TonemapParamsBuffer { TonemapParams
 layout(set = 0, binding = 19, std430) buffer AoParamsBuffer { AoParams ao_params_check[]; };
 layout(set = 0, binding = 20, std430) buffer AoBlurParamsBuffer { AoBlurParams ao_blur_params_check[]; };
 layout(set = 0, binding = 21, std430) buffer IblParamsBuffer { IblParams ibl_params_check[]; };
+layout(set = 0, binding = 22, std430) buffer LightTestParamsBuffer { LightTestParams light_test_params_check[]; };
 
 void main() {
     pattern_params[0].seed += 1u;
@@ -53,4 +54,5 @@ void main() {
     ao_params_check[0].counts.x += 1u;
     ao_blur_params_check[0].size.x += 1u;
     ibl_params_check[0].dst.x += 1u;
+    light_test_params_check[0].config.x += 1u;
 }

@@ -114,7 +114,7 @@ void main() {
         if (any(greaterThan(le, vec3(0.0)))) {
             float w = 1.0;
             if (HAS_LIGHTS && prev_pdf > 0.0) {
-                float light_pdf = triangles[tri].light_pmf / area * hit.t * hit.t / abs(dot(ng, wo));
+                float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
                 w = mis_weight(prev_pdf, light_pdf);
             }
             vec3 c = throughput * le * w;

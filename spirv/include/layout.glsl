@@ -212,4 +212,12 @@ struct IblParams {
     vec4 values;   // perceptual roughness of the level (prefilter), unused, unused, unused
 };
 
+// Push constants of light_sample_test.comp (tests only).
+struct LightTestParams {
+    vec4 point;    // shading point xyz (world), unused
+    vec4 normal;   // its unit normal xyz (world), unused
+    uvec4 config;  // mode, count, seed, variant (0 the renderer's pdf, 1 a deliberately wrong one)
+    uvec4 size;    // environment width, height, emissive-triangle count, unused
+};
+
 #endif

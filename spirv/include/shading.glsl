@@ -239,6 +239,13 @@ bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 u, uint count
         && light_reaches(p, ng, t, b, n, wi, true, lp, wi_local);
 }
 
+// The solid-angle density with which sample_emissive picks the point a ray hits at distance
+// `dist` on emissive triangle `tri` (area `area`, unit normal ng), arriving from direction wo
+// (unit, towards the ray's origin): what MIS weighs emission found by BSDF sampling against.
+float emissive_pdf(uint tri, float area, float dist, vec3 ng, vec3 wo) {
+    return triangles[tri].light_pmf / area * dist * dist / abs(dot(ng, wo));
+}
+
 // Direct light from the `count` punctual lights at p (one shadow ray each): delta distributions,
 // so light sampling is the only strategy.
 vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo_local, uint count) {

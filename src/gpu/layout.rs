@@ -348,6 +348,21 @@ pub struct AoBlurParams {
 }
 const _: () = assert!(size_of::<AoBlurParams>() == 80);
 
+/// Push constants of `light_sample_test.comp` (tests only).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LightTestParams {
+    /// Shading point xyz (world), unused.
+    pub point: [f32; 4],
+    /// Its unit normal xyz (world), unused.
+    pub normal: [f32; 4],
+    /// Mode, count, seed, variant (0 the renderer's pdf, 1 a deliberately wrong one).
+    pub config: [u32; 4],
+    /// Environment width, height, emissive-triangle count, unused.
+    pub size: [u32; 4],
+}
+const _: () = assert!(size_of::<LightTestParams>() == 64);
+
 /// The G-buffer's material index where no surface was hit (`GBUFFER_NO_SURFACE`).
 pub const GBUFFER_NO_SURFACE: u32 = u32::MAX;
 
@@ -463,5 +478,6 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
         layout_of!(AoParams { cam_origin, cam_forward, cam_right, cam_up, radius_bias, size_frame, counts }),
         layout_of!(AoBlurParams { cam_forward, cam_right, cam_up, weights, size }),
         layout_of!(IblParams { src, dst, values }),
+        layout_of!(LightTestParams { point, normal, config, size }),
     ]
 }

@@ -26,14 +26,6 @@ layout(push_constant) uniform Push { AoParams params; };
 #include "gbuffer.glsl"
 #include "bvh.glsl"
 
-// shading.glsl's offset_ray (Wächter and Binder, Ray Tracing Gems ch. 6), repeated here because
-// shading.glsl needs the whole scene's buffers.
-vec3 ao_offset_ray(vec3 p, vec3 n) {
-    ivec3 of_i = ivec3(256.0 * n);
-    vec3 p_i = intBitsToFloat(floatBitsToInt(p) + mix(of_i, -of_i, lessThan(p, vec3(0.0))));
-    return mix(p_i, p + (1.0 / 65536.0) * n, lessThan(abs(p), vec3(1.0 / 32.0)));
-}
-
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uvec2 size = params.size_frame.xy;
@@ -49,7 +41,7 @@ void main() {
                               params.cam_up.xyz, pixel, size, depth);
     vec3 n = normalize(imageLoad(gb_normal, pixel).xyz);
     vec3 ng = oct_decode(unpackSnorm2x16(imageLoad(gb_material, pixel).y));
-    vec3 o = ao_offset_ray(p, ng);
+    vec3 o = offset_ray(p, ng);
     float radius = params.radius_bias.x;
     uint rays = max(params.counts.x, 1u);
     vec3 t;

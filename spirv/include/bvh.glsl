@@ -53,6 +53,14 @@ BvhRay bvh_ray(vec3 origin, vec3 dir) {
 }
 
 // Watertight test against bvh_tris[i]: true with t in (tmin, tmax) and the barycentrics.
+// Offsets a ray origin off the surface along n by a few ulps (Wächter and Binder, Ray Tracing
+// Gems ch. 6), so the new ray neither re-hits its own triangle nor tunnels through a neighbour.
+vec3 offset_ray(vec3 p, vec3 n) {
+    ivec3 of_i = ivec3(256.0 * n);
+    vec3 p_i = intBitsToFloat(floatBitsToInt(p) + mix(of_i, -of_i, lessThan(p, vec3(0.0))));
+    return mix(p_i, p + (1.0 / 65536.0) * n, lessThan(abs(p), vec3(1.0 / 32.0)));
+}
+
 bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary) {
     // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
     precise vec3 a = bvh_tris[i].v0.xyz - r.origin;

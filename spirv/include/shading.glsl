@@ -18,14 +18,6 @@
 #include "bsdf.glsl"
 #include "texture.glsl"
 
-// Offsets a ray origin off the surface along n by a few ulps (Wächter and Binder, Ray Tracing
-// Gems ch. 6), so the new ray neither re-hits its own triangle nor tunnels through a neighbour.
-vec3 offset_ray(vec3 p, vec3 n) {
-    ivec3 of_i = ivec3(256.0 * n);
-    vec3 p_i = intBitsToFloat(floatBitsToInt(p) + mix(of_i, -of_i, lessThan(p, vec3(0.0))));
-    return mix(p_i, p + (1.0 / 65536.0) * n, lessThan(abs(p), vec3(1.0 / 32.0)));
-}
-
 // Whether light arriving along wi (unit, towards the light) reaches p: wi above both the shading
 // frame (t, b, n) and the geometric surface ng, and nothing on the shadow ray, which ends just
 // short of `target` when `to_point` and is unbounded otherwise. Also gives wi in the frame.

@@ -665,6 +665,20 @@ fn normal_maps_tilt_the_shading_normal() {
     }
 }
 
+/// Clear, smooth, white glass of ior 1.5: refracting (`volume`) or thin-walled.
+fn clear_glass(volume: bool) -> Material {
+    Material {
+        base_color_factor: [1.0; 4],
+        metallic: 0.0,
+        roughness: 0.0,
+        transmission_factor: 1.0,
+        ior: 1.5,
+        volume,
+        double_sided: true,
+        ..Default::default()
+    }
+}
+
 /// A clear, smooth glass sphere (KHR_materials_transmission; refracting with
 /// KHR_materials_volume, or thin-walled) under a constant environment of 1 is 1 on average: at
 /// every interface reflection and transmission share the energy (F + (1 − F)), radiance scales
@@ -678,16 +692,7 @@ fn white_furnace_glass_spheres_are_one() {
     let sphere = icosphere(4, Vec3::ZERO, 1.0);
     let cam = camera(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 35.0);
     for volume in [true, false] {
-        let glass = Material {
-            base_color_factor: [1.0; 4],
-            metallic: 0.0,
-            roughness: 0.0,
-            transmission_factor: 1.0,
-            ior: 1.5,
-            volume,
-            double_sided: true,
-            ..Default::default()
-        };
+        let glass = clear_glass(volume);
         let scene = scene_of(&[(&sphere, glass, true)], cam);
         let settings =
             PathSettings { size: (40, 40), spp: 64, env: [1.0; 3], max_bounces: 64, ..Default::default() };
@@ -728,16 +733,7 @@ fn solid_glass_inverts_the_sky_and_thin_glass_does_not() {
     let size = (48, 48);
     let mut colour_above_centre = Vec::new();
     for volume in [true, false] {
-        let glass = Material {
-            base_color_factor: [1.0; 4],
-            metallic: 0.0,
-            roughness: 0.0,
-            transmission_factor: 1.0,
-            ior: 1.5,
-            volume,
-            double_sided: true,
-            ..Default::default()
-        };
+        let glass = clear_glass(volume);
         let scene = scene_of(&[(&sphere, glass, true)], cam);
         let mut device_scene = GpuScene::upload(&gpu, &scene).unwrap();
         device_scene.set_environment(&gpu, &map).unwrap();

@@ -129,20 +129,23 @@ fn main() {
 fn build_only(scene: &RayScene, builds: usize, sweep: bool) -> Result<()> {
     use umbra::bvh::{BuildOptions, Bvh};
     let mut bvh = Bvh::build(&scene.triangles)?;
+    let cpu_before = process_cpu_seconds();
     let mut ms: Vec<f64> = (0..builds.max(1))
         .map(|_| {
             bvh = Bvh::build(&scene.triangles)?;
             Ok(bvh.stats.build_ms)
         })
         .collect::<Result<_>>()?;
+    let cpu_ms = cpu_before.zip(process_cpu_seconds()).map(|(a, b)| (b - a) * 1e3 / ms.len() as f64);
     bvh.validate().map_err(anyhow::Error::msg)?;
     ms.sort_by(f64::total_cmp);
     let s = &bvh.stats;
     println!(
-        "{}: build median {:.1} ms, fastest {:.1} ms; SAH cost {:.2}, {} nodes, depth {}",
+        "{}: build median {:.1} ms, fastest {:.1} ms, CPU time {} ms per build; SAH cost {:.2}, {} nodes, depth {}",
         scene.name,
         ms[ms.len() / 2],
         ms[0],
+        cpu_ms.map_or("?".into(), |t| format!("{t:.0}")),
         s.sah_cost,
         s.nodes,
         s.depth
@@ -157,6 +160,17 @@ fn build_only(scene: &RayScene, builds: usize, sweep: bool) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// User + system CPU time of this process (all threads) from `/proc/self/stat`, in seconds at
+/// the kernel's 10 ms tick; `None` where there is no procfs. Steadier than wall-clock time on a
+/// shared machine.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
+    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i - 3)?.parse::<f64>().ok();
+    Some((ticks(14)? + ticks(15)?) / 100.0)
 }
 
 /// Generated terrain with a row of spheres on it: `2·n²` + 15,360 triangles.

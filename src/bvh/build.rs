@@ -101,14 +101,19 @@ struct Binning {
 }
 
 impl Binning {
+    /// The bin of `c2` on each axis. Clamped to the last bin as a float and converted to `i32`
+    /// with all three lanes at once: a saturating `f32 as usize` per axis costs several
+    /// instructions each (`c2 - origin` is never negative, so the result is never below 0).
     fn bins_of(&self, c2: Vec3A) -> [usize; 3] {
-        let b = ((c2 - self.origin) * self.scale).to_array();
-        [0, 1, 2].map(|axis| (b[axis] as usize).min(self.bins - 1))
+        let last = Vec3A::splat((self.bins - 1) as f32);
+        let b = ((c2 - self.origin) * self.scale).min(last).as_ivec3();
+        [b.x as usize, b.y as usize, b.z as usize]
     }
 
-    /// `bins_of(c2)[axis]`, computed for that axis alone (with the same arithmetic).
-    fn bin_on(&self, c2: Vec3A, axis: usize) -> usize {
-        (((c2[axis] - self.origin[axis]) * self.scale[axis]) as usize).min(self.bins - 1)
+    /// Whether `c2` falls in a bin below `bin` on `axis` (`bins_of(c2)[axis] < bin`, compared
+    /// as floats: for a whole number `bin`, `floor(b) < bin` exactly when `b < bin`).
+    fn below(&self, c2: Vec3A, axis: usize, bin: usize) -> bool {
+        (c2[axis] - self.origin[axis]) * self.scale[axis] < bin as f32
     }
 }
 
@@ -400,22 +405,26 @@ fn sweep(refs: &[PrimRef], keys: &mut [(f32, u32)], right_area: &mut [f32], cost
 fn partition(refs: &mut [PrimRef], order: &mut [u32], split: &Split) -> (usize, Option<[(Aabb, Aabb); 2]>) {
     match &split.kind {
         SplitKind::Bin { bin, binning } => {
+            // The four boxes live in locals (registers): indexing an array of sides by the
+            // side chained every primitive's update through memory.
+            let (mut left_box, mut left_centroids) = (Aabb::EMPTY, Aabb::EMPTY);
+            let (mut right_box, mut right_centroids) = (Aabb::EMPTY, Aabb::EMPTY);
             let mut left = 0;
-            let mut sides = [(Aabb::EMPTY, Aabb::EMPTY); 2];
             for i in 0..refs.len() {
                 let r = refs[i];
                 let c2 = r.centroid2();
-                let goes_left = binning.bin_on(c2, split.axis) < *bin;
-                let side = &mut sides[usize::from(!goes_left)];
-                side.0.grow(&Aabb { min: r.min, max: r.max });
-                side.1.grow_point(c2);
-                if goes_left {
+                if binning.below(c2, split.axis, *bin) {
+                    left_box.grow(&Aabb { min: r.min, max: r.max });
+                    left_centroids.grow_point(c2);
                     refs.swap(i, left);
                     order.swap(i, left);
                     left += 1;
+                } else {
+                    right_box.grow(&Aabb { min: r.min, max: r.max });
+                    right_centroids.grow_point(c2);
                 }
             }
-            (left, Some(sides))
+            (left, Some([(left_box, left_centroids), (right_box, right_centroids)]))
         }
         SplitKind::Sorted { count } => {
             let axis = split.axis;

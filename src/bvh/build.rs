@@ -542,3 +542,82 @@ fn stats(bvh: &Bvh, options: &BuildOptions) -> BvhStats {
     s.sah_cost = cost as f32;
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Rng;
+
+    /// Sort keys order like `total_cmp` on the centroid, then by position: negative values,
+    /// both zeros, ties, tiny and huge magnitudes.
+    #[test]
+    fn sort_keys_order_by_centroid_then_position() {
+        let mut rng = Rng::new(7);
+        let values = [-3.5e30, -2.0, -1.0, -1e-30, -0.0, 0.0, 1e-30, 0.5, 1.0, 7.25, 3e30];
+        for _ in 0..200 {
+            let n = 1 + rng.below(40);
+            let centroids: Vec<f32> = (0..n).map(|_| values[rng.below(values.len())]).collect();
+            let mut keys: Vec<u64> = centroids.iter().enumerate().map(|(i, &c)| sort_key(c, i)).collect();
+            keys.sort_unstable();
+            let mut expected: Vec<usize> = (0..n).collect();
+            expected.sort_by(|&a, &b| centroids[a].total_cmp(&centroids[b]).then(a.cmp(&b)));
+            assert_eq!(keys.iter().map(|&k| position_of(k)).collect::<Vec<_>>(), expected);
+        }
+    }
+
+    fn half_area_of(refs: &[PrimRef]) -> f32 {
+        let mut b = Aabb::EMPTY;
+        for r in refs {
+            b.grow(&Aabb { min: r.min, max: r.max });
+        }
+        b.half_area()
+    }
+
+    /// A sweep's partition is the split it evaluated: the two sides it leaves have exactly the
+    /// chosen cost, which is the least over every split of every axis's centroid order, and the
+    /// input indices still follow their boxes. Centroids snap to a coarse grid so that ties
+    /// (where sorting twice could order differently) are common.
+    #[test]
+    fn sweep_partitions_as_evaluated() {
+        let mut rng = Rng::new(11);
+        for round in 0..500 {
+            let n = 2 + rng.below(if round % 2 == 0 { SMALL - 1 } else { 40 });
+            let refs: Vec<PrimRef> = (0..n)
+                .map(|_| {
+                    let c = Vec3A::new(rng.below(4) as f32, rng.below(3) as f32 - 1.0, rng.below(2) as f32);
+                    let h = Vec3A::new(rng.range(0.0, 1.0), rng.range(0.0, 1.0), rng.range(0.0, 1.0));
+                    PrimRef { min: c - h, max: c + h }
+                })
+                .collect();
+            let mut sorted = vec![0u64; n];
+            let Some(split) = best_sweep(&refs, &mut sorted, 1.0) else {
+                continue;
+            };
+            // The least cost over all axes and split positions, by brute force.
+            let mut least = f32::INFINITY;
+            for axis in 0..3 {
+                let mut by_axis = refs.clone();
+                by_axis.sort_by(|a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
+                for k in 1..n {
+                    if by_axis[k - 1].centroid2()[axis] == by_axis[n - 1].centroid2()[axis] {
+                        break;
+                    }
+                    let cost =
+                        half_area_of(&by_axis[..k]) * k as f32 + half_area_of(&by_axis[k..]) * (n - k) as f32;
+                    least = least.min(cost);
+                }
+            }
+            assert!(split.cost <= least * (1.0 + 1e-6), "round {round}: chose {} over {least}", split.cost);
+            let mut parted = refs.clone();
+            let mut order: Vec<u32> = (0..n as u32).collect();
+            let (count, _) = partition(&mut parted, &mut order, &split, &sorted);
+            let cost = half_area_of(&parted[..count]) * count as f32
+                + half_area_of(&parted[count..]) * (n - count) as f32;
+            assert_eq!(cost, split.cost, "round {round}: the partition's cost is not the evaluated one");
+            for (r, &i) in parted.iter().zip(&order) {
+                let original = &refs[i as usize];
+                assert!(r.min == original.min && r.max == original.max, "round {round}: index lost its box");
+            }
+        }
+    }
+}

@@ -1,6 +1,7 @@
 //! `umbra-bench`: umbra's measurements. `suite` charts every method's GPU time against its error
 //! to a converged reference; `rays` is the ray-throughput mode (BVH build statistics and Mrays/s
-//! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass.
+//! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass;
+//! `build` times the BVH build alone (CPU only, no Vulkan).
 
 mod chart;
 mod passes;

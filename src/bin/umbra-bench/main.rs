@@ -1,6 +1,7 @@
 //! `umbra-bench`: umbra's measurements. `suite` charts every method's GPU time against its error
 //! to a converged reference; `rays` is the ray-throughput mode (BVH build statistics and Mrays/s
-//! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass.
+//! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass;
+//! `build` times the BVH build alone (CPU only, no Vulkan).
 
 mod chart;
 mod passes;
@@ -103,10 +104,74 @@ enum Command {
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
     },
+    /// BVH build time and SAH cost only (CPU, no Vulkan): the generated terrains of `rays` and
+    /// any glTF files, built repeatedly; prints the median and fastest build.
+    Build {
+        /// Terrain resolutions n (2·n² + 15,360 triangles each): 351 is 262k, 704 is 1M.
+        #[arg(long, value_delimiter = ',', default_value = "351,704")]
+        terrain: Vec<u32>,
+        /// glTF scenes to build as well.
+        #[arg(long = "gltf")]
+        gltf: Vec<PathBuf>,
+        /// Builds per scene (after one warm-up build).
+        #[arg(long, default_value_t = 5)]
+        builds: usize,
+        /// Also build with the full-sweep SAH and compare SAH cost (slow on large scenes).
+        #[arg(long)]
+        sweep: bool,
+    },
 }
 
 fn main() {
     umbra::cli::main(|| run(Cli::parse()));
+}
+
+/// `umbra-bench build` for one scene: a warm-up build, then `builds` timed ones.
+fn build_only(scene: &RayScene, builds: usize, sweep: bool) -> Result<()> {
+    use umbra::bvh::{BuildOptions, Bvh};
+    let mut bvh = Bvh::build(&scene.triangles)?;
+    let cpu_before = process_cpu_seconds();
+    let mut ms: Vec<f64> = (0..builds.max(1))
+        .map(|_| {
+            bvh = Bvh::build(&scene.triangles)?;
+            Ok(bvh.stats.build_ms)
+        })
+        .collect::<Result<_>>()?;
+    let cpu_ms = cpu_before.zip(process_cpu_seconds()).map(|(a, b)| (b - a) * 1e3 / ms.len() as f64);
+    bvh.validate().map_err(anyhow::Error::msg)?;
+    ms.sort_by(f64::total_cmp);
+    let s = &bvh.stats;
+    println!(
+        "{}: build median {:.1} ms, fastest {:.1} ms, CPU time {} ms per build; SAH cost {:.2}, {} nodes, depth {}",
+        scene.name,
+        ms[ms.len() / 2],
+        ms[0],
+        cpu_ms.map_or("?".into(), |t| format!("{t:.0}")),
+        s.sah_cost,
+        s.nodes,
+        s.depth
+    );
+    if sweep {
+        let reference =
+            Bvh::build_with(&scene.triangles, &BuildOptions { full_sweep: true, ..Default::default() })?;
+        println!(
+            "  full-sweep SAH cost {:.2}: binned is {:+.2} %",
+            reference.stats.sah_cost,
+            (s.sah_cost / reference.stats.sah_cost - 1.0) * 100.0
+        );
+    }
+    Ok(())
+}
+
+/// User + system CPU time of this process (all threads) from `/proc/self/stat`, in seconds at
+/// the kernel's 10 ms tick; `None` where there is no procfs. Steadier than wall-clock time on a
+/// shared machine.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
+    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i - 3)?.parse::<f64>().ok();
+    Some((ticks(14)? + ticks(15)?) / 100.0)
 }
 
 /// Generated terrain with a row of spheres on it: `2·n²` + 15,360 triangles.
@@ -209,6 +274,16 @@ fn run(cli: Cli) -> Result<()> {
             std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
                 .with_context(|| format!("writing {}", path.display()))?;
             println!("wrote {}", path.display());
+        }
+        Command::Build { terrain, gltf, builds, sweep } => {
+            let mut scenes: Vec<RayScene> = terrain.iter().map(|&n| terrain_scene("terrain", n)).collect();
+            for path in &gltf {
+                scenes.push(gltf_scene(path)?);
+            }
+            println!("{} rayon threads", rayon::current_num_threads());
+            for scene in &scenes {
+                build_only(scene, builds, sweep)?;
+            }
         }
         Command::Passes { scene, size, repeats, shadow_rays, out } => {
             run_passes(scene, size, repeats, shadow_rays, out)?

@@ -11,7 +11,8 @@ use umbra::gpu::scene::{GpuScene, SceneArrays};
 use umbra::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
 use umbra::render::{camera_params, path_trace, PathSettings};
 use umbra::scene::{
-    mip_level_count, Camera, Filter, Material, Sampler, Scene, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM,
+    mip_level_count, texture_transform, Camera, Filter, Material, Sampler, Scene, Texture, TextureRef, Wrap,
+    IDENTITY_TRANSFORM,
 };
 
 /// A `size` × `size` checker of single texels, black and white.
@@ -184,13 +185,24 @@ fn floor_texel(uv: [f32; 2]) -> Option<f32> {
 /// Pixels of the grazing floor between magnified and minified 2× (0 < lod < 1) have the base
 /// colour of the level of detail the CPU computes for their ray cone: trilinear, the level-0
 /// texel blended with level 1 (uniform sRGB 188) by the lod's fraction; nearest-level, level 0
-/// below lod 0.5 and level 1 above. Within 0.01 (half-float storage, lod to ~1e-3).
+/// below lod 0.5 and level 1 above; and through a texture transform that scales the uvs. Within 0.01 (half-float storage, lod to ~1e-3).
 #[test]
 fn gbuffer_lod_is_the_ray_cone_lod() {
     let gpu = Gpu::new();
     let grey = ((188.0f32 / 255.0 + 0.055) / 1.055).powf(2.4);
-    for mipmap_filter in [Filter::Linear, Filter::Nearest] {
-        let scene = grazing_floor(sampler(true, mipmap_filter));
+    for (mipmap_filter, transformed) in
+        [(Filter::Linear, false), (Filter::Nearest, false), (Filter::Linear, true)]
+    {
+        let mut scene = grazing_floor(sampler(true, mipmap_filter));
+        if transformed {
+            // The same texels through KHR_texture_transform: uvs a quarter, scaled back up 4×
+            // and offset by whole checks. The cone's lod accounts for the transform's scale.
+            for uv in &mut scene.uv0 {
+                *uv = uv.map(|c| c / 4.0);
+            }
+            let reference = scene.materials[0].base_color_texture.as_mut().unwrap();
+            reference.transform = texture_transform([0.25, 0.5], 0.0, [4.0, 4.0]);
+        }
         let g = floor_gbuffer(&gpu, &scene);
         let (mut checked, mut worst) = (0, 0.0f32);
         for (i, pixel) in floor_pixels(&scene).iter().enumerate() {
@@ -218,7 +230,7 @@ fn gbuffer_lod_is_the_ray_cone_lod() {
             checked += 1;
         }
         println!(
-            "{mipmap_filter:?} between levels: {checked} pixels with 0 < lod < 1, worst error {worst:.5}"
+            "{mipmap_filter:?} between levels, transformed {transformed}: {checked} pixels with 0 < lod < 1, worst error {worst:.5}"
         );
         assert!(checked >= 50, "only {checked} pixels checked");
     }

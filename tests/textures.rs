@@ -4,6 +4,8 @@
 //! level 0).
 
 mod common;
+#[path = "support/generate.rs"]
+mod generate;
 
 use common::Gpu;
 use glam::Vec3;
@@ -90,6 +92,48 @@ fn mip_chain_of_odd_sizes_keeps_the_mean() {
         })
         .sum();
     assert_eq!(f64::from(chain[0].rgba8[0]), expected.round());
+}
+
+/// glTF minification filters map to the sampler: mipmaps for every *_MIPMAP_* mode and when
+/// unspecified, the nearest level for *_MIPMAP_NEAREST, linear between levels otherwise.
+#[test]
+fn gltf_min_filters_choose_the_mip_mode() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join("textured.glb");
+    let (mut json, bin) = generate::split_glb(&std::fs::read(path).unwrap());
+    let expected = [
+        (Some(9728), Filter::Nearest, false, Filter::Linear), // NEAREST
+        (Some(9984), Filter::Nearest, true, Filter::Nearest), // NEAREST_MIPMAP_NEAREST
+        (Some(9985), Filter::Linear, true, Filter::Nearest),  // LINEAR_MIPMAP_NEAREST
+        (Some(9986), Filter::Nearest, true, Filter::Linear),  // NEAREST_MIPMAP_LINEAR
+        (Some(9987), Filter::Linear, true, Filter::Linear),   // LINEAR_MIPMAP_LINEAR
+        (None, Filter::Linear, true, Filter::Linear),         // left to the renderer
+    ];
+    for (min_filter, min, mipmaps, between) in expected {
+        // Every sampler of the file gets the filter.
+        for sampler in json["samplers"].as_array_mut().unwrap() {
+            let sampler = sampler.as_object_mut().unwrap();
+            match min_filter {
+                Some(f) => sampler.insert("minFilter".into(), f.into()),
+                None => sampler.remove("minFilter"),
+            };
+        }
+        let glb = generate::glb(&serde_json::to_vec(&json).unwrap(), &bin);
+        let scene = Scene::from_glb_bytes("filters.glb", &glb).unwrap();
+        for texture in &scene.textures {
+            let s = texture.sampler;
+            assert_eq!(
+                (s.min_filter, s.mipmaps, s.mipmap_filter),
+                (min, mipmaps, between),
+                "minFilter {min_filter:?}"
+            );
+        }
+        let arrays = SceneArrays::new(&scene).unwrap();
+        assert!(!arrays.textures.is_empty());
+        for gpu in &arrays.textures {
+            let levels = if mipmaps { mip_level_count(gpu.width, gpu.height) } else { 1 };
+            assert_eq!(gpu.levels, levels, "minFilter {min_filter:?}");
+        }
+    }
 }
 
 /// A 400 m floor at y = 0 with an 8 × 8 single-texel sRGB checker repeating every metre (8 texels

@@ -63,16 +63,23 @@ vec4 texture_sample(uint tex, vec2 uv) {
                           (textures[tex].flags & TEXTURE_LINEAR) != 0u);
 }
 
-// Mip level `level` of texture `tex` at uv, with the minification filter.
-vec4 texture_sample_level(uint tex, uint level, vec2 uv) {
-    uint offset = textures[tex].offset;
-    int w = int(textures[tex].width);
-    int h = int(textures[tex].height);
+// Where mip level `level` of texture `tex` starts in the texel buffer, and its size.
+void texture_level(uint tex, uint level, out uint offset, out int w, out int h) {
+    offset = textures[tex].offset;
+    w = int(textures[tex].width);
+    h = int(textures[tex].height);
     for (uint k = 0u; k < level; ++k) {
         offset += uint(w * h);
         w = max(w / 2, 1);
         h = max(h / 2, 1);
     }
+}
+
+// Mip level `level` of texture `tex` at uv, with the minification filter.
+vec4 texture_sample_level(uint tex, uint level, vec2 uv) {
+    uint offset;
+    int w, h;
+    texture_level(tex, level, offset, w, h);
     return texture_filter(tex, offset, w, h, uv, (textures[tex].flags & TEXTURE_MIN_LINEAR) != 0u);
 }
 
@@ -90,11 +97,18 @@ vec4 texture_sample_lod(uint tex, vec2 uv, float lod) {
         return texture_sample_level(tex, min(uint(l + 0.5), top), uv);
     }
     uint l0 = uint(l);
-    vec4 a = texture_sample_level(tex, l0, uv);
-    if (l0 == top) {
+    uint offset;
+    int w, h;
+    texture_level(tex, l0, offset, w, h);
+    bool linear = (textures[tex].flags & TEXTURE_MIN_LINEAR) != 0u;
+    vec4 a = texture_filter(tex, offset, w, h, uv, linear);
+    float f = l - float(l0);
+    if (l0 == top || f == 0.0) {
         return a;
     }
-    return mix(a, texture_sample_level(tex, l0 + 1u, uv), l - float(l0));
+    // The next level follows this one.
+    vec4 b = texture_filter(tex, offset + uint(w * h), max(w / 2, 1), max(h / 2, 1), uv, linear);
+    return mix(a, b, f);
 }
 
 #endif

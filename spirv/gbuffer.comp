@@ -57,13 +57,21 @@ void main() {
     vec3 ng = normalize(tri_normal(tri));
     vec3 wo = -dir;
     vec4 uv = tri_uv(tri, hit.bary);
-    vec3 le = emitted(tri, hit.bary, ng, wo);
+    // One sample per pixel: textures are filtered over the pixel's footprint, a ray cone whose
+    // spread is the angle of a pixel (Ray Tracing Gems ch. 20) and whose width at the hit is t
+    // times that.
+    vec2 cone_lod = LOD_LEVEL0;
+    if (HAS_TEXTURES) {
+        float spread = atan(2.0 * length(params.cam_up.xyz) / float(size.y));
+        cone_lod = ray_cone_lod(tri, hit.t * spread, dir, ng);
+    }
+    vec3 le = emitted_lod(tri, hit.bary, ng, wo, cone_lod);
     if (dot(ng, wo) < 0.0) {
         ng = -ng;
     }
     uint material = triangles[tri].material;
-    vec3 n = shading_normal(tri, hit.bary, ng, uv);
-    Surface s = material_surface(material, uv);
+    vec3 n = shading_normal_lod(tri, hit.bary, ng, uv, cone_lod);
+    Surface s = material_surface_lod(material, uv, cone_lod);
 
     // View-space depth: distance along the camera's forward axis.
     imageStore(gb_depth, pixel, vec4(hit.t * dot(dir, forward)));

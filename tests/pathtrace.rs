@@ -543,6 +543,7 @@ fn textures_wrap_decode_and_transform() {
                 mag_filter: Filter::Nearest,
                 min_filter: Filter::Nearest,
                 mipmaps: false,
+                mipmap_filter: Filter::Nearest,
             },
         });
         let settings =
@@ -638,6 +639,7 @@ fn normal_maps_tilt_the_shading_normal() {
                 mag_filter: Filter::Nearest,
                 min_filter: Filter::Nearest,
                 mipmaps: false,
+                mipmap_filter: Filter::Nearest,
             },
         });
         scene.lights.push(Light {
@@ -838,6 +840,7 @@ fn alpha_mask_and_blend() {
         mag_filter: Filter::Nearest,
         min_filter: Filter::Nearest,
         mipmaps: false,
+        mipmap_filter: Filter::Nearest,
     };
     scene.textures.push(Texture {
         name: "half transparent".into(),

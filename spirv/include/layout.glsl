@@ -99,6 +99,10 @@ struct GpuTexture {
     uint width;
     uint height;
     uint flags;  // TEXTURE_* bits
+    uint levels; // mip levels stored (1: level 0 only), each after the previous, sizes max(1, size >> k)
+    uint pad0;
+    uint pad1;
+    uint pad2;
 };
 
 #define TEXTURE_WRAP_S_CLAMP 1u
@@ -107,6 +111,8 @@ struct GpuTexture {
 #define TEXTURE_WRAP_T_MIRROR 8u
 #define TEXTURE_LINEAR 16u
 #define TEXTURE_SRGB 32u
+#define TEXTURE_MIN_LINEAR 64u
+#define TEXTURE_MIP_LINEAR 128u
 
 // One emissive triangle in the light-sampling table.
 struct GpuLightTri {

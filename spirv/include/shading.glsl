@@ -30,23 +30,55 @@ bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 wi, bool to_poi
     return to_point ? !bvh_any(o, target - o, 0.0, 0.9999) : !bvh_any(o, wi, 0.0, BVH_INF);
 }
 
-// Material texture `slot` (0 base colour, 1 metallic-roughness, 2 emissive, 3 normal) at the hit's UV
-// sets (uv.xy = uv0, uv.zw = uv1); white when the slot is empty.
-vec4 material_texture(uint id, uint slot, vec4 uv) {
+// Material `id`'s texture in `slot` (its index + 1, 0 when the slot is empty) and the slot's
+// transformed UV from the hit's UV sets (uv.xy = uv0, uv.zw = uv1).
+uint material_texture_uv(uint id, uint slot, vec4 uv, out vec2 t) {
     // Spec constants only as plain `if` conditions: `!HAS_TEXTURES` or `?:` on one would be an
     // OpSpecConstantOp, which naga rejects.
     uint tex = 0u;
     if (HAS_TEXTURES) {
         tex = materials[id].textures[slot];
     }
+    t = vec2(0.0);
+    if (tex != 0u) {
+        vec4 r0 = materials[id].tex_transform[2u * slot];
+        vec4 r1 = materials[id].tex_transform[2u * slot + 1u];
+        vec2 st = r0.w != 0.0 ? uv.zw : uv.xy;
+        t = vec2(dot(r0.xyz, vec3(st, 1.0)), dot(r1.xyz, vec3(st, 1.0)));
+    }
+    return tex;
+}
+
+// Material texture `slot` (0 base colour, 1 metallic-roughness, 2 emissive, 3 normal) at the hit's UV
+// sets (uv.xy = uv0, uv.zw = uv1), level 0; white when the slot is empty.
+vec4 material_texture(uint id, uint slot, vec4 uv) {
+    vec2 t;
+    uint tex = material_texture_uv(id, slot, uv, t);
     if (tex == 0u) {
         return vec4(1.0);
     }
+    return texture_sample(tex - 1u, t);
+}
+
+// Level of detail that makes material_texture_lod read level 0, as material_texture does.
+const vec2 LOD_LEVEL0 = vec2(-1e30);
+
+// material_texture filtered for a ray cone: `cone_lod` from ray_cone_lod (LOD_LEVEL0: level 0).
+vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
+    vec2 t;
+    uint tex = material_texture_uv(id, slot, uv, t);
+    if (tex == 0u) {
+        return vec4(1.0);
+    }
+    tex -= 1u;
+    if (max(cone_lod.x, cone_lod.y) <= LOD_LEVEL0.x) {
+        return texture_sample(tex, t);
+    }
     vec4 r0 = materials[id].tex_transform[2u * slot];
     vec4 r1 = materials[id].tex_transform[2u * slot + 1u];
-    vec2 st = r0.w != 0.0 ? uv.zw : uv.xy;
-    vec2 t = vec2(dot(r0.xyz, vec3(st, 1.0)), dot(r1.xyz, vec3(st, 1.0)));
-    return texture_sample(tex - 1u, t);
+    float texel_area = float(textures[tex].width) * float(textures[tex].height) * abs(r0.x * r1.y - r0.y * r1.x);
+    float lod = (r0.w != 0.0 ? cone_lod.y : cone_lod.x) + 0.5 * log2(texel_area);
+    return texture_sample_lod(tex, t, lod);
 }
 
 // Material `id` as a BSDF surface, given its (textured) base colour, metallic and roughness:
@@ -73,7 +105,17 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     return s;
 }
 
-// Material `id` at the hit's UV sets, textures applied.
+// Material `id` at the hit's UV sets, textures applied, filtered for a ray cone's `cone_lod`
+// (see material_texture_lod).
+Surface material_surface_lod(uint id, vec4 uv, vec2 cone_lod) {
+    vec3 base = materials[id].base_color.rgb * material_texture_lod(id, 0u, uv, cone_lod).rgb;
+    vec4 mr = material_texture_lod(id, 1u, uv, cone_lod);
+    float metallic = clamp(materials[id].params.x * mr.b, 0.0, 1.0);
+    float roughness = clamp(materials[id].emissive_rough.w * mr.g, 0.0, 1.0);
+    return material_surface_from(id, base, metallic, roughness);
+}
+
+// Material `id` at the hit's UV sets, textures applied (level 0).
 Surface material_surface(uint id, vec4 uv) {
     vec3 base = materials[id].base_color.rgb * material_texture(id, 0u, uv).rgb;
     vec4 mr = material_texture(id, 1u, uv);
@@ -107,9 +149,28 @@ vec4 tri_uv(uint tri, vec2 bary) {
     return uv;
 }
 
+// The texture-independent part of a ray cone's level of detail at a hit of triangle `tri`
+// (Akenine-Möller et al., "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
+// Tracing Gems ch. 20), for UV set 0 in x and set 1 in y: log2(width / |ng·dir|) for a cone of
+// `width` at the hit, unit ray direction `dir` and unit geometric normal ng, plus
+// 0.5 log2(UV area / world area) of the triangle. material_texture_lod adds each texture's
+// 0.5 log2(texel count) and its transform's scale. A triangle without UV area gives -inf: level 0.
+vec2 ray_cone_lod(uint tri, float width, vec3 dir, vec3 ng) {
+    uint i0 = triangles[tri].v0;
+    uint i1 = triangles[tri].v1;
+    uint i2 = triangles[tri].v2;
+    vec4 a = vec4(vertices[i0].normal_u.w, vertices[i0].v_uv1.xyz);
+    vec4 e1 = vec4(vertices[i1].normal_u.w, vertices[i1].v_uv1.xyz) - a;
+    vec4 e2 = vec4(vertices[i2].normal_u.w, vertices[i2].v_uv1.xyz) - a;
+    // Both areas doubled: the factor cancels in the ratio.
+    vec2 uv_area = abs(vec2(e1.x * e2.y - e1.y * e2.x, e1.z * e2.w - e1.w * e2.z));
+    float world_area = length(tri_normal(tri));
+    return log2(width / abs(dot(ng, dir))) + 0.5 * log2(uv_area / world_area);
+}
+
 // Radiance the triangle emits at barycentrics `bary` towards a viewer on the side of `towards`
-// (unit normal n).
-vec3 emitted(uint tri, vec2 bary, vec3 n, vec3 towards) {
+// (unit normal n), emissive texture filtered for a ray cone's `cone_lod` (see material_texture_lod).
+vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
     uint m = triangles[tri].material;
     bool front = dot(n, towards) > 0.0;
     bool two_sided = (materials[m].flags.x & MATERIAL_DOUBLE_SIDED) != 0u;
@@ -118,9 +179,15 @@ vec3 emitted(uint tri, vec2 bary, vec3 n, vec3 towards) {
     }
     vec3 e = materials[m].emissive_rough.rgb;
     if (HAS_TEXTURES && any(greaterThan(e, vec3(0.0)))) {
-        e *= material_texture(m, 2u, tri_uv(tri, bary)).rgb;
+        e *= material_texture_lod(m, 2u, tri_uv(tri, bary), cone_lod).rgb;
     }
     return e;
+}
+
+// Radiance the triangle emits at barycentrics `bary` towards a viewer on the side of `towards`
+// (unit normal n), emissive texture at level 0.
+vec3 emitted(uint tri, vec2 bary, vec3 n, vec3 towards) {
+    return emitted_lod(tri, bary, n, towards, LOD_LEVEL0);
 }
 
 // Picks one of `count` emissive triangles by power (binary search in the CDF).
@@ -142,8 +209,9 @@ uint pick_light(float u, uint count) {
 // The shading normal at barycentrics `bary` of triangle `tri` whose geometric normal `ng` faces
 // the viewer: the interpolated vertex normal (ng where it degenerates), flipped to ng's side, then
 // the material's normal map (tangent-space normal scaled in xy, through the interpolated TBN)
-// where it keeps the normal above the geometry.
-vec3 shading_normal(uint tri, vec2 bary, vec3 ng, vec4 uv) {
+// where it keeps the normal above the geometry; the normal map filtered for a ray cone's `cone_lod`
+// (see material_texture_lod; LOD_LEVEL0 for level 0).
+vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
     uint i0 = triangles[tri].v0;
     uint i1 = triangles[tri].v1;
     uint i2 = triangles[tri].v2;
@@ -167,7 +235,7 @@ vec3 shading_normal(uint tri, vec2 bary, vec3 ng, vec4 uv) {
             if (tl > 1e-8) {
                 tt /= tl;
                 vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
-                vec3 nm = material_texture(material, 3u, uv).rgb * 2.0 - 1.0;
+                vec3 nm = material_texture_lod(material, 3u, uv, cone_lod).rgb * 2.0 - 1.0;
                 nm.xy *= materials[material].tex_transform[7].w;
                 vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
                 if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
@@ -177,6 +245,11 @@ vec3 shading_normal(uint tri, vec2 bary, vec3 ng, vec4 uv) {
         }
     }
     return n;
+}
+
+// shading_normal_lod with the normal map at level 0.
+vec3 shading_normal(uint tri, vec2 bary, vec3 ng, vec4 uv) {
+    return shading_normal_lod(tri, bary, ng, uv, LOD_LEVEL0);
 }
 
 // Light from punctual light k at p: the unit direction towards it, whether that is a point

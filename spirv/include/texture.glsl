@@ -1,6 +1,8 @@
 // Textures from one storage buffer of RGBA8 texels (no bindless on lavapipe): glTF wrap modes,
-// nearest or bilinear filtering, sRGB decoding before filtering. No mipmaps: the path tracer's
-// pixel jitter integrates the footprint.
+// nearest or bilinear filtering, sRGB decoding before filtering, and mip chains (stored after
+// level 0 where the sampler asks for them). texture_sample reads level 0: the path tracer's pixel
+// jitter integrates the footprint. texture_sample_lod filters for a level of detail, for kernels
+// that take one sample per pixel (the G-buffer's ray cones).
 //
 // The including kernel declares, before including this file:
 //   readonly buffer ... { GpuTexture textures[]; };
@@ -24,32 +26,89 @@ vec3 srgb_to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
 }
 
-vec4 texture_texel(uint tex, int x, int y) {
+// Texel (x, y), wrapped, of the w × h level that starts at texel `offset` of texture `tex`.
+vec4 texture_texel_at(uint tex, uint offset, int w, int h, int x, int y) {
     uint flags = textures[tex].flags;
-    int w = int(textures[tex].width);
-    int h = int(textures[tex].height);
     x = texture_wrap(x, w, (flags & TEXTURE_WRAP_S_CLAMP) != 0u, (flags & TEXTURE_WRAP_S_MIRROR) != 0u);
     y = texture_wrap(y, h, (flags & TEXTURE_WRAP_T_CLAMP) != 0u, (flags & TEXTURE_WRAP_T_MIRROR) != 0u);
-    vec4 c = unpackUnorm4x8(texels[textures[tex].offset + uint(y * w + x)]);
+    vec4 c = unpackUnorm4x8(texels[offset + uint(y * w + x)]);
     if ((flags & TEXTURE_SRGB) != 0u) {
         c.rgb = srgb_to_linear(c.rgb);
     }
     return c;
 }
 
-// Linear RGBA of texture `tex` at uv (v down, as glTF).
-vec4 texture_sample(uint tex, vec2 uv) {
-    vec2 size = vec2(float(textures[tex].width), float(textures[tex].height));
-    if ((textures[tex].flags & TEXTURE_LINEAR) == 0u) {
+vec4 texture_texel(uint tex, int x, int y) {
+    return texture_texel_at(tex, textures[tex].offset, int(textures[tex].width), int(textures[tex].height), x, y);
+}
+
+// One level (w × h texels from `offset`) at uv: bilinear when `linear`, else the nearest texel.
+vec4 texture_filter(uint tex, uint offset, int w, int h, vec2 uv, bool linear) {
+    vec2 size = vec2(float(w), float(h));
+    if (!linear) {
         ivec2 p = ivec2(floor(uv * size));
-        return texture_texel(tex, p.x, p.y);
+        return texture_texel_at(tex, offset, w, h, p.x, p.y);
     }
     vec2 st = uv * size - 0.5;
     vec2 f = fract(st);
     ivec2 p = ivec2(floor(st));
-    vec4 a = mix(texture_texel(tex, p.x, p.y), texture_texel(tex, p.x + 1, p.y), f.x);
-    vec4 b = mix(texture_texel(tex, p.x, p.y + 1), texture_texel(tex, p.x + 1, p.y + 1), f.x);
+    vec4 a = mix(texture_texel_at(tex, offset, w, h, p.x, p.y), texture_texel_at(tex, offset, w, h, p.x + 1, p.y), f.x);
+    vec4 b = mix(texture_texel_at(tex, offset, w, h, p.x, p.y + 1), texture_texel_at(tex, offset, w, h, p.x + 1, p.y + 1), f.x);
     return mix(a, b, f.y);
+}
+
+// Linear RGBA of texture `tex` at uv (v down, as glTF): level 0, magnification filter.
+vec4 texture_sample(uint tex, vec2 uv) {
+    return texture_filter(tex, textures[tex].offset, int(textures[tex].width), int(textures[tex].height), uv,
+                          (textures[tex].flags & TEXTURE_LINEAR) != 0u);
+}
+
+// Where mip level `level` of texture `tex` starts in the texel buffer, and its size.
+void texture_level(uint tex, uint level, out uint offset, out int w, out int h) {
+    offset = textures[tex].offset;
+    w = int(textures[tex].width);
+    h = int(textures[tex].height);
+    for (uint k = 0u; k < level; ++k) {
+        offset += uint(w * h);
+        w = max(w / 2, 1);
+        h = max(h / 2, 1);
+    }
+}
+
+// Mip level `level` of texture `tex` at uv, with the minification filter.
+vec4 texture_sample_level(uint tex, uint level, vec2 uv) {
+    uint offset;
+    int w, h;
+    texture_level(tex, level, offset, w, h);
+    return texture_filter(tex, offset, w, h, uv, (textures[tex].flags & TEXTURE_MIN_LINEAR) != 0u);
+}
+
+// Linear RGBA of texture `tex` at uv for level of detail `lod` (log2 of texels per pixel
+// footprint): lod <= 0 (magnified, or NaN) is texture_sample; minified, the sampler's minification
+// filter on level 0 when the texture has no mips, on the nearest level (*_MIPMAP_NEAREST), or
+// linearly between the two nearest levels (*_MIPMAP_LINEAR: trilinear with a linear filter).
+vec4 texture_sample_lod(uint tex, vec2 uv, float lod) {
+    if (!(lod > 0.0)) {
+        return texture_sample(tex, uv);
+    }
+    uint top = textures[tex].levels - 1u;
+    float l = min(lod, float(top));
+    if ((textures[tex].flags & TEXTURE_MIP_LINEAR) == 0u) {
+        return texture_sample_level(tex, min(uint(l + 0.5), top), uv);
+    }
+    uint l0 = uint(l);
+    uint offset;
+    int w, h;
+    texture_level(tex, l0, offset, w, h);
+    bool linear = (textures[tex].flags & TEXTURE_MIN_LINEAR) != 0u;
+    vec4 a = texture_filter(tex, offset, w, h, uv, linear);
+    float f = l - float(l0);
+    if (l0 == top || f == 0.0) {
+        return a;
+    }
+    // The next level follows this one.
+    vec4 b = texture_filter(tex, offset + uint(w * h), max(w / 2, 1), max(h / 2, 1), uv, linear);
+    return mix(a, b, f);
 }
 
 #endif

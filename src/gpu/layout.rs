@@ -152,8 +152,17 @@ pub struct GpuTexture {
     pub height: u32,
     /// `TEXTURE_*` bits ([`GpuTexture::WRAP_S_CLAMP`], ...).
     pub flags: u32,
+    /// Mip levels stored (1: level 0 only). Level k is `max(1, width >> k)` ×
+    /// `max(1, height >> k)` texels and follows level k − 1 in the texel buffer.
+    pub levels: u32,
+    /// Padding to 32 bytes.
+    pub pad0: u32,
+    /// Padding.
+    pub pad1: u32,
+    /// Padding.
+    pub pad2: u32,
 }
-const _: () = assert!(size_of::<GpuTexture>() == 16);
+const _: () = assert!(size_of::<GpuTexture>() == 32);
 
 impl GpuTexture {
     /// `TEXTURE_WRAP_S_CLAMP`.
@@ -168,6 +177,10 @@ impl GpuTexture {
     pub const LINEAR: u32 = 16;
     /// `TEXTURE_SRGB` (decode sRGB to linear).
     pub const SRGB: u32 = 32;
+    /// `TEXTURE_MIN_LINEAR` (bilinear within a level when minified; otherwise nearest).
+    pub const MIN_LINEAR: u32 = 64;
+    /// `TEXTURE_MIP_LINEAR` (blend the two nearest mip levels; otherwise the nearest level).
+    pub const MIP_LINEAR: u32 = 128;
 }
 
 /// One entry of the emissive-triangle sampling table (`GpuLightTri`).
@@ -448,7 +461,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
             textures,
             tex_transform
         }),
-        layout_of!(GpuTexture { offset, width, height, flags }),
+        layout_of!(GpuTexture { offset, width, height, flags, levels, pad0, pad1, pad2 }),
         layout_of!(SampleTestParams { wo_alpha, config }),
         layout_of!(GpuLightTri { tri, cdf, pmf, area }),
         layout_of!(PathParams {

@@ -410,16 +410,27 @@ impl GpuTextures {
         let flags = wrap(sampler.wrap_s, GpuTexture::WRAP_S_CLAMP, GpuTexture::WRAP_S_MIRROR)
             | wrap(sampler.wrap_t, GpuTexture::WRAP_T_CLAMP, GpuTexture::WRAP_T_MIRROR)
             | if sampler.mag_filter == Filter::Linear { GpuTexture::LINEAR } else { 0 }
+            | if sampler.min_filter == Filter::Linear { GpuTexture::MIN_LINEAR } else { 0 }
+            | if sampler.mipmap_filter == Filter::Linear { GpuTexture::MIP_LINEAR } else { 0 }
             | if texture.srgb { GpuTexture::SRGB } else { 0 };
+        // The mip chain follows level 0, only where the sampler asks for mipmaps.
+        let chain = if sampler.mipmaps { texture.mip_chain() } else { Vec::new() };
         let i = self.textures.len() as u32;
         self.textures.push(GpuTexture {
             offset: self.texels.len() as u32,
             width: texture.width,
             height: texture.height,
             flags,
+            levels: 1 + chain.len() as u32,
+            ..Default::default()
         });
-        self.texels
-            .extend(texture.rgba8.chunks_exact(4).map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])));
+        let pack = |rgba8: &[u8]| -> Vec<u32> {
+            rgba8.chunks_exact(4).map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])).collect()
+        };
+        self.texels.extend(pack(&texture.rgba8));
+        for level in &chain {
+            self.texels.extend(pack(&level.rgba8));
+        }
         self.index.insert(r.texture, i);
         i + 1
     }

@@ -5,7 +5,7 @@
 //! |---|---|---|
 //! | `depth` | `R32_SFLOAT` | view-space depth (distance along the camera's forward axis); 0 where no surface |
 //! | `normal` | `R16G16B16A16_SFLOAT` | world-space shading normal xyz (interpolated, normal-mapped, facing the camera's side of the geometry), perceptual roughness √α in w (α floored as the BSDF floors it) |
-//! | `base` | `R16G16B16A16_SFLOAT` | linear base colour rgb (textures applied), metallic in a |
+//! | `base` | `R16G16B16A16_SFLOAT` | linear base colour rgb (textures applied, mipmapped ones filtered for the pixel's ray cone), metallic in a |
 //! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504), 0 in a |
 //! | `material` | `R32G32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16` |
 //!

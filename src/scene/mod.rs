@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 pub use camera::{Camera, Light, LightKind};
 pub use emissive::EmissiveTable;
 pub use material::{texture_transform, AlphaMode, Material, TextureRef, IDENTITY_TRANSFORM};
-pub use texture::{Filter, Sampler, Texture, Wrap};
+pub use texture::{mip_level_count, Filter, MipLevel, Sampler, Texture, Wrap};
 
 /// glTF extensions umbra reads; a file that *requires* any other one is rejected.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[

@@ -45,6 +45,9 @@ pub struct Sampler {
     /// Whether minification uses mipmaps (the glTF minification filter is a mipmap mode, or is
     /// left to the renderer).
     pub mipmaps: bool,
+    /// Between mip levels when `mipmaps`: `Linear` blends the two nearest levels (trilinear with
+    /// a linear `min_filter`), `Nearest` takes the nearest level (glTF `*_MIPMAP_NEAREST`).
+    pub mipmap_filter: Filter,
 }
 
 impl Default for Sampler {
@@ -56,6 +59,7 @@ impl Default for Sampler {
             mag_filter: Filter::Linear,
             min_filter: Filter::Linear,
             mipmaps: true,
+            mipmap_filter: Filter::Linear,
         }
     }
 }
@@ -82,6 +86,10 @@ impl Sampler {
                 _ => Filter::Linear,
             },
             mipmaps: !matches!(min, Some(MinFilter::Nearest | MinFilter::Linear)),
+            mipmap_filter: match min {
+                Some(MinFilter::NearestMipmapNearest | MinFilter::LinearMipmapNearest) => Filter::Nearest,
+                _ => Filter::Linear,
+            },
         }
     }
 }
@@ -122,6 +130,114 @@ impl Texture {
             })
             .sum();
         (sum / count as f64) as f32
+    }
+}
+
+/// One level of a texture's mip chain, RGBA8 like the texture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MipLevel {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Texels, RGBA8, rows top to bottom.
+    pub rgba8: Vec<u8>,
+}
+
+/// The number of levels of a full mip chain of a `width` × `height` texture, level 0 included:
+/// each level halves both sizes (rounding down, at least 1) down to 1 × 1.
+pub fn mip_level_count(width: u32, height: u32) -> u32 {
+    32 - width.max(height).max(1).leading_zeros()
+}
+
+impl Texture {
+    /// The mip chain below level 0: levels 1 to [`mip_level_count`] − 1, each of size
+    /// `max(1, size >> k)`. Each level is the area-weighted box filter of the level above (a 2 × 2
+    /// box for even sizes; for an odd size each new texel covers 2.5 texels, the middle one shared
+    /// by halves), so every level keeps the texture's mean. Filtering happens in linear space: sRGB
+    /// colour is decoded, averaged and re-encoded (alpha is always linear); levels are computed
+    /// from the unquantised level above and rounded to 8 bits once. Empty when `rgba8` does not
+    /// hold `width × height` texels.
+    pub fn mip_chain(&self) -> Vec<MipLevel> {
+        if self.rgba8.len() as u64 != u64::from(self.width) * u64::from(self.height) * 4 {
+            return Vec::new();
+        }
+        let decode: [f32; 256] = std::array::from_fn(|v| {
+            let c = v as f32 / 255.0;
+            if self.srgb {
+                srgb_to_linear(c)
+            } else {
+                c
+            }
+        });
+        let mut level: Vec<[f32; 4]> = self
+            .rgba8
+            .chunks_exact(4)
+            .map(|p| {
+                [decode[p[0] as usize], decode[p[1] as usize], decode[p[2] as usize], p[3] as f32 / 255.0]
+            })
+            .collect();
+        let (mut w, mut h) = (self.width.max(1), self.height.max(1));
+        let mut chain = Vec::new();
+        for _ in 1..mip_level_count(w, h) {
+            let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+            let (wx, wy) = (box_weights(w, nw), box_weights(h, nh));
+            let mut next = vec![[0.0f32; 4]; (nw * nh) as usize];
+            for (y, row_weights) in wy.iter().enumerate() {
+                for (x, col_weights) in wx.iter().enumerate() {
+                    let mut sum = [0.0f32; 4];
+                    for &(sy, ky) in row_weights {
+                        for &(sx, kx) in col_weights {
+                            let t = level[(sy * w + sx) as usize];
+                            for c in 0..4 {
+                                sum[c] += ky * kx * t[c];
+                            }
+                        }
+                    }
+                    next[y * nw as usize + x] = sum;
+                }
+            }
+            let rgba8 = next
+                .iter()
+                .flat_map(|t| {
+                    let colour = |c: f32| if self.srgb { linear_to_srgb(c) } else { c };
+                    [colour(t[0]), colour(t[1]), colour(t[2]), t[3]]
+                        .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+                })
+                .collect();
+            chain.push(MipLevel { width: nw, height: nh, rgba8 });
+            (level, w, h) = (next, nw, nh);
+        }
+        chain
+    }
+}
+
+/// For each of the `dst` texels along an axis, the `src` texels it covers and their weights
+/// (overlap of [i·src/dst, (i+1)·src/dst) with each source texel, normalised).
+fn box_weights(src: u32, dst: u32) -> Vec<Vec<(u32, f32)>> {
+    (0..dst)
+        .map(|i| {
+            let (lo, hi) = (
+                f64::from(i) * f64::from(src) / f64::from(dst),
+                f64::from(i + 1) * f64::from(src) / f64::from(dst),
+            );
+            (lo.floor() as u32..(hi.ceil() as u32).min(src))
+                .map(|j| {
+                    let overlap = hi.min(f64::from(j + 1)) - lo.max(f64::from(j));
+                    (j, (overlap / (hi - lo)) as f32)
+                })
+                .filter(|&(_, k)| k > 0.0)
+                .collect()
+        })
+        .collect()
+}
+
+/// The sRGB transfer function.
+fn linear_to_srgb(c: f32) -> f32 {
+    if c <= 0.0031308 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
     }
 }
 

@@ -88,22 +88,22 @@ vec4 texture_sample_level(uint tex, uint level, vec2 uv) {
 // filter on level 0 when the texture has no mips, on the nearest level (*_MIPMAP_NEAREST), or
 // linearly between the two nearest levels (*_MIPMAP_LINEAR: trilinear with a linear filter).
 vec4 texture_sample_lod(uint tex, vec2 uv, float lod) {
-    if (!(lod > 0.0)) {
-        return texture_sample(tex, uv);
-    }
+    // One code path for magnified and minified lanes (they share SIMD lanes on CPU devices, where
+    // separate paths would both run): level l0 with the filter for its side of lod 0, and for
+    // *_MIPMAP_LINEAR a second, coarser level only where the blend needs it.
+    uint flags = textures[tex].flags;
+    bool minified = lod > 0.0;
     uint top = textures[tex].levels - 1u;
-    float l = min(lod, float(top));
-    if ((textures[tex].flags & TEXTURE_MIP_LINEAR) == 0u) {
-        return texture_sample_level(tex, min(uint(l + 0.5), top), uv);
-    }
-    uint l0 = uint(l);
+    float l = minified ? min(lod, float(top)) : 0.0;
+    bool mip_linear = (flags & TEXTURE_MIP_LINEAR) != 0u;
+    uint l0 = mip_linear ? uint(l) : min(uint(l + 0.5), top);
+    bool linear = (flags & (minified ? TEXTURE_MIN_LINEAR : TEXTURE_LINEAR)) != 0u;
     uint offset;
     int w, h;
     texture_level(tex, l0, offset, w, h);
-    bool linear = (textures[tex].flags & TEXTURE_MIN_LINEAR) != 0u;
     vec4 a = texture_filter(tex, offset, w, h, uv, linear);
     float f = l - float(l0);
-    if (l0 == top || f == 0.0) {
+    if (!mip_linear || l0 == top || !(f > 0.0)) {
         return a;
     }
     // The next level follows this one.

@@ -6,7 +6,7 @@
 //
 // The including kernel declares, before including this file:
 //   readonly buffer ... { GpuTexture textures[]; };
-//   readonly buffer ... { uint texels[]; };
+//   readonly buffer ... { uint texels[]; };  // the sRGB table (256 f32 bits), then RGBA8 texels
 #ifndef UMBRA_TEXTURE_GLSL
 #define UMBRA_TEXTURE_GLSL
 
@@ -22,18 +22,18 @@ int texture_wrap(int i, int size, bool clamp_mode, bool mirror) {
     return ((i % size) + size) % size;
 }
 
-vec3 srgb_to_linear(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
-}
-
 // Texel (x, y), wrapped, of the w × h level that starts at texel `offset` of texture `tex`.
 vec4 texture_texel_at(uint tex, uint offset, int w, int h, int x, int y) {
     uint flags = textures[tex].flags;
     x = texture_wrap(x, w, (flags & TEXTURE_WRAP_S_CLAMP) != 0u, (flags & TEXTURE_WRAP_S_MIRROR) != 0u);
     y = texture_wrap(y, h, (flags & TEXTURE_WRAP_T_CLAMP) != 0u, (flags & TEXTURE_WRAP_T_MIRROR) != 0u);
-    vec4 c = unpackUnorm4x8(texels[offset + uint(y * w + x)]);
+    uint bits = texels[offset + uint(y * w + x)];
+    vec4 c = unpackUnorm4x8(bits);
     if ((flags & TEXTURE_SRGB) != 0u) {
-        c.rgb = srgb_to_linear(c.rgb);
+        // texels[0..256] is the sRGB decoding table (src/gpu/scene.rs): exact, and far cheaper
+        // than pow on CPU devices.
+        c.rgb = vec3(uintBitsToFloat(texels[bits & 255u]), uintBitsToFloat(texels[(bits >> 8) & 255u]),
+                     uintBitsToFloat(texels[(bits >> 16) & 255u]));
     }
     return c;
 }

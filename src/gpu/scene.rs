@@ -36,7 +36,7 @@ pub struct GpuScene {
     pub env_conditional: Buffer,
     /// `GpuTexture`s.
     pub textures: Buffer,
-    /// RGBA8 texels of every texture.
+    /// The sRGB decoding table (256 `f32` bits), then the RGBA8 texels of every texture.
     pub texels: Buffer,
     /// Textures the materials use.
     pub texture_count: u32,
@@ -72,7 +72,8 @@ pub struct SceneArrays {
     pub punctual: Vec<GpuLight>,
     /// The textures the GPU materials use.
     pub textures: Vec<GpuTexture>,
-    /// Their texels, RGBA8 packed little-endian into u32.
+    /// The sRGB decoding table (the linear value of each 8-bit code, as `f32` bits; present when
+    /// there is any texture), then their texels, RGBA8 packed little-endian into u32.
     pub texels: Vec<u32>,
 }
 
@@ -399,6 +400,11 @@ impl GpuTextures {
         let Some(texture) = scene.textures.get(r.texture as usize) else { return 0 };
         if let Some(&i) = self.index.get(&r.texture) {
             return i + 1;
+        }
+        if self.texels.is_empty() {
+            // The texel buffer starts with the sRGB decoding table (texture.glsl reads it: a
+            // table lookup costs CPU devices far less than pow, and is exact for 8-bit codes).
+            self.texels.extend((0..256).map(|code| crate::output::srgb_decode(code as f32 / 255.0).to_bits()));
         }
         use crate::scene::{Filter, Wrap};
         let wrap = |w: Wrap, clamp: u32, mirror: u32| match w {

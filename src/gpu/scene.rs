@@ -404,7 +404,8 @@ impl GpuTextures {
         if self.texels.is_empty() {
             // The texel buffer starts with the sRGB decoding table (texture.glsl reads it: a
             // table lookup costs CPU devices far less than pow, and is exact for 8-bit codes).
-            self.texels.extend((0..256).map(|code| crate::output::srgb_decode(code as f32 / 255.0).to_bits()));
+            self.texels
+                .extend((0..256).map(|code| crate::output::srgb_decode(code as f32 / 255.0).to_bits()));
         }
         use crate::scene::{Filter, Wrap};
         let wrap = |w: Wrap, clamp: u32, mirror: u32| match w {

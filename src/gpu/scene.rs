@@ -112,8 +112,7 @@ impl SceneArrays {
     pub fn with_bvh(scene: &Scene, mut bvh: Bvh) -> Self {
         // The traversal's alpha test reads each triangle's alpha mode from v1.w (bits: 0 opaque,
         // 1 mask, 2 blend), so opaque triangles never pay for it.
-        for (tri, &input) in bvh.tris.iter_mut().zip(&bvh.prim_order) {
-            let mode = scene.triangle_material.get(input as usize).map_or(0, |&m| alpha_bits(scene, m));
+        for (tri, mode) in bvh.tris.iter_mut().zip(alpha_modes(scene, &bvh.prim_order)) {
             tri.v1[3] = f32::from_bits(mode);
         }
         let shading = ShadingArrays::new(scene, &bvh.prim_order);
@@ -284,6 +283,8 @@ impl GpuScene {
     /// Uploads arrays already laid out (tests keep them to compare against).
     pub fn from_arrays(ctx: &Context, arrays: &SceneArrays) -> Result<Self> {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        // The alpha bits with_bvh wrote into the BVH triangles.
+        let alpha_modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
         Ok(Self {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
             triangles: Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?,
@@ -297,14 +298,14 @@ impl GpuScene {
             texels: Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?,
             texture_count: arrays.textures.len() as u32,
             has_transmission: transmits(&arrays.materials),
-            has_alpha: arrays.bvh.tris.iter().any(|t| t.v1[3].to_bits() != 0),
+            has_alpha: alpha_modes.iter().any(|&m| m != 0),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
             env_size: None,
             bvh_stats: arrays.bvh.stats.clone(),
             prim_order: arrays.bvh.prim_order.clone(),
-            alpha_modes: scene_alpha_modes(&arrays.bvh.tris),
+            alpha_modes,
         })
     }
 
@@ -321,12 +322,7 @@ impl GpuScene {
                 self.prim_order.len()
             )));
         }
-        let modes: Vec<u32> = self
-            .prim_order
-            .iter()
-            .map(|&p| scene.triangle_material.get(p as usize).map_or(0, |&m| alpha_bits(scene, m)))
-            .collect();
-        if modes != self.alpha_modes {
+        if alpha_modes(scene, &self.prim_order) != self.alpha_modes {
             return Err(Error::Invalid(format!(
                 "scene '{}' changes a material's alpha mode (opaque, mask, blend): that needs a new upload",
                 scene.name
@@ -349,17 +345,15 @@ impl GpuScene {
     }
 }
 
-fn scene_alpha_modes(tris: &[crate::bvh::BvhTri]) -> Vec<u32> {
-    tris.iter().map(|t| t.v1[3].to_bits()).collect()
-}
-
-/// The alpha mode of material `m` as the traversal's bits (0 opaque, 1 mask, 2 blend).
-fn alpha_bits(scene: &Scene, m: u32) -> u32 {
-    match scene.materials.get(m as usize).map(|m| m.alpha_mode) {
+/// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits (0 opaque,
+/// 1 mask, 2 blend).
+fn alpha_modes(scene: &Scene, prim_order: &[u32]) -> Vec<u32> {
+    let bits = |m: &u32| match scene.materials.get(*m as usize).map(|m| m.alpha_mode) {
         Some(AlphaMode::Mask) => 1,
         Some(AlphaMode::Blend) => 2,
         _ => 0,
-    }
+    };
+    prim_order.iter().map(|&p| scene.triangle_material.get(p as usize).map_or(0, bits)).collect()
 }
 
 fn transmits(materials: &[GpuMaterial]) -> bool {

@@ -250,32 +250,19 @@ pub fn run_scene(
             ao,
             ..HybridSettings::default()
         };
-        warm_up(|| hybrid(ctx, renderer.scene(), camera, &settings).map(|_| ()))?;
-        let mut times = Vec::new();
-        let mut last = None;
-        for _ in 0..s.repeats.max(1) {
-            let image = hybrid(ctx, renderer.scene(), camera, &settings)?;
-            // The IBL tables and prefiltered maps are computed once per scene, not per frame.
-            let (once, frame): (Vec<_>, Vec<_>) =
-                image.pass_ms.iter().partition(|(name, _)| name.starts_with("ibl"));
-            times.push(frame.iter().map(|(_, ms)| ms).sum::<f64>());
-            if precompute_ms.is_empty() {
-                precompute_ms = once.into_iter().cloned().collect();
-            }
-            last = Some(image);
+        // The IBL tables and prefiltered maps are computed once per scene, not per frame.
+        let is_once = |name: &str| name.starts_with("ibl");
+        let (ms, image) = timed(
+            s.repeats,
+            || hybrid(ctx, renderer.scene(), camera, &settings),
+            |image| image.pass_ms.iter().filter(|(name, _)| !is_once(name)).map(|(_, ms)| ms).sum(),
+        )?;
+        if precompute_ms.is_empty() {
+            precompute_ms = image.pass_ms.iter().filter(|(name, _)| is_once(name)).cloned().collect();
         }
-        let Some(image) = last else { bail!("no hybrid run") };
         let (rmse, rel_mse) = errors(&image.color, &reference);
         let flip = Some(flip_mean(&image.color, &reference, s.size));
-        points.push(Point {
-            method: method.into(),
-            unit,
-            value,
-            ms: median(&mut times),
-            rmse,
-            rel_mse,
-            flip,
-        });
+        points.push(Point { method: method.into(), unit, value, ms, rmse, rel_mse, flip });
     }
     let title = format!("{} — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name);
     let stem = s.out.join(format!("suite-{key}"));
@@ -314,6 +301,25 @@ pub fn run_scene(
         ao_reference_mse_floor: ao_floor,
         precompute_ms,
     })
+}
+
+/// Runs `run` for half a second of warm-up, then `repeats` times (at least once): the median of
+/// `frame_ms` over the repeats, and the last result.
+fn timed<T>(
+    repeats: usize,
+    mut run: impl FnMut() -> umbra::Result<T>,
+    frame_ms: impl Fn(&T) -> f64,
+) -> Result<(f64, T)> {
+    warm_up(|| run().map(|_| ()))?;
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeats.max(1) {
+        let result = run()?;
+        times.push(frame_ms(&result));
+        last = Some(result);
+    }
+    let Some(last) = last else { bail!("no timed run") };
+    Ok((median(&mut times), last))
 }
 
 fn chart_points(points: &[Point]) -> Vec<ChartPoint<'_>> {
@@ -355,17 +361,11 @@ fn ambient_occlusion_sweep(
     for (method, unit, value, ao_method) in runs {
         let mut run_settings = settings(value, 1);
         run_settings.blur = ao_method == AoMethod::Ssao;
-        warm_up(|| ambient_occlusion(ctx, scene, camera, s.size, ao_method, &run_settings).map(|_| ()))?;
-        let mut times = Vec::new();
-        let mut last = None;
-        for _ in 0..s.repeats.max(1) {
-            let image = ambient_occlusion(ctx, scene, camera, s.size, ao_method, &run_settings)?;
-            times.push(
-                image.pass_ms.iter().filter(|(name, _)| name != "gbuffer").map(|(_, ms)| ms).sum::<f64>(),
-            );
-            last = Some(image);
-        }
-        let Some(image) = last else { bail!("no AO run") };
+        let (ms, image) = timed(
+            s.repeats,
+            || ambient_occlusion(ctx, scene, camera, s.size, ao_method, &run_settings),
+            |image| image.pass_ms.iter().filter(|(name, _)| name != "gbuffer").map(|(_, ms)| ms).sum(),
+        )?;
         let mse = image
             .values
             .iter()
@@ -379,7 +379,7 @@ fn ambient_occlusion_sweep(
             method: method.into(),
             unit,
             value,
-            ms: median(&mut times),
+            ms,
             rmse: mse.sqrt(),
             rel_mse: mse,
             flip: None,

@@ -21,8 +21,8 @@ layout(constant_id = 5) const bool HAS_ALPHA = false;
 // The hybrid passes shade reflection only (see src/passes/deferred.rs).
 const bool HAS_TRANSMISSION = false;
 
-layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
+layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
+layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };

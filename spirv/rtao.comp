@@ -13,8 +13,8 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(set = 0, binding = 1, std430) readonly buffer BvhTris { BvhTri bvh_tris[]; };
+layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
+layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, r32f) uniform readonly image2D gb_depth;
 layout(set = 0, binding = 3, rgba16f) uniform readonly image2D gb_normal;
 layout(set = 0, binding = 4, rg32ui) uniform readonly uimage2D gb_material;

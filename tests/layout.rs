@@ -7,9 +7,36 @@ use umbra::gpu::layout::{gpu_layouts, StructLayout};
 use umbra::kernels::KERNELS;
 
 fn parse(words: &[u32]) -> Result<Module, String> {
-    let bytes: &[u8] = bytemuck::cast_slice(words);
+    let words = texel_buffers_as_1d(words);
+    let bytes: &[u8] = bytemuck::cast_slice(&words);
     naga::front::spv::parse_u8_slice(bytes, &naga::front::spv::Options::default())
         .map_err(|e| format!("{e:?}"))
+}
+
+/// naga has no texel buffers (its `ImageDimension` lacks SPIR-V's `Buffer`), which every kernel
+/// that traces binds for the BVH: present them to it as 1D images, which it reads the same way
+/// (`OpImageFetch` by one integer coordinate), and drop the `SampledBuffer` capability. Nothing
+/// else of the module changes, so the struct layouts it checks are the kernel's own.
+fn texel_buffers_as_1d(words: &[u32]) -> Vec<u32> {
+    const OP_CAPABILITY: u32 = 17;
+    const OP_TYPE_IMAGE: u32 = 25;
+    const CAPABILITY_SAMPLED_BUFFER: u32 = 46;
+    const DIM_1D: u32 = 0;
+    const DIM_BUFFER: u32 = 5;
+    let mut out = words[..5].to_vec();
+    let mut i = 5;
+    while i < words.len() {
+        let (count, opcode) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+        let mut instruction = words[i..i + count.max(1)].to_vec();
+        i += count.max(1);
+        match opcode {
+            OP_CAPABILITY if instruction[1] == CAPABILITY_SAMPLED_BUFFER => continue,
+            OP_TYPE_IMAGE if instruction[3] == DIM_BUFFER => instruction[3] = DIM_1D,
+            _ => {}
+        }
+        out.extend(instruction);
+    }
+    out
 }
 
 /// Differences between the host layouts and every named struct of `module`, plus the names of

@@ -118,7 +118,9 @@ fn assert_too_large(result: umbra::Result<impl Sized>, name: &str, buffer: &str,
             assert!(message.starts_with(name), "{message}");
             assert!(message.contains(buffer), "{message}");
             assert!(message.contains(&format!("at most {limit} bytes")), "{message}");
-            assert!(message.contains("maxStorageBufferRange"), "{message}");
+            let what =
+                if buffer.starts_with("bvh ") { "maxTexelBufferElements" } else { "maxStorageBufferRange" };
+            assert!(message.contains(what), "{message}");
         }
         Err(e) => panic!("expected a scene error naming {name}, got: {e}"),
         Ok(_) => panic!("{name} fits under {limit} bytes"),
@@ -138,15 +140,24 @@ fn scene_buffer_sizes_are_checked_against_the_device_limit() {
     assert_eq!(triangles, std::mem::size_of_val(arrays.triangles.as_slice()) as u64);
     let vertices = sizes.iter().find(|s| s.0 == "scene vertices").unwrap().1;
     assert_eq!(vertices, std::mem::size_of_val(arrays.vertices.as_slice()) as u64);
-    let mut info = gpu.info().clone();
-    info.max_storage_buffer_range = bytes;
-    arrays.check_limits(&scene.name, &info).unwrap();
-    info.max_storage_buffer_range = bytes - 1;
-    assert_too_large(arrays.check_limits(&scene.name, &info), &scene.name, largest, bytes - 1);
+    // A device whose limit is `bytes` for every buffer: storage buffers in bytes, the BVH's
+    // texel buffers in 16-byte texels (their sizes are whole texels).
+    let device = |bytes: u64| {
+        let mut info = gpu.info().clone();
+        info.max_storage_buffer_range = bytes;
+        info.max_texel_buffer_elements = (bytes / 16) as u32;
+        info
+    };
+    for (buffer, size) in sizes.iter().filter(|s| s.0.starts_with("bvh ")) {
+        assert_eq!(size % 16, 0, "{buffer} is not whole texels");
+    }
+    arrays.check_limits(&scene.name, &device(bytes)).unwrap();
+    let below = if largest.starts_with("bvh ") { bytes - 16 } else { bytes - 1 };
+    assert_too_large(arrays.check_limits(&scene.name, &device(below)), &scene.name, largest, below);
     // Each buffer is checked, not just the largest.
     for (buffer, size) in sizes.into_iter().filter(|s| s.1 > 0) {
-        info.max_storage_buffer_range = size - 1;
-        let message = arrays.check_limits(&scene.name, &info).unwrap_err().to_string();
+        let below = if buffer.starts_with("bvh ") { size - 16 } else { size - 1 };
+        let message = arrays.check_limits(&scene.name, &device(below)).unwrap_err().to_string();
         assert!(sizes.iter().any(|(b, s)| message.contains(b) && *s >= size), "{buffer}: {message}");
     }
 }

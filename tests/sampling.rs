@@ -441,11 +441,13 @@ struct LightKernel {
 
 impl LightKernel {
     fn new(gpu: &Gpu, env: Option<&umbra::environment::EnvironmentMap>) -> Self {
+        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
+        bindings[..2].copy_from_slice(&umbra::bvh::gpu::GpuBvh::BINDINGS);
         let pipeline = ComputePipeline::new(
             gpu,
             "light_sample_test",
             &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 14],
+                bindings: &bindings,
                 push_constant_size: std::mem::size_of::<LightTestParams>() as u32,
                 specialization: &[],
             },
@@ -484,8 +486,8 @@ impl LightKernel {
             self.pipeline.push_descriptors(
                 cmd,
                 &[
-                    Descriptor::Buffer(&s.bvh.nodes),
-                    Descriptor::Buffer(&s.bvh.tris),
+                    s.bvh.descriptors()[0],
+                    s.bvh.descriptors()[1],
                     Descriptor::Buffer(&s.triangles),
                     Descriptor::Buffer(&s.vertices),
                     Descriptor::Buffer(&s.materials),

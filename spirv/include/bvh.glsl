@@ -1,19 +1,34 @@
 // BVH traversal: closest hit and any hit, a watertight ray/triangle test (Woop, Benthin and Wald
-// 2013) and a robust slab test (Ize 2013). src/bvh/traverse.rs is the same algorithm, operation
-// for operation; keep them in step.
+// 2013) and a robust slab test (Ize 2013). The ray set-up, triangle test and slab test are those
+// of src/bvh/traverse.rs operation for operation (keep them in step); the walk differs in order
+// only (it reads the GPU layout, `GpuBvhNode` in src/bvh/gpu.rs), so both find the same nearest
+// hit up to ties in t.
 //
-// The including kernel declares, before including this file:
-//   readonly buffer ... { BvhNode bvh_nodes[]; };
-//   readonly buffer ... { BvhTri bvh_tris[]; };
+// The including kernel declares, before including this file, the BVH as two uniform texel
+// buffers of RGBA32UI (`GpuBvhNode`s as four texels each, `BvhTri`s as three):
+//   uniform usamplerBuffer bvh_node_texels;
+//   uniform usamplerBuffer bvh_tri_texels;
+// Texel fetches rather than storage buffers: on llvmpipe (Mesa 22) a storage-buffer load is a
+// loop over the SIMD lanes with a bounds check and a branch per component, a texel fetch a
+// branch-free gather (BENCHMARKS.md: +25-40 % rays/s); GPUs read both through their caches.
 // Every arithmetic result the watertight test depends on is `precise`, so the compiler cannot
 // contract a*b - c*d into an fma on one side of a shared edge and not on the other.
 #ifndef UMBRA_BVH_GLSL
 #define UMBRA_BVH_GLSL
 
-#define BVH_MAX_DEPTH 64
+#define BVH_MAX_DEPTH 64u
 const float BVH_DIR_EPS = 1e-20;
 const float BVH_SLAB_ROBUST = 1.0 + 1.0 / 1048576.0;
 const float BVH_INF = uintBitsToFloat(0x7f800000u);
+
+
+// Child c of GPU node n: (aabb_min, index) and (aabb_max, count). count 0: an inner node (index
+// is its GPU node); BVH_NO_CHILD: absent; otherwise a leaf of `count` triangles from `index`.
+uvec4 bvh_child_lo(uint n, uint c) { return texelFetch(bvh_node_texels, int(4u * n + 2u * c)); }
+uvec4 bvh_child_hi(uint n, uint c) { return texelFetch(bvh_node_texels, int(4u * n + 2u * c + 1u)); }
+const uint BVH_NO_CHILD = 0xffffffffu;
+// Vertex k of triangle i (BVH order); w: v0's original index, v1's alpha-mode bits.
+vec4 bvh_tri_v(uint i, uint k) { return uintBitsToFloat(texelFetch(bvh_tri_texels, int(3u * i + k))); }
 
 struct Hit {
     float t;
@@ -52,7 +67,7 @@ BvhRay bvh_ray(vec3 origin, vec3 dir) {
     return r;
 }
 
-// Watertight test against bvh_tris[i]: true with t in (tmin, tmax) and the barycentrics.
+// Watertight test against triangle i: true with t in (tmin, tmax) and the barycentrics.
 // Offsets a ray origin off the surface along n by a few ulps (Wächter and Binder, Ray Tracing
 // Gems ch. 6), so the new ray neither re-hits its own triangle nor tunnels through a neighbour.
 vec3 offset_ray(vec3 p, vec3 n) {
@@ -63,9 +78,9 @@ vec3 offset_ray(vec3 p, vec3 n) {
 
 bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary) {
     // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
-    precise vec3 a = bvh_tris[i].v0.xyz - r.origin;
-    precise vec3 b = bvh_tris[i].v1.xyz - r.origin;
-    precise vec3 c = bvh_tris[i].v2.xyz - r.origin;
+    precise vec3 a = bvh_tri_v(i, 0u).xyz - r.origin;
+    precise vec3 b = bvh_tri_v(i, 1u).xyz - r.origin;
+    precise vec3 c = bvh_tri_v(i, 2u).xyz - r.origin;
     precise float ax = a[r.kx] - r.shear.x * a[r.kz];
     precise float ay = a[r.ky] - r.shear.y * a[r.kz];
     precise float bx = b[r.kx] - r.shear.x * b[r.kz];
@@ -94,90 +109,88 @@ bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out ve
     return true;
 }
 
-// Entry distance of the ray into node n within [tmin, tmax], or BVH_INF.
-float bvh_slab(BvhRay r, uint n, float tmin, float tmax) {
-    vec3 t0 = (bvh_nodes[n].aabb_min - r.origin) * r.inv_dir;
-    vec3 t1 = (bvh_nodes[n].aabb_max - r.origin) * r.inv_dir;
-    vec3 lo = min(t0, t1);
-    vec3 hi = max(t0, t1);
-    float near = max(max(lo.x, lo.y), max(lo.z, tmin));
-    float far = min(min(hi.x, hi.y), hi.z) * BVH_SLAB_ROBUST;
+// Entry distance of the ray into a child's box (its two texels) within [tmin, tmax], or BVH_INF;
+// always BVH_INF for an absent child.
+float bvh_slab(BvhRay r, uvec4 lo, uvec4 hi, float tmin, float tmax) {
+    vec3 t0 = (uintBitsToFloat(lo.xyz) - r.origin) * r.inv_dir;
+    vec3 t1 = (uintBitsToFloat(hi.xyz) - r.origin) * r.inv_dir;
+    vec3 near3 = min(t0, t1);
+    vec3 far3 = max(t0, t1);
+    float near = max(max(near3.x, near3.y), max(near3.z, tmin));
+    float far = min(min(far3.x, far3.y), far3.z) * BVH_SLAB_ROBUST;
     far = min(far, tmax);
-    return near <= far ? near : BVH_INF;
+    return near <= far && hi.w != BVH_NO_CHILD ? near : BVH_INF;
 }
 
-bool bvh_is_empty() {
-    return bvh_nodes[0].tri_count == 0u && bvh_nodes[0].aabb_min.x > bvh_nodes[0].aabb_max.x;
-}
-
-// Front-to-back traversal with t in (tmin, tmax); any_hit stops at the first hit found.
 #ifdef UMBRA_ALPHA_TEST
 // Whether a hit at barycentrics `bary` of triangle `tri` (in BVH order), whose material is
-// alpha-masked or blended (bvh_tris[tri].v1.w's bits: 1 mask, 2 blend), is opaque for a ray from
+// alpha-masked or blended (bvh_tri_v(tri, 1u).w's bits: 1 mask, 2 blend), is opaque for a ray from
 // `origin` along `dir`. Defined by shading.glsl; only kernels that shade the scene define UMBRA_ALPHA_TEST
 // (and the specialization constant HAS_ALPHA), the others see every triangle as opaque.
 bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir);
 #endif
 
+// Front-to-back traversal with t in (tmin, tmax); any_hit stops at the first hit found.
+// Each step tests both children of a GPU node, then the triangles of those that are leaves and
+// were hit, then descends into the nearer inner child hit, pushing the farther. Leaves cost no
+// step of their own: on a SIMD CPU (llvmpipe) every step runs the triangle loop's body at least
+// once whether or not any lane needs it, so fewer steps is what pays.
 bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
     hit = Hit(tmax, 0xffffffffu, vec2(0.0));
-    if (bvh_is_empty()) {
-        return false;
-    }
     BvhRay r = bvh_ray(origin, dir);
     uint stack[BVH_MAX_DEPTH];
     uint sp = 0u;
     uint node = 0u;
     bool found = false;
     while (true) {
-        uint count = bvh_nodes[node].tri_count;
-        uint first = bvh_nodes[node].left_first;
-        if (count > 0u) {
-            for (uint i = first; i < first + count; ++i) {
-                float t;
-                vec2 bary;
-                if (bvh_intersect(r, i, tmin, tmax, t, bary)) {
+        uvec4 a_lo = bvh_child_lo(node, 0u);
+        uvec4 a_hi = bvh_child_hi(node, 0u);
+        uvec4 b_lo = bvh_child_lo(node, 1u);
+        uvec4 b_hi = bvh_child_hi(node, 1u);
+        float da = bvh_slab(r, a_lo, a_hi, tmin, tmax);
+        float db = bvh_slab(r, b_lo, b_hi, tmin, tmax);
+        // Triangles of the leaf children hit: a's first, then b's.
+        uint na = da != BVH_INF ? a_hi.w : 0u;
+        uint nb = db != BVH_INF ? b_hi.w : 0u;
+        for (uint k = 0u; k < na + nb; ++k) {
+            uint i = k < na ? a_lo.w + k : b_lo.w + (k - na);
+            float t;
+            vec2 bary;
+            if (bvh_intersect(r, i, tmin, tmax, t, bary)) {
 #ifdef UMBRA_ALPHA_TEST
-                    if (HAS_ALPHA && floatBitsToUint(bvh_tris[i].v1.w) != 0u && !bvh_alpha_opaque(i, bary, origin, dir)) {
-                        continue;
-                    }
+                if (HAS_ALPHA && floatBitsToUint(bvh_tri_v(i, 1u).w) != 0u && !bvh_alpha_opaque(i, bary, origin, dir)) {
+                    continue;
+                }
 #endif
-                    found = true;
-                    tmax = t;
-                    hit = Hit(t, i, bary);
-                    if (any_hit) {
-                        return true;
-                    }
+                found = true;
+                tmax = t;
+                hit = Hit(t, i, bary);
+                if (any_hit) {
+                    return true;
                 }
             }
-            if (sp == 0u) {
-                break;
-            }
-            node = stack[--sp];
-            continue;
         }
-        uint near = first;
-        uint far = first + 1u;
-        float d_near = bvh_slab(r, near, tmin, tmax);
-        float d_far = bvh_slab(r, far, tmin, tmax);
-        if (d_near > d_far) {
-            uint k = near;
-            near = far;
-            far = k;
-            float d = d_near;
-            d_near = d_far;
-            d_far = d;
+        // Inner children hit, and not beyond a hit just found (tmax may be infinite).
+        bool ia = a_hi.w == 0u && da != BVH_INF && da <= tmax;
+        bool ib = b_hi.w == 0u && db != BVH_INF && db <= tmax;
+        uint near = a_lo.w;
+        uint far = b_lo.w;
+        if (ib && (!ia || db < da)) {
+            near = b_lo.w;
+            far = a_lo.w;
         }
-        if (d_near == BVH_INF) {
-            if (sp == 0u) {
-                break;
-            }
-            node = stack[--sp];
-        } else {
+        // The farther child is written to the stack by every lane (a slot above the top is
+        // free), and only the pointer moves conditionally: a store under a divergent condition
+        // costs a per-lane branch on SIMD CPUs (llvmpipe), which mispredicts.
+        stack[min(sp, BVH_MAX_DEPTH - 1u)] = far;
+        if (ia || ib) {
             node = near;
-            if (d_far != BVH_INF) {
-                stack[sp++] = far;
+            sp += ia && ib ? 1u : 0u;
+        } else {
+            if (sp == 0u) {
+                break;
             }
+            node = stack[--sp];
         }
     }
     return found;

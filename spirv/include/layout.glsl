@@ -17,13 +17,13 @@ struct BufferTestParams {
     uint add;
 };
 
-// One node of the flattened BVH (tinybvh's BVHNode, 32 bytes). Interior: tri_count == 0 and the
-// children are left_first and left_first + 1. Leaf: tri_count triangles from left_first.
-struct BvhNode {
+// One child of a GPU BVH node (a node is two, 64 bytes; bvh.glsl reads them as texels). count 0:
+// an inner node, index its GPU node; 0xffffffff: absent; else a leaf of count triangles from index.
+struct GpuBvhChild {
     vec3 aabb_min;
-    uint left_first;
+    uint index;
     vec3 aabb_max;
-    uint tri_count;
+    uint count;
 };
 
 // A triangle in BVH order; floatBitsToUint(v0.w) is its index before reordering.

@@ -5,7 +5,7 @@
 //
 // The including kernel declares, before including this file:
 //   const bool HAS_TEXTURES, HAS_ALPHA (specialization constants);
-//   readonly buffers bvh_nodes[], bvh_tris[] (bvh.glsl), triangles[] (GpuTriangle),
+//   the BVH's texel buffers (bvh.glsl), readonly buffers triangles[] (GpuTriangle),
 //   vertices[] (GpuVertex), materials[] (GpuMaterial), lights[] (GpuLightTri),
 //   punctual[] (GpuLight), textures[] (GpuTexture), texels[] (uint);
 // and includes layout.glsl. This file includes bvh.glsl, bsdf.glsl and texture.glsl.
@@ -125,13 +125,13 @@ Surface material_surface(uint id, vec4 uv) {
 }
 
 vec3 tri_vertex(uint tri, uint k) {
-    return k == 0u ? bvh_tris[tri].v0.xyz : (k == 1u ? bvh_tris[tri].v1.xyz : bvh_tris[tri].v2.xyz);
+    return bvh_tri_v(tri, k).xyz;
 }
 
 // Unnormalised geometric normal (length = 2 * area), by the winding.
 vec3 tri_normal(uint tri) {
-    vec3 a = bvh_tris[tri].v0.xyz;
-    return cross(bvh_tris[tri].v1.xyz - a, bvh_tris[tri].v2.xyz - a);
+    vec3 a = bvh_tri_v(tri, 0u).xyz;
+    return cross(bvh_tri_v(tri, 1u).xyz - a, bvh_tri_v(tri, 2u).xyz - a);
 }
 
 // Both UV sets at barycentrics (b1, b2) of triangle `tri`: uv0 in xy, uv1 in zw.
@@ -335,7 +335,7 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
 bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir) {
     uint m = triangles[tri].material;
     float alpha = materials[m].base_color.a * material_texture(m, 0u, tri_uv(tri, bary)).a;
-    if (floatBitsToUint(bvh_tris[tri].v1.w) == 1u) {
+    if (floatBitsToUint(bvh_tri_v(tri, 1u).w) == 1u) {
         return alpha >= materials[m].params.w;
     }
     uvec4 h = pcg4d(uvec4(floatBitsToUint(origin) ^ floatBitsToUint(dir).yzx, tri));

@@ -1,14 +1,19 @@
 //! The BVH on the GPU: its two storage buffers, and `trace.comp`, which traces a buffer of rays
 //! (closest or any hit) for the traversal tests and the ray-throughput benchmark.
 
-use super::Bvh;
+use super::{Bvh, BvhNode};
 use crate::error::Result;
 use crate::gpu::layout::{TraceHit, TraceParams, TraceRay};
-use crate::vk::{raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc};
+use crate::vk::{raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc, TexelView};
 
-/// The node and triangle buffers of a [`Bvh`], uploaded once.
+/// The node and triangle buffers of a [`Bvh`], uploaded once, and their texel views: every
+/// kernel binds the BVH as two uniform texel buffers (bindings 0 and 1, see `bvh.glsl`).
 pub struct GpuBvh {
-    /// `bvh_nodes[]`.
+    /// `bvh_node_texels`: each [`GpuBvhNode`] as four RGBA32UI texels.
+    pub node_texels: TexelView,
+    /// `bvh_tri_texels`: each triangle as three RGBA32UI texels.
+    pub tri_texels: TexelView,
+    /// The [`GpuBvhNode`]s.
     pub nodes: Buffer,
     /// `bvh_tris[]`.
     pub tris: Buffer,
@@ -18,11 +23,96 @@ impl GpuBvh {
     /// Uploads `bvh` through staging buffers (an empty BVH's triangle list still gets a minimal
     /// buffer: see [`Buffer::new`]).
     pub fn upload(ctx: &Context, bvh: &Bvh) -> Result<Self> {
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let usage = raw::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        let nodes = Buffer::upload(ctx, "bvh nodes", &GpuBvhNode::from_bvh(bvh), usage)?;
+        // An empty scene's one (never read) triangle: a texel view needs at least one texel.
+        let empty = [Default::default()];
+        let tri_list = if bvh.tris.is_empty() { &empty[..] } else { &bvh.tris[..] };
+        let tris = Buffer::upload(ctx, "bvh triangles", tri_list, usage)?;
         Ok(Self {
-            nodes: Buffer::upload(ctx, "bvh nodes", &bvh.nodes, usage)?,
-            tris: Buffer::upload(ctx, "bvh triangles", &bvh.tris, usage)?,
+            node_texels: nodes.texel_view(raw::Format::R32G32B32A32_UINT, 16)?,
+            tri_texels: tris.texel_view(raw::Format::R32G32B32A32_UINT, 16)?,
+            nodes,
+            tris,
         })
+    }
+
+    /// The descriptor types of the BVH's two bindings (0 and 1 of every kernel that traces).
+    pub const BINDINGS: [raw::DescriptorType; 2] = [raw::DescriptorType::UNIFORM_TEXEL_BUFFER; 2];
+
+    /// The BVH's two descriptors, in the order of [`GpuBvh::BINDINGS`].
+    pub fn descriptors(&self) -> [Descriptor<'_>; 2] {
+        [Descriptor::Texels(&self.node_texels), Descriptor::Texels(&self.tri_texels)]
+    }
+}
+
+/// One child of a [`GpuBvhNode`]: its box, and what it is.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuBvhChild {
+    /// Box minimum.
+    pub aabb_min: [f32; 3],
+    /// An inner child: its [`GpuBvhNode`]. A leaf: its first triangle.
+    pub index: u32,
+    /// Box maximum.
+    pub aabb_max: [f32; 3],
+    /// 0 for an inner child, the triangle count of a leaf, or [`GpuBvhChild::NONE`].
+    pub count: u32,
+}
+
+impl GpuBvhChild {
+    /// The `count` of a child that is not there (never hit): the root's second child when the
+    /// whole BVH is one leaf, both when it is empty.
+    pub const NONE: u32 = u32::MAX;
+
+    fn none() -> Self {
+        Self { count: Self::NONE, ..Default::default() }
+    }
+}
+
+/// The BVH as the GPU traverses it: one node per inner node of [`Bvh::nodes`], holding both
+/// children's boxes (Aila and Laine 2009), so one step fetches 64 bytes (four texels) and tests
+/// both children, and leaf children's triangles are tested in the same step. Node 0 is the root.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuBvhNode {
+    /// The two children, in [`Bvh::nodes`] order.
+    pub children: [GpuBvhChild; 2],
+}
+const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 64);
+
+impl GpuBvhNode {
+    /// The GPU layout of `bvh`: its inner nodes in their order (depth first, so a subtree stays
+    /// together); a BVH that is a single leaf or empty gets one root with absent children.
+    pub fn from_bvh(bvh: &Bvh) -> Vec<Self> {
+        let nodes = &bvh.nodes;
+        let root = &nodes[0];
+        if root.is_leaf() || root.aabb_min[0] > root.aabb_max[0] {
+            let only = if root.is_leaf() { Self::child(root, 0) } else { GpuBvhChild::none() };
+            return vec![Self { children: [only, GpuBvhChild::none()] }];
+        }
+        // gpu_index[n]: the GPU node of inner node n.
+        let mut gpu_index = vec![u32::MAX; nodes.len()];
+        let mut inner = 0u32;
+        for (n, node) in nodes.iter().enumerate() {
+            if !node.is_leaf() {
+                gpu_index[n] = inner;
+                inner += 1;
+            }
+        }
+        nodes
+            .iter()
+            .filter(|node| !node.is_leaf())
+            .map(|node| {
+                let first = node.left_first as usize;
+                Self { children: [0, 1].map(|k| Self::child(&nodes[first + k], gpu_index[first + k])) }
+            })
+            .collect()
+    }
+
+    fn child(node: &BvhNode, gpu_index: u32) -> GpuBvhChild {
+        let (index, count) = if node.is_leaf() { (node.left_first, node.tri_count) } else { (gpu_index, 0) };
+        GpuBvhChild { aabb_min: node.aabb_min, index, aabb_max: node.aabb_max, count }
     }
 }
 
@@ -52,7 +142,12 @@ impl RayTracer {
                 ctx,
                 "trace",
                 &PipelineDesc {
-                    bindings: &[raw::DescriptorType::STORAGE_BUFFER; 4],
+                    bindings: &[
+                        GpuBvh::BINDINGS[0],
+                        GpuBvh::BINDINGS[1],
+                        raw::DescriptorType::STORAGE_BUFFER,
+                        raw::DescriptorType::STORAGE_BUFFER,
+                    ],
                     push_constant_size: std::mem::size_of::<TraceParams>() as u32,
                     specialization: &[(0, any)],
                 },
@@ -77,8 +172,8 @@ impl RayTracer {
         pipeline.push_descriptors(
             cmd,
             &[
-                Descriptor::Buffer(&bvh.nodes),
-                Descriptor::Buffer(&bvh.tris),
+                bvh.descriptors()[0],
+                bvh.descriptors()[1],
                 Descriptor::Buffer(&batch.rays),
                 Descriptor::Buffer(&batch.hits),
             ],

@@ -83,7 +83,8 @@ impl SceneArrays {
         Ok(Self::with_bvh(scene, Bvh::build(&scene.triangle_soup())?))
     }
 
-    /// The name and size in bytes of each storage buffer [`GpuScene::from_arrays`] uploads.
+    /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
+    /// two are texel buffers, the others storage buffers).
     pub fn buffer_sizes(&self) -> [(&'static str, u64); 8] {
         fn bytes<T>(v: &[T]) -> u64 {
             std::mem::size_of_val(v) as u64
@@ -101,7 +102,8 @@ impl SceneArrays {
     }
 
     /// Checks that every buffer of the scene `name` fits `device`'s `maxStorageBufferRange`
-    /// (128 MiB on lavapipe): one error naming the scene, the buffer, both sizes and what to
+    /// (128 MiB on lavapipe), or for the BVH `maxTexelBufferElements` texels of 16 bytes (2 GiB
+    /// on lavapipe): one error naming the scene, the buffer, both sizes and what to
     /// reduce, before anything is allocated. [`GpuScene::upload`] calls it; a test can pass a
     /// [`DeviceInfo`] with a lowered limit.
     pub fn check_limits(&self, name: &str, device: &DeviceInfo) -> Result<()> {
@@ -130,23 +132,35 @@ fn remedy(buffer: &str) -> &'static str {
     }
 }
 
-/// Checks `(buffer, bytes)` pairs of `name` against `device`'s storage-buffer limit.
-fn fits(name: &str, buffers: &[(&'static str, u64)], device: &DeviceInfo) -> Result<()> {
-    let limit = device.max_storage_buffer_range;
-    match buffers.iter().find(|(_, bytes)| *bytes > limit) {
-        Some(&(buffer, bytes)) => Err(Error::Scene {
-            path: name.into(),
-            message: format!(
-                "too large for device '{}': its {buffer} need {bytes} bytes ({:.1} MiB) in one storage \
-                 buffer, but the device binds at most {limit} bytes ({:.1} MiB, maxStorageBufferRange); {}",
-                device.name,
-                bytes as f64 / 1048576.0,
-                limit as f64 / 1048576.0,
-                remedy(buffer)
-            ),
-        }),
-        None => Ok(()),
+/// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers are
+/// uniform texel buffers of 16-byte texels, every other one a storage buffer.
+fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str) {
+    if buffer.starts_with("bvh ") {
+        (device.max_texel_buffer_elements as u64 * 16, "texel", "maxTexelBufferElements × 16 bytes")
+    } else {
+        (device.max_storage_buffer_range, "storage", "maxStorageBufferRange")
     }
+}
+
+/// Checks `(buffer, bytes)` pairs of `name` against `device`'s buffer limits.
+fn fits(name: &str, buffers: &[(&'static str, u64)], device: &DeviceInfo) -> Result<()> {
+    for &(buffer, bytes) in buffers {
+        let (limit, kind, what) = limit(buffer, device);
+        if bytes > limit {
+            return Err(Error::Scene {
+                path: name.into(),
+                message: format!(
+                    "too large for device '{}': its {buffer} need {bytes} bytes ({:.1} MiB) in one {kind} \
+                     buffer, but the device binds at most {limit} bytes ({:.1} MiB, {what}); {}",
+                    device.name,
+                    bytes as f64 / 1048576.0,
+                    limit as f64 / 1048576.0,
+                    remedy(buffer)
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Everything of a scene's GPU layout but its BVH: what changes when materials or lights do.

@@ -23,6 +23,7 @@
 //! after itself and never submits.
 
 use super::gbuffer::GBufferViews;
+use crate::bvh::gpu::GpuBvh;
 use crate::error::{Error, Result};
 use crate::gpu::layout::{AoBlurParams, AoParams};
 use crate::gpu::scene::GpuScene;
@@ -216,7 +217,7 @@ impl RtaoPass {
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Self> {
         let mut bindings = [raw::DescriptorType::STORAGE_IMAGE; 6];
-        bindings[..2].fill(raw::DescriptorType::STORAGE_BUFFER);
+        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
         let pipeline = ComputePipeline::new(
             ctx,
             "rtao",
@@ -249,8 +250,8 @@ impl RtaoPass {
         self.pipeline.record(
             cmd,
             &[
-                Descriptor::Buffer(&scene.bvh.nodes),
-                Descriptor::Buffer(&scene.bvh.tris),
+                scene.bvh.descriptors()[0],
+                scene.bvh.descriptors()[1],
                 Descriptor::StorageView(gbuffer.depth),
                 Descriptor::StorageView(gbuffer.normal),
                 Descriptor::StorageView(gbuffer.material),

@@ -7,6 +7,7 @@
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
+use crate::bvh::gpu::GpuBvh;
 use crate::error::Result;
 use crate::gpu::layout::DeferredParams;
 use crate::gpu::scene::GpuScene;
@@ -66,6 +67,7 @@ impl DeferredPass {
         let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 22];
         bindings[12..18].fill(raw::DescriptorType::STORAGE_IMAGE);
         bindings[21] = raw::DescriptorType::STORAGE_IMAGE;
+        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
         let pipeline = ComputePipeline::new(
             ctx,
             "deferred",
@@ -131,8 +133,8 @@ impl DeferredPass {
         params: &DeferredParams,
     ) -> Result<()> {
         let mut resources = vec![
-            Descriptor::Buffer(&scene.bvh.nodes),
-            Descriptor::Buffer(&scene.bvh.tris),
+            scene.bvh.descriptors()[0],
+            scene.bvh.descriptors()[1],
             Descriptor::Buffer(&scene.triangles),
             Descriptor::Buffer(&scene.vertices),
             Descriptor::Buffer(&scene.materials),

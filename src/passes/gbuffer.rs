@@ -12,6 +12,7 @@
 //! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
 //! with a compute-to-compute barrier.
 
+use crate::bvh::gpu::GpuBvh;
 use crate::error::Result;
 use crate::gpu::layout::GBufferParams;
 pub use crate::gpu::layout::GBUFFER_NO_SURFACE;
@@ -148,6 +149,7 @@ impl GBufferPass {
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
         let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
         bindings[9..].fill(raw::DescriptorType::STORAGE_IMAGE);
+        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
         let pipeline = ComputePipeline::new(
             ctx,
             "gbuffer",
@@ -177,8 +179,8 @@ impl GBufferPass {
         params: &GBufferParams,
     ) -> Result<()> {
         let mut resources = vec![
-            Descriptor::Buffer(&scene.bvh.nodes),
-            Descriptor::Buffer(&scene.bvh.tris),
+            scene.bvh.descriptors()[0],
+            scene.bvh.descriptors()[1],
             Descriptor::Buffer(&scene.triangles),
             Descriptor::Buffer(&scene.vertices),
             Descriptor::Buffer(&scene.materials),

@@ -1,6 +1,7 @@
 //! The progressive path-tracing pass (`spirv/pathtrace.comp`): one sample per pixel per
 //! dispatch into a running mean and second moment.
 
+use crate::bvh::gpu::GpuBvh;
 use crate::error::Result;
 use crate::gpu::layout::{PathParams, PathStats};
 use crate::gpu::scene::GpuScene;
@@ -80,11 +81,13 @@ impl PathTracePass {
         microfacet: Microfacet,
         heuristic: Heuristic,
     ) -> Result<Self> {
+        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 17];
+        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
         let pipeline = ComputePipeline::new(
             ctx,
             "pathtrace",
             &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_BUFFER; 17],
+                bindings: &bindings,
                 push_constant_size: std::mem::size_of::<PathParams>() as u32,
                 specialization: &[
                     (0, (microfacet == Microfacet::Beckmann) as u32),
@@ -131,8 +134,8 @@ impl PathTracePass {
         self.pipeline.record(
             cmd,
             &[
-                Descriptor::Buffer(&scene.bvh.nodes),
-                Descriptor::Buffer(&scene.bvh.tris),
+                scene.bvh.descriptors()[0],
+                scene.bvh.descriptors()[1],
                 Descriptor::Buffer(&scene.triangles),
                 Descriptor::Buffer(&scene.vertices),
                 Descriptor::Buffer(&scene.materials),

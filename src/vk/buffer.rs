@@ -150,6 +150,46 @@ impl Buffer {
     }
 }
 
+/// A view of a [`Buffer`] as a uniform texel buffer of one format (`usamplerBuffer` in GLSL).
+/// Create it with [`Buffer::texel_view`]; destroyed on drop.
+pub struct TexelView {
+    shared: Arc<Shared>,
+    /// The raw handle.
+    pub raw: vk::BufferView,
+}
+
+impl Buffer {
+    /// A uniform texel buffer view of the whole buffer as `format` texels of `texel_bytes` bytes
+    /// each. The buffer must have been created with `UNIFORM_TEXEL_BUFFER` usage; the texel count
+    /// must be within the device's `maxTexelBufferElements`.
+    pub fn texel_view(&self, format: vk::Format, texel_bytes: u64) -> Result<TexelView> {
+        let texels = self.size / texel_bytes;
+        let limit = self.shared.info.max_texel_buffer_elements as u64;
+        if texels > limit {
+            return Err(Error::Invalid(format!(
+                "buffer '{}' holds {texels} texels but device '{}' views at most {limit} per texel buffer",
+                self.name, self.shared.info.name
+            )));
+        }
+        let info = vk::BufferViewCreateInfo::default()
+            .buffer(self.raw)
+            .format(format)
+            .offset(0)
+            .range(texels * texel_bytes);
+        // SAFETY: a valid buffer; the view is destroyed in Drop, before anything frees the buffer
+        // that a pending submission could still read.
+        let raw = unsafe { self.shared.device.create_buffer_view(&info, None) }.call("vkCreateBufferView")?;
+        Ok(TexelView { shared: self.shared.clone(), raw })
+    }
+}
+
+impl Drop for TexelView {
+    fn drop(&mut self) {
+        // SAFETY: as for Buffer: no pending submission uses the view.
+        unsafe { self.shared.device.destroy_buffer_view(self.raw, None) };
+    }
+}
+
 impl Drop for Buffer {
     fn drop(&mut self) {
         // SAFETY: umbra waits for its submissions; a host recording umbra's work keeps the

@@ -56,6 +56,8 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     /// Largest storage-buffer binding, in bytes.
     pub max_storage_buffer_range: u64,
+    /// Largest number of texels one texel-buffer view addresses (`maxTexelBufferElements`).
+    pub max_texel_buffer_elements: u32,
     /// Largest 2D image side.
     pub max_image_dimension_2d: u32,
     /// Largest workgroup count per dimension.
@@ -500,6 +502,7 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) ->
         timestamp_period: p.limits.timestamp_period,
         timestamp_valid_bits: families.get(family as usize).map_or(0, |f| f.timestamp_valid_bits),
         max_storage_buffer_range: p.limits.max_storage_buffer_range as u64,
+        max_texel_buffer_elements: p.limits.max_texel_buffer_elements,
         max_image_dimension_2d: p.limits.max_image_dimension2_d,
         max_compute_work_group_count: p.limits.max_compute_work_group_count,
         subgroup_size: subgroup.subgroup_size,

@@ -9,7 +9,7 @@ mod image;
 mod pipeline;
 mod timer;
 
-pub use buffer::Buffer;
+pub use buffer::{Buffer, TexelView};
 pub use context::{Context, ContextDesc, DeviceInfo, HostDevice};
 pub use debug::ValidationLog;
 pub use image::Image;

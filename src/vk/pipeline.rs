@@ -7,6 +7,7 @@ use ash::vk;
 use std::sync::Arc;
 
 /// One resource bound by [`ComputePipeline::push_descriptors`], in binding order.
+#[derive(Clone, Copy)]
 pub enum Descriptor<'a> {
     /// A storage buffer.
     Buffer(&'a Buffer),
@@ -14,6 +15,8 @@ pub enum Descriptor<'a> {
     StorageImage(&'a Image),
     /// A view of a storage image in GENERAL layout that umbra does not own (a host engine's).
     StorageView(vk::ImageView),
+    /// A uniform texel buffer (`usamplerBuffer`).
+    Texels(&'a super::TexelView),
 }
 
 impl Descriptor<'_> {
@@ -21,6 +24,7 @@ impl Descriptor<'_> {
         match self {
             Descriptor::Buffer(_) => vk::DescriptorType::STORAGE_BUFFER,
             Descriptor::StorageImage(_) | Descriptor::StorageView(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Descriptor::Texels(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
         }
     }
 }
@@ -157,6 +161,13 @@ impl ComputePipeline {
                 _ => [vk::DescriptorImageInfo::default()],
             })
             .collect();
+        let views: Vec<[vk::BufferView; 1]> = resources
+            .iter()
+            .map(|r| match r {
+                Descriptor::Texels(v) => [v.raw],
+                _ => [vk::BufferView::null()],
+            })
+            .collect();
         let writes: Vec<_> = resources
             .iter()
             .enumerate()
@@ -165,6 +176,7 @@ impl ComputePipeline {
                 match r {
                     Descriptor::Buffer(_) => w.buffer_info(&buffers[i]),
                     Descriptor::StorageImage(_) | Descriptor::StorageView(_) => w.image_info(&images[i]),
+                    Descriptor::Texels(_) => w.texel_buffer_view(&views[i]),
                 }
             })
             .collect();

@@ -85,6 +85,9 @@ enum Command {
         /// Primary rays in row order instead of 8×8 tiles (what ray order costs).
         #[arg(long)]
         row_order: bool,
+        /// Only the `--gltf` scenes, not the generated terrains.
+        #[arg(long)]
+        no_terrain: bool,
     },
     /// GPU time per pass (G-buffer, deferred lighting, one path-traced sample per pixel) on one
     /// scene, median over repeats after a warm-up.
@@ -237,7 +240,7 @@ fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Rays { quick, size, repeats, sweep, gltf, out, row_order } => {
+        Command::Rays { quick, size, repeats, sweep, gltf, out, row_order, no_terrain } => {
             let ctx = Context::new(&ContextDesc::default())?;
             let device = ctx.info().name.clone();
             let (scenes, settings) = if quick {
@@ -251,7 +254,7 @@ fn run(cli: Cli) -> Result<()> {
                     RaySettings { size, repeats, builds: 5, sweep, row_order },
                 )
             };
-            let mut scenes = scenes;
+            let mut scenes = if no_terrain { Vec::new() } else { scenes };
             for path in &gltf {
                 scenes.push(gltf_scene(path)?);
             }

@@ -225,7 +225,9 @@ fn failed_submissions_name_the_last_pass() {
         eprintln!("{message}");
         match &err {
             Error::Vulkan { call: "vkQueueSubmit2", result, pass: Some(pass) } => {
-                assert_eq!((*result, pass.as_str()), (fault, expected), "{message}");
+                // Nothing reached the GPU, so its breadcrumb is empty: the last pass recorded.
+                assert_eq!((*result, pass.split(',').next()), (fault, Some(expected)), "{message}");
+                assert!(pass.ends_with("the last pass recorded; the submission never reached the GPU"));
             }
             other => panic!("expected a Vulkan error naming {expected}: {other}"),
         }

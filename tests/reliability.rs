@@ -261,8 +261,9 @@ fn failed_submissions_name_the_last_pass() {
 
 /// The GPU-written breadcrumb: a kernel that hangs until the host releases it, recorded between
 /// two quick ones into one submission, makes `submit` time out naming the hanging kernel as the
-/// one running on the GPU (dispatch 2 of 3, the first finished), not the last one recorded.
-/// Released, the GPU finishes the work (the third dispatch's output is right), and the
+/// one running on the GPU (dispatch 2 of 3, the first finished), not the last one recorded;
+/// waiting for the held submission times out too, naming the same pass. Released, the GPU
+/// finishes the work (the third dispatch's output is right), and the
 /// submission's fence, pool and breadcrumb, kept while it ran, are freed without a validation
 /// message.
 #[test]
@@ -315,9 +316,13 @@ fn a_hung_submission_names_the_pass_the_gpu_was_running() {
         // Whatever happens, the host releases the GPU: a missing timeout fails, never hangs.
         let result = receiver.recv_timeout(Duration::from_secs(60));
         let waited = started.elapsed();
+        // Still held: waiting for the abandoned submission times out too, naming the same pass.
+        gpu.set_submit_timeout(Duration::from_millis(200));
+        let still = gpu.wait_idle();
         release.store(1, Ordering::SeqCst);
-        (result, waited)
+        (result, (waited, still))
     });
+    let (waited, still) = waited;
     let err = match result {
         Ok(Err(e)) => e,
         Ok(Ok(())) => panic!("the submission finished although the kernel was never released"),
@@ -334,6 +339,12 @@ fn a_hung_submission_names_the_pass_the_gpu_was_running() {
     }
     assert!(message.starts_with("GPU work did not finish within 1.5 s (pass spin_test"), "{message}");
     assert!(waited >= timeout && waited < Duration::from_secs(30), "{waited:?}");
+    match still {
+        Err(Error::Timeout { pass: Some(pass), .. }) => {
+            assert!(pass.starts_with("spin_test, dispatch 2 of 3"))
+        }
+        other => panic!("expected waiting for the held submission to time out: {other:?}"),
+    }
 
     // Released, the GPU finishes; the abandoned submission is reclaimed.
     gpu.set_submit_timeout(Duration::from_secs(600));

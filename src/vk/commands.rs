@@ -34,11 +34,8 @@ impl Context {
     pub fn wait_idle(&self) -> Result<()> {
         let timeout_ns = self.shared.submit_timeout_ns.load(Ordering::Relaxed);
         match self.shared.reclaim(Some(timeout_ns))? {
-            0 => Ok(()),
-            running => Err(Error::Timeout {
-                seconds: timeout_ns as f64 * 1e-9,
-                pass: Some(format!("{running} abandoned submission(s) still running")),
-            }),
+            (0, _) => Ok(()),
+            (_, pass) => Err(Error::Timeout { seconds: timeout_ns as f64 * 1e-9, pass }),
         }
     }
 
@@ -154,6 +151,7 @@ impl Context {
                     fence,
                     pool,
                     crumb,
+                    passes: trail.map(|t| t.passes).unwrap_or_default(),
                 });
             } else {
                 // Finished, failed, or never submitted: nothing of it is in use.

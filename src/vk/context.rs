@@ -1,6 +1,6 @@
 //! The Vulkan context: umbra's own headless instance and device, or a host engine's handles.
 
-use super::breadcrumb::{CrumbBuffer, Trail};
+use super::breadcrumb::{describe, CrumbBuffer, Trail};
 use super::commands::DEFAULT_SUBMIT_TIMEOUT;
 use super::debug::{messenger_info, ValidationLog};
 use crate::error::{Error, Result, VkContext};
@@ -109,6 +109,8 @@ pub(crate) struct Abandoned {
     pub fence: vk::Fence,
     pub pool: vk::CommandPool,
     pub crumb: Option<CrumbBuffer>,
+    /// The kernels it dispatched, to name where it still is.
+    pub passes: Vec<&'static str>,
 }
 
 impl Shared {
@@ -130,11 +132,12 @@ impl Shared {
     }
 
     /// Frees the abandoned submissions the GPU has finished, first waiting up to `wait`
-    /// nanoseconds for all of them when given; returns how many are still running.
-    pub fn reclaim(&self, wait: Option<u64>) -> Result<usize> {
+    /// nanoseconds for all of them when given; returns how many are still running and, from the
+    /// breadcrumb, where the first of them is.
+    pub fn reclaim(&self, wait: Option<u64>) -> Result<(usize, Option<String>)> {
         let mut abandoned = self.abandoned.lock().unwrap_or_else(|p| p.into_inner());
         if abandoned.is_empty() {
-            return Ok(0);
+            return Ok((0, None));
         }
         if let Some(timeout_ns) = wait {
             let fences: Vec<_> = abandoned.iter().map(|a| a.fence).collect();
@@ -159,8 +162,9 @@ impl Shared {
                 running.push(a);
             }
         }
+        let first = running.first().and_then(|a| describe(&a.passes, &a.crumb.as_ref()?.slots()));
         *abandoned = running;
-        Ok(abandoned.len())
+        Ok((abandoned.len(), first))
     }
 }
 

@@ -14,6 +14,11 @@
 //! waiting for the fence: that is the point, and the memory is host-coherent; the reading is
 //! best-effort diagnostics, never used for anything but the message.
 //!
+//! Cost on lavapipe: no difference above the noise in `umbra-bench passes` (ms-long passes);
+//! about 0.3–1 µs per dispatch in a submission of 200 tiny dispatches (~13 µs each). On a real
+//! GPU the barrier also ends the overlap of back-to-back dispatches that had no barrier between
+//! them (umbra's passes already put one after each).
+//!
 //! A host's own command buffers (recording through [`crate::embed`]) get no breadcrumb: there
 //! the host owns diagnostics and [`super::Context::last_pass`] names the last pass recorded.
 

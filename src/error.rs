@@ -26,7 +26,11 @@ pub enum Error {
         call: &'static str,
         /// Its result code.
         result: vk::Result,
-        /// The last pass recorded into the failed submission, if known (the pass marker).
+        /// The pass of the failed submission, when known: the kernel name first, then where it
+        /// stood. From the GPU-written breadcrumb of [`crate::vk::Context::submit`], the first
+        /// dispatch the GPU had not finished (`"ssao, dispatch 2 of 4: running or next to run on
+        /// the GPU; 1 finished"`); when the work never reached the GPU, the last pass recorded
+        /// (`"pathtrace, the last pass recorded; the submission never reached the GPU"`).
         pass: Option<String>,
     },
     /// Device memory could not be allocated.
@@ -67,10 +71,19 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// Submitted GPU work did not finish within the context's submit timeout
+    /// ([`crate::vk::Context::set_submit_timeout`]).
+    #[error("GPU work did not finish within {seconds} s{}", pass_hint(.pass))]
+    Timeout {
+        /// The timeout, in seconds.
+        seconds: f64,
+        /// The pass the GPU was running, from the breadcrumb (as in [`Error::Vulkan`]).
+        pass: Option<String>,
+    },
 }
 
 fn pass_hint(pass: &Option<String>) -> String {
-    pass.as_ref().map(|p| format!(" (last pass recorded: {p})")).unwrap_or_default()
+    pass.as_ref().map(|p| format!(" (pass {p})")).unwrap_or_default()
 }
 
 /// Turns an `ash` result into [`Error::Vulkan`] naming the call.

@@ -5,7 +5,9 @@
 mod common;
 
 use common::Gpu;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Mutex;
+use std::time::{Duration, Instant};
 use umbra::environment::EnvironmentMap;
 use umbra::gpu::scene::{GpuScene, SceneArrays};
 
@@ -14,7 +16,8 @@ use umbra::passes::pathtrace::{PathTarget, PathTracePass};
 use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
 use umbra::scene::{Material, Sampler, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
 
-use umbra::vk::{barrier, raw, Buffer, MemoryLocation};
+use umbra::gpu::layout::BufferTestParams;
+use umbra::vk::{barrier, raw, Buffer, ComputePipeline, Descriptor, MemoryLocation, PipelineDesc};
 use umbra::Error;
 
 /// Every warning logged in this test binary (tests run in parallel: filter by a unique name).
@@ -236,7 +239,9 @@ fn failed_submissions_name_the_last_pass() {
         eprintln!("{message}");
         match &err {
             Error::Vulkan { call: "vkQueueSubmit2", result, pass: Some(pass) } => {
-                assert_eq!((*result, pass.as_str()), (fault, expected), "{message}");
+                // Nothing reached the GPU, so its breadcrumb is empty: the last pass recorded.
+                assert_eq!((*result, pass.split(',').next()), (fault, Some(expected)), "{message}");
+                assert!(pass.ends_with("the last pass recorded; the submission never reached the GPU"));
             }
             other => panic!("expected a Vulkan error naming {expected}: {other}"),
         }
@@ -263,6 +268,107 @@ fn failed_submissions_name_the_last_pass() {
         Err(e) => panic!("expected an allocation error, got {e}"),
         Ok(_) => panic!("allocated 2^50 bytes"),
     }
+}
+
+/// The GPU-written breadcrumb: a kernel that hangs until the host releases it, recorded between
+/// two quick ones into one submission, makes `submit` time out naming the hanging kernel as the
+/// one running on the GPU (dispatch 2 of 3, the first finished), not the last one recorded;
+/// waiting for the held submission times out too, naming the same pass. Released, the GPU
+/// finishes the work (the third dispatch's output is right), and the
+/// submission's fence, pool and breadcrumb, kept while it ran, are freed without a validation
+/// message.
+#[test]
+fn a_hung_submission_names_the_pass_the_gpu_was_running() {
+    let gpu = Gpu::new();
+    let buffers = [raw::DescriptorType::STORAGE_BUFFER; 2];
+    let desc = PipelineDesc { bindings: &buffers, push_constant_size: 8, specialization: &[] };
+    let quick = ComputePipeline::new(&gpu, "test_buffer", &desc).unwrap();
+    let desc = PipelineDesc { bindings: &buffers[..1], ..Default::default() };
+    let spin = ComputePipeline::new(&gpu, "spin_test", &desc).unwrap();
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
+    let input: Vec<u32> = (0..64).collect();
+    let input = Buffer::upload(&gpu, "quick input", &input, usage).unwrap();
+    let outputs =
+        [0, 1].map(|i| Buffer::upload(&gpu, &format!("quick output {i}"), &[0u32; 64], usage).unwrap());
+    let mut flag = Buffer::new(&gpu, "spin flag", 12, usage, MemoryLocation::CpuToGpu).unwrap();
+    flag.mapped_mut().unwrap().fill(0);
+    // SAFETY: a host-visible, coherent mapping of at least 4 bytes, alive as long as `flag`;
+    // the kernel reads it only atomically.
+    let release = unsafe { &*(flag.mapped_mut().unwrap().as_mut_ptr() as *const AtomicU32) };
+
+    let timeout = Duration::from_millis(1500);
+    gpu.set_submit_timeout(timeout);
+    assert_eq!(gpu.submit_timeout(), timeout);
+    let started = Instant::now();
+    let (sender, receiver) = std::sync::mpsc::channel();
+    let (result, waited) = std::thread::scope(|s| {
+        s.spawn(|| {
+            let result = gpu.submit(|cmd| {
+                for (k, output) in outputs.iter().enumerate() {
+                    quick.bind(cmd);
+                    quick.push_descriptors(cmd, &[Descriptor::Buffer(&input), Descriptor::Buffer(output)])?;
+                    quick.push_constants(cmd, &BufferTestParams { count: 64, add: k as u32 })?;
+                    quick.dispatch(cmd, [64, 1, 1], [64, 1, 1])?;
+                    barrier::compute_to_compute(&gpu, cmd);
+                    if k == 0 {
+                        // 1024 workgroups of 64: on lavapipe (where an invocation's loops end
+                        // after 65535 iterations) ~80 ms each on one core, 40 s on two, if
+                        // never released; released, they all end within milliseconds.
+                        spin.bind(cmd);
+                        spin.push_descriptors(cmd, &[Descriptor::Buffer(&flag)])?;
+                        spin.dispatch(cmd, [1024 * 64, 1, 1], [64, 1, 1])?;
+                        barrier::compute_to_compute(&gpu, cmd);
+                    }
+                }
+                Ok(())
+            });
+            let _ = sender.send(result);
+        });
+        // Whatever happens, the host releases the GPU: a missing timeout fails, never hangs.
+        let result = receiver.recv_timeout(Duration::from_secs(60));
+        let waited = started.elapsed();
+        // Still held: waiting for the abandoned submission times out too, naming the same pass.
+        gpu.set_submit_timeout(Duration::from_millis(200));
+        let still = gpu.wait_idle();
+        release.store(1, Ordering::SeqCst);
+        (result, (waited, still))
+    });
+    let (waited, still) = waited;
+    let err = match result {
+        Ok(Err(e)) => e,
+        Ok(Ok(())) => panic!("the submission finished although the kernel was never released"),
+        Err(_) => panic!("submit did not return within 60 s despite its {timeout:?} timeout"),
+    };
+    let message = err.to_string();
+    eprintln!("{message} (after {waited:?})");
+    match &err {
+        Error::Timeout { seconds, pass: Some(pass) } => {
+            assert_eq!(*seconds, 1.5);
+            assert_eq!(pass, "spin_test, dispatch 2 of 3: running or next to run on the GPU; 1 finished");
+        }
+        other => panic!("expected a timeout naming spin_test: {other}"),
+    }
+    assert!(message.starts_with("GPU work did not finish within 1.5 s (pass spin_test"), "{message}");
+    assert!(waited >= timeout && waited < Duration::from_secs(30), "{waited:?}");
+    match still {
+        Err(Error::Timeout { pass: Some(pass), .. }) => {
+            assert!(pass.starts_with("spin_test, dispatch 2 of 3"))
+        }
+        other => panic!("expected waiting for the held submission to time out: {other:?}"),
+    }
+
+    // Released, the GPU finishes; the abandoned submission is reclaimed.
+    gpu.set_submit_timeout(Duration::from_secs(600));
+    let released_at = Instant::now();
+    gpu.wait_idle().unwrap();
+    eprintln!("the GPU finished {:?} after its release", released_at.elapsed());
+    let [_, spun, released] = flag.read::<u32>(&gpu).unwrap()[..] else { panic!("3 words") };
+    assert_eq!(released, 1, "the kernel ran until the host released it ({spun} iterations)");
+    let expected: Vec<u32> = (0..64).map(|v| 3 * v + 1).collect();
+    assert_eq!(outputs[1].read::<u32>(&gpu).unwrap(), expected, "the dispatch after the spin ran");
+    // A later submission finishes normally.
+    let out: Vec<u32> = outputs[0].read(&gpu).unwrap();
+    assert_eq!(out, (0..64).map(|v| 3 * v).collect::<Vec<_>>());
 }
 
 /// Hybrid renders are deterministic: the same seeds give the same bytes (colour and display),

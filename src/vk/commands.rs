@@ -1,26 +1,87 @@
 //! Recording and submitting one-off command buffers on umbra's own queue.
 
+use super::breadcrumb::{self, CrumbBuffer, Trail};
+use super::context::Abandoned;
 use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
 
-/// How long a submission may run before umbra reports it instead of waiting forever.
-const SUBMIT_TIMEOUT_NS: u64 = 600 * 1_000_000_000;
+/// How long a submission may run, by default, before umbra reports it instead of waiting forever.
+pub(crate) const DEFAULT_SUBMIT_TIMEOUT: Duration = Duration::from_secs(600);
 
 impl Context {
+    /// Sets how long [`Context::submit`] waits for the GPU before it gives up with
+    /// [`Error::Timeout`] naming the pass the GPU was running (default 600 s): a watchdog for
+    /// hosts with a frame budget and for tests. Applies to every clone of this context.
+    ///
+    /// A submission that timed out may still be running: its command pool, fence and breadcrumb
+    /// are kept until it finishes. Before dropping resources its work uses, make it finish and
+    /// call [`Context::wait_idle`].
+    pub fn set_submit_timeout(&self, timeout: Duration) {
+        let ns = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
+        self.shared.submit_timeout_ns.store(ns, Ordering::Relaxed);
+    }
+
+    /// The timeout of [`Context::submit`] (see [`Context::set_submit_timeout`]).
+    pub fn submit_timeout(&self) -> Duration {
+        Duration::from_nanos(self.shared.submit_timeout_ns.load(Ordering::Relaxed))
+    }
+
+    /// Waits, up to the submit timeout, until every submission [`Context::submit`] gave up on
+    /// has finished on the GPU, and frees what they held. Returns at once when there is none.
+    pub fn wait_idle(&self) -> Result<()> {
+        let timeout_ns = self.shared.submit_timeout_ns.load(Ordering::Relaxed);
+        match self.shared.reclaim(Some(timeout_ns))? {
+            (0, _) => Ok(()),
+            (_, pass) => Err(Error::Timeout { seconds: timeout_ns as f64 * 1e-9, pass }),
+        }
+    }
+
     /// Records `record` into a fresh primary command buffer, submits it and waits for it.
     ///
     /// Each call has its own command pool, so threads may call this concurrently; the queue
     /// itself is locked only for the submission.
+    ///
+    /// The command buffer carries a GPU-written breadcrumb: after each kernel dispatched into
+    /// it (through [`super::ComputePipeline::dispatch`]; the first 256), the GPU marks that
+    /// dispatch finished in a small host-visible buffer. When waiting fails (a lost device, or
+    /// no completion within [`Context::submit_timeout`]), the error names the first dispatch
+    /// the GPU had not finished: the pass that was running. When the work never reached the GPU
+    /// (a failed `vkQueueSubmit2`), it names the last pass recorded.
     pub fn submit<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
-        let device = &self.shared.device;
+        let shared = &self.shared;
+        let device = &shared.device;
+        // Free what earlier timed-out submissions held, where the GPU has finished them.
+        let _ = shared.reclaim(None);
+        let crumb = shared.crumbs.lock().unwrap_or_else(|p| p.into_inner()).pop();
+        let crumb = match crumb {
+            Some(c) => Some(c),
+            None => CrumbBuffer::new(shared)
+                .inspect_err(|e| log::warn!("umbra: no pass breadcrumb for this submission: {e}"))
+                .ok(),
+        };
+        if let Some(c) = &crumb {
+            c.zero();
+        }
+        let timeout_ns = shared.submit_timeout_ns.load(Ordering::Relaxed);
         let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(self.shared.queue_family)
+            .queue_family_index(shared.queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-        // SAFETY: valid device; the pool, fence and command buffer are destroyed below.
+        // SAFETY: valid device; the pool, fence and command buffer are destroyed below, or kept
+        // in `abandoned` until the GPU has finished with them.
         unsafe {
-            let pool = device.create_command_pool(&pool_info, None).call("vkCreateCommandPool")?;
-            let mut still_running = false;
+            let pool = match device.create_command_pool(&pool_info, None).call("vkCreateCommandPool") {
+                Ok(pool) => pool,
+                Err(e) => {
+                    shared.crumbs.lock().unwrap_or_else(|p| p.into_inner()).extend(crumb);
+                    return Err(e);
+                }
+            };
+            let mut fence = vk::Fence::null();
+            let mut submitted = false;
+            let mut timed_out = false;
             let mut recorded = None;
             let result = (|| {
                 let cmd = device
@@ -32,6 +93,10 @@ impl Context {
                     )
                     .call("vkAllocateCommandBuffers")?[0];
                 recorded = Some(cmd);
+                if let Some(c) = &crumb {
+                    let trail = Trail { buffer: c.raw, passes: Vec::new() };
+                    shared.trails.lock().unwrap_or_else(|p| p.into_inner()).insert(cmd, trail);
+                }
                 device
                     .begin_command_buffer(
                         cmd,
@@ -41,52 +106,58 @@ impl Context {
                     .call("vkBeginCommandBuffer")?;
                 let value = record(cmd)?;
                 device.end_command_buffer(cmd).call("vkEndCommandBuffer")?;
-                let fence =
-                    device.create_fence(&vk::FenceCreateInfo::default(), None).call("vkCreateFence")?;
+                fence = device.create_fence(&vk::FenceCreateInfo::default(), None).call("vkCreateFence")?;
                 let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
                 let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-                let injected = self.shared.injected_fault.lock().unwrap_or_else(|p| p.into_inner()).take();
-                let submitted = match injected {
-                    Some(fault) => Err(fault).call("vkQueueSubmit2"),
+                let injected = shared.injected_fault.lock().unwrap_or_else(|p| p.into_inner()).take();
+                match injected {
+                    Some(fault) => Err(fault).call("vkQueueSubmit2")?,
                     None => {
-                        let queue = self.shared.queue.lock().unwrap_or_else(|p| p.into_inner());
-                        device.queue_submit2(*queue, &submit, fence).call("vkQueueSubmit2")
+                        let queue = shared.queue.lock().unwrap_or_else(|p| p.into_inner());
+                        device.queue_submit2(*queue, &submit, fence).call("vkQueueSubmit2")?
                     }
-                };
-                let waited = submitted.and_then(|()| {
-                    match device.wait_for_fences(&[fence], true, SUBMIT_TIMEOUT_NS) {
-                        Err(vk::Result::TIMEOUT) => Err(Error::Invalid(format!(
-                            "GPU work did not finish within {} s",
-                            SUBMIT_TIMEOUT_NS / 1_000_000_000
-                        ))),
-                        other => other.call("vkWaitForFences"),
-                    }
-                });
-                if let Err(Error::Invalid(message)) = waited {
-                    // Still running: leak the fence and pool rather than free them under the GPU.
-                    still_running = true;
-                    return Err(Error::Invalid(match self.last_pass(cmd) {
-                        Some(pass) => format!("{message} (last pass recorded: {pass})"),
-                        None => message,
-                    }));
                 }
-                device.destroy_fence(fence, None);
-                waited.map(|()| value)
+                submitted = true;
+                match device.wait_for_fences(&[fence], true, timeout_ns) {
+                    Err(vk::Result::TIMEOUT) => {
+                        timed_out = true;
+                        Err(Error::Timeout { seconds: timeout_ns as f64 * 1e-9, pass: None })
+                    }
+                    other => other.call("vkWaitForFences").map(|()| value),
+                }
             })();
-            // The pass marker: a Vulkan error names the last pass recorded before it.
-            let pass = recorded.and_then(|cmd| self.last_pass(cmd));
-            let result = result.map_err(|e| match e {
-                Error::Vulkan { call, result, pass: None } => {
-                    Error::Vulkan { call, result, pass: pass.map(String::from) }
-                }
-                other => other,
-            });
+            let trail =
+                recorded.and_then(|cmd| shared.trails.lock().unwrap_or_else(|p| p.into_inner()).remove(&cmd));
+            let last = recorded.and_then(|cmd| self.last_pass(cmd));
             if let Some(cmd) = recorded {
                 self.clear_pass(cmd);
             }
-            // A recording that failed never reached the queue: its pool goes too.
-            if !still_running {
+            // Name the pass: where the GPU got to when it ran the work, else the last recorded.
+            let name_pass = || match (submitted, &trail, &crumb) {
+                (true, Some(trail), Some(crumb)) => breadcrumb::describe(&trail.passes, &crumb.slots()),
+                (false, _, _) => last.map(breadcrumb::never_submitted),
+                _ => last.map(|p| format!("{p}, the last pass recorded")),
+            };
+            let result = result.map_err(|e| match e {
+                Error::Vulkan { call, result, pass: None } => {
+                    Error::Vulkan { call, result, pass: name_pass() }
+                }
+                Error::Timeout { seconds, pass: None } => Error::Timeout { seconds, pass: name_pass() },
+                other => other,
+            });
+            if timed_out {
+                // Still running: keep the fence, pool and breadcrumb until the GPU is done.
+                shared.abandoned.lock().unwrap_or_else(|p| p.into_inner()).push(Abandoned {
+                    fence,
+                    pool,
+                    crumb,
+                    passes: trail.map(|t| t.passes).unwrap_or_default(),
+                });
+            } else {
+                // Finished, failed, or never submitted: nothing of it is in use.
+                device.destroy_fence(fence, None);
                 device.destroy_command_pool(pool, None);
+                shared.crumbs.lock().unwrap_or_else(|p| p.into_inner()).extend(crumb);
             }
             result
         }

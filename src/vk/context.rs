@@ -1,5 +1,7 @@
 //! The Vulkan context: umbra's own headless instance and device, or a host engine's handles.
 
+use super::breadcrumb::{describe, CrumbBuffer, Trail};
+use super::commands::DEFAULT_SUBMIT_TIMEOUT;
 use super::debug::{messenger_info, ValidationLog};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
@@ -8,6 +10,7 @@ use gpu_allocator::{AllocationSizes, AllocatorDebugSettings};
 use std::collections::HashMap;
 use std::ffi::CStr;
 use std::mem::ManuallyDrop;
+use std::sync::atomic::AtomicU64;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
@@ -91,6 +94,25 @@ pub(crate) struct Shared {
     pub passes: Mutex<HashMap<vk::CommandBuffer, &'static str>>,
     /// A failure the next [`Context::submit`] reports instead of submitting (tests only).
     pub injected_fault: Mutex<Option<vk::Result>>,
+    /// The GPU-written breadcrumb of each command buffer [`Context::submit`] is recording or
+    /// has submitted (see [`super::breadcrumb`]); a host's command buffers have none.
+    pub trails: Mutex<HashMap<vk::CommandBuffer, Trail>>,
+    /// Breadcrumb buffers no submission uses, for the next ones.
+    pub crumbs: Mutex<Vec<CrumbBuffer>>,
+    /// Submissions a timeout gave up on while the GPU still ran them: freed once their fence
+    /// signals ([`Context::wait_idle`], the next submit, or the context's drop).
+    pub abandoned: Mutex<Vec<Abandoned>>,
+    /// [`Context::submit`]'s timeout in nanoseconds.
+    pub submit_timeout_ns: AtomicU64,
+}
+
+/// What a timed-out submission holds until the GPU is done with it.
+pub(crate) struct Abandoned {
+    pub fence: vk::Fence,
+    pub pool: vk::CommandPool,
+    pub crumb: Option<CrumbBuffer>,
+    /// The kernels it dispatched, to name where it still is.
+    pub passes: Vec<&'static str>,
 }
 
 impl Shared {
@@ -102,6 +124,50 @@ impl Shared {
     pub fn mark_pass(&self, cmd: vk::CommandBuffer, pass: &'static str) {
         self.passes.lock().unwrap_or_else(|p| p.into_inner()).insert(cmd, pass);
     }
+
+    /// Writes the breadcrumb of the dispatch of `pass` just recorded into `cmd`, if `cmd` is one
+    /// of [`Context::submit`]'s command buffers.
+    pub fn breadcrumb(&self, cmd: vk::CommandBuffer, pass: &'static str) {
+        if let Some(trail) = self.trails.lock().unwrap_or_else(|p| p.into_inner()).get_mut(&cmd) {
+            trail.after_dispatch(&self.device, cmd, pass);
+        }
+    }
+
+    /// Frees the abandoned submissions the GPU has finished, first waiting up to `wait`
+    /// nanoseconds for all of them when given; returns how many are still running and, from the
+    /// breadcrumb, where the first of them is.
+    pub fn reclaim(&self, wait: Option<u64>) -> Result<(usize, Option<String>)> {
+        let mut abandoned = self.abandoned.lock().unwrap_or_else(|p| p.into_inner());
+        if abandoned.is_empty() {
+            return Ok((0, None));
+        }
+        if let Some(timeout_ns) = wait {
+            let fences: Vec<_> = abandoned.iter().map(|a| a.fence).collect();
+            // SAFETY: valid fences of this device.
+            match unsafe { self.device.wait_for_fences(&fences, true, timeout_ns) } {
+                Ok(()) | Err(vk::Result::TIMEOUT) => {}
+                Err(e) => return Err(e).call("vkWaitForFences"),
+            }
+        }
+        let mut running = Vec::new();
+        for a in abandoned.drain(..) {
+            // SAFETY: a valid fence; once signalled, nothing of the submission is in use.
+            if unsafe { self.device.get_fence_status(a.fence) } == Ok(true) {
+                unsafe {
+                    self.device.destroy_fence(a.fence, None);
+                    self.device.destroy_command_pool(a.pool, None);
+                }
+                if let Some(crumb) = a.crumb {
+                    self.crumbs.lock().unwrap_or_else(|p| p.into_inner()).push(crumb);
+                }
+            } else {
+                running.push(a);
+            }
+        }
+        let first = running.first().and_then(|a| describe(&a.passes, &a.crumb.as_ref()?.slots()));
+        *abandoned = running;
+        Ok((abandoned.len(), first))
+    }
 }
 
 impl Drop for Shared {
@@ -110,6 +176,16 @@ impl Drop for Shared {
         // queue, then destroy in reverse order of creation: cache, allocator, device, instance.
         unsafe {
             let _ = self.device.device_wait_idle();
+            let abandoned = std::mem::take(self.abandoned.get_mut().unwrap_or_else(|p| p.into_inner()));
+            let mut crumbs = std::mem::take(self.crumbs.get_mut().unwrap_or_else(|p| p.into_inner()));
+            for a in abandoned {
+                self.device.destroy_fence(a.fence, None);
+                self.device.destroy_command_pool(a.pool, None);
+                crumbs.extend(a.crumb);
+            }
+            for crumb in crumbs {
+                crumb.destroy(self);
+            }
             self.device.destroy_pipeline_cache(self.pipeline_cache, None);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owned {
@@ -284,6 +360,10 @@ impl Context {
                 owned,
                 passes: Mutex::new(HashMap::new()),
                 injected_fault: Mutex::new(None),
+                trails: Mutex::new(HashMap::new()),
+                crumbs: Mutex::new(Vec::new()),
+                abandoned: Mutex::new(Vec::new()),
+                submit_timeout_ns: AtomicU64::new(DEFAULT_SUBMIT_TIMEOUT.as_nanos() as u64),
             }),
         })
     }
@@ -295,8 +375,9 @@ impl Context {
 
     /// The pass marker of `cmd`: the kernel of the last pass recorded into it (each
     /// [`super::ComputePipeline::dispatch`] sets it). A host that records umbra's passes into its
-    /// own command buffer can name the pass when its submission fails; umbra's own
-    /// [`Context::submit`] puts it into every Vulkan error it returns.
+    /// own command buffer can name the pass when its submission fails. umbra's own
+    /// [`Context::submit`] names the pass the GPU was running instead (its breadcrumb), and this
+    /// one only when the work never reached the GPU.
     pub fn last_pass(&self, cmd: vk::CommandBuffer) -> Option<&'static str> {
         self.shared.passes.lock().unwrap_or_else(|p| p.into_inner()).get(&cmd).copied()
     }

@@ -1,6 +1,7 @@
 //! The thin Vulkan layer: only what umbra uses.
 
 pub mod barrier;
+mod breadcrumb;
 mod buffer;
 mod commands;
 mod context;

@@ -228,7 +228,9 @@ impl ComputePipeline {
         self.dispatch(cmd, size, local)
     }
 
-    /// Dispatches enough `local`-sized workgroups to cover `size` invocations.
+    /// Dispatches enough `local`-sized workgroups to cover `size` invocations. Sets the pass
+    /// marker ([`Context::last_pass`]) and, in a command buffer of [`Context::submit`], records
+    /// the GPU-written breadcrumb after the dispatch (an execution barrier and a 4-byte fill).
     pub fn dispatch(&self, cmd: vk::CommandBuffer, size: [u32; 3], local: [u32; 3]) -> Result<()> {
         let groups: [u32; 3] = std::array::from_fn(|i| size[i].div_ceil(local[i].max(1)));
         let max = self.shared.info.max_compute_work_group_count;
@@ -241,6 +243,7 @@ impl ComputePipeline {
         self.shared.mark_pass(cmd, self.name);
         // SAFETY: recording into a command buffer in the recording state.
         unsafe { self.shared.device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+        self.shared.breadcrumb(cmd, self.name);
         Ok(())
     }
 }

@@ -5,7 +5,7 @@
 // hit up to ties in t.
 //
 // The including kernel declares, before including this file, the BVH as two uniform texel
-// buffers of RGBA32UI (`GpuBvhNode`s as four texels each, `BvhTri`s as three):
+// buffers of RGBA32UI (`GpuBvhNode`s as eight texels each, `BvhTri`s as three):
 //   uniform usamplerBuffer bvh_node_texels;
 //   uniform usamplerBuffer bvh_tri_texels;
 // Texel fetches rather than storage buffers: on llvmpipe (Mesa 22) a storage-buffer load is a
@@ -24,8 +24,8 @@ const float BVH_INF = uintBitsToFloat(0x7f800000u);
 
 // Child c of GPU node n: (aabb_min, index) and (aabb_max, count). count 0: an inner node (index
 // is its GPU node); BVH_NO_CHILD: absent; otherwise a leaf of `count` triangles from `index`.
-uvec4 bvh_child_lo(uint n, uint c) { return texelFetch(bvh_node_texels, int(4u * n + 2u * c)); }
-uvec4 bvh_child_hi(uint n, uint c) { return texelFetch(bvh_node_texels, int(4u * n + 2u * c + 1u)); }
+uvec4 bvh_child_lo(uint n, uint c) { return texelFetch(bvh_node_texels, int(8u * n + 2u * c)); }
+uvec4 bvh_child_hi(uint n, uint c) { return texelFetch(bvh_node_texels, int(8u * n + 2u * c + 1u)); }
 const uint BVH_NO_CHILD = 0xffffffffu;
 // Vertex k of triangle i (BVH order); w: v0's original index, v1's alpha-mode bits.
 vec4 bvh_tri_v(uint i, uint k) { return uintBitsToFloat(texelFetch(bvh_tri_texels, int(3u * i + k))); }
@@ -67,7 +67,6 @@ BvhRay bvh_ray(vec3 origin, vec3 dir) {
     return r;
 }
 
-// Watertight test against triangle i: true with t in (tmin, tmax) and the barycentrics.
 // Offsets a ray origin off the surface along n by a few ulps (Wächter and Binder, Ray Tracing
 // Gems ch. 6), so the new ray neither re-hits its own triangle nor tunnels through a neighbour.
 vec3 offset_ray(vec3 p, vec3 n) {
@@ -76,9 +75,18 @@ vec3 offset_ray(vec3 p, vec3 n) {
     return mix(p_i, p + (1.0 / 65536.0) * n, lessThan(abs(p), vec3(1.0 / 32.0)));
 }
 
-bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary) {
-    // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
-    precise vec3 a = bvh_tri_v(i, 0u).xyz - r.origin;
+// The next float above x (Rust's f32::next_up for finite x).
+float bvh_next_up(float x) {
+    uint bits = floatBitsToUint(x);
+    return x > 0.0 ? uintBitsToFloat(bits + 1u) : (x == 0.0 ? uintBitsToFloat(1u) : uintBitsToFloat(bits - 1u));
+}
+
+// Watertight test against triangle i: true with t in (tmin, tmax), the barycentrics, and the
+// triangle's index in the input (`order`, which breaks ties between equally near hits).
+bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary, out uint order) {
+    vec4 v0 = bvh_tri_v(i, 0u);
+    order = floatBitsToUint(v0.w);
+    precise vec3 a = v0.xyz - r.origin;
     precise vec3 b = bvh_tri_v(i, 1u).xyz - r.origin;
     precise vec3 c = bvh_tri_v(i, 2u).xyz - r.origin;
     precise float ax = a[r.kx] - r.shear.x * a[r.kz];
@@ -117,8 +125,9 @@ float bvh_slab(BvhRay r, uvec4 lo, uvec4 hi, float tmin, float tmax) {
     vec3 near3 = min(t0, t1);
     vec3 far3 = max(t0, t1);
     float near = max(max(near3.x, near3.y), max(near3.z, tmin));
-    float far = min(min(far3.x, far3.y), far3.z) * BVH_SLAB_ROBUST;
-    far = min(far, tmax);
+    // tmax is scaled too: a box whose entry rounds just past the nearest hit so far (a hit on its
+    // face, as on every axis-aligned wall) is still visited, for the tie rule of bvh_trace.
+    float far = min(min(min(far3.x, far3.y), far3.z), tmax) * BVH_SLAB_ROBUST;
     return near <= far && hi.w != BVH_NO_CHILD ? near : BVH_INF;
 }
 
@@ -130,11 +139,27 @@ float bvh_slab(BvhRay r, uvec4 lo, uvec4 hi, float tmin, float tmax) {
 bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir);
 #endif
 
-// Front-to-back traversal with t in (tmin, tmax); any_hit stops at the first hit found.
-// Each step tests both children of a GPU node, then the triangles of those that are leaves and
-// were hit, then descends into the nearer inner child hit, pushing the farther. Leaves cost no
-// step of their own: on a SIMD CPU (llvmpipe) every step runs the triangle loop's body at least
-// once whether or not any lane needs it, so fewer steps is what pays.
+// Orders two (distance, node) pairs by distance: one comparator of a sorting network.
+#define BVH_SORT2(da, na, db, nb)      \
+    {                                  \
+        bool swap_ = db < da;          \
+        float d_ = da;                 \
+        uint n_ = na;                  \
+        da = swap_ ? db : da;          \
+        na = swap_ ? nb : na;          \
+        db = swap_ ? d_ : db;          \
+        nb = swap_ ? n_ : nb;          \
+    }
+
+// Front-to-back traversal with t in (tmin, tmax); any_hit stops at the first hit found. The
+// closest hit is the nearest, and of equally near ones (a ray through a shared edge) the one
+// first in the input, so the answer does not depend on the order of the walk (the BVH's layout,
+// its width, the CPU or the GPU): the brute-force reference keeps the lowest index too.
+// Each step tests the four children of a GPU node, then the triangles of those that are leaves
+// and were hit, then descends into the nearest inner child hit and pushes the others, farthest
+// first. Leaves cost no step of their own: on a SIMD CPU (llvmpipe) every step runs the triangle
+// loop's body at least once whether or not any lane needs it, so fewer steps is what pays.
+// Everything per child is written out for constant child indices (registers, not memory).
 bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
     hit = Hit(tmax, 0xffffffffu, vec2(0.0));
     BvhRay r = bvh_ray(origin, dir);
@@ -142,21 +167,33 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
     uint sp = 0u;
     uint node = 0u;
     bool found = false;
+    uint hit_order = 0xffffffffu;
     while (true) {
-        uvec4 a_lo = bvh_child_lo(node, 0u);
-        uvec4 a_hi = bvh_child_hi(node, 0u);
-        uvec4 b_lo = bvh_child_lo(node, 1u);
-        uvec4 b_hi = bvh_child_hi(node, 1u);
-        float da = bvh_slab(r, a_lo, a_hi, tmin, tmax);
-        float db = bvh_slab(r, b_lo, b_hi, tmin, tmax);
-        // Triangles of the leaf children hit: a's first, then b's.
-        uint na = da != BVH_INF ? a_hi.w : 0u;
-        uint nb = db != BVH_INF ? b_hi.w : 0u;
-        for (uint k = 0u; k < na + nb; ++k) {
-            uint i = k < na ? a_lo.w + k : b_lo.w + (k - na);
+        uvec4 lo0 = bvh_child_lo(node, 0u);
+        uvec4 hi0 = bvh_child_hi(node, 0u);
+        uvec4 lo1 = bvh_child_lo(node, 1u);
+        uvec4 hi1 = bvh_child_hi(node, 1u);
+        uvec4 lo2 = bvh_child_lo(node, 2u);
+        uvec4 hi2 = bvh_child_hi(node, 2u);
+        uvec4 lo3 = bvh_child_lo(node, 3u);
+        uvec4 hi3 = bvh_child_hi(node, 3u);
+        float d0 = bvh_slab(r, lo0, hi0, tmin, tmax);
+        float d1 = bvh_slab(r, lo1, hi1, tmin, tmax);
+        float d2 = bvh_slab(r, lo2, hi2, tmin, tmax);
+        float d3 = bvh_slab(r, lo3, hi3, tmin, tmax);
+        // Triangles of the leaf children hit, child by child: k counts through all of them.
+        uint e1 = d0 != BVH_INF ? hi0.w : 0u;  // running ends
+        uint e2 = e1 + (d1 != BVH_INF ? hi1.w : 0u);
+        uint e3 = e2 + (d2 != BVH_INF ? hi2.w : 0u);
+        uint e4 = e3 + (d3 != BVH_INF ? hi3.w : 0u);
+        for (uint k = 0u; k < e4; ++k) {
+            uint i = k < e1 ? lo0.w + k : (k < e2 ? lo1.w + (k - e1) : (k < e3 ? lo2.w + (k - e2) : lo3.w + (k - e3)));
             float t;
             vec2 bary;
-            if (bvh_intersect(r, i, tmin, tmax, t, bary)) {
+            uint order;
+            // After a hit, one equally near with a lower input index replaces it.
+            float limit = found ? bvh_next_up(tmax) : tmax;
+            if (bvh_intersect(r, i, tmin, limit, t, bary, order) && (t < tmax || order < hit_order)) {
 #ifdef UMBRA_ALPHA_TEST
                 if (HAS_ALPHA && floatBitsToUint(bvh_tri_v(i, 1u).w) != 0u && !bvh_alpha_opaque(i, bary, origin, dir)) {
                     continue;
@@ -164,28 +201,39 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
 #endif
                 found = true;
                 tmax = t;
+                hit_order = order;
                 hit = Hit(t, i, bary);
                 if (any_hit) {
                     return true;
                 }
             }
         }
-        // Inner children hit, and not beyond a hit just found (tmax may be infinite).
-        bool ia = a_hi.w == 0u && da != BVH_INF && da <= tmax;
-        bool ib = b_hi.w == 0u && db != BVH_INF && db <= tmax;
-        uint near = a_lo.w;
-        uint far = b_lo.w;
-        if (ib && (!ia || db < da)) {
-            near = b_lo.w;
-            far = a_lo.w;
-        }
-        // The farther child is written to the stack by every lane (a slot above the top is
-        // free), and only the pointer moves conditionally: a store under a divergent condition
-        // costs a per-lane branch on SIMD CPUs (llvmpipe), which mispredicts.
-        stack[min(sp, BVH_MAX_DEPTH - 1u)] = far;
-        if (ia || ib) {
-            node = near;
-            sp += ia && ib ? 1u : 0u;
+        // Inner children hit, and not beyond a hit just found (tmax may be infinite): their
+        // distances, BVH_INF for the others, sorted nearest first.
+        float reach = tmax * BVH_SLAB_ROBUST;
+        float k0 = hi0.w == 0u && d0 <= reach ? d0 : BVH_INF;
+        float k1 = hi1.w == 0u && d1 <= reach ? d1 : BVH_INF;
+        float k2 = hi2.w == 0u && d2 <= reach ? d2 : BVH_INF;
+        float k3 = hi3.w == 0u && d3 <= reach ? d3 : BVH_INF;
+        uint n0 = lo0.w;
+        uint n1 = lo1.w;
+        uint n2 = lo2.w;
+        uint n3 = lo3.w;
+        BVH_SORT2(k0, n0, k1, n1);
+        BVH_SORT2(k2, n2, k3, n3);
+        BVH_SORT2(k0, n0, k2, n2);
+        BVH_SORT2(k1, n1, k3, n3);
+        BVH_SORT2(k1, n1, k2, n2);
+        uint m = uint(k0 != BVH_INF) + uint(k1 != BVH_INF) + uint(k2 != BVH_INF) + uint(k3 != BVH_INF);
+        // Push all but the nearest, the farthest deepest. Every lane writes its three slots above
+        // the top (free), and only the pointer moves conditionally: a store under a divergent
+        // condition costs a per-lane branch on SIMD CPUs (llvmpipe), which mispredicts.
+        stack[min(sp, BVH_MAX_DEPTH - 1u)] = m == 4u ? n3 : (m == 3u ? n2 : n1);
+        stack[min(sp + 1u, BVH_MAX_DEPTH - 1u)] = m == 4u ? n2 : n1;
+        stack[min(sp + 2u, BVH_MAX_DEPTH - 1u)] = n1;
+        if (m > 0u) {
+            node = n0;
+            sp += m - 1u;
         } else {
             if (sp == 0u) {
                 break;

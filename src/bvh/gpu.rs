@@ -9,7 +9,7 @@ use crate::vk::{raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocatio
 /// The node and triangle buffers of a [`Bvh`], uploaded once, and their texel views: every
 /// kernel binds the BVH as two uniform texel buffers (bindings 0 and 1, see `bvh.glsl`).
 pub struct GpuBvh {
-    /// `bvh_node_texels`: each [`GpuBvhNode`] as four RGBA32UI texels.
+    /// `bvh_node_texels`: each [`GpuBvhNode`] as eight RGBA32UI texels.
     pub node_texels: TexelView,
     /// `bvh_tri_texels`: each triangle as three RGBA32UI texels.
     pub tri_texels: TexelView,
@@ -70,44 +70,63 @@ impl GpuBvhChild {
     }
 }
 
-/// The BVH as the GPU traverses it: one node per inner node of [`Bvh::nodes`], holding both
-/// children's boxes (Aila and Laine 2009), so one step fetches 64 bytes (four texels) and tests
-/// both children, and leaf children's triangles are tested in the same step. Node 0 is the root.
+/// The BVH as the GPU traverses it: a 4-wide tree collapsed from [`Bvh::nodes`] (each node
+/// takes its binary node's two children and opens the largest-area inner child until it has four
+/// or only leaves), holding all children's boxes (Aila and Laine 2009), so one step fetches 128
+/// bytes (eight texels), tests four boxes, and the triangles of the leaf children hit are tested
+/// in the same step. Node 0 is the root.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuBvhNode {
-    /// The two children, in [`Bvh::nodes`] order.
-    pub children: [GpuBvhChild; 2],
+    /// Up to four children; absent ones have `count == GpuBvhChild::NONE`.
+    pub children: [GpuBvhChild; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 128);
 
 impl GpuBvhNode {
-    /// The GPU layout of `bvh`: its inner nodes in their order (depth first, so a subtree stays
-    /// together); a BVH that is a single leaf or empty gets one root with absent children.
+    /// Children per node.
+    pub const WIDTH: usize = 4;
+
+    /// The GPU layout of `bvh`, nodes in depth-first order of creation (a node's inner children
+    /// get consecutive slots); a BVH that is a single leaf or empty gets one root whose children
+    /// are that leaf or absent.
     pub fn from_bvh(bvh: &Bvh) -> Vec<Self> {
         let nodes = &bvh.nodes;
         let root = &nodes[0];
+        let none = GpuBvhChild::none();
         if root.is_leaf() || root.aabb_min[0] > root.aabb_max[0] {
-            let only = if root.is_leaf() { Self::child(root, 0) } else { GpuBvhChild::none() };
-            return vec![Self { children: [only, GpuBvhChild::none()] }];
+            let only = if root.is_leaf() { Self::child(root, 0) } else { none };
+            return vec![Self { children: [only, none, none, none] }];
         }
-        // gpu_index[n]: the GPU node of inner node n.
-        let mut gpu_index = vec![u32::MAX; nodes.len()];
-        let mut inner = 0u32;
-        for (n, node) in nodes.iter().enumerate() {
-            if !node.is_leaf() {
-                gpu_index[n] = inner;
-                inner += 1;
+        let mut out = vec![Self::default()];
+        // (binary inner node, its slot in `out`)
+        let mut work = vec![(0usize, 0usize)];
+        while let Some((n, slot)) = work.pop() {
+            let first = nodes[n].left_first as usize;
+            let mut kids = vec![first, first + 1];
+            while kids.len() < Self::WIDTH {
+                let widest = (0..kids.len())
+                    .filter(|&k| !nodes[kids[k]].is_leaf())
+                    .max_by(|&a, &b| nodes[kids[a]].surface_area().total_cmp(&nodes[kids[b]].surface_area()));
+                let Some(k) = widest else { break };
+                let opened = kids.remove(k);
+                let first = nodes[opened].left_first as usize;
+                kids.extend([first, first + 1]);
             }
+            let mut node = Self { children: [none; 4] };
+            for (c, &k) in kids.iter().enumerate() {
+                let index = if nodes[k].is_leaf() {
+                    0
+                } else {
+                    out.push(Self::default());
+                    work.push((k, out.len() - 1));
+                    (out.len() - 1) as u32
+                };
+                node.children[c] = Self::child(&nodes[k], index);
+            }
+            out[slot] = node;
         }
-        nodes
-            .iter()
-            .filter(|node| !node.is_leaf())
-            .map(|node| {
-                let first = node.left_first as usize;
-                Self { children: [0, 1].map(|k| Self::child(&nodes[first + k], gpu_index[first + k])) }
-            })
-            .collect()
+        out
     }
 
     fn child(node: &BvhNode, gpu_index: u32) -> GpuBvhChild {

@@ -46,7 +46,7 @@ impl BvhNode {
         self.tri_count > 0
     }
 
-    fn surface_area(&self) -> f32 {
+    pub(crate) fn surface_area(&self) -> f32 {
         let e = Vec3::from(self.aabb_max) - Vec3::from(self.aabb_min);
         if e.min_element() < 0.0 {
             return 0.0;

@@ -107,7 +107,10 @@ impl RayPre {
         let t0 = (Vec3::from(node.aabb_min) - self.origin) * self.inv_dir;
         let t1 = (Vec3::from(node.aabb_max) - self.origin) * self.inv_dir;
         let near = t0.min(t1).max_element().max(tmin);
-        let far = (t0.max(t1).min_element() * SLAB_ROBUST).min(tmax);
+        // tmax is scaled too: a box whose entry rounds just past the nearest hit so far (a hit on
+        // the box's face, as on every axis-aligned wall) is still visited, for its equally near
+        // hits and the tie rule of `closest`.
+        let far = t0.max(t1).min_element().min(tmax) * SLAB_ROBUST;
         if near <= far {
             near
         } else {
@@ -117,14 +120,23 @@ impl RayPre {
 }
 
 impl Bvh {
-    /// The nearest hit of `ray`, exactly as `bvh_closest` in `bvh.glsl` finds it.
+    /// The nearest hit of `ray`, and of equally near ones the first in the input, as
+    /// `bvh_closest` in `bvh.glsl` finds it (the GPU walks another layout in another order; the
+    /// tie rule makes the answer independent of the order).
     pub fn closest(&self, ray: &Ray) -> Option<Hit> {
         let mut best: Option<Hit> = None;
+        let mut best_order = u32::MAX;
         let mut tmax = ray.tmax;
         self.walk(ray, |pre, tri, index, tmin| {
-            if let Some((t, bary)) = pre.intersect(&tri.vertices(), tmin, tmax) {
-                tmax = t;
-                best = Some(Hit { t, tri: index, bary });
+            let order = tri.v0[3].to_bits();
+            // After a hit, one equally near with a lower input index replaces it.
+            let limit = if best.is_some() { tmax.next_up() } else { tmax };
+            if let Some((t, bary)) = pre.intersect(&tri.vertices(), tmin, limit) {
+                if t < tmax || order < best_order {
+                    tmax = t;
+                    best_order = order;
+                    best = Some(Hit { t, tri: index, bary });
+                }
             }
             (false, tmax)
         });

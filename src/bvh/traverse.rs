@@ -119,6 +119,19 @@ impl RayPre {
     }
 }
 
+/// The next float above a finite `x` (`f32::next_up`, stable only from Rust 1.86; `bvh_next_up` in
+/// `bvh.glsl`).
+fn next_up(x: f32) -> f32 {
+    let bits = x.to_bits();
+    if x > 0.0 {
+        f32::from_bits(bits + 1)
+    } else if x == 0.0 {
+        f32::from_bits(1)
+    } else {
+        f32::from_bits(bits - 1)
+    }
+}
+
 impl Bvh {
     /// The nearest hit of `ray`, and of equally near ones the first in the input, as
     /// `bvh_closest` in `bvh.glsl` finds it (the GPU walks another layout in another order; the
@@ -130,7 +143,7 @@ impl Bvh {
         self.walk(ray, |pre, tri, index, tmin| {
             let order = tri.v0[3].to_bits();
             // After a hit, one equally near with a lower input index replaces it.
-            let limit = if best.is_some() { tmax.next_up() } else { tmax };
+            let limit = if best.is_some() { next_up(tmax) } else { tmax };
             if let Some((t, bary)) = pre.intersect(&tri.vertices(), tmin, limit) {
                 if t < tmax || order < best_order {
                     tmax = t;

@@ -15,7 +15,7 @@
 uint texture_word(uint i) { return texelFetch(scene_texels, int(i)).x; }
 
 // i modulo n (n > 0), in [0, n), without integer division: CPU devices divide integers one lane
-// at a time, and the two `%` of ((i % n) + n) % n were about 30 % of the G-buffer's time on the
+// at a time, and the two `%` of ((i % n) + n) % n were half the G-buffer's time on the
 // textured scene (lavapipe). Exact for every int: the float quotient of the first step is within
 // a few ulps, so its remainder is within a few hundred of [0, n) and exact as a float; the second
 // step's quotient of that is exact but at most one off, which the selects fix.

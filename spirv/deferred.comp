@@ -29,7 +29,7 @@ layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial mat
 layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLightTri lights[]; };
 layout(set = 0, binding = 6, std430) readonly buffer Punctual { GpuLight punctual[]; };
 layout(set = 0, binding = 7, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 8, std430) readonly buffer Texels { uint texels[]; };
+layout(set = 0, binding = 8) uniform usamplerBuffer scene_texels;
 layout(set = 0, binding = 9, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
 layout(set = 0, binding = 10, std430) readonly buffer EnvMarginal { float env_marginal[]; };
 layout(set = 0, binding = 11, std430) readonly buffer EnvConditional { float env_conditional[]; };

@@ -20,7 +20,7 @@ layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle tri
 layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 5, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 6, std430) readonly buffer Texels { uint texels[]; };
+layout(set = 0, binding = 6) uniform usamplerBuffer scene_texels;
 // Unused here (shading.glsl's light helpers), declared so the include compiles.
 layout(set = 0, binding = 7, std430) readonly buffer Lights { GpuLightTri lights[]; };
 layout(set = 0, binding = 8, std430) readonly buffer Punctual { GpuLight punctual[]; };

@@ -31,7 +31,7 @@ layout(set = 0, binding = 7, std430) readonly buffer EnvTexels { vec4 env_texels
 layout(set = 0, binding = 8, std430) readonly buffer EnvMarginal { float env_marginal[]; };
 layout(set = 0, binding = 9, std430) readonly buffer EnvConditional { float env_conditional[]; };
 layout(set = 0, binding = 10, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 11, std430) readonly buffer Texels { uint texels[]; };
+layout(set = 0, binding = 11) uniform usamplerBuffer scene_texels;
 layout(set = 0, binding = 12, std430) readonly buffer Directions { vec4 directions[]; };
 layout(set = 0, binding = 13, std430) buffer Results { vec4 results[]; };
 layout(push_constant) uniform Push { LightTestParams params; };

@@ -32,7 +32,7 @@ layout(set = 0, binding = 12, std430) readonly buffer EnvTexels { vec4 env_texel
 layout(set = 0, binding = 13, std430) readonly buffer EnvMarginal { float env_marginal[]; };
 layout(set = 0, binding = 14, std430) readonly buffer EnvConditional { float env_conditional[]; };
 layout(set = 0, binding = 15, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 16, std430) readonly buffer Texels { uint texels[]; };
+layout(set = 0, binding = 16) uniform usamplerBuffer scene_texels;
 layout(push_constant) uniform Push { PathParams params; };
 
 #include "random.glsl"

@@ -1,4 +1,4 @@
-// Textures from one storage buffer of RGBA8 texels (no bindless on lavapipe): glTF wrap modes,
+// Textures from one uniform texel buffer of RGBA8 texels (no bindless on lavapipe): glTF wrap modes,
 // nearest or bilinear filtering, sRGB decoding before filtering, and mip chains (stored after
 // level 0 where the sampler asks for them). texture_sample reads level 0: the path tracer's pixel
 // jitter integrates the footprint. texture_sample_lod filters for a level of detail, for kernels
@@ -6,9 +6,26 @@
 //
 // The including kernel declares, before including this file:
 //   readonly buffer ... { GpuTexture textures[]; };
-//   readonly buffer ... { uint texels[]; };  // the sRGB table (256 f32 bits), then RGBA8 texels
+//   uniform usamplerBuffer scene_texels;  // R32UI: the sRGB table (256 f32 bits), then RGBA8 texels
+// (a texel buffer: on CPU devices texelFetch is a branch-free gather, a storage buffer load a
+// bounds-checked loop over the lanes)
 #ifndef UMBRA_TEXTURE_GLSL
 #define UMBRA_TEXTURE_GLSL
+
+uint texture_word(uint i) { return texelFetch(scene_texels, int(i)).x; }
+
+// i modulo n (n > 0), in [0, n), without integer division: CPU devices divide integers one lane
+// at a time, and the two `%` of ((i % n) + n) % n were half the G-buffer's time on the
+// textured scene (lavapipe). Exact for every int: the float quotient of the first step is within
+// a few ulps, so its remainder is within a few hundred of [0, n) and exact as a float; the second
+// step's quotient of that is exact but at most one off, which the selects fix.
+int texture_mod(int i, int n) {
+    float fn = float(n);
+    int m = i - n * int(floor(float(i) / fn));
+    m -= n * int(floor(float(m) / fn));
+    m += m < 0 ? n : 0;
+    return m >= n ? m - n : m;
+}
 
 int texture_wrap(int i, int size, bool clamp_mode, bool mirror) {
     if (clamp_mode) {
@@ -16,10 +33,10 @@ int texture_wrap(int i, int size, bool clamp_mode, bool mirror) {
     }
     if (mirror) {
         int period = 2 * size;
-        int m = ((i % period) + period) % period;
+        int m = texture_mod(i, period);
         return m < size ? m : period - 1 - m;
     }
-    return ((i % size) + size) % size;
+    return texture_mod(i, size);
 }
 
 // Texel (x, y), wrapped, of the w × h level that starts at texel `offset` of texture `tex`.
@@ -27,13 +44,13 @@ vec4 texture_texel_at(uint tex, uint offset, int w, int h, int x, int y) {
     uint flags = textures[tex].flags;
     x = texture_wrap(x, w, (flags & TEXTURE_WRAP_S_CLAMP) != 0u, (flags & TEXTURE_WRAP_S_MIRROR) != 0u);
     y = texture_wrap(y, h, (flags & TEXTURE_WRAP_T_CLAMP) != 0u, (flags & TEXTURE_WRAP_T_MIRROR) != 0u);
-    uint bits = texels[offset + uint(y * w + x)];
+    uint bits = texture_word(offset + uint(y * w + x));
     vec4 c = unpackUnorm4x8(bits);
     if ((flags & TEXTURE_SRGB) != 0u) {
-        // texels[0..256] is the sRGB decoding table (src/gpu/scene.rs): exact, and far cheaper
+        // Words 0..256 are the sRGB decoding table (src/gpu/scene.rs): exact, and far cheaper
         // than pow on CPU devices.
-        c.rgb = vec3(uintBitsToFloat(texels[bits & 255u]), uintBitsToFloat(texels[(bits >> 8) & 255u]),
-                     uintBitsToFloat(texels[(bits >> 16) & 255u]));
+        c.rgb = vec3(uintBitsToFloat(texture_word(bits & 255u)), uintBitsToFloat(texture_word((bits >> 8) & 255u)),
+                     uintBitsToFloat(texture_word((bits >> 16) & 255u)));
     }
     return c;
 }

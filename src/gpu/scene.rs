@@ -7,7 +7,7 @@ use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Scene};
-use crate::vk::{raw, Buffer, Context, DeviceInfo};
+use crate::vk::{raw, Buffer, Context, DeviceInfo, TexelView};
 use glam::Vec3;
 
 /// Storage buffers for one scene.
@@ -36,7 +36,11 @@ pub struct GpuScene {
     pub env_conditional: Buffer,
     /// `GpuTexture`s.
     pub textures: Buffer,
-    /// The sRGB decoding table (256 `f32` bits), then the RGBA8 texels of every texture.
+    /// `scene_texels`: [`GpuScene::texels`] as R32UI texels (`texture.glsl` reads them with
+    /// `texelFetch`).
+    pub texel_view: TexelView,
+    /// The sRGB decoding table (256 `f32` bits), then the RGBA8 texels of every texture (one
+    /// zero word when there is no texture: a texel view needs a texel).
     pub texels: Buffer,
     /// Textures the materials use.
     pub texture_count: u32,
@@ -84,7 +88,7 @@ impl SceneArrays {
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
-    /// two are texel buffers, the others storage buffers).
+    /// two and the scene texels are texel buffers, the others storage buffers).
     pub fn buffer_sizes(&self) -> [(&'static str, u64); 8] {
         fn bytes<T>(v: &[T]) -> u64 {
             std::mem::size_of_val(v) as u64
@@ -103,6 +107,7 @@ impl SceneArrays {
 
     /// Checks that every buffer of the scene `name` fits `device`'s `maxStorageBufferRange`
     /// (128 MiB on lavapipe), or for the BVH `maxTexelBufferElements` texels of 16 bytes (2 GiB
+    /// on lavapipe), or for the scene texels `maxTexelBufferElements` texels of 4 bytes (512 MiB
     /// on lavapipe): one error naming the scene, the buffer, both sizes and what to
     /// reduce, before anything is allocated. [`GpuScene::upload`] calls it; a test can pass a
     /// [`DeviceInfo`] with a lowered limit.
@@ -133,10 +138,13 @@ fn remedy(buffer: &str) -> &'static str {
 }
 
 /// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers are
-/// uniform texel buffers of 16-byte texels, every other one a storage buffer.
+/// uniform texel buffers of 16-byte texels, the scene texels one of 4-byte texels, every other
+/// one a storage buffer.
 fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str) {
     if buffer.starts_with("bvh ") {
         (device.max_texel_buffer_elements as u64 * 16, "texel", "maxTexelBufferElements × 16 bytes")
+    } else if buffer == "scene texels" {
+        (device.max_texel_buffer_elements as u64 * 4, "texel", "maxTexelBufferElements × 4 bytes")
     } else {
         (device.max_storage_buffer_range, "storage", "maxStorageBufferRange")
     }
@@ -299,6 +307,7 @@ impl GpuScene {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         // The alpha bits with_bvh wrote into the BVH triangles.
         let alpha_modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
+        let (texels, texel_view) = upload_texels(ctx, &arrays.texels)?;
         Ok(Self {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
             triangles: Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?,
@@ -309,7 +318,8 @@ impl GpuScene {
             punctual: Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?,
             punctual_count: arrays.punctual.len() as u32,
             textures: Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?,
-            texels: Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?,
+            texel_view,
+            texels,
             texture_count: arrays.textures.len() as u32,
             has_transmission: transmits(&arrays.materials),
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
@@ -352,11 +362,23 @@ impl GpuScene {
         self.punctual = Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?;
         self.punctual_count = arrays.punctual.len() as u32;
         self.textures = Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?;
-        self.texels = Buffer::upload(ctx, "scene texels", &arrays.texels, usage)?;
+        let (texels, texel_view) = upload_texels(ctx, &arrays.texels)?;
+        self.texel_view = texel_view;
+        self.texels = texels;
         self.texture_count = arrays.textures.len() as u32;
         self.has_transmission = transmits(&arrays.materials);
         Ok(())
     }
+}
+
+/// Uploads the scene texels as a uniform texel buffer of R32UI words and views it (an empty list
+/// as one zero word, never read: a texel view needs at least one texel).
+fn upload_texels(ctx: &Context, texels: &[u32]) -> Result<(Buffer, TexelView)> {
+    let usage = raw::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+    let words = if texels.is_empty() { &[0u32][..] } else { texels };
+    let buffer = Buffer::upload(ctx, "scene texels", words, usage)?;
+    let view = buffer.texel_view(raw::Format::R32_UINT, 4)?;
+    Ok((buffer, view))
 }
 
 /// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits (0 opaque,

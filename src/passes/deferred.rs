@@ -68,6 +68,7 @@ impl DeferredPass {
         bindings[12..18].fill(raw::DescriptorType::STORAGE_IMAGE);
         bindings[21] = raw::DescriptorType::STORAGE_IMAGE;
         bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
+        bindings[8] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
         let pipeline = ComputePipeline::new(
             ctx,
             "deferred",
@@ -141,7 +142,7 @@ impl DeferredPass {
             Descriptor::Buffer(&scene.lights),
             Descriptor::Buffer(&scene.punctual),
             Descriptor::Buffer(&scene.textures),
-            Descriptor::Buffer(&scene.texels),
+            Descriptor::Texels(&scene.texel_view),
             Descriptor::Buffer(&scene.env_texels),
             Descriptor::Buffer(&scene.env_marginal),
             Descriptor::Buffer(&scene.env_conditional),

@@ -150,6 +150,7 @@ impl GBufferPass {
         let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
         bindings[9..].fill(raw::DescriptorType::STORAGE_IMAGE);
         bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
+        bindings[6] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
         let pipeline = ComputePipeline::new(
             ctx,
             "gbuffer",
@@ -185,7 +186,7 @@ impl GBufferPass {
             Descriptor::Buffer(&scene.vertices),
             Descriptor::Buffer(&scene.materials),
             Descriptor::Buffer(&scene.textures),
-            Descriptor::Buffer(&scene.texels),
+            Descriptor::Texels(&scene.texel_view),
             Descriptor::Buffer(&scene.lights),
             Descriptor::Buffer(&scene.punctual),
         ];

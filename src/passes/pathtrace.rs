@@ -83,6 +83,7 @@ impl PathTracePass {
     ) -> Result<Self> {
         let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 17];
         bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
+        bindings[16] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
         let pipeline = ComputePipeline::new(
             ctx,
             "pathtrace",
@@ -150,7 +151,7 @@ impl PathTracePass {
                 Descriptor::Buffer(&scene.env_marginal),
                 Descriptor::Buffer(&scene.env_conditional),
                 Descriptor::Buffer(&scene.textures),
-                Descriptor::Buffer(&scene.texels),
+                Descriptor::Texels(&scene.texel_view),
             ],
             params,
             [target.size.0, target.size.1, 1],

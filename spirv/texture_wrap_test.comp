@@ -1,0 +1,28 @@
+#version 460
+// Test kernel: texture.glsl's repeat and mirrored-repeat wrapping of integer texel coordinates
+// (texture_wrap, whose modulo avoids integer division), for pairs (i, size) from the host:
+// out[2k] = repeat, out[2k + 1] = mirror. tests/texture_wrap.rs compares them with Rust's exact
+// rem_euclid.
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(set = 0, binding = 0, std430) readonly buffer Input { ivec2 cases[]; };
+layout(set = 0, binding = 1, std430) buffer Output { int wrapped[]; };
+// What texture.glsl's sampling functions read (unused here).
+layout(set = 0, binding = 2, std430) readonly buffer Textures { GpuTexture textures[]; };
+layout(set = 0, binding = 3) uniform usamplerBuffer scene_texels;
+layout(push_constant) uniform Push { BufferTestParams params; };
+
+#include "texture.glsl"
+
+void main() {
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= params.count) {
+        return;
+    }
+    ivec2 c = cases[k];
+    wrapped[2u * k] = texture_wrap(c.x, c.y, false, false);
+    wrapped[2u * k + 1u] = texture_wrap(c.x, c.y, false, true);
+}

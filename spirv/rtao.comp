@@ -7,24 +7,39 @@
 // any-hit query through the BVH over (0, r) from the origin offset off the geometric surface as
 // shadow rays are (shading.glsl). A direction below the geometric surface counts as occluded (the
 // surface itself blocks it). The output is the fraction of unoccluded rays, an unbiased estimate
-// of AO(p) with variance AO(1 − AO) / rays. Pixels without a surface get 1.
+// of AO(p) with variance AO(1 − AO) / rays. Pixels without a surface get 1. Alpha-masked and
+// blended surfaces occlude as the path tracer sees them (shading.glsl's alpha test).
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+layout(constant_id = 0) const bool HAS_TEXTURES = false;
+layout(constant_id = 1) const bool HAS_ALPHA = false;
+const bool BECKMANN = false;
+const bool HAS_TRANSMISSION = false;
+
+// Bindings 0-8 as gbuffer.comp's (GpuScene::SURFACE_BINDINGS): the BVH and what shading.glsl's
+// alpha test reads, so alpha-masked and blended surfaces occlude as the path tracer sees them.
 layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
 layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
-layout(set = 0, binding = 2, r32f) uniform readonly image2D gb_depth;
-layout(set = 0, binding = 3, rgba16f) uniform readonly image2D gb_normal;
-layout(set = 0, binding = 4, rg32ui) uniform readonly uimage2D gb_material;
-layout(set = 0, binding = 5, r32f) uniform writeonly image2D out_ao;
+layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
+layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
+layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
+layout(set = 0, binding = 5, std430) readonly buffer Textures { GpuTexture textures[]; };
+layout(set = 0, binding = 6) uniform usamplerBuffer scene_texels;
+layout(set = 0, binding = 7, std430) readonly buffer Lights { GpuLightTri lights[]; };
+layout(set = 0, binding = 8, std430) readonly buffer Punctual { GpuLight punctual[]; };
+layout(set = 0, binding = 9, r32f) uniform readonly image2D gb_depth;
+layout(set = 0, binding = 10, rgba16f) uniform readonly image2D gb_normal;
+layout(set = 0, binding = 11, rg32ui) uniform readonly uimage2D gb_material;
+layout(set = 0, binding = 12, r32f) uniform writeonly image2D out_ao;
 layout(push_constant) uniform Push { AoParams params; };
 
 #include "random.glsl"
 #include "sampling.glsl"
 #include "gbuffer.glsl"
-#include "bvh.glsl"
+#include "shading.glsl"
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);

@@ -74,7 +74,7 @@ impl Renderer {
             ibl: IblResources::build(ctx, &gpu_scene, &IblSettings::default())?,
             ssao: SsaoPass::new(ctx)?,
             ao_blur: AoBlurPass::new(ctx)?,
-            rtao: RtaoPass::new(ctx)?,
+            rtao: RtaoPass::new(ctx, &gpu_scene)?,
             tonemap: TonemapPass::new(ctx)?,
             path: PathTracePass::for_scene(ctx, &gpu_scene, Microfacet::Ggx, Heuristic::Power)?,
             path_options: (Microfacet::Ggx, Heuristic::Power),
@@ -95,6 +95,7 @@ impl Renderer {
         self.scene.update(&self.ctx, scene)?;
         self.gbuffer = GBufferPass::new(&self.ctx, &self.scene)?;
         self.deferred = DeferredPass::new(&self.ctx, &self.scene)?;
+        self.rtao = RtaoPass::new(&self.ctx, &self.scene)?;
         self.path =
             PathTracePass::for_scene(&self.ctx, &self.scene, self.path_options.0, self.path_options.1)?;
         Ok(())

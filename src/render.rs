@@ -337,7 +337,7 @@ pub fn ambient_occlusion(
     let blurred = make("ambient occlusion blurred")?;
     let gbuffer_pass = GBufferPass::new(ctx, scene)?;
     let ssao = SsaoPass::new(ctx)?;
-    let rtao = RtaoPass::new(ctx)?;
+    let rtao = RtaoPass::new(ctx, scene)?;
     let blur = AoBlurPass::new(ctx)?;
     let gbuffer_params = GBufferPass::params(camera, size);
     let params = ao_params(camera, size, settings);

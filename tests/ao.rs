@@ -16,7 +16,7 @@ use glam::Vec3;
 use umbra::gpu::scene::{GpuScene, SceneArrays};
 use umbra::passes::ao::AoSettings;
 use umbra::render::{ambient_occlusion, camera_params, AoImage, AoMethod};
-use umbra::scene::{Camera, Material, Scene};
+use umbra::scene::{AlphaMode, Camera, Material, Scene};
 
 /// A scene of quads (one grey diffuse material), built in memory.
 #[derive(Default)]
@@ -119,6 +119,44 @@ fn render(
     let times: Vec<String> = image.pass_ms.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect();
     eprintln!("  {method:?} {size}x{size}: {}", times.join(", "));
     image
+}
+
+/// RTAO sees alpha as the path tracer does: a ceiling h = 0.2 above the floor (AO (h/r)² = 0.16
+/// under it when opaque, radius 0.5) whose material is alpha-masked below its cutoff is not there
+/// for the G-buffer (the camera above sees the floor through it) nor for RTAO's rays: the floor's
+/// AO is exactly 1 (an RTAO blind to alpha gives ~0.16). At the cutoff the ceiling is opaque
+/// again, and the camera sees it.
+#[test]
+fn rtao_sees_through_alpha_masked_surfaces() {
+    let gpu = Gpu::new();
+    let settings = AoSettings { samples: 16, radius: 0.5, blur: false, ..Default::default() };
+    let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 30.0);
+    let with_ceiling = |alpha: f32| {
+        let mut quads = Quads::new().floor().quad(
+            Vec3::new(-20.0, 0.2, -20.0),
+            Vec3::new(0.0, 0.0, 40.0),
+            Vec3::new(40.0, 0.0, 0.0),
+        );
+        quads.scene.materials.push(Material {
+            metallic: 0.0,
+            base_color_factor: [0.8, 0.8, 0.8, alpha],
+            alpha_mode: AlphaMode::Mask,
+            alpha_cutoff: 0.5,
+            ..Default::default()
+        });
+        let n = quads.scene.triangle_material.len();
+        quads.scene.triangle_material[n - 2..].fill(1);
+        quads.upload(&gpu)
+    };
+    let masked = render(&gpu, &with_ceiling(0.2), &cam, 32, AoMethod::Rtao, &settings);
+    for (i, s) in surfaces(&masked, &cam).iter().enumerate() {
+        let (p, _) = s.expect("the floor fills the image");
+        assert!(p.y.abs() < 1e-4, "pixel {i} sees {p}, not the floor through the masked ceiling");
+        assert_eq!(masked.values[i], 1.0, "pixel {i}: RTAO occluded by a masked-away ceiling");
+    }
+    let opaque = render(&gpu, &with_ceiling(0.5), &cam, 32, AoMethod::Rtao, &settings);
+    let heights: Vec<f32> = surfaces(&opaque, &cam).iter().map(|s| s.expect("a surface").0.y).collect();
+    assert!(heights.iter().all(|y| (y - 0.2).abs() < 1e-4), "the opaque ceiling hides the floor");
 }
 
 /// Cosine-weighted AO of a floor point at distance d from a perpendicular wall, radius r.

@@ -7,7 +7,7 @@ use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Scene};
-use crate::vk::{raw, Buffer, Context, DeviceInfo, TexelView};
+use crate::vk::{raw, Buffer, Context, Descriptor, DeviceInfo, TexelView};
 use glam::Vec3;
 
 /// Storage buffers for one scene.
@@ -277,6 +277,43 @@ impl ShadingArrays {
 }
 
 impl GpuScene {
+    /// The descriptor types of bindings 0–8 of the kernels that trace and shade the scene's
+    /// surfaces without lighting it (`gbuffer.comp`, `rtao.comp`): the BVH, then what
+    /// `shading.glsl` reads (triangles, vertices, materials, textures, texels, lights, punctual).
+    pub const SURFACE_BINDINGS: [raw::DescriptorType; 9] = [
+        GpuBvh::BINDINGS[0],
+        GpuBvh::BINDINGS[1],
+        raw::DescriptorType::STORAGE_BUFFER,
+        raw::DescriptorType::STORAGE_BUFFER,
+        raw::DescriptorType::STORAGE_BUFFER,
+        raw::DescriptorType::STORAGE_BUFFER,
+        raw::DescriptorType::UNIFORM_TEXEL_BUFFER,
+        raw::DescriptorType::STORAGE_BUFFER,
+        raw::DescriptorType::STORAGE_BUFFER,
+    ];
+
+    /// The descriptors of [`GpuScene::SURFACE_BINDINGS`], in order.
+    pub fn surface_descriptors(&self) -> [Descriptor<'_>; 9] {
+        let [nodes, tris] = self.bvh.descriptors();
+        [
+            nodes,
+            tris,
+            Descriptor::Buffer(&self.triangles),
+            Descriptor::Buffer(&self.vertices),
+            Descriptor::Buffer(&self.materials),
+            Descriptor::Buffer(&self.textures),
+            Descriptor::Texels(&self.texel_view),
+            Descriptor::Buffer(&self.lights),
+            Descriptor::Buffer(&self.punctual),
+        ]
+    }
+
+    /// The specialization constants `HAS_TEXTURES` and `HAS_ALPHA` of a surface kernel, under
+    /// the constant ids `textures` and `alpha`.
+    pub fn surface_specialization(&self, textures: u32, alpha: u32) -> [(u32, u32); 2] {
+        [(textures, (self.texture_count > 0) as u32), (alpha, self.has_alpha as u32)]
+    }
+
     /// Lights the scene with an environment map (replacing any previous one), uploading it
     /// with its importance-sampling tables.
     pub fn set_environment(&mut self, ctx: &Context, map: &EnvironmentMap) -> Result<()> {

@@ -23,7 +23,6 @@
 //! after itself and never submits.
 
 use super::gbuffer::GBufferViews;
-use crate::bvh::gpu::GpuBvh;
 use crate::error::{Error, Result};
 use crate::gpu::layout::{AoBlurParams, AoParams};
 use crate::gpu::scene::GpuScene;
@@ -214,17 +213,18 @@ pub struct RtaoPass {
 }
 
 impl RtaoPass {
-    /// Builds the pipeline.
-    pub fn new(ctx: &Context) -> Result<Self> {
-        let mut bindings = [raw::DescriptorType::STORAGE_IMAGE; 6];
-        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
+    /// Builds the pipeline for `scene` (specialised for its textures and alpha-tested materials:
+    /// masked and blended surfaces occlude as the path tracer sees them).
+    pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
+        let mut bindings = [raw::DescriptorType::STORAGE_IMAGE; 13];
+        bindings[..9].copy_from_slice(&GpuScene::SURFACE_BINDINGS);
         let pipeline = ComputePipeline::new(
             ctx,
             "rtao",
             &PipelineDesc {
                 bindings: &bindings,
                 push_constant_size: std::mem::size_of::<AoParams>() as u32,
-                specialization: &[],
+                specialization: &scene.surface_specialization(0, 1),
             },
         )?;
         Ok(Self { pipeline })
@@ -247,20 +247,10 @@ impl RtaoPass {
         output: raw::ImageView,
         params: &AoParams,
     ) -> Result<()> {
-        self.pipeline.record(
-            cmd,
-            &[
-                scene.bvh.descriptors()[0],
-                scene.bvh.descriptors()[1],
-                Descriptor::StorageView(gbuffer.depth),
-                Descriptor::StorageView(gbuffer.normal),
-                Descriptor::StorageView(gbuffer.material),
-                Descriptor::StorageView(output),
-            ],
-            params,
-            [gbuffer.size.0, gbuffer.size.1, 1],
-            LOCAL,
-        )?;
+        let mut resources = scene.surface_descriptors().to_vec();
+        resources
+            .extend([gbuffer.depth, gbuffer.normal, gbuffer.material, output].map(Descriptor::StorageView));
+        self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

@@ -12,7 +12,6 @@
 //! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
 //! with a compute-to-compute barrier.
 
-use crate::bvh::gpu::GpuBvh;
 use crate::error::Result;
 use crate::gpu::layout::GBufferParams;
 pub use crate::gpu::layout::GBUFFER_NO_SURFACE;
@@ -147,17 +146,15 @@ impl GBufferPass {
 
     /// Builds the pipeline for what `scene` has (textures, alpha-tested materials).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
-        bindings[9..].fill(raw::DescriptorType::STORAGE_IMAGE);
-        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
-        bindings[6] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
+        let mut bindings = [raw::DescriptorType::STORAGE_IMAGE; 14];
+        bindings[..9].copy_from_slice(&GpuScene::SURFACE_BINDINGS);
         let pipeline = ComputePipeline::new(
             ctx,
             "gbuffer",
             &PipelineDesc {
                 bindings: &bindings,
                 push_constant_size: std::mem::size_of::<GBufferParams>() as u32,
-                specialization: &[(0, (scene.texture_count > 0) as u32), (1, scene.has_alpha as u32)],
+                specialization: &scene.surface_specialization(0, 1),
             },
         )?;
         Ok(Self { pipeline })
@@ -179,17 +176,7 @@ impl GBufferPass {
         target: &GBufferViews,
         params: &GBufferParams,
     ) -> Result<()> {
-        let mut resources = vec![
-            scene.bvh.descriptors()[0],
-            scene.bvh.descriptors()[1],
-            Descriptor::Buffer(&scene.triangles),
-            Descriptor::Buffer(&scene.vertices),
-            Descriptor::Buffer(&scene.materials),
-            Descriptor::Buffer(&scene.textures),
-            Descriptor::Texels(&scene.texel_view),
-            Descriptor::Buffer(&scene.lights),
-            Descriptor::Buffer(&scene.punctual),
-        ];
+        let mut resources = scene.surface_descriptors().to_vec();
         resources.extend(target.in_order().map(Descriptor::StorageView));
         self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);

@@ -3,6 +3,9 @@
 // emission, punctual lights and emissive triangles with ray-traced shadows (area lights sampled,
 // `counts.z` shadow rays per pixel, so shadows are soft), and split-sum image-based lighting
 // (ibl.glsl; counts.w bit 0) multiplied by ambient occlusion. One bounce: no indirect light beyond what IBL approximates.
+// Transmissive materials (KHR_materials_transmission) transmit the prefiltered environment seen
+// through their one interface: straight on for thin-walled ones, refracted once for volumes (no
+// exit refraction, no second surface: the G-buffer knows only the first).
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -18,8 +21,7 @@ layout(constant_id = 2) const bool HAS_PUNCTUAL = false;
 layout(constant_id = 3) const bool HAS_ENV_MAP = false;
 layout(constant_id = 4) const bool BECKMANN = false;
 layout(constant_id = 5) const bool HAS_ALPHA = false;
-// The hybrid passes shade reflection only (see src/passes/deferred.rs).
-const bool HAS_TRANSMISSION = false;
+layout(constant_id = 6) const bool HAS_TRANSMISSION = false;
 
 layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
 layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
@@ -95,11 +97,18 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
     vec4 table = ibl_table(nv, roughness);
     vec3 specular_light = params.env.rgb;
     vec3 irradiance_over_pi = params.env.rgb;
+    vec3 transmitted_light = params.env.rgb;
+    // Transmission: the view ray continues through a thin wall, or refracts into a volume
+    // (total internal reflection cannot happen entering the denser medium from outside).
+    vec3 through = s.thin ? -wo : refract(-wo, n, 1.0 / s.eta);
     if (HAS_ENV_MAP) {
         float lod = clamp(roughness, 0.0, 1.0) * float(IBL_LEVELS - 1u);
         uint k0 = min(uint(lod), IBL_LEVELS - 1u);
         uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
         specular_light *= mix(ibl_level(k0, r), ibl_level(k1, r), lod - float(k0));
+        if (HAS_TRANSMISSION && s.transmission > 0.0 && dot(through, through) > 0.0) {
+            transmitted_light *= mix(ibl_level(k0, through), ibl_level(k1, through), lod - float(k0));
+        }
         float y[9];
         sh9_basis(n, y);
         vec3 e = vec3(0.0);
@@ -110,7 +119,9 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
     }
     vec3 dielectric_spec = s.f0 * table.x + s.f90 * table.y;
     float diffuse_weight = 1.0 - max3(s.f0) * table.z - s.f90 * table.w;
-    vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * irradiance_over_pi;
+    // The diffuse lobe's share `transmission` transmits instead (as bsdf.glsl splits it).
+    vec3 below = mix(irradiance_over_pi, transmitted_light, s.transmission);
+    vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * below;
     vec3 metal = (s.base * table.x + table.y) * specular_light;
     return mix(dielectric, metal, s.metallic);
 }
@@ -148,6 +159,10 @@ void main() {
     vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
     if (wo_local.z > 0.0) {
         Surface s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w);
+        if (HAS_TRANSMISSION) {
+            // Seen from outside (wo on the front): glass (ior) behind the surface.
+            s.eta = materials[mat.x].params.y;
+        }
 
         // Image-based lighting (split sum), times ambient occlusion.
         if ((params.counts.w & DEFERRED_IBL) != 0u) {

@@ -3,7 +3,10 @@
 //! ray-traced shadows, into a linear `R32G32B32A32_SFLOAT` image (`GENERAL` layout; alpha 1).
 //! Pixels without a surface get the environment seen directly. Split-sum image-based lighting
 //! ([`IblResources`], precomputed once per scene) times an ambient-occlusion image lights every
-//! surface with the environment (a constant or the scene's map).
+//! surface with the environment (a constant or the scene's map). Transmissive materials transmit
+//! the prefiltered environment through their one interface (straight on when thin-walled,
+//! refracted once into a volume); the G-buffer holds only the first surface, so a volume's exit
+//! and anything behind a transmissive surface but the environment are not seen.
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
@@ -82,6 +85,7 @@ impl DeferredPass {
                     (3, scene.env_size.is_some() as u32),
                     (4, 0),
                     (5, scene.has_alpha as u32),
+                    (6, scene.has_transmission as u32),
                 ],
             },
         )?;

@@ -185,8 +185,9 @@ void main() {
                 vec3 wi_local;
                 vec3 l_emit;
                 float light_pdf;
-                if (sample_emissive(p, ng, t, b, n, u.xyz, params.counts.x, wi_local, l_emit, light_pdf)) {
-                    sum += bsdf_eval(s, wo_local, wi_local) * wi_local.z * l_emit / light_pdf;
+                if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.counts.x, wi_local, l_emit,
+                                    light_pdf)) {
+                    sum += bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * l_emit / light_pdf;
                 }
             }
             radiance += sum / float(rays);

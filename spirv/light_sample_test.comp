@@ -95,7 +95,7 @@ void main() {
         vec3 wi_local;
         vec3 l_emit;
         float light_pdf;
-        if (sample_emissive(p, n, t, b, n, u.xyz, params.size.z, wi_local, l_emit, light_pdf)) {
+        if (sample_emissive(p, n, t, b, n, false, u.xyz, params.size.z, wi_local, l_emit, light_pdf)) {
             results[i] = vec4(wi_local.x * t + wi_local.y * b + wi_local.z * n, light_pdf);
         } else {
             results[i] = vec4(0.0);

@@ -153,10 +153,11 @@ void main() {
             vec3 wi_local;
             vec3 l_emit;
             float light_pdf;
-            if (sample_emissive(p, ng, t, b, n, u.xyz, params.settings.z, wi_local, l_emit, light_pdf)) {
+            if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.settings.z, wi_local, l_emit,
+                                light_pdf)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
-                vec3 c = throughput * f * wi_local.z * l_emit * (w / light_pdf);
+                vec3 c = throughput * f * abs(wi_local.z) * l_emit * (w / light_pdf);
                 radiance += c;
                 nonfinite |= nonfinite_bit(c, NONFINITE_EMISSIVE_NEE);
             }
@@ -175,11 +176,11 @@ void main() {
             float pdf;
             vec3 wi = env_sample(u, params.env_info.xy, pdf);
             vec3 wi_local;
-            if (pdf > 0.0 && light_reaches(p, ng, t, b, n, wi, false, wi, wi_local)) {
+            if (pdf > 0.0 && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, false, wi, wi_local)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = mis_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
                 vec3 le = env_radiance(wi, params.env_info.xy) * params.env.rgb;
-                vec3 c = throughput * f * wi_local.z * le * (w / pdf);
+                vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
                 radiance += c;
                 nonfinite |= nonfinite_bit(c, NONFINITE_ENV_NEE);
             }
@@ -201,9 +202,9 @@ void main() {
         }
         nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
         throughput *= weight;
-        // Light sampling covers only the reflection side, so an emitter or the environment
-        // reached through a transmission is weighted 1 (prev_pdf 0).
-        prev_pdf = transmitted ? 0.0 : pdf;
+        // Light sampling covers both sides of a transmitting surface, so an emitter or the
+        // environment reached either way is weighed by MIS against it.
+        prev_pdf = pdf;
         if (depth + 1u >= rr_depth) {
             float q = clamp(max3(throughput), 0.05, 1.0);
             if (u.w >= q) {

@@ -19,14 +19,18 @@
 #include "texture.glsl"
 
 // Whether light arriving along wi (unit, towards the light) reaches p: wi above both the shading
-// frame (t, b, n) and the geometric surface ng, and nothing on the shadow ray, which ends just
-// short of `target` when `to_point` and is unbounded otherwise. Also gives wi in the frame.
-bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 wi, bool to_point, vec3 target, out vec3 wi_local) {
+// frame (t, b, n) and the geometric surface ng — or, on a surface that `transmits`, below both —
+// and nothing on the shadow ray, which leaves from wi's side, and ends just short of `target`
+// when `to_point` and is unbounded otherwise. Also gives wi in the frame.
+bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 wi, bool to_point, vec3 target,
+                   out vec3 wi_local) {
     wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
-    if (!(wi_local.z > 0.0 && dot(wi, ng) > 0.0)) {
+    bool above = wi_local.z > 0.0 && dot(wi, ng) > 0.0;
+    bool below = transmits && wi_local.z < 0.0 && dot(wi, ng) < 0.0;
+    if (!above && !below) {
         return false;
     }
-    vec3 o = offset_ray(p, ng);
+    vec3 o = offset_ray(p, below ? -ng : ng);
     return to_point ? !bvh_any(o, target - o, 0.0, 0.9999) : !bvh_any(o, wi, 0.0, BVH_INF);
 }
 
@@ -286,7 +290,7 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
 // Next-event estimation on the emissive triangles: one of `count` by power (u.x), a uniform point
 // on it (u.yz). True when it emits towards p and nothing blocks it; then gives the direction in
 // the shading frame, the emitted radiance and the solid-angle pdf of the sample.
-bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 u, uint count,
+bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 u, uint count,
                      out vec3 wi_local, out vec3 l_emit, out float light_pdf) {
     uint k = pick_light(u.x, count);
     uint ltri = lights[k].tri;
@@ -301,7 +305,7 @@ bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, vec3 u, uint count
     float cos_l = abs(dot(ln, wi));
     light_pdf = lights[k].pmf / lights[k].area * dist2 / cos_l;
     return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0
-        && light_reaches(p, ng, t, b, n, wi, true, lp, wi_local);
+        && light_reaches(p, ng, t, b, n, transmits, wi, true, lp, wi_local);
 }
 
 // The solid-angle density with which sample_emissive picks the point a ray hits at distance
@@ -311,8 +315,14 @@ float emissive_pdf(uint tri, float area, float dist, vec3 ng, vec3 wo) {
     return triangles[tri].light_pmf / area * dist * dist / abs(dot(ng, wo));
 }
 
+// Whether light sampling at a surface covers the side below it too (a transmitting material,
+// in a kernel specialised for transmission).
+bool surface_transmits(Surface s) {
+    return HAS_TRANSMISSION && s.transmission > 0.0 && s.metallic < 1.0;
+}
+
 // Direct light from the `count` punctual lights at p (one shadow ray each): delta distributions,
-// so light sampling is the only strategy.
+// so light sampling is the only strategy; through a transmitting surface too.
 vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo_local, uint count) {
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < count; ++k) {
@@ -321,8 +331,9 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
         vec3 position;
         vec3 li = punctual_incident(k, p, wi, to_point, position);
         vec3 wi_local;
-        if (any(greaterThan(li, vec3(0.0))) && light_reaches(p, ng, t, b, n, wi, to_point, position, wi_local)) {
-            sum += bsdf_eval(s, wo_local, wi_local) * wi_local.z * li;
+        if (any(greaterThan(li, vec3(0.0)))
+            && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, to_point, position, wi_local)) {
+            sum += bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * li;
         }
     }
     return sum;

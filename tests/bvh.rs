@@ -288,7 +288,46 @@ fn random_soups_build_valid_bvhs() {
                 assert_eq!(t.input_index(), input);
                 assert_eq!(t.vertices(), triangles[input as usize]);
             }
+            gpu_layout_is_valid(&bvh).unwrap_or_else(|e| panic!("case {case} (n {n}): GPU layout: {e}"));
         }
+    }
+}
+
+/// The 4-wide GPU layout of `bvh`: every node reachable from the root exactly once, every
+/// triangle in exactly one leaf, every child's box inside its parent child's box.
+fn gpu_layout_is_valid(bvh: &Bvh) -> Result<(), String> {
+    use umbra::bvh::gpu::{GpuBvhChild, GpuBvhNode};
+    let nodes = GpuBvhNode::from_bvh(bvh);
+    let mut seen_nodes = vec![false; nodes.len()];
+    let mut seen_tris = vec![0u32; bvh.tris.len()];
+    let inside = |c: &GpuBvhChild, lo: [f32; 3], hi: [f32; 3]| {
+        (0..3).all(|k| c.aabb_min[k] >= lo[k] && c.aabb_max[k] <= hi[k])
+    };
+    let mut stack = vec![(0u32, [f32::NEG_INFINITY; 3], [f32::INFINITY; 3])];
+    while let Some((n, lo, hi)) = stack.pop() {
+        let seen = seen_nodes.get_mut(n as usize).ok_or(format!("node {n} out of range"))?;
+        if std::mem::replace(seen, true) {
+            return Err(format!("node {n} reached twice"));
+        }
+        for c in nodes[n as usize].children.iter().filter(|c| c.count != GpuBvhChild::NONE) {
+            if !inside(c, lo, hi) {
+                return Err(format!("a child of node {n} leaves its parent's box"));
+            }
+            if c.count == 0 {
+                stack.push((c.index, c.aabb_min, c.aabb_max));
+            } else {
+                for t in c.index..c.index + c.count {
+                    *seen_tris.get_mut(t as usize).ok_or(format!("triangle {t} out of range"))? += 1;
+                }
+            }
+        }
+    }
+    if let Some(n) = seen_nodes.iter().position(|s| !s) {
+        return Err(format!("node {n} unreachable"));
+    }
+    match seen_tris.iter().position(|&k| k != 1) {
+        Some(t) => Err(format!("triangle {t} in {} leaves", seen_tris[t])),
+        None => Ok(()),
     }
 }
 

@@ -1,8 +1,8 @@
 // BVH traversal: closest hit and any hit, a watertight ray/triangle test (Woop, Benthin and Wald
 // 2013) and a robust slab test (Ize 2013). The ray set-up, triangle test and slab test are those
 // of src/bvh/traverse.rs operation for operation (keep them in step); the walk differs in order
-// only (it reads the GPU layout, `GpuBvhNode` in src/bvh/gpu.rs), so both find the same nearest
-// hit up to ties in t.
+// only (it reads the 4-wide GPU layout, `GpuBvhNode` in src/bvh/gpu.rs), and both keep the same
+// tie rule, so both find the same nearest hit (up to a GPU's rounding of divisions).
 //
 // The including kernel declares, before including this file, the BVH as two uniform texel
 // buffers of RGBA32UI (`GpuBvhNode`s as eight texels each, `BvhTri`s as three):
@@ -20,7 +20,6 @@
 const float BVH_DIR_EPS = 1e-20;
 const float BVH_SLAB_ROBUST = 1.0 + 1.0 / 1048576.0;
 const float BVH_INF = uintBitsToFloat(0x7f800000u);
-
 
 // Child c of GPU node n: (aabb_min, index) and (aabb_max, count). count 0: an inner node (index
 // is its GPU node); BVH_NO_CHILD: absent; otherwise a leaf of `count` triangles from `index`.

@@ -1,6 +1,10 @@
 #version 460
-// SH9 irradiance of the environment map (ibl.glsl): one workgroup; each invocation projects
-// whole rows (the basis integrated exactly over each texel, sh9_cell), then a tree reduction per coefficient; the result is multiplied by A_l.
+// SH9 irradiance of the environment map (ibl.glsl): one workgroup per dispatch, 128 rows from
+// params.src.w (one row per invocation: the basis integrated exactly over each texel,
+// sh9_cell), a tree reduction per coefficient, multiplied by A_l and added to what the earlier
+// dispatches summed (the first one writes). Rows in batches because llvmpipe breaks every loop
+// of an invocation after 65,535 loop iterations in all: one invocation summing every 128th row
+// of a 4096×2048 map went past it and left the coefficients 98 % off.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -25,7 +29,7 @@ void main() {
     for (uint k = 0u; k < 9u; ++k) {
         c[k] = vec3(0.0);
     }
-    for (uint y = tid; y < size.y; y += 128u) {
+    for (uint y = params.src.w + tid; y < min(params.src.w + 128u, size.y); y += 128u) {
         float t0 = PI * float(y) / float(size.y);
         float t1 = PI * float(y + 1u) / float(size.y);
         for (uint x = 0u; x < size.x; ++x) {
@@ -49,7 +53,8 @@ void main() {
             barrier();
         }
         if (tid == 0u) {
-            sh[k] = vec4(partial[0] * sh9_band_factor(k), 0.0);
+            vec3 before = params.src.w > 0u ? sh[k].rgb : vec3(0.0);
+            sh[k] = vec4(before + partial[0] * sh9_band_factor(k), 0.0);
         }
         barrier();
     }

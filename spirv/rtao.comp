@@ -33,7 +33,7 @@ layout(set = 0, binding = 8, std430) readonly buffer Punctual { GpuLight punctua
 layout(set = 0, binding = 9, r32f) uniform readonly image2D gb_depth;
 layout(set = 0, binding = 10, rgba16f) uniform readonly image2D gb_normal;
 layout(set = 0, binding = 11, rg32ui) uniform readonly uimage2D gb_material;
-layout(set = 0, binding = 12, r32f) uniform writeonly image2D out_ao;
+layout(set = 0, binding = 12, r32f) uniform image2D out_ao;
 layout(push_constant) uniform Push { AoParams params; };
 
 #include "random.glsl"
@@ -48,6 +48,12 @@ void main() {
         return;
     }
     float depth = imageLoad(gb_depth, pixel).x;
+    // Rays [first, first + batch) of the pixel's `rays` (counts.z, counts.w): one dispatch per
+    // batch, each adding its rays' share, so no invocation runs long enough for llvmpipe's loop
+    // limiter (65,535 loop iterations per invocation, then every loop breaks) to cut it short.
+    uint rays = max(params.counts.x, 1u);
+    uint first = params.counts.z;
+    uint last = min(first + max(params.counts.w, 1u), rays);
     if (depth <= 0.0) {
         imageStore(out_ao, pixel, vec4(1.0));
         return;
@@ -58,12 +64,11 @@ void main() {
     vec3 ng = oct_decode(unpackSnorm2x16(imageLoad(gb_material, pixel).y));
     vec3 o = offset_ray(p, ng);
     float radius = params.radius_bias.x;
-    uint rays = max(params.counts.x, 1u);
     vec3 t;
     vec3 b;
     basis(n, t, b);
     uint open = 0u;
-    for (uint i = 0u; i < rays; ++i) {
+    for (uint i = first; i < last; ++i) {
         vec2 u = rand4(uvec2(pixel), params.size_frame.z * rays + i, 0u, params.size_frame.w).xy;
         vec3 w = sample_cosine_hemisphere(u);
         vec3 dir = w.x * t + w.y * b + w.z * n;
@@ -71,5 +76,6 @@ void main() {
             open += 1u;
         }
     }
-    imageStore(out_ao, pixel, vec4(float(open) / float(rays)));
+    float before = first > 0u ? imageLoad(out_ao, pixel).x : 0.0;
+    imageStore(out_ao, pixel, vec4(before + float(open) / float(rays)));
 }

@@ -555,3 +555,54 @@ fn cli_writes_ao_png_and_exr() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Many rays per pixel are not cut short. lavapipe stops every loop of an invocation once the
+/// invocation has run 65,535 loop iterations in all (gallivm's loop limiter), so 1,024 rays
+/// through a deep BVH in one invocation returned whatever was found before the cut-off. RTAO now
+/// traces a pixel's rays in batches, one dispatch each. Over a floor under a cloud of 30,000
+/// tiny triangles (each ray crosses many boxes and mostly misses), 1,024 rays must equal the mean
+/// of the same 1,024 rays run as 16 frames of 64 (the ray index is frame × rays + i), to float
+/// rounding.
+#[test]
+fn rtao_with_many_rays_is_not_cut_short() {
+    let gpu = Gpu::new();
+    let mut quads = Quads::new().floor();
+    let mut rng = umbra::geometry::Rng::new(7);
+    let s = &mut quads.scene;
+    for _ in 0..30_000 {
+        let c = Vec3::new(rng.range(-1.0, 1.0), rng.range(0.02, 0.5), rng.range(-1.0, 1.0));
+        let base = s.positions.len() as u32;
+        for k in 0..3 {
+            let p = c + 0.004 * Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            s.positions.push(p.to_array());
+            s.normals.push([0.0, 1.0, 0.0]);
+            let _ = k;
+        }
+        s.triangles.push([base, base + 1, base + 2]);
+        s.triangle_material.push(0);
+    }
+    let scene = quads.upload(&gpu);
+    let cam = camera(Vec3::new(0.0, 3.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 30.0);
+    let size = 16;
+    let settings = |samples, frame| AoSettings {
+        samples,
+        radius: 0.5,
+        blur: false,
+        frame,
+        seed: 99,
+        ..Default::default()
+    };
+    let many =
+        ambient_occlusion(&gpu, &scene, &cam, (size, size), AoMethod::Rtao, &settings(1024, 0)).unwrap();
+    let mut mean = vec![0.0f64; (size * size) as usize];
+    for frame in 0..16 {
+        let few = ambient_occlusion(&gpu, &scene, &cam, (size, size), AoMethod::Rtao, &settings(64, frame))
+            .unwrap();
+        for (m, v) in mean.iter_mut().zip(&few.values) {
+            *m += *v as f64 / 16.0;
+        }
+    }
+    let worst = many.values.iter().zip(&mean).map(|(&a, &b)| (a as f64 - b).abs()).fold(0.0, f64::max);
+    eprintln!("1024 rays vs 16 × 64: worst difference {worst:.2e}");
+    assert!(worst < 1e-5, "1024 rays in one go differ from the same rays in batches by {worst}");
+}

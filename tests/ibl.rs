@@ -885,3 +885,27 @@ fn thin_glass_transmits_the_environment_behind_it() {
     assert!((h_mean - p_mean).abs() <= 3.29 * se + 3e-3, "hybrid {h_mean} vs path tracer {p_mean} ± {se}");
     assert!(h_mean > 0.9, "the glass should show the bright sky behind it: {h_mean}");
 }
+
+/// The SH9 projection of a large map is not cut short: llvmpipe breaks every loop of an
+/// invocation after 65,535 loop iterations in all, and one invocation of `ibl_sh.comp` used to
+/// sum every 128th row in full (a 4096×2048 map, the largest lavapipe's storage buffers hold,
+/// came out 98 % off). Its coefficients must equal the f64 projection (1e-4 relative to the
+/// largest), as the small maps' do.
+#[test]
+fn sh9_of_a_large_map_is_not_cut_short() {
+    let map = synthetic_map(4096, 2048, sky);
+    let gpu = Gpu::new();
+    let mut scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
+    scene.set_environment(&gpu, &map).unwrap();
+    let ibl = IblResources::build(&gpu, &scene, &IblSettings::default()).unwrap();
+    let sh: Vec<[f32; 4]> = ibl.sh.read(&gpu).unwrap();
+    let cpu = sh9_irradiance_coefficients(&map);
+    let largest = cpu.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let error = (0..9)
+        .flat_map(|k| (0..3).map(move |c| (k, c)))
+        .map(|(k, c)| (sh[k][c] as f64 - cpu[k][c]).abs())
+        .fold(0.0, f64::max)
+        / largest;
+    eprintln!("SH9 of a 4096×2048 map: GPU vs f64 projection {error:.2e} of the largest coefficient");
+    assert!(error < 1e-4, "SH9 coefficients off by {error:e} of the largest");
+}

@@ -199,7 +199,7 @@ struct AoParams {
     vec4 cam_up;       // up * tan(yfov/2)
     vec4 radius_bias;  // AO radius r (world units), SSAO plane bias (world units), unused, unused
     uvec4 size_frame;  // width, height, frame, seed
-    uvec4 counts;      // directions (SSAO) or rays (RTAO) per pixel, SSAO steps per direction, unused, unused
+    uvec4 counts;      // directions (SSAO) or rays (RTAO) per pixel, SSAO steps per direction, RTAO: first ray and rays of this dispatch
 };
 
 // Push constants of ao_blur.comp.
@@ -213,7 +213,7 @@ struct AoBlurParams {
 
 // Push constants of the IBL precomputation kernels (ibl_*.comp).
 struct IblParams {
-    uvec4 src;     // source width, height (the environment map), level read (chain kernels), unused
+    uvec4 src;     // source width, height (the environment map), level read (chain kernels), first row (ibl_sh)
     uvec4 dst;     // level width, height, texel offset of the level written, samples (per axis for the LUT)
     vec4 values;   // perceptual roughness of the level (prefilter), unused, unused, unused
 };

@@ -235,9 +235,14 @@ impl RtaoPass {
         ao_params(camera, size, settings)
     }
 
+    /// Rays per pixel in one dispatch: llvmpipe breaks every loop of an invocation after 65,535
+    /// loop iterations in all, and one ray through a large BVH can take a few hundred.
+    pub const RAYS_PER_DISPATCH: u32 = 32;
+
     /// Records the pass: the scene's BVH and the G-buffer's depth, normal and material (for the
     /// geometric normal) in, `output` (`R32_SFLOAT`, `GENERAL`) written, then a
-    /// compute-to-compute barrier. Never submits.
+    /// compute-to-compute barrier. The rays go in batches of [`RtaoPass::RAYS_PER_DISPATCH`],
+    /// one dispatch each. Never submits.
     pub fn record(
         &self,
         ctx: &Context,
@@ -250,8 +255,14 @@ impl RtaoPass {
         let mut resources = scene.surface_descriptors().to_vec();
         resources
             .extend([gbuffer.depth, gbuffer.normal, gbuffer.material, output].map(Descriptor::StorageView));
-        self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
-        barrier::compute_to_compute(ctx, cmd);
+        let rays = params.counts[0].max(1);
+        for first in (0..rays).step_by(Self::RAYS_PER_DISPATCH as usize) {
+            let mut batch = *params;
+            batch.counts[2] = first;
+            batch.counts[3] = Self::RAYS_PER_DISPATCH.min(rays - first);
+            self.pipeline.record(cmd, &resources, &batch, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
+            barrier::compute_to_compute(ctx, cmd);
+        }
         Ok(())
     }
 }

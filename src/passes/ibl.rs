@@ -174,15 +174,13 @@ impl IblResources {
         end(&mut timer)?;
 
         begin(&mut timer, "ibl sh")?;
+        // 128 rows per dispatch (one per invocation): see ibl_sh.comp on llvmpipe's loop limiter.
         let sh = [Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.sh)];
-        self.sh_pipeline.record(
-            cmd,
-            &sh,
-            &IblParams { src, ..Default::default() },
-            [128, 1, 1],
-            [128, 1, 1],
-        )?;
-        barrier::compute_to_compute(ctx, cmd);
+        for first_row in (0..src[1].max(1)).step_by(128) {
+            let params = IblParams { src: [src[0], src[1], src[2], first_row], ..Default::default() };
+            self.sh_pipeline.record(cmd, &sh, &params, [128, 1, 1], [128, 1, 1])?;
+            barrier::compute_to_compute(ctx, cmd);
+        }
         end(&mut timer)
     }
 }

@@ -909,3 +909,32 @@ fn sh9_of_a_large_map_is_not_cut_short() {
     eprintln!("SH9 of a 4096×2048 map: GPU vs f64 projection {error:.2e} of the largest coefficient");
     assert!(error < 1e-4, "SH9 coefficients off by {error:e} of the largest");
 }
+
+/// Sample counts that one invocation could not finish on a CPU device are refused with a clear
+/// error, and the largest allowed ones build.
+#[test]
+fn ibl_sample_counts_are_checked() {
+    let gpu = Gpu::new();
+    let scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
+    for settings in [
+        IblSettings { lut_samples: 0, ..Default::default() },
+        IblSettings { lut_samples: IblSettings::MAX_LUT_SAMPLES + 1, ..Default::default() },
+        IblSettings { prefilter_samples: IblSettings::MAX_PREFILTER_SAMPLES + 1, ..Default::default() },
+    ] {
+        let message = IblResources::build(&gpu, &scene, &settings).err().expect("refused").to_string();
+        assert!(message.contains("must be 1 to"), "{message}");
+    }
+    // The largest table is the default one's integral (not cut short): within the default's
+    // quadrature error, 1e-3.
+    let largest = IblSettings { lut_samples: IblSettings::MAX_LUT_SAMPLES, ..Default::default() };
+    let big: Vec<[f32; 4]> = IblResources::build(&gpu, &scene, &largest).unwrap().lut.read(&gpu).unwrap();
+    let default: Vec<[f32; 4]> =
+        IblResources::build(&gpu, &scene, &IblSettings::default()).unwrap().lut.read(&gpu).unwrap();
+    let worst =
+        big.iter().flatten().zip(default.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(
+        worst < 1e-3,
+        "the {}-sample table differs from the default by {worst}",
+        IblSettings::MAX_LUT_SAMPLES
+    );
+}

@@ -5,7 +5,7 @@
 //! environment map (a constant environment) only the table is computed: the prefiltered
 //! radiance and the irradiance of a constant are the constant (and π times it).
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::layout::IblParams;
 use crate::gpu::scene::GpuScene;
 use crate::ibl::{chain_level_sizes, prefiltered_level_sizes, IBL_LEVELS, LUT_SIZE};
@@ -24,6 +24,30 @@ pub struct IblSettings {
 impl Default for IblSettings {
     fn default() -> Self {
         Self { lut_samples: 128, prefilter_samples: 64 }
+    }
+}
+
+impl IblSettings {
+    /// Largest `lut_samples`: one invocation loops over its square, and llvmpipe breaks every loop
+    /// of an invocation after 65,535 loop iterations in all (181² + 181 is within it).
+    pub const MAX_LUT_SAMPLES: u32 = 181;
+    /// Largest `prefilter_samples`, for the same limit.
+    pub const MAX_PREFILTER_SAMPLES: u32 = 32_768;
+
+    /// Both counts at least 1 and at most their maximum, else a clear error.
+    pub fn validate(&self) -> Result<()> {
+        for (name, value, max) in [
+            ("lut_samples", self.lut_samples, Self::MAX_LUT_SAMPLES),
+            ("prefilter_samples", self.prefilter_samples, Self::MAX_PREFILTER_SAMPLES),
+        ] {
+            if value == 0 || value > max {
+                return Err(Error::Invalid(format!(
+                    "IBL {name} is {value}: must be 1 to {max} (one kernel invocation loops over them, and \
+                     CPU devices cut loops short past 65,535 iterations)"
+                )));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -69,6 +93,7 @@ impl IblResources {
     /// Allocates the tables for `scene`'s environment (none when it has no map) and builds the
     /// pipelines; [`Self::record`] fills them.
     pub fn new(ctx: &Context, scene: &GpuScene, settings: &IblSettings) -> Result<Self> {
+        settings.validate()?;
         let env_size = scene.env_size;
         let (chain_texels, prefiltered_texels) = match env_size {
             Some(size) => (

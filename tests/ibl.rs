@@ -99,6 +99,22 @@ const NORMALS: [[f64; 3]; 6] = [
     [0.0, 0.0, -1.0],
 ];
 
+/// The f64 SH9 projection of `map`, and how far the kernel's coefficients are from it, relative
+/// to the largest.
+fn sh9_gpu_error(gpu: &Gpu, scene: &mut GpuScene, map: &EnvironmentMap) -> ([[f64; 3]; 9], f64) {
+    let cpu = sh9_irradiance_coefficients(map);
+    scene.set_environment(gpu, map).unwrap();
+    let ibl = IblResources::build(gpu, scene, &IblSettings::default()).unwrap();
+    let sh: Vec<[f32; 4]> = ibl.sh.read(gpu).unwrap();
+    let largest = cpu.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let error = (0..9)
+        .flat_map(|k| (0..3).map(move |c| (k, c)))
+        .map(|(k, c)| (sh[k][c] as f64 - cpu[k][c]).abs())
+        .fold(0.0, f64::max)
+        / largest;
+    (cpu, error)
+}
+
 /// SH9 irradiance: the kernel's coefficients equal the f64 projection (1e-4 relative to the
 /// largest); for a constant map the SH irradiance is exactly π L (the texel-integrated basis
 /// has no band 1–2 content; the brute-force sum over texel centres is within 1e-3); for a map of bands 0–2 only, SH9
@@ -119,16 +135,7 @@ fn sh9_irradiance_matches_brute_force() {
     let gpu = Gpu::new();
     let mut scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
     for (name, map) in [("constant", &constant), ("banded", &banded), ("sky", &bright)] {
-        let cpu = sh9_irradiance_coefficients(map);
-        scene.set_environment(&gpu, map).unwrap();
-        let ibl = IblResources::build(&gpu, &scene, &IblSettings::default()).unwrap();
-        let sh: Vec<[f32; 4]> = ibl.sh.read(&gpu).unwrap();
-        let largest = cpu.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        let gpu_error = (0..9)
-            .flat_map(|k| (0..3).map(move |c| (k, c)))
-            .map(|(k, c)| (sh[k][c] as f64 - cpu[k][c]).abs())
-            .fold(0.0, f64::max)
-            / largest;
+        let (cpu, gpu_error) = sh9_gpu_error(&gpu, &mut scene, map);
         let l2 = map.texels.iter().enumerate().map(|(i, t)| {
             let d_omega = texel_direction(i % w, i / w, w, h).1;
             t.map(|v| (v as f64).powi(2) * d_omega)
@@ -896,16 +903,7 @@ fn sh9_of_a_large_map_is_not_cut_short() {
     let map = synthetic_map(4096, 2048, sky);
     let gpu = Gpu::new();
     let mut scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
-    scene.set_environment(&gpu, &map).unwrap();
-    let ibl = IblResources::build(&gpu, &scene, &IblSettings::default()).unwrap();
-    let sh: Vec<[f32; 4]> = ibl.sh.read(&gpu).unwrap();
-    let cpu = sh9_irradiance_coefficients(&map);
-    let largest = cpu.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let error = (0..9)
-        .flat_map(|k| (0..3).map(move |c| (k, c)))
-        .map(|(k, c)| (sh[k][c] as f64 - cpu[k][c]).abs())
-        .fold(0.0, f64::max)
-        / largest;
+    let (_, error) = sh9_gpu_error(&gpu, &mut scene, &map);
     eprintln!("SH9 of a 4096×2048 map: GPU vs f64 projection {error:.2e} of the largest coefficient");
     assert!(error < 1e-4, "SH9 coefficients off by {error:e} of the largest");
 }

@@ -99,9 +99,13 @@ const NORMALS: [[f64; 3]; 6] = [
     [0.0, 0.0, -1.0],
 ];
 
-/// The f64 SH9 projection of `map`, and how far the kernel's coefficients are from it, relative
-/// to the largest.
-fn sh9_gpu_error(gpu: &Gpu, scene: &mut GpuScene, map: &EnvironmentMap) -> ([[f64; 3]; 9], f64) {
+/// The f64 SH9 projection of `map`, how far the kernel's coefficients are from it (relative to
+/// the largest), and the IBL resources built.
+fn sh9_gpu_error(
+    gpu: &Gpu,
+    scene: &mut GpuScene,
+    map: &EnvironmentMap,
+) -> ([[f64; 3]; 9], f64, IblResources) {
     let cpu = sh9_irradiance_coefficients(map);
     scene.set_environment(gpu, map).unwrap();
     let ibl = IblResources::build(gpu, scene, &IblSettings::default()).unwrap();
@@ -112,7 +116,7 @@ fn sh9_gpu_error(gpu: &Gpu, scene: &mut GpuScene, map: &EnvironmentMap) -> ([[f6
         .map(|(k, c)| (sh[k][c] as f64 - cpu[k][c]).abs())
         .fold(0.0, f64::max)
         / largest;
-    (cpu, error)
+    (cpu, error, ibl)
 }
 
 /// SH9 irradiance: the kernel's coefficients equal the f64 projection (1e-4 relative to the
@@ -135,7 +139,7 @@ fn sh9_irradiance_matches_brute_force() {
     let gpu = Gpu::new();
     let mut scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
     for (name, map) in [("constant", &constant), ("banded", &banded), ("sky", &bright)] {
-        let (cpu, gpu_error) = sh9_gpu_error(&gpu, &mut scene, map);
+        let (cpu, gpu_error, ibl) = sh9_gpu_error(&gpu, &mut scene, map);
         let l2 = map.texels.iter().enumerate().map(|(i, t)| {
             let d_omega = texel_direction(i % w, i / w, w, h).1;
             t.map(|v| (v as f64).powi(2) * d_omega)
@@ -903,7 +907,7 @@ fn sh9_of_a_large_map_is_not_cut_short() {
     let map = synthetic_map(4096, 2048, sky);
     let gpu = Gpu::new();
     let mut scene = GpuScene::upload(&gpu, &scene_file("spheres.glb")).unwrap();
-    let (_, error) = sh9_gpu_error(&gpu, &mut scene, &map);
+    let (_, error, _) = sh9_gpu_error(&gpu, &mut scene, &map);
     eprintln!("SH9 of a 4096×2048 map: GPU vs f64 projection {error:.2e} of the largest coefficient");
     assert!(error < 1e-4, "SH9 coefficients off by {error:e} of the largest");
 }

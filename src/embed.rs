@@ -222,6 +222,7 @@ impl Renderer {
         ao: Option<raw::ImageView>,
         settings: &LightingSettings,
     ) -> Result<()> {
+        settings.validate()?;
         let params = DeferredPass::params(&self.scene, camera, gbuffer.size, settings);
         self.deferred.record(&self.ctx, cmd, &self.scene, gbuffer, output, &self.ibl, ao, &params)
     }

@@ -229,6 +229,7 @@ pub fn hybrid(
     camera: &Camera,
     settings: &HybridSettings,
 ) -> Result<HybridImage> {
+    settings.lighting.validate()?;
     let size = settings.size;
     let gbuffer = GBuffer::new(ctx, size)?;
     let output = Image::storage_2d(ctx, "hybrid colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;

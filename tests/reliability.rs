@@ -566,3 +566,35 @@ fn absurd_output_sizes_are_clear_cli_errors() {
     assert!(stderr.contains("path accum") && stderr.contains("binds at most"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// Hybrid lighting settings that one kernel invocation could not finish on a CPU device (more
+/// shadow rays than `LightingSettings::MAX_SHADOW_RAYS`), none at all, or a negative environment
+/// are one clear error, not a silently darker frame.
+#[test]
+fn hybrid_lighting_settings_are_checked() {
+    use umbra::passes::deferred::LightingSettings;
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    let camera = scene.camera(None).unwrap();
+    let bad = [
+        LightingSettings { shadow_rays: 0, ..Default::default() },
+        LightingSettings { shadow_rays: LightingSettings::MAX_SHADOW_RAYS + 1, ..Default::default() },
+        LightingSettings { env: [0.5, -1.0, 0.5], ..Default::default() },
+    ];
+    for lighting in bad {
+        let settings = HybridSettings { size: (8, 8), lighting, ..Default::default() };
+        match hybrid(&gpu, &device_scene, &camera, &settings) {
+            Err(Error::Invalid(message)) => assert!(message.contains("must be"), "{message}"),
+            other => panic!("{lighting:?}: expected a clear error, got {:?}", other.map(|_| ())),
+        }
+    }
+    let most = LightingSettings { shadow_rays: LightingSettings::MAX_SHADOW_RAYS, ..Default::default() };
+    hybrid(
+        &gpu,
+        &device_scene,
+        &camera,
+        &HybridSettings { size: (8, 8), lighting: most, ..Default::default() },
+    )
+    .unwrap();
+}

@@ -11,7 +11,7 @@
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
 use crate::bvh::gpu::GpuBvh;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::layout::DeferredParams;
 use crate::gpu::scene::GpuScene;
 use crate::render::camera_params;
@@ -39,6 +39,33 @@ pub struct LightingSettings {
 impl Default for LightingSettings {
     fn default() -> Self {
         Self { shadow_rays: 4, frame: 0, seed: 0, env: [0.0; 3], ibl: true, ibl_lookup: IblLookup::Dominant }
+    }
+}
+
+impl LightingSettings {
+    /// Most shadow rays per pixel: one invocation traces them all, and CPU devices (llvmpipe)
+    /// break every loop of an invocation after 65,535 loop iterations in all; 64 rays through a
+    /// Sponza-class BVH stay well inside it.
+    pub const MAX_SHADOW_RAYS: u32 = 64;
+
+    /// Checks the settings: 1 to [`Self::MAX_SHADOW_RAYS`] shadow rays, a finite non-negative
+    /// environment.
+    pub fn validate(&self) -> Result<()> {
+        if self.shadow_rays == 0 || self.shadow_rays > Self::MAX_SHADOW_RAYS {
+            return Err(Error::Invalid(format!(
+                "{} shadow rays per pixel: must be 1 to {} (one kernel invocation traces them all, and CPU \
+                 devices cut loops short past 65,535 iterations)",
+                self.shadow_rays,
+                Self::MAX_SHADOW_RAYS
+            )));
+        }
+        if !self.env.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            return Err(Error::Invalid(format!(
+                "environment radiance {:?} must be finite and non-negative",
+                self.env
+            )));
+        }
+        Ok(())
     }
 }
 

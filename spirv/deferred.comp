@@ -106,7 +106,7 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
         uint k0 = min(uint(lod), IBL_LEVELS - 1u);
         uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
         specular_light *= mix(ibl_level(k0, r), ibl_level(k1, r), lod - float(k0));
-        if (HAS_TRANSMISSION && s.transmission > 0.0 && dot(through, through) > 0.0) {
+        if (surface_transmits(s) && dot(through, through) > 0.0) {
             transmitted_light *= mix(ibl_level(k0, through), ibl_level(k1, through), lod - float(k0));
         }
         float y[9];

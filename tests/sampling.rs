@@ -498,7 +498,7 @@ impl LightKernel {
                     Descriptor::Buffer(&s.env_marginal),
                     Descriptor::Buffer(&s.env_conditional),
                     Descriptor::Buffer(&s.textures),
-                    Descriptor::Texels(&s.texel_view),
+                    Descriptor::Texels(&s.texels),
                     Descriptor::Buffer(&input),
                     Descriptor::Buffer(&output),
                 ],

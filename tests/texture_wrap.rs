@@ -8,7 +8,7 @@ mod common;
 
 use common::Gpu;
 use umbra::gpu::layout::BufferTestParams;
-use umbra::vk::{raw, Buffer, ComputePipeline, Descriptor, PipelineDesc};
+use umbra::vk::{raw, Buffer, ComputePipeline, Descriptor, PipelineDesc, TexelBuffer};
 
 fn mirror(i: i32, n: i32) -> i32 {
     let period = 2 * n;
@@ -49,9 +49,7 @@ fn repeat_and_mirror_wrapping_are_exact() {
     let input = Buffer::upload(&gpu, "wrap cases", &cases, usage).unwrap();
     let output = Buffer::upload(&gpu, "wrapped", &vec![0i32; 2 * cases.len()], usage).unwrap();
     let textures = Buffer::upload(&gpu, "no textures", &[0u32; 16], usage).unwrap();
-    let texels =
-        Buffer::upload(&gpu, "no texels", &[0u32], raw::BufferUsageFlags::UNIFORM_TEXEL_BUFFER).unwrap();
-    let texel_view = texels.texel_view(raw::Format::R32_UINT, 4).unwrap();
+    let texels = TexelBuffer::upload(&gpu, "no texels", &[0u32], raw::Format::R32_UINT, 4).unwrap();
     let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 4];
     bindings[3] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
     let desc = PipelineDesc { bindings: &bindings, push_constant_size: 8, specialization: &[] };
@@ -62,7 +60,7 @@ fn repeat_and_mirror_wrapping_are_exact() {
             Descriptor::Buffer(&input),
             Descriptor::Buffer(&output),
             Descriptor::Buffer(&textures),
-            Descriptor::Texels(&texel_view),
+            Descriptor::Texels(&texels),
         ];
         pipeline.push_descriptors(cmd, &descriptors)?;
         pipeline.push_constants(cmd, &BufferTestParams { count, add: 0 })?;

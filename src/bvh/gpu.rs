@@ -1,39 +1,29 @@
-//! The BVH on the GPU: its two storage buffers, and `trace.comp`, which traces a buffer of rays
-//! (closest or any hit) for the traversal tests and the ray-throughput benchmark.
+//! The BVH on the GPU: its 4-wide layout in two texel buffers, and `trace.comp`, which traces a
+//! buffer of rays (closest or any hit) for the traversal tests and the ray-throughput benchmark.
 
 use super::{Bvh, BvhNode};
 use crate::error::Result;
 use crate::gpu::layout::{TraceHit, TraceParams, TraceRay};
-use crate::vk::{raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc, TexelView};
+use crate::vk::{
+    raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc, TexelBuffer,
+};
 
-/// The node and triangle buffers of a [`Bvh`], uploaded once, and their texel views: every
-/// kernel binds the BVH as two uniform texel buffers (bindings 0 and 1, see `bvh.glsl`).
+/// The node and triangle lists of a [`Bvh`], uploaded once: every kernel binds the BVH as two
+/// uniform texel buffers of RGBA32UI (bindings 0 and 1, see `bvh.glsl`).
 pub struct GpuBvh {
-    /// `bvh_node_texels`: each [`GpuBvhNode`] as eight RGBA32UI texels.
-    pub node_texels: TexelView,
-    /// `bvh_tri_texels`: each triangle as three RGBA32UI texels.
-    pub tri_texels: TexelView,
-    /// The [`GpuBvhNode`]s.
-    pub nodes: Buffer,
-    /// `bvh_tris[]`.
-    pub tris: Buffer,
+    /// `bvh_node_texels`: each [`GpuBvhNode`] as eight texels.
+    pub nodes: TexelBuffer,
+    /// `bvh_tri_texels`: each triangle as three texels.
+    pub tris: TexelBuffer,
 }
 
 impl GpuBvh {
-    /// Uploads `bvh` through staging buffers (an empty BVH's triangle list still gets a minimal
-    /// buffer: see [`Buffer::new`]).
+    /// Uploads `bvh` through staging buffers.
     pub fn upload(ctx: &Context, bvh: &Bvh) -> Result<Self> {
-        let usage = raw::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
-        let nodes = Buffer::upload(ctx, "bvh nodes", &GpuBvhNode::from_bvh(bvh), usage)?;
-        // An empty scene's one (never read) triangle: a texel view needs at least one texel.
-        let empty = [Default::default()];
-        let tri_list = if bvh.tris.is_empty() { &empty[..] } else { &bvh.tris[..] };
-        let tris = Buffer::upload(ctx, "bvh triangles", tri_list, usage)?;
+        const RGBA32UI: raw::Format = raw::Format::R32G32B32A32_UINT;
         Ok(Self {
-            node_texels: nodes.texel_view(raw::Format::R32G32B32A32_UINT, 16)?,
-            tri_texels: tris.texel_view(raw::Format::R32G32B32A32_UINT, 16)?,
-            nodes,
-            tris,
+            nodes: TexelBuffer::upload(ctx, "bvh nodes", &GpuBvhNode::from_bvh(bvh), RGBA32UI, 16)?,
+            tris: TexelBuffer::upload(ctx, "bvh triangles", &bvh.tris, RGBA32UI, 16)?,
         })
     }
 
@@ -42,7 +32,7 @@ impl GpuBvh {
 
     /// The BVH's two descriptors, in the order of [`GpuBvh::BINDINGS`].
     pub fn descriptors(&self) -> [Descriptor<'_>; 2] {
-        [Descriptor::Texels(&self.node_texels), Descriptor::Texels(&self.tri_texels)]
+        [Descriptor::Texels(&self.nodes), Descriptor::Texels(&self.tris)]
     }
 }
 

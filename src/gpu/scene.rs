@@ -7,7 +7,7 @@ use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Scene};
-use crate::vk::{raw, Buffer, Context, Descriptor, DeviceInfo, TexelView};
+use crate::vk::{raw, Buffer, Context, Descriptor, DeviceInfo, TexelBuffer};
 use glam::Vec3;
 
 /// Storage buffers for one scene.
@@ -36,12 +36,9 @@ pub struct GpuScene {
     pub env_conditional: Buffer,
     /// `GpuTexture`s.
     pub textures: Buffer,
-    /// `scene_texels`: [`GpuScene::texels`] as R32UI texels (`texture.glsl` reads them with
-    /// `texelFetch`).
-    pub texel_view: TexelView,
-    /// The sRGB decoding table (256 `f32` bits), then the RGBA8 texels of every texture (one
-    /// zero word when there is no texture: a texel view needs a texel).
-    pub texels: Buffer,
+    /// `scene_texels`, R32UI texels (`texture.glsl` reads them with `texelFetch`): the sRGB
+    /// decoding table (256 `f32` bits), then the RGBA8 texels of every texture.
+    pub texels: TexelBuffer,
     /// Textures the materials use.
     pub texture_count: u32,
     /// Whether some material transmits (`KHR_materials_transmission`): the path tracer is
@@ -302,7 +299,7 @@ impl GpuScene {
             Descriptor::Buffer(&self.vertices),
             Descriptor::Buffer(&self.materials),
             Descriptor::Buffer(&self.textures),
-            Descriptor::Texels(&self.texel_view),
+            Descriptor::Texels(&self.texels),
             Descriptor::Buffer(&self.lights),
             Descriptor::Buffer(&self.punctual),
         ]
@@ -344,7 +341,6 @@ impl GpuScene {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         // The alpha bits with_bvh wrote into the BVH triangles.
         let alpha_modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
-        let (texels, texel_view) = upload_texels(ctx, &arrays.texels)?;
         Ok(Self {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
             triangles: Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?,
@@ -355,8 +351,7 @@ impl GpuScene {
             punctual: Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?,
             punctual_count: arrays.punctual.len() as u32,
             textures: Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?,
-            texel_view,
-            texels,
+            texels: upload_texels(ctx, &arrays.texels)?,
             texture_count: arrays.textures.len() as u32,
             has_transmission: transmits(&arrays.materials),
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
@@ -399,23 +394,16 @@ impl GpuScene {
         self.punctual = Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?;
         self.punctual_count = arrays.punctual.len() as u32;
         self.textures = Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?;
-        let (texels, texel_view) = upload_texels(ctx, &arrays.texels)?;
-        self.texel_view = texel_view;
-        self.texels = texels;
+        self.texels = upload_texels(ctx, &arrays.texels)?;
         self.texture_count = arrays.textures.len() as u32;
         self.has_transmission = transmits(&arrays.materials);
         Ok(())
     }
 }
 
-/// Uploads the scene texels as a uniform texel buffer of R32UI words and views it (an empty list
-/// as one zero word, never read: a texel view needs at least one texel).
-fn upload_texels(ctx: &Context, texels: &[u32]) -> Result<(Buffer, TexelView)> {
-    let usage = raw::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
-    let words = if texels.is_empty() { &[0u32][..] } else { texels };
-    let buffer = Buffer::upload(ctx, "scene texels", words, usage)?;
-    let view = buffer.texel_view(raw::Format::R32_UINT, 4)?;
-    Ok((buffer, view))
+/// Uploads the scene texels as a uniform texel buffer of R32UI words.
+fn upload_texels(ctx: &Context, texels: &[u32]) -> Result<TexelBuffer> {
+    TexelBuffer::upload(ctx, "scene texels", texels, raw::Format::R32_UINT, 4)
 }
 
 /// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits (0 opaque,

@@ -173,7 +173,7 @@ impl DeferredPass {
             Descriptor::Buffer(&scene.lights),
             Descriptor::Buffer(&scene.punctual),
             Descriptor::Buffer(&scene.textures),
-            Descriptor::Texels(&scene.texel_view),
+            Descriptor::Texels(&scene.texels),
             Descriptor::Buffer(&scene.env_texels),
             Descriptor::Buffer(&scene.env_marginal),
             Descriptor::Buffer(&scene.env_conditional),

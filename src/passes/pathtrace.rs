@@ -151,7 +151,7 @@ impl PathTracePass {
                 Descriptor::Buffer(&scene.env_marginal),
                 Descriptor::Buffer(&scene.env_conditional),
                 Descriptor::Buffer(&scene.textures),
-                Descriptor::Texels(&scene.texel_view),
+                Descriptor::Texels(&scene.texels),
             ],
             params,
             [target.size.0, target.size.1, 1],

@@ -150,43 +150,55 @@ impl Buffer {
     }
 }
 
-/// A view of a [`Buffer`] as a uniform texel buffer of one format (`usamplerBuffer` in GLSL).
-/// Create it with [`Buffer::texel_view`]; destroyed on drop.
-pub struct TexelView {
-    shared: Arc<Shared>,
-    /// The raw handle.
-    pub raw: vk::BufferView,
+/// A buffer read as a uniform texel buffer of one format (`usamplerBuffer` in GLSL): the buffer
+/// and its view, destroyed together (the view first).
+pub struct TexelBuffer {
+    /// The view the kernels bind.
+    pub view: vk::BufferView,
+    /// The buffer.
+    pub buffer: Buffer,
 }
 
-impl Buffer {
-    /// A uniform texel buffer view of the whole buffer as `format` texels of `texel_bytes` bytes
-    /// each. The buffer must have been created with `UNIFORM_TEXEL_BUFFER` usage; the texel count
-    /// must be within the device's `maxTexelBufferElements`.
-    pub fn texel_view(&self, format: vk::Format, texel_bytes: u64) -> Result<TexelView> {
-        let texels = self.size / texel_bytes;
-        let limit = self.shared.info.max_texel_buffer_elements as u64;
+impl TexelBuffer {
+    /// Uploads `data` (through [`Buffer::upload`]) and views it as `format` texels of
+    /// `texel_bytes` bytes each. An empty list uploads one zeroed element, never read: a view
+    /// needs at least one texel. The texel count must be within the device's
+    /// `maxTexelBufferElements`.
+    pub fn upload<T: bytemuck::Pod>(
+        ctx: &Context,
+        name: &str,
+        data: &[T],
+        format: vk::Format,
+        texel_bytes: u64,
+    ) -> Result<Self> {
+        let zeroed = [T::zeroed()];
+        let data = if data.is_empty() { &zeroed[..] } else { data };
+        let buffer = Buffer::upload(ctx, name, data, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER)?;
+        let shared = &buffer.shared;
+        let texels = buffer.size / texel_bytes;
+        let limit = shared.info.max_texel_buffer_elements as u64;
         if texels > limit {
             return Err(Error::Invalid(format!(
-                "buffer '{}' holds {texels} texels but device '{}' views at most {limit} per texel buffer",
-                self.name, self.shared.info.name
+                "buffer '{name}' holds {texels} texels but device '{}' views at most {limit} per texel buffer",
+                shared.info.name
             )));
         }
         let info = vk::BufferViewCreateInfo::default()
-            .buffer(self.raw)
+            .buffer(buffer.raw)
             .format(format)
             .offset(0)
             .range(texels * texel_bytes);
-        // SAFETY: a valid buffer; the view is destroyed in Drop, before anything frees the buffer
-        // that a pending submission could still read.
-        let raw = unsafe { self.shared.device.create_buffer_view(&info, None) }.call("vkCreateBufferView")?;
-        Ok(TexelView { shared: self.shared.clone(), raw })
+        // SAFETY: a valid buffer; the view is destroyed in Drop, before the buffer.
+        let view = unsafe { shared.device.create_buffer_view(&info, None) }.call("vkCreateBufferView")?;
+        Ok(Self { view, buffer })
     }
 }
 
-impl Drop for TexelView {
+impl Drop for TexelBuffer {
     fn drop(&mut self) {
-        // SAFETY: as for Buffer: no pending submission uses the view.
-        unsafe { self.shared.device.destroy_buffer_view(self.raw, None) };
+        // SAFETY: as for Buffer: no pending submission uses the view. The buffer field drops
+        // after this, so the view goes first.
+        unsafe { self.buffer.shared.device.destroy_buffer_view(self.view, None) };
     }
 }
 

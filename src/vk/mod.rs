@@ -10,7 +10,7 @@ mod image;
 mod pipeline;
 mod timer;
 
-pub use buffer::{Buffer, TexelView};
+pub use buffer::{Buffer, TexelBuffer};
 pub use context::{Context, ContextDesc, DeviceInfo, HostDevice};
 pub use debug::ValidationLog;
 pub use image::Image;

@@ -16,7 +16,7 @@ pub enum Descriptor<'a> {
     /// A view of a storage image in GENERAL layout that umbra does not own (a host engine's).
     StorageView(vk::ImageView),
     /// A uniform texel buffer (`usamplerBuffer`).
-    Texels(&'a super::TexelView),
+    Texels(&'a super::TexelBuffer),
 }
 
 impl Descriptor<'_> {
@@ -164,7 +164,7 @@ impl ComputePipeline {
         let views: Vec<[vk::BufferView; 1]> = resources
             .iter()
             .map(|r| match r {
-                Descriptor::Texels(v) => [v.raw],
+                Descriptor::Texels(t) => [t.view],
                 _ => [vk::BufferView::null()],
             })
             .collect();

@@ -255,12 +255,17 @@ impl RtaoPass {
         let mut resources = scene.surface_descriptors().to_vec();
         resources
             .extend([gbuffer.depth, gbuffer.normal, gbuffer.material, output].map(Descriptor::StorageView));
+        // The pipeline and resources once; per batch only the push constants change.
+        let p = &self.pipeline;
+        p.bind(cmd);
+        p.push_descriptors(cmd, &resources)?;
         let rays = params.counts[0].max(1);
         for first in (0..rays).step_by(Self::RAYS_PER_DISPATCH as usize) {
             let mut batch = *params;
             batch.counts[2] = first;
             batch.counts[3] = Self::RAYS_PER_DISPATCH.min(rays - first);
-            self.pipeline.record(cmd, &resources, &batch, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
+            p.push_constants(cmd, &batch)?;
+            p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
             barrier::compute_to_compute(ctx, cmd);
         }
         Ok(())

@@ -200,10 +200,15 @@ impl IblResources {
 
         begin(&mut timer, "ibl sh")?;
         // 128 rows per dispatch (one per invocation): see ibl_sh.comp on llvmpipe's loop limiter.
-        let sh = [Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.sh)];
+        let p = &self.sh_pipeline;
+        p.bind(cmd);
+        p.push_descriptors(cmd, &[Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.sh)])?;
         for first_row in (0..src[1].max(1)).step_by(128) {
-            let params = IblParams { src: [src[0], src[1], src[2], first_row], ..Default::default() };
-            self.sh_pipeline.record(cmd, &sh, &params, [128, 1, 1], [128, 1, 1])?;
+            p.push_constants(
+                cmd,
+                &IblParams { src: [src[0], src[1], src[2], first_row], ..Default::default() },
+            )?;
+            p.dispatch(cmd, [128, 1, 1], [128, 1, 1])?;
             barrier::compute_to_compute(ctx, cmd);
         }
         end(&mut timer)

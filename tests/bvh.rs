@@ -294,7 +294,8 @@ fn random_soups_build_valid_bvhs() {
 }
 
 /// The 4-wide GPU layout of `bvh`: every node reachable from the root exactly once, every
-/// triangle in exactly one leaf, every child's box inside its parent child's box.
+/// triangle in exactly one leaf, every child's box inside its parent child's box, and a node's
+/// inner children at consecutive indices (the traversal stack stores the first and offsets).
 fn gpu_layout_is_valid(bvh: &Bvh) -> Result<(), String> {
     use umbra::bvh::gpu::{GpuBvhChild, GpuBvhNode};
     let nodes = GpuBvhNode::from_bvh(bvh);
@@ -309,7 +310,13 @@ fn gpu_layout_is_valid(bvh: &Bvh) -> Result<(), String> {
         if std::mem::replace(seen, true) {
             return Err(format!("node {n} reached twice"));
         }
-        for c in nodes[n as usize].children.iter().filter(|c| c.count != GpuBvhChild::NONE) {
+        let children = &nodes[n as usize].children;
+        let mut inner: Vec<u32> = children.iter().filter(|c| c.count == 0).map(|c| c.index).collect();
+        inner.sort_unstable();
+        if inner.windows(2).any(|w| w[1] != w[0] + 1) {
+            return Err(format!("node {n}: inner children {inner:?} not consecutive"));
+        }
+        for c in children.iter().filter(|c| c.count != GpuBvhChild::NONE) {
             if !inside(c, lo, hi) {
                 return Err(format!("a child of node {n} leaves its parent's box"));
             }

@@ -218,26 +218,36 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
         uint n1 = lo1.w;
         uint n2 = lo2.w;
         uint n3 = lo3.w;
+        // A node's inner children have consecutive GPU indices from `first` (GpuBvhNode::from_bvh).
+        uint first = min(min(hi0.w == 0u ? n0 : BVH_NO_CHILD, hi1.w == 0u ? n1 : BVH_NO_CHILD),
+                         min(hi2.w == 0u ? n2 : BVH_NO_CHILD, hi3.w == 0u ? n3 : BVH_NO_CHILD));
         BVH_SORT2(k0, n0, k1, n1);
         BVH_SORT2(k2, n2, k3, n3);
         BVH_SORT2(k0, n0, k2, n2);
         BVH_SORT2(k1, n1, k3, n3);
         BVH_SORT2(k1, n1, k2, n2);
         uint m = uint(k0 != BVH_INF) + uint(k1 != BVH_INF) + uint(k2 != BVH_INF) + uint(k3 != BVH_INF);
-        // Push all but the nearest, the farthest deepest. Every lane writes its three slots above
-        // the top (free), and only the pointer moves conditionally: a store under a divergent
-        // condition costs a per-lane branch on SIMD CPUs (llvmpipe), which mispredicts.
-        stack[min(sp, BVH_MAX_DEPTH - 1u)] = m == 4u ? n3 : (m == 3u ? n2 : n1);
-        stack[min(sp + 1u, BVH_MAX_DEPTH - 1u)] = m == 4u ? n2 : n1;
-        stack[min(sp + 2u, BVH_MAX_DEPTH - 1u)] = n1;
-        if (m > 0u) {
+        // The step descends into the nearest and leaves the others, nearest first, in one stack
+        // entry: bits 31..8 `first`, 7..6 how many remain (1-3), then their offsets from `first`
+        // two bits each, the next one highest. A pop takes the entry's next child and writes the rest back. So a
+        // step stores one word, at a slot chosen per lane, and every lane stores it: a store under
+        // a divergent condition, and each extra store, costs a per-lane branch on SIMD CPUs
+        // (llvmpipe), which mispredicts.
+        uint pushed = (first << 8u) | ((m - 1u) << 6u) | (((n1 - first) & 3u) << 4u) |
+                      (((n2 - first) & 3u) << 2u) | ((n3 - first) & 3u);
+        uint top = stack[max(sp, 1u) - 1u];
+        uint rest = (top & 0xffffff00u) | ((((top >> 6u) & 3u) - 1u) << 6u) | ((top & 15u) << 2u);
+        bool descend = m > 0u;
+        stack[min(descend ? sp : sp - 1u, BVH_MAX_DEPTH - 1u)] = descend ? pushed : rest;
+        if (descend) {
             node = n0;
-            sp += m - 1u;
+            sp += m > 1u ? 1u : 0u;
         } else {
             if (sp == 0u) {
                 break;
             }
-            node = stack[--sp];
+            node = (top >> 8u) + ((top >> 4u) & 3u);
+            sp -= ((top >> 6u) & 3u) == 1u ? 1u : 0u;
         }
     }
     return found;

@@ -2,7 +2,7 @@
 //! buffer of rays (closest or any hit) for the traversal tests and the ray-throughput benchmark.
 
 use super::{Bvh, BvhNode};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::layout::{TraceHit, TraceParams, TraceRay};
 use crate::vk::{
     raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc, TexelBuffer,
@@ -18,11 +18,20 @@ pub struct GpuBvh {
 }
 
 impl GpuBvh {
-    /// Uploads `bvh` through staging buffers.
+    /// Uploads `bvh` through staging buffers. Fails for more than [`GpuBvhNode::MAX_NODES`] nodes.
     pub fn upload(ctx: &Context, bvh: &Bvh) -> Result<Self> {
         const RGBA32UI: raw::Format = raw::Format::R32G32B32A32_UINT;
+        let nodes = GpuBvhNode::from_bvh(bvh);
+        if nodes.len() > GpuBvhNode::MAX_NODES {
+            return Err(Error::Invalid(format!(
+                "the BVH of {} triangles has {} 4-wide nodes; the traversal addresses at most {}",
+                bvh.tris.len(),
+                nodes.len(),
+                GpuBvhNode::MAX_NODES
+            )));
+        }
         Ok(Self {
-            nodes: TexelBuffer::upload(ctx, "bvh nodes", &GpuBvhNode::from_bvh(bvh), RGBA32UI, 16)?,
+            nodes: TexelBuffer::upload(ctx, "bvh nodes", &nodes, RGBA32UI, 16)?,
             tris: TexelBuffer::upload(ctx, "bvh triangles", &bvh.tris, RGBA32UI, 16)?,
         })
     }
@@ -77,9 +86,13 @@ impl GpuBvhNode {
     /// Children per node.
     pub const WIDTH: usize = 4;
 
+    /// The most nodes the traversal addresses: its stack entries keep a node index in 24 bits
+    /// (`bvh.glsl`), about 50 million triangles.
+    pub const MAX_NODES: usize = 1 << 24;
+
     /// The GPU layout of `bvh`, nodes in depth-first order of creation (a node's inner children
-    /// get consecutive slots); a BVH that is a single leaf or empty gets one root whose children
-    /// are that leaf or absent.
+    /// get consecutive slots, which the traversal stack relies on); a BVH that is a single leaf
+    /// or empty gets one root whose children are that leaf or absent.
     pub fn from_bvh(bvh: &Bvh) -> Vec<Self> {
         let nodes = &bvh.nodes;
         let root = &nodes[0];

@@ -170,11 +170,12 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     let stats = &gpu_scene.bvh_stats;
     log::info!(
-        "{}: {} triangles, {} emissive; BVH {:.1} ms, {} nodes, SAH {:.2}",
+        "{}: {} triangles, {} emissive; BVH {:.1} ms, {} references, {} nodes, SAH {:.2}",
         scene.name,
         stats.triangles,
         gpu_scene.light_count,
         stats.build_ms,
+        stats.references,
         stats.nodes,
         stats.sah_cost
     );

@@ -139,6 +139,19 @@ fn gpu_closest_hits_match_brute_force_on_several_scenes() {
         big.extend(icosphere(4, c, 2.0 + k as f32 * 0.3).soup()); // 5,120 each
     }
     assert!(big.len() >= 200_000, "{}", big.len());
+    // Long thin triangles across the box among small ones: the case early split clipping is
+    // for, so the walk meets pieces of one triangle in several leaves.
+    let mut slivers = random_soup(2000, Vec3::splat(-2.0), Vec3::splat(2.0), 0.05, 8);
+    let mut rng = Rng::new(11);
+    for _ in 0..100 {
+        let (a, b) = (
+            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
+            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
+        );
+        slivers.push([a, b, (a + b) * 0.5 + rng.on_sphere() * 0.05]);
+    }
+    let split = Bvh::build(&slivers).unwrap().stats;
+    assert!(split.references > split.triangles + 100, "{split:?}");
     let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
     let cornell = umbra::scene::Scene::cornell_box().triangle_soup();
     let spheres =
@@ -152,6 +165,7 @@ fn gpu_closest_hits_match_brute_force_on_several_scenes() {
         ("cornell box", &cornell, 4),
         ("spheres.glb", &spheres, 5),
         ("instanced.glb", &instanced, 6),
+        ("slivers", &slivers, 7),
     ] {
         let rays = rays(triangles, RAYS, seed);
         let hits = check_scene(&gpu, &tracer, name, triangles, &rays);
@@ -265,6 +279,7 @@ fn empty_single_and_degenerate_scenes_behave() {
 #[test]
 fn random_soups_build_valid_bvhs() {
     let mut rng = Rng::new(99);
+    let mut split = 0;
     for case in 0..60 {
         let n = [1, 2, 3, 5, 17, 100, 1000, 5000][case % 8];
         let edge = [1e-4, 0.01, 0.5, 50.0][rng.below(4)];
@@ -281,16 +296,69 @@ fn random_soups_build_valid_bvhs() {
             let bvh = Bvh::build_with(&triangles, &options).unwrap();
             bvh.validate().unwrap_or_else(|e| panic!("case {case} (n {n}, sweep {full_sweep}): {e}"));
             assert_eq!(bvh.stats.triangles, triangles.len());
+            assert_eq!(bvh.stats.references, bvh.tris.len());
+            // Every input triangle once, or once per piece when pre-split.
             let mut order = bvh.prim_order.clone();
             order.sort_unstable();
-            assert!(order.iter().enumerate().all(|(i, &p)| i as u32 == p), "case {case}: not a permutation");
+            order.dedup();
+            assert!(
+                order.iter().enumerate().all(|(i, &p)| i as u32 == p),
+                "case {case}: an input is missing"
+            );
             for (t, &input) in bvh.tris.iter().zip(&bvh.prim_order) {
                 assert_eq!(t.input_index(), input);
                 assert_eq!(t.vertices(), triangles[input as usize]);
             }
+            split += split_triangles_are_covered(&bvh, &mut rng)
+                .unwrap_or_else(|e| panic!("case {case} (n {n}): {e}"));
             gpu_layout_is_valid(&bvh).unwrap_or_else(|e| panic!("case {case} (n {n}): GPU layout: {e}"));
         }
     }
+    assert!(split > 0, "no case split a triangle: the pieces' coverage went untested");
+}
+
+/// Every point of a triangle split into pieces (its vertices, edge points and random inner
+/// points) lies in the box of some leaf holding one of its pieces, so a ray that meets the
+/// triangle reaches it. Returns how many triangles were split.
+fn split_triangles_are_covered(bvh: &Bvh, rng: &mut Rng) -> Result<usize, String> {
+    let mut leaf_boxes: Vec<Vec<(Vec3, Vec3)>> = vec![Vec::new(); bvh.stats.triangles];
+    let mut stack = vec![0usize];
+    while let Some(n) = stack.pop() {
+        let node = &bvh.nodes[n];
+        if node.is_leaf() {
+            for t in node.left_first..node.left_first + node.tri_count {
+                leaf_boxes[bvh.prim_order[t as usize] as usize]
+                    .push((node.aabb_min.into(), node.aabb_max.into()));
+            }
+        } else if node.aabb_min[0] <= node.aabb_max[0] {
+            stack.extend([node.left_first as usize, node.left_first as usize + 1]);
+        }
+    }
+    let mut split = 0;
+    for (input, boxes) in leaf_boxes.iter().enumerate().filter(|(_, b)| b.len() > 1) {
+        split += 1;
+        let t = bvh.tris[bvh.prim_order.iter().position(|&p| p as usize == input).unwrap()].vertices();
+        let mut points = t.to_vec();
+        for k in 0..3 {
+            for f in [0.5, 1.0 / 3.0, 0.999] {
+                points.push(t[k] + (t[(k + 1) % 3] - t[k]) * f);
+            }
+        }
+        for _ in 0..200 {
+            let (a, b) = (rng.f32(), rng.f32());
+            let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+            points.push(t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b);
+        }
+        for p in points {
+            if !boxes.iter().any(|&(lo, hi)| p.cmpge(lo).all() && p.cmple(hi).all()) {
+                return Err(format!(
+                    "point {p} of split triangle {input} {t:?} is in none of its {} leaves",
+                    boxes.len()
+                ));
+            }
+        }
+    }
+    Ok(split)
 }
 
 /// The 4-wide GPU layout of `bvh`: every node reachable from the root exactly once, every

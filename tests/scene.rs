@@ -1064,3 +1064,41 @@ fn shared_asset_scenes_load_with_their_known_counts() {
     assert_eq!(spheres.materials.len(), 98 + 1);
     assert_eq!(expected(&read_glb(&path).0).materials, 98 + 1);
 }
+
+/// A triangle the BVH build splits into pieces (early split clipping) appears once per piece in
+/// BVH order, and every reference must carry the same shading record, its light pmf included:
+/// the path tracer's MIS reads the pmf of whichever reference a ray hits.
+#[test]
+fn split_triangles_carry_their_shading_in_every_reference() {
+    let mut scene = Scene { name: "split".into(), ..Default::default() };
+    scene.materials.push(umbra::scene::Material::default());
+    scene.materials.push(umbra::scene::Material { emissive: [4.0; 3], ..Default::default() });
+    let mut add = |corners: [Vec3; 3], material: u32| {
+        let base = scene.positions.len() as u32;
+        scene.positions.extend(corners.map(<[f32; 3]>::from));
+        scene.normals.extend([[0.0, 1.0, 0.0]; 3]);
+        scene.triangles.push([base, base + 1, base + 2]);
+        scene.triangle_material.push(material);
+    };
+    // Small triangles on a floor, a few of them emissive, and one large emissive ceiling.
+    for i in 0..400 {
+        let p = Vec3::new((i % 20) as f32 * 0.1 - 1.0, 0.0, (i / 20) as f32 * 0.1 - 1.0);
+        add([p, p + Vec3::new(0.05, 0.0, 0.0), p + Vec3::new(0.0, 0.0, 0.05)], u32::from(i % 50 == 0));
+    }
+    let big = 400;
+    add([Vec3::new(-10.0, 5.0, -10.0), Vec3::new(10.0, 5.0, -10.0), Vec3::new(0.0, 5.0, 10.0)], 1);
+    scene.update_emissive();
+    let arrays = umbra::gpu::scene::SceneArrays::new(&scene).unwrap();
+    let references: Vec<usize> =
+        (0..arrays.triangles.len()).filter(|&i| arrays.bvh.prim_order[i] == big).collect();
+    assert!(references.len() > 1, "the large triangle was not split: {:?}", arrays.bvh.stats);
+    let record = arrays.triangles[references[0]];
+    assert!(record.light_pmf > 0.5, "{record:?}");
+    for &i in &references {
+        assert_eq!(arrays.triangles[i], record, "reference {i} of the split triangle differs");
+    }
+    for (i, t) in arrays.triangles.iter().enumerate() {
+        let input = arrays.bvh.prim_order[i];
+        assert_eq!(t.light_pmf > 0.0, input == big || (input < 400 && input % 50 == 0), "reference {i}");
+    }
+}

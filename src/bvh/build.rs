@@ -20,11 +20,25 @@ pub struct BuildOptions {
     /// Evaluate every split position (sorting per node) instead of binning: slow, the quality
     /// reference for the binned build.
     pub full_sweep: bool,
+    /// Early split clipping (Ernst and Greiner 2007): a triangle whose box has more than this
+    /// many times the mean box surface area is clipped into pieces (halving the longest axis of
+    /// the piece's box) until each piece's box is below that, and the build sees the pieces'
+    /// tighter boxes; each piece becomes a reference to the same triangle. At most a
+    /// `1/presplit` share of the triangles is large enough (Markov's inequality), so the extra
+    /// references stay bounded. 0 disables it.
+    pub presplit: f32,
 }
 
 impl Default for BuildOptions {
     fn default() -> Self {
-        Self { bins: 16, max_leaf_size: 4, traversal_cost: 1.0, intersection_cost: 1.0, full_sweep: false }
+        Self {
+            bins: 16,
+            max_leaf_size: 4,
+            traversal_cost: 1.0,
+            intersection_cost: 1.0,
+            full_sweep: false,
+            presplit: 8.0,
+        }
     }
 }
 
@@ -170,20 +184,13 @@ pub(super) fn build(triangles: &[[Vec3; 3]], options: &BuildOptions) -> Bvh {
     if triangles.is_empty() {
         return Bvh::empty();
     }
-    let mut refs: Vec<PrimRef> = triangles
-        .par_iter()
-        .map(|t| {
-            let (a, b, c) = (Vec3A::from(t[0]), Vec3A::from(t[1]), Vec3A::from(t[2]));
-            PrimRef { min: a.min(b).min(c), max: a.max(b).max(c) }
-        })
-        .collect();
-    let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+    let (mut refs, mut order) = references(triangles, options.presplit);
     let builder =
         Builder { options: &BuildOptions { bins: options.bins.clamp(2, MAX_BINS), ..options.clone() } };
     let (bounds, centroids) = bounds_of(&refs);
     let prepared = start.elapsed();
     // Every subtree over m primitives gets 2(m - 1) child slots; the root's start at 2.
-    let mut slots: Vec<BvhNode> = bytemuck::zeroed_vec(2 * triangles.len());
+    let mut slots: Vec<BvhNode> = bytemuck::zeroed_vec(2 * refs.len());
     let (head, child_slots) = slots.split_at_mut(2);
     head[0] = builder.node(&mut refs, &mut order, 0, bounds, centroids, 0, child_slots, 2);
     let built = start.elapsed();
@@ -193,7 +200,7 @@ pub(super) fn build(triangles: &[[Vec3; 3]], options: &BuildOptions) -> Bvh {
     let tris = order.par_iter().map(|&i| BvhTri::new(&triangles[i as usize], i)).collect();
     let mut bvh = Bvh { nodes, tris, prim_order: order, stats: BvhStats::default() };
     let reordered = start.elapsed();
-    bvh.stats = stats(&bvh, options);
+    bvh.stats = stats(&bvh, options, triangles.len());
     bvh.stats.build_ms = reordered.as_secs_f64() * 1e3;
     log::debug!(
         "BVH build phases (cumulative): prepare {prepared:?}, tree {built:?}, flatten {flattened:?}, \
@@ -201,6 +208,109 @@ pub(super) fn build(triangles: &[[Vec3; 3]], options: &BuildOptions) -> Bvh {
         start.elapsed()
     );
     bvh
+}
+
+/// What the build partitions: a box per triangle, or with `presplit` > 0 per piece of the large
+/// ones (see [`BuildOptions::presplit`]), each with the input index of its triangle.
+fn references(triangles: &[[Vec3; 3]], presplit: f32) -> (Vec<PrimRef>, Vec<u32>) {
+    let boxes: Vec<PrimRef> = triangles
+        .par_iter()
+        .map(|t| {
+            let (a, b, c) = (Vec3A::from(t[0]), Vec3A::from(t[1]), Vec3A::from(t[2]));
+            PrimRef { min: a.min(b).min(c), max: a.max(b).max(c) }
+        })
+        .collect();
+    let area = |r: &PrimRef| Aabb { min: r.min, max: r.max }.half_area();
+    let mean = boxes.par_iter().map(|b| area(b) as f64).sum::<f64>() / boxes.len() as f64;
+    let threshold = presplit * mean as f32;
+    if presplit <= 0.0 || !threshold.is_finite() || !boxes.par_iter().any(|b| area(b) > threshold) {
+        return (boxes, (0..triangles.len() as u32).collect());
+    }
+    // A split triangle's first piece takes its place, the others go at the end.
+    let large: Vec<usize> =
+        (0..triangles.len()).into_par_iter().filter(|&i| area(&boxes[i]) > threshold).collect();
+    let pieces: Vec<Vec<PrimRef>> = large
+        .par_iter()
+        .map(|&i| {
+            let polygon = triangles[i].map(Vec3A::from);
+            let mut out = Vec::new();
+            clip_pieces(&polygon, boxes[i], boxes[i], threshold, 0, &mut |r| out.push(r));
+            out
+        })
+        .collect();
+    let mut refs = boxes;
+    let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+    for (&i, p) in large.iter().zip(&pieces) {
+        let Some((first, rest)) = p.split_first() else { continue };
+        refs[i] = *first;
+        refs.extend_from_slice(rest);
+        order.extend(std::iter::repeat_n(i as u32, rest.len()));
+    }
+    (refs, order)
+}
+
+/// Pieces deeper than this are kept whatever their size (at most 2^8 per triangle).
+const MAX_CLIP_DEPTH: u32 = 8;
+
+/// Splits `polygon` (a piece of a triangle whose own box is `whole`; `piece` is the polygon's
+/// box) at the middle of the box's longest axis until the pieces' boxes are below `threshold`,
+/// and hands each box to `out`. A box is padded by some ulps of the triangle's coordinates, then
+/// clipped to `whole` (exact: the triangle's own vertices), so the rounding of the clip points
+/// cannot leave any point of the triangle outside the union of its pieces' boxes.
+fn clip_pieces(
+    polygon: &[Vec3A],
+    piece: PrimRef,
+    whole: PrimRef,
+    threshold: f32,
+    depth: u32,
+    out: &mut impl FnMut(PrimRef),
+) {
+    if (Aabb { min: piece.min, max: piece.max }).half_area() <= threshold || depth >= MAX_CLIP_DEPTH {
+        out(piece);
+        return;
+    }
+    let extent = piece.max - piece.min;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    let plane = 0.5 * (piece.min[axis] + piece.max[axis]);
+    for below in [true, false] {
+        let inside = |v: Vec3A| if below { v[axis] <= plane } else { v[axis] >= plane };
+        // Sutherland-Hodgman against one plane; both sides compute each crossing from the same
+        // edge in the same direction, so they share it bit for bit.
+        // A convex polygon gains at most one vertex per clip: 3 + MAX_CLIP_DEPTH in all.
+        let mut buffer = [Vec3A::ZERO; 3 + MAX_CLIP_DEPTH as usize];
+        let mut len = 0;
+        for (k, &p) in polygon.iter().enumerate() {
+            let q = polygon[(k + 1) % polygon.len()];
+            if inside(p) {
+                buffer[len] = p;
+                len += 1;
+            }
+            if inside(p) != inside(q) {
+                let mut x = p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis]));
+                x[axis] = plane;
+                buffer[len] = x;
+                len += 1;
+            }
+        }
+        if len < 3 {
+            continue;
+        }
+        let part = &buffer[..len];
+        let (lo, hi) = part
+            .iter()
+            .fold((Vec3A::splat(f32::MAX), Vec3A::splat(-f32::MAX)), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        // Each level's clip points are within a few ulps of the triangle's magnitude of true
+        // points of it (errors add up over the levels): 64 ulps cover all eight levels.
+        let pad = whole.min.abs().max(whole.max.abs()) * (64.0 * f32::EPSILON);
+        let next = PrimRef { min: (lo - pad).max(whole.min), max: (hi + pad).min(whole.max) };
+        clip_pieces(part, next, whole, threshold, depth + 1, out);
+    }
 }
 
 /// The box of the primitives and the box of their (doubled) centroids.
@@ -518,9 +628,9 @@ fn compact(slots: &[BvhNode]) -> Vec<BvhNode> {
     nodes
 }
 
-fn stats(bvh: &Bvh, options: &BuildOptions) -> BvhStats {
+fn stats(bvh: &Bvh, options: &BuildOptions, triangles: usize) -> BvhStats {
     let root_area = bvh.nodes[0].surface_area().max(f32::MIN_POSITIVE);
-    let mut s = BvhStats { triangles: bvh.tris.len(), ..Default::default() };
+    let mut s = BvhStats { triangles, references: bvh.tris.len(), ..Default::default() };
     let mut cost = 0.0f64;
     let mut stack = vec![(0usize, 0usize)];
     while let Some((index, depth)) = stack.pop() {
@@ -538,7 +648,7 @@ fn stats(bvh: &Bvh, options: &BuildOptions) -> BvhStats {
             stack.extend([(l, depth + 1), (l + 1, depth + 1)]);
         }
     }
-    s.mean_leaf_size = s.triangles as f32 / s.leaves.max(1) as f32;
+    s.mean_leaf_size = s.references as f32 / s.leaves.max(1) as f32;
     s.sah_cost = cost as f32;
     s
 }

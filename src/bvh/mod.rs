@@ -91,6 +91,9 @@ impl BvhTri {
 pub struct BvhStats {
     /// Triangles.
     pub triangles: usize,
+    /// Triangle references in the leaves: the triangles plus the extra pieces of the ones split
+    /// by [`BuildOptions::presplit`].
+    pub references: usize,
     /// Nodes in use (the unused slot 1 not counted).
     pub nodes: usize,
     /// Leaves.
@@ -99,7 +102,7 @@ pub struct BvhStats {
     pub depth: usize,
     /// Largest leaf.
     pub max_leaf_size: usize,
-    /// Mean triangles per leaf.
+    /// Mean references per leaf.
     pub mean_leaf_size: f32,
     /// Surface-area-heuristic cost with the build's traversal and intersection costs.
     pub sah_cost: f32,
@@ -112,9 +115,10 @@ pub struct BvhStats {
 pub struct Bvh {
     /// Nodes, root first (see the module docs for the layout).
     pub nodes: Vec<BvhNode>,
-    /// Triangles in leaf order.
+    /// Triangles in leaf order: a triangle split by [`BuildOptions::presplit`] appears once
+    /// per piece, in the leaves of those pieces.
     pub tris: Vec<BvhTri>,
-    /// `prim_order[i]` is the input index of `tris[i]`.
+    /// `prim_order[i]` is the input index of `tris[i]`; every input index appears at least once.
     pub prim_order: Vec<u32>,
     /// Build statistics.
     pub stats: BvhStats,
@@ -161,8 +165,9 @@ impl Bvh {
     }
 
     /// Checks every structural invariant: children in range and pairwise at even indices, each
-    /// triangle in exactly one leaf, child boxes inside their parent's, every triangle inside its
-    /// leaf's box, depth within [`MAX_DEPTH`]. Returns the first violation.
+    /// reference in exactly one leaf and every input triangle in at least one, child boxes inside
+    /// their parent's, every triangle inside its leaf's box (a split one's box meeting it), depth
+    /// within [`MAX_DEPTH`]. Returns the first violation.
     pub fn validate(&self) -> Result<(), String> {
         if self.is_empty() {
             return match self.nodes.as_slice() {
@@ -171,6 +176,15 @@ impl Bvh {
             };
         }
         let mut seen = vec![false; self.tris.len()];
+        // How many references each input triangle has: one must lie inside its leaf's box, the
+        // pieces of a split one only meet theirs.
+        let mut pieces = vec![0u32; self.stats.triangles];
+        for &p in &self.prim_order {
+            *pieces.get_mut(p as usize).ok_or(format!("input index {p} out of range"))? += 1;
+        }
+        if let Some(p) = pieces.iter().position(|&k| k == 0) {
+            return Err(format!("input triangle {p} is in no leaf"));
+        }
         let mut stack = vec![(0usize, 0usize)];
         while let Some((index, depth)) = stack.pop() {
             if depth >= MAX_DEPTH {
@@ -188,7 +202,14 @@ impl Bvh {
                     if std::mem::replace(&mut seen[t], true) {
                         return Err(format!("triangle {t} is in two leaves"));
                     }
-                    if !self.tris[t].vertices().iter().all(|&v| inside(v)) {
+                    let v = self.tris[t].vertices();
+                    let fits = if pieces[self.prim_order[t] as usize] == 1 {
+                        v.iter().all(|&v| inside(v))
+                    } else {
+                        let (a, b) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+                        a.cmple(hi).all() && b.cmpge(lo).all()
+                    };
+                    if !fits {
                         return Err(format!("triangle {t} pokes out of leaf {index}"));
                     }
                 }

@@ -182,7 +182,7 @@ struct ShadingArrays {
 impl ShadingArrays {
     /// `prim_order[i]`: the scene triangle at BVH position i.
     fn new(scene: &Scene, prim_order: &[u32]) -> Self {
-        let mut bvh_index = vec![0u32; prim_order.len()];
+        let mut bvh_index = vec![0u32; scene.triangles.len()];
         for (i, &input) in prim_order.iter().enumerate() {
             bvh_index[input as usize] = i as u32;
         }
@@ -205,6 +205,9 @@ impl ShadingArrays {
             })
             .collect();
         let table = &scene.emissive;
+        // A light's pmf goes to every BVH reference of its triangle (a split triangle has
+        // several): whichever one a ray hits, MIS weighs it by the same pdf.
+        let mut light_pmf = vec![0.0f32; scene.triangles.len()];
         let lights: Vec<GpuLightTri> = table
             .triangles
             .iter()
@@ -212,10 +215,13 @@ impl ShadingArrays {
             .map(|(k, &input)| {
                 let tri = bvh_index[input as usize];
                 let pmf = table.pmf(k);
-                triangles[tri as usize].light_pmf = pmf;
+                light_pmf[input as usize] = pmf;
                 GpuLightTri { tri, cdf: table.cdf[k], pmf, area: triangles[tri as usize].area }
             })
             .collect();
+        for (t, &input) in triangles.iter_mut().zip(prim_order) {
+            t.light_pmf = light_pmf[input as usize];
+        }
         let vertices = (0..scene.positions.len())
             .map(|i| {
                 let n = scene.normals.get(i).copied().unwrap_or([0.0; 3]);
@@ -370,12 +376,12 @@ impl GpuScene {
     /// loading. The geometry must be the same (same triangles and positions). Replaces buffers, so
     /// no command buffer using this scene may be pending (wait for the host's frame fence first).
     pub fn update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
-        if scene.triangles.len() != self.prim_order.len() {
+        if scene.triangles.len() != self.bvh_stats.triangles {
             return Err(Error::Invalid(format!(
                 "scene '{}' has {} triangles but was uploaded with {}: geometry changes need a new upload",
                 scene.name,
                 scene.triangles.len(),
-                self.prim_order.len()
+                self.bvh_stats.triangles
             )));
         }
         if alpha_modes(scene, &self.prim_order) != self.alpha_modes {

@@ -480,7 +480,7 @@ fn run_passes(
 
 fn stats_json(s: &umbra::bvh::BvhStats) -> serde_json::Value {
     json!({
-        "nodes": s.nodes, "leaves": s.leaves, "depth": s.depth, "max_leaf_size": s.max_leaf_size,
+        "references": s.references, "nodes": s.nodes, "leaves": s.leaves, "depth": s.depth, "max_leaf_size": s.max_leaf_size,
         "mean_leaf_size": s.mean_leaf_size, "sah_cost": s.sah_cost, "build_ms": s.build_ms,
     })
 }
@@ -502,8 +502,15 @@ fn print_report(r: &RayReport) {
     println!("\n{}", r.scene);
     let b = &r.binned;
     println!(
-        "  binned SAH build: {:.1} ms (median), SAH cost {:.2}, {} nodes, {} leaves (mean {:.2}, max {}), depth {}",
-        r.binned_build_ms_median, b.sah_cost, b.nodes, b.leaves, b.mean_leaf_size, b.max_leaf_size, b.depth
+        "  binned SAH build: {:.1} ms (median), {} references, SAH cost {:.2}, {} nodes, {} leaves (mean {:.2}, max {}), depth {}",
+        r.binned_build_ms_median,
+        b.references,
+        b.sah_cost,
+        b.nodes,
+        b.leaves,
+        b.mean_leaf_size,
+        b.max_leaf_size,
+        b.depth
     );
     if let Some(s) = &r.sweep {
         println!(

@@ -23,15 +23,15 @@ layout(constant_id = 4) const bool BECKMANN = false;
 layout(constant_id = 5) const bool HAS_ALPHA = false;
 layout(constant_id = 6) const bool HAS_TRANSMISSION = false;
 
-layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
-layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
+layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
+layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLightTri lights[]; };
 layout(set = 0, binding = 6, std430) readonly buffer Punctual { GpuLight punctual[]; };
 layout(set = 0, binding = 7, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 8) uniform usamplerBuffer scene_texels;
+layout(set = 0, binding = 8, r32ui) uniform readonly uimageBuffer scene_texels;
 layout(set = 0, binding = 9, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
 layout(set = 0, binding = 10, std430) readonly buffer EnvMarginal { float env_marginal[]; };
 layout(set = 0, binding = 11, std430) readonly buffer EnvConditional { float env_conditional[]; };

@@ -14,13 +14,13 @@ const bool BECKMANN = false;
 // The hybrid passes shade reflection only (see src/passes/deferred.rs).
 const bool HAS_TRANSMISSION = false;
 
-layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
-layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
+layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
+layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 5, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 6) uniform usamplerBuffer scene_texels;
+layout(set = 0, binding = 6, r32ui) uniform readonly uimageBuffer scene_texels;
 // Unused here (shading.glsl's light helpers), declared so the include compiles.
 layout(set = 0, binding = 7, std430) readonly buffer Lights { GpuLightTri lights[]; };
 layout(set = 0, binding = 8, std430) readonly buffer Punctual { GpuLight punctual[]; };

@@ -20,8 +20,8 @@ const bool HAS_TEXTURES = false;
 const bool HAS_TRANSMISSION = false;
 const bool HAS_ALPHA = false;
 
-layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
-layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
+layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
+layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
@@ -31,7 +31,7 @@ layout(set = 0, binding = 7, std430) readonly buffer EnvTexels { vec4 env_texels
 layout(set = 0, binding = 8, std430) readonly buffer EnvMarginal { float env_marginal[]; };
 layout(set = 0, binding = 9, std430) readonly buffer EnvConditional { float env_conditional[]; };
 layout(set = 0, binding = 10, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 11) uniform usamplerBuffer scene_texels;
+layout(set = 0, binding = 11, r32ui) uniform readonly uimageBuffer scene_texels;
 layout(set = 0, binding = 12, std430) readonly buffer Directions { vec4 directions[]; };
 layout(set = 0, binding = 13, std430) buffer Results { vec4 results[]; };
 layout(push_constant) uniform Push { LightTestParams params; };

@@ -16,8 +16,8 @@ layout(constant_id = 5) const bool HAS_TEXTURES = false;
 layout(constant_id = 6) const bool HAS_TRANSMISSION = false;
 layout(constant_id = 7) const bool HAS_ALPHA = false;
 
-layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
-layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
+layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
+layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
@@ -32,7 +32,7 @@ layout(set = 0, binding = 12, std430) readonly buffer EnvTexels { vec4 env_texel
 layout(set = 0, binding = 13, std430) readonly buffer EnvMarginal { float env_marginal[]; };
 layout(set = 0, binding = 14, std430) readonly buffer EnvConditional { float env_conditional[]; };
 layout(set = 0, binding = 15, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 16) uniform usamplerBuffer scene_texels;
+layout(set = 0, binding = 16, r32ui) uniform readonly uimageBuffer scene_texels;
 layout(push_constant) uniform Push { PathParams params; };
 
 #include "random.glsl"

@@ -21,13 +21,13 @@ const bool HAS_TRANSMISSION = false;
 
 // Bindings 0-8 as gbuffer.comp's (GpuScene::SURFACE_BINDINGS): the BVH and what shading.glsl's
 // alpha test reads, so alpha-masked and blended surfaces occlude as the path tracer sees them.
-layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
-layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
+layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
+layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 5, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 6) uniform usamplerBuffer scene_texels;
+layout(set = 0, binding = 6, r32ui) uniform readonly uimageBuffer scene_texels;
 layout(set = 0, binding = 7, std430) readonly buffer Lights { GpuLightTri lights[]; };
 layout(set = 0, binding = 8, std430) readonly buffer Punctual { GpuLight punctual[]; };
 layout(set = 0, binding = 9, r32f) uniform readonly image2D gb_depth;

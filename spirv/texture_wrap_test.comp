@@ -12,7 +12,7 @@ layout(set = 0, binding = 0, std430) readonly buffer Input { ivec2 cases[]; };
 layout(set = 0, binding = 1, std430) buffer Output { int wrapped[]; };
 // What texture.glsl's sampling functions read (unused here).
 layout(set = 0, binding = 2, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 3) uniform usamplerBuffer scene_texels;
+layout(set = 0, binding = 3, r32ui) uniform readonly uimageBuffer scene_texels;
 layout(push_constant) uniform Push { BufferTestParams params; };
 
 #include "texture.glsl"

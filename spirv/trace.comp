@@ -8,8 +8,8 @@ layout(local_size_x = 64) in;
 
 layout(constant_id = 0) const bool TRACE_ANY = false;
 
-layout(set = 0, binding = 0) uniform usamplerBuffer bvh_node_texels;
-layout(set = 0, binding = 1) uniform usamplerBuffer bvh_tri_texels;
+layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
+layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
 layout(set = 0, binding = 2, std430) readonly buffer Rays { TraceRay rays[]; };
 layout(set = 0, binding = 3, std430) buffer Hits { TraceHit hits[]; };
 layout(push_constant) uniform Push { TraceParams params; };

@@ -14,13 +14,15 @@ fn parse(words: &[u32]) -> Result<Module, String> {
 }
 
 /// naga has no texel buffers (its `ImageDimension` lacks SPIR-V's `Buffer`), which every kernel
-/// that traces binds for the BVH: present them to it as 1D images, which it reads the same way
-/// (`OpImageFetch` by one integer coordinate), and drop the `SampledBuffer` capability. Nothing
-/// else of the module changes, so the struct layouts it checks are the kernel's own.
+/// that traces binds for the BVH: present them to it as 1D storage images, which it reads the
+/// same way (`OpImageRead` by one integer coordinate), and drop the `SampledBuffer` and
+/// `ImageBuffer` capabilities. Nothing else of the module changes, so the struct layouts it
+/// checks are the kernel's own.
 fn texel_buffers_as_1d(words: &[u32]) -> Vec<u32> {
     const OP_CAPABILITY: u32 = 17;
     const OP_TYPE_IMAGE: u32 = 25;
     const CAPABILITY_SAMPLED_BUFFER: u32 = 46;
+    const CAPABILITY_IMAGE_BUFFER: u32 = 47;
     const DIM_1D: u32 = 0;
     const DIM_BUFFER: u32 = 5;
     let mut out = words[..5].to_vec();
@@ -30,7 +32,11 @@ fn texel_buffers_as_1d(words: &[u32]) -> Vec<u32> {
         let mut instruction = words[i..i + count.max(1)].to_vec();
         i += count.max(1);
         match opcode {
-            OP_CAPABILITY if instruction[1] == CAPABILITY_SAMPLED_BUFFER => continue,
+            OP_CAPABILITY
+                if [CAPABILITY_SAMPLED_BUFFER, CAPABILITY_IMAGE_BUFFER].contains(&instruction[1]) =>
+            {
+                continue
+            }
             OP_TYPE_IMAGE if instruction[3] == DIM_BUFFER => instruction[3] = DIM_1D,
             _ => {}
         }

@@ -113,7 +113,7 @@ fn environment_file_with_bad_texels_is_named_and_renders_finite() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The texel size of the scene buffers bound as uniform texel buffers (the BVH's RGBA32UI, the
+/// The texel size of the scene buffers bound as storage texel buffers (the BVH's RGBA32UI, the
 /// scene texels' R32UI); `None` for storage buffers.
 fn texel_bytes(buffer: &str) -> Option<u64> {
     match buffer {

@@ -443,7 +443,7 @@ impl LightKernel {
     fn new(gpu: &Gpu, env: Option<&umbra::environment::EnvironmentMap>) -> Self {
         let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
         bindings[..2].copy_from_slice(&umbra::bvh::gpu::GpuBvh::BINDINGS);
-        bindings[11] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
+        bindings[11] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
         let pipeline = ComputePipeline::new(
             gpu,
             "light_sample_test",

@@ -51,7 +51,7 @@ fn repeat_and_mirror_wrapping_are_exact() {
     let textures = Buffer::upload(&gpu, "no textures", &[0u32; 16], usage).unwrap();
     let texels = TexelBuffer::upload(&gpu, "no texels", &[0u32], raw::Format::R32_UINT, 4).unwrap();
     let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 4];
-    bindings[3] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
+    bindings[3] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
     let desc = PipelineDesc { bindings: &bindings, push_constant_size: 8, specialization: &[] };
     let pipeline = ComputePipeline::new(&gpu, "texture_wrap_test", &desc).unwrap();
     gpu.submit(|cmd| {

@@ -4,13 +4,15 @@
 // only (it reads the 4-wide GPU layout, `GpuBvhNode` in src/bvh/gpu.rs), and both keep the same
 // tie rule, so both find the same nearest hit (up to a GPU's rounding of divisions).
 //
-// The including kernel declares, before including this file, the BVH as two uniform texel
-// buffers of RGBA32UI (`GpuBvhNode`s as eight texels each, `BvhTri`s as three):
-//   uniform usamplerBuffer bvh_node_texels;
-//   uniform usamplerBuffer bvh_tri_texels;
-// Texel fetches rather than storage buffers: on llvmpipe (Mesa 22) a storage-buffer load is a
-// loop over the SIMD lanes with a bounds check and a branch per component, a texel fetch a
-// branch-free gather (BENCHMARKS.md: +25-40 % rays/s); GPUs read both through their caches.
+// The including kernel declares, before including this file, the BVH as two read-only storage
+// texel buffers of RGBA32UI (`GpuBvhNode`s as eight texels each, `BvhTri`s as three):
+//   layout(rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
+//   layout(rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
+// Texel buffers rather than storage buffers: on llvmpipe (Mesa 22) a storage-buffer load is a
+// loop over the SIMD lanes with a bounds check and a branch per component, a texel read a
+// branch-free gather (BENCHMARKS.md: +25-40 % rays/s); and imageLoad rather than texelFetch,
+// which llvmpipe calls as a function (spilling every live vector register around each call)
+// where it inlines imageLoad (+5-10 %). GPUs read all of them through their caches.
 // Every arithmetic result the watertight test depends on is `precise`, so the compiler cannot
 // contract a*b - c*d into an fma on one side of a shared edge and not on the other.
 #ifndef UMBRA_BVH_GLSL
@@ -23,11 +25,11 @@ const float BVH_INF = uintBitsToFloat(0x7f800000u);
 
 // Child c of GPU node n: (aabb_min, index) and (aabb_max, count). count 0: an inner node (index
 // is its GPU node); BVH_NO_CHILD: absent; otherwise a leaf of `count` triangles from `index`.
-uvec4 bvh_child_lo(uint n, uint c) { return texelFetch(bvh_node_texels, int(8u * n + 2u * c)); }
-uvec4 bvh_child_hi(uint n, uint c) { return texelFetch(bvh_node_texels, int(8u * n + 2u * c + 1u)); }
+uvec4 bvh_child_lo(uint n, uint c) { return imageLoad(bvh_node_texels, int(8u * n + 2u * c)); }
+uvec4 bvh_child_hi(uint n, uint c) { return imageLoad(bvh_node_texels, int(8u * n + 2u * c + 1u)); }
 const uint BVH_NO_CHILD = 0xffffffffu;
 // Vertex k of triangle i (BVH order); w: v0's original index, v1's alpha-mode bits.
-vec4 bvh_tri_v(uint i, uint k) { return uintBitsToFloat(texelFetch(bvh_tri_texels, int(3u * i + k))); }
+vec4 bvh_tri_v(uint i, uint k) { return uintBitsToFloat(imageLoad(bvh_tri_texels, int(3u * i + k))); }
 
 struct Hit {
     float t;

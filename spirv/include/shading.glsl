@@ -7,7 +7,7 @@
 //   const bool HAS_TEXTURES, HAS_ALPHA (specialization constants);
 //   the BVH's texel buffers (bvh.glsl), readonly buffers triangles[] (GpuTriangle),
 //   vertices[] (GpuVertex), materials[] (GpuMaterial), lights[] (GpuLightTri),
-//   punctual[] (GpuLight), textures[] (GpuTexture), scene_texels (usamplerBuffer, R32UI);
+//   punctual[] (GpuLight), textures[] (GpuTexture), scene_texels (uimageBuffer, R32UI);
 // and includes layout.glsl. This file includes bvh.glsl, bsdf.glsl and texture.glsl.
 #ifndef UMBRA_SHADING_GLSL
 #define UMBRA_SHADING_GLSL

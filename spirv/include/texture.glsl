@@ -1,4 +1,4 @@
-// Textures from one uniform texel buffer of RGBA8 texels (no bindless on lavapipe): glTF wrap modes,
+// Textures from one storage texel buffer of RGBA8 texels (no bindless on lavapipe): glTF wrap modes,
 // nearest or bilinear filtering, sRGB decoding before filtering, and mip chains (stored after
 // level 0 where the sampler asks for them). texture_sample reads level 0: the path tracer's pixel
 // jitter integrates the footprint. texture_sample_lod filters for a level of detail, for kernels
@@ -6,13 +6,13 @@
 //
 // The including kernel declares, before including this file:
 //   readonly buffer ... { GpuTexture textures[]; };
-//   uniform usamplerBuffer scene_texels;  // R32UI: the sRGB table (256 f32 bits), then RGBA8 texels
-// (a texel buffer: on CPU devices texelFetch is a branch-free gather, a storage buffer load a
-// bounds-checked loop over the lanes)
+//   layout(r32ui) uniform readonly uimageBuffer scene_texels;  // the sRGB table (256 f32 bits),
+//                                                              // then RGBA8 texels
+// (a storage texel buffer, as the BVH's: see bvh.glsl)
 #ifndef UMBRA_TEXTURE_GLSL
 #define UMBRA_TEXTURE_GLSL
 
-uint texture_word(uint i) { return texelFetch(scene_texels, int(i)).x; }
+uint texture_word(uint i) { return imageLoad(scene_texels, int(i)).x; }
 
 // i modulo n (n > 0), in [0, n), without integer division: CPU devices divide integers one lane
 // at a time, and the two `%` of ((i % n) + n) % n were half the G-buffer's time on the

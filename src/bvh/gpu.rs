@@ -9,7 +9,7 @@ use crate::vk::{
 };
 
 /// The node and triangle lists of a [`Bvh`], uploaded once: every kernel binds the BVH as two
-/// uniform texel buffers of RGBA32UI (bindings 0 and 1, see `bvh.glsl`).
+/// read-only storage texel buffers of RGBA32UI (bindings 0 and 1, see `bvh.glsl`).
 pub struct GpuBvh {
     /// `bvh_node_texels`: each [`GpuBvhNode`] as eight texels.
     pub nodes: TexelBuffer,
@@ -37,7 +37,7 @@ impl GpuBvh {
     }
 
     /// The descriptor types of the BVH's two bindings (0 and 1 of every kernel that traces).
-    pub const BINDINGS: [raw::DescriptorType; 2] = [raw::DescriptorType::UNIFORM_TEXEL_BUFFER; 2];
+    pub const BINDINGS: [raw::DescriptorType; 2] = [raw::DescriptorType::STORAGE_TEXEL_BUFFER; 2];
 
     /// The BVH's two descriptors, in the order of [`GpuBvh::BINDINGS`].
     pub fn descriptors(&self) -> [Descriptor<'_>; 2] {

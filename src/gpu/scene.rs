@@ -36,7 +36,7 @@ pub struct GpuScene {
     pub env_conditional: Buffer,
     /// `GpuTexture`s.
     pub textures: Buffer,
-    /// `scene_texels`, R32UI texels (`texture.glsl` reads them with `texelFetch`): the sRGB
+    /// `scene_texels`, R32UI texels (`texture.glsl` reads them with `imageLoad`): the sRGB
     /// decoding table (256 `f32` bits), then the RGBA8 texels of every texture.
     pub texels: TexelBuffer,
     /// Textures the materials use.
@@ -135,7 +135,7 @@ fn remedy(buffer: &str) -> &'static str {
 }
 
 /// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers are
-/// uniform texel buffers of 16-byte texels, the scene texels one of 4-byte texels, every other
+/// storage texel buffers of 16-byte texels, the scene texels one of 4-byte texels, every other
 /// one a storage buffer.
 fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str) {
     if buffer.starts_with("bvh ") {
@@ -290,7 +290,7 @@ impl GpuScene {
         raw::DescriptorType::STORAGE_BUFFER,
         raw::DescriptorType::STORAGE_BUFFER,
         raw::DescriptorType::STORAGE_BUFFER,
-        raw::DescriptorType::UNIFORM_TEXEL_BUFFER,
+        raw::DescriptorType::STORAGE_TEXEL_BUFFER,
         raw::DescriptorType::STORAGE_BUFFER,
         raw::DescriptorType::STORAGE_BUFFER,
     ];
@@ -407,7 +407,7 @@ impl GpuScene {
     }
 }
 
-/// Uploads the scene texels as a uniform texel buffer of R32UI words.
+/// Uploads the scene texels as a storage texel buffer of R32UI words.
 fn upload_texels(ctx: &Context, texels: &[u32]) -> Result<TexelBuffer> {
     TexelBuffer::upload(ctx, "scene texels", texels, raw::Format::R32_UINT, 4)
 }

@@ -98,7 +98,7 @@ impl DeferredPass {
         bindings[12..18].fill(raw::DescriptorType::STORAGE_IMAGE);
         bindings[21] = raw::DescriptorType::STORAGE_IMAGE;
         bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
-        bindings[8] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
+        bindings[8] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
         let pipeline = ComputePipeline::new(
             ctx,
             "deferred",

@@ -83,7 +83,7 @@ impl PathTracePass {
     ) -> Result<Self> {
         let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 17];
         bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
-        bindings[16] = raw::DescriptorType::UNIFORM_TEXEL_BUFFER;
+        bindings[16] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
         let pipeline = ComputePipeline::new(
             ctx,
             "pathtrace",

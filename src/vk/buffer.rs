@@ -150,8 +150,9 @@ impl Buffer {
     }
 }
 
-/// A buffer read as a uniform texel buffer of one format (`usamplerBuffer` in GLSL): the buffer
-/// and its view, destroyed together (the view first).
+/// A buffer read as a storage texel buffer of one format (`readonly uimageBuffer` in GLSL, read
+/// with `imageLoad`): the buffer and its view, destroyed together (the view first). The formats
+/// umbra uses (R32_UINT, R32G32B32A32_UINT) support storage texel buffers on every device.
 pub struct TexelBuffer {
     /// The view the kernels bind.
     pub view: vk::BufferView,
@@ -173,7 +174,7 @@ impl TexelBuffer {
     ) -> Result<Self> {
         let zeroed = [T::zeroed()];
         let data = if data.is_empty() { &zeroed[..] } else { data };
-        let buffer = Buffer::upload(ctx, name, data, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER)?;
+        let buffer = Buffer::upload(ctx, name, data, vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER)?;
         let shared = &buffer.shared;
         let texels = buffer.size / texel_bytes;
         let limit = shared.info.max_texel_buffer_elements as u64;

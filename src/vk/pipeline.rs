@@ -15,7 +15,7 @@ pub enum Descriptor<'a> {
     StorageImage(&'a Image),
     /// A view of a storage image in GENERAL layout that umbra does not own (a host engine's).
     StorageView(vk::ImageView),
-    /// A uniform texel buffer (`usamplerBuffer`).
+    /// A read-only storage texel buffer (`readonly uimageBuffer`).
     Texels(&'a super::TexelBuffer),
 }
 
@@ -24,7 +24,7 @@ impl Descriptor<'_> {
         match self {
             Descriptor::Buffer(_) => vk::DescriptorType::STORAGE_BUFFER,
             Descriptor::StorageImage(_) | Descriptor::StorageView(_) => vk::DescriptorType::STORAGE_IMAGE,
-            Descriptor::Texels(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            Descriptor::Texels(_) => vk::DescriptorType::STORAGE_TEXEL_BUFFER,
         }
     }
 }

@@ -118,17 +118,26 @@ bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out ve
     return true;
 }
 
+// min and max as selects: GLSL's min and max must return the other operand for a NaN, which
+// llvmpipe builds from three instructions (minps, an unordered compare, a blend) where a select
+// is the one instruction x86's minps is. The slab test never sees a NaN (bvh_ray nudges tiny
+// direction components, boxes are finite), so both give the same values.
+vec3 bvh_min3(vec3 a, vec3 b) { return mix(b, a, lessThan(a, b)); }
+vec3 bvh_max3(vec3 a, vec3 b) { return mix(b, a, greaterThan(a, b)); }
+float bvh_min(float a, float b) { return a < b ? a : b; }
+float bvh_max(float a, float b) { return a > b ? a : b; }
+
 // Entry distance of the ray into a child's box (its two texels) within [tmin, tmax], or BVH_INF;
 // always BVH_INF for an absent child.
 float bvh_slab(BvhRay r, uvec4 lo, uvec4 hi, float tmin, float tmax) {
     vec3 t0 = (uintBitsToFloat(lo.xyz) - r.origin) * r.inv_dir;
     vec3 t1 = (uintBitsToFloat(hi.xyz) - r.origin) * r.inv_dir;
-    vec3 near3 = min(t0, t1);
-    vec3 far3 = max(t0, t1);
-    float near = max(max(near3.x, near3.y), max(near3.z, tmin));
+    vec3 near3 = bvh_min3(t0, t1);
+    vec3 far3 = bvh_max3(t0, t1);
+    float near = bvh_max(bvh_max(near3.x, near3.y), bvh_max(near3.z, tmin));
     // tmax is scaled too: a box whose entry rounds just past the nearest hit so far (a hit on its
     // face, as on every axis-aligned wall) is still visited, for the tie rule of bvh_trace.
-    float far = min(min(min(far3.x, far3.y), far3.z), tmax) * BVH_SLAB_ROBUST;
+    float far = bvh_min(bvh_min(bvh_min(far3.x, far3.y), far3.z), tmax) * BVH_SLAB_ROBUST;
     return near <= far && hi.w != BVH_NO_CHILD ? near : BVH_INF;
 }
 

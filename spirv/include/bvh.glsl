@@ -161,15 +161,96 @@ bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir);
         nb = swap_ ? n_ : nb;          \
     }
 
+// One node visited: its leaf children hit, as triangle ranges (`first` and running `end`, so
+// triangle k of the visit is in the first child whose end exceeds k), and its inner children hit
+// (within the nearest hit so far), sorted nearest first: the nearest to descend into, the others
+// as one stack entry (bits 31..8 the node's first inner child, 7..6 how many remain, 1 to 3, then
+// their offsets from it, two bits each, the next one highest; a node's inner children have
+// consecutive GPU indices, GpuBvhNode::from_bvh).
+struct BvhVisit {
+    uvec4 first;
+    uvec4 end;
+    uint inner;
+    uint nearest;
+    uint entry;
+};
+
+BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
+    uvec4 lo0 = bvh_child_lo(node, 0u);
+    uvec4 hi0 = bvh_child_hi(node, 0u);
+    uvec4 lo1 = bvh_child_lo(node, 1u);
+    uvec4 hi1 = bvh_child_hi(node, 1u);
+    uvec4 lo2 = bvh_child_lo(node, 2u);
+    uvec4 hi2 = bvh_child_hi(node, 2u);
+    uvec4 lo3 = bvh_child_lo(node, 3u);
+    uvec4 hi3 = bvh_child_hi(node, 3u);
+    float d0 = bvh_slab(r, lo0, hi0, tmin, tmax);
+    float d1 = bvh_slab(r, lo1, hi1, tmin, tmax);
+    float d2 = bvh_slab(r, lo2, hi2, tmin, tmax);
+    float d3 = bvh_slab(r, lo3, hi3, tmin, tmax);
+    BvhVisit v;
+    v.first = uvec4(lo0.w, lo1.w, lo2.w, lo3.w);
+    v.end.x = d0 != BVH_INF ? hi0.w : 0u;
+    v.end.y = v.end.x + (d1 != BVH_INF ? hi1.w : 0u);
+    v.end.z = v.end.y + (d2 != BVH_INF ? hi2.w : 0u);
+    v.end.w = v.end.z + (d3 != BVH_INF ? hi3.w : 0u);
+    // Inner children hit, and not beyond the nearest hit (tmax may be infinite): their distances,
+    // BVH_INF for the others.
+    float reach = tmax * BVH_SLAB_ROBUST;
+    float k0 = hi0.w == 0u && d0 <= reach ? d0 : BVH_INF;
+    float k1 = hi1.w == 0u && d1 <= reach ? d1 : BVH_INF;
+    float k2 = hi2.w == 0u && d2 <= reach ? d2 : BVH_INF;
+    float k3 = hi3.w == 0u && d3 <= reach ? d3 : BVH_INF;
+    uint n0 = lo0.w;
+    uint n1 = lo1.w;
+    uint n2 = lo2.w;
+    uint n3 = lo3.w;
+    uint first = min(min(hi0.w == 0u ? n0 : BVH_NO_CHILD, hi1.w == 0u ? n1 : BVH_NO_CHILD),
+                     min(hi2.w == 0u ? n2 : BVH_NO_CHILD, hi3.w == 0u ? n3 : BVH_NO_CHILD));
+    BVH_SORT2(k0, n0, k1, n1);
+    BVH_SORT2(k2, n2, k3, n3);
+    BVH_SORT2(k0, n0, k2, n2);
+    BVH_SORT2(k1, n1, k3, n3);
+    BVH_SORT2(k1, n1, k2, n2);
+    v.inner = uint(k0 != BVH_INF) + uint(k1 != BVH_INF) + uint(k2 != BVH_INF) + uint(k3 != BVH_INF);
+    v.nearest = n0;
+    v.entry = (first << 8u) | ((v.inner - 1u) << 6u) | (((n1 - first) & 3u) << 4u) |
+              (((n2 - first) & 3u) << 2u) | ((n3 - first) & 3u);
+    return v;
+}
+
+// After visit `v`, moves `node` into its nearest inner child (the others pushed as one entry), or
+// else to the next child of the entry on top of the stack (written back with the rest, or
+// popped); `more` is false when the walk is over. One stack word is stored, at a slot chosen per
+// lane, by every lane: on SIMD CPUs (llvmpipe) a store under a divergent condition, and each
+// extra store, costs a per-lane branch that mispredicts.
+#define BVH_ADVANCE(v, more)                                                                     \
+    {                                                                                            \
+        uint top_ = stack[max(sp, 1u) - 1u];                                                     \
+        uint rest_ = (top_ & 0xffffff00u) | ((((top_ >> 6u) & 3u) - 1u) << 6u) | ((top_ & 15u) << 2u); \
+        bool descend_ = v.inner > 0u;                                                            \
+        stack[min(descend_ ? sp : sp - 1u, BVH_MAX_DEPTH - 1u)] = descend_ ? v.entry : rest_;    \
+        more = descend_ || sp > 0u;                                                              \
+        if (descend_) {                                                                          \
+            node = v.nearest;                                                                    \
+            sp += v.inner > 1u ? 1u : 0u;                                                        \
+        } else if (sp > 0u) {                                                                    \
+            node = (top_ >> 8u) + ((top_ >> 4u) & 3u);                                           \
+            sp -= ((top_ >> 6u) & 3u) == 1u ? 1u : 0u;                                           \
+        }                                                                                        \
+    }
+
 // Front-to-back traversal with t in (tmin, tmax); any_hit stops at the first hit found. The
 // closest hit is the nearest, and of equally near ones (a ray through a shared edge) the one
 // first in the input, so the answer does not depend on the order of the walk (the BVH's layout,
 // its width, the CPU or the GPU): the brute-force reference keeps the lowest index too.
-// Each step tests the four children of a GPU node, then the triangles of those that are leaves
-// and were hit, then descends into the nearest inner child hit and pushes the others, farthest
-// first. Leaves cost no step of their own: on a SIMD CPU (llvmpipe) every step runs the triangle
-// loop's body at least once whether or not any lane needs it, so fewer steps is what pays.
-// Everything per child is written out for constant child indices (registers, not memory).
+// Each iteration visits two nodes, then tests the triangles of the leaf children both hit. On a
+// SIMD CPU (llvmpipe) every iteration runs the triangle loop's body at least once, whether or not
+// any lane has a leaf (in Sponza most visits have none), so two visits per loop halve those empty
+// runs: +20-30 % rays/s there (BENCHMARKS.md; three visits gained nothing more). The second
+// visit's culling does not see the first's triangles yet, which costs a few extra visits and
+// never a wrong answer. Everything per child is written out for constant child indices
+// (registers, not memory).
 bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
     hit = Hit(tmax, 0xffffffffu, vec2(0.0));
     BvhRay r = bvh_ray(origin, dir);
@@ -179,25 +260,23 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
     bool found = false;
     uint hit_order = 0xffffffffu;
     while (true) {
-        uvec4 lo0 = bvh_child_lo(node, 0u);
-        uvec4 hi0 = bvh_child_hi(node, 0u);
-        uvec4 lo1 = bvh_child_lo(node, 1u);
-        uvec4 hi1 = bvh_child_hi(node, 1u);
-        uvec4 lo2 = bvh_child_lo(node, 2u);
-        uvec4 hi2 = bvh_child_hi(node, 2u);
-        uvec4 lo3 = bvh_child_lo(node, 3u);
-        uvec4 hi3 = bvh_child_hi(node, 3u);
-        float d0 = bvh_slab(r, lo0, hi0, tmin, tmax);
-        float d1 = bvh_slab(r, lo1, hi1, tmin, tmax);
-        float d2 = bvh_slab(r, lo2, hi2, tmin, tmax);
-        float d3 = bvh_slab(r, lo3, hi3, tmin, tmax);
-        // Triangles of the leaf children hit, child by child: k counts through all of them.
-        uint e1 = d0 != BVH_INF ? hi0.w : 0u;  // running ends
-        uint e2 = e1 + (d1 != BVH_INF ? hi1.w : 0u);
-        uint e3 = e2 + (d2 != BVH_INF ? hi2.w : 0u);
-        uint e4 = e3 + (d3 != BVH_INF ? hi3.w : 0u);
-        for (uint k = 0u; k < e4; ++k) {
-            uint i = k < e1 ? lo0.w + k : (k < e2 ? lo1.w + (k - e1) : (k < e3 ? lo2.w + (k - e2) : lo3.w + (k - e3)));
+        BvhVisit a = bvh_visit(r, node, tmin, tmax);
+        bool more;
+        BVH_ADVANCE(a, more);
+        // When the walk ended with the first visit, the second (of the same node) is void.
+        BvhVisit b = bvh_visit(r, node, tmin, tmax);
+        if (more) {
+            BVH_ADVANCE(b, more);
+        } else {
+            b.end = uvec4(0u);
+        }
+        uint from_b = a.end.w;
+        for (uint k = 0u; k < from_b + b.end.w; ++k) {
+            bool in_a = k < from_b;
+            uint j = in_a ? k : k - from_b;
+            uvec4 f = in_a ? a.first : b.first;
+            uvec4 e = in_a ? a.end : b.end;
+            uint i = j < e.x ? f.x + j : (j < e.y ? f.y + (j - e.x) : (j < e.z ? f.z + (j - e.y) : f.w + (j - e.z)));
             float t;
             vec2 bary;
             uint order;
@@ -218,47 +297,8 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
                 }
             }
         }
-        // Inner children hit, and not beyond a hit just found (tmax may be infinite): their
-        // distances, BVH_INF for the others, sorted nearest first.
-        float reach = tmax * BVH_SLAB_ROBUST;
-        float k0 = hi0.w == 0u && d0 <= reach ? d0 : BVH_INF;
-        float k1 = hi1.w == 0u && d1 <= reach ? d1 : BVH_INF;
-        float k2 = hi2.w == 0u && d2 <= reach ? d2 : BVH_INF;
-        float k3 = hi3.w == 0u && d3 <= reach ? d3 : BVH_INF;
-        uint n0 = lo0.w;
-        uint n1 = lo1.w;
-        uint n2 = lo2.w;
-        uint n3 = lo3.w;
-        // A node's inner children have consecutive GPU indices from `first` (GpuBvhNode::from_bvh).
-        uint first = min(min(hi0.w == 0u ? n0 : BVH_NO_CHILD, hi1.w == 0u ? n1 : BVH_NO_CHILD),
-                         min(hi2.w == 0u ? n2 : BVH_NO_CHILD, hi3.w == 0u ? n3 : BVH_NO_CHILD));
-        BVH_SORT2(k0, n0, k1, n1);
-        BVH_SORT2(k2, n2, k3, n3);
-        BVH_SORT2(k0, n0, k2, n2);
-        BVH_SORT2(k1, n1, k3, n3);
-        BVH_SORT2(k1, n1, k2, n2);
-        uint m = uint(k0 != BVH_INF) + uint(k1 != BVH_INF) + uint(k2 != BVH_INF) + uint(k3 != BVH_INF);
-        // The step descends into the nearest and leaves the others, nearest first, in one stack
-        // entry: bits 31..8 `first`, 7..6 how many remain (1-3), then their offsets from `first`
-        // two bits each, the next one highest. A pop takes the entry's next child and writes the rest back. So a
-        // step stores one word, at a slot chosen per lane, and every lane stores it: a store under
-        // a divergent condition, and each extra store, costs a per-lane branch on SIMD CPUs
-        // (llvmpipe), which mispredicts.
-        uint pushed = (first << 8u) | ((m - 1u) << 6u) | (((n1 - first) & 3u) << 4u) |
-                      (((n2 - first) & 3u) << 2u) | ((n3 - first) & 3u);
-        uint top = stack[max(sp, 1u) - 1u];
-        uint rest = (top & 0xffffff00u) | ((((top >> 6u) & 3u) - 1u) << 6u) | ((top & 15u) << 2u);
-        bool descend = m > 0u;
-        stack[min(descend ? sp : sp - 1u, BVH_MAX_DEPTH - 1u)] = descend ? pushed : rest;
-        if (descend) {
-            node = n0;
-            sp += m > 1u ? 1u : 0u;
-        } else {
-            if (sp == 0u) {
-                break;
-            }
-            node = (top >> 8u) + ((top >> 4u) & 3u);
-            sp -= ((top >> 6u) & 3u) == 1u ? 1u : 0u;
+        if (!more) {
+            break;
         }
     }
     return found;

@@ -8,6 +8,7 @@
 // exit refraction, no second surface: the G-buffer knows only the first).
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
+#include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -127,7 +128,7 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
 }
 
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pixel = ivec2(tile_pixel());
     uvec2 size = params.size_frame.xy;
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;

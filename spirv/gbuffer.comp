@@ -5,6 +5,7 @@
 // the path tracer sees.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
+#include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -35,7 +36,7 @@ layout(push_constant) uniform Push { GBufferParams params; };
 #include "shading.glsl"
 
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pixel = ivec2(tile_pixel());
     uvec2 size = params.size.xy;
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;

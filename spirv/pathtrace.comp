@@ -4,6 +4,7 @@
 // importance sampling (power or balance heuristic), Russian roulette.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
+#include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -62,7 +63,7 @@ uint nonfinite_bit(vec3 v, uint bit) {
 }
 
 void main() {
-    uvec2 pixel = gl_GlobalInvocationID.xy;
+    uvec2 pixel = tile_pixel();
     uvec2 size = params.size_frame.xy;
     if (any(greaterThanEqual(pixel, size))) {
         return;

@@ -11,6 +11,7 @@
 // blended surfaces occlude as the path tracer sees them (shading.glsl's alpha test).
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
+#include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -42,7 +43,7 @@ layout(push_constant) uniform Push { AoParams params; };
 #include "shading.glsl"
 
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pixel = ivec2(tile_pixel());
     uvec2 size = params.size_frame.xy;
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;

@@ -99,9 +99,10 @@ fn primary_rays(scene: &RayScene, (w, h): (u32, u32), row_order: bool) -> Vec<Ra
     let up = right.cross(forward);
     let tan = (scene.yfov * 0.5).tan();
     let aspect = w as f32 / h as f32;
-    // In 8×8 tiles, row-major inside each: with trace.comp's 64-wide workgroups each workgroup
-    // is one tile (a 32-lane warp an 8×4 block), as in the renderer's 8×8 kernels. Row order
-    // (a warp on a 32×1 strip) measured 3.9× slower on Sponza on an H100 (BENCHMARKS.md).
+    // In 8×8 tiles: with trace.comp's 64-wide workgroups each workgroup is one tile, ordered as
+    // the renderer's 8×8 kernels order it (`pixel.glsl`: 8-lane SIMD batches on 4×2 blocks, a
+    // 32-lane warp an 8×4 block). Row order (a warp on a 32×1 strip) measured 3.9× slower on
+    // Sponza on an H100 (BENCHMARKS.md).
     let tiles = (w.div_ceil(8), h.div_ceil(8));
     (0..tiles.0 * tiles.1 * 64)
         .map(|i| {
@@ -109,7 +110,8 @@ fn primary_rays(scene: &RayScene, (w, h): (u32, u32), row_order: bool) -> Vec<Ra
                 return (i % w, i / w);
             }
             let (tile, k) = (i / 64, i % 64);
-            ((tile % tiles.0) * 8 + k % 8, (tile / tiles.0) * 8 + k / 8)
+            let (kx, ky) = ((k & 3) | ((k >> 1) & 4), ((k >> 2) & 1) | ((k >> 3) & 6));
+            ((tile % tiles.0) * 8 + kx, (tile / tiles.0) * 8 + ky)
         })
         .filter(|&(x, y)| x < w && y < h)
         .map(|(x, y)| {

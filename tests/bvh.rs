@@ -30,10 +30,7 @@ fn rays(triangles: &[[Vec3; 3]], count: usize, seed: u64) -> Vec<Ray> {
             let (dir, tmin, tmax) = match i % 3 {
                 0 => (rng.on_sphere(), 0.0, f32::INFINITY),
                 1 => {
-                    let t = triangles[rng.below(triangles.len())];
-                    let (a, b) = (rng.f32(), rng.f32());
-                    let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
-                    let target = t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b;
+                    let target = point_on(&triangles[rng.below(triangles.len())], &mut rng);
                     ((target - origin).normalize_or(Vec3::X), 0.0, f32::INFINITY)
                 }
                 _ => {
@@ -46,6 +43,13 @@ fn rays(triangles: &[[Vec3; 3]], count: usize, seed: u64) -> Vec<Ray> {
             Ray { origin, dir: dir * scale, tmin: tmin / scale, tmax: tmax / scale }
         })
         .collect()
+}
+
+/// A uniformly random point of triangle `t`.
+fn point_on(t: &[Vec3; 3], rng: &mut Rng) -> Vec3 {
+    let (a, b) = (rng.f32(), rng.f32());
+    let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+    t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b
 }
 
 /// Whether `got` (BVH order) answers a ray as the reference (input order) does.
@@ -322,13 +326,16 @@ fn random_soups_build_valid_bvhs() {
 /// triangle reaches it. Returns how many triangles were split.
 fn split_triangles_are_covered(bvh: &Bvh, rng: &mut Rng) -> Result<usize, String> {
     let mut leaf_boxes: Vec<Vec<(Vec3, Vec3)>> = vec![Vec::new(); bvh.stats.triangles];
+    // One BVH position of each input triangle, for its vertices.
+    let mut position = vec![0usize; bvh.stats.triangles];
     let mut stack = vec![0usize];
     while let Some(n) = stack.pop() {
         let node = &bvh.nodes[n];
         if node.is_leaf() {
-            for t in node.left_first..node.left_first + node.tri_count {
-                leaf_boxes[bvh.prim_order[t as usize] as usize]
-                    .push((node.aabb_min.into(), node.aabb_max.into()));
+            for t in node.left_first as usize..(node.left_first + node.tri_count) as usize {
+                let input = bvh.prim_order[t] as usize;
+                leaf_boxes[input].push((node.aabb_min.into(), node.aabb_max.into()));
+                position[input] = t;
             }
         } else if node.aabb_min[0] <= node.aabb_max[0] {
             stack.extend([node.left_first as usize, node.left_first as usize + 1]);
@@ -337,18 +344,14 @@ fn split_triangles_are_covered(bvh: &Bvh, rng: &mut Rng) -> Result<usize, String
     let mut split = 0;
     for (input, boxes) in leaf_boxes.iter().enumerate().filter(|(_, b)| b.len() > 1) {
         split += 1;
-        let t = bvh.tris[bvh.prim_order.iter().position(|&p| p as usize == input).unwrap()].vertices();
+        let t = bvh.tris[position[input]].vertices();
         let mut points = t.to_vec();
         for k in 0..3 {
             for f in [0.5, 1.0 / 3.0, 0.999] {
                 points.push(t[k] + (t[(k + 1) % 3] - t[k]) * f);
             }
         }
-        for _ in 0..200 {
-            let (a, b) = (rng.f32(), rng.f32());
-            let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
-            points.push(t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b);
-        }
+        points.extend((0..200).map(|_| point_on(&t, rng)));
         for p in points {
             if !boxes.iter().any(|&(lo, hi)| p.cmpge(lo).all() && p.cmple(hi).all()) {
                 return Err(format!(

@@ -83,6 +83,10 @@ impl PrimRef {
     fn centroid2(&self) -> Vec3A {
         self.min + self.max
     }
+
+    fn aabb(&self) -> Aabb {
+        Aabb { min: self.min, max: self.max }
+    }
 }
 
 /// A chosen split, with its unnormalised cost `area(L)·n(L) + area(R)·n(R)` (times the
@@ -220,11 +224,15 @@ fn references(triangles: &[[Vec3; 3]], presplit: f32) -> (Vec<PrimRef>, Vec<u32>
             PrimRef { min: a.min(b).min(c), max: a.max(b).max(c) }
         })
         .collect();
-    let area = |r: &PrimRef| Aabb { min: r.min, max: r.max }.half_area();
+    let unsplit = |boxes| (boxes, (0..triangles.len() as u32).collect());
+    if presplit <= 0.0 {
+        return unsplit(boxes);
+    }
+    let area = |r: &PrimRef| r.aabb().half_area();
     let mean = boxes.par_iter().map(|b| area(b) as f64).sum::<f64>() / boxes.len() as f64;
     let threshold = presplit * mean as f32;
-    if presplit <= 0.0 || !threshold.is_finite() || !boxes.par_iter().any(|b| area(b) > threshold) {
-        return (boxes, (0..triangles.len() as u32).collect());
+    if !threshold.is_finite() || !boxes.par_iter().any(|b| area(b) > threshold) {
+        return unsplit(boxes);
     }
     // A split triangle's first piece takes its place, the others go at the end.
     let large: Vec<usize> =
@@ -265,7 +273,7 @@ fn clip_pieces(
     depth: u32,
     out: &mut impl FnMut(PrimRef),
 ) {
-    if (Aabb { min: piece.min, max: piece.max }).half_area() <= threshold || depth >= MAX_CLIP_DEPTH {
+    if piece.aabb().half_area() <= threshold || depth >= MAX_CLIP_DEPTH {
         out(piece);
         return;
     }
@@ -302,13 +310,12 @@ fn clip_pieces(
             continue;
         }
         let part = &buffer[..len];
-        let (lo, hi) = part
-            .iter()
-            .fold((Vec3A::splat(f32::MAX), Vec3A::splat(-f32::MAX)), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let mut bounds = Aabb::EMPTY;
+        part.iter().for_each(|&v| bounds.grow_point(v));
         // Each level's clip points are within a few ulps of the triangle's magnitude of true
         // points of it (errors add up over the levels): 64 ulps cover all eight levels.
         let pad = whole.min.abs().max(whole.max.abs()) * (64.0 * f32::EPSILON);
-        let next = PrimRef { min: (lo - pad).max(whole.min), max: (hi + pad).min(whole.max) };
+        let next = PrimRef { min: (bounds.min - pad).max(whole.min), max: (bounds.max + pad).min(whole.max) };
         clip_pieces(part, next, whole, threshold, depth + 1, out);
     }
 }
@@ -316,7 +323,7 @@ fn clip_pieces(
 /// The box of the primitives and the box of their (doubled) centroids.
 fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     let fold = |(mut b, mut c): (Aabb, Aabb), r: &PrimRef| {
-        b.grow(&Aabb { min: r.min, max: r.max });
+        b.grow(&r.aabb());
         c.grow_point(r.centroid2());
         (b, c)
     };
@@ -521,7 +528,7 @@ fn sweep(
         }
         let prim = |k: usize| {
             let r = &refs[position_of(keys[k])];
-            Aabb { min: r.min, max: r.max }
+            r.aabb()
         };
         let mut acc = Aabb::EMPTY;
         for k in (1..n).rev() {
@@ -564,13 +571,13 @@ fn partition(
                 let r = refs[i];
                 let c2 = r.centroid2();
                 if binning.below(c2, split.axis, *bin) {
-                    left_box.grow(&Aabb { min: r.min, max: r.max });
+                    left_box.grow(&r.aabb());
                     left_centroids.grow_point(c2);
                     refs.swap(i, left);
                     order.swap(i, left);
                     left += 1;
                 } else {
-                    right_box.grow(&Aabb { min: r.min, max: r.max });
+                    right_box.grow(&r.aabb());
                     right_centroids.grow_point(c2);
                 }
             }
@@ -678,7 +685,7 @@ mod tests {
     fn half_area_of(refs: &[PrimRef]) -> f32 {
         let mut b = Aabb::EMPTY;
         for r in refs {
-            b.grow(&Aabb { min: r.min, max: r.max });
+            b.grow(&r.aabb());
         }
         b.half_area()
     }

@@ -25,7 +25,7 @@ impl GpuBvh {
         if nodes.len() > GpuBvhNode::MAX_NODES {
             return Err(Error::Invalid(format!(
                 "the BVH of {} triangles has {} 4-wide nodes; the traversal addresses at most {}",
-                bvh.tris.len(),
+                bvh.stats.triangles,
                 nodes.len(),
                 GpuBvhNode::MAX_NODES
             )));

@@ -23,9 +23,9 @@
 //! the host owns diagnostics and [`super::Context::last_pass`] names the last pass recorded.
 
 use super::context::Shared;
-use crate::error::{Error, Result, VkContext};
+use crate::error::{Error, Result};
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 
 /// Dispatches tracked per command buffer; later ones are counted but not written.
@@ -39,34 +39,15 @@ pub(crate) struct CrumbBuffer {
 
 impl CrumbBuffer {
     pub fn new(shared: &Shared) -> Result<Self> {
-        let size = (SLOTS * 4) as u64;
-        let info = vk::BufferCreateInfo::default()
-            .size(size)
-            .usage(vk::BufferUsageFlags::TRANSFER_DST)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        // SAFETY: valid device; the buffer is destroyed on error or by `destroy`.
-        let raw = unsafe { shared.device.create_buffer(&info, None) }.call("vkCreateBuffer")?;
-        let requirements = unsafe { shared.device.get_buffer_memory_requirements(raw) };
-        let allocation = shared
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name: "pass breadcrumb",
-                requirements,
-                location: MemoryLocation::GpuToCpu,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| {
-                unsafe { shared.device.destroy_buffer(raw, None) };
-                Error::Allocation { name: "pass breadcrumb".into(), source }
-            });
-        let allocation = allocation?;
+        let (raw, allocation) = super::buffer::create_bound(
+            shared,
+            "pass breadcrumb",
+            (SLOTS * 4) as u64,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
         let crumb = Self { raw, allocation };
-        // SAFETY: memory from the allocator for this buffer's requirements.
-        let bound = unsafe {
-            shared.device.bind_buffer_memory(raw, crumb.allocation.memory(), crumb.allocation.offset())
-        };
-        if let Err(e) = bound.call("vkBindBufferMemory").and_then(|()| crumb.slots_ptr().map(|_| ())) {
+        if let Err(e) = crumb.slots_ptr() {
             crumb.destroy(shared);
             return Err(e);
         }

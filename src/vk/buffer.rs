@@ -38,40 +38,8 @@ impl Buffer {
             )));
         }
         let size = size.max(4);
-        let info =
-            vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
-        // SAFETY: valid device; the buffer is destroyed on error or in Drop.
-        let raw = match unsafe { shared.device.create_buffer(&info, None) } {
-            // A size no heap can hold: name the buffer, as an allocator failure would.
-            Err(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY) => {
-                return Err(Error::Allocation {
-                    name: format!("{name} ({size} bytes)"),
-                    source: gpu_allocator::AllocationError::OutOfMemory,
-                })
-            }
-            other => other.call("vkCreateBuffer")?,
-        };
-        let requirements = unsafe { shared.device.get_buffer_memory_requirements(raw) };
-        let allocation = shared
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| {
-                unsafe { shared.device.destroy_buffer(raw, None) };
-                Error::Allocation { name: name.into(), source }
-            })?;
-        // SAFETY: memory from the allocator for this buffer's requirements.
-        let bound =
-            unsafe { shared.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
-        let buffer =
-            Self { shared: shared.clone(), raw, size, allocation: Some(allocation), name: name.into() };
-        bound.call("vkBindBufferMemory")?;
-        Ok(buffer)
+        let (raw, allocation) = create_bound(shared, name, size, usage, location)?;
+        Ok(Self { shared: shared.clone(), raw, size, allocation: Some(allocation), name: name.into() })
     }
 
     /// A device-local buffer filled with `data` through a staging buffer and a GPU copy (the path
@@ -201,6 +169,53 @@ impl Drop for TexelBuffer {
         // after this, so the view goes first.
         unsafe { self.buffer.shared.device.destroy_buffer_view(self.view, None) };
     }
+}
+
+/// A buffer of `size` bytes with its memory from the allocator, bound: what [`Buffer::new`] wraps,
+/// and the breadcrumb buffers that [`Shared`] pools (a `Buffer` holds the `Shared` it came from,
+/// so those cannot be `Buffer`s). On an error nothing is left to free.
+pub(super) fn create_bound(
+    shared: &Shared,
+    name: &str,
+    size: u64,
+    usage: vk::BufferUsageFlags,
+    location: MemoryLocation,
+) -> Result<(vk::Buffer, Allocation)> {
+    let info =
+        vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+    // SAFETY: valid device; the buffer is destroyed on error here, else by the caller.
+    let raw = match unsafe { shared.device.create_buffer(&info, None) } {
+        // A size no heap can hold: name the buffer, as an allocator failure would.
+        Err(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY) => {
+            return Err(Error::Allocation {
+                name: format!("{name} ({size} bytes)"),
+                source: gpu_allocator::AllocationError::OutOfMemory,
+            })
+        }
+        other => other.call("vkCreateBuffer")?,
+    };
+    let requirements = unsafe { shared.device.get_buffer_memory_requirements(raw) };
+    let allocation = shared
+        .allocator()
+        .allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })
+        .map_err(|source| {
+            unsafe { shared.device.destroy_buffer(raw, None) };
+            Error::Allocation { name: name.into(), source }
+        })?;
+    // SAFETY: memory from the allocator for this buffer's requirements.
+    let bound = unsafe { shared.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+    if let Err(e) = bound.call("vkBindBufferMemory") {
+        unsafe { shared.device.destroy_buffer(raw, None) };
+        let _ = shared.allocator().free(allocation);
+        return Err(e);
+    }
+    Ok((raw, allocation))
 }
 
 impl Drop for Buffer {

@@ -35,6 +35,18 @@ fn scene_of(parts: &[(&Mesh, Material, bool)], camera: Camera) -> Scene {
     scene
 }
 
+/// A camera at `height` above the origin looking straight down (-y), image up along -z.
+fn looking_down(height: f32, yfov: f32) -> Camera {
+    Camera {
+        position: [0.0, height, 0.0],
+        forward: [0.0, -1.0, 0.0],
+        up: [0.0, 0.0, -1.0],
+        yfov,
+        aspect: None,
+        znear: 0.01,
+    }
+}
+
 /// A square floor at y = 0, `half` metres each way, facing +y.
 fn floor_quad(half: f32) -> Mesh {
     Mesh {
@@ -343,14 +355,7 @@ fn punctual_lights_match_closed_form() {
         base_color_factor: [albedo, albedo, albedo, 1.0],
         ..Default::default()
     };
-    let cam = Camera {
-        position: [0.0, 6.0, 0.0],
-        forward: [0.0, -1.0, 0.0],
-        up: [0.0, 0.0, -1.0],
-        yfov: 60f32.to_radians(),
-        aspect: None,
-        znear: 0.01,
-    };
+    let cam = looking_down(6.0, 60f32.to_radians());
     let base = Light {
         name: String::new(),
         kind: LightKind::Point,
@@ -913,14 +918,7 @@ fn punctual_light_shines_through_rough_thin_glass() {
     let gpu = Gpu::new();
     let sheet = floor_quad(2.0);
     let glass = Material { roughness: 0.5, ..clear_glass(false) };
-    let cam = Camera {
-        position: [0.0, 1.0, 0.0],
-        forward: [0.0, -1.0, 0.0],
-        up: [0.0, 0.0, -1.0],
-        yfov: 2f32.to_radians(),
-        aspect: None,
-        znear: 0.01,
-    };
+    let cam = looking_down(1.0, 2f32.to_radians());
     let mut scene = scene_of(&[(&sheet, glass, false)], cam);
     let light_pos = Vec3::new(0.0, -1.0, 0.0);
     scene.lights.push(umbra::scene::Light {

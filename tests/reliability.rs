@@ -37,6 +37,12 @@ impl log::Log for Capture {
     fn flush(&self) {}
 }
 
+/// The embedded Cornell box uploaded to `gpu`, and its camera.
+fn cornell_box(gpu: &Gpu) -> (GpuScene, umbra::scene::Camera) {
+    let scene = Scene::cornell_box();
+    (GpuScene::upload(gpu, &scene).unwrap(), scene.camera(None).unwrap())
+}
+
 fn warnings_naming(name: &str) -> Vec<String> {
     static LOGGER: Capture = Capture;
     let _ = log::set_logger(&LOGGER).map(|()| log::set_max_level(log::LevelFilter::Warn));
@@ -239,9 +245,7 @@ fn scenes_over_the_device_buffer_limit_are_one_clear_error() {
 #[test]
 fn failed_submissions_name_the_last_pass() {
     let gpu = Gpu::new();
-    let scene = Scene::cornell_box();
-    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let camera = scene.camera(None).unwrap();
+    let (device_scene, camera) = cornell_box(&gpu);
     let settings = PathSettings { size: (8, 8), spp: 1, ..Default::default() };
     let pass = PathTracePass::for_scene(&gpu, &device_scene, Default::default(), Default::default()).unwrap();
     let resolve = umbra::passes::pathtrace::ResolvePass::new(&gpu).unwrap();
@@ -408,9 +412,7 @@ fn a_hung_submission_names_the_pass_the_gpu_was_running() {
 #[test]
 fn hybrid_same_seed_same_bytes_different_seed_different() {
     let gpu = Gpu::new();
-    let scene = Scene::cornell_box();
-    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let camera = scene.camera(None).unwrap();
+    let (device_scene, camera) = cornell_box(&gpu);
     let mut settings =
         HybridSettings { size: (32, 32), ao: Some(AoSettings::default()), ..Default::default() };
     settings.lighting.env = [0.5; 3];
@@ -443,9 +445,7 @@ fn ten_thousand_samples_equal_a_float64_accumulation() {
     const N: u32 = 10_000;
     const PIXELS: usize = 16;
     let gpu = Gpu::new();
-    let scene = Scene::cornell_box();
-    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let camera = scene.camera(None).unwrap();
+    let (device_scene, camera) = cornell_box(&gpu);
     let settings = PathSettings { size: (4, 4), spp: N, ..Default::default() };
     let start = std::time::Instant::now();
     let image = path_trace(&gpu, &device_scene, &camera, &settings, |_, _| {}).unwrap();
@@ -574,9 +574,7 @@ fn absurd_output_sizes_are_clear_cli_errors() {
 fn hybrid_lighting_settings_are_checked() {
     use umbra::passes::deferred::LightingSettings;
     let gpu = Gpu::new();
-    let scene = Scene::cornell_box();
-    let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let camera = scene.camera(None).unwrap();
+    let (device_scene, camera) = cornell_box(&gpu);
     let bad = [
         LightingSettings { shadow_rays: 0, ..Default::default() },
         LightingSettings { shadow_rays: LightingSettings::MAX_SHADOW_RAYS + 1, ..Default::default() },

@@ -9,7 +9,7 @@ layout(local_size_x = 1) in;
 layout(set = 0, binding = 0, std430) buffer PatternParamsBuffer { PatternParams pattern_params[]; };
 
 layout(set = 0, binding = 1, std430) buffer BufferTestParamsBuffer { BufferTestParams buffer_test_params[]; };
-layout(set = 0, binding = 2, std430) buffer BvhNodeBuffer { GpuBvhChild bvh_node_check[]; };
+layout(set = 0, binding = 2, std430) buffer BvhNodeBuffer { GpuBvhNode bvh_node_check[]; };
 layout(set = 0, binding = 3, std430) buffer BvhTriBuffer { BvhTri bvh_tri_check[]; };
 layout(set = 0, binding = 4, std430) buffer TraceRayBuffer { TraceRay trace_ray_check[]; };
 layout(set = 0, binding = 5, std430) buffer TraceHitBuffer { TraceHit trace_hit_check[]; };
@@ -34,7 +34,7 @@ layout(set = 0, binding = 22, std430) buffer LightTestParamsBuffer { LightTestPa
 void main() {
     pattern_params[0].seed += 1u;
     buffer_test_params[0].add += 1u;
-    bvh_node_check[0].count += 1u;
+    bvh_node_check[0].child[0] += 1u;
     bvh_tri_check[0].v0.x += 1.0;
     trace_ray_check[0].origin_tmin.x += 1.0;
     trace_hit_check[0].tri += 1u;

@@ -5,7 +5,7 @@ mod common;
 
 use common::Gpu;
 use glam::Vec3;
-use umbra::bvh::gpu::{GpuBvh, Query, RayTracer};
+use umbra::bvh::gpu::{GpuBvh, GpuBvhNode, Query, RayTracer};
 use umbra::bvh::reference::{same_hit, Reference};
 use umbra::bvh::{BuildOptions, Bvh, Hit, Ray};
 use umbra::geometry::{icosphere, random_soup, terrain, Mesh, Rng};
@@ -73,7 +73,20 @@ fn zero_area(t: &[Vec3; 3]) -> bool {
 /// where the CPU rounds correctly. So the GPU may also answer as if zero-area triangles were not
 /// there, or hit one of them before the reference's hit; every other triangle must agree exactly.
 fn check_scene(gpu: &Gpu, tracer: &RayTracer, name: &str, triangles: &[[Vec3; 3]], rays: &[Ray]) -> usize {
-    let bvh = Bvh::build(triangles).unwrap();
+    check_scene_with(gpu, tracer, name, triangles, rays, &BuildOptions::default())
+}
+
+/// `check_scene` for a BVH built with `options`.
+fn check_scene_with(
+    gpu: &Gpu,
+    tracer: &RayTracer,
+    name: &str,
+    triangles: &[[Vec3; 3]],
+    rays: &[Ray],
+    options: &BuildOptions,
+) -> usize {
+    let bvh = Bvh::build_with(triangles, options).unwrap();
+    gpu_layout_is_valid(&bvh).unwrap_or_else(|e| panic!("{name}: GPU layout: {e}"));
     bvh.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
     let device_bvh = GpuBvh::upload(gpu, &bvh).unwrap();
     let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
@@ -175,6 +188,113 @@ fn gpu_closest_hits_match_brute_force_on_several_scenes() {
         let hits = check_scene(&gpu, &tracer, name, triangles, &rays);
         assert!(hits > RAYS / 4, "{name}: only {hits} hits; the rays do not exercise the scene");
     }
+    // Leaves of up to 300 triangles (node visits made costly): the GPU layout splits each above
+    // GpuBvhNode::MAX_LEAF into a subtree of GPU nodes (two levels above 56) sharing its box.
+    let options = BuildOptions { max_leaf_size: 300, traversal_cost: 1000.0, ..Default::default() };
+    let big_leaves = Bvh::build_with(&soup, &options).unwrap().stats;
+    assert!(big_leaves.max_leaf_size > 4 * GpuBvhNode::MAX_LEAF as usize, "{big_leaves:?}");
+    check_scene_with(&gpu, &tracer, "soup in large leaves", &soup, &rays(&soup, RAYS, 8), &options);
+}
+
+/// Axis-aligned walls (two halves of the scene meeting on z = 0.00149, as Sponza's do on its
+/// symmetry plane) and rays that start on their planes or a float off them, many parallel to one
+/// or two axes (direction components 0 or 1e-20): where the GPU's quantized boxes and their
+/// widened slab test (`bvh.glsl`) are most likely to cut a box the ray touches. The GPU must find every hit
+/// the brute-force reference finds beyond the rounding of the origin.
+#[test]
+fn grazing_and_axis_parallel_rays_on_axis_aligned_walls_match_brute_force() {
+    let gpu = Gpu::new();
+    let tracer = RayTracer::new(&gpu).unwrap();
+    let mut rng = Rng::new(21);
+    let planes = [-7.8f32, -2.41851, -0.528511, 0.00149, 0.538988, 3.3, 7.8];
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        for &c in &planes {
+            for _ in 0..24 {
+                // A rectangle on plane `c`, ending on a plane in one direction at times.
+                let (mut lo, mut hi) =
+                    (rng.in_box(Vec3::splat(-8.0), Vec3::ZERO), rng.in_box(Vec3::ZERO, Vec3::splat(8.0)));
+                if rng.f32() < 0.5 {
+                    hi[v] = planes[3];
+                } else if rng.f32() < 0.5 {
+                    lo[v] = planes[3];
+                }
+                let corner = |a: f32, b: f32| {
+                    let mut p = Vec3::splat(c);
+                    (p[u], p[v]) = (a, b);
+                    p
+                };
+                let [p00, p10, p11, p01] =
+                    [corner(lo[u], lo[v]), corner(hi[u], lo[v]), corner(hi[u], hi[v]), corner(lo[u], hi[v])];
+                triangles.extend([[p00, p10, p11], [p00, p11, p01]]);
+            }
+        }
+    }
+    let rays: Vec<Ray> = (0..RAYS)
+        .map(|i| {
+            let mut origin = rng.in_box(Vec3::splat(-9.0), Vec3::splat(9.0));
+            // On a plane, or a float either side of it, on one or two axes.
+            for _ in 0..1 + i % 2 {
+                let (axis, c) = (rng.below(3), planes[rng.below(planes.len())]);
+                origin[axis] = match rng.below(3) {
+                    0 => c,
+                    1 => f32::from_bits(c.to_bits() + 1),
+                    _ => f32::from_bits(c.to_bits() - 1),
+                };
+            }
+            // Components 0 or 1e-20 (parallel to an axis: never meeting its walls) or at least
+            // 0.1 (a wall met at a grazing angle is ill-conditioned for any triangle test, and
+            // the nearest hit there is a matter of rounding, not of the BVH).
+            let mut dir = Vec3::from(std::array::from_fn(|_| {
+                rng.range(0.1, 1.0) * if rng.f32() < 0.5 { -1.0 } else { 1.0 }
+            }));
+            for _ in 0..1 + (i / 2) % 2 {
+                dir[rng.below(3)] = [0.0, 1e-20, -1e-20][rng.below(3)];
+            }
+            // tmin above the triangle test's rounding at the origin: a ray from a float off a
+            // wall may "hit" it at t = 1e-8 going away from it, a hit no box test can expect.
+            Ray { origin, dir, tmin: 1e-4, tmax: f32::INFINITY }
+        })
+        .collect();
+    // Walls cross, and a ray near a crossing meets two of them at about one t, which the triangle
+    // test computes only to a few ulps of the walls' coordinates (its t cancels the vertices'
+    // distances, Woop et al. 2013), so either may come first: a hit counts as the reference's
+    // when it is within 1e-5 (about ten ulps of the coordinates, at most 9) of it along the ray.
+    // A box wrongly culled shows as a miss or a hit farther along.
+    let bvh = Bvh::build(&triangles).unwrap();
+    let device_bvh = GpuBvh::upload(&gpu, &bvh).unwrap();
+    let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
+    let closest = tracer.trace(&gpu, Query::Closest, &device_bvh, &trace_rays).unwrap();
+    let any = tracer.trace(&gpu, Query::Any, &device_bvh, &trace_rays).unwrap();
+    let expected = Reference::new(&triangles).closest_all(&rays);
+    let near = |got: Option<Hit>, want: Option<Hit>, ray: &Ray| match (got, want) {
+        (None, None) => true,
+        (Some(g), Some(w)) => (g.t - w.t).abs() * ray.dir.length() <= 1e-5,
+        _ => false,
+    };
+    let mut failures = Vec::new();
+    for (i, ray) in rays.iter().enumerate() {
+        let (gpu_hit, cpu_hit) = (closest[i].hit(), bvh.closest(ray));
+        if !near(gpu_hit, expected[i], ray) || !near(cpu_hit, expected[i], ray) {
+            failures.push(format!(
+                "ray {i} {ray:?}: GPU {gpu_hit:?}, CPU {cpu_hit:?}, reference {:?}",
+                expected[i]
+            ));
+        }
+        if (any[i].t == 1.0) != expected[i].is_some() {
+            failures.push(format!("ray {i} {ray:?}: any-hit {}, reference {:?}", any[i].t, expected[i]));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} rays disagree; first:\n{}",
+        failures.len(),
+        rays.len(),
+        failures[..failures.len().min(10)].join("\n")
+    );
+    let hits = expected.iter().filter(|h| h.is_some()).count();
+    assert!(hits > RAYS / 2, "only {hits} hits; the rays do not exercise the walls");
 }
 
 /// Rays from inside a closed mesh through every vertex and every edge (at several points along
@@ -365,47 +485,83 @@ fn split_triangles_are_covered(bvh: &Bvh, rng: &mut Rng) -> Result<usize, String
 }
 
 /// The 4-wide GPU layout of `bvh`: every node reachable from the root exactly once, every
-/// triangle in exactly one leaf, every child's box inside its parent child's box, and a node's
-/// inner children at consecutive indices (the traversal stack stores the first and offsets).
+/// triangle in exactly one leaf, each leaf's triangles within one leaf of the binary BVH, every
+/// child's (quantized) box around all the binary leaves below it, so each box the GPU tests holds
+/// all it must, and a node's inner children at consecutive indices (the traversal stack stores
+/// the first and offsets).
 fn gpu_layout_is_valid(bvh: &Bvh) -> Result<(), String> {
-    use umbra::bvh::gpu::{GpuBvhChild, GpuBvhNode};
-    let nodes = GpuBvhNode::from_bvh(bvh);
-    let mut seen_nodes = vec![false; nodes.len()];
-    let mut seen_tris = vec![0u32; bvh.tris.len()];
-    let inside = |c: &GpuBvhChild, lo: [f32; 3], hi: [f32; 3]| {
-        (0..3).all(|k| c.aabb_min[k] >= lo[k] && c.aabb_max[k] <= hi[k])
+    let nodes = GpuBvhNode::from_bvh(bvh).map_err(|e| e.to_string())?;
+    let mut check = LayoutCheck {
+        seen_nodes: vec![false; nodes.len()],
+        nodes,
+        leaves: bvh
+            .nodes
+            .iter()
+            .filter(|n| n.is_leaf())
+            .map(|n| (n.left_first, (n.tri_count, (n.aabb_min.map(f64::from), n.aabb_max.map(f64::from)))))
+            .collect(),
+        seen_tris: vec![0; bvh.tris.len()],
     };
-    let mut stack = vec![(0u32, [f32::NEG_INFINITY; 3], [f32::INFINITY; 3])];
-    while let Some((n, lo, hi)) = stack.pop() {
-        let seen = seen_nodes.get_mut(n as usize).ok_or(format!("node {n} out of range"))?;
+    check.subtree(0)?;
+    if let Some(n) = check.seen_nodes.iter().position(|s| !s) {
+        return Err(format!("node {n} unreachable"));
+    }
+    match check.seen_tris.iter().position(|&c| c != 1) {
+        Some(t) => Err(format!("triangle {t} in {} leaves", check.seen_tris[t])),
+        None => Ok(()),
+    }
+}
+
+type Box3 = ([f64; 3], [f64; 3]);
+
+/// The walk of `gpu_layout_is_valid`.
+struct LayoutCheck {
+    nodes: Vec<GpuBvhNode>,
+    /// The binary BVH's leaves by first triangle: (count, box).
+    leaves: std::collections::BTreeMap<u32, (u32, Box3)>,
+    seen_nodes: Vec<bool>,
+    seen_tris: Vec<u32>,
+}
+
+impl LayoutCheck {
+    /// Checks GPU node `n`'s subtree; the union of the binary leaves' boxes below it.
+    fn subtree(&mut self, n: u32) -> Result<Box3, String> {
+        let seen = self.seen_nodes.get_mut(n as usize).ok_or(format!("node {n} out of range"))?;
         if std::mem::replace(seen, true) {
             return Err(format!("node {n} reached twice"));
         }
-        let children = &nodes[n as usize].children;
-        let mut inner: Vec<u32> = children.iter().filter(|c| c.count == 0).map(|c| c.index).collect();
+        let node = self.nodes[n as usize];
+        let mut inner: Vec<u32> = (0..4).filter(|&c| node.count(c) == 0).map(|c| node.index(c)).collect();
         inner.sort_unstable();
         if inner.windows(2).any(|w| w[1] != w[0] + 1) {
             return Err(format!("node {n}: inner children {inner:?} not consecutive"));
         }
-        for c in children.iter().filter(|c| c.count != GpuBvhChild::NONE) {
-            if !inside(c, lo, hi) {
-                return Err(format!("a child of node {n} leaves its parent's box"));
-            }
-            if c.count == 0 {
-                stack.push((c.index, c.aabb_min, c.aabb_max));
+        let mut all = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for c in 0..4 {
+            let Some(quantized) = node.child_box(c) else { continue };
+            let (index, count) = (node.index(c), node.count(c));
+            let exact = if count == 0 {
+                self.subtree(index)?
             } else {
-                for t in c.index..c.index + c.count {
-                    *seen_tris.get_mut(t as usize).ok_or(format!("triangle {t} out of range"))? += 1;
+                // A leaf of the binary BVH, or a part of one too large for a GPU leaf.
+                let leaf = match self.leaves.range(..=index).next_back() {
+                    Some((&first, &(size, leaf))) if index + count <= first + size => leaf,
+                    _ => return Err(format!("child {c} of node {n}: triangles {index}+{count} in no leaf")),
+                };
+                for t in index..index + count {
+                    *self.seen_tris.get_mut(t as usize).ok_or(format!("triangle {t} out of range"))? += 1;
                 }
+                leaf
+            };
+            if !(0..3).all(|k| quantized.0[k] <= exact.0[k] && exact.1[k] <= quantized.1[k]) {
+                return Err(format!("child {c} of node {n}: box {quantized:?} misses {exact:?}"));
             }
+            all = (
+                std::array::from_fn(|k| all.0[k].min(exact.0[k])),
+                std::array::from_fn(|k| all.1[k].max(exact.1[k])),
+            );
         }
-    }
-    if let Some(n) = seen_nodes.iter().position(|s| !s) {
-        return Err(format!("node {n} unreachable"));
-    }
-    match seen_tris.iter().position(|&k| k != 1) {
-        Some(t) => Err(format!("triangle {t} in {} leaves", seen_tris[t])),
-        None => Ok(()),
+        Ok(all)
     }
 }
 

@@ -1,11 +1,13 @@
 // BVH traversal: closest hit and any hit, a watertight ray/triangle test (Woop, Benthin and Wald
-// 2013) and a robust slab test (Ize 2013). The ray set-up, triangle test and slab test are those
-// of src/bvh/traverse.rs operation for operation (keep them in step); the walk differs in order
-// only (it reads the 4-wide GPU layout, `GpuBvhNode` in src/bvh/gpu.rs), and both keep the same
-// tie rule, so both find the same nearest hit (up to a GPU's rounding of divisions).
+// 2013) and a robust slab test (Ize 2013) on quantized boxes. The ray set-up and triangle test
+// are those of src/bvh/traverse.rs operation for operation (keep them in step); the walk reads
+// the 4-wide GPU layout (`GpuBvhNode` in src/bvh/gpu.rs), whose 8-bit boxes contain the binary
+// BVH's and whose slab test is widened by a bound on its rounding, so it culls no box an exact
+// test would keep; both keep the same tie rule, so both find the same nearest hit (up to a GPU's
+// rounding of divisions).
 //
 // The including kernel declares, before including this file, the BVH as two read-only storage
-// texel buffers of RGBA32UI (`GpuBvhNode`s as eight texels each, `BvhTri`s as three):
+// texel buffers of RGBA32UI (`GpuBvhNode`s as four texels each, `BvhTri`s as three):
 //   layout(rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
 //   layout(rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
 // Texel buffers rather than storage buffers: on llvmpipe (Mesa 22) a storage-buffer load is a
@@ -23,11 +25,12 @@ const float BVH_DIR_EPS = 1e-20;
 const float BVH_SLAB_ROBUST = 1.0 + 1.0 / 1048576.0;
 const float BVH_INF = uintBitsToFloat(0x7f800000u);
 
-// Child c of GPU node n: (aabb_min, index) and (aabb_max, count). count 0: an inner node (index
-// is its GPU node); BVH_NO_CHILD: absent; otherwise a leaf of `count` triangles from `index`.
-uvec4 bvh_child_lo(uint n, uint c) { return imageLoad(bvh_node_texels, int(8u * n + 2u * c)); }
-uvec4 bvh_child_hi(uint n, uint c) { return imageLoad(bvh_node_texels, int(8u * n + 2u * c + 1u)); }
-const uint BVH_NO_CHILD = 0xffffffffu;
+// GPU node n's four texels (GpuBvhNode in src/bvh/gpu.rs): 0 the grid's origin and step.x,
+// 1 step.y, step.z and the lower planes x, y, 2 lower z and upper x, y, z (one byte per child in
+// each plane word), 3 the child words: index << 4 | count, count 0 an inner node, BVH_NO_CHILD
+// absent, else a leaf's triangle count.
+uvec4 bvh_node(uint n, uint k) { return imageLoad(bvh_node_texels, int(4u * n + k)); }
+const uint BVH_NO_CHILD = 15u;
 // Vertex k of triangle i (BVH order); w: v0's original index, v1's alpha-mode bits.
 vec4 bvh_tri_v(uint i, uint k) { return uintBitsToFloat(imageLoad(bvh_tri_texels, int(3u * i + k))); }
 
@@ -122,23 +125,52 @@ bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out ve
 // llvmpipe builds from three instructions (minps, an unordered compare, a blend) where a select
 // is the one instruction x86's minps is. The slab test never sees a NaN (bvh_ray nudges tiny
 // direction components, boxes are finite), so both give the same values.
-vec3 bvh_min3(vec3 a, vec3 b) { return mix(b, a, lessThan(a, b)); }
-vec3 bvh_max3(vec3 a, vec3 b) { return mix(b, a, greaterThan(a, b)); }
 float bvh_min(float a, float b) { return a < b ? a : b; }
 float bvh_max(float a, float b) { return a > b ? a : b; }
 
-// Entry distance of the ray into a child's box (its two texels) within [tmin, tmax], or BVH_INF;
-// always BVH_INF for an absent child.
-float bvh_slab(BvhRay r, uvec4 lo, uvec4 hi, float tmin, float tmax) {
-    vec3 t0 = (uintBitsToFloat(lo.xyz) - r.origin) * r.inv_dir;
-    vec3 t1 = (uintBitsToFloat(hi.xyz) - r.origin) * r.inv_dir;
-    vec3 near3 = bvh_min3(t0, t1);
-    vec3 far3 = bvh_max3(t0, t1);
+// A node's grid in ray units, per axis: a plane q grid steps from the origin is at distance
+// q * a + b, with a = step * inv_dir and b = (origin - o) * inv_dir. Computed so, a distance is
+// off by at most about 2^-24 * (765 |a| + 3 |b|) (a and b rounded once and twice, the product and
+// sum once each, inv_dir once); `slack` is over five times that, subtracted from entries
+// (b_near) and added to exits (b_far), so the computed interval holds the exact one. A ray nearly
+// parallel to an axis has a huge |a| and |b| there, and so a huge slack: that axis then never cuts
+// the interval short, as a wrongly signed distance could. The near planes of an axis are the
+// lower ones for a positive direction, the upper ones for a negative (`near`, `far`: the plane
+// words to read).
+struct BvhGrid {
+    vec3 a;
+    vec3 b_near;
+    vec3 b_far;
+    uvec3 near;
+    uvec3 far;
+};
+
+BvhGrid bvh_grid(BvhRay r, uvec4 t0, uvec4 t1, uvec4 t2) {
+    BvhGrid g;
+    g.a = uintBitsToFloat(uvec3(t0.w, t1.xy)) * r.inv_dir;
+    vec3 b = (uintBitsToFloat(t0.xyz) - r.origin) * r.inv_dir;
+    vec3 slack = (256.0 * abs(g.a) + 2.0 * abs(b)) * (1.0 / 1048576.0);
+    g.b_near = b - slack;
+    g.b_far = b + slack;
+    bvec3 positive = greaterThanEqual(r.inv_dir, vec3(0.0));
+    uvec3 lo = uvec3(t1.zw, t2.x);
+    uvec3 hi = t2.yzw;
+    g.near = mix(hi, lo, positive);
+    g.far = mix(lo, hi, positive);
+    return g;
+}
+
+// Entry distance of the ray into child c's box (bytes c of the plane words) within [tmin, tmax],
+// or BVH_INF; always BVH_INF for an absent child.
+float bvh_slab(BvhGrid g, uint c, uint count, float tmin, float tmax) {
+    vec3 near3 = vec3((g.near >> (8u * c)) & 255u) * g.a + g.b_near;
+    vec3 far3 = vec3((g.far >> (8u * c)) & 255u) * g.a + g.b_far;
     float near = bvh_max(bvh_max(near3.x, near3.y), bvh_max(near3.z, tmin));
-    // tmax is scaled too: a box whose entry rounds just past the nearest hit so far (a hit on its
-    // face, as on every axis-aligned wall) is still visited, for the tie rule of bvh_trace.
-    float far = bvh_min(bvh_min(bvh_min(far3.x, far3.y), far3.z), tmax) * BVH_SLAB_ROBUST;
-    return near <= far && hi.w != BVH_NO_CHILD ? near : BVH_INF;
+    // tmax is scaled: a box whose entry is just past the nearest hit so far as the triangle test
+    // rounded it (a hit on its face, as on every axis-aligned wall) is still visited, for the tie
+    // rule of bvh_trace.
+    float far = bvh_min(bvh_min(bvh_min(far3.x, far3.y), far3.z), tmax * BVH_SLAB_ROBUST);
+    return near <= far && count != BVH_NO_CHILD ? near : BVH_INF;
 }
 
 #ifdef UMBRA_ALPHA_TEST
@@ -176,37 +208,32 @@ struct BvhVisit {
 };
 
 BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
-    uvec4 lo0 = bvh_child_lo(node, 0u);
-    uvec4 hi0 = bvh_child_hi(node, 0u);
-    uvec4 lo1 = bvh_child_lo(node, 1u);
-    uvec4 hi1 = bvh_child_hi(node, 1u);
-    uvec4 lo2 = bvh_child_lo(node, 2u);
-    uvec4 hi2 = bvh_child_hi(node, 2u);
-    uvec4 lo3 = bvh_child_lo(node, 3u);
-    uvec4 hi3 = bvh_child_hi(node, 3u);
-    float d0 = bvh_slab(r, lo0, hi0, tmin, tmax);
-    float d1 = bvh_slab(r, lo1, hi1, tmin, tmax);
-    float d2 = bvh_slab(r, lo2, hi2, tmin, tmax);
-    float d3 = bvh_slab(r, lo3, hi3, tmin, tmax);
+    BvhGrid g = bvh_grid(r, bvh_node(node, 0u), bvh_node(node, 1u), bvh_node(node, 2u));
+    uvec4 words = bvh_node(node, 3u);
+    uvec4 count = words & 15u;
+    uvec4 index = words >> 4u;
+    float d0 = bvh_slab(g, 0u, count.x, tmin, tmax);
+    float d1 = bvh_slab(g, 1u, count.y, tmin, tmax);
+    float d2 = bvh_slab(g, 2u, count.z, tmin, tmax);
+    float d3 = bvh_slab(g, 3u, count.w, tmin, tmax);
     BvhVisit v;
-    v.first = uvec4(lo0.w, lo1.w, lo2.w, lo3.w);
-    v.end.x = d0 != BVH_INF ? hi0.w : 0u;
-    v.end.y = v.end.x + (d1 != BVH_INF ? hi1.w : 0u);
-    v.end.z = v.end.y + (d2 != BVH_INF ? hi2.w : 0u);
-    v.end.w = v.end.z + (d3 != BVH_INF ? hi3.w : 0u);
-    // Inner children hit, and not beyond the nearest hit (tmax may be infinite): their distances,
+    v.first = index;
+    v.end.x = d0 != BVH_INF ? count.x : 0u;
+    v.end.y = v.end.x + (d1 != BVH_INF ? count.y : 0u);
+    v.end.z = v.end.y + (d2 != BVH_INF ? count.z : 0u);
+    v.end.w = v.end.z + (d3 != BVH_INF ? count.w : 0u);
+    // Inner children hit (bvh_slab's entry is within the nearest hit so far): their distances,
     // BVH_INF for the others.
-    float reach = tmax * BVH_SLAB_ROBUST;
-    float k0 = hi0.w == 0u && d0 <= reach ? d0 : BVH_INF;
-    float k1 = hi1.w == 0u && d1 <= reach ? d1 : BVH_INF;
-    float k2 = hi2.w == 0u && d2 <= reach ? d2 : BVH_INF;
-    float k3 = hi3.w == 0u && d3 <= reach ? d3 : BVH_INF;
-    uint n0 = lo0.w;
-    uint n1 = lo1.w;
-    uint n2 = lo2.w;
-    uint n3 = lo3.w;
-    uint first = min(min(hi0.w == 0u ? n0 : BVH_NO_CHILD, hi1.w == 0u ? n1 : BVH_NO_CHILD),
-                     min(hi2.w == 0u ? n2 : BVH_NO_CHILD, hi3.w == 0u ? n3 : BVH_NO_CHILD));
+    float k0 = count.x == 0u ? d0 : BVH_INF;
+    float k1 = count.y == 0u ? d1 : BVH_INF;
+    float k2 = count.z == 0u ? d2 : BVH_INF;
+    float k3 = count.w == 0u ? d3 : BVH_INF;
+    uint n0 = index.x;
+    uint n1 = index.y;
+    uint n2 = index.z;
+    uint n3 = index.w;
+    uint first = min(min(count.x == 0u ? n0 : 0xffffffffu, count.y == 0u ? n1 : 0xffffffffu),
+                     min(count.z == 0u ? n2 : 0xffffffffu, count.w == 0u ? n3 : 0xffffffffu));
     BVH_SORT2(k0, n0, k1, n1);
     BVH_SORT2(k2, n2, k3, n3);
     BVH_SORT2(k0, n0, k2, n2);

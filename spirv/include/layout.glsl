@@ -17,13 +17,15 @@ struct BufferTestParams {
     uint add;
 };
 
-// One child of a GPU BVH node (a node is two, 64 bytes; bvh.glsl reads them as texels). count 0:
-// an inner node, index its GPU node; 0xffffffff: absent; else a leaf of count triangles from index.
-struct GpuBvhChild {
-    vec3 aabb_min;
-    uint index;
-    vec3 aabb_max;
-    uint count;
+// A GPU BVH node, 64 bytes (bvh.glsl reads it as four texels): a grid per axis (planes at
+// origin + q * step), each child's box in 8-bit grid steps (lo[axis], hi[axis]: byte c is child
+// c), and per child a word index << 4 | count (count 0 inner, 15 absent, else a leaf's).
+struct GpuBvhNode {
+    vec3 origin;
+    float step[3];
+    uint lo[3];
+    uint hi[3];
+    uint child[4];
 };
 
 // A triangle in BVH order; floatBitsToUint(v0.w) is its index before reordering.

@@ -1,27 +1,30 @@
 //! The BVH on the GPU: its 4-wide layout in two texel buffers, and `trace.comp`, which traces a
 //! buffer of rays (closest or any hit) for the traversal tests and the ray-throughput benchmark.
 
+use super::traverse::next_up;
 use super::{Bvh, BvhNode};
 use crate::error::{Error, Result};
 use crate::gpu::layout::{TraceHit, TraceParams, TraceRay};
 use crate::vk::{
     raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc, TexelBuffer,
 };
+use rayon::prelude::*;
 
 /// The node and triangle lists of a [`Bvh`], uploaded once: every kernel binds the BVH as two
 /// read-only storage texel buffers of RGBA32UI (bindings 0 and 1, see `bvh.glsl`).
 pub struct GpuBvh {
-    /// `bvh_node_texels`: each [`GpuBvhNode`] as eight texels.
+    /// `bvh_node_texels`: each [`GpuBvhNode`] as four texels.
     pub nodes: TexelBuffer,
     /// `bvh_tri_texels`: each triangle as three texels.
     pub tris: TexelBuffer,
 }
 
 impl GpuBvh {
-    /// Uploads `bvh` through staging buffers. Fails for more than [`GpuBvhNode::MAX_NODES`] nodes.
+    /// Uploads `bvh` through staging buffers. Fails for more than [`GpuBvhNode::MAX_NODES`] nodes
+    /// or as [`GpuBvhNode::from_bvh`] does.
     pub fn upload(ctx: &Context, bvh: &Bvh) -> Result<Self> {
         const RGBA32UI: raw::Format = raw::Format::R32G32B32A32_UINT;
-        let nodes = GpuBvhNode::from_bvh(bvh);
+        let nodes = GpuBvhNode::from_bvh(bvh)?;
         if nodes.len() > GpuBvhNode::MAX_NODES {
             return Err(Error::Invalid(format!(
                 "the BVH of {} triangles has {} 4-wide nodes; the traversal addresses at most {}",
@@ -45,96 +48,312 @@ impl GpuBvh {
     }
 }
 
-/// One child of a [`GpuBvhNode`]: its box, and what it is.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuBvhChild {
-    /// Box minimum.
-    pub aabb_min: [f32; 3],
-    /// An inner child: its [`GpuBvhNode`]. A leaf: its first triangle.
-    pub index: u32,
-    /// Box maximum.
-    pub aabb_max: [f32; 3],
-    /// 0 for an inner child, the triangle count of a leaf, or [`GpuBvhChild::NONE`].
-    pub count: u32,
-}
-
-impl GpuBvhChild {
-    /// The `count` of a child that is not there (never hit): the root's second child when the
-    /// whole BVH is one leaf, both when it is empty.
-    pub const NONE: u32 = u32::MAX;
-
-    fn none() -> Self {
-        Self { count: Self::NONE, ..Default::default() }
-    }
-}
-
 /// The BVH as the GPU traverses it: a 4-wide tree collapsed from [`Bvh::nodes`] (each node
 /// takes its binary node's two children and opens the largest-area inner child until it has four
-/// or only leaves), holding all children's boxes (Aila and Laine 2009), so one step fetches 128
-/// bytes (eight texels), tests four boxes, and the triangles of the leaf children hit are tested
-/// in the same step. Node 0 is the root.
+/// or only leaves), holding all children's boxes (Aila and Laine 2009) in 64 bytes, four texels:
+/// the boxes quantized to 8 bits per plane on a per-node grid (after Ylitie, Karras and Laine
+/// 2017), so one step fetches half the bytes of full-precision boxes. Node 0 is the root.
+///
+/// On each axis a node's grid has planes at `origin + q * step` for q in 0..=255, the first and
+/// last on the node's bounds (to a float's precision, outward); a child's box is rounded outward
+/// to the grid, exactly, so it contains the child's true box. The traversal computes a plane's
+/// distance as `q * a + b` with `a = step / d` and `b = (origin - o) / d` per node, which is off
+/// by a small multiple of the node's size in ray units; `bvh.glsl` widens every interval by a
+/// bound on that. (BENCHMARKS.md: 3 % more node visits on Sponza than exact boxes with the camera
+/// on its symmetry plane, where the halves' boxes meet, 0.5 % off it; choosing the grid to keep
+/// a child's plane exact did not pay.)
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuBvhNode {
-    /// Up to four children; absent ones have `count == GpuBvhChild::NONE`.
-    pub children: [GpuBvhChild; 4],
+    /// The grid's origin (texel 0).
+    pub origin: [f32; 3],
+    /// The grid's step per axis (`step[0]` ends texel 0; 2^-64 on a flat axis).
+    pub step: [f32; 3],
+    /// Lower planes, `lo[axis][child]`, in grid steps from the origin (from the middle of texel 1).
+    pub lo: [[u8; 4]; 3],
+    /// Upper planes, `hi[axis][child]` (the rest of texel 2).
+    pub hi: [[u8; 4]; 3],
+    /// Per child (texel 3): `index << 4 | count`, count 0 for an inner child (index its node),
+    /// 1 to [`GpuBvhNode::MAX_LEAF`] for a leaf (index its first triangle), or
+    /// [`GpuBvhNode::NONE`] for a child that is not there.
+    pub child: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 128);
+const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 64);
+
+/// A box, `(min, max)`.
+type Box3 = ([f32; 3], [f32; 3]);
+
+/// One child while the layout is built.
+#[derive(Clone, Copy)]
+enum Kid {
+    /// A binary inner node.
+    Inner(usize),
+    /// Triangles `first..first + count` of binary leaf `leaf` (all of it or a part).
+    Leaf { leaf: usize, first: u32, count: u32 },
+}
 
 impl GpuBvhNode {
     /// Children per node.
     pub const WIDTH: usize = 4;
 
+    /// The child word's count of a child that is not there (never hit): all of them in the root
+    /// of an empty BVH, and those a node has fewer than four of.
+    pub const NONE: u32 = 15;
+
+    /// The most triangles a GPU leaf holds (the child word's 4 bits); a larger leaf of the binary
+    /// BVH becomes a small subtree of GPU nodes whose leaves share its box.
+    pub const MAX_LEAF: u32 = 14;
+
     /// The most nodes the traversal addresses: its stack entries keep a node index in 24 bits
     /// (`bvh.glsl`), about 50 million triangles.
     pub const MAX_NODES: usize = 1 << 24;
 
+    /// The most triangle references a child word addresses (28 bits).
+    pub const MAX_TRIANGLES: usize = 1 << 28;
+
     /// The GPU layout of `bvh`, nodes in depth-first order of creation (a node's inner children
     /// get consecutive slots, which the traversal stack relies on); a BVH that is a single leaf
-    /// or empty gets one root whose children are that leaf or absent.
-    pub fn from_bvh(bvh: &Bvh) -> Vec<Self> {
+    /// or empty gets a root whose children are that leaf or absent. Fails for more than
+    /// [`GpuBvhNode::MAX_TRIANGLES`] references or a box beyond the grid's reach (a step above
+    /// 2^60).
+    pub fn from_bvh(bvh: &Bvh) -> Result<Vec<Self>> {
+        if bvh.tris.len() > Self::MAX_TRIANGLES {
+            return Err(Error::Invalid(format!(
+                "the BVH holds {} triangle references; the GPU layout addresses at most {}",
+                bvh.tris.len(),
+                Self::MAX_TRIANGLES
+            )));
+        }
         let nodes = &bvh.nodes;
         let root = &nodes[0];
-        let none = GpuBvhChild::none();
-        if root.is_leaf() || root.aabb_min[0] > root.aabb_max[0] {
-            let only = if root.is_leaf() { Self::child(root, 0) } else { none };
-            return vec![Self { children: [only, none, none, none] }];
-        }
-        let mut out = vec![Self::default()];
-        // (binary inner node, its slot in `out`)
-        let mut work = vec![(0usize, 0usize)];
-        while let Some((n, slot)) = work.pop() {
-            let first = nodes[n].left_first as usize;
-            let mut kids = vec![first, first + 1];
-            while kids.len() < Self::WIDTH {
-                let widest = (0..kids.len())
-                    .filter(|&k| !nodes[kids[k]].is_leaf())
-                    .max_by(|&a, &b| nodes[kids[a]].surface_area().total_cmp(&nodes[kids[b]].surface_area()));
-                let Some(k) = widest else { break };
-                let opened = kids.remove(k);
-                let first = nodes[opened].left_first as usize;
-                kids.extend([first, first + 1]);
-            }
-            let mut node = Self { children: [none; 4] };
-            for (c, &k) in kids.iter().enumerate() {
-                let index = if nodes[k].is_leaf() {
-                    0
-                } else {
-                    out.push(Self::default());
-                    work.push((k, out.len() - 1));
-                    (out.len() - 1) as u32
+        let empty = !root.is_leaf() && root.aabb_min[0] > root.aabb_max[0];
+        let box_of = |kid: &Kid| {
+            let n = &nodes[match *kid {
+                Kid::Inner(n) => n,
+                Kid::Leaf { leaf, .. } => leaf,
+            }];
+            (n.aabb_min, n.aabb_max)
+        };
+        // The tree first (children's boxes and words per slot), then the grids, in parallel.
+        // (children's boxes and words, how many): about one GPU node per three binary ones.
+        let mut slots: Vec<([(Box3, u32); 4], usize)> = Vec::with_capacity(nodes.len() / 3 + 1);
+        slots.push(Default::default());
+        let root_kid = if root.is_leaf() {
+            Kid::Leaf { leaf: 0, first: root.left_first, count: root.tri_count }
+        } else {
+            Kid::Inner(0)
+        };
+        let mut work = if empty { Vec::new() } else { vec![(root_kid, 0usize)] };
+        while let Some((kid, slot)) = work.pop() {
+            let kids = match kid {
+                Kid::Inner(n) => Self::collapse(nodes, n),
+                Kid::Leaf { leaf, first, count } => {
+                    let parts = count.div_ceil(Self::MAX_LEAF).min(Self::WIDTH as u32);
+                    let size = count.div_ceil(parts);
+                    (0..parts)
+                        .map(|p| Kid::Leaf {
+                            leaf,
+                            first: first + p * size,
+                            count: size.min(count - p * size),
+                        })
+                        .collect()
+                }
+            };
+            for (c, kid) in kids.into_iter().enumerate() {
+                let word = match kid {
+                    Kid::Leaf { first, count, .. } if count <= Self::MAX_LEAF => first << 4 | count,
+                    _ => {
+                        slots.push(Default::default());
+                        work.push((kid, slots.len() - 1));
+                        ((slots.len() - 1) as u32) << 4
+                    }
                 };
-                node.children[c] = Self::child(&nodes[k], index);
+                slots[slot].0[c] = (box_of(&kid), word);
+                slots[slot].1 = c + 1;
             }
-            out[slot] = node;
         }
-        out
+        slots.par_iter().map(|(children, n)| Self::new(&children[..*n])).collect()
     }
 
-    fn child(node: &BvhNode, gpu_index: u32) -> GpuBvhChild {
-        let (index, count) = if node.is_leaf() { (node.left_first, node.tri_count) } else { (gpu_index, 0) };
-        GpuBvhChild { aabb_min: node.aabb_min, index, aabb_max: node.aabb_max, count }
+    /// The children of binary inner node `n` in a 4-wide node: its two, then the largest-area
+    /// inner child opened until there are four or only leaves.
+    fn collapse(nodes: &[BvhNode], n: usize) -> Vec<Kid> {
+        let first = nodes[n].left_first as usize;
+        let mut kids = vec![first, first + 1];
+        while kids.len() < Self::WIDTH {
+            let widest = (0..kids.len())
+                .filter(|&k| !nodes[kids[k]].is_leaf())
+                .max_by(|&a, &b| nodes[kids[a]].surface_area().total_cmp(&nodes[kids[b]].surface_area()));
+            let Some(k) = widest else { break };
+            let opened = kids.remove(k);
+            let first = nodes[opened].left_first as usize;
+            kids.extend([first, first + 1]);
+        }
+        kids.into_iter()
+            .map(|k| match &nodes[k] {
+                leaf if leaf.is_leaf() => {
+                    Kid::Leaf { leaf: k, first: leaf.left_first, count: leaf.tri_count }
+                }
+                _ => Kid::Inner(k),
+            })
+            .collect()
+    }
+
+    /// A node of up to four children (box, child word) on the grids that fit them best.
+    fn new(children: &[(Box3, u32)]) -> Result<Self> {
+        let mut node = Self { child: [Self::NONE; 4], ..Default::default() };
+        for axis in 0..3 {
+            let mut planes = [[0.0f32; 2]; 4];
+            for (p, (b, _)) in planes.iter_mut().zip(children) {
+                *p = [b.0[axis], b.1[axis]];
+            }
+            let planes = &planes[..children.len()];
+            let grid = Grid::fit(planes).ok_or_else(|| {
+                Error::Invalid(format!(
+                    "a BVH node's boxes span {planes:?} on axis {axis}; the GPU layout takes boxes within about 1e20"
+                ))
+            })?;
+            node.origin[axis] = grid.origin;
+            node.step[axis] = grid.step;
+            for (c, &[lo, hi]) in planes.iter().enumerate() {
+                node.lo[axis][c] = grid.below(lo);
+                node.hi[axis][c] = grid.above(hi);
+            }
+        }
+        for (c, &(_, word)) in children.iter().enumerate() {
+            node.child[c] = word;
+        }
+        Ok(node)
+    }
+
+    /// Child `c`'s count: 0 inner, [`GpuBvhNode::NONE`] absent, else a leaf's triangles.
+    pub fn count(&self, c: usize) -> u32 {
+        self.child[c] & 15
+    }
+
+    /// Child `c`'s index: an inner child's node, a leaf's first triangle.
+    pub fn index(&self, c: usize) -> u32 {
+        self.child[c] >> 4
+    }
+
+    /// Child `c`'s box as the traversal sees it (to the nearest float64 of its exact planes), or
+    /// `None` for an absent child.
+    pub fn child_box(&self, c: usize) -> Option<([f64; 3], [f64; 3])> {
+        (self.count(c) != Self::NONE).then(|| {
+            let grid = |axis: usize| Grid { origin: self.origin[axis], step: self.step[axis] };
+            (
+                std::array::from_fn(|axis| grid(axis).plane(self.lo[axis][c]).0),
+                std::array::from_fn(|axis| grid(axis).plane(self.hi[axis][c]).0),
+            )
+        })
+    }
+}
+
+/// One axis of a node's grid: planes at `origin + q * step` for q in 0..=255, each exactly the
+/// unevaluated sum of two float64s (`plane`), so the rounding of boxes to the grid is exact.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    origin: f32,
+    step: f32,
+}
+
+impl Grid {
+    /// The finest step (2^-64): `step / d` stays a normal float for any direction the traversal
+    /// meets (components are at least 1e-20), and a flat axis takes it.
+    const MIN_STEP: f32 = 5.421_011e-20;
+    /// The coarsest step (2^60): `step / d` stays finite for a direction component of 1e-20.
+    const MAX_STEP: f32 = 1.152_921_5e18;
+
+    /// The grid whose first and last planes are (to a float's precision, and outward) the
+    /// children's lowest and highest planes on this axis (`planes`, lower and upper), or `None`
+    /// for boxes beyond the coarsest step or not finite. A flat axis takes the finest step.
+    fn fit(planes: &[[f32; 2]]) -> Option<Self> {
+        let lo = planes.iter().map(|p| p[0]).fold(f32::INFINITY, f32::min);
+        let hi = planes.iter().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
+        if planes.is_empty() || (lo == hi && lo.is_finite()) {
+            let origin = if planes.is_empty() { 0.0 } else { lo };
+            return Some(Self { origin, step: Self::MIN_STEP });
+        }
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return None;
+        }
+        let step = ((f64::from(hi) - f64::from(lo)) / 255.0).max(f64::from(Self::MIN_STEP));
+        let mut grid = Self { origin: lo, step: round_up(step) };
+        // The quotient's float64 rounding may leave the last plane an ulp short.
+        for _ in 0..4 {
+            if grid.at_or_above(255, hi) {
+                break;
+            }
+            grid.step = next_up(grid.step);
+        }
+        (grid.at_or_above(255, hi) && grid.step <= Self::MAX_STEP).then_some(grid)
+    }
+
+    /// Plane `q` exactly, as `(s, e)` with `s` the nearest float64 and `s + e` the plane: `q *
+    /// step` is exact in float64 (8 by 24 bits), and TwoSum gives the sum's rounding error.
+    fn plane(&self, q: u8) -> (f64, f64) {
+        let (a, b) = (f64::from(self.origin), f64::from(q) * f64::from(self.step));
+        let s = a + b;
+        let bb = s - a;
+        (s, (a - (s - bb)) + (b - bb))
+    }
+
+    /// How plane `q` compares with `v`, exactly: the nearest float64 of the plane decides unless
+    /// it is `v` itself (any other float64 lies beyond the plane's rounding error).
+    fn compare(&self, q: u8, v: f32) -> std::cmp::Ordering {
+        let v = f64::from(v);
+        let s = f64::from(self.origin) + f64::from(q) * f64::from(self.step);
+        if s != v {
+            return s.total_cmp(&v);
+        }
+        self.plane(q).1.partial_cmp(&0.0).unwrap_or(std::cmp::Ordering::Equal)
+    }
+
+    fn at_or_below(&self, q: u8, v: f32) -> bool {
+        self.compare(q, v).is_le()
+    }
+
+    fn at_or_above(&self, q: u8, v: f32) -> bool {
+        self.compare(q, v).is_ge()
+    }
+
+    /// About the plane at `v` (truncated: `v` is at or above the origin).
+    fn guess(&self, v: f32) -> u8 {
+        ((f64::from(v) - f64::from(self.origin)) / f64::from(self.step)).clamp(0.0, 255.0) as u8
+    }
+
+    /// The highest plane at or below `v` (plane 0 is).
+    fn below(&self, v: f32) -> u8 {
+        let mut q = self.guess(v);
+        while q > 0 && !self.at_or_below(q, v) {
+            q -= 1;
+        }
+        while q < 255 && self.at_or_below(q + 1, v) {
+            q += 1;
+        }
+        q
+    }
+
+    /// The lowest plane at or above `v` (plane 255 is).
+    fn above(&self, v: f32) -> u8 {
+        let mut q = self.guess(v);
+        while q < 255 && !self.at_or_above(q, v) {
+            q += 1;
+        }
+        while q > 0 && self.at_or_above(q - 1, v) {
+            q -= 1;
+        }
+        q
+    }
+}
+
+/// The smallest float at or above `x`.
+fn round_up(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) < x {
+        next_up(y)
+    } else {
+        y
     }
 }
 

@@ -7,8 +7,9 @@
 //! `tri_count` triangles from `tris[left_first]`. An empty BVH is a root with `tri_count == 0`
 //! and an inverted box (`aabb_min > aabb_max`), which traversal checks once per ray.
 //!
-//! The GLSL traversal in `spirv/include/bvh.glsl` and [`traverse`] here are the same algorithm,
-//! operation for operation, so the CPU can validate the GPU.
+//! The GLSL traversal in `spirv/include/bvh.glsl` and [`traverse`] here share the ray set-up and
+//! the triangle test operation for operation and cull boxes conservatively, so the CPU can
+//! validate the GPU hit for hit.
 
 mod build;
 pub mod gpu;

@@ -1,6 +1,7 @@
-//! CPU traversal, operation for operation the algorithm of `spirv/include/bvh.glsl`: a watertight
-//! ray/triangle test (Woop, Benthin and Wald 2013) and a robust slab test (Ize 2013), so rays
-//! along shared edges and through shared vertices never slip between triangles.
+//! CPU traversal: the watertight ray/triangle test of `spirv/include/bvh.glsl` operation for
+//! operation (Woop, Benthin and Wald 2013), so rays along shared edges and through shared
+//! vertices never slip between triangles, and a robust slab test (Ize 2013) on the binary BVH's
+//! exact boxes (the GPU's boxes are quantized, its slab test widened to match).
 
 use super::{Bvh, BvhNode, BvhTri, MAX_DEPTH};
 use glam::Vec3;
@@ -42,6 +43,8 @@ pub const SLAB_ROBUST: f32 = 1.0 + 1.0 / 1048576.0;
 pub struct RayPre {
     origin: Vec3,
     inv_dir: Vec3,
+    /// The axes the direction is parallel to (components below `DIR_EPS`).
+    parallel: glam::BVec3,
     k: [usize; 3],
     shear: Vec3,
 }
@@ -69,7 +72,13 @@ impl RayPre {
         }
         let shear = Vec3::new(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
         let nudged = Vec3::select(a.cmplt(Vec3::splat(DIR_EPS)), Vec3::splat(DIR_EPS).copysign(dir), dir);
-        Self { origin, inv_dir: nudged.recip(), k: [kx, ky, kz], shear }
+        Self {
+            origin,
+            inv_dir: nudged.recip(),
+            parallel: a.cmplt(Vec3::splat(DIR_EPS)),
+            k: [kx, ky, kz],
+            shear,
+        }
     }
 
     /// The watertight test: `Some((t, [b1, b2]))` when the ray meets the triangle with
@@ -106,11 +115,17 @@ impl RayPre {
     pub fn slab(&self, node: &BvhNode, tmin: f32, tmax: f32) -> f32 {
         let t0 = (Vec3::from(node.aabb_min) - self.origin) * self.inv_dir;
         let t1 = (Vec3::from(node.aabb_max) - self.origin) * self.inv_dir;
-        let near = t0.min(t1).max_element().max(tmin);
+        // A ray parallel to an axis and on one of the box's planes there stays on it: its 0 on
+        // that axis is neither an entry nor an exit (the triangle test hits the box's edges).
+        let zero = |t: Vec3| self.parallel & t.cmpeq(Vec3::ZERO);
+        let (near3, far3) = (t0.min(t1), t0.max(t1));
+        let near3 = Vec3::select(zero(near3), Vec3::NEG_INFINITY, near3);
+        let far3 = Vec3::select(zero(far3), Vec3::INFINITY, far3);
+        let near = near3.max_element().max(tmin);
         // tmax is scaled too: a box whose entry rounds just past the nearest hit so far (a hit on
         // the box's face, as on every axis-aligned wall) is still visited, for its equally near
         // hits and the tie rule of `closest`.
-        let far = t0.max(t1).min_element().min(tmax) * SLAB_ROBUST;
+        let far = far3.min_element().min(tmax) * SLAB_ROBUST;
         if near <= far {
             near
         } else {
@@ -121,7 +136,7 @@ impl RayPre {
 
 /// The next float above a finite `x` (`f32::next_up`, stable only from Rust 1.86; `bvh_next_up` in
 /// `bvh.glsl`).
-fn next_up(x: f32) -> f32 {
+pub(crate) fn next_up(x: f32) -> f32 {
     let bits = x.to_bits();
     if x > 0.0 {
         f32::from_bits(bits + 1)

@@ -1,7 +1,7 @@
 //! Rust twins of the structs in `spirv/include/layout.glsl`. `tests/layout.rs` compares every
 //! member offset, size and array stride with the compiled SPIR-V, so neither side can drift.
 
-pub use crate::bvh::gpu::GpuBvhChild;
+pub use crate::bvh::gpu::GpuBvhNode;
 pub use crate::bvh::{BvhNode, BvhTri};
 use bytemuck::{Pod, Zeroable};
 use std::mem::{offset_of, size_of};
@@ -446,7 +446,7 @@ pub fn gpu_layouts() -> Vec<StructLayout> {
     vec![
         layout_of!(PatternParams { size, seed, frame }),
         layout_of!(BufferTestParams { count, add }),
-        layout_of!(GpuBvhChild { aabb_min, index, aabb_max, count }),
+        layout_of!(GpuBvhNode { origin, step, lo, hi, child }),
         layout_of!(BvhTri { v0, v1, v2 }),
         layout_of!(TraceRay { origin_tmin, dir_tmax }),
         layout_of!(TraceHit { t, tri, u, v }),

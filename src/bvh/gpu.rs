@@ -134,8 +134,8 @@ impl GpuBvhNode {
             }];
             (n.aabb_min, n.aabb_max)
         };
-        // The tree first (children's boxes and words per slot), then the grids, in parallel.
-        // (children's boxes and words, how many): about one GPU node per three binary ones.
+        // The tree first, as each slot's children (box, child word) and how many, about one GPU
+        // node per three binary ones; then the grids, in parallel.
         let mut slots: Vec<([(Box3, u32); 4], usize)> = Vec::with_capacity(nodes.len() / 3 + 1);
         slots.push(Default::default());
         let root_kid = if root.is_leaf() {
@@ -199,7 +199,7 @@ impl GpuBvhNode {
             .collect()
     }
 
-    /// A node of up to four children (box, child word) on the grids that fit them best.
+    /// A node of up to four children (box, child word), on each axis the grid that spans them.
     fn new(children: &[(Box3, u32)]) -> Result<Self> {
         let mut node = Self { child: [Self::NONE; 4], ..Default::default() };
         for axis in 0..3 {

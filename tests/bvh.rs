@@ -392,6 +392,11 @@ fn empty_single_and_degenerate_scenes_behave() {
             assert!(a != b && b != c && c != a, "hit a triangle with coincident vertices: {ray:?}");
         }
     }
+    // A scene beyond the GPU layout's reach (about 1e18 across) is refused with the reason.
+    let huge =
+        Bvh::build(&[tri, [Vec3::splat(-1e19), Vec3::new(1e19, -1e19, 0.0), Vec3::splat(1e19)]]).unwrap();
+    let err = GpuBvh::upload(&gpu, &huge).err().expect("a 2e19-wide scene uploaded");
+    assert!(err.to_string().contains("within about 1e18"), "{err}");
     // Non-finite input is refused, naming the triangle.
     let err = Bvh::build(&[tri, [Vec3::NAN, Vec3::ZERO, Vec3::ONE]]).unwrap_err();
     assert!(err.to_string().contains("triangle 1"), "{err}");

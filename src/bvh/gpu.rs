@@ -115,7 +115,7 @@ impl GpuBvhNode {
     /// get consecutive slots, which the traversal stack relies on); a BVH that is a single leaf
     /// or empty gets a root whose children are that leaf or absent. Fails for more than
     /// [`GpuBvhNode::MAX_TRIANGLES`] references or a box beyond the grid's reach (a step above
-    /// 2^60).
+    /// 2^52: a scene more than about 1e18 across).
     pub fn from_bvh(bvh: &Bvh) -> Result<Vec<Self>> {
         if bvh.tris.len() > Self::MAX_TRIANGLES {
             return Err(Error::Invalid(format!(
@@ -210,7 +210,7 @@ impl GpuBvhNode {
             let planes = &planes[..children.len()];
             let grid = Grid::fit(planes).ok_or_else(|| {
                 Error::Invalid(format!(
-                    "a BVH node's boxes span {planes:?} on axis {axis}; the GPU layout takes boxes within about 1e20"
+                    "a BVH node's boxes span {planes:?} on axis {axis}; the GPU layout takes boxes within about 1e18"
                 ))
             })?;
             node.origin[axis] = grid.origin;
@@ -261,8 +261,10 @@ impl Grid {
     /// The finest step (2^-64): `step / d` stays a normal float for any direction the traversal
     /// meets (components are at least 1e-20), and a flat axis takes it.
     const MIN_STEP: f32 = 5.421_011e-20;
-    /// The coarsest step (2^60): `step / d` stays finite for a direction component of 1e-20.
-    const MAX_STEP: f32 = 1.152_921_5e18;
+    /// The coarsest step (2^52, boxes up to about 1e18): `step / d` stays finite for a direction
+    /// component of 1e-20, and so does `(origin - o) / d` for ray origins within about 3e18 of the
+    /// scene, which the slab test's slack needs (`bvh.glsl`).
+    const MAX_STEP: f32 = 4_503_599_627_370_496.0;
 
     /// The grid whose first and last planes are (to a float's precision, and outward) the
     /// children's lowest and highest planes on this axis (`planes`, lower and upper), or `None`

@@ -173,7 +173,8 @@ void main() {
 
         // Punctual lights: one shadow ray each.
         if (HAS_PUNCTUAL) {
-            radiance += punctual_direct(p, ng, t, b, n, s, wo_local, params.counts.y);
+            float u = rand4(uvec2(pixel), params.size_frame.z, 2u, params.size_frame.w).x;
+            radiance += punctual_direct(p, ng, t, b, n, s, wo_local, params.counts.y, u);
         }
 
         // Emissive triangles: `counts.z` light samples (triangle by power, uniform point on it),

@@ -166,7 +166,8 @@ void main() {
 
         // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
         if (HAS_PUNCTUAL) {
-            vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.settings.w);
+            float u = rand4(pixel, sample_index, depth * 8u + 4u, seed).x;
+            vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.settings.w, u);
             radiance += c;
             nonfinite |= nonfinite_bit(c, NONFINITE_PUNCTUAL);
         }

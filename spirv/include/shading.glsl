@@ -321,11 +321,37 @@ bool surface_transmits(Surface s) {
     return HAS_TRANSMISSION && s.transmission > 0.0 && s.metallic < 1.0;
 }
 
-// Direct light from the `count` punctual lights at p (one shadow ray each): delta distributions,
-// so light sampling is the only strategy; through a transmitting surface too.
-vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo_local, uint count) {
+// Punctual lights evaluated at a shading point: all of them up to PUNCTUAL_ALL; beyond,
+// PUNCTUAL_ALL of them picked by power (GpuLight's selection table), stratified over the table,
+// each weighted by 1 / (PUNCTUAL_ALL pmf): unbiased, and the work stays bounded. (llvmpipe ends
+// every loop of an invocation after 65,535 iterations in all, which one shadow ray per light cut
+// short from about 13,000 lights over a plane, or a few hundred in Sponza.)
+const uint PUNCTUAL_ALL = 16u;
+
+// The light whose selection interval holds u (binary search of the inclusive prefix).
+uint pick_punctual(float u, uint count) {
+    uint lo = 0u;
+    uint hi = count - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (punctual[mid].intensity.w <= u) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// Direct light from the `count` punctual lights at p (one shadow ray per light evaluated, u
+// places the strata when they are sampled): delta distributions, so light sampling is the only
+// strategy; through a transmitting surface too.
+vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo_local, uint count, float u) {
+    bool every = count <= PUNCTUAL_ALL;
     vec3 sum = vec3(0.0);
-    for (uint k = 0u; k < count; ++k) {
+    for (uint j = 0u; j < min(count, PUNCTUAL_ALL); ++j) {
+        uint k = every ? j : pick_punctual((float(j) + u) * (1.0 / float(PUNCTUAL_ALL)), count);
+        float weight = every ? 1.0 : 1.0 / (float(PUNCTUAL_ALL) * punctual[k].cone.z);
         vec3 wi;
         bool to_point;
         vec3 position;
@@ -333,7 +359,7 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
         vec3 wi_local;
         if (any(greaterThan(li, vec3(0.0)))
             && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, to_point, position, wi_local)) {
-            sum += bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * li;
+            sum += weight * bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * li;
         }
     }
     return sum;

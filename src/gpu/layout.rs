@@ -207,9 +207,10 @@ pub struct GpuLight {
     pub position_range: [f32; 4],
     /// Unit direction the light shines in, kind ([`GpuLight::POINT`], ...).
     pub direction_kind: [f32; 4],
-    /// Colour × intensity (candela; lux for directional lights), unused.
+    /// Colour × intensity (candela; lux for directional lights), inclusive prefix of the
+    /// selection probabilities (by power).
     pub intensity: [f32; 4],
-    /// cos(outer cone), 1 / max(cos(inner) − cos(outer), 1e-4), unused, unused.
+    /// cos(outer cone), 1 / max(cos(inner) − cos(outer), 1e-4), selection probability, unused.
     pub cone: [f32; 4],
 }
 const _: () = assert!(size_of::<GpuLight>() == 64);

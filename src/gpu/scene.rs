@@ -273,7 +273,7 @@ impl ShadingArrays {
                 ],
             })
             .collect();
-        let punctual = scene.lights.iter().map(gpu_light).collect();
+        let punctual = punctual_lights(scene);
         let GpuTextures { textures, texels, .. } = gpu_textures;
         Self { triangles, vertices, materials, lights, punctual, textures, texels }
     }
@@ -425,6 +425,48 @@ fn alpha_modes(scene: &Scene, prim_order: &[u32]) -> Vec<u32> {
 
 fn transmits(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.params[2] > 0.0)
+}
+
+/// The scene's punctual lights with their selection table: by power (KHR_lights_punctual's
+/// intensity × colour luminance, times 4π for a point light, the cone's solid angle for a spot,
+/// and the scene's cross-section πr² for a directional light, as pbrt's `Phi`), uniform if all
+/// are black. Shading evaluates every light up to a few and samples that many by this table
+/// beyond (`punctual_direct` in `shading.glsl`).
+fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
+    use crate::scene::LightKind;
+    use std::f32::consts::PI;
+    let (lo, hi) = scene.bounds();
+    let radius = 0.5 * (glam::Vec3::from(hi) - glam::Vec3::from(lo)).length();
+    let mut lights: Vec<GpuLight> = scene.lights.iter().map(gpu_light).collect();
+    let power: Vec<f64> = scene
+        .lights
+        .iter()
+        .map(|light| {
+            let [r, g, b] = light.color.map(|c| c * light.intensity);
+            let luminance = (0.2126 * r + 0.7152 * g + 0.0722 * b).max(0.0);
+            let cone = 0.5 * (light.inner_cone_angle.cos() + light.outer_cone_angle.cos());
+            f64::from(luminance)
+                * f64::from(match light.kind {
+                    LightKind::Point => 4.0 * PI,
+                    LightKind::Spot => 2.0 * PI * (1.0 - cone),
+                    LightKind::Directional => PI * radius * radius,
+                })
+        })
+        .collect();
+    // In f64: with many lights an f32 sum would be off by more than a single light's share.
+    let total: f64 = power.iter().sum();
+    let n = lights.len() as f64;
+    let mut cdf = 0.0;
+    for (light, &p) in lights.iter_mut().zip(&power) {
+        let pmf = if total > 0.0 && total.is_finite() { p / total } else { 1.0 / n };
+        cdf += pmf;
+        light.intensity[3] = cdf as f32;
+        light.cone[2] = pmf as f32;
+    }
+    if let Some(last) = lights.last_mut() {
+        last.intensity[3] = 1.0;
+    }
+    lights
 }
 
 fn gpu_light(light: &crate::scene::Light) -> GpuLight {

@@ -55,13 +55,13 @@ impl GpuBvh {
 /// 2017), so one step fetches half the bytes of full-precision boxes. Node 0 is the root.
 ///
 /// On each axis a node's grid has planes at `origin + q * step` for q in 0..=255, the first and
-/// last on the node's bounds (to a float's precision, outward); a child's box is rounded outward
-/// to the grid, exactly, so it contains the child's true box. The traversal computes a plane's
-/// distance as `q * a + b` with `a = step / d` and `b = (origin - o) / d` per node, which is off
-/// by a small multiple of the node's size in ray units; `bvh.glsl` widens every interval by a
-/// bound on that. (BENCHMARKS.md: 3 % more node visits on Sponza than exact boxes with the camera
-/// on its symmetry plane, where the halves' boxes meet, 0.5 % off it; choosing the grid to keep
-/// a child's plane exact did not pay.)
+/// last on the node's bounds (to a float's precision, outward), or, in the top levels, one of them
+/// and one of a child's planes inside, whichever grows the children's boxes least; a child's box
+/// is rounded outward to the grid, exactly, so it contains the child's true box. The traversal
+/// computes a plane's distance as `q * a + b` with `a = step / d` and `b = (origin - o) / d` per
+/// node, which is off by a small multiple of the node's size in ray units; `bvh.glsl` widens every
+/// interval by a bound on that. (BENCHMARKS.md: 3 % more node visits on Sponza than exact boxes
+/// with the camera on its symmetry plane, where the halves' boxes meet, 0.5 % off it.)
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuBvhNode {
@@ -82,6 +82,14 @@ const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 64);
 
 /// A box, `(min, max)`.
 type Box3 = ([f32; 3], [f32; 3]);
+
+/// A GPU node while the layout is built: its children (box, child word), how many, its depth.
+#[derive(Clone, Copy, Default)]
+struct Slot {
+    children: [(Box3, u32); 4],
+    len: usize,
+    depth: u32,
+}
 
 /// One child while the layout is built.
 #[derive(Clone, Copy)]
@@ -107,6 +115,12 @@ impl GpuBvhNode {
     /// The most nodes the traversal addresses: its stack entries keep a node index in 24 bits
     /// (`bvh.glsl`), about 50 million triangles.
     pub const MAX_NODES: usize = 1 << 24;
+
+    /// Nodes this close to the root (at most 1,365 of them) get the grid that grows their
+    /// children's boxes least among a few (`Grid::fit_least_growth`), the others the one through
+    /// their bounds: +2–3 % shadow rays on Sponza for no measurable layout time; for all nodes it
+    /// gained no more and took 3× the time (BENCHMARKS.md).
+    const SEARCH_DEPTH: u32 = 6;
 
     /// The most triangle references a child word addresses (28 bits).
     pub const MAX_TRIANGLES: usize = 1 << 28;
@@ -134,10 +148,9 @@ impl GpuBvhNode {
             }];
             (n.aabb_min, n.aabb_max)
         };
-        // The tree first, as each slot's children (box, child word) and how many, about one GPU
-        // node per three binary ones; then the grids, in parallel.
-        let mut slots: Vec<([(Box3, u32); 4], usize)> = Vec::with_capacity(nodes.len() / 3 + 1);
-        slots.push(Default::default());
+        // The tree first, about one GPU node per three binary ones; then the grids, in parallel.
+        let mut slots: Vec<Slot> = Vec::with_capacity(nodes.len() / 3 + 1);
+        slots.push(Slot::default());
         let root_kid = if root.is_leaf() {
             Kid::Leaf { leaf: 0, first: root.left_first, count: root.tri_count }
         } else {
@@ -163,16 +176,17 @@ impl GpuBvhNode {
                 let word = match kid {
                     Kid::Leaf { first, count, .. } if count <= Self::MAX_LEAF => first << 4 | count,
                     _ => {
-                        slots.push(Default::default());
+                        let depth = slots[slot].depth + 1;
+                        slots.push(Slot { depth, ..Slot::default() });
                         work.push((kid, slots.len() - 1));
                         ((slots.len() - 1) as u32) << 4
                     }
                 };
-                slots[slot].0[c] = (box_of(&kid), word);
-                slots[slot].1 = c + 1;
+                slots[slot].children[c] = (box_of(&kid), word);
+                slots[slot].len = c + 1;
             }
         }
-        slots.par_iter().map(|(children, n)| Self::new(&children[..*n])).collect()
+        slots.par_iter().map(|s| Self::new(&s.children[..s.len], s.depth < Self::SEARCH_DEPTH)).collect()
     }
 
     /// The children of binary inner node `n` in a 4-wide node: its two, then the largest-area
@@ -199,8 +213,9 @@ impl GpuBvhNode {
             .collect()
     }
 
-    /// A node of up to four children (box, child word), on each axis the grid that spans them.
-    fn new(children: &[(Box3, u32)]) -> Result<Self> {
+    /// A node of up to four children (box, child word), on each axis the grid through their
+    /// bounds or, with `search`, the one of a few that grows their boxes least.
+    fn new(children: &[(Box3, u32)], search: bool) -> Result<Self> {
         let mut node = Self { child: [Self::NONE; 4], ..Default::default() };
         for axis in 0..3 {
             let mut planes = [[0.0f32; 2]; 4];
@@ -208,7 +223,18 @@ impl GpuBvhNode {
                 *p = [b.0[axis], b.1[axis]];
             }
             let planes = &planes[..children.len()];
-            let grid = Grid::fit(planes).ok_or_else(|| {
+            // A box's area grows by its other two extents per unit of this one.
+            let mut weights = [0.0f64; 4];
+            for (w, (b, _)) in weights.iter_mut().zip(children) {
+                let extent = |k: usize| f64::from(b.1[k] - b.0[k]);
+                *w = extent((axis + 1) % 3) + extent((axis + 2) % 3);
+            }
+            let grid = if search {
+                Grid::fit_least_growth(planes, &weights[..children.len()])
+            } else {
+                Grid::fit(planes)
+            };
+            let grid = grid.ok_or_else(|| {
                 Error::Invalid(format!(
                     "a BVH node's boxes span {planes:?} on axis {axis}; the GPU layout takes boxes within about 1e18"
                 ))
@@ -265,6 +291,64 @@ impl Grid {
     /// component of 1e-20, and so does `(origin - o) / d` for ray origins within about 3e18 of the
     /// scene, which the slab test's slack needs (`bvh.glsl`).
     const MAX_STEP: f32 = 4_503_599_627_370_496.0;
+
+    /// Of the grid through the children's bounds (`fit`) and those through one bound and one of
+    /// the children's planes inside (to a float's precision), the one whose rounding grows the
+    /// children's boxes least, each axis's growth weighted by `weights` (the other two extents).
+    /// A child's plane inside the node, such as where the two halves of a symmetric scene meet,
+    /// then often stays exact: where a camera on the symmetry plane would otherwise be inside
+    /// both halves' grown boxes.
+    fn fit_least_growth(planes: &[[f32; 2]], weights: &[f64]) -> Option<Self> {
+        let natural = Self::fit(planes)?;
+        let lo = planes.iter().map(|p| p[0]).fold(f32::INFINITY, f32::min);
+        let hi = planes.iter().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
+        let (lo64, hi64) = (f64::from(lo), f64::from(hi));
+        let growth = |g: &Self| -> f64 {
+            let moved = |[a, b]: [f32; 2]| {
+                f64::from(a) - g.plane(g.below(a)).0 + g.plane(g.above(b)).0 - f64::from(b)
+            };
+            planes.iter().zip(weights).map(|(&p, w)| w * moved(p)).sum()
+        };
+        let at = |p: f64| 255.0 * (p - lo64) / (hi64 - lo64);
+        let inside = planes.iter().flatten().map(|&p| f64::from(p)).filter(|&p| p > lo64 && p < hi64);
+        inside
+            .flat_map(|p| {
+                let (below, above) = ((at(p).floor() as u8).max(1), (at(p).ceil() as u8).min(254));
+                [Self::through(lo64, 0, p, below, lo, hi), Self::through(p, above, hi64, 255, lo, hi)]
+            })
+            .flatten()
+            .fold((growth(&natural), natural), |best, g| {
+                let c = growth(&g);
+                if c < best.0 {
+                    (c, g)
+                } else {
+                    best
+                }
+            })
+            .1
+            .into()
+    }
+
+    /// The grid with plane `i` at (about) `p` and plane `j` at `r`, moved down and widened by
+    /// ulps until it spans `[lo, hi]`, if its step is within reach.
+    fn through(p: f64, i: u8, r: f64, j: u8, lo: f32, hi: f32) -> Option<Self> {
+        let step = ((r - p) / f64::from(j - i)).max(f64::from(Self::MIN_STEP));
+        let mut grid = Self { origin: round_down(p - f64::from(i) * step), step: round_up(step) };
+        for _ in 0..16 {
+            if grid.at_or_below(0, lo) {
+                break;
+            }
+            grid.origin = next_down(grid.origin);
+        }
+        for _ in 0..16 {
+            if grid.at_or_above(255, hi) {
+                break;
+            }
+            grid.step = next_up(grid.step);
+        }
+        let fits = grid.at_or_below(0, lo) && grid.at_or_above(255, hi);
+        (fits && grid.origin.is_finite() && grid.step <= Self::MAX_STEP).then_some(grid)
+    }
 
     /// The grid whose first and last planes are (to a float's precision, and outward) the
     /// children's lowest and highest planes on this axis (`planes`, lower and upper), or `None`
@@ -349,6 +433,11 @@ impl Grid {
     }
 }
 
+/// The next float below finite `x`.
+fn next_down(x: f32) -> f32 {
+    -next_up(-x)
+}
+
 /// The smallest float at or above `x`.
 fn round_up(x: f64) -> f32 {
     let y = x as f32;
@@ -357,6 +446,11 @@ fn round_up(x: f64) -> f32 {
     } else {
         y
     }
+}
+
+/// The largest float at or below `x`.
+fn round_down(x: f64) -> f32 {
+    -round_up(-x)
 }
 
 /// Which query `trace.comp` answers.

@@ -185,6 +185,36 @@ fn deferred_direct_light_equals_path_traced_direct_light() {
     assert!(outliers * 200 <= compared, "{outliers} of {compared} pixels differ (worst |z| {worst:.2})");
 }
 
+/// Deferred shading with 20,000 copies of spheres.glb's light, each 1/20,000 as bright, equals
+/// shading with the one light: beyond 16 punctual lights the lighting pass samples 16 by power
+/// (exact here, the copies being alike) rather than sending 20,000 shadow rays per pixel, which
+/// llvmpipe's limit on loop iterations per invocation would cut short.
+#[test]
+fn deferred_shading_counts_every_one_of_many_punctual_lights() {
+    let gpu = Gpu::new();
+    let one = scene_file("spheres.glb");
+    let mut many = one.clone();
+    let light =
+        umbra::scene::Light { intensity: one.lights[0].intensity / 20_000.0, ..one.lights[0].clone() };
+    many.lights = vec![light; 20_000];
+    let settings = HybridSettings { size: (64, 48), ..Default::default() };
+    let shade = |scene: &Scene| {
+        let gpu_scene = GpuScene::upload(&gpu, scene).unwrap();
+        hybrid(&gpu, &gpu_scene, &scene.camera(None).unwrap(), &settings).unwrap().color
+    };
+    let (a, b) = (shade(&one), shade(&many));
+    let lit = a.iter().filter(|p| p[0] > 0.05).count();
+    assert!(lit > 500, "only {lit} lit pixels");
+    for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-3 * a[c].abs() + 1e-5,
+                "pixel {i}: one light {a:?}, 20,000 {b:?}"
+            );
+        }
+    }
+}
+
 /// The tonemap kernel equals its CPU twin (src/tonemap.rs) to one 8-bit step on every curve, over
 /// values from 0 to far above white, negative, NaN and Inf; and the twin has the curves' known
 /// values (worked by hand from their definitions).

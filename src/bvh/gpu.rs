@@ -363,16 +363,7 @@ impl Grid {
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
             return None;
         }
-        let step = ((f64::from(hi) - f64::from(lo)) / 255.0).max(f64::from(Self::MIN_STEP));
-        let mut grid = Self { origin: lo, step: round_up(step) };
-        // The quotient's float64 rounding may leave the last plane an ulp short.
-        for _ in 0..4 {
-            if grid.at_or_above(255, hi) {
-                break;
-            }
-            grid.step = next_up(grid.step);
-        }
-        (grid.at_or_above(255, hi) && grid.step <= Self::MAX_STEP).then_some(grid)
+        Self::through(f64::from(lo), 0, f64::from(hi), 255, lo, hi)
     }
 
     /// Plane `q` exactly, as `(s, e)` with `s` the nearest float64 and `s + e` the plane: `q *

@@ -223,13 +223,13 @@ impl GpuBvhNode {
                 *p = [b.0[axis], b.1[axis]];
             }
             let planes = &planes[..children.len()];
-            // A box's area grows by its other two extents per unit of this one.
-            let mut weights = [0.0f64; 4];
-            for (w, (b, _)) in weights.iter_mut().zip(children) {
-                let extent = |k: usize| f64::from(b.1[k] - b.0[k]);
-                *w = extent((axis + 1) % 3) + extent((axis + 2) % 3);
-            }
             let grid = if search {
+                // A box's area grows by its other two extents per unit of this one.
+                let mut weights = [0.0f64; 4];
+                for (w, (b, _)) in weights.iter_mut().zip(children) {
+                    let extent = |k: usize| f64::from(b.1[k] - b.0[k]);
+                    *w = extent((axis + 1) % 3) + extent((axis + 2) % 3);
+                }
                 Grid::fit_least_growth(planes, &weights[..children.len()])
             } else {
                 Grid::fit(planes)
@@ -300,8 +300,7 @@ impl Grid {
     /// both halves' grown boxes.
     fn fit_least_growth(planes: &[[f32; 2]], weights: &[f64]) -> Option<Self> {
         let natural = Self::fit(planes)?;
-        let lo = planes.iter().map(|p| p[0]).fold(f32::INFINITY, f32::min);
-        let hi = planes.iter().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
+        let (lo, hi) = Self::span(planes);
         let (lo64, hi64) = (f64::from(lo), f64::from(hi));
         let growth = |g: &Self| -> f64 {
             let moved = |[a, b]: [f32; 2]| {
@@ -354,8 +353,7 @@ impl Grid {
     /// children's lowest and highest planes on this axis (`planes`, lower and upper), or `None`
     /// for boxes beyond the coarsest step or not finite. A flat axis takes the finest step.
     fn fit(planes: &[[f32; 2]]) -> Option<Self> {
-        let lo = planes.iter().map(|p| p[0]).fold(f32::INFINITY, f32::min);
-        let hi = planes.iter().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
+        let (lo, hi) = Self::span(planes);
         if planes.is_empty() || (lo == hi && lo.is_finite()) {
             let origin = if planes.is_empty() { 0.0 } else { lo };
             return Some(Self { origin, step: Self::MIN_STEP });
@@ -364,6 +362,13 @@ impl Grid {
             return None;
         }
         Self::through(f64::from(lo), 0, f64::from(hi), 255, lo, hi)
+    }
+
+    /// The lowest and highest of `planes` (lower, upper): infinite and inverted for none.
+    fn span(planes: &[[f32; 2]]) -> (f32, f32) {
+        let lo = planes.iter().map(|p| p[0]).fold(f32::INFINITY, f32::min);
+        let hi = planes.iter().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
+        (lo, hi)
     }
 
     /// Plane `q` exactly, as `(s, e)` with `s` the nearest float64 and `s + e` the plane: `q *
@@ -378,12 +383,11 @@ impl Grid {
     /// How plane `q` compares with `v`, exactly: the nearest float64 of the plane decides unless
     /// it is `v` itself (any other float64 lies beyond the plane's rounding error).
     fn compare(&self, q: u8, v: f32) -> std::cmp::Ordering {
-        let v = f64::from(v);
-        let s = f64::from(self.origin) + f64::from(q) * f64::from(self.step);
+        let ((s, e), v) = (self.plane(q), f64::from(v));
         if s != v {
             return s.total_cmp(&v);
         }
-        self.plane(q).1.partial_cmp(&0.0).unwrap_or(std::cmp::Ordering::Equal)
+        e.partial_cmp(&0.0).unwrap_or(std::cmp::Ordering::Equal)
     }
 
     fn at_or_below(&self, q: u8, v: f32) -> bool {

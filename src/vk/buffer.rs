@@ -3,7 +3,7 @@
 use super::{barrier, context::Shared, Context};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -196,18 +196,8 @@ pub(super) fn create_bound(
     };
     let requirements = unsafe { shared.device.get_buffer_memory_requirements(raw) };
     let allocation = shared
-        .allocator()
-        .allocate(&AllocationCreateDesc {
-            name,
-            requirements,
-            location,
-            linear: true,
-            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-        })
-        .map_err(|source| {
-            unsafe { shared.device.destroy_buffer(raw, None) };
-            Error::Allocation { name: name.into(), source }
-        })?;
+        .allocate(name, requirements, location, true)
+        .inspect_err(|_| unsafe { shared.device.destroy_buffer(raw, None) })?;
     // SAFETY: memory from the allocator for this buffer's requirements.
     let bound = unsafe { shared.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
     if let Err(e) = bound.call("vkBindBufferMemory") {

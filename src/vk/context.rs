@@ -5,7 +5,10 @@ use super::commands::DEFAULT_SUBMIT_TIMEOUT;
 use super::debug::{messenger_info, ValidationLog};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
-use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use gpu_allocator::vulkan::{
+    Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc,
+};
+use gpu_allocator::MemoryLocation;
 use gpu_allocator::{AllocationSizes, AllocatorDebugSettings};
 use std::collections::HashMap;
 use std::ffi::CStr;
@@ -118,6 +121,26 @@ pub(crate) struct Abandoned {
 impl Shared {
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Memory for a resource with `requirements` (`linear`: a buffer or linear image), its
+    /// failure named after `name`; the caller binds it and frees it with the resource.
+    pub fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> Result<Allocation> {
+        self.allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| Error::Allocation { name: name.into(), source })
     }
 
     /// Notes that `pass` is the latest kernel recorded into `cmd`.

@@ -3,7 +3,7 @@
 use super::{barrier, barrier::access, context::Shared, Buffer, Context};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -67,18 +67,8 @@ impl Image {
         let raw = unsafe { shared.device.create_image(&info, None) }.call("vkCreateImage")?;
         let requirements = unsafe { shared.device.get_image_memory_requirements(raw) };
         let allocation = shared
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| {
-                unsafe { shared.device.destroy_image(raw, None) };
-                Error::Allocation { name: name.into(), source }
-            })?;
+            .allocate(name, requirements, MemoryLocation::GpuOnly, false)
+            .inspect_err(|_| unsafe { shared.device.destroy_image(raw, None) })?;
         let mut image = Self {
             shared: shared.clone(),
             raw,

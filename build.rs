@@ -8,10 +8,12 @@ use glslang::{
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// Resolves `#include "x.glsl"` against the includer's folder, then `spirv/include/`.
+/// Resolves `#include "x.glsl"` against the includer's folder, then `spirv/include/`, then the
+/// declarations generated from `src/gpu/interface.rs` (`layout.glsl`, `kernel/<name>.glsl`).
 struct Includes {
     include_dir: PathBuf,
     kernel_dir: PathBuf,
+    generated_dir: PathBuf,
 }
 
 impl IncludeHandler for Includes {
@@ -26,14 +28,15 @@ impl IncludeHandler for Includes {
             .parent()
             .map(|p| self.kernel_dir.join(p))
             .unwrap_or_else(|| self.kernel_dir.clone());
-        [includer_dir.join(header), self.include_dir.join(header)].into_iter().find(|p| p.is_file()).and_then(
-            |path| {
+        [includer_dir.join(header), self.include_dir.join(header), self.generated_dir.join(header)]
+            .into_iter()
+            .find(|p| p.is_file())
+            .and_then(|path| {
                 let data = std::fs::read_to_string(&path).ok()?;
                 let name =
                     path.strip_prefix(&self.kernel_dir).unwrap_or(&path).to_string_lossy().into_owned();
                 Some(IncludeResult { name, data })
-            },
-        )
+            })
     }
 }
 
@@ -56,17 +59,40 @@ fn format_log(label: &str, log: &str) -> String {
         .join("\n")
 }
 
-/// Compiles `dir/file`; includes resolve against the includer's folder, then `include_dir`.
-fn compile(compiler: &Compiler, dir: &Path, include_dir: &Path, file: &str) -> Result<Vec<u32>, String> {
+/// Compiles `dir/file`; includes resolve against the includer's folder, then `include_dir`, then
+/// `generated_dir`.
+fn compile(
+    compiler: &Compiler,
+    dir: &Path,
+    include_dir: &Path,
+    generated_dir: &Path,
+    file: &str,
+) -> Result<Vec<u32>, String> {
     let folder = dir.file_name().map_or("spirv".into(), |f| f.to_string_lossy().into_owned());
     let label = format!("{folder}/{file}");
     let text = std::fs::read_to_string(dir.join(file)).map_err(|e| format!("{label}: {e}"))?;
+    compile_source(compiler, dir, include_dir, generated_dir, &label, text)
+}
+
+/// Compiles the kernel `text` named `label` (for messages).
+fn compile_source(
+    compiler: &Compiler,
+    dir: &Path,
+    include_dir: &Path,
+    generated_dir: &Path,
+    label: &str,
+    text: String,
+) -> Result<Vec<u32>, String> {
     let source = ShaderSource::from(text);
     let options = CompilerOptions {
         target: Target::Vulkan { version: VulkanVersion::Vulkan1_3, spirv_version: SpirvVersion::SPIRV1_6 },
         ..CompilerOptions::default()
     };
-    let mut includes = Includes { include_dir: include_dir.to_path_buf(), kernel_dir: dir.to_path_buf() };
+    let mut includes = Includes {
+        include_dir: include_dir.to_path_buf(),
+        kernel_dir: dir.to_path_buf(),
+        generated_dir: generated_dir.to_path_buf(),
+    };
     let input = ShaderInput::new(
         &source,
         ShaderStage::Compute,
@@ -79,13 +105,318 @@ fn compile(compiler: &Compiler, dir: &Path, include_dir: &Path, file: &str) -> R
         use glslang::error::GlslangError as G;
         match e {
             G::PreprocessError(log) | G::ParseError(log) | G::LinkError(log) | G::MapIoError(log) => {
-                format_log(&label, &log.log)
+                format_log(label, &log.log)
             }
             other => format!("{label}: {other}"),
         }
     };
     let shader = compiler.create_shader(input).map_err(describe)?;
     shader.compile().map_err(describe)
+}
+
+// ---- The GLSL side of `src/gpu/interface.rs` ----------------------------------------------
+// The same file the library reads with its own macros (src/gpu/layout.rs); these turn it into
+// GLSL text.
+
+/// A GLSL declaration's comment lines from its doc attributes (as `stringify!` shows them:
+/// `doc = "..."`, `doc = r"..."` or `/// ...`).
+fn comment(metas: &[&str], indent: &str) -> String {
+    metas
+        .iter()
+        .filter_map(|m| {
+            if let Some(text) = m.strip_prefix("///") {
+                return Some(text.to_string());
+            }
+            // `doc = "..."`, however the pretty-printer spaced or broke it.
+            let rest = m.strip_prefix("doc")?;
+            let (start, end) = (rest.find('"')?, rest.rfind('"')?);
+            Some(rest[start + 1..end.max(start + 1)].replace("\\\"", "\"").replace("\\'", "'"))
+        })
+        .map(|text| format!("{indent}//{}\n", text.trim_end()))
+        .collect()
+}
+
+struct GlslStruct {
+    name: &'static str,
+    metas: Vec<&'static str>,
+    /// (doc attributes, declaration without the `;`)
+    fields: Vec<(Vec<&'static str>, String)>,
+}
+
+macro_rules! glsl_field {
+    ([$t:tt; $n:literal], $f:ident) => {
+        format!("{} {}[{}]", stringify!($t), stringify!($f), $n)
+    };
+    ($t:ident, $f:ident) => {
+        format!("{} {}", stringify!($t), stringify!($f))
+    };
+}
+
+macro_rules! gpu_structs {
+    ($($(#[$meta:meta])* struct $name:ident {
+        $($(#[$fmeta:meta])* $field:ident : $ty:tt $(as $rust:ty)?),* $(,)?
+    })*) => {
+        fn glsl_structs() -> Vec<GlslStruct> {
+            vec![$(GlslStruct {
+                name: stringify!($name),
+                metas: vec![$(stringify!($meta)),*],
+                fields: vec![$((vec![$(stringify!($fmeta)),*], glsl_field!($ty, $field))),*],
+            }),*]
+        }
+    };
+}
+
+macro_rules! gpu_constants {
+    ($($(#[$meta:meta])* $name:ident : $ty:tt = $value:expr;)*) => {
+        fn glsl_constants() -> String {
+            let mut out = String::new();
+            $(
+                out.push_str(&comment(&[$(stringify!($meta)),*], ""));
+                let value = stringify!($value);
+                let suffix = if stringify!($ty) == "uint" { "u" } else { "" };
+                out.push_str(&format!("const {} {} = {value}{suffix};\n", stringify!($ty), stringify!($name)));
+            )*
+            out
+        }
+    };
+}
+
+/// One binding: name, access, kind, argument (element type or format).
+#[derive(Clone)]
+struct GlslBinding {
+    name: &'static str,
+    access: &'static str,
+    kind: &'static str,
+    arg: &'static str,
+    array: bool,
+}
+
+macro_rules! glsl_binding {
+    ($name:ident : $access:ident $kind:ident [$arg:tt]) => {
+        GlslBinding {
+            name: stringify!($name),
+            access: stringify!($access),
+            kind: stringify!($kind),
+            arg: stringify!($arg),
+            array: true,
+        }
+    };
+    ($name:ident : $access:ident $kind:ident $arg:tt) => {
+        GlslBinding {
+            name: stringify!($name),
+            access: stringify!($access),
+            kind: stringify!($kind),
+            arg: stringify!($arg),
+            array: false,
+        }
+    };
+}
+
+macro_rules! scene_bindings {
+    ($($(#[$meta:meta])* $name:ident : $access:ident $kind:ident $arg:tt),* $(,)?) => {
+        fn glsl_scene_bindings() -> Vec<GlslBinding> {
+            vec![$(glsl_binding!($name : $access $kind $arg)),*]
+        }
+    };
+}
+
+struct GlslKernel {
+    name: &'static str,
+    scene: &'static str,
+    features: Vec<&'static str>,
+    push: &'static str,
+    /// (name, type, default)
+    spec: Vec<(&'static str, &'static str, &'static str)>,
+    bindings: Vec<GlslBinding>,
+}
+
+macro_rules! kernels {
+    ($($(#[$meta:meta])* $kernel:ident {
+        scene: $scene:ident $([$($feature:ident),* $(,)?])?,
+        push: $push:ty,
+        spec: { $($spec:ident : $sty:tt = $sdef:expr),* $(,)? },
+        bindings: { $($(#[$bmeta:meta])* $name:ident : $access:ident $kind:ident $arg:tt),* $(,)? }
+    })*) => {
+        fn glsl_kernels() -> Vec<GlslKernel> {
+            vec![$(GlslKernel {
+                name: stringify!($kernel),
+                scene: stringify!($scene),
+                features: vec![$($(stringify!($feature)),*)?],
+                push: stringify!($push),
+                spec: vec![$((stringify!($spec), stringify!($sty), stringify!($sdef))),*],
+                bindings: vec![$(glsl_binding!($name : $access $kind $arg)),*],
+            }),*]
+        }
+    };
+}
+
+include!("src/gpu/interface.rs");
+
+/// Scene features in constant-id order (src/gpu/kernel.rs `SCENE_FEATURES`).
+const SCENE_FEATURES: [&str; 6] = ["textures", "alpha", "lights", "punctual", "env_map", "transmission"];
+/// The constant id of a kernel's first own specialization constant (`FIRST_KERNEL_SPEC_ID`).
+const FIRST_KERNEL_SPEC_ID: usize = 8;
+const HEADER: &str = "// Generated by build.rs from src/gpu/interface.rs: edit that file, not this one.\n";
+
+/// `layout.glsl`: every shared struct and constant.
+fn layout_glsl() -> String {
+    let mut out = format!("{HEADER}#ifndef UMBRA_LAYOUT_GLSL\n#define UMBRA_LAYOUT_GLSL\n\n");
+    for s in glsl_structs() {
+        out.push_str(&comment(&s.metas, ""));
+        out.push_str(&format!("struct {} {{\n", s.name));
+        for (metas, decl) in &s.fields {
+            out.push_str(&comment(metas, "    "));
+            out.push_str(&format!("    {decl};\n"));
+        }
+        out.push_str("};\n\n");
+    }
+    out.push_str(&glsl_constants());
+    out.push_str("\n#endif\n");
+    out
+}
+
+fn camel(name: &str) -> String {
+    name.split('_').map(|w| w[..1].to_uppercase() + &w[1..]).collect()
+}
+
+/// One binding's declaration.
+fn binding_glsl(kernel: &str, number: usize, b: &GlslBinding) -> Result<String, String> {
+    let image_prefix = if b.arg.ends_with("ui") {
+        "u"
+    } else if b.arg.ends_with('i') {
+        "i"
+    } else {
+        ""
+    };
+    let qualifier = match b.access {
+        "readonly" => "readonly ",
+        "writeonly" => "writeonly ",
+        "readwrite" => "",
+        "coherent" => "coherent ",
+        other => return Err(format!("kernel {kernel}: binding {}: unknown access '{other}'", b.name)),
+    };
+    Ok(match b.kind {
+        "buffer" => {
+            if b.access == "writeonly" {
+                return Err(format!("kernel {kernel}: buffer {}: naga rejects writeonly buffers", b.name));
+            }
+            let array = if b.array { "[]" } else { "" };
+            format!(
+                "layout(set = 0, binding = {number}, std430) {qualifier}buffer {} {{ {} {}{array}; }};\n",
+                camel(b.name),
+                b.arg,
+                b.name
+            )
+        }
+        "image" => format!(
+            "layout(set = 0, binding = {number}, {}) uniform {qualifier}{image_prefix}image2D {};\n",
+            b.arg, b.name
+        ),
+        "texels" => format!(
+            "layout(set = 0, binding = {number}, {}) uniform {qualifier}{image_prefix}imageBuffer {};\n",
+            b.arg, b.name
+        ),
+        other => return Err(format!("kernel {kernel}: binding {}: unknown kind '{other}'", b.name)),
+    })
+}
+
+/// `kernel/<name>.glsl`: a kernel's specialization constants, bindings and push constants.
+fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> {
+    let mut out = format!("{HEADER}// The interface of {}.comp.\n#include \"layout.glsl\"\n\n", k.name);
+    if k.scene == "full" {
+        for (id, feature) in SCENE_FEATURES.iter().enumerate() {
+            let name = format!("HAS_{}", feature.to_uppercase());
+            if k.features.contains(feature) {
+                out.push_str(&format!("layout(constant_id = {id}) const bool {name} = false;\n"));
+            } else {
+                out.push_str(&format!("const bool {name} = false;  // not specialised in this kernel\n"));
+            }
+        }
+    }
+    if let Some(f) = k.features.iter().find(|f| !SCENE_FEATURES.contains(f)) {
+        return Err(format!("kernel {}: unknown scene feature '{f}'", k.name));
+    }
+    for (i, (name, ty, default)) in k.spec.iter().enumerate() {
+        let suffix = if *ty == "uint" { "u" } else { "" };
+        out.push_str(&format!(
+            "layout(constant_id = {}) const {ty} {} = {default}{suffix};\n",
+            FIRST_KERNEL_SPEC_ID + i,
+            name.to_uppercase()
+        ));
+    }
+    out.push('\n');
+    let scene_part: &[GlslBinding] = match k.scene {
+        "full" => scene,
+        "bvh" => &scene[..2],
+        "none" => &[],
+        other => return Err(format!("kernel {}: unknown scene use '{other}'", k.name)),
+    };
+    for (i, b) in scene_part.iter().enumerate() {
+        out.push_str(&binding_glsl(k.name, i, b)?);
+    }
+    let first = if k.scene == "none" { 0 } else { scene.len() };
+    for (i, b) in k.bindings.iter().enumerate() {
+        out.push_str(&binding_glsl(k.name, first + i, b)?);
+    }
+    if k.push != "()" {
+        out.push_str(&format!("layout(push_constant) uniform Push {{ {} params; }};\n", k.push));
+    }
+    Ok(out)
+}
+
+/// A kernel that declares a runtime array of every shared struct, so tests/layout.rs can read
+/// each struct's offsets and array stride from SPIR-V. Never dispatched.
+fn layout_check_glsl() -> String {
+    let mut out = format!("#version 460\n{HEADER}#extension GL_GOOGLE_include_directive : require\n");
+    out.push_str("#include \"layout.glsl\"\nlayout(local_size_x = 1) in;\n");
+    let structs = glsl_structs();
+    for (i, s) in structs.iter().enumerate() {
+        out.push_str(&format!(
+            "layout(set = 0, binding = {i}, std430) buffer Check{i} {{ {} check_{i}[]; }};\n",
+            s.name
+        ));
+    }
+    out.push_str("void main() {\n");
+    for i in 0..structs.len() {
+        out.push_str(&format!("    check_{i}[0] = check_{i}[1];\n"));
+    }
+    out.push_str("}\n");
+    out
+}
+
+/// Writes the generated GLSL into `dir`; checks that every kernel of `spirv/` has an interface
+/// and includes it, and every interface a kernel.
+fn generate(dir: &Path, spirv: &Path, kernels: &[String]) -> Result<(), String> {
+    let write = |path: PathBuf, text: String| -> Result<(), String> {
+        // Unchanged files keep their time stamps.
+        if std::fs::read_to_string(&path).ok().as_deref() != Some(text.as_str()) {
+            std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+        Ok(())
+    };
+    std::fs::create_dir_all(dir.join("kernel")).map_err(|e| e.to_string())?;
+    write(dir.join("layout.glsl"), layout_glsl())?;
+    let scene = glsl_scene_bindings();
+    let defs = glsl_kernels();
+    for k in &defs {
+        let file = format!("{}.comp", k.name);
+        if !kernels.contains(&file) {
+            return Err(format!("src/gpu/interface.rs: kernel {} has no spirv/{file}", k.name));
+        }
+        let include = format!("#include \"kernel/{}.glsl\"", k.name);
+        let text = std::fs::read_to_string(spirv.join(&file)).map_err(|e| format!("spirv/{file}: {e}"))?;
+        if !text.contains(&include) {
+            return Err(format!("spirv/{file}: must `{include}` (its interface)"));
+        }
+        write(dir.join("kernel").join(format!("{}.glsl", k.name)), kernel_glsl(k, &scene)?)?;
+    }
+    for file in kernels {
+        let name = file.trim_end_matches(".comp");
+        if !defs.iter().any(|k| k.name == name) {
+            return Err(format!("spirv/{file}: no interface in src/gpu/interface.rs (add it to `kernels!`)"));
+        }
+    }
+    Ok(())
 }
 
 fn main() {
@@ -105,25 +436,39 @@ fn main() {
         println!("cargo:rerun-if-changed={}", entry.path().display());
     }
 
+    println!("cargo:rerun-if-changed=src/gpu/interface.rs");
+    let generated = out.join("include");
+    if let Err(e) = generate(&generated, &dir, &kernels) {
+        eprintln!("error: {e}");
+        println!("cargo:warning={e}");
+        std::process::exit(1);
+    }
+
     let compiler = Compiler::acquire().expect("glslang initialises");
+    let include = dir.join("include");
     // Kernels are independent: compile them on all cores.
-    let results: Vec<(String, Result<Vec<u32>, String>)> = std::thread::scope(|s| {
+    let mut results: Vec<(String, Result<Vec<u32>, String>)> = std::thread::scope(|s| {
         let handles: Vec<_> = kernels
             .iter()
-            .map(|k| (k.clone(), s.spawn(|| compile(compiler, &dir, &dir.join("include"), k))))
+            .map(|k| (k.clone(), s.spawn(|| compile(compiler, &dir, &include, &generated, k))))
             .collect();
         handles
             .into_iter()
             .map(|(k, h)| (k, h.join().unwrap_or_else(|_| Err("glslang panicked".into()))))
             .collect()
     });
+    let check =
+        compile_source(compiler, &dir, &include, &generated, "layout_check.comp", layout_check_glsl());
+    results.push(("layout_check.comp".into(), check));
 
     let mut errors = Vec::new();
     let mut table = String::from(
         "/// Every kernel in `spirv/`, compiled by build.rs.\npub static KERNELS: &[Kernel] = &[\n",
     );
     for (file, result) in results {
-        println!("cargo:rerun-if-changed=spirv/{file}");
+        if file != "layout_check.comp" {
+            println!("cargo:rerun-if-changed=spirv/{file}");
+        }
         match result {
             Ok(words) => {
                 let name = file.trim_end_matches(".comp");
@@ -158,7 +503,7 @@ fn main() {
     for entry in std::fs::read_dir(&examples).into_iter().flatten().flatten() {
         let file = entry.file_name().to_string_lossy().into_owned();
         if let Some(name) = file.strip_suffix(".comp") {
-            match compile(compiler, &examples, &dir.join("include"), &file) {
+            match compile(compiler, &examples, &include, &generated, &file) {
                 Ok(words) => std::fs::write(out.join(format!("{name}.spv")), bytemuck_bytes(&words))
                     .expect("write SPIR-V to OUT_DIR"),
                 Err(e) => {

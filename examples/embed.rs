@@ -534,8 +534,15 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_general));
 
         // 1. The host's own G-buffer pass.
-        let (origin, forward, right, up) = umbra::render::camera_params(&camera, size);
-        let push = HostCamera { origin, forward, right, up, size: [size.0, size.1, tris.len() as u32, 0] };
+        let c = umbra::gpu::layout::GpuCamera::new(&camera, size);
+        let v4 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+        let push = HostCamera {
+            origin: v4(c.origin),
+            forward: v4(c.forward),
+            right: v4(c.right),
+            up: v4(c.up),
+            size: [size.0, size.1, tris.len() as u32, 0],
+        };
         device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
         device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipeline_layout, 0, &[set], &[]);
         device.cmd_push_constants(

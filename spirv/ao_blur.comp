@@ -7,28 +7,22 @@
 // bleed across silhouettes or creases. Taps without a surface are skipped; so is a pixel
 // without a surface (written 1).
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/ao_blur.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-
-layout(set = 0, binding = 0, r32f) uniform readonly image2D ao_in;
-layout(set = 0, binding = 1, r32f) uniform readonly image2D gb_depth;
-layout(set = 0, binding = 2, rgba16f) uniform readonly image2D gb_normal;
-layout(set = 0, binding = 3, r32f) uniform writeonly image2D out_ao;
-layout(push_constant) uniform Push { AoBlurParams params; };
 
 #include "camera.glsl"
 
 // The view-space position (camera at the origin) of `pixel`'s surface at `depth`.
 vec3 view_position(ivec2 pixel, float depth) {
-    vec3 forward = params.cam_forward.xyz;
-    vec3 dir = camera_ray(forward, params.cam_right.xyz, params.cam_up.xyz, vec2(pixel) + 0.5, params.size.xy);
+    vec3 forward = params.camera.forward;
+    vec3 dir = camera_ray(forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, params.size);
     return dir * (depth / dot(dir, forward));
 }
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = ivec2(params.size.xy);
+    ivec2 size = ivec2(params.size);
     if (any(greaterThanEqual(pixel, size))) {
         return;
     }
@@ -39,7 +33,7 @@ void main() {
     }
     vec3 p0 = view_position(pixel, d0);
     vec3 n0 = normalize(imageLoad(gb_normal, pixel).xyz);
-    float inv_sigma = 1.0 / (params.weights.x * d0);
+    float inv_sigma = 1.0 / (params.depth_sigma * d0);
     float sum = 0.0;
     float weight = 0.0;
     for (int dy = -2; dy <= 1; ++dy) {
@@ -54,7 +48,7 @@ void main() {
             }
             float plane = dot(view_position(q, d) - p0, n0) * inv_sigma;
             float w = exp(-0.5 * plane * plane);
-            w *= pow(max(dot(normalize(imageLoad(gb_normal, q).xyz), n0), 0.0), params.weights.y);
+            w *= pow(max(dot(normalize(imageLoad(gb_normal, q).xyz), n0), 0.0), params.normal_exponent);
             sum += w * imageLoad(ao_in, q).x;
             weight += w;
         }

@@ -1,59 +1,25 @@
 #version 460
 // Deferred lighting of the G-buffer (gbuffer.comp) with the path tracer's BSDF and lights:
 // emission, punctual lights and emissive triangles with ray-traced shadows (area lights sampled,
-// `counts.z` shadow rays per pixel, so shadows are soft), and split-sum image-based lighting
-// (ibl.glsl; counts.w bit 0) multiplied by ambient occlusion. One bounce: no indirect light beyond what IBL approximates.
+// `shadow_rays` shadow rays per pixel, so shadows are soft), and split-sum image-based lighting
+// (ibl.glsl; `ibl`) multiplied by ambient occlusion. One bounce: no indirect light beyond what IBL approximates.
 // Transmissive materials (KHR_materials_transmission) transmit the prefiltered environment seen
 // through their one interface: straight on for thin-walled ones, refracted once for volumes (no
 // exit refraction, no second surface: the G-buffer knows only the first).
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/deferred.glsl"
 #include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-
-// Bits of params.counts.w.
-const uint DEFERRED_IBL = 1u;
-const uint DEFERRED_IBL_DOMINANT = 2u;  // read the prefiltered map along the dominant direction
-
-layout(constant_id = 0) const bool HAS_TEXTURES = false;
-layout(constant_id = 1) const bool HAS_LIGHTS = false;
-layout(constant_id = 2) const bool HAS_PUNCTUAL = false;
-layout(constant_id = 3) const bool HAS_ENV_MAP = false;
-layout(constant_id = 4) const bool BECKMANN = false;
-layout(constant_id = 5) const bool HAS_ALPHA = false;
-layout(constant_id = 6) const bool HAS_TRANSMISSION = false;
-
-layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
-layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
-layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
-layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLightTri lights[]; };
-layout(set = 0, binding = 6, std430) readonly buffer Punctual { GpuLight punctual[]; };
-layout(set = 0, binding = 7, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 8, r32ui) uniform readonly uimageBuffer scene_texels;
-layout(set = 0, binding = 9, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
-layout(set = 0, binding = 10, std430) readonly buffer EnvMarginal { float env_marginal[]; };
-layout(set = 0, binding = 11, std430) readonly buffer EnvConditional { float env_conditional[]; };
-layout(set = 0, binding = 12, r32f) uniform readonly image2D gb_depth;
-layout(set = 0, binding = 13, rgba16f) uniform readonly image2D gb_normal;
-layout(set = 0, binding = 14, rgba16f) uniform readonly image2D gb_base;
-layout(set = 0, binding = 15, rgba16f) uniform readonly image2D gb_emission;
-layout(set = 0, binding = 16, rg32ui) uniform readonly uimage2D gb_material;
-layout(set = 0, binding = 17, rgba32f) uniform writeonly image2D out_color;
-layout(set = 0, binding = 18, std430) readonly buffer IblLut { vec4 ibl_lut[]; };
-layout(set = 0, binding = 19, std430) readonly buffer IblPrefiltered { vec4 ibl_prefiltered[]; };
-layout(set = 0, binding = 20, std430) readonly buffer IblSh { vec4 ibl_sh[]; };
-// Ambient occlusion multiplying the IBL term (1 = unoccluded); a 1x1 image means none.
-layout(set = 0, binding = 21, r32f) uniform readonly image2D ao_image;
-layout(push_constant) uniform Push { DeferredParams params; };
 
 #include "random.glsl"
 #include "gbuffer.glsl"
 #include "environment.glsl"
 #include "shading.glsl"
 #include "ibl.glsl"
+
+// The punctual light pick's stream (the emissive samples draw from RNG_EMISSIVE_NEE).
+const uint RNG_DEFERRED_PUNCTUAL = 2u;
 
 // The BRDF table (A, B, C, D) at (n.v, perceptual roughness), bilinear between its entries (n.v
 // at texel centres, roughness j / (N - 1)).
@@ -70,7 +36,7 @@ vec4 ibl_table(float nv, float roughness) {
 
 // Prefiltered level k at direction r: level 0 is the map itself (nearest, as env_radiance).
 vec3 ibl_level(uint k, vec3 r) {
-    uvec2 src = params.env_info.xy;
+    uvec2 src = params.env_size;
     if (k == 0u) {
         return env_radiance(r, src);
     }
@@ -91,14 +57,14 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
     // towards the normal: look up along the dominant direction (Lagarde and de Rousiers 2014,
     // "Moving Frostbite to PBR", eq. 56, with alpha as their linear roughness).
     vec3 r = reflect(-wo, n);
-    if ((params.counts.w & DEFERRED_IBL_DOMINANT) != 0u) {
+    if (params.ibl_dominant != 0u) {
         float smooth_ = clamp(1.0 - s.alpha, 0.0, 1.0);
         r = normalize(mix(n, r, smooth_ * (sqrt(smooth_) + s.alpha)));
     }
     vec4 table = ibl_table(nv, roughness);
-    vec3 specular_light = params.env.rgb;
-    vec3 irradiance_over_pi = params.env.rgb;
-    vec3 transmitted_light = params.env.rgb;
+    vec3 specular_light = params.env;
+    vec3 irradiance_over_pi = params.env;
+    vec3 transmitted_light = params.env;
     // Transmission: the view ray continues through a thin wall, or refracts into a volume
     // (total internal reflection cannot happen entering the denser medium from outside).
     vec3 through = s.thin ? -wo : refract(-wo, n, 1.0 / s.eta);
@@ -129,23 +95,23 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
 
 void main() {
     ivec2 pixel = ivec2(tile_pixel());
-    uvec2 size = params.size_frame.xy;
+    uvec2 size = params.size;
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;
     }
-    vec3 forward = params.cam_forward.xyz;
-    vec3 dir = camera_ray(forward, params.cam_right.xyz, params.cam_up.xyz, vec2(pixel) + 0.5, size);
+    vec3 forward = params.camera.forward;
+    vec3 dir = camera_ray(forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, size);
     float depth = imageLoad(gb_depth, pixel).x;
     if (depth <= 0.0) {
         // No surface: the environment seen directly.
-        vec3 background = params.env.rgb;
+        vec3 background = params.env;
         if (HAS_ENV_MAP) {
-            background *= env_radiance(dir, params.env_info.xy);
+            background *= env_radiance(dir, params.env_size);
         }
         imageStore(out_color, pixel, vec4(background, 1.0));
         return;
     }
-    vec3 p = params.cam_origin.xyz + dir * (depth / dot(dir, forward));
+    vec3 p = params.camera.origin + dir * (depth / dot(dir, forward));
     vec4 normal_rough = imageLoad(gb_normal, pixel);
     vec4 base_metal = imageLoad(gb_base, pixel);
     uvec2 mat = imageLoad(gb_material, pixel).xy;
@@ -166,28 +132,28 @@ void main() {
         }
 
         // Image-based lighting (split sum), times ambient occlusion.
-        if ((params.counts.w & DEFERRED_IBL) != 0u) {
+        if (params.ibl != 0u) {
             float ao = imageLoad(ao_image, min(pixel, imageSize(ao_image) - 1)).x;
             radiance += ao * ibl_lighting(s, normal_rough.w, n, wo, wo_local.z);
         }
 
         // Punctual lights: one shadow ray each.
         if (HAS_PUNCTUAL) {
-            float u = rand4(uvec2(pixel), params.size_frame.z, 2u, params.size_frame.w).x;
-            radiance += punctual_direct(p, ng, t, b, n, s, wo_local, params.counts.y, u);
+            float u = rand4(uvec2(pixel), params.frame, RNG_DEFERRED_PUNCTUAL, params.seed).x;
+            radiance += punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
         }
 
-        // Emissive triangles: `counts.z` light samples (triangle by power, uniform point on it),
+        // Emissive triangles: `shadow_rays` light samples (triangle by power, uniform point on it),
         // each with its shadow ray; light sampling alone, which is unbiased for direct light.
-        if (HAS_LIGHTS && params.counts.x > 0u) {
-            uint rays = max(params.counts.z, 1u);
+        if (HAS_LIGHTS && params.light_count > 0u) {
+            uint rays = max(params.shadow_rays, 1u);
             vec3 sum = vec3(0.0);
             for (uint r = 0u; r < rays; ++r) {
-                vec4 u = rand4(uvec2(pixel), params.size_frame.z * rays + r, 1u, params.size_frame.w);
+                vec4 u = rand4(uvec2(pixel), params.frame * rays + r, RNG_EMISSIVE_NEE, params.seed);
                 vec3 wi_local;
                 vec3 l_emit;
                 float light_pdf;
-                if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.counts.x, wi_local, l_emit,
+                if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
                                     light_pdf)) {
                     sum += bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * l_emit / light_pdf;
                 }

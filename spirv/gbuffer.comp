@@ -4,46 +4,27 @@
 // documents. Shading attributes come from shading.glsl, so the G-buffer sees exactly the surface
 // the path tracer sees.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/gbuffer.glsl"
 #include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(constant_id = 0) const bool HAS_TEXTURES = false;
-layout(constant_id = 1) const bool HAS_ALPHA = false;
 const bool BECKMANN = false;
-// The hybrid passes shade reflection only (see src/passes/deferred.rs).
-const bool HAS_TRANSMISSION = false;
-
-layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
-layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
-layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
-layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = 5, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 6, r32ui) uniform readonly uimageBuffer scene_texels;
-// Unused here (shading.glsl's light helpers), declared so the include compiles.
-layout(set = 0, binding = 7, std430) readonly buffer Lights { GpuLightTri lights[]; };
-layout(set = 0, binding = 8, std430) readonly buffer Punctual { GpuLight punctual[]; };
-layout(set = 0, binding = 9, r32f) uniform writeonly image2D gb_depth;
-layout(set = 0, binding = 10, rgba16f) uniform writeonly image2D gb_normal;
-layout(set = 0, binding = 11, rgba16f) uniform writeonly image2D gb_base;
-layout(set = 0, binding = 12, rgba16f) uniform writeonly image2D gb_emission;
-layout(set = 0, binding = 13, rg32ui) uniform writeonly uimage2D gb_material;
-layout(push_constant) uniform Push { GBufferParams params; };
+// HAS_TRANSMISSION is not specialised: the hybrid passes shade reflection only (see
+// src/passes/deferred.rs).
 
 #include "gbuffer.glsl"
 #include "shading.glsl"
 
 void main() {
     ivec2 pixel = ivec2(tile_pixel());
-    uvec2 size = params.size.xy;
+    uvec2 size = params.size;
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;
     }
-    vec3 origin = params.cam_origin.xyz;
-    vec3 forward = params.cam_forward.xyz;
-    vec3 dir = camera_ray(forward, params.cam_right.xyz, params.cam_up.xyz, vec2(pixel) + 0.5, size);
+    vec3 origin = params.camera.origin;
+    vec3 forward = params.camera.forward;
+    vec3 dir = camera_ray(forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, size);
 
     Hit hit;
     if (!bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
@@ -63,7 +44,7 @@ void main() {
     // times that.
     vec2 cone_lod = LOD_LEVEL0;
     if (HAS_TEXTURES) {
-        float spread = atan(2.0 * length(params.cam_up.xyz) / float(size.y));
+        float spread = atan(2.0 * length(params.camera.up) / float(size.y));
         cone_lod = ray_cone_lod(tri, hit.t * spread, dir, ng);
     }
     vec3 le = emitted_lod(tri, hit.bary, ng, wo, cone_lod);

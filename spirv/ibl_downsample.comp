@@ -3,25 +3,21 @@
 // map when k = 1), each texel the solid-angle weighted mean of its 2x2 parents (clamped at the
 // edges of a level that is already one texel wide or high).
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/ibl_downsample.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-
-layout(set = 0, binding = 0, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
-layout(set = 0, binding = 1, std430) buffer Chain { vec4 chain[]; };
-layout(push_constant) uniform Push { IblParams params; };
 
 #include "ibl.glsl"
 
 vec3 parent(uint k, uvec2 xy, uvec2 size) {
     uint i = xy.y * size.x + xy.x;
-    return k == 0u ? env_texels[i].rgb : chain[chain_offset(k, params.src.xy) + i].rgb;
+    return k == 0u ? env_texels[i].rgb : chain[chain_offset(k, params.src_size) + i].rgb;
 }
 
 void main() {
     uvec2 xy = gl_GlobalInvocationID.xy;
-    uvec2 src = params.src.xy;
-    uint k = params.src.z;
+    uvec2 src = params.src_size;
+    uint k = params.src_level;
     uvec2 size = chain_size(k, src);
     if (any(greaterThanEqual(xy, size))) {
         return;

@@ -3,12 +3,9 @@
 // GGX visible normals (graded towards the distribution's tail) (specular: f cos / pdf = G1(wi), split by the Schlick factor) and of the
 // cosine hemisphere (diffuse Fresnel weighting).
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/ibl_lut.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-
-layout(set = 0, binding = 0, std430) buffer Lut { vec4 lut[]; };
-layout(push_constant) uniform Push { IblParams params; };
 
 #include "ibl.glsl"
 
@@ -24,7 +21,7 @@ void main() {
     float roughness = float(ij.y) / float(n - 1u);
     float a = max(roughness * roughness, 1e-4);
     vec3 wo = vec3(sqrt(1.0 - nv * nv), 0.0, nv);
-    uint m = params.dst.w;
+    uint m = params.samples;
     vec4 sum = vec4(0.0);
     for (uint sy = 0u; sy < m; ++sy) {
         vec4 row = vec4(0.0);

@@ -1,26 +1,18 @@
 #version 460
-// One prefiltered level (ibl.glsl) of perceptual roughness `values.x`: per texel direction r,
-// n = v = r, `dst.w` Hammersley samples of GGX visible normals, sum L(l) n.l / sum n.l, with
+// One prefiltered level (ibl.glsl) of perceptual roughness `roughness`: per texel direction r,
+// n = v = r, `samples` Hammersley samples of GGX visible normals, sum L(l) n.l / sum n.l, with
 // filtered importance sampling (Krivanek and Colbert 2008): each sample reads the box chain at
 // the level whose texels cover its share of the solid angle, 1 / (samples * pdf).
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/ibl_prefilter.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
-layout(set = 0, binding = 1, std430) readonly buffer Chain { vec4 chain[]; };
-layout(set = 0, binding = 2, std430) buffer Prefiltered { vec4 prefiltered[]; };
-layout(push_constant) uniform Push { IblParams params; };
-
-// Only env_uv / env_direction are used; the sampling tables environment.glsl names are stubs.
-const float env_marginal[1] = float[1](1.0);
-const float env_conditional[1] = float[1](1.0);
 #include "environment.glsl"
 #include "ibl.glsl"
 
 vec3 chain_bilinear(uint k, vec2 uv) {
-    uvec2 size = chain_size(k, params.src.xy);
+    uvec2 size = chain_size(k, params.src_size);
     uvec4 idx;
     vec4 w;
     equirect_taps(uv, size, idx, w);
@@ -28,25 +20,25 @@ vec3 chain_bilinear(uint k, vec2 uv) {
         return w.x * env_texels[idx.x].rgb + w.y * env_texels[idx.y].rgb + w.z * env_texels[idx.z].rgb +
                w.w * env_texels[idx.w].rgb;
     }
-    uint o = chain_offset(k, params.src.xy);
+    uint o = chain_offset(k, params.src_size);
     return w.x * chain[o + idx.x].rgb + w.y * chain[o + idx.y].rgb + w.z * chain[o + idx.z].rgb +
            w.w * chain[o + idx.w].rgb;
 }
 
 void main() {
     uvec2 xy = gl_GlobalInvocationID.xy;
-    uvec2 size = params.dst.xy;
+    uvec2 size = params.dst_size;
     if (any(greaterThanEqual(xy, size))) {
         return;
     }
-    uvec2 src = params.src.xy;
+    uvec2 src = params.src_size;
     vec3 r = env_direction((vec2(xy) + 0.5) / vec2(size));
     vec3 t;
     vec3 b;
     basis(r, t, b);
-    float roughness = params.values.x;
+    float roughness = params.roughness;
     float a = max(roughness * roughness, 1e-4);
-    uint count = params.dst.w;
+    uint count = params.samples;
     uint levels = chain_levels(src);
     // Solid angle of a source texel is (2 pi / W)(pi / H) sin(theta).
     float texel = 2.0 * PI * PI / float(src.x * src.y);
@@ -76,5 +68,5 @@ void main() {
         sum += radiance * l.z;
         weight += l.z;
     }
-    prefiltered[params.dst.z + xy.y * size.x + xy.x] = vec4(weight > 0.0 ? sum / weight : vec3(0.0), 1.0);
+    prefiltered[params.dst_offset + xy.y * size.x + xy.x] = vec4(weight > 0.0 ? sum / weight : vec3(0.0), 1.0);
 }

@@ -1,22 +1,15 @@
 #version 460
 // SH9 irradiance of the environment map (ibl.glsl): one workgroup per dispatch, 128 rows from
-// params.src.w (one row per invocation: the basis integrated exactly over each texel,
+// params.first_row (one row per invocation: the basis integrated exactly over each texel,
 // sh9_cell), a tree reduction per coefficient, multiplied by A_l and added to what the earlier
 // dispatches summed (the first one writes). Rows in batches because llvmpipe breaks every loop
 // of an invocation after 65,535 loop iterations in all: one invocation summing every 128th row
 // of a 4096×2048 map went past it and left the coefficients 98 % off.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/ibl_sh.glsl"
 
 layout(local_size_x = 128) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
-layout(set = 0, binding = 1, std430) buffer Sh { vec4 sh[]; };
-layout(push_constant) uniform Push { IblParams params; };
-
-// Only env_uv / env_direction are used; the sampling tables environment.glsl names are stubs.
-const float env_marginal[1] = float[1](1.0);
-const float env_conditional[1] = float[1](1.0);
 #include "environment.glsl"
 #include "ibl.glsl"
 
@@ -24,12 +17,12 @@ shared vec3 partial[128];
 
 void main() {
     uint tid = gl_LocalInvocationID.x;
-    uvec2 size = params.src.xy;
+    uvec2 size = params.src_size;
     vec3 c[9];
     for (uint k = 0u; k < 9u; ++k) {
         c[k] = vec3(0.0);
     }
-    for (uint y = params.src.w + tid; y < min(params.src.w + 128u, size.y); y += 128u) {
+    for (uint y = params.first_row + tid; y < min(params.first_row + 128u, size.y); y += 128u) {
         float t0 = PI * float(y) / float(size.y);
         float t1 = PI * float(y + 1u) / float(size.y);
         for (uint x = 0u; x < size.x; ++x) {
@@ -53,7 +46,7 @@ void main() {
             barrier();
         }
         if (tid == 0u) {
-            vec3 before = params.src.w > 0u ? sh[k].rgb : vec3(0.0);
+            vec3 before = params.first_row > 0u ? sh[k].rgb : vec3(0.0);
             sh[k] = vec4(before + partial[0] * sh9_band_factor(k), 0.0);
         }
         barrier();

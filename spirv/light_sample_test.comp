@@ -1,7 +1,7 @@
 #version 460
 // Test-only: samples the environment map and the emissive triangles with the renderer's own
 // environment.glsl and shading.glsl, and evaluates the pdfs the path tracer weighs those samples
-// with, for the chi-square tests in tests/sampling.rs. Modes (config.x):
+// with, for the chi-square tests in tests/sampling.rs. Modes (`mode`):
 //   0 env_sample                      -> (direction, pdf)
 //   1 env_pdf at directions[i]        -> (direction, pdf)
 //   2 pick_light                      -> (entry, its pmf, its triangle, 0)
@@ -9,32 +9,13 @@
 //   4 sample_emissive from the point  -> (world direction, pdf; 0 when it fails)
 //   5 the MIS light pdf pathtrace.comp gives a BSDF ray from the point along directions[i]
 //     -> (direction, pdf; 0 when the ray hits nothing that emits towards the point)
-// Variant 1 (config.w) makes modes 1 and 5 report a deliberately wrong pdf.
+// Variant 1 (`variant`) makes modes 1 and 5 report a deliberately wrong pdf.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/light_sample_test.glsl"
 
 layout(local_size_x = 64) in;
 
 const bool BECKMANN = false;
-const bool HAS_TEXTURES = false;
-const bool HAS_TRANSMISSION = false;
-const bool HAS_ALPHA = false;
-
-layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
-layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
-layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
-layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLightTri lights[]; };
-layout(set = 0, binding = 6, std430) readonly buffer Punctual { GpuLight punctual[]; };
-layout(set = 0, binding = 7, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
-layout(set = 0, binding = 8, std430) readonly buffer EnvMarginal { float env_marginal[]; };
-layout(set = 0, binding = 9, std430) readonly buffer EnvConditional { float env_conditional[]; };
-layout(set = 0, binding = 10, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 11, r32ui) uniform readonly uimageBuffer scene_texels;
-layout(set = 0, binding = 12, std430) readonly buffer Directions { vec4 directions[]; };
-layout(set = 0, binding = 13, std430) buffer Results { vec4 results[]; };
-layout(push_constant) uniform Push { LightTestParams params; };
 
 #include "random.glsl"
 #include "environment.glsl"
@@ -58,17 +39,17 @@ float mis_light_pdf(vec3 p, vec3 n, vec3 dir) {
     }
     float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
     // The wrong variant forgets the cosine at the light (an area density scaled by distance²).
-    return params.config.w == 1u ? light_pdf * abs(dot(ng, wo)) : light_pdf;
+    return params.variant == 1u ? light_pdf * abs(dot(ng, wo)) : light_pdf;
 }
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= params.config.y) {
+    if (i >= params.count) {
         return;
     }
-    uvec2 size = params.size.xy;
-    uint mode = params.config.x;
-    vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.config.z);
+    uvec2 size = params.env_size;
+    uint mode = params.mode;
+    vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
     if (mode == 0u) {
         float pdf;
         vec3 d = env_sample(u, size, pdf);
@@ -77,31 +58,31 @@ void main() {
         vec3 d = directions[i].xyz;
         float pdf = env_pdf(d, size);
         // The wrong variant forgets the 1 / sin(theta) of the (u, v) -> sphere Jacobian.
-        if (params.config.w == 1u) {
+        if (params.variant == 1u) {
             pdf *= sqrt(max(0.0, 1.0 - d.y * d.y));
         }
         results[i] = vec4(d, pdf);
     } else if (mode == 2u) {
-        uint k = pick_light(u.x, params.size.z);
+        uint k = pick_light(u.x, params.light_count);
         results[i] = vec4(float(k), lights[k].pmf, float(lights[k].tri), 0.0);
     } else if (mode == 3u) {
         results[i] = vec4(sample_triangle(u.xy), 0.0, 0.0);
     } else if (mode == 4u) {
-        vec3 p = params.point.xyz;
-        vec3 n = params.normal.xyz;
+        vec3 p = params.point;
+        vec3 n = params.normal;
         vec3 t;
         vec3 b;
         basis(n, t, b);
         vec3 wi_local;
         vec3 l_emit;
         float light_pdf;
-        if (sample_emissive(p, n, t, b, n, false, u.xyz, params.size.z, wi_local, l_emit, light_pdf)) {
+        if (sample_emissive(p, n, t, b, n, false, u.xyz, params.light_count, wi_local, l_emit, light_pdf)) {
             results[i] = vec4(wi_local.x * t + wi_local.y * b + wi_local.z * n, light_pdf);
         } else {
             results[i] = vec4(0.0);
         }
     } else {
         vec3 d = directions[i].xyz;
-        results[i] = vec4(d, mis_light_pdf(params.point.xyz, params.normal.xyz, d));
+        results[i] = vec4(d, mis_light_pdf(params.point, params.normal, d));
     }
 }

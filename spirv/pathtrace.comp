@@ -3,38 +3,10 @@
 // its second moment. Next-event estimation on emissive triangles, BSDF sampling, multiple
 // importance sampling (power or balance heuristic), Russian roulette.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/pathtrace.glsl"
 #include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-
-layout(constant_id = 0) const bool BECKMANN = false;
-layout(constant_id = 1) const bool POWER_HEURISTIC = true;
-layout(constant_id = 2) const bool HAS_LIGHTS = true;
-layout(constant_id = 3) const bool HAS_PUNCTUAL = true;
-layout(constant_id = 4) const bool HAS_ENV_MAP = false;
-layout(constant_id = 5) const bool HAS_TEXTURES = false;
-layout(constant_id = 6) const bool HAS_TRANSMISSION = false;
-layout(constant_id = 7) const bool HAS_ALPHA = false;
-
-layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
-layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
-layout(set = 0, binding = 2, std430) readonly buffer Triangles { GpuTriangle triangles[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Vertices { GpuVertex vertices[]; };
-layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLightTri lights[]; };
-layout(set = 0, binding = 6, std430) buffer Accum { vec4 accum[]; };
-layout(set = 0, binding = 7, std430) buffer Moment { vec4 moment[]; };
-layout(set = 0, binding = 8, std430) buffer Albedo { vec4 aov_albedo[]; };
-layout(set = 0, binding = 9, std430) buffer NormalDepth { vec4 aov_normal_depth[]; };
-layout(set = 0, binding = 10, std430) buffer Stats { PathStats stats; };
-layout(set = 0, binding = 11, std430) readonly buffer Punctual { GpuLight punctual[]; };
-layout(set = 0, binding = 12, std430) readonly buffer EnvTexels { vec4 env_texels[]; };
-layout(set = 0, binding = 13, std430) readonly buffer EnvMarginal { float env_marginal[]; };
-layout(set = 0, binding = 14, std430) readonly buffer EnvConditional { float env_conditional[]; };
-layout(set = 0, binding = 15, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 16, r32ui) uniform readonly uimageBuffer scene_texels;
-layout(push_constant) uniform Push { PathParams params; };
 
 #include "random.glsl"
 #include "camera.glsl"
@@ -64,26 +36,26 @@ uint nonfinite_bit(vec3 v, uint bit) {
 
 void main() {
     uvec2 pixel = tile_pixel();
-    uvec2 size = params.size_frame.xy;
+    uvec2 size = params.size;
     if (any(greaterThanEqual(pixel, size))) {
         return;
     }
     uint index = pixel.y * size.x + pixel.x;
-    uint sample_index = params.size_frame.z;
-    uint seed = params.size_frame.w;
-    uint max_bounces = params.settings.x;
-    uint rr_depth = params.settings.y;
+    uint sample_index = params.sample_index;
+    uint seed = params.seed;
+    uint max_bounces = params.max_bounces;
+    uint rr_depth = params.rr_depth;
 
-    vec4 jitter = rand4(pixel, sample_index, 0u, seed);
-    vec3 origin = params.cam_origin.xyz;
-    vec3 dir = camera_ray(params.cam_forward.xyz, params.cam_right.xyz, params.cam_up.xyz,
+    vec4 jitter = rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), seed);
+    vec3 origin = params.camera.origin;
+    vec3 dir = camera_ray(params.camera.forward, params.camera.right, params.camera.up,
                           vec2(pixel) + jitter.xy, size);
 
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     uint nonfinite = 0u;  // NONFINITE_* bits of the stages that produced a non-finite value
     float prev_pdf = 0.0;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
-    vec4 albedo = vec4(params.env.rgb, 0.0);
+    vec4 albedo = vec4(params.env, 0.0);
     vec4 normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
 
     for (uint depth = 0u;; ++depth) {
@@ -91,14 +63,14 @@ void main() {
         if (!bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
             if (HAS_ENV_MAP) {
                 float w = 1.0;
-                if (params.env_info.z != 0u && prev_pdf > 0.0) {
-                    w = mis_weight(prev_pdf, env_pdf(dir, params.env_info.xy));
+                if (params.env_nee != 0u && prev_pdf > 0.0) {
+                    w = mis_weight(prev_pdf, env_pdf(dir, params.env_size));
                 }
-                vec3 c = throughput * env_radiance(dir, params.env_info.xy) * params.env.rgb * w;
+                vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
                 radiance += c;
                 nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
             } else {
-                radiance += throughput * params.env.rgb;
+                radiance += throughput * params.env;
             }
             break;
         }
@@ -149,12 +121,12 @@ void main() {
         }
 
         // Next-event estimation: one emissive triangle by power, a uniform point on it.
-        if (HAS_LIGHTS && params.settings.z > 0u) {
-            vec4 u = rand4(pixel, sample_index, depth * 8u + 1u, seed);
+        if (HAS_LIGHTS && params.light_count > 0u) {
+            vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
             vec3 wi_local;
             vec3 l_emit;
             float light_pdf;
-            if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.settings.z, wi_local, l_emit,
+            if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
                                 light_pdf)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
@@ -166,22 +138,22 @@ void main() {
 
         // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
         if (HAS_PUNCTUAL) {
-            float u = rand4(pixel, sample_index, depth * 8u + 4u, seed).x;
-            vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.settings.w, u);
+            float u = rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
+            vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
             radiance += c;
             nonfinite |= nonfinite_bit(c, NONFINITE_PUNCTUAL);
         }
 
         // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
-        if (HAS_ENV_MAP && params.env_info.z != 0u) {
-            vec4 u = rand4(pixel, sample_index, depth * 8u + 3u, seed);
+        if (HAS_ENV_MAP && params.env_nee != 0u) {
+            vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
             float pdf;
-            vec3 wi = env_sample(u, params.env_info.xy, pdf);
+            vec3 wi = env_sample(u, params.env_size, pdf);
             vec3 wi_local;
             if (pdf > 0.0 && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, false, wi, wi_local)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = mis_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
-                vec3 le = env_radiance(wi, params.env_info.xy) * params.env.rgb;
+                vec3 le = env_radiance(wi, params.env_size) * params.env;
                 vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
                 radiance += c;
                 nonfinite |= nonfinite_bit(c, NONFINITE_ENV_NEE);
@@ -189,7 +161,7 @@ void main() {
         }
 
         // Continue the path by sampling the BSDF.
-        vec4 u = rand4(pixel, sample_index, depth * 8u + 2u, seed);
+        vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_BSDF), seed);
         vec3 wi_local;
         vec3 weight;
         float pdf;

@@ -2,15 +2,9 @@
 // Test-only: draws directions with the renderer's own sampling routines (sampling.glsl,
 // bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/sample_test.glsl"
 
 layout(local_size_x = 64) in;
-
-layout(constant_id = 0) const bool BECKMANN = false;
-
-layout(set = 0, binding = 0, std430) readonly buffer Directions { vec4 directions[]; };
-layout(set = 0, binding = 1, std430) buffer Results { vec4 results[]; };
-layout(push_constant) uniform Push { SampleTestParams params; };
 
 #include "random.glsl"
 #include "bsdf.glsl"
@@ -26,16 +20,16 @@ Surface dielectric(float alpha) {
     s.f90 = 1.0;
     s.alpha = alpha;
     s.transmission = 1.0;
-    s.eta = params.config.w == 3u ? 1.0 / 1.5 : 1.5;
-    s.thin = params.config.w == 4u;
+    s.eta = params.kind == 3u ? 1.0 / 1.5 : 1.5;
+    s.thin = params.kind == 4u;
     return s;
 }
 
 float sampler_pdf(vec3 wo, vec3 wi, float alpha) {
-    if (params.config.w == 0u) {
+    if (params.kind == 0u) {
         return pdf_cosine_hemisphere(wi);
     }
-    if (params.config.w >= 2u) {
+    if (params.kind >= 2u) {
         return bsdf_pdf(dielectric(alpha), wo, wi);
     }
     vec3 h = wo + wi;
@@ -45,15 +39,15 @@ float sampler_pdf(vec3 wo, vec3 wi, float alpha) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= params.config.y) {
+    if (i >= params.count) {
         return;
     }
-    vec3 wo = params.wo_alpha.xyz;
-    float alpha = params.wo_alpha.w;
-    if (params.config.x == 0u) {
-        vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.config.z);
+    vec3 wo = params.wo;
+    float alpha = params.alpha;
+    if (params.mode == 0u) {
+        vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
         vec3 wi;
-        if (params.config.w >= 2u) {
+        if (params.kind >= 2u) {
             vec3 weight;
             float pdf;
             // A failed sample (outside its lobe's side, or beyond the critical angle) reports pdf 0.
@@ -61,7 +55,7 @@ void main() {
                 results[i] = vec4(0.0);
                 return;
             }
-        } else if (params.config.w == 0u) {
+        } else if (params.kind == 0u) {
             wi = sample_cosine_hemisphere(u.xy);
         } else {
             wi = reflect(-wo, micro_sample(wo, alpha, u.xy));

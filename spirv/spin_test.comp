@@ -9,27 +9,22 @@
 // bound, so there the length of the hang comes from the number of workgroups. Its SIMD lanes
 // are 8 wide and a lane outside the workgroup never sees an atomic's result (it would spin to
 // that limit after the release): the workgroup size is a multiple of 8.
+#extension GL_GOOGLE_include_directive : require
+// MAX_ITERATIONS, a specialization constant, defaults to the bound where loops are not cut short:
+// 2^24 atomic reads per invocation.
+#include "kernel/spin_test.glsl"
 
 layout(local_size_x = 64) in;
-
-// The bound where loops are not cut short: 2^24 atomic reads per invocation.
-layout(constant_id = 0) const uint MAX_ITERATIONS = 0x1000000u;
-
-layout(set = 0, binding = 0, std430) coherent buffer Spin {
-    uint release;
-    uint spun;
-    uint released;
-};
 
 void main() {
     uint i = 0u;
     bool freed = false;
     for (; i < MAX_ITERATIONS; i++) {
-        if (atomicAdd(release, 0u) != 0u) {
+        if (atomicAdd(spin.release, 0u) != 0u) {
             freed = true;
             break;
         }
     }
-    atomicAdd(spun, i);
-    atomicMax(released, freed ? 1u : 0u);
+    atomicAdd(spin.spun, i);
+    atomicMax(spin.released, freed ? 1u : 0u);
 }

@@ -3,9 +3,9 @@
 //
 // AO(p) = cosine-weighted fraction of the hemisphere around the normal whose rays leave p
 // without meeting geometry within the radius r: the quantity rtao.comp estimates with rays.
-// SSAO estimates it from the depth buffer alone: `counts.x` directions of a fixed cosine-weighted
+// SSAO estimates it from the depth buffer alone: `samples` directions of a fixed cosine-weighted
 // kernel (stratified in cos²θ, golden-ratio azimuths), rotated about the normal per pixel by a
-// 4x4 tiled (Bayer) pattern that ao_blur.comp averages away. Along each direction, `counts.y`
+// 4x4 tiled (Bayer) pattern that ao_blur.comp averages away. Along each direction, `steps`
 // points at distances r·f², f = (s + j) / (steps - 1 + j) (so more points near p, the last at r).
 // A point is occluded when it lies behind the surface seen at its pixel (the depth buffer read as
 // the front of solid matter, tested against that surface's plane, so a point above the same tilted
@@ -13,14 +13,9 @@
 // of p (the range check). Points that project off screen, behind the camera, or onto a pixel
 // without a surface are unoccluded: the screen holds no information there.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/ssao.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-
-layout(set = 0, binding = 0, r32f) uniform readonly image2D gb_depth;
-layout(set = 0, binding = 1, rgba16f) uniform readonly image2D gb_normal;
-layout(set = 0, binding = 2, r32f) uniform writeonly image2D out_ao;
-layout(push_constant) uniform Push { AoParams params; };
 
 #include "random.glsl"
 #include "sampling.glsl"
@@ -31,21 +26,21 @@ const uint BAYER4[16] = uint[16](0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u,
 const float GOLDEN = 0.61803398874989485;
 
 vec3 position_at(ivec2 pixel, float depth) {
-    return gbuffer_position(params.cam_origin.xyz, params.cam_forward.xyz, params.cam_right.xyz,
-                            params.cam_up.xyz, pixel, params.size_frame.xy, depth);
+    return gbuffer_position(params.camera.origin, params.camera.forward, params.camera.right,
+                            params.camera.up, pixel, params.size, depth);
 }
 
 // Whether point q (world) is behind the depth buffer's surface, within range of p at depth d0.
 bool occluded(vec3 q, float d0, float radius, float bias) {
-    vec3 v = q - params.cam_origin.xyz;
-    float dq = dot(v, params.cam_forward.xyz);
+    vec3 v = q - params.camera.origin;
+    float dq = dot(v, params.camera.forward);
     if (dq <= 0.0) {
         return false;
     }
-    vec3 right = params.cam_right.xyz;
-    vec3 up = params.cam_up.xyz;
+    vec3 right = params.camera.right;
+    vec3 up = params.camera.up;
     vec2 ndc = vec2(dot(v, right) / dot(right, right), dot(v, up) / dot(up, up)) / dq;
-    vec2 size = vec2(params.size_frame.xy);
+    vec2 size = vec2(params.size);
     vec2 pos = vec2(0.5 * (ndc.x + 1.0), 0.5 * (1.0 - ndc.y)) * size;
     if (any(lessThan(pos, vec2(0.0))) || any(greaterThanEqual(pos, size))) {
         return false;
@@ -62,7 +57,7 @@ bool occluded(vec3 q, float d0, float radius, float bias) {
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    uvec2 size = params.size_frame.xy;
+    uvec2 size = params.size;
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;
     }
@@ -73,15 +68,15 @@ void main() {
     }
     vec3 p = position_at(pixel, d0);
     vec3 n = normalize(imageLoad(gb_normal, pixel).xyz);
-    float radius = params.radius_bias.x;
+    float radius = params.radius;
     // The bias grows with depth: float error of reconstructed positions.
-    float bias = params.radius_bias.y + 1e-5 * d0;
-    uint directions = max(params.counts.x, 1u);
-    uint steps = max(params.counts.y, 1u);
+    float bias = params.bias + 1e-5 * d0;
+    uint directions = max(params.samples, 1u);
+    uint steps = max(params.steps, 1u);
 
     // The tile's rotation about n, and its offset within each cos²θ stratum.
     float k = (float(BAYER4[(pixel.y & 3) * 4 + (pixel.x & 3)]) + 0.5) / 16.0;
-    vec4 kernel_seed = rand4(uvec2(0u), params.size_frame.z, 0u, params.size_frame.w);
+    vec4 kernel_seed = rand4(uvec2(0u), params.frame, 0u, params.seed);
     vec3 t;
     vec3 b;
     basis(n, t, b);

@@ -2,15 +2,11 @@
 // Writes a known function of the invocation id into an rgba32f image. The foundation test
 // recomputes it on the CPU and expects every texel bit-exact.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/test_pattern.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 // Multiplies the hash channel: proves specialization constants reach the kernel.
-layout(constant_id = 0) const uint PATTERN_MULTIPLIER = 1;
-
-layout(set = 0, binding = 0, rgba32f) uniform writeonly image2D out_image;
-layout(push_constant) uniform Push { PatternParams params; };
 
 uint pattern_hash(uint x) {
     x ^= x >> 16;

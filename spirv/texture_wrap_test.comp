@@ -4,16 +4,10 @@
 // out[2k] = repeat, out[2k + 1] = mirror. tests/texture_wrap.rs compares them with Rust's exact
 // rem_euclid.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/texture_wrap_test.glsl"
 
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer Input { ivec2 cases[]; };
-layout(set = 0, binding = 1, std430) buffer Output { int wrapped[]; };
-// What texture.glsl's sampling functions read (unused here).
-layout(set = 0, binding = 2, std430) readonly buffer Textures { GpuTexture textures[]; };
-layout(set = 0, binding = 3, r32ui) uniform readonly uimageBuffer scene_texels;
-layout(push_constant) uniform Push { BufferTestParams params; };
 
 #include "texture.glsl"
 

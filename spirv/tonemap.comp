@@ -2,13 +2,9 @@
 // Display transform of a linear image: exposure, a tone curve (src/tonemap.rs is the reference
 // twin: clamp, Hill's ACES fit, Khronos PBR Neutral), sRGB encoding, into an 8-bit image.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/tonemap.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-
-layout(set = 0, binding = 0, rgba32f) uniform readonly image2D src;
-layout(set = 0, binding = 1, rgba8) uniform writeonly image2D dst;
-layout(push_constant) uniform Push { TonemapParams params; };
 
 vec3 aces_fit(vec3 v) {
     return (v * (v + 0.0245786) - 0.000090537) / (v * (0.983729 * v + 0.4329510) + 0.238081);
@@ -44,7 +40,7 @@ vec3 srgb_encode(vec3 c) {
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(uvec2(pixel), params.size.xy))) {
+    if (any(greaterThanEqual(uvec2(pixel), params.size))) {
         return;
     }
     vec4 c = imageLoad(src, pixel);

@@ -2,17 +2,9 @@
 // Traces a buffer of rays through the BVH: closest hit (TRACE_ANY == 0) or any hit (1).
 // Used by the traversal tests and by umbra-bench's ray-throughput mode.
 #extension GL_GOOGLE_include_directive : require
-#include "layout.glsl"
+#include "kernel/trace.glsl"
 
 layout(local_size_x = 64) in;
-
-layout(constant_id = 0) const bool TRACE_ANY = false;
-
-layout(set = 0, binding = 0, rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
-layout(set = 0, binding = 1, rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
-layout(set = 0, binding = 2, std430) readonly buffer Rays { TraceRay rays[]; };
-layout(set = 0, binding = 3, std430) buffer Hits { TraceHit hits[]; };
-layout(push_constant) uniform Push { TraceParams params; };
 
 #include "bvh.glsl"
 

@@ -42,9 +42,8 @@ use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
-use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass, ResolvePass};
+use crate::passes::pathtrace::{Heuristic, Microfacet, PathSettings, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
-use crate::render::PathSettings;
 use crate::scene::{Camera, Scene};
 use crate::vk::{raw, Context};
 
@@ -142,7 +141,7 @@ impl Renderer {
         }
         let mut params = PathTracePass::params(&self.scene, camera, settings);
         for sample in first..first + count {
-            params.size_frame[2] = sample;
+            params.sample_index = sample;
             self.path.record(&self.ctx, cmd, &self.scene, target, &params)?;
         }
         Ok(())

@@ -3,9 +3,7 @@
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
-use umbra::vk::{
-    self, raw, ComputePipeline, Context, ContextDesc, Descriptor, GpuTimer, Image, PipelineDesc,
-};
+use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
 
 #[derive(Parser)]
 #[command(name = "umbra", version, about = "Physically based rendering with Vulkan compute kernels")]
@@ -416,27 +414,21 @@ fn run(cli: Cli) -> Result<()> {
         Command::Pattern { size: (w, h), output, exr } => {
             let ctx = Context::new(&ContextDesc::default())?;
             let image = Image::storage_2d(&ctx, "pattern", w, h, raw::Format::R32G32B32A32_SFLOAT)?;
-            let pipeline = ComputePipeline::new(
-                &ctx,
-                "test_pattern",
-                &PipelineDesc {
-                    bindings: &[raw::DescriptorType::STORAGE_IMAGE],
-                    push_constant_size: 16,
-                    specialization: &[(0, 1)],
-                },
-            )?;
+            use umbra::gpu::kernels::test_pattern;
+            let pipeline = umbra::gpu::Pipeline::<test_pattern::Kernel>::plain(&ctx)?;
             let mut timer = GpuTimer::new(&ctx, 1)?;
             ctx.submit(|cmd| {
                 timer.reset(cmd);
                 image.init_general(&ctx, cmd);
                 timer.begin(cmd, "test_pattern")?;
-                pipeline.bind(cmd);
-                pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image)])?;
-                pipeline.push_constants(
+                let params = umbra::gpu::layout::PatternParams { size: [w, h], seed: 0, frame: 0 };
+                pipeline.record(
                     cmd,
-                    &umbra::gpu::layout::PatternParams { size: [w, h], seed: 0, frame: 0 },
+                    &test_pattern::Resources { out_image: &image.view },
+                    &params,
+                    [w, h, 1],
+                    [8, 8, 1],
                 )?;
-                pipeline.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
                 timer.end(cmd)
             })?;
             for t in timer.read()? {

@@ -7,56 +7,11 @@ use crate::passes::ao::{ao_params, AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
 use crate::passes::ibl::{IblResources, IblSettings};
-use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass};
+pub use crate::passes::pathtrace::PathSettings;
+use crate::passes::pathtrace::{PathTarget, PathTracePass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
 use crate::vk::{raw, Context, GpuTimer, Image};
-use glam::Vec3;
-
-/// Settings of a path-traced render.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PathSettings {
-    /// Width and height in pixels.
-    pub size: (u32, u32),
-    /// Samples per pixel.
-    pub spp: u32,
-    /// Scattering events per path (1 = direct lighting only).
-    pub max_bounces: u32,
-    /// Russian roulette starts once a path has scattered this many times.
-    pub rr_depth: u32,
-    /// Seed of the counter-based random numbers.
-    pub seed: u32,
-    /// Microfacet distribution.
-    pub microfacet: Microfacet,
-    /// MIS heuristic.
-    pub heuristic: Heuristic,
-    /// Constant environment radiance (linear rgb) seen by rays that leave the scene, or, when
-    /// the scene has an environment map, the map's multiplier.
-    pub env: [f32; 3],
-    /// Sample the environment map for next-event estimation (with MIS); off leaves only BSDF
-    /// sampling to find it (a check of the two strategies against each other).
-    pub env_nee: bool,
-    /// Stop before `spp` once [`PathImage::relative_error`] is at most this (checked after each
-    /// batch, from 16 samples per pixel on).
-    pub target_error: Option<f32>,
-}
-
-impl Default for PathSettings {
-    fn default() -> Self {
-        Self {
-            size: (256, 256),
-            spp: 64,
-            max_bounces: 8,
-            rr_depth: 3,
-            seed: 0,
-            microfacet: Microfacet::Ggx,
-            heuristic: Heuristic::Power,
-            env: [0.0; 3],
-            env_nee: true,
-            target_error: None,
-        }
-    }
-}
 
 /// A path-traced image, linear, row-major from the top left.
 #[derive(Debug, Clone)]
@@ -115,21 +70,6 @@ fn relative_error(mean: &[[f32; 4]], moment: &[[f32; 4]], spp: u32) -> f32 {
 /// The ε of the relative MSE, var / (mean² + ε): keeps dark pixels from dominating.
 const RELATIVE_EPSILON: f64 = 0.01;
 
-/// The pinhole camera as `pathtrace.comp` wants it, for an image of `size`.
-pub fn camera_params(camera: &Camera, (w, h): (u32, u32)) -> ([f32; 4], [f32; 4], [f32; 4], [f32; 4]) {
-    let forward = Vec3::from(camera.forward).normalize();
-    let right = forward.cross(Vec3::from(camera.up)).normalize();
-    let up = right.cross(forward);
-    let tan = (camera.yfov * 0.5).tan();
-    let aspect = w as f32 / h as f32;
-    (
-        Vec3::from(camera.position).extend(0.0).into(),
-        forward.extend(0.0).into(),
-        (right * tan * aspect).extend(0.0).into(),
-        (up * tan).extend(0.0).into(),
-    )
-}
-
 /// Path traces `settings.spp` samples per pixel, calling `progress(done, total)` after each
 /// submitted batch.
 pub fn path_trace(
@@ -157,7 +97,7 @@ pub fn path_trace(
             timer.reset(cmd);
             timer.begin(cmd, "pathtrace")?;
             for s in done..done + count {
-                params.size_frame[2] = s;
+                params.sample_index = s;
                 pass.record(ctx, cmd, scene, &target, &params)?;
             }
             timer.end(cmd)

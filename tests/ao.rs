@@ -13,9 +13,10 @@ mod common;
 
 use common::Gpu;
 use glam::Vec3;
+use umbra::gpu::layout::GpuCamera;
 use umbra::gpu::scene::{GpuScene, SceneArrays};
 use umbra::passes::ao::AoSettings;
-use umbra::render::{ambient_occlusion, camera_params, AoImage, AoMethod};
+use umbra::render::{ambient_occlusion, AoImage, AoMethod};
 use umbra::scene::{AlphaMode, Camera, Material, Scene};
 
 /// A scene of quads (one grey diffuse material), built in memory.
@@ -90,8 +91,9 @@ fn camera(position: Vec3, target: Vec3, up: Vec3, yfov_degrees: f32) -> Camera {
 /// reconstructed on the CPU from the G-buffer's depth as the kernels do.
 fn surfaces(image: &AoImage, cam: &Camera) -> Vec<Option<(Vec3, Vec3)>> {
     let (w, h) = image.size;
-    let (o, f, r, u) = camera_params(cam, image.size);
-    let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+    let c = GpuCamera::new(cam, image.size);
+    let (o, f, r, u) = (c.origin, c.forward, c.right, c.up);
+    let v = Vec3::from;
     (0..w * h)
         .map(|i| {
             let depth = image.gbuffer.depth[i as usize];

@@ -3,20 +3,14 @@
 mod common;
 
 use common::Gpu;
+use umbra::gpu::kernels::{test_buffer, test_pattern};
 use umbra::gpu::layout::{BufferTestParams, PatternParams};
+use umbra::gpu::Pipeline;
 use umbra::vk::{raw, Buffer, ComputePipeline, Descriptor, GpuTimer, Image, PipelineDesc};
 
-fn pattern_pipeline(gpu: &Gpu, multiplier: u32) -> ComputePipeline {
-    ComputePipeline::new(
-        gpu,
-        "test_pattern",
-        &PipelineDesc {
-            bindings: &[raw::DescriptorType::STORAGE_IMAGE],
-            push_constant_size: std::mem::size_of::<PatternParams>() as u32,
-            specialization: &[(0, multiplier)],
-        },
-    )
-    .expect("test_pattern pipeline")
+fn pattern_pipeline(gpu: &Gpu, multiplier: u32) -> Pipeline<test_pattern::Kernel> {
+    Pipeline::new(gpu, &test_pattern::Spec { pattern_multiplier: multiplier }, None)
+        .expect("test_pattern pipeline")
 }
 
 /// The CPU twin of `pattern_hash` in test_pattern.comp.
@@ -39,10 +33,13 @@ fn pattern_1080p_reads_back_exactly() {
     let pipeline = pattern_pipeline(&gpu, multiplier);
     gpu.submit(|cmd| {
         image.init_general(&gpu, cmd);
-        pipeline.bind(cmd);
-        pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image)])?;
-        pipeline.push_constants(cmd, &params)?;
-        pipeline.dispatch(cmd, [w, h, 1], [8, 8, 1])
+        pipeline.record(
+            cmd,
+            &test_pattern::Resources { out_image: &image.view },
+            &params,
+            [w, h, 1],
+            [8, 8, 1],
+        )
     })
     .unwrap();
     let texels: Vec<f32> = image.read(&gpu).unwrap();
@@ -77,10 +74,14 @@ fn timestamps_give_positive_durations() {
         image.init_general(&gpu, cmd);
         for pass in ["first", "second"] {
             timer.begin(cmd, pass)?;
-            pipeline.bind(cmd);
-            pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image)])?;
-            pipeline.push_constants(cmd, &PatternParams { size: [w, h], seed: 1, frame: 0 })?;
-            pipeline.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
+            let params = PatternParams { size: [w, h], seed: 1, frame: 0 };
+            pipeline.record(
+                cmd,
+                &test_pattern::Resources { out_image: &image.view },
+                &params,
+                [w, h, 1],
+                [8, 8, 1],
+            )?;
             timer.end(cmd)?;
             umbra::vk::barrier::compute_to_compute(&gpu, cmd);
         }
@@ -106,22 +107,11 @@ fn buffers_round_trip_through_staging_and_a_kernel() {
     assert_eq!(src.read::<u32>(&gpu).unwrap(), input, "staging upload then readback");
 
     let dst = Buffer::upload(&gpu, "output", &vec![0u32; count as usize], usage).unwrap();
-    let pipeline = ComputePipeline::new(
-        &gpu,
-        "test_buffer",
-        &PipelineDesc {
-            bindings: &[raw::DescriptorType::STORAGE_BUFFER; 2],
-            push_constant_size: 8,
-            specialization: &[],
-        },
-    )
-    .unwrap();
+    let pipeline = Pipeline::<test_buffer::Kernel>::plain(&gpu).unwrap();
     let params = BufferTestParams { count, add: 17 };
     gpu.submit(|cmd| {
-        pipeline.bind(cmd);
-        pipeline.push_descriptors(cmd, &[Descriptor::Buffer(&src), Descriptor::Buffer(&dst)])?;
-        pipeline.push_constants(cmd, &params)?;
-        pipeline.dispatch(cmd, [count, 1, 1], [64, 1, 1])
+        let resources = test_buffer::Resources { values_in: &src, values_out: &dst };
+        pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
     })
     .unwrap();
     let out: Vec<u32> = dst.read(&gpu).unwrap();
@@ -134,7 +124,14 @@ fn binding_mistakes_are_errors_not_silent() {
     let gpu = Gpu::new();
     let image = Image::storage_2d(&gpu, "img", 8, 8, raw::Format::R32G32B32A32_SFLOAT).unwrap();
     let buffer = Buffer::upload(&gpu, "buf", &[0u32; 16], raw::BufferUsageFlags::STORAGE_BUFFER).unwrap();
-    let pipeline = pattern_pipeline(&gpu, 1);
+    // The untyped pipeline of the Vulkan layer (what the typed one is built on) checks what it is
+    // given against its layout.
+    let desc = PipelineDesc {
+        bindings: &[(0, raw::DescriptorType::STORAGE_IMAGE)],
+        push_constant_size: std::mem::size_of::<PatternParams>() as u32,
+        specialization: &[(8, 1)],
+    };
+    let pipeline = ComputePipeline::new(&gpu, "test_pattern", &desc).unwrap();
     gpu.submit(|cmd| {
         pipeline.bind(cmd);
         let wrong_type = pipeline.push_descriptors(cmd, &[Descriptor::Buffer(&buffer)]);
@@ -196,10 +193,9 @@ fn contexts_coexist_across_threads() {
                 let pipeline = pattern_pipeline(&gpu, 1);
                 gpu.submit(|cmd| {
                     image.init_general(&gpu, cmd);
-                    pipeline.bind(cmd);
-                    pipeline.push_descriptors(cmd, &[Descriptor::StorageImage(&image)])?;
-                    pipeline.push_constants(cmd, &PatternParams { size: [16, 16], seed, frame: 0 })?;
-                    pipeline.dispatch(cmd, [16, 16, 1], [8, 8, 1])
+                    let params = PatternParams { size: [16, 16], seed, frame: 0 };
+                    let resources = test_pattern::Resources { out_image: &image.view };
+                    pipeline.record(cmd, &resources, &params, [16, 16, 1], [8, 8, 1])
                 })
                 .unwrap();
                 let texels: Vec<f32> = image.read(&gpu).unwrap();

@@ -6,9 +6,10 @@ mod common;
 use common::Gpu;
 use glam::Vec3;
 use umbra::bvh::traverse::Ray;
+use umbra::gpu::layout::GpuCamera;
 use umbra::gpu::scene::{GpuScene, SceneArrays};
 use umbra::passes::gbuffer::{GBuffer, GBufferPass, GBUFFER_NO_SURFACE};
-use umbra::render::{camera_params, hybrid, path_trace, HybridSettings, PathSettings};
+use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
 use umbra::scene::Scene;
 
 fn scene_file(name: &str) -> Scene {
@@ -17,15 +18,11 @@ fn scene_file(name: &str) -> Scene {
 }
 
 /// The centre ray of `pixel`, computed on the CPU from the same camera parameters.
-fn centre_ray(
-    params: &([f32; 4], [f32; 4], [f32; 4], [f32; 4]),
-    (w, h): (u32, u32),
-    (x, y): (u32, u32),
-) -> Ray {
-    let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+fn centre_ray(c: &GpuCamera, (w, h): (u32, u32), (x, y): (u32, u32)) -> Ray {
+    let v = Vec3::from;
     let ndc = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0, 1.0 - 2.0 * (y as f32 + 0.5) / h as f32);
-    let dir = (v(params.1) + ndc.0 * v(params.2) + ndc.1 * v(params.3)).normalize();
-    Ray { origin: v(params.0), dir, tmin: 0.0, tmax: f32::INFINITY }
+    let dir = (v(c.forward) + ndc.0 * v(c.right) + ndc.1 * v(c.up)).normalize();
+    Ray { origin: v(c.origin), dir, tmin: 0.0, tmax: f32::INFINITY }
 }
 
 /// Every pixel of the G-buffer of the sphere grid (and of the textured scene) agrees with a CPU
@@ -46,7 +43,7 @@ fn gbuffer_matches_cpu_traversal() {
         gpu.submit(|cmd| pass.record(&gpu, cmd, &gpu_scene, &target.views(), &params)).unwrap();
         let data = target.read(&gpu).unwrap();
 
-        let cam = camera_params(&camera, size);
+        let cam = GpuCamera::new(&camera, size);
         let forward = Vec3::from(camera.forward).normalize();
         let (mut surfaces, mut mismatched) = (0, Vec::new());
         for y in 0..size.1 {

@@ -326,8 +326,9 @@ fn render_lookups(
     }
     let settings = PathSettings { size, spp, max_bounces: 1, env, ..Default::default() };
     let pt = path_trace(gpu, &gpu_scene, &camera, &settings, |_, _| {}).unwrap();
-    let cam = umbra::render::camera_params(&camera, size);
-    let v = |a: [f32; 4]| glam::Vec3::new(a[0], a[1], a[2]);
+    let c = umbra::gpu::layout::GpuCamera::new(&camera, size);
+    let cam = (c.origin, c.forward, c.right, c.up);
+    let v = glam::Vec3::from;
     let view = (0..size.0 * size.1)
         .map(|i| {
             let (x, y) = (i % size.0, i / size.0);
@@ -596,8 +597,9 @@ fn white_furnace_split_sum_matches_path_tracer() {
         };
         // E box-filtered over each pixel as the path tracer's pixels are (8×8 rays against the
         // exact sphere): Fresnel's curvature in n·v makes the centre value alone ~5e-4 low.
-        let cam = umbra::render::camera_params(&scene.camera(None).unwrap(), size);
-        let c64 = |a: [f32; 4]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+        let c = umbra::gpu::layout::GpuCamera::new(&scene.camera(None).unwrap(), size);
+        let cam = (c.origin, c.forward, c.right, c.up);
+        let c64 = |a: [f32; 3]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
         let (origin, forward, right, up) = (c64(cam.0), c64(cam.1), c64(cam.2), c64(cam.3));
         let exact_box = |i: usize| {
             let (x, y) = ((i % size.0 as usize) as f64, (i / size.0 as usize) as f64);

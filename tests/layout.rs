@@ -1,8 +1,16 @@
-//! Host/GPU struct layouts: every struct of `spirv/include/layout.glsl` against its Rust twin,
-//! read from the compiled SPIR-V with naga.
+//! The Rust/GLSL interface, read back from the compiled SPIR-V with naga: every struct of
+//! `src/gpu/interface.rs` against its Rust twin (offsets, sizes, array strides), and every
+//! shipping kernel's bindings (set, number, name, kind, element type or format, access), push
+//! constants and specialization constants against the kernel's interface. The GLSL side is
+//! generated from the same definition; this checks the generator and the kernels (a kernel cannot
+//! add a binding of its own by hand) and shows that swapping two same-typed buffers is caught.
 
-use naga::{ArraySize, Module, TypeInner};
+use naga::{AddressSpace, ArraySize, ImageClass, ImageDimension, Module, StorageAccess, TypeInner};
 use std::collections::{BTreeSet, HashMap};
+use umbra::gpu::kernel::{
+    Access, BindingDesc, BindingKind, KernelInterface, FIRST_KERNEL_SPEC_ID, SCENE_FEATURES,
+};
+use umbra::gpu::kernels;
 use umbra::gpu::layout::{gpu_layouts, StructLayout};
 use umbra::kernels::KERNELS;
 
@@ -11,6 +19,11 @@ fn parse(words: &[u32]) -> Result<Module, String> {
     let bytes: &[u8] = bytemuck::cast_slice(&words);
     naga::front::spv::parse_u8_slice(bytes, &naga::front::spv::Options::default())
         .map_err(|e| format!("{e:?}"))
+}
+
+fn module(name: &str) -> Module {
+    let kernel = umbra::kernels::kernel(name).unwrap_or_else(|| panic!("kernel {name} is embedded"));
+    parse(kernel.words()).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// naga has no texel buffers (its `ImageDimension` lacks SPIR-V's `Buffer`), which every kernel
@@ -55,7 +68,7 @@ fn compare(module: &Module, host: &[StructLayout]) -> (Vec<String>, BTreeSet<Str
     }
     let mut errors = Vec::new();
     let mut strided = BTreeSet::new();
-    for (handle, ty) in module.types.iter() {
+    for (_, ty) in module.types.iter() {
         match &ty.inner {
             TypeInner::Struct { members, .. } => {
                 let Some(h) = ty.name.as_deref().and_then(|n| by_name.get(n)) else { continue };
@@ -68,7 +81,6 @@ fn compare(module: &Module, host: &[StructLayout]) -> (Vec<String>, BTreeSet<Str
                 if gpu != cpu {
                     errors.push(format!("{}: GPU (name, offset, size) {gpu:?} != host {cpu:?}", h.name));
                 }
-                let _ = handle;
             }
             TypeInner::Array { base, stride, size } => {
                 let base_ty = &module.types[*base];
@@ -88,15 +100,158 @@ fn compare(module: &Module, host: &[StructLayout]) -> (Vec<String>, BTreeSet<Str
     (errors, strided)
 }
 
-/// Struct names declared in `spirv/include/layout.glsl`.
-fn glsl_struct_names() -> BTreeSet<String> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/include/layout.glsl");
-    let text = std::fs::read_to_string(path).expect("layout.glsl is readable");
-    text.lines()
-        .filter_map(|l| l.trim().strip_prefix("struct "))
-        .filter_map(|rest| rest.split(|c: char| !c.is_alphanumeric() && c != '_').next())
-        .map(str::to_string)
-        .collect()
+/// A type as GLSL names it in `interface.rs`: a struct's name, `float`, `uvec4`, ...
+fn glsl_type(module: &Module, ty: naga::Handle<naga::Type>) -> String {
+    let t = &module.types[ty];
+    let scalar = |s: &naga::Scalar| match s.kind {
+        naga::ScalarKind::Float => ("float", ""),
+        naga::ScalarKind::Uint => ("uint", "u"),
+        naga::ScalarKind::Sint => ("int", "i"),
+        _ => ("?", "?"),
+    };
+    match &t.inner {
+        TypeInner::Struct { .. } => t.name.clone().unwrap_or_default(),
+        TypeInner::Scalar(s) => scalar(s).0.to_string(),
+        TypeInner::Vector { size, scalar: s } => format!("{}vec{}", scalar(s).1, *size as u8),
+        other => format!("{other:?}"),
+    }
+}
+
+/// The GLSL format qualifier of a naga storage format.
+fn glsl_format(format: naga::StorageFormat) -> &'static str {
+    use naga::StorageFormat as F;
+    match format {
+        F::R32Float => "r32f",
+        F::R32Uint => "r32ui",
+        F::Rg32Uint => "rg32ui",
+        F::Rgba8Unorm => "rgba8",
+        F::Rgba16Float => "rgba16f",
+        F::Rgba32Float => "rgba32f",
+        F::Rgba32Uint => "rgba32ui",
+        _ => "(other)",
+    }
+}
+
+/// What a kernel's access qualifier allows.
+fn allowed(access: Access) -> StorageAccess {
+    match access {
+        Access::ReadOnly => StorageAccess::LOAD,
+        Access::WriteOnly => StorageAccess::STORE,
+        Access::ReadWrite | Access::Coherent => StorageAccess::LOAD | StorageAccess::STORE,
+    }
+}
+
+/// Differences between a kernel's compiled bindings, push constants and specialization constants
+/// and `bindings` (its interface's numbered bindings, or a deliberately altered copy).
+fn check_interface(
+    module: &Module,
+    interface: &KernelInterface,
+    bindings: &[(u32, BindingDesc)],
+) -> Vec<String> {
+    let name = interface.name;
+    let mut errors = Vec::new();
+    let expected: HashMap<u32, &BindingDesc> = bindings.iter().map(|(n, b)| (*n, b)).collect();
+    let mut seen = BTreeSet::new();
+    let mut push_blocks = 0;
+    for (_, var) in module.global_variables.iter() {
+        if var.space == AddressSpace::Immediate {
+            push_blocks += 1;
+            let found = match &module.types[var.ty].inner {
+                TypeInner::Struct { members, .. } if members.len() == 1 => {
+                    (members[0].name.clone().unwrap_or_default(), glsl_type(module, members[0].ty))
+                }
+                other => (String::new(), format!("{other:?}")),
+            };
+            if found != ("params".to_string(), interface.push_type.to_string()) {
+                errors.push(format!(
+                    "{name}: push constants {found:?}, interface says params: {}",
+                    interface.push_type
+                ));
+            }
+            continue;
+        }
+        let Some(rb) = &var.binding else { continue };
+        if rb.group != 0 {
+            errors.push(format!("{name}: a binding in set {} (umbra uses set 0 only)", rb.group));
+            continue;
+        }
+        seen.insert(rb.binding);
+        let Some(b) = expected.get(&rb.binding) else {
+            errors.push(format!("{name}: binding {} ({:?}) is not in the interface", rb.binding, var.name));
+            continue;
+        };
+        let ty = &module.types[var.ty];
+        let (found_name, kind, arg, access) = match (&var.space, &ty.inner) {
+            (AddressSpace::Storage { access }, TypeInner::Struct { members, .. }) if members.len() == 1 => {
+                let m = &members[0];
+                let (kind, arg) = match module.types[m.ty].inner {
+                    TypeInner::Array { base, size: ArraySize::Dynamic, .. } => {
+                        (BindingKind::Buffer, glsl_type(module, base))
+                    }
+                    _ => (BindingKind::BufferStruct, glsl_type(module, m.ty)),
+                };
+                (m.name.clone().unwrap_or_default(), kind, arg, *access)
+            }
+            (
+                AddressSpace::Handle,
+                TypeInner::Image { dim, class: ImageClass::Storage { format, access }, .. },
+            ) => {
+                let kind = if *dim == ImageDimension::D1 { BindingKind::Texels } else { BindingKind::Image };
+                (var.name.clone().unwrap_or_default(), kind, glsl_format(*format).to_string(), *access)
+            }
+            (space, inner) => {
+                errors.push(format!("{name}: binding {}: unexpected {space:?} {inner:?}", rb.binding));
+                continue;
+            }
+        };
+        let got = (found_name.as_str(), kind, arg.as_str());
+        if got != (b.name, b.kind, b.arg) {
+            errors.push(format!(
+                "{name}: binding {} is {got:?} in the kernel, {:?} in the interface",
+                rb.binding,
+                (b.name, b.kind, b.arg)
+            ));
+        }
+        if !allowed(b.access).contains(access) {
+            errors.push(format!(
+                "{name}: binding {} ({}) is {access:?}, interface says {:?}",
+                rb.binding, b.name, b.access
+            ));
+        }
+    }
+    // A binding the kernel never reads may be left out of the SPIR-V; the kernel's own ones are
+    // all used.
+    let first_own = interface.first_own_binding();
+    for (n, b) in bindings {
+        if *n >= first_own && !seen.contains(n) {
+            errors.push(format!("{name}: binding {n} ({}) is missing from the kernel", b.name));
+        }
+    }
+    if push_blocks != (interface.push_size > 0) as usize {
+        errors.push(format!("{name}: {push_blocks} push-constant blocks for {} bytes", interface.push_size));
+    }
+    // Specialization constants by name and id.
+    let mut spec: Vec<(u16, String)> = SCENE_FEATURES
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| interface.features.contains(f))
+        .map(|(i, f)| (i as u16, format!("HAS_{}", f.to_uppercase())))
+        .collect();
+    for (i, s) in interface.spec.iter().enumerate() {
+        spec.push(((FIRST_KERNEL_SPEC_ID as usize + i) as u16, s.name.to_uppercase()));
+    }
+    let found: BTreeSet<(u16, String)> = module
+        .overrides
+        .iter()
+        .filter_map(|(_, o)| Some((o.id?, o.name.clone().unwrap_or_default())))
+        .collect();
+    // An unused constant may be left out; every one present must be the interface's.
+    for f in &found {
+        if !spec.contains(f) {
+            errors.push(format!("{name}: specialization constant {f:?} is not in the interface {spec:?}"));
+        }
+    }
+    errors
 }
 
 #[test]
@@ -110,8 +265,6 @@ fn every_kernel_parses_with_naga() {
 fn gpu_structs_match_host_layouts() {
     let host = gpu_layouts();
     let host_names: BTreeSet<String> = host.iter().map(|s| s.name.to_string()).collect();
-    assert_eq!(glsl_struct_names(), host_names, "layout.glsl structs and src/gpu/layout.rs twins differ");
-
     let mut strided = BTreeSet::new();
     for k in KERNELS {
         let module = parse(k.words()).unwrap_or_else(|e| panic!("{}: {e}", k.name));
@@ -119,13 +272,30 @@ fn gpu_structs_match_host_layouts() {
         assert!(errors.is_empty(), "kernel {}: {errors:#?}", k.name);
         strided.extend(proven);
     }
-    assert_eq!(strided, host_names, "layout_check.comp must declare a runtime array of every shared struct");
+    assert_eq!(
+        strided, host_names,
+        "the generated layout_check kernel declares a runtime array of every struct"
+    );
+}
+
+/// Every kernel of `spirv/` has an interface, and every interface's kernel matches it.
+#[test]
+fn every_kernel_matches_its_interface() {
+    let interfaces: BTreeSet<&str> = kernels::ALL.iter().map(|k| k.name).collect();
+    let shipped: BTreeSet<&str> = KERNELS.iter().map(|k| k.name).filter(|n| *n != "layout_check").collect();
+    assert_eq!(interfaces, shipped, "kernels and interfaces differ");
+    let mut errors = Vec::new();
+    for interface in kernels::ALL {
+        let module = module(interface.name);
+        errors.extend(check_interface(&module, interface, &interface.numbered_bindings()));
+    }
+    assert!(errors.is_empty(), "{errors:#?}");
 }
 
 /// The check must fail when only one side changes.
 #[test]
 fn layout_check_detects_one_sided_changes() {
-    let module = parse(umbra::kernels::kernel("layout_check").expect("layout_check kernel").words()).unwrap();
+    let module = module("layout_check");
     let host = gpu_layouts();
     assert!(compare(&module, &host).0.is_empty());
 
@@ -140,4 +310,57 @@ fn layout_check_detects_one_sided_changes() {
     let mut resized = host.clone();
     resized[0].size += 4;
     assert!(!compare(&module, &resized).0.is_empty(), "a padded host struct went unnoticed");
+}
+
+/// Two buffers of one type swapped on one side (the path tracer's `accum` and `moment`, the
+/// scene's `env_marginal` and `env_conditional`), a texel buffer's format changed, a kernel's own
+/// binding moved: each is reported.
+#[test]
+fn interface_check_detects_swapped_bindings() {
+    let swapped = |interface: &KernelInterface, a: &str, b: &str| {
+        let mut bindings = interface.numbered_bindings();
+        let i = bindings.iter().position(|(_, d)| d.name == a).unwrap();
+        let j = bindings.iter().position(|(_, d)| d.name == b).unwrap();
+        let (ni, nj) = (bindings[i].0, bindings[j].0);
+        bindings[i].0 = nj;
+        bindings[j].0 = ni;
+        bindings
+    };
+    let pathtrace = module("pathtrace");
+    let interface = &kernels::pathtrace::INTERFACE;
+    assert!(check_interface(&pathtrace, interface, &interface.numbered_bindings()).is_empty());
+    for (a, b) in
+        [("accum", "moment"), ("env_marginal", "env_conditional"), ("aov_albedo", "aov_normal_depth")]
+    {
+        let errors = check_interface(&pathtrace, interface, &swapped(interface, a, b));
+        assert!(
+            errors.iter().any(|e| e.contains(a)) && errors.iter().any(|e| e.contains(b)),
+            "{a}/{b}: {errors:?}"
+        );
+    }
+
+    let deferred = module("deferred");
+    let interface = &kernels::deferred::INTERFACE;
+    let errors = check_interface(&deferred, interface, &swapped(interface, "gb_normal", "gb_base"));
+    assert!(!errors.is_empty(), "two rgba16f images swapped went unnoticed");
+
+    let mut bindings = interface.numbered_bindings();
+    bindings.iter_mut().find(|(_, b)| b.name == "scene_texels").unwrap().1.arg = "rgba32ui";
+    assert!(
+        !check_interface(&deferred, interface, &bindings).is_empty(),
+        "a texel format change went unnoticed"
+    );
+
+    let mut bindings = interface.numbered_bindings();
+    bindings.last_mut().unwrap().0 += 1;
+    assert!(!check_interface(&deferred, interface, &bindings).is_empty(), "a moved binding went unnoticed");
+
+    // The path tracer's two specialization constants in the other order (ids swapped).
+    let pt = &kernels::pathtrace::INTERFACE;
+    let reordered = KernelInterface { spec: vec![pt.spec[1], pt.spec[0]].leak(), ..*pt };
+    let errors = check_interface(&pathtrace, &reordered, &pt.numbered_bindings());
+    assert!(errors.iter().any(|e| e.contains("BECKMANN")), "{errors:?}");
+    // A push-constant struct of another name.
+    let other_push = KernelInterface { push_type: "DeferredParams", ..*pt };
+    assert!(!check_interface(&pathtrace, &other_push, &pt.numbered_bindings()).is_empty());
 }

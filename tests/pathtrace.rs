@@ -6,6 +6,7 @@ mod common;
 use common::Gpu;
 use glam::Vec3;
 use umbra::geometry::{icosphere, Mesh};
+use umbra::gpu::layout::GpuCamera;
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::pathtrace::Microfacet;
 use umbra::render::{path_trace, PathImage, PathSettings};
@@ -98,9 +99,9 @@ fn render(gpu: &Gpu, scene: &Scene, settings: &PathSettings) -> PathImage {
 
 /// The direction through the centre of pixel (x, y), as `pathtrace.comp` computes it.
 fn pixel_ray(cam: &Camera, (w, h): (u32, u32), x: u32, y: u32) -> Vec3 {
-    let (_, f, r, u) = umbra::render::camera_params(cam, (w, h));
+    let c = GpuCamera::new(cam, (w, h));
     let ndc = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0, 1.0 - 2.0 * (y as f32 + 0.5) / h as f32);
-    (Vec3::from_slice(&f) + ndc.0 * Vec3::from_slice(&r) + ndc.1 * Vec3::from_slice(&u)).normalize()
+    (Vec3::from(c.forward) + ndc.0 * Vec3::from(c.right) + ndc.1 * Vec3::from(c.up)).normalize()
 }
 
 /// cos of the angle between the view ray and the normal of the unit sphere at the origin, at
@@ -382,10 +383,10 @@ fn punctual_lights_match_closed_form() {
         // Closed form for the floor point under pixel position (x, y) (in pixels, fractional).
         let expected_at = |x: f32, y: f32| {
             let (w, h) = (settings.size.0 as f32, settings.size.1 as f32);
-            let (_, f, r, u) = umbra::render::camera_params(&cam, settings.size);
+            let c = GpuCamera::new(&cam, settings.size);
             let ndc = (2.0 * x / w - 1.0, 1.0 - 2.0 * y / h);
-            let d = (Vec3::from_slice(&f) + ndc.0 * Vec3::from_slice(&r) + ndc.1 * Vec3::from_slice(&u))
-                .normalize();
+            let d =
+                (Vec3::from(c.forward) + ndc.0 * Vec3::from(c.right) + ndc.1 * Vec3::from(c.up)).normalize();
             let p = Vec3::from(cam.position) + d * (cam.position[1] / -d.y);
             let (wi, irradiance) = match light.kind {
                 LightKind::Directional => (-Vec3::from(light.direction), light.intensity),
@@ -939,9 +940,9 @@ fn punctual_light_shines_through_rough_thin_glass() {
     let alpha = 0.25f64;
     let a2 = alpha * alpha;
     let g1 = |c: f64| 2.0 * c / (c + (a2 + (1.0 - a2) * c * c).sqrt());
-    let (_, f, r, u) = umbra::render::camera_params(&cam, size);
-    let v3 = |a: [f32; 4]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
-    let (origin, f, r, u) = (glam::DVec3::new(0.0, 1.0, 0.0), v3(f), v3(r), v3(u));
+    let c = GpuCamera::new(&cam, size);
+    let v3 = |a: [f32; 3]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+    let (origin, f, r, u) = (glam::DVec3::new(0.0, 1.0, 0.0), v3(c.forward), v3(c.right), v3(c.up));
     let radiance = |sx: f64, sy: f64| {
         let ndc = (2.0 * sx / size.0 as f64 - 1.0, 1.0 - 2.0 * sy / size.1 as f64);
         let d = (f + ndc.0 * r + ndc.1 * u).normalize();

@@ -16,8 +16,10 @@ use umbra::passes::pathtrace::{PathTarget, PathTracePass};
 use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
 use umbra::scene::{Material, Sampler, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
 
+use umbra::gpu::kernels::{spin_test, test_buffer};
 use umbra::gpu::layout::BufferTestParams;
-use umbra::vk::{barrier, raw, Buffer, ComputePipeline, Descriptor, MemoryLocation, PipelineDesc};
+use umbra::gpu::Pipeline;
+use umbra::vk::{barrier, raw, Buffer, MemoryLocation};
 use umbra::Error;
 
 /// Every warning logged in this test binary (tests run in parallel: filter by a unique name).
@@ -316,11 +318,8 @@ fn failed_submissions_name_the_last_pass() {
 #[test]
 fn a_hung_submission_names_the_pass_the_gpu_was_running() {
     let gpu = Gpu::new();
-    let buffers = [raw::DescriptorType::STORAGE_BUFFER; 2];
-    let desc = PipelineDesc { bindings: &buffers, push_constant_size: 8, specialization: &[] };
-    let quick = ComputePipeline::new(&gpu, "test_buffer", &desc).unwrap();
-    let desc = PipelineDesc { bindings: &buffers[..1], ..Default::default() };
-    let spin = ComputePipeline::new(&gpu, "spin_test", &desc).unwrap();
+    let quick = Pipeline::<test_buffer::Kernel>::plain(&gpu).unwrap();
+    let spin = Pipeline::<spin_test::Kernel>::plain(&gpu).unwrap();
     let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
     let input: Vec<u32> = (0..64).collect();
     let input = Buffer::upload(&gpu, "quick input", &input, usage).unwrap();
@@ -341,18 +340,16 @@ fn a_hung_submission_names_the_pass_the_gpu_was_running() {
         s.spawn(|| {
             let result = gpu.submit(|cmd| {
                 for (k, output) in outputs.iter().enumerate() {
-                    quick.bind(cmd);
-                    quick.push_descriptors(cmd, &[Descriptor::Buffer(&input), Descriptor::Buffer(output)])?;
-                    quick.push_constants(cmd, &BufferTestParams { count: 64, add: k as u32 })?;
-                    quick.dispatch(cmd, [64, 1, 1], [64, 1, 1])?;
+                    let resources = test_buffer::Resources { values_in: &input, values_out: output };
+                    let params = BufferTestParams { count: 64, add: k as u32 };
+                    quick.record(cmd, &resources, &params, [64, 1, 1], [64, 1, 1])?;
                     barrier::compute_to_compute(&gpu, cmd);
                     if k == 0 {
                         // 1024 workgroups of 64: on lavapipe (where an invocation's loops end
                         // after 65535 iterations) ~80 ms each on one core, 40 s on two, if
                         // never released; released, they all end within milliseconds.
-                        spin.bind(cmd);
-                        spin.push_descriptors(cmd, &[Descriptor::Buffer(&flag)])?;
-                        spin.dispatch(cmd, [1024 * 64, 1, 1], [64, 1, 1])?;
+                        let resources = spin_test::Resources { spin: &flag };
+                        spin.record(cmd, &resources, &(), [1024 * 64, 1, 1], [64, 1, 1])?;
                         barrier::compute_to_compute(&gpu, cmd);
                     }
                 }
@@ -480,7 +477,7 @@ fn ten_thousand_samples_equal_a_float64_accumulation() {
                 // SAFETY: valid buffers, recording command buffer.
                 unsafe { gpu.device().cmd_fill_buffer(cmd, target.accum.raw, 0, raw::WHOLE_SIZE, 0) };
                 barrier::transfer_to_compute(&gpu, cmd);
-                params.size_frame[2] = s;
+                params.sample_index = s;
                 pass.record(&gpu, cmd, &device_scene, &target, &params)?;
                 barrier::compute_to_transfer(&gpu, cmd);
                 let region = [raw::BufferCopy::default().dst_offset(s as u64 * row).size(row)];

@@ -13,8 +13,10 @@ mod common;
 
 use common::Gpu;
 use glam::Vec3;
+use umbra::gpu::kernels::{light_sample_test, sample_test};
 use umbra::gpu::layout::{LightTestParams, SampleTestParams};
-use umbra::vk::{raw, Buffer, ComputePipeline, Descriptor, MemoryLocation, PipelineDesc};
+use umbra::gpu::Pipeline;
+use umbra::vk::{raw, Buffer, MemoryLocation};
 
 const THETA_CELLS: usize = 16; // in cos θ over [−1, 1]
 const PHI_CELLS: usize = 32;
@@ -54,25 +56,14 @@ enum Dielectric {
 }
 
 struct Kernel {
-    ggx: ComputePipeline,
-    beckmann: ComputePipeline,
+    ggx: Pipeline<sample_test::Kernel>,
+    beckmann: Pipeline<sample_test::Kernel>,
 }
 
 impl Kernel {
     fn new(gpu: &Gpu) -> Self {
-        let make = |beckmann: u32| {
-            ComputePipeline::new(
-                gpu,
-                "sample_test",
-                &PipelineDesc {
-                    bindings: &[raw::DescriptorType::STORAGE_BUFFER; 2],
-                    push_constant_size: std::mem::size_of::<SampleTestParams>() as u32,
-                    specialization: &[(0, beckmann)],
-                },
-            )
-            .unwrap()
-        };
-        Self { ggx: make(0), beckmann: make(1) }
+        let make = |beckmann| Pipeline::new(gpu, &sample_test::Spec { beckmann }, None).unwrap();
+        Self { ggx: make(false), beckmann: make(true) }
     }
 
     /// Runs the kernel: mode 0 samples `count` directions, mode 1 evaluates the pdf at `dirs`.
@@ -110,13 +101,10 @@ impl Kernel {
         let output =
             Buffer::new(gpu, "sample test results", count as u64 * 16, usage, MemoryLocation::GpuOnly)
                 .unwrap();
-        let params =
-            SampleTestParams { wo_alpha: wo.extend(alpha).into(), config: [mode, count, 12345, which] };
+        let params = SampleTestParams { wo: wo.into(), alpha, mode, count, seed: 12345, kind: which };
         gpu.submit(|cmd| {
-            pipeline.bind(cmd);
-            pipeline.push_descriptors(cmd, &[Descriptor::Buffer(&input), Descriptor::Buffer(&output)])?;
-            pipeline.push_constants(cmd, &params)?;
-            pipeline.dispatch(cmd, [count, 1, 1], [64, 1, 1])
+            let resources = sample_test::Resources { directions: &input, results: &output };
+            pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
         })
         .unwrap();
         output.read(gpu).unwrap()
@@ -434,31 +422,19 @@ struct LightRun {
 }
 
 struct LightKernel {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<light_sample_test::Kernel>,
     scene: umbra::gpu::scene::GpuScene,
     arrays: umbra::gpu::scene::SceneArrays,
 }
 
 impl LightKernel {
     fn new(gpu: &Gpu, env: Option<&umbra::environment::EnvironmentMap>) -> Self {
-        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 14];
-        bindings[..2].copy_from_slice(&umbra::bvh::gpu::GpuBvh::BINDINGS);
-        bindings[11] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
-        let pipeline = ComputePipeline::new(
-            gpu,
-            "light_sample_test",
-            &PipelineDesc {
-                bindings: &bindings,
-                push_constant_size: std::mem::size_of::<LightTestParams>() as u32,
-                specialization: &[],
-            },
-        )
-        .unwrap();
         let arrays = umbra::gpu::scene::SceneArrays::new(&light_scene()).unwrap();
         let mut scene = umbra::gpu::scene::GpuScene::from_arrays(gpu, &arrays).unwrap();
         if let Some(env) = env {
             scene.set_environment(gpu, env).unwrap();
         }
+        let pipeline = Pipeline::for_scene(gpu, &scene, &light_sample_test::Spec::default()).unwrap();
         Self { pipeline, scene, arrays }
     }
 
@@ -476,35 +452,20 @@ impl LightKernel {
                 .unwrap();
         let (w, h) = self.scene.env_size.unwrap_or((1, 1));
         let params = LightTestParams {
-            point: [0.0; 4],
-            normal: [0.0, 1.0, 0.0, 0.0],
-            config: [run.mode, run.count, 4242, run.variant],
-            size: [w, h, self.scene.light_count, 0],
+            point: [0.0; 3],
+            normal: [0.0, 1.0, 0.0],
+            mode: run.mode,
+            count: run.count,
+            seed: 4242,
+            variant: run.variant,
+            env_size: [w, h],
+            light_count: self.scene.light_count,
+            ..Default::default()
         };
-        let s = &self.scene;
         gpu.submit(|cmd| {
-            self.pipeline.bind(cmd);
-            self.pipeline.push_descriptors(
-                cmd,
-                &[
-                    s.bvh.descriptors()[0],
-                    s.bvh.descriptors()[1],
-                    Descriptor::Buffer(&s.triangles),
-                    Descriptor::Buffer(&s.vertices),
-                    Descriptor::Buffer(&s.materials),
-                    Descriptor::Buffer(&s.lights),
-                    Descriptor::Buffer(&s.punctual),
-                    Descriptor::Buffer(&s.env_texels),
-                    Descriptor::Buffer(&s.env_marginal),
-                    Descriptor::Buffer(&s.env_conditional),
-                    Descriptor::Buffer(&s.textures),
-                    Descriptor::Texels(&s.texels),
-                    Descriptor::Buffer(&input),
-                    Descriptor::Buffer(&output),
-                ],
-            )?;
-            self.pipeline.push_constants(cmd, &params)?;
-            self.pipeline.dispatch(cmd, [run.count, 1, 1], [64, 1, 1])
+            let resources =
+                light_sample_test::Resources { scene: &self.scene, directions: &input, results: &output };
+            self.pipeline.record(cmd, &resources, &params, [run.count, 1, 1], [64, 1, 1])
         })
         .unwrap();
         output.read(gpu).unwrap()

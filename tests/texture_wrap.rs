@@ -7,8 +7,10 @@
 mod common;
 
 use common::Gpu;
+use umbra::gpu::kernels::texture_wrap_test;
 use umbra::gpu::layout::BufferTestParams;
-use umbra::vk::{raw, Buffer, ComputePipeline, Descriptor, PipelineDesc, TexelBuffer};
+use umbra::gpu::Pipeline;
+use umbra::vk::{raw, Buffer, TexelBuffer};
 
 fn mirror(i: i32, n: i32) -> i32 {
     let period = 2 * n;
@@ -50,21 +52,15 @@ fn repeat_and_mirror_wrapping_are_exact() {
     let output = Buffer::upload(&gpu, "wrapped", &vec![0i32; 2 * cases.len()], usage).unwrap();
     let textures = Buffer::upload(&gpu, "no textures", &[0u32; 16], usage).unwrap();
     let texels = TexelBuffer::upload(&gpu, "no texels", &[0u32], raw::Format::R32_UINT, 4).unwrap();
-    let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 4];
-    bindings[3] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
-    let desc = PipelineDesc { bindings: &bindings, push_constant_size: 8, specialization: &[] };
-    let pipeline = ComputePipeline::new(&gpu, "texture_wrap_test", &desc).unwrap();
+    let pipeline = Pipeline::<texture_wrap_test::Kernel>::plain(&gpu).unwrap();
     gpu.submit(|cmd| {
-        pipeline.bind(cmd);
-        let descriptors = [
-            Descriptor::Buffer(&input),
-            Descriptor::Buffer(&output),
-            Descriptor::Buffer(&textures),
-            Descriptor::Texels(&texels),
-        ];
-        pipeline.push_descriptors(cmd, &descriptors)?;
-        pipeline.push_constants(cmd, &BufferTestParams { count, add: 0 })?;
-        pipeline.dispatch(cmd, [count, 1, 1], [64, 1, 1])
+        let resources = texture_wrap_test::Resources {
+            cases: &input,
+            wrapped: &output,
+            textures: &textures,
+            scene_texels: &texels,
+        };
+        pipeline.record(cmd, &resources, &BufferTestParams { count, add: 0 }, [count, 1, 1], [64, 1, 1])
     })
     .unwrap();
     let out: Vec<i32> = output.read(&gpu).unwrap();

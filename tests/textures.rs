@@ -9,9 +9,10 @@ mod generate;
 
 use common::Gpu;
 use glam::Vec3;
+use umbra::gpu::layout::GpuCamera;
 use umbra::gpu::scene::{GpuScene, SceneArrays};
 use umbra::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
-use umbra::render::{camera_params, path_trace, PathSettings};
+use umbra::render::{path_trace, PathSettings};
 use umbra::scene::{
     mip_level_count, texture_transform, Camera, Filter, Material, Sampler, Scene, Texture, TextureRef, Wrap,
     IDENTITY_TRANSFORM,
@@ -195,8 +196,9 @@ fn gbuffer(gpu: &Gpu, scene: &Scene, size: (u32, u32)) -> GBufferData {
 fn floor_pixels(scene: &Scene) -> Vec<Option<(f32, [f32; 2])>> {
     let camera = scene.camera(None).unwrap();
     let (w, h) = FLOOR_SIZE;
-    let (origin, f, r, u) = camera_params(&camera, FLOOR_SIZE);
-    let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+    let c = GpuCamera::new(&camera, FLOOR_SIZE);
+    let (origin, f, r, u) = (c.origin, c.forward, c.right, c.up);
+    let v = Vec3::from;
     let spread = (2.0 * v(u).length() / h as f32).atan();
     (0..w * h)
         .map(|i| {

@@ -18,7 +18,21 @@ uvec4 pcg4d(uvec4 v) {
     return v;
 }
 
-// Four uniform numbers in [0, 1) for (pixel, sample, stream); stream = bounce * 8 + use.
+// Random-number streams: a path's bounce `depth` draws from streams rng_stream(depth, use), four
+// numbers each, one stream per use, so changing how one use consumes numbers leaves the others'
+// numbers unchanged.
+const uint RNG_STREAMS_PER_BOUNCE = 8u;
+const uint RNG_CAMERA = 0u;        // pixel jitter (xy), at depth 0
+const uint RNG_EMISSIVE_NEE = 1u;  // emissive triangle by power (x), point on it (yz)
+const uint RNG_BSDF = 2u;          // BSDF sample (xyz), Russian roulette (w)
+const uint RNG_ENV_NEE = 3u;       // environment map sample
+const uint RNG_PUNCTUAL = 4u;      // punctual light pick (x)
+
+uint rng_stream(uint depth, uint use) {
+    return depth * RNG_STREAMS_PER_BOUNCE + use;
+}
+
+// Four uniform numbers in [0, 1) for (pixel, sample, stream).
 vec4 rand4(uvec2 pixel, uint sample_index, uint stream, uint seed) {
     uvec4 h = pcg4d(uvec4(pixel, sample_index, stream ^ (seed * 0x9E3779B9u)));
     return vec4(h >> 8u) * (1.0 / 16777216.0);

@@ -3,12 +3,10 @@
 // incidence and shadow rays. Shared by every kernel that shades the scene (pathtrace.comp,
 // gbuffer.comp, deferred.comp), so all of umbra's methods see the same surface.
 //
-// The including kernel declares, before including this file:
-//   const bool HAS_TEXTURES, HAS_ALPHA (specialization constants);
-//   the BVH's texel buffers (bvh.glsl), readonly buffers triangles[] (GpuTriangle),
-//   vertices[] (GpuVertex), materials[] (GpuMaterial), lights[] (GpuLightTri),
-//   punctual[] (GpuLight), textures[] (GpuTexture), scene_texels (uimageBuffer, R32UI);
-// and includes layout.glsl. This file includes bvh.glsl, bsdf.glsl and texture.glsl.
+// The including kernel reads the whole scene (`scene: full` in src/gpu/interface.rs): its
+// generated kernel/<name>.glsl declares the scene's bindings and HAS_* constants. It declares
+// `const bool BECKMANN` unless that is one of its specialization constants. This file includes
+// bvh.glsl, bsdf.glsl and texture.glsl.
 #ifndef UMBRA_SHADING_GLSL
 #define UMBRA_SHADING_GLSL
 

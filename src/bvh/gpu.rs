@@ -4,10 +4,11 @@
 use super::traverse::next_up;
 use super::{Bvh, BvhNode};
 use crate::error::{Error, Result};
+use crate::gpu::kernels::trace;
+pub use crate::gpu::layout::GpuBvhNode;
 use crate::gpu::layout::{TraceHit, TraceParams, TraceRay};
-use crate::vk::{
-    raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc, TexelBuffer,
-};
+use crate::gpu::Pipeline;
+use crate::vk::{raw, Buffer, Context, Descriptor, MemoryLocation, TexelBuffer};
 use rayon::prelude::*;
 
 /// The node and triangle lists of a [`Bvh`], uploaded once: every kernel binds the BVH as two
@@ -39,46 +40,11 @@ impl GpuBvh {
         })
     }
 
-    /// The descriptor types of the BVH's two bindings (0 and 1 of every kernel that traces).
-    pub const BINDINGS: [raw::DescriptorType; 2] = [raw::DescriptorType::STORAGE_TEXEL_BUFFER; 2];
-
-    /// The BVH's two descriptors, in the order of [`GpuBvh::BINDINGS`].
+    /// The BVH's two descriptors (bindings 0 and 1 of every kernel that traces).
     pub fn descriptors(&self) -> [Descriptor<'_>; 2] {
         [Descriptor::Texels(&self.nodes), Descriptor::Texels(&self.tris)]
     }
 }
-
-/// The BVH as the GPU traverses it: a 4-wide tree collapsed from [`Bvh::nodes`] (each node
-/// takes its binary node's two children and opens the largest-area inner child until it has four
-/// or only leaves), holding all children's boxes (Aila and Laine 2009) in 64 bytes, four texels:
-/// the boxes quantized to 8 bits per plane on a per-node grid (after Ylitie, Karras and Laine
-/// 2017), so one step fetches half the bytes of full-precision boxes. Node 0 is the root.
-///
-/// On each axis a node's grid has planes at `origin + q * step` for q in 0..=255, the first and
-/// last on the node's bounds (to a float's precision, outward), or, in the top levels, one of them
-/// and one of a child's planes inside, whichever grows the children's boxes least; a child's box
-/// is rounded outward to the grid, exactly, so it contains the child's true box. The traversal
-/// computes a plane's distance as `q * a + b` with `a = step / d` and `b = (origin - o) / d` per
-/// node, which is off by a small multiple of the node's size in ray units; `bvh.glsl` widens every
-/// interval by a bound on that. (BENCHMARKS.md: 3 % more node visits on Sponza than exact boxes
-/// with the camera on its symmetry plane, where the halves' boxes meet, 0.5 % off it.)
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuBvhNode {
-    /// The grid's origin (texel 0).
-    pub origin: [f32; 3],
-    /// The grid's step per axis (`step[0]` ends texel 0; 2^-64 on a flat axis).
-    pub step: [f32; 3],
-    /// Lower planes, `lo[axis][child]`, in grid steps from the origin (from the middle of texel 1).
-    pub lo: [[u8; 4]; 3],
-    /// Upper planes, `hi[axis][child]` (the rest of texel 2).
-    pub hi: [[u8; 4]; 3],
-    /// Per child (texel 3): `index << 4 | count`, count 0 for an inner child (index its node),
-    /// 1 to [`GpuBvhNode::MAX_LEAF`] for a leaf (index its first triangle), or
-    /// [`GpuBvhNode::NONE`] for a child that is not there.
-    pub child: [u32; 4],
-}
-const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 64);
 
 /// A box, `(min, max)`.
 type Box3 = ([f32; 3], [f32; 3]);
@@ -459,8 +425,8 @@ pub enum Query {
 
 /// `trace.comp` specialised for both queries.
 pub struct RayTracer {
-    closest: ComputePipeline,
-    any: ComputePipeline,
+    closest: Pipeline<trace::Kernel>,
+    any: Pipeline<trace::Kernel>,
 }
 
 /// Workgroup size of `trace.comp`.
@@ -469,23 +435,8 @@ const LOCAL: u32 = 64;
 impl RayTracer {
     /// Builds both pipelines.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let make = |any: u32| {
-            ComputePipeline::new(
-                ctx,
-                "trace",
-                &PipelineDesc {
-                    bindings: &[
-                        GpuBvh::BINDINGS[0],
-                        GpuBvh::BINDINGS[1],
-                        raw::DescriptorType::STORAGE_BUFFER,
-                        raw::DescriptorType::STORAGE_BUFFER,
-                    ],
-                    push_constant_size: std::mem::size_of::<TraceParams>() as u32,
-                    specialization: &[(0, any)],
-                },
-            )
-        };
-        Ok(Self { closest: make(0)?, any: make(1)? })
+        let make = |trace_any| Pipeline::new(ctx, &trace::Spec { trace_any }, None);
+        Ok(Self { closest: make(false)?, any: make(true)? })
     }
 
     /// Records a trace of `batch`'s rays into its hits. Never submits.
@@ -500,18 +451,13 @@ impl RayTracer {
             Query::Closest => &self.closest,
             Query::Any => &self.any,
         };
-        pipeline.bind(cmd);
-        pipeline.push_descriptors(
+        pipeline.record(
             cmd,
-            &[
-                bvh.descriptors()[0],
-                bvh.descriptors()[1],
-                Descriptor::Buffer(&batch.rays),
-                Descriptor::Buffer(&batch.hits),
-            ],
-        )?;
-        pipeline.push_constants(cmd, &TraceParams { count: batch.count, ..Default::default() })?;
-        pipeline.dispatch(cmd, [batch.count, 1, 1], [LOCAL, 1, 1])
+            &trace::Resources { bvh, rays: &batch.rays, hits: &batch.hits },
+            &TraceParams { count: batch.count, ..Default::default() },
+            [batch.count, 1, 1],
+            [LOCAL, 1, 1],
+        )
     }
 
     /// Uploads `rays`, traces them and reads the hits back (one submission; for tests).

@@ -26,7 +26,7 @@ pub use traverse::{Hit, Ray};
 /// The deepest a BVH may be; the traversal stack holds this many entries.
 pub const MAX_DEPTH: usize = 64;
 
-/// One node of the flattened BVH (`BvhNode` in `layout.glsl`).
+/// One node of the flattened binary BVH (the CPU side; the GPU reads [`gpu::GpuBvhNode`]s).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
@@ -56,19 +56,7 @@ impl BvhNode {
     }
 }
 
-/// A triangle in BVH order (`BvhTri` in `layout.glsl`): three vertices, and in `v0[3]` the bits
-/// of its index in the input.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhTri {
-    /// First vertex; `w` holds the input index as `f32` bits.
-    pub v0: [f32; 4],
-    /// Second vertex.
-    pub v1: [f32; 4],
-    /// Third vertex.
-    pub v2: [f32; 4],
-}
-const _: () = assert!(size_of::<BvhTri>() == 48);
+pub use crate::gpu::layout::BvhTri;
 
 impl BvhTri {
     fn new(v: &[Vec3; 3], input_index: u32) -> Self {

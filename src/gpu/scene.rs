@@ -1,13 +1,13 @@
 //! The scene on the GPU: the BVH, triangles in BVH order, vertex attributes, materials and the
 //! emissive-triangle sampling table, uploaded once as storage buffers.
 
-use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex};
+use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources};
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Scene};
-use crate::vk::{raw, Buffer, Context, Descriptor, DeviceInfo, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, DeviceInfo, TexelBuffer};
 use glam::Vec3;
 
 /// Storage buffers for one scene.
@@ -280,41 +280,28 @@ impl ShadingArrays {
 }
 
 impl GpuScene {
-    /// The descriptor types of bindings 0–8 of the kernels that trace and shade the scene's
-    /// surfaces without lighting it (`gbuffer.comp`, `rtao.comp`): the BVH, then what
-    /// `shading.glsl` reads (triangles, vertices, materials, textures, texels, lights, punctual).
-    pub const SURFACE_BINDINGS: [raw::DescriptorType; 9] = [
-        GpuBvh::BINDINGS[0],
-        GpuBvh::BINDINGS[1],
-        raw::DescriptorType::STORAGE_BUFFER,
-        raw::DescriptorType::STORAGE_BUFFER,
-        raw::DescriptorType::STORAGE_BUFFER,
-        raw::DescriptorType::STORAGE_BUFFER,
-        raw::DescriptorType::STORAGE_TEXEL_BUFFER,
-        raw::DescriptorType::STORAGE_BUFFER,
-        raw::DescriptorType::STORAGE_BUFFER,
-    ];
-
-    /// The descriptors of [`GpuScene::SURFACE_BINDINGS`], in order.
-    pub fn surface_descriptors(&self) -> [Descriptor<'_>; 9] {
-        let [nodes, tris] = self.bvh.descriptors();
-        [
-            nodes,
-            tris,
-            Descriptor::Buffer(&self.triangles),
-            Descriptor::Buffer(&self.vertices),
-            Descriptor::Buffer(&self.materials),
-            Descriptor::Buffer(&self.textures),
-            Descriptor::Texels(&self.texels),
-            Descriptor::Buffer(&self.lights),
-            Descriptor::Buffer(&self.punctual),
-        ]
+    /// The scene's binding block, by name: the same numbers in every kernel that reads the
+    /// scene (`interface.rs`, `scene_bindings!`).
+    pub fn resources(&self) -> SceneResources<'_> {
+        SceneResources {
+            bvh_node_texels: &self.bvh.nodes,
+            bvh_tri_texels: &self.bvh.tris,
+            triangles: &self.triangles,
+            vertices: &self.vertices,
+            materials: &self.materials,
+            textures: &self.textures,
+            scene_texels: &self.texels,
+            lights: &self.lights,
+            punctual: &self.punctual,
+            env_texels: &self.env_texels,
+            env_marginal: &self.env_marginal,
+            env_conditional: &self.env_conditional,
+        }
     }
 
-    /// The specialization constants `HAS_TEXTURES` and `HAS_ALPHA` of a surface kernel, under
-    /// the constant ids `textures` and `alpha`.
-    pub fn surface_specialization(&self, textures: u32, alpha: u32) -> [(u32, u32); 2] {
-        [(textures, (self.texture_count > 0) as u32), (alpha, self.has_alpha as u32)]
+    /// What the scene has, for the kernels specialised on it.
+    pub fn features(&self) -> super::kernel::SceneFeatures {
+        super::kernel::SceneFeatures::of(self)
     }
 
     /// Lights the scene with an environment map (replacing any previous one), uploading it

@@ -24,11 +24,12 @@
 
 use super::gbuffer::GBufferViews;
 use crate::error::{Error, Result};
-use crate::gpu::layout::{AoBlurParams, AoParams};
+use crate::gpu::kernels::{ao_blur, rtao, ssao};
+use crate::gpu::layout::{AoBlurParams, AoParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
-use crate::render::camera_params;
+use crate::gpu::Pipeline;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, PipelineDesc};
+use crate::vk::{barrier, raw, Context};
 
 /// What the AO passes compute.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,15 +78,16 @@ impl AoSettings {
 
 /// The push constants of both AO kernels for `camera` over an image of `size`.
 pub fn ao_params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> AoParams {
-    let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
     AoParams {
-        cam_origin,
-        cam_forward,
-        cam_right,
-        cam_up,
-        radius_bias: [settings.radius, settings.bias, 0.0, 0.0],
-        size_frame: [size.0, size.1, settings.frame, settings.seed],
-        counts: [settings.samples, settings.steps, 0, 0],
+        camera: GpuCamera::new(camera, size),
+        radius: settings.radius,
+        bias: settings.bias,
+        size: [size.0, size.1],
+        frame: settings.frame,
+        seed: settings.seed,
+        samples: settings.samples,
+        steps: settings.steps,
+        ..Default::default()
     }
 }
 
@@ -93,22 +95,13 @@ const LOCAL: [u32; 3] = [8, 8, 1];
 
 /// `ssao.comp`: screen-space AO from depth and normals.
 pub struct SsaoPass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<ssao::Kernel>,
 }
 
 impl SsaoPass {
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "ssao",
-            &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_IMAGE; 3],
-                push_constant_size: std::mem::size_of::<AoParams>() as u32,
-                specialization: &[],
-            },
-        )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline: Pipeline::plain(ctx)? })
     }
 
     /// The push constants (see [`ao_params`]).
@@ -128,11 +121,7 @@ impl SsaoPass {
     ) -> Result<()> {
         self.pipeline.record(
             cmd,
-            &[
-                Descriptor::StorageView(gbuffer.depth),
-                Descriptor::StorageView(gbuffer.normal),
-                Descriptor::StorageView(output),
-            ],
+            &ssao::Resources { gb_depth: &gbuffer.depth, gb_normal: &gbuffer.normal, out_ao: &output },
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
             LOCAL,
@@ -144,7 +133,7 @@ impl SsaoPass {
 
 /// `ao_blur.comp`: a bilateral 4×4 blur of an AO image, weighted by plane distance and normals.
 pub struct AoBlurPass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<ao_blur::Kernel>,
 }
 
 impl AoBlurPass {
@@ -155,27 +144,16 @@ impl AoBlurPass {
 
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "ao_blur",
-            &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_IMAGE; 4],
-                push_constant_size: std::mem::size_of::<AoBlurParams>() as u32,
-                specialization: &[],
-            },
-        )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline: Pipeline::plain(ctx)? })
     }
 
     /// The push constants for `camera` over an image of `size`.
     pub fn params(camera: &Camera, size: (u32, u32)) -> AoBlurParams {
-        let (_, cam_forward, cam_right, cam_up) = camera_params(camera, size);
         AoBlurParams {
-            cam_forward,
-            cam_right,
-            cam_up,
-            weights: [Self::PLANE_SIGMA, Self::NORMAL_POWER, 0.0, 0.0],
-            size: [size.0, size.1, 0, 0],
+            camera: GpuCamera::new(camera, size),
+            depth_sigma: Self::PLANE_SIGMA,
+            normal_exponent: Self::NORMAL_POWER,
+            size: [size.0, size.1],
         }
     }
 
@@ -192,12 +170,12 @@ impl AoBlurPass {
     ) -> Result<()> {
         self.pipeline.record(
             cmd,
-            &[
-                Descriptor::StorageView(input),
-                Descriptor::StorageView(gbuffer.depth),
-                Descriptor::StorageView(gbuffer.normal),
-                Descriptor::StorageView(output),
-            ],
+            &ao_blur::Resources {
+                ao_in: &input,
+                gb_depth: &gbuffer.depth,
+                gb_normal: &gbuffer.normal,
+                out_ao: &output,
+            },
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
             LOCAL,
@@ -209,25 +187,14 @@ impl AoBlurPass {
 
 /// `rtao.comp`: ray-traced AO, the ground truth.
 pub struct RtaoPass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<rtao::Kernel>,
 }
 
 impl RtaoPass {
     /// Builds the pipeline for `scene` (specialised for its textures and alpha-tested materials:
     /// masked and blended surfaces occlude as the path tracer sees them).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        let mut bindings = [raw::DescriptorType::STORAGE_IMAGE; 13];
-        bindings[..9].copy_from_slice(&GpuScene::SURFACE_BINDINGS);
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "rtao",
-            &PipelineDesc {
-                bindings: &bindings,
-                push_constant_size: std::mem::size_of::<AoParams>() as u32,
-                specialization: &scene.surface_specialization(0, 1),
-            },
-        )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &rtao::Spec::default())? })
     }
 
     /// The push constants (see [`ao_params`]).
@@ -252,18 +219,21 @@ impl RtaoPass {
         output: raw::ImageView,
         params: &AoParams,
     ) -> Result<()> {
-        let mut resources = scene.surface_descriptors().to_vec();
-        resources
-            .extend([gbuffer.depth, gbuffer.normal, gbuffer.material, output].map(Descriptor::StorageView));
+        let resources = rtao::Resources {
+            scene,
+            gb_depth: &gbuffer.depth,
+            gb_normal: &gbuffer.normal,
+            gb_material: &gbuffer.material,
+            out_ao: &output,
+        };
         // The pipeline and resources once; per batch only the push constants change.
         let p = &self.pipeline;
-        p.bind(cmd);
-        p.push_descriptors(cmd, &resources)?;
-        let rays = params.counts[0].max(1);
+        p.bind(cmd, &resources)?;
+        let rays = params.samples.max(1);
         for first in (0..rays).step_by(Self::RAYS_PER_DISPATCH as usize) {
             let mut batch = *params;
-            batch.counts[2] = first;
-            batch.counts[3] = Self::RAYS_PER_DISPATCH.min(rays - first);
+            batch.first_ray = first;
+            batch.batch_rays = Self::RAYS_PER_DISPATCH.min(rays - first);
             p.push_constants(cmd, &batch)?;
             p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
             barrier::compute_to_compute(ctx, cmd);

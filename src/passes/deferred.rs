@@ -10,13 +10,13 @@
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
-use crate::bvh::gpu::GpuBvh;
 use crate::error::{Error, Result};
-use crate::gpu::layout::DeferredParams;
+use crate::gpu::kernels::deferred;
+use crate::gpu::layout::{DeferredParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
-use crate::render::camera_params;
+use crate::gpu::Pipeline;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, Image, PipelineDesc};
+use crate::vk::{barrier, raw, Context, Image};
 
 /// What the lighting pass computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,7 +82,7 @@ pub enum IblLookup {
 
 /// `deferred.comp`, specialised for the scene's features.
 pub struct DeferredPass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<deferred::Kernel>,
     /// 1×1 `R32_SFLOAT` of 1.0: the ambient occlusion when the caller has none.
     no_ao: Image,
 }
@@ -94,28 +94,7 @@ impl DeferredPass {
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
     /// an environment map).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 22];
-        bindings[12..18].fill(raw::DescriptorType::STORAGE_IMAGE);
-        bindings[21] = raw::DescriptorType::STORAGE_IMAGE;
-        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
-        bindings[8] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "deferred",
-            &PipelineDesc {
-                bindings: &bindings,
-                push_constant_size: std::mem::size_of::<DeferredParams>() as u32,
-                specialization: &[
-                    (0, (scene.texture_count > 0) as u32),
-                    (1, (scene.light_count > 0) as u32),
-                    (2, (scene.punctual_count > 0) as u32),
-                    (3, scene.env_size.is_some() as u32),
-                    (4, 0),
-                    (5, scene.has_alpha as u32),
-                    (6, scene.has_transmission as u32),
-                ],
-            },
-        )?;
+        let pipeline = Pipeline::for_scene(ctx, scene, &deferred::Spec { beckmann: false })?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
         no_ao.write(ctx, &[1.0f32])?;
         Ok(Self { pipeline, no_ao })
@@ -128,23 +107,20 @@ impl DeferredPass {
         size: (u32, u32),
         settings: &LightingSettings,
     ) -> DeferredParams {
-        let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
         let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
-        let [r, g, b] = settings.env;
         DeferredParams {
-            cam_origin,
-            cam_forward,
-            cam_right,
-            cam_up,
-            env: [r, g, b, 0.0],
-            size_frame: [size.0, size.1, settings.frame, settings.seed],
-            counts: [
-                scene.light_count,
-                scene.punctual_count,
-                settings.shadow_rays.max(1),
-                settings.ibl as u32 | ((settings.ibl_lookup == IblLookup::Dominant) as u32) << 1,
-            ],
-            env_info: [env_w, env_h, 0, 0],
+            camera: GpuCamera::new(camera, size),
+            env: settings.env,
+            ibl: settings.ibl as u32,
+            size: [size.0, size.1],
+            frame: settings.frame,
+            seed: settings.seed,
+            light_count: scene.light_count,
+            punctual_count: scene.punctual_count,
+            shadow_rays: settings.shadow_rays.max(1),
+            ibl_dominant: (settings.ibl_lookup == IblLookup::Dominant) as u32,
+            env_size: [env_w, env_h],
+            ..Default::default()
         }
     }
 
@@ -164,26 +140,19 @@ impl DeferredPass {
         ao: Option<raw::ImageView>,
         params: &DeferredParams,
     ) -> Result<()> {
-        let mut resources = vec![
-            scene.bvh.descriptors()[0],
-            scene.bvh.descriptors()[1],
-            Descriptor::Buffer(&scene.triangles),
-            Descriptor::Buffer(&scene.vertices),
-            Descriptor::Buffer(&scene.materials),
-            Descriptor::Buffer(&scene.lights),
-            Descriptor::Buffer(&scene.punctual),
-            Descriptor::Buffer(&scene.textures),
-            Descriptor::Texels(&scene.texels),
-            Descriptor::Buffer(&scene.env_texels),
-            Descriptor::Buffer(&scene.env_marginal),
-            Descriptor::Buffer(&scene.env_conditional),
-        ];
-        resources.extend(gbuffer.in_order().map(Descriptor::StorageView));
-        resources.push(Descriptor::StorageView(output));
-        resources.push(Descriptor::Buffer(&ibl.lut));
-        resources.push(Descriptor::Buffer(&ibl.prefiltered));
-        resources.push(Descriptor::Buffer(&ibl.sh));
-        resources.push(Descriptor::StorageView(ao.unwrap_or(self.no_ao.view)));
+        let resources = deferred::Resources {
+            scene,
+            gb_depth: &gbuffer.depth,
+            gb_normal: &gbuffer.normal,
+            gb_base: &gbuffer.base,
+            gb_emission: &gbuffer.emission,
+            gb_material: &gbuffer.material,
+            out_color: &output,
+            ibl_lut: &ibl.lut,
+            ibl_prefiltered: &ibl.prefiltered,
+            ibl_sh: &ibl.sh,
+            ao_image: &ao.unwrap_or(self.no_ao.view),
+        };
         self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())

@@ -13,12 +13,13 @@
 //! with a compute-to-compute barrier.
 
 use crate::error::Result;
-use crate::gpu::layout::GBufferParams;
+use crate::gpu::kernels::gbuffer;
 pub use crate::gpu::layout::GBUFFER_NO_SURFACE;
+use crate::gpu::layout::{GBufferParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
-use crate::render::camera_params;
+use crate::gpu::Pipeline;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, Image, PipelineDesc};
+use crate::vk::{barrier, raw, Context, Image};
 
 /// The G-buffer images (see the module documentation for their formats and contents).
 pub struct GBuffer {
@@ -137,7 +138,7 @@ pub struct GBufferData {
 
 /// `gbuffer.comp`, specialised for whether the scene has textures and alpha-tested materials.
 pub struct GBufferPass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<gbuffer::Kernel>,
 }
 
 impl GBufferPass {
@@ -146,24 +147,12 @@ impl GBufferPass {
 
     /// Builds the pipeline for what `scene` has (textures, alpha-tested materials).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        let mut bindings = [raw::DescriptorType::STORAGE_IMAGE; 14];
-        bindings[..9].copy_from_slice(&GpuScene::SURFACE_BINDINGS);
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "gbuffer",
-            &PipelineDesc {
-                bindings: &bindings,
-                push_constant_size: std::mem::size_of::<GBufferParams>() as u32,
-                specialization: &scene.surface_specialization(0, 1),
-            },
-        )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &gbuffer::Spec::default())? })
     }
 
     /// The push constants for `camera` over an image of `size`.
     pub fn params(camera: &Camera, size: (u32, u32)) -> GBufferParams {
-        let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, size);
-        GBufferParams { cam_origin, cam_forward, cam_right, cam_up, size: [size.0, size.1, 0, 0] }
+        GBufferParams { camera: GpuCamera::new(camera, size), size: [size.0, size.1], ..Default::default() }
     }
 
     /// Records the pass into `target` (umbra's [`GBuffer::views`] or a host's images in the same
@@ -176,8 +165,14 @@ impl GBufferPass {
         target: &GBufferViews,
         params: &GBufferParams,
     ) -> Result<()> {
-        let mut resources = scene.surface_descriptors().to_vec();
-        resources.extend(target.in_order().map(Descriptor::StorageView));
+        let resources = gbuffer::Resources {
+            scene,
+            gb_depth: &target.depth,
+            gb_normal: &target.normal,
+            gb_base: &target.base,
+            gb_emission: &target.emission,
+            gb_material: &target.material,
+        };
         self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())

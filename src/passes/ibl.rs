@@ -6,10 +6,12 @@
 //! radiance and the irradiance of a constant are the constant (and π times it).
 
 use crate::error::{Error, Result};
+use crate::gpu::kernels::{ibl_downsample, ibl_lut, ibl_prefilter, ibl_sh};
 use crate::gpu::layout::IblParams;
 use crate::gpu::scene::GpuScene;
+use crate::gpu::Pipeline;
 use crate::ibl::{chain_level_sizes, prefiltered_level_sizes, IBL_LEVELS, LUT_SIZE};
-use crate::vk::{barrier, raw, Buffer, ComputePipeline, Context, Descriptor, GpuTimer, PipelineDesc};
+use crate::vk::{barrier, raw, Buffer, Context, GpuTimer};
 use gpu_allocator::MemoryLocation;
 
 /// What the precomputation spends.
@@ -64,10 +66,10 @@ pub struct IblResources {
     /// The environment map's size, or none for a constant environment.
     pub env_size: Option<(u32, u32)>,
     settings: IblSettings,
-    lut_pipeline: ComputePipeline,
-    downsample: ComputePipeline,
-    prefilter: ComputePipeline,
-    sh_pipeline: ComputePipeline,
+    lut_pipeline: Pipeline<ibl_lut::Kernel>,
+    downsample: Pipeline<ibl_downsample::Kernel>,
+    prefilter: Pipeline<ibl_prefilter::Kernel>,
+    sh_pipeline: Pipeline<ibl_sh::Kernel>,
 }
 
 fn storage(ctx: &Context, name: &str, texels: usize) -> Result<Buffer> {
@@ -75,18 +77,6 @@ fn storage(ctx: &Context, name: &str, texels: usize) -> Result<Buffer> {
         | raw::BufferUsageFlags::TRANSFER_SRC
         | raw::BufferUsageFlags::TRANSFER_DST;
     Buffer::new(ctx, name, 16 * texels.max(1) as u64, usage, MemoryLocation::GpuOnly)
-}
-
-fn pipeline(ctx: &Context, kernel: &str, buffers: usize) -> Result<ComputePipeline> {
-    ComputePipeline::new(
-        ctx,
-        kernel,
-        &PipelineDesc {
-            bindings: &vec![raw::DescriptorType::STORAGE_BUFFER; buffers],
-            push_constant_size: std::mem::size_of::<IblParams>() as u32,
-            specialization: &[],
-        },
-    )
 }
 
 impl IblResources {
@@ -109,10 +99,10 @@ impl IblResources {
             sh: storage(ctx, "ibl sh", 9)?,
             env_size,
             settings: *settings,
-            lut_pipeline: pipeline(ctx, "ibl_lut", 1)?,
-            downsample: pipeline(ctx, "ibl_downsample", 2)?,
-            prefilter: pipeline(ctx, "ibl_prefilter", 3)?,
-            sh_pipeline: pipeline(ctx, "ibl_sh", 2)?,
+            lut_pipeline: Pipeline::plain(ctx)?,
+            downsample: Pipeline::for_scene(ctx, scene, &Default::default())?,
+            prefilter: Pipeline::for_scene(ctx, scene, &Default::default())?,
+            sh_pipeline: Pipeline::for_scene(ctx, scene, &Default::default())?,
         })
     }
 
@@ -144,10 +134,11 @@ impl IblResources {
         };
         begin(&mut timer, "ibl lut")?;
         let params = IblParams {
-            dst: [LUT_SIZE, LUT_SIZE, 0, self.settings.lut_samples.max(1)],
+            dst_size: [LUT_SIZE, LUT_SIZE],
+            samples: self.settings.lut_samples.max(1),
             ..Default::default()
         };
-        let lut = [Descriptor::Buffer(&self.lut)];
+        let lut = ibl_lut::Resources { lut: &self.lut };
         self.lut_pipeline.record(cmd, &lut, &params, [LUT_SIZE, LUT_SIZE, 1], [8, 8, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         end(&mut timer)?;
@@ -160,36 +151,30 @@ impl IblResources {
                 scene.env_size
             )));
         }
-        let src = [size.0, size.1, 0, 0];
+        let src_size = [size.0, size.1];
 
         begin(&mut timer, "ibl prefilter")?;
         let p = &self.downsample;
-        p.bind(cmd);
-        p.push_descriptors(cmd, &[Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.chain)])?;
+        p.bind(cmd, &ibl_downsample::Resources { scene, chain: &self.chain })?;
         for (k, &(w, h)) in chain_level_sizes(size).iter().enumerate().skip(1) {
-            p.push_constants(cmd, &IblParams { src: [size.0, size.1, k as u32, 0], ..Default::default() })?;
+            p.push_constants(cmd, &IblParams { src_size, src_level: k as u32, ..Default::default() })?;
             p.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
             barrier::compute_to_compute(ctx, cmd);
         }
         let p = &self.prefilter;
-        p.bind(cmd);
-        p.push_descriptors(
-            cmd,
-            &[
-                Descriptor::Buffer(&scene.env_texels),
-                Descriptor::Buffer(&self.chain),
-                Descriptor::Buffer(&self.prefiltered),
-            ],
-        )?;
+        p.bind(cmd, &ibl_prefilter::Resources { scene, chain: &self.chain, prefiltered: &self.prefiltered })?;
         let mut offset = 0;
         for (k, &(w, h)) in prefiltered_level_sizes(size).iter().enumerate().skip(1) {
             let roughness = k as f32 / (IBL_LEVELS - 1) as f32;
             p.push_constants(
                 cmd,
                 &IblParams {
-                    src,
-                    dst: [w, h, offset, self.settings.prefilter_samples.max(1)],
-                    values: [roughness, 0.0, 0.0, 0.0],
+                    src_size,
+                    dst_size: [w, h],
+                    dst_offset: offset,
+                    samples: self.settings.prefilter_samples.max(1),
+                    roughness,
+                    ..Default::default()
                 },
             )?;
             p.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
@@ -201,13 +186,9 @@ impl IblResources {
         begin(&mut timer, "ibl sh")?;
         // 128 rows per dispatch (one per invocation): see ibl_sh.comp on llvmpipe's loop limiter.
         let p = &self.sh_pipeline;
-        p.bind(cmd);
-        p.push_descriptors(cmd, &[Descriptor::Buffer(&scene.env_texels), Descriptor::Buffer(&self.sh)])?;
-        for first_row in (0..src[1].max(1)).step_by(128) {
-            p.push_constants(
-                cmd,
-                &IblParams { src: [src[0], src[1], src[2], first_row], ..Default::default() },
-            )?;
+        p.bind(cmd, &ibl_sh::Resources { scene, sh: &self.sh })?;
+        for first_row in (0..src_size[1].max(1)).step_by(128) {
+            p.push_constants(cmd, &IblParams { src_size, first_row, ..Default::default() })?;
             p.dispatch(cmd, [128, 1, 1], [128, 1, 1])?;
             barrier::compute_to_compute(ctx, cmd);
         }

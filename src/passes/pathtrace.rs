@@ -1,13 +1,13 @@
 //! The progressive path-tracing pass (`spirv/pathtrace.comp`): one sample per pixel per
 //! dispatch into a running mean and second moment.
 
-use crate::bvh::gpu::GpuBvh;
 use crate::error::Result;
-use crate::gpu::layout::{PathParams, PathStats};
+use crate::gpu::kernels::{pathtrace, resolve};
+use crate::gpu::layout::{GpuCamera, PathParams, PathStats, ResolveParams};
 use crate::gpu::scene::GpuScene;
-use crate::render::{camera_params, PathSettings};
+use crate::gpu::Pipeline;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Buffer, ComputePipeline, Context, Descriptor, MemoryLocation, PipelineDesc};
+use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation};
 
 /// The microfacet distribution of the specular lobes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -27,6 +27,51 @@ pub enum Heuristic {
     Power,
     /// The balance heuristic.
     Balance,
+}
+
+/// Settings of a path-traced render.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathSettings {
+    /// Width and height in pixels.
+    pub size: (u32, u32),
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Scattering events per path (1 = direct lighting only).
+    pub max_bounces: u32,
+    /// Russian roulette starts once a path has scattered this many times.
+    pub rr_depth: u32,
+    /// Seed of the counter-based random numbers.
+    pub seed: u32,
+    /// Microfacet distribution.
+    pub microfacet: Microfacet,
+    /// MIS heuristic.
+    pub heuristic: Heuristic,
+    /// Constant environment radiance (linear rgb) seen by rays that leave the scene, or, when
+    /// the scene has an environment map, the map's multiplier.
+    pub env: [f32; 3],
+    /// Sample the environment map for next-event estimation (with MIS); off leaves only BSDF
+    /// sampling to find it (a check of the two strategies against each other).
+    pub env_nee: bool,
+    /// Stop before `spp` once [`crate::render::PathImage::relative_error`] is at most this (checked after each
+    /// batch, from 16 samples per pixel on).
+    pub target_error: Option<f32>,
+}
+
+impl Default for PathSettings {
+    fn default() -> Self {
+        Self {
+            size: (256, 256),
+            spp: 64,
+            max_bounces: 8,
+            rr_depth: 3,
+            seed: 0,
+            microfacet: Microfacet::Ggx,
+            heuristic: Heuristic::Power,
+            env: [0.0; 3],
+            env_nee: true,
+            target_error: None,
+        }
+    }
 }
 
 /// The per-pixel buffers a path-traced image accumulates into.
@@ -66,7 +111,7 @@ impl PathTarget {
 
 /// `pathtrace.comp`, specialised for one scene's features and the chosen sampling.
 pub struct PathTracePass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<pathtrace::Kernel>,
 }
 
 impl PathTracePass {
@@ -81,48 +126,34 @@ impl PathTracePass {
         microfacet: Microfacet,
         heuristic: Heuristic,
     ) -> Result<Self> {
-        let mut bindings = [raw::DescriptorType::STORAGE_BUFFER; 17];
-        bindings[..2].copy_from_slice(&GpuBvh::BINDINGS);
-        bindings[16] = raw::DescriptorType::STORAGE_TEXEL_BUFFER;
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "pathtrace",
-            &PipelineDesc {
-                bindings: &bindings,
-                push_constant_size: std::mem::size_of::<PathParams>() as u32,
-                specialization: &[
-                    (0, (microfacet == Microfacet::Beckmann) as u32),
-                    (1, (heuristic == Heuristic::Power) as u32),
-                    (2, (scene.light_count > 0) as u32),
-                    (3, (scene.punctual_count > 0) as u32),
-                    (4, scene.env_size.is_some() as u32),
-                    (5, (scene.texture_count > 0) as u32),
-                    (6, scene.has_transmission as u32),
-                    (7, scene.has_alpha as u32),
-                ],
-            },
-        )?;
-        Ok(Self { pipeline })
+        let spec = pathtrace::Spec {
+            beckmann: microfacet == Microfacet::Beckmann,
+            power_heuristic: heuristic == Heuristic::Power,
+        };
+        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)? })
     }
 
-    /// The push constants for sample 0 of `settings` seen from `camera` (`size_frame[2]` is the
-    /// sample index: set it per dispatch).
+    /// The push constants for sample 0 of `settings` seen from `camera` (`sample_index`: set it
+    /// per dispatch).
     pub fn params(scene: &GpuScene, camera: &Camera, settings: &PathSettings) -> PathParams {
-        let (cam_origin, cam_forward, cam_right, cam_up) = camera_params(camera, settings.size);
         let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
         PathParams {
-            cam_origin,
-            cam_forward,
-            cam_right,
-            cam_up,
-            env: [settings.env[0], settings.env[1], settings.env[2], 0.0],
-            size_frame: [settings.size.0, settings.size.1, 0, settings.seed],
-            settings: [settings.max_bounces, settings.rr_depth, scene.light_count, scene.punctual_count],
-            env_info: [env_w, env_h, settings.env_nee as u32, 0],
+            camera: GpuCamera::new(camera, settings.size),
+            env: settings.env,
+            env_nee: settings.env_nee as u32,
+            size: [settings.size.0, settings.size.1],
+            sample_index: 0,
+            seed: settings.seed,
+            max_bounces: settings.max_bounces,
+            rr_depth: settings.rr_depth,
+            light_count: scene.light_count,
+            punctual_count: scene.punctual_count,
+            env_size: [env_w, env_h],
+            ..Default::default()
         }
     }
 
-    /// Records one sample per pixel (sample `params.size_frame[2]`), then a barrier so the next
+    /// Records one sample per pixel (sample `params.sample_index`), then a barrier so the next
     /// dispatch or a copy sees it. Never submits.
     pub fn record(
         &self,
@@ -134,25 +165,14 @@ impl PathTracePass {
     ) -> Result<()> {
         self.pipeline.record(
             cmd,
-            &[
-                scene.bvh.descriptors()[0],
-                scene.bvh.descriptors()[1],
-                Descriptor::Buffer(&scene.triangles),
-                Descriptor::Buffer(&scene.vertices),
-                Descriptor::Buffer(&scene.materials),
-                Descriptor::Buffer(&scene.lights),
-                Descriptor::Buffer(&target.accum),
-                Descriptor::Buffer(&target.moment),
-                Descriptor::Buffer(&target.albedo),
-                Descriptor::Buffer(&target.normal_depth),
-                Descriptor::Buffer(&target.stats),
-                Descriptor::Buffer(&scene.punctual),
-                Descriptor::Buffer(&scene.env_texels),
-                Descriptor::Buffer(&scene.env_marginal),
-                Descriptor::Buffer(&scene.env_conditional),
-                Descriptor::Buffer(&scene.textures),
-                Descriptor::Texels(&scene.texels),
-            ],
+            &pathtrace::Resources {
+                scene,
+                accum: &target.accum,
+                moment: &target.moment,
+                aov_albedo: &target.albedo,
+                aov_normal_depth: &target.normal_depth,
+                stats: &target.stats,
+            },
             params,
             [target.size.0, target.size.1, 1],
             Self::LOCAL,
@@ -164,22 +184,13 @@ impl PathTracePass {
 
 /// `resolve.comp`: a [`PathTarget`]'s running mean into an `R32G32B32A32_SFLOAT` storage image.
 pub struct ResolvePass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<resolve::Kernel>,
 }
 
 impl ResolvePass {
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "resolve",
-            &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_BUFFER, raw::DescriptorType::STORAGE_IMAGE],
-                push_constant_size: 16,
-                specialization: &[],
-            },
-        )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline: Pipeline::plain(ctx)? })
     }
 
     /// Records the copy of `target`'s mean into `output` (a storage image of the target's size
@@ -193,8 +204,8 @@ impl ResolvePass {
     ) -> Result<()> {
         self.pipeline.record(
             cmd,
-            &[Descriptor::Buffer(&target.accum), Descriptor::StorageView(output)],
-            &[target.size.0, target.size.1, 0, 0],
+            &resolve::Resources { accum: &target.accum, out_color: &output },
+            &ResolveParams { size: [target.size.0, target.size.1], ..Default::default() },
             [target.size.0, target.size.1, 1],
             [8, 8, 1],
         )?;

@@ -3,13 +3,15 @@
 //! in `GENERAL` layout; a compute-to-compute barrier follows. [`crate::tonemap`] is its CPU twin.
 
 use crate::error::Result;
+use crate::gpu::kernels::tonemap;
 use crate::gpu::layout::TonemapParams;
+use crate::gpu::Pipeline;
 pub use crate::tonemap::ToneCurve;
-use crate::vk::{barrier, raw, ComputePipeline, Context, Descriptor, PipelineDesc};
+use crate::vk::{barrier, raw, Context};
 
 /// `tonemap.comp`.
 pub struct TonemapPass {
-    pipeline: ComputePipeline,
+    pipeline: Pipeline<tonemap::Kernel>,
 }
 
 impl TonemapPass {
@@ -18,16 +20,7 @@ impl TonemapPass {
 
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let pipeline = ComputePipeline::new(
-            ctx,
-            "tonemap",
-            &PipelineDesc {
-                bindings: &[raw::DescriptorType::STORAGE_IMAGE; 2],
-                push_constant_size: std::mem::size_of::<TonemapParams>() as u32,
-                specialization: &[],
-            },
-        )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline: Pipeline::plain(ctx)? })
     }
 
     /// Records `dst = sRGB(curve(src × 2^stops))` over `size` pixels and a barrier after it:
@@ -46,7 +39,7 @@ impl TonemapPass {
     ) -> Result<()> {
         self.pipeline.record(
             cmd,
-            &[Descriptor::StorageView(src), Descriptor::StorageView(dst)],
+            &tonemap::Resources { src: &src, dst: &dst },
             &TonemapParams { size: [w, h], exposure: exposure_stops.exp2(), curve: curve.code() },
             [w, h, 1],
             Self::LOCAL,

@@ -29,11 +29,12 @@ impl Descriptor<'_> {
     }
 }
 
-/// What a kernel binds: descriptor types by binding index, push-constant size, constants.
+/// What a kernel binds: descriptor types by binding number, push-constant size, constants.
+/// Built from a kernel's interface by [`crate::gpu::kernel::Pipeline`].
 #[derive(Debug, Clone, Default)]
 pub struct PipelineDesc<'a> {
-    /// The type of each binding of set 0, binding 0 first.
-    pub bindings: &'a [vk::DescriptorType],
+    /// `(binding number, type)` of each binding of set 0, in the order resources are pushed.
+    pub bindings: &'a [(u32, vk::DescriptorType)],
     /// Bytes of push constants (0 for none); a multiple of 4.
     pub push_constant_size: u32,
     /// `(constant_id, value)` specialization constants (32-bit each).
@@ -48,7 +49,7 @@ pub struct ComputePipeline {
     set_layout: vk::DescriptorSetLayout,
     layout: vk::PipelineLayout,
     pipeline: vk::Pipeline,
-    bindings: Vec<vk::DescriptorType>,
+    bindings: Vec<(u32, vk::DescriptorType)>,
     push_constant_size: u32,
 }
 
@@ -61,10 +62,9 @@ impl ComputePipeline {
         let layout_bindings: Vec<_> = desc
             .bindings
             .iter()
-            .enumerate()
-            .map(|(i, &ty)| {
+            .map(|&(binding, ty)| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
+                    .binding(binding)
                     .descriptor_type(ty)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
@@ -134,11 +134,12 @@ impl ComputePipeline {
         unsafe { self.shared.device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline) };
     }
 
-    /// Pushes set 0. The resources must match the pipeline's bindings in number and type;
-    /// a mismatch is an error, never a silently wrong binding.
+    /// Pushes set 0: `resources` in the order of [`PipelineDesc::bindings`]. They must match the
+    /// pipeline's bindings in number and type; a mismatch is an error, never a silently wrong
+    /// binding.
     pub fn push_descriptors(&self, cmd: vk::CommandBuffer, resources: &[Descriptor<'_>]) -> Result<()> {
         let types: Vec<_> = resources.iter().map(Descriptor::ty).collect();
-        if types != self.bindings {
+        if !types.iter().eq(self.bindings.iter().map(|(_, ty)| ty)) {
             return Err(Error::Invalid(format!(
                 "kernel '{}' binds {:?} but was given {:?}",
                 self.name, self.bindings, types
@@ -172,7 +173,8 @@ impl ComputePipeline {
             .iter()
             .enumerate()
             .map(|(i, r)| {
-                let w = vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(r.ty());
+                let w =
+                    vk::WriteDescriptorSet::default().dst_binding(self.bindings[i].0).descriptor_type(r.ty());
                 match r {
                     Descriptor::Buffer(_) => w.buffer_info(&buffers[i]),
                     Descriptor::StorageImage(_) | Descriptor::StorageView(_) => w.image_info(&images[i]),
@@ -203,6 +205,9 @@ impl ComputePipeline {
                 self.push_constant_size,
                 bytes.len()
             )));
+        }
+        if bytes.is_empty() {
+            return Ok(());
         }
         // SAFETY: size checked against the layout's range.
         unsafe {

@@ -71,7 +71,7 @@ pub fn run(
     let mut samples: Vec<Vec<f64>> = vec![Vec::new(); 5];
     let mut names = Vec::new();
     for repeat in 0..=repeats {
-        path_params.size_frame[2] = repeat as u32;
+        path_params.sample_index = repeat as u32;
         ctx.submit(|cmd| {
             timer.reset(cmd);
             timer.begin(cmd, "gbuffer")?;

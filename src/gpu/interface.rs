@@ -1,0 +1,814 @@
+// The interface between Rust and the kernels, written once: every struct the host and the GPU
+// share, every constant both read, and per kernel its bindings, push constants and
+// specialization constants. This file is read twice:
+//
+// - by the library (`src/gpu/layout.rs`), whose macros turn each struct into a `#[repr(C)]`,
+//   `bytemuck::Pod` Rust struct, each constant into a `pub const`, and each kernel into a module
+//   with its typed resources (`Resources`, one field per binding, by name), its push-constant
+//   type and its specialization constants (`Spec`);
+// - by `build.rs`, whose macros of the same names turn the same text into GLSL:
+//   `layout.glsl` (structs and constants) and `kernel/<name>.glsl` per kernel (its binding,
+//   push-constant and specialization-constant declarations), which the kernel includes.
+//
+// Why Rust is the source and GLSL is generated: the Rust side needs more than the GLSL side
+// (types the compiler checks, `Pod`, docs, resource structs), macro_rules reads this text as
+// tokens without a parser of its own, and rust-analyzer and rustdoc see it. GLSL is generated with
+// the same names, so kernels read `params.camera.origin` and `triangles[i]` as before.
+// tests/layout.rs reads every compiled kernel with naga and checks each struct's offsets and
+// each binding's set, number, name and type against this file: the generator cannot drift either.
+//
+// Types are GLSL's names (`float`, `uint`, `int`, `vec2`..`vec4`, `uvec2`..`uvec4`, `ivec2`,
+// `[T; N]` for `T name[N]`, a struct's name). std430 rules apply: a `vec3` or `uvec2` must sit
+// on its own alignment, which the Rust `[f32; 3]`/`[u32; 2]` does not enforce: the naga test
+// and each struct's size assertion catch a misplaced one. `as` gives a field another Rust type of
+// the same size (bytes read on the GPU as `uint`s).
+//
+// Bindings: `name: access kind arg`, access `readonly`, `writeonly`, `readwrite` or `coherent`;
+// kind `buffer` (arg `[T]`: a runtime array, or `T`: one struct), `image` (arg: its storage
+// format), `texels` (a storage texel buffer read as `uimageBuffer`, arg: its format). The scene's
+// bindings are one block with the same numbers in every kernel that uses the scene (`scene: full`)
+// or only its BVH (`scene: bvh`); a kernel's own bindings follow from `SCENE_BINDINGS` on (from 0
+// without a scene), in the order written.
+
+gpu_structs! {
+    /// A pinhole camera as every kernel that casts rays from it reads it (`camera.glsl`).
+    struct GpuCamera {
+        /// Position.
+        origin: vec3,
+        /// Padding.
+        pad0: float,
+        /// Unit forward.
+        forward: vec3,
+        /// Padding.
+        pad1: float,
+        /// Right × tan(yfov/2) × aspect.
+        right: vec3,
+        /// Padding.
+        pad2: float,
+        /// Up × tan(yfov/2).
+        up: vec3,
+        /// Padding.
+        pad3: float,
+    }
+
+    /// Push constants of `test_pattern.comp`.
+    #[doc(hidden)]
+    struct PatternParams {
+        /// Image width and height.
+        size: uvec2,
+        /// Added to the hashed index.
+        seed: uint,
+        /// Added to the product channel.
+        frame: uint,
+    }
+
+    /// Push constants of `test_buffer.comp` and `texture_wrap_test.comp`.
+    #[doc(hidden)]
+    struct BufferTestParams {
+        /// Number of elements.
+        count: uint,
+        /// Added to each tripled element.
+        add: uint,
+    }
+
+    /// What `spin_test.comp` shares with the host.
+    #[doc(hidden)]
+    struct SpinState {
+        /// Set non-zero by the host to release the spinning invocations.
+        release: uint,
+        /// Iterations of all invocations.
+        spun: uint,
+        /// 1 once an invocation saw the release.
+        released: uint,
+    }
+
+    /// The BVH as the GPU traverses it: a 4-wide tree collapsed from [`crate::bvh::Bvh::nodes`]
+    /// (each node takes its binary node's two children and opens the largest-area inner child
+    /// until it has four or only leaves), holding all children's boxes (Aila and Laine 2009) in 64
+    /// bytes, four texels (bvh.glsl): the boxes quantized to 8 bits per plane on a per-node grid
+    /// (after Ylitie, Karras and Laine 2017), so one step fetches half the bytes of
+    /// full-precision boxes. Node 0 is the root.
+    ///
+    /// On each axis a node's grid has planes at `origin + q * step` for q in 0..=255, the first
+    /// and last on the node's bounds (to a float's precision, outward), or, in the top levels, one
+    /// of them and one of a child's planes inside, whichever grows the children's boxes least; a
+    /// child's box is rounded outward to the grid, exactly, so it contains the child's true box.
+    /// The traversal computes a plane's distance as `q * a + b` with `a = step / d` and
+    /// `b = (origin - o) / d` per node, which is off by a small multiple of the node's size in ray
+    /// units; `bvh.glsl` widens every interval by a bound on that. (BENCHMARKS.md: 3 % more node
+    /// visits on Sponza than exact boxes with the camera on its symmetry plane, where the halves'
+    /// boxes meet, 0.5 % off it.)
+    struct GpuBvhNode {
+        /// The grid's origin (texel 0).
+        origin: vec3,
+        /// The grid's step per axis (`step[0]` ends texel 0; 2^-64 on a flat axis).
+        step: [float; 3],
+        /// Lower planes, `lo[axis][child]`, in grid steps from the origin (from the middle of
+        /// texel 1); the GPU reads each axis's four bytes as one `uint`.
+        lo: [uint; 3] as [[u8; 4]; 3],
+        /// Upper planes, `hi[axis][child]` (the rest of texel 2).
+        hi: [uint; 3] as [[u8; 4]; 3],
+        /// Per child (texel 3): `index << 4 | count`, count 0 for an inner child (index its node),
+        /// 1 to [`GpuBvhNode::MAX_LEAF`] for a leaf (index its first triangle), or
+        /// [`GpuBvhNode::NONE`] for a child that is not there.
+        child: [uint; 4],
+    }
+
+    /// A triangle in BVH order: three vertices, and in `v0[3]` the bits of its index in the
+    /// input; `v1[3]` holds its alpha mode bits (0 opaque, 1 mask, 2 blend) for the traversal.
+    struct BvhTri {
+        /// First vertex; `w` holds the input index as `f32` bits.
+        v0: vec4,
+        /// Second vertex; `w` the alpha mode bits.
+        v1: vec4,
+        /// Third vertex.
+        v2: vec4,
+    }
+
+    /// A ray for `trace.comp`: origin and `tmin`, direction and `tmax`.
+    struct TraceRay {
+        /// Origin xyz, `tmin` in w.
+        origin_tmin: vec4,
+        /// Direction xyz (need not be normalised), `tmax` in w.
+        dir_tmax: vec4,
+    }
+
+    /// `trace.comp`'s answer for one ray.
+    struct TraceHit {
+        /// Hit distance (closest-hit mode); 1.0 for occluded, 0.0 for clear in any-hit mode.
+        t: float,
+        /// Triangle index in BVH order, [`TraceHit::MISS`] for none.
+        tri: uint,
+        /// Barycentric weight of the triangle's second vertex.
+        u: float,
+        /// Barycentric weight of the triangle's third vertex.
+        v: float,
+    }
+
+    /// Push constants of `trace.comp`.
+    struct TraceParams {
+        /// Number of rays.
+        count: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+        /// Padding.
+        pad2: uint,
+    }
+
+    /// A triangle of the GPU scene in BVH order.
+    struct GpuTriangle {
+        /// First vertex index.
+        v0: uint,
+        /// Second vertex index.
+        v1: uint,
+        /// Third vertex index.
+        v2: uint,
+        /// Material index.
+        material: uint,
+        /// Probability that light sampling picks this triangle (0 if it does not emit).
+        light_pmf: float,
+        /// Area in square metres.
+        area: float,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
+    /// Shading attributes of a vertex (world space).
+    struct GpuVertex {
+        /// Normal xyz, uv0.x.
+        normal_u: vec4,
+        /// uv0.y, uv1.xy, unused.
+        v_uv1: vec4,
+        /// Tangent xyz, bitangent sign (all 0 when the scene has no tangents).
+        tangent: vec4,
+    }
+
+    /// A glTF metallic-roughness material's factors and texture slots.
+    struct GpuMaterial {
+        /// baseColorFactor.
+        base_color: vec4,
+        /// Emission (strength applied) rgb, roughness.
+        emissive_rough: vec4,
+        /// specularColorFactor rgb, specularFactor.
+        specular: vec4,
+        /// metallic, ior, transmission, alpha cutoff.
+        params: vec4,
+        /// `x`: `MATERIAL_*` bits.
+        flags: uvec4,
+        /// Base colour, metallic-roughness, emissive, normal texture: index + 1 (0: none).
+        textures: uvec4,
+        /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
+        /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; the normal slot's row1.w is
+        /// the normal scale.
+        tex_transform: [vec4; 8],
+    }
+
+    /// A texture in the shared texel buffer (RGBA8, one `uint` per texel, row-major).
+    struct GpuTexture {
+        /// First texel in the texel buffer.
+        offset: uint,
+        /// Width.
+        width: uint,
+        /// Height.
+        height: uint,
+        /// `TEXTURE_*` bits.
+        flags: uint,
+        /// Mip levels stored (1: level 0 only). Level k is `max(1, width >> k)` ×
+        /// `max(1, height >> k)` texels and follows level k − 1 in the texel buffer.
+        levels: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+        /// Padding.
+        pad2: uint,
+    }
+
+    /// One entry of the emissive-triangle sampling table.
+    struct GpuLightTri {
+        /// Triangle in BVH order.
+        tri: uint,
+        /// Inclusive prefix of the normalised power.
+        cdf: float,
+        /// Selection probability.
+        pmf: float,
+        /// Area in square metres.
+        area: float,
+    }
+
+    /// A `KHR_lights_punctual` light in world space.
+    struct GpuLight {
+        /// Position xyz, range (0: infinite).
+        position_range: vec4,
+        /// Unit direction the light shines in, kind (`LIGHT_*`).
+        direction_kind: vec4,
+        /// Colour × intensity (candela; lux for directional lights), inclusive prefix of the
+        /// selection probabilities (by power).
+        intensity: vec4,
+        /// cos(outer cone), 1 / max(cos(inner) − cos(outer), 1e-4), selection probability, unused.
+        cone: vec4,
+    }
+
+    /// Push constants of `pathtrace.comp`.
+    struct PathParams {
+        /// The camera.
+        camera: GpuCamera,
+        /// Constant environment radiance rgb (or the environment map's multiplier).
+        env: vec3,
+        /// Sample the environment map for next-event estimation (0/1).
+        env_nee: uint,
+        /// Image width and height.
+        size: uvec2,
+        /// The sample index (one sample per pixel per dispatch).
+        sample_index: uint,
+        /// Seed of the random numbers.
+        seed: uint,
+        /// Scattering events per path.
+        max_bounces: uint,
+        /// Russian roulette starts once a path has scattered this many times.
+        rr_depth: uint,
+        /// Emissive triangles in the sampling table.
+        light_count: uint,
+        /// Punctual lights.
+        punctual_count: uint,
+        /// Environment map width and height.
+        env_size: uvec2,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
+    /// Per-render counters written by `pathtrace.comp`.
+    struct PathStats {
+        /// Samples that came out NaN or infinite (replaced by 0; must stay 0).
+        nonfinite_samples: uint,
+        /// Where they arose: bits of [`NONFINITE_SOURCES`].
+        nonfinite_sources: uint,
+        /// Padding.
+        pad1: uint,
+        /// Padding.
+        pad2: uint,
+    }
+
+    /// Push constants of `gbuffer.comp`.
+    struct GBufferParams {
+        /// The camera.
+        camera: GpuCamera,
+        /// Image width and height.
+        size: uvec2,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
+    /// Push constants of `deferred.comp`.
+    struct DeferredParams {
+        /// The camera.
+        camera: GpuCamera,
+        /// Constant environment radiance rgb (or the environment map's multiplier).
+        env: vec3,
+        /// Split-sum image-based lighting of the environment (0/1).
+        ibl: uint,
+        /// Image width and height.
+        size: uvec2,
+        /// Frame index (decorrelates successive frames' light samples).
+        frame: uint,
+        /// Seed of the random numbers.
+        seed: uint,
+        /// Emissive triangles in the sampling table.
+        light_count: uint,
+        /// Punctual lights.
+        punctual_count: uint,
+        /// Shadow rays (light samples) per pixel for the emissive triangles.
+        shadow_rays: uint,
+        /// Read the prefiltered environment along the lobe's dominant direction (1) or the
+        /// mirror direction (0).
+        ibl_dominant: uint,
+        /// Environment map width and height.
+        env_size: uvec2,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
+    /// Push constants of `tonemap.comp`.
+    struct TonemapParams {
+        /// Width, height.
+        size: uvec2,
+        /// Linear multiplier (2^stops).
+        exposure: float,
+        /// [`crate::tonemap::ToneCurve::code`]: 0 clamp, 1 ACES (Hill's fit), 2 Khronos PBR Neutral.
+        curve: uint,
+    }
+
+    /// Push constants of `resolve.comp`.
+    struct ResolveParams {
+        /// Width, height.
+        size: uvec2,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
+    /// Push constants of `sample_test.comp` (the sampling tests' kernel).
+    #[doc(hidden)]
+    struct SampleTestParams {
+        /// Outgoing direction (local frame).
+        wo: vec3,
+        /// Microfacet alpha.
+        alpha: float,
+        /// 0 sample, 1 evaluate the pdf.
+        mode: uint,
+        /// Number of samples or directions.
+        count: uint,
+        /// Seed.
+        seed: uint,
+        /// 0 cosine, 1 microfacet, 2-4 dielectric BSDF (2 reflection side, 3 inside, 4 thin).
+        kind: uint,
+    }
+
+    /// Push constants of `ssao.comp` and `rtao.comp`.
+    struct AoParams {
+        /// The camera.
+        camera: GpuCamera,
+        /// AO radius r (world units).
+        radius: float,
+        /// SSAO plane bias (world units).
+        bias: float,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+        /// Image width and height.
+        size: uvec2,
+        /// Frame index.
+        frame: uint,
+        /// Seed of the random numbers.
+        seed: uint,
+        /// Directions (SSAO) or rays (RTAO) per pixel.
+        samples: uint,
+        /// SSAO steps per direction.
+        steps: uint,
+        /// RTAO: the first ray of this dispatch.
+        first_ray: uint,
+        /// RTAO: rays of this dispatch.
+        batch_rays: uint,
+    }
+
+    /// Push constants of `ao_blur.comp`.
+    struct AoBlurParams {
+        /// The camera (its origin unused).
+        camera: GpuCamera,
+        /// Plane-distance sigma, a fraction of the view depth.
+        depth_sigma: float,
+        /// Normal exponent.
+        normal_exponent: float,
+        /// Image width and height.
+        size: uvec2,
+    }
+
+    /// Push constants of the IBL precomputation kernels (`ibl_*.comp`).
+    struct IblParams {
+        /// Source width, height (the environment map).
+        src_size: uvec2,
+        /// Chain level read (`ibl_downsample`).
+        src_level: uint,
+        /// First row of this dispatch (`ibl_sh`).
+        first_row: uint,
+        /// Width and height of the level written.
+        dst_size: uvec2,
+        /// Texel offset of the level written.
+        dst_offset: uint,
+        /// Samples (per axis for the LUT).
+        samples: uint,
+        /// Perceptual roughness of the level (prefilter).
+        roughness: float,
+        /// Padding.
+        pad0: float,
+        /// Padding.
+        pad1: float,
+        /// Padding.
+        pad2: float,
+    }
+
+    /// Push constants of `light_sample_test.comp` (tests only).
+    #[doc(hidden)]
+    struct LightTestParams {
+        /// Shading point (world).
+        point: vec3,
+        /// Padding.
+        pad0: float,
+        /// Its unit normal (world).
+        normal: vec3,
+        /// Padding.
+        pad1: float,
+        /// Mode (see the kernel).
+        mode: uint,
+        /// Number of samples or directions.
+        count: uint,
+        /// Seed.
+        seed: uint,
+        /// 0 the renderer's pdf, 1 a deliberately wrong one.
+        variant: uint,
+        /// Environment width, height.
+        env_size: uvec2,
+        /// Emissive triangles.
+        light_count: uint,
+        /// Padding.
+        pad2: uint,
+    }
+}
+
+gpu_constants! {
+    /// `GpuMaterial::flags.x`: the material is double-sided.
+    MATERIAL_DOUBLE_SIDED: uint = 1;
+    /// `GpuMaterial::flags.x`: `KHR_materials_volume` with a thickness: transmission refracts
+    /// (else it is thin-walled).
+    MATERIAL_VOLUME: uint = 2;
+    /// `GpuTexture::flags`: clamp s.
+    TEXTURE_WRAP_S_CLAMP: uint = 1;
+    /// `GpuTexture::flags`: mirror s.
+    TEXTURE_WRAP_S_MIRROR: uint = 2;
+    /// `GpuTexture::flags`: clamp t.
+    TEXTURE_WRAP_T_CLAMP: uint = 4;
+    /// `GpuTexture::flags`: mirror t.
+    TEXTURE_WRAP_T_MIRROR: uint = 8;
+    /// `GpuTexture::flags`: bilinear magnification (otherwise nearest).
+    TEXTURE_LINEAR: uint = 16;
+    /// `GpuTexture::flags`: decode sRGB to linear.
+    TEXTURE_SRGB: uint = 32;
+    /// `GpuTexture::flags`: bilinear within a level when minified (otherwise nearest).
+    TEXTURE_MIN_LINEAR: uint = 64;
+    /// `GpuTexture::flags`: blend the two nearest mip levels (otherwise the nearest level).
+    TEXTURE_MIP_LINEAR: uint = 128;
+    /// `GpuLight::direction_kind.w` of a point light.
+    LIGHT_POINT: float = 0.0;
+    /// `GpuLight::direction_kind.w` of a spot light.
+    LIGHT_SPOT: float = 1.0;
+    /// `GpuLight::direction_kind.w` of a directional light.
+    LIGHT_DIRECTIONAL: float = 2.0;
+    /// The G-buffer's material index where no surface was hit.
+    GBUFFER_NO_SURFACE: uint = 0xffffffff;
+}
+
+scene_bindings! {
+    /// BVH nodes ([`GpuBvhNode`]), four RGBA32UI texels each.
+    bvh_node_texels: readonly texels rgba32ui,
+    /// BVH triangles ([`BvhTri`]), three RGBA32UI texels each.
+    bvh_tri_texels: readonly texels rgba32ui,
+    /// [`GpuTriangle`]s in BVH order.
+    triangles: readonly buffer [GpuTriangle],
+    /// [`GpuVertex`]s.
+    vertices: readonly buffer [GpuVertex],
+    /// [`GpuMaterial`]s.
+    materials: readonly buffer [GpuMaterial],
+    /// [`GpuTexture`]s.
+    textures: readonly buffer [GpuTexture],
+    /// The sRGB decoding table, then every texture's RGBA8 texels, one R32UI texel each.
+    scene_texels: readonly texels r32ui,
+    /// The emissive-triangle sampling table ([`GpuLightTri`]).
+    lights: readonly buffer [GpuLightTri],
+    /// Punctual lights ([`GpuLight`]).
+    punctual: readonly buffer [GpuLight],
+    /// Environment texels: rgb radiance, density over (u, v).
+    env_texels: readonly buffer [vec4],
+    /// The environment's row CDF.
+    env_marginal: readonly buffer [float],
+    /// The environment's per-row CDFs.
+    env_conditional: readonly buffer [float],
+}
+
+kernels! {
+    /// The progressive path tracer.
+    pathtrace {
+        scene: full [lights, punctual, env_map, textures, transmission, alpha],
+        push: PathParams,
+        spec: { beckmann: bool = false, power_heuristic: bool = true },
+        bindings: {
+            /// Running mean rgb, sample count (vec4 per pixel).
+            accum: readwrite buffer [vec4],
+            /// Running mean of the squared samples rgb.
+            moment: readwrite buffer [vec4],
+            /// Base colour at the first hit.
+            aov_albedo: readwrite buffer [vec4],
+            /// Shading normal and distance at the first hit.
+            aov_normal_depth: readwrite buffer [vec4],
+            /// Counters ([`PathStats`]).
+            stats: readwrite buffer PathStats,
+        }
+    }
+
+    /// A path target's running mean into an image.
+    resolve {
+        scene: none,
+        push: ResolveParams,
+        spec: {},
+        bindings: {
+            /// The running mean.
+            accum: readonly buffer [vec4],
+            /// The image written.
+            out_color: writeonly image rgba32f,
+        }
+    }
+
+    /// The ray-cast G-buffer.
+    gbuffer {
+        scene: full [textures, alpha],
+        push: GBufferParams,
+        spec: {},
+        bindings: {
+            /// View-space depth.
+            gb_depth: writeonly image r32f,
+            /// Octahedral normal, roughness.
+            gb_normal: writeonly image rgba16f,
+            /// Base colour, metallic.
+            gb_base: writeonly image rgba16f,
+            /// Emission.
+            gb_emission: writeonly image rgba16f,
+            /// Material index, octahedral geometric normal.
+            gb_material: writeonly image rg32ui,
+        }
+    }
+
+    /// Deferred lighting of a G-buffer.
+    deferred {
+        scene: full [textures, lights, punctual, env_map, alpha, transmission],
+        push: DeferredParams,
+        spec: { beckmann: bool = false },
+        bindings: {
+            /// View-space depth.
+            gb_depth: readonly image r32f,
+            /// Octahedral normal, roughness.
+            gb_normal: readonly image rgba16f,
+            /// Base colour, metallic.
+            gb_base: readonly image rgba16f,
+            /// Emission.
+            gb_emission: readonly image rgba16f,
+            /// Material index, octahedral geometric normal.
+            gb_material: readonly image rg32ui,
+            /// The lit image.
+            out_color: writeonly image rgba32f,
+            /// The split-sum BRDF table.
+            ibl_lut: readonly buffer [vec4],
+            /// The prefiltered environment chain.
+            ibl_prefiltered: readonly buffer [vec4],
+            /// SH9 irradiance coefficients.
+            ibl_sh: readonly buffer [vec4],
+            /// Ambient occlusion multiplying the IBL term (1 = unoccluded); 1×1 for none.
+            ao_image: readonly image r32f,
+        }
+    }
+
+    /// Screen-space ambient occlusion.
+    ssao {
+        scene: none,
+        push: AoParams,
+        spec: {},
+        bindings: {
+            /// View-space depth.
+            gb_depth: readonly image r32f,
+            /// Octahedral normal, roughness.
+            gb_normal: readonly image rgba16f,
+            /// AO (1 = unoccluded).
+            out_ao: writeonly image r32f,
+        }
+    }
+
+    /// Ray-traced ambient occlusion (SSAO's ground truth).
+    rtao {
+        scene: full [textures, alpha],
+        push: AoParams,
+        spec: {},
+        bindings: {
+            /// View-space depth.
+            gb_depth: readonly image r32f,
+            /// Octahedral normal, roughness.
+            gb_normal: readonly image rgba16f,
+            /// Material index, octahedral geometric normal.
+            gb_material: readonly image rg32ui,
+            /// AO, accumulated over batches of rays.
+            out_ao: readwrite image r32f,
+        }
+    }
+
+    /// The depth-aware AO blur.
+    ao_blur {
+        scene: none,
+        push: AoBlurParams,
+        spec: {},
+        bindings: {
+            /// The AO to blur.
+            ao_in: readonly image r32f,
+            /// View-space depth.
+            gb_depth: readonly image r32f,
+            /// Octahedral normal, roughness.
+            gb_normal: readonly image rgba16f,
+            /// The blurred AO.
+            out_ao: writeonly image r32f,
+        }
+    }
+
+    /// HDR to display.
+    tonemap {
+        scene: none,
+        push: TonemapParams,
+        spec: {},
+        bindings: {
+            /// Linear HDR input.
+            src: readonly image rgba32f,
+            /// sRGB-encoded output.
+            dst: writeonly image rgba8,
+        }
+    }
+
+    /// The split-sum BRDF table.
+    ibl_lut {
+        scene: none,
+        push: IblParams,
+        spec: {},
+        bindings: {
+            /// The table.
+            lut: readwrite buffer [vec4],
+        }
+    }
+
+    /// One level of the environment's box-filtered chain.
+    ibl_downsample {
+        scene: full [],
+        push: IblParams,
+        spec: {},
+        bindings: {
+            /// The chain (level 0 is the map itself, not stored).
+            chain: readwrite buffer [vec4],
+        }
+    }
+
+    /// One roughness level of the prefiltered environment.
+    ibl_prefilter {
+        scene: full [],
+        push: IblParams,
+        spec: {},
+        bindings: {
+            /// The box-filtered chain.
+            chain: readonly buffer [vec4],
+            /// The prefiltered levels.
+            prefiltered: readwrite buffer [vec4],
+        }
+    }
+
+    /// SH9 irradiance of the environment.
+    ibl_sh {
+        scene: full [],
+        push: IblParams,
+        spec: {},
+        bindings: {
+            /// The nine coefficients.
+            sh: readwrite buffer [vec4],
+        }
+    }
+
+    /// Rays through the BVH (tests and the ray-throughput benchmark).
+    trace {
+        scene: bvh,
+        push: TraceParams,
+        spec: { trace_any: bool = false },
+        bindings: {
+            /// The rays.
+            rays: readonly buffer [TraceRay],
+            /// Their hits.
+            hits: readwrite buffer [TraceHit],
+        }
+    }
+
+    /// Test-only: a pattern into an image.
+    #[doc(hidden)]
+    test_pattern {
+        scene: none,
+        push: PatternParams,
+        spec: { pattern_multiplier: uint = 1 },
+        bindings: {
+            /// The image.
+            out_image: writeonly image rgba32f,
+        }
+    }
+
+    /// Test-only: `out = 3 in + add`.
+    #[doc(hidden)]
+    test_buffer {
+        scene: none,
+        push: BufferTestParams,
+        spec: {},
+        bindings: {
+            /// Input.
+            values_in: readonly buffer [uint],
+            /// Output.
+            values_out: readwrite buffer [uint],
+        }
+    }
+
+    /// Test-only: hangs until released (the breadcrumb test).
+    #[doc(hidden)]
+    spin_test {
+        scene: none,
+        push: (),
+        spec: { max_iterations: uint = 0x1000000 },
+        bindings: {
+            /// The shared flags.
+            spin: coherent buffer SpinState,
+        }
+    }
+
+    /// Test-only: samplers and pdfs of bsdf.glsl for the chi-square tests.
+    #[doc(hidden)]
+    sample_test {
+        scene: none,
+        push: SampleTestParams,
+        spec: { beckmann: bool = false },
+        bindings: {
+            /// Directions at which to evaluate pdfs.
+            directions: readonly buffer [vec4],
+            /// Samples or pdfs.
+            results: readwrite buffer [vec4],
+        }
+    }
+
+    /// Test-only: light sampling of environment.glsl and shading.glsl.
+    #[doc(hidden)]
+    light_sample_test {
+        scene: full [],
+        push: LightTestParams,
+        spec: {},
+        bindings: {
+            /// Directions at which to evaluate pdfs.
+            directions: readonly buffer [vec4],
+            /// Samples or pdfs.
+            results: readwrite buffer [vec4],
+        }
+    }
+
+    /// Test-only: texture.glsl's wrap modes.
+    #[doc(hidden)]
+    texture_wrap_test {
+        scene: none,
+        push: BufferTestParams,
+        spec: {},
+        bindings: {
+            /// (texel coordinate, texture) cases.
+            cases: readonly buffer [ivec2],
+            /// The wrapped coordinates.
+            wrapped: readwrite buffer [int],
+            /// The textures.
+            textures: readonly buffer [GpuTexture],
+            /// Their texels.
+            scene_texels: readonly texels r32ui,
+        }
+    }
+}

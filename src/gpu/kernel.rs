@@ -1,0 +1,306 @@
+//! Kernels as types: [`Pipeline<K>`] builds a kernel's compute pipeline from its interface
+//! ([`KernelInterface`], generated from `src/gpu/interface.rs`) and records it with the kernel's
+//! own resource struct, push-constant type and specialization constants, so a binding is given by
+//! name and its number, type and place in the set come from the one definition.
+
+use super::scene::GpuScene;
+use crate::error::{Error, Result};
+use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc};
+use std::marker::PhantomData;
+
+/// How a binding is read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Access {
+    /// `readonly`.
+    ReadOnly,
+    /// `writeonly` (images only: naga rejects write-only buffers).
+    WriteOnly,
+    /// Read and written.
+    ReadWrite,
+    /// Read and written, `coherent`.
+    Coherent,
+}
+
+/// What a binding is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BindingKind {
+    /// A storage buffer holding a runtime array of `arg`.
+    Buffer,
+    /// A storage buffer holding one `arg` struct.
+    BufferStruct,
+    /// A 2D storage image of format `arg`.
+    Image,
+    /// A storage texel buffer of format `arg`.
+    Texels,
+}
+
+impl BindingKind {
+    /// The Vulkan descriptor type.
+    pub fn descriptor_type(self) -> raw::DescriptorType {
+        match self {
+            BindingKind::Buffer | BindingKind::BufferStruct => raw::DescriptorType::STORAGE_BUFFER,
+            BindingKind::Image => raw::DescriptorType::STORAGE_IMAGE,
+            BindingKind::Texels => raw::DescriptorType::STORAGE_TEXEL_BUFFER,
+        }
+    }
+}
+
+/// One binding of a kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BindingDesc {
+    /// The name: the variable's for images and texel buffers, the block's one member for buffers.
+    pub name: &'static str,
+    /// How the kernel reads it.
+    pub access: Access,
+    /// What it is.
+    pub kind: BindingKind,
+    /// The element type (buffers) or storage format (images, texel buffers), as in GLSL.
+    pub arg: &'static str,
+}
+
+/// Which part of the scene's binding block a kernel declares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SceneUse {
+    /// None: the kernel's own bindings start at 0.
+    None,
+    /// The BVH's two bindings (0 and 1).
+    Bvh,
+    /// The whole block ([`super::layout::SCENE_BINDING_DESCS`]).
+    Full,
+}
+
+/// One specialization constant of a kernel's own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SpecDesc {
+    /// Its name in Rust (upper case in GLSL).
+    pub name: &'static str,
+    /// `bool` or `uint`.
+    pub ty: &'static str,
+}
+
+/// Everything the host and a kernel agree on.
+#[derive(Debug)]
+pub struct KernelInterface {
+    /// The kernel's file stem in `spirv/`.
+    pub name: &'static str,
+    /// Which part of the scene's bindings it declares.
+    pub scene: SceneUse,
+    /// The scene features ([`SCENE_FEATURES`]) it is specialised on; the others are `false`.
+    pub features: &'static [&'static str],
+    /// Its own bindings, in order (numbered from [`KernelInterface::first_own_binding`]).
+    pub bindings: &'static [BindingDesc],
+    /// The push-constant struct's name (`()` for none).
+    pub push_type: &'static str,
+    /// Its size in bytes.
+    pub push_size: u32,
+    /// Its own specialization constants, ids from [`FIRST_KERNEL_SPEC_ID`] in order.
+    pub spec: &'static [SpecDesc],
+}
+
+/// The scene features a kernel can be specialised on: `HAS_<NAME>` in GLSL, constant id = index.
+pub const SCENE_FEATURES: [&str; 6] = ["textures", "alpha", "lights", "punctual", "env_map", "transmission"];
+
+/// The constant id of a kernel's first own specialization constant.
+pub const FIRST_KERNEL_SPEC_ID: u32 = 8;
+
+impl KernelInterface {
+    /// The binding number of the kernel's first own binding.
+    pub fn first_own_binding(&self) -> u32 {
+        match self.scene {
+            SceneUse::None => 0,
+            SceneUse::Bvh | SceneUse::Full => super::layout::SCENE_BINDINGS,
+        }
+    }
+
+    /// Every binding with its number: the scene's (those the kernel declares), then its own.
+    pub fn numbered_bindings(&self) -> Vec<(u32, BindingDesc)> {
+        let scene: &[BindingDesc] = match self.scene {
+            SceneUse::None => &[],
+            SceneUse::Bvh => &super::layout::SCENE_BINDING_DESCS[..2],
+            SceneUse::Full => super::layout::SCENE_BINDING_DESCS,
+        };
+        let first = self.first_own_binding();
+        scene
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (i as u32, *b))
+            .chain(self.bindings.iter().enumerate().map(|(i, b)| (first + i as u32, *b)))
+            .collect()
+    }
+
+    /// The constant id of scene feature `name`.
+    pub fn feature_id(name: &str) -> Option<u32> {
+        SCENE_FEATURES.iter().position(|f| *f == name).map(|i| i as u32)
+    }
+}
+
+/// What a scene has, for the kernels specialised on it (what it lacks costs nothing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SceneFeatures {
+    /// Some material has a texture.
+    pub textures: bool,
+    /// Some triangle is alpha-masked or blended.
+    pub alpha: bool,
+    /// Some triangle emits.
+    pub lights: bool,
+    /// There are punctual lights.
+    pub punctual: bool,
+    /// There is an environment map.
+    pub env_map: bool,
+    /// Some material transmits.
+    pub transmission: bool,
+}
+
+impl SceneFeatures {
+    /// The scene's features.
+    pub fn of(scene: &GpuScene) -> Self {
+        Self {
+            textures: scene.texture_count > 0,
+            alpha: scene.has_alpha,
+            lights: scene.light_count > 0,
+            punctual: scene.punctual_count > 0,
+            env_map: scene.env_size.is_some(),
+            transmission: scene.has_transmission,
+        }
+    }
+
+    /// Feature `name` of [`SCENE_FEATURES`].
+    pub fn get(&self, name: &str) -> Option<bool> {
+        Some(match name {
+            "textures" => self.textures,
+            "alpha" => self.alpha,
+            "lights" => self.lights,
+            "punctual" => self.punctual,
+            "env_map" => self.env_map,
+            "transmission" => self.transmission,
+            _ => return None,
+        })
+    }
+}
+
+/// A specialization constant's value as the 32 bits Vulkan takes.
+pub trait SpecValue: Copy {
+    /// The value's bits.
+    fn to_u32(self) -> u32;
+}
+
+impl SpecValue for bool {
+    fn to_u32(self) -> u32 {
+        self as u32
+    }
+}
+
+impl SpecValue for u32 {
+    fn to_u32(self) -> u32 {
+        self
+    }
+}
+
+/// A kernel's own specialization constants, in id order.
+pub trait SpecValues {
+    /// Their values.
+    fn values(&self) -> Vec<u32>;
+}
+
+/// A kernel's resources, in binding order.
+pub trait BindResources<'a> {
+    /// The descriptors, in binding order.
+    fn descriptors(&self) -> Vec<Descriptor<'a>>;
+}
+
+/// A kernel of `spirv/` as a type (`crate::gpu::layout::kernels::<name>::Kernel`).
+pub trait Kernel {
+    /// The resources it binds, by name.
+    type Resources<'a>: BindResources<'a>;
+    /// Its push constants.
+    type Push: bytemuck::Pod;
+    /// Its own specialization constants.
+    type Spec: SpecValues + Default;
+    /// Its interface.
+    const INTERFACE: &'static KernelInterface;
+}
+
+/// A compute pipeline of kernel `K`, recorded with `K`'s resources and push constants.
+pub struct Pipeline<K: Kernel> {
+    pipeline: ComputePipeline,
+    _kernel: PhantomData<fn() -> K>,
+}
+
+impl<K: Kernel> Pipeline<K> {
+    /// The pipeline specialised with `spec` and, for a kernel that depends on them, the scene's
+    /// `features` (an error when they are needed and not given).
+    pub fn new(ctx: &Context, spec: &K::Spec, features: Option<&SceneFeatures>) -> Result<Self> {
+        let interface = K::INTERFACE;
+        let mut specialization = Vec::new();
+        for &name in interface.features {
+            let id = KernelInterface::feature_id(name).ok_or_else(|| {
+                Error::Invalid(format!("kernel '{}': unknown scene feature '{name}'", interface.name))
+            })?;
+            let value = features.and_then(|f| f.get(name)).ok_or_else(|| {
+                Error::Invalid(format!(
+                    "kernel '{}' is specialised on the scene's features: give them",
+                    interface.name
+                ))
+            })?;
+            specialization.push((id, value as u32));
+        }
+        for (i, value) in spec.values().into_iter().enumerate() {
+            specialization.push((FIRST_KERNEL_SPEC_ID + i as u32, value));
+        }
+        let bindings: Vec<(u32, raw::DescriptorType)> =
+            interface.numbered_bindings().into_iter().map(|(n, b)| (n, b.kind.descriptor_type())).collect();
+        let pipeline = ComputePipeline::new(
+            ctx,
+            interface.name,
+            &PipelineDesc {
+                bindings: &bindings,
+                push_constant_size: interface.push_size,
+                specialization: &specialization,
+            },
+        )?;
+        Ok(Self { pipeline, _kernel: PhantomData })
+    }
+
+    /// The pipeline with the default specialization and no scene features.
+    pub fn plain(ctx: &Context) -> Result<Self> {
+        Self::new(ctx, &K::Spec::default(), None)
+    }
+
+    /// The pipeline for `scene`'s features and `spec`.
+    pub fn for_scene(ctx: &Context, scene: &GpuScene, spec: &K::Spec) -> Result<Self> {
+        Self::new(ctx, spec, Some(&SceneFeatures::of(scene)))
+    }
+
+    /// Records one dispatch: binds the pipeline, pushes `resources` and `push`, and dispatches
+    /// enough `local`-sized workgroups to cover `size` invocations. The caller records the
+    /// barrier that orders it with what follows.
+    pub fn record(
+        &self,
+        cmd: raw::CommandBuffer,
+        resources: &K::Resources<'_>,
+        push: &K::Push,
+        size: [u32; 3],
+        local: [u32; 3],
+    ) -> Result<()> {
+        self.bind(cmd, resources)?;
+        self.push_constants(cmd, push)?;
+        self.pipeline.dispatch(cmd, size, local)
+    }
+
+    /// Binds the pipeline and pushes `resources` (for several dispatches that differ only in
+    /// their push constants: [`Self::push_constants`] and [`Self::dispatch`] after it).
+    pub fn bind(&self, cmd: raw::CommandBuffer, resources: &K::Resources<'_>) -> Result<()> {
+        self.pipeline.bind(cmd);
+        self.pipeline.push_descriptors(cmd, &resources.descriptors())
+    }
+
+    /// Pushes the push constants.
+    pub fn push_constants(&self, cmd: raw::CommandBuffer, push: &K::Push) -> Result<()> {
+        self.pipeline.push_constants(cmd, push)
+    }
+
+    /// Dispatches enough `local`-sized workgroups to cover `size` invocations.
+    pub fn dispatch(&self, cmd: raw::CommandBuffer, size: [u32; 3], local: [u32; 3]) -> Result<()> {
+        self.pipeline.dispatch(cmd, size, local)
+    }
+}

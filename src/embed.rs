@@ -15,7 +15,14 @@
 //! // or progressive path tracing, a few samples per frame, resolved into the host's image:
 //! renderer.record_path_samples(cmd, &camera, &target, &path_settings, first_sample, count)?;
 //! renderer.record_path_resolve(cmd, &target, hdr_view)?;
+//! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
+//! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
+//!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view) }, &settings, None)?;
 //! ```
+//!
+//! Every `record_*` goes through [`crate::render::Passes`], the orchestrator that owns the
+//! pipelines, all built once, at construction (a path tracer with other sampling options than
+//! the default's when first recorded, or ahead of time by [`Renderer::set_path_tracer`]).
 //!
 //! Contract:
 //! - The device was created with Vulkan 1.3, `synchronization2` and `VK_KHR_push_descriptor`
@@ -36,49 +43,46 @@
 //!   the context's queue and wait; call them while no command buffer using the renderer is
 //!   pending (after the host's frame fence).
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::gpu::scene::GpuScene;
-use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
-use crate::passes::deferred::{DeferredPass, LightingSettings};
-use crate::passes::gbuffer::{GBufferPass, GBufferViews};
+use crate::passes::ao::AoSettings;
+use crate::passes::deferred::LightingSettings;
+use crate::passes::gbuffer::GBufferViews;
 use crate::passes::ibl::{IblResources, IblSettings};
-use crate::passes::pathtrace::{Heuristic, Microfacet, PathSettings, PathTarget, PathTracePass, ResolvePass};
-use crate::passes::tonemap::{ToneCurve, TonemapPass};
+use crate::passes::pathtrace::{Heuristic, Microfacet, PathSettings, PathTarget};
+use crate::passes::tonemap::ToneCurve;
+use crate::render::{HybridSettings, HybridTargets, Passes};
 use crate::scene::{Camera, Scene};
-use crate::vk::{raw, Context};
+use crate::vk::{raw, Context, GpuTimer};
 
-/// umbra's passes and one scene on a (host's) device.
+/// umbra's passes and one scene on a (host's) device: the scene, its image-based lighting
+/// tables and the pipelines ([`Passes`], each built once).
 pub struct Renderer {
     ctx: Context,
     scene: GpuScene,
-    gbuffer: GBufferPass,
-    deferred: DeferredPass,
     ibl: IblResources,
-    ssao: SsaoPass,
-    ao_blur: AoBlurPass,
-    rtao: RtaoPass,
-    tonemap: TonemapPass,
-    path: PathTracePass,
+    passes: Passes,
     path_options: (Microfacet, Heuristic),
-    resolve: ResolvePass,
 }
 
 impl Renderer {
-    /// Builds the BVH, uploads the scene and creates the pipelines it needs.
+    /// Builds the BVH, uploads the scene, precomputes its image-based lighting and creates every
+    /// pipeline.
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
-        let gpu_scene = GpuScene::upload(ctx, scene)?;
+        Self::with_gpu_scene(ctx, GpuScene::upload(ctx, scene)?)
+    }
+
+    /// A renderer for a scene already on the GPU (with its environment map, if any).
+    pub fn with_gpu_scene(ctx: &Context, scene: GpuScene) -> Result<Self> {
+        let passes = Passes::new(ctx, &scene);
+        let path_options = (Microfacet::Ggx, Heuristic::Power);
+        // Built now, not at the first frame: a host records frames against a deadline.
+        passes.prepare(&scene, path_options.0, path_options.1)?;
         Ok(Self {
-            gbuffer: GBufferPass::new(ctx, &gpu_scene)?,
-            deferred: DeferredPass::new(ctx, &gpu_scene)?,
-            ibl: IblResources::build(ctx, &gpu_scene, &IblSettings::default())?,
-            ssao: SsaoPass::new(ctx)?,
-            ao_blur: AoBlurPass::new(ctx)?,
-            rtao: RtaoPass::new(ctx, &gpu_scene)?,
-            tonemap: TonemapPass::new(ctx)?,
-            path: PathTracePass::for_scene(ctx, &gpu_scene, Microfacet::Ggx, Heuristic::Power)?,
-            path_options: (Microfacet::Ggx, Heuristic::Power),
-            resolve: ResolvePass::new(ctx)?,
-            scene: gpu_scene,
+            ibl: IblResources::build(ctx, &scene, &IblSettings::default())?,
+            passes,
+            path_options,
+            scene,
             ctx: ctx.clone(),
         })
     }
@@ -88,22 +92,25 @@ impl Renderer {
         &self.scene
     }
 
+    /// The pipelines (the orchestrator every `record_*` goes through).
+    pub fn passes(&self) -> &Passes {
+        &self.passes
+    }
+
     /// Takes changed materials, textures or lights of `scene` (same geometry) without rebuilding
-    /// the BVH, and re-specialises the lighting pipeline for them.
+    /// the BVH, and re-specialises the pipelines for them.
     pub fn update_scene(&mut self, scene: &Scene) -> Result<()> {
         self.scene.update(&self.ctx, scene)?;
-        self.gbuffer = GBufferPass::new(&self.ctx, &self.scene)?;
-        self.deferred = DeferredPass::new(&self.ctx, &self.scene)?;
-        self.rtao = RtaoPass::new(&self.ctx, &self.scene)?;
-        self.path =
-            PathTracePass::for_scene(&self.ctx, &self.scene, self.path_options.0, self.path_options.1)?;
+        self.passes = Passes::new(&self.ctx, &self.scene);
+        self.passes.prepare(&self.scene, self.path_options.0, self.path_options.1)?;
         Ok(())
     }
 
-    /// Chooses the path tracer's microfacet model and MIS heuristic (GGX and the power
-    /// heuristic by default); rebuilds its pipeline.
+    /// Chooses the path tracer's default microfacet model and MIS heuristic (GGX and the power
+    /// heuristic at first) and builds its pipeline now. Settings with other options also work:
+    /// their pipeline is built when first recorded.
     pub fn set_path_tracer(&mut self, microfacet: Microfacet, heuristic: Heuristic) -> Result<()> {
-        self.path = PathTracePass::for_scene(&self.ctx, &self.scene, microfacet, heuristic)?;
+        self.passes.path_pass(&self.scene, microfacet, heuristic)?;
         self.path_options = (microfacet, heuristic);
         Ok(())
     }
@@ -116,7 +123,7 @@ impl Renderer {
 
     /// Records path-traced samples `first .. first + count` into `target` (sample 0 restarts
     /// the running mean; a moved camera or changed scene restarts at 0). `settings.size` must be
-    /// the target's; its microfacet and heuristic those of [`Self::set_path_tracer`].
+    /// the target's.
     pub fn record_path_samples(
         &self,
         cmd: raw::CommandBuffer,
@@ -126,25 +133,7 @@ impl Renderer {
         first: u32,
         count: u32,
     ) -> Result<()> {
-        if settings.size != target.size {
-            return Err(Error::Invalid(format!(
-                "path settings are for {:?} but the target is {:?}",
-                settings.size, target.size
-            )));
-        }
-        if (settings.microfacet, settings.heuristic) != self.path_options {
-            return Err(Error::Invalid(format!(
-                "the renderer's path tracer is built for {:?}; call set_path_tracer for {:?}",
-                self.path_options,
-                (settings.microfacet, settings.heuristic)
-            )));
-        }
-        let mut params = PathTracePass::params(&self.scene, camera, settings);
-        for sample in first..first + count {
-            params.sample_index = sample;
-            self.path.record(&self.ctx, cmd, &self.scene, target, &params)?;
-        }
-        Ok(())
+        self.passes.record_path_samples(cmd, &self.scene, camera, target, settings, first, count)
     }
 
     /// Records the copy of `target`'s running mean into `output`: the host's
@@ -156,7 +145,7 @@ impl Renderer {
         target: &PathTarget,
         output: raw::ImageView,
     ) -> Result<()> {
-        self.resolve.record(&self.ctx, cmd, target, output)
+        self.passes.record_path_resolve(cmd, target, output)
     }
 
     /// Records umbra's ray-cast G-buffer for `camera` into `target`.
@@ -166,8 +155,7 @@ impl Renderer {
         camera: &Camera,
         target: &GBufferViews,
     ) -> Result<()> {
-        let params = GBufferPass::params(camera, target.size);
-        self.gbuffer.record(&self.ctx, cmd, &self.scene, target, &params)
+        self.passes.record_gbuffer(cmd, &self.scene, camera, target)
     }
 
     /// Records SSAO of `gbuffer` (umbra's or the host's) into `raw_ao` and, when `settings.blur`,
@@ -183,15 +171,7 @@ impl Renderer {
         blurred: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<raw::ImageView> {
-        settings.validate()?;
-        let params = SsaoPass::params(camera, gbuffer.size, settings);
-        self.ssao.record(&self.ctx, cmd, gbuffer, raw_ao, &params)?;
-        if !settings.blur {
-            return Ok(raw_ao);
-        }
-        let blur_params = AoBlurPass::params(camera, gbuffer.size);
-        self.ao_blur.record(&self.ctx, cmd, gbuffer, raw_ao, blurred, &blur_params)?;
-        Ok(blurred)
+        self.passes.record_ssao(cmd, camera, gbuffer, raw_ao, blurred, settings)
     }
 
     /// Records ray-traced ambient occlusion of `gbuffer` (SSAO's ground truth: `settings.samples`
@@ -205,9 +185,7 @@ impl Renderer {
         output: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<()> {
-        settings.validate()?;
-        let params = RtaoPass::params(camera, gbuffer.size, settings);
-        self.rtao.record(&self.ctx, cmd, &self.scene, gbuffer, output, &params)
+        self.passes.record_rtao(cmd, &self.scene, camera, gbuffer, output, settings)
     }
 
     /// Records deferred lighting of `gbuffer` (umbra's or the host's own) seen from `camera` into
@@ -221,9 +199,22 @@ impl Renderer {
         ao: Option<raw::ImageView>,
         settings: &LightingSettings,
     ) -> Result<()> {
-        settings.validate()?;
-        let params = DeferredPass::params(&self.scene, camera, gbuffer.size, settings);
-        self.deferred.record(&self.ctx, cmd, &self.scene, gbuffer, output, &self.ibl, ao, &params)
+        self.passes.record_lighting(cmd, &self.scene, &self.ibl, camera, gbuffer, output, ao, settings)
+    }
+
+    /// Records a whole hybrid frame into the host's `targets` (G-buffer, SSAO and blur when
+    /// `settings.ao`, lighting, tonemap when `targets.ldr`), timed into `timer` if given. The
+    /// renderer's image-based lighting is the default [`IblSettings`]' (`settings.ibl` is not
+    /// read here).
+    pub fn record_hybrid(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        self.passes.record_hybrid(cmd, &self.scene, &self.ibl, camera, targets, settings, timer)
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`
@@ -237,6 +228,6 @@ impl Renderer {
         exposure_stops: f32,
         curve: ToneCurve,
     ) -> Result<()> {
-        self.tonemap.record(&self.ctx, cmd, src, dst, size, exposure_stops, curve)
+        self.passes.record_tonemap(cmd, src, dst, size, exposure_stops, curve)
     }
 }

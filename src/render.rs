@@ -1,17 +1,29 @@
-//! Whole renders: the passes in order, submitted in batches, read back as linear images.
+//! The orchestrator. [`Passes`] owns the pipelines of every pass for one scene's features, each
+//! built once, on first use, and records the frames: the hybrid frame (G-buffer → SSAO → blur →
+//! deferred lighting → tonemap, [`Passes::record_hybrid`]), ambient occlusion and the progressive
+//! path tracer. The one-shot renders ([`Passes::hybrid`], [`Passes::path_trace`],
+//! [`Passes::ambient_occlusion`], which allocate the images, submit in batches and read back
+//! linear images; the free functions of the same names build a [`Passes`] for one render), the
+//! CLI, umbra-bench and the embedding API ([`crate::embed::Renderer`]) all go through it.
+//!
+//! Dependencies run one way: the passes (`crate::passes`) know neither this module nor the
+//! embedding API; this module knows the passes; the embedding API knows both
+//! (tests/modules.rs keeps it so).
 
 use crate::error::{Error, Result};
 use crate::gpu::layout::PathStats;
 use crate::gpu::scene::GpuScene;
-use crate::passes::ao::{ao_params, AoBlurPass, AoSettings, RtaoPass, SsaoPass};
+use crate::gpu::SceneFeatures;
+use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingSettings};
-use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass};
+use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
 pub use crate::passes::pathtrace::PathSettings;
-use crate::passes::pathtrace::{PathTarget, PathTracePass};
+use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
 use crate::vk::{raw, Context, GpuTimer, Image};
+use std::sync::OnceLock;
 
 /// A path-traced image, linear, row-major from the top left.
 #[derive(Debug, Clone)]
@@ -70,65 +82,6 @@ fn relative_error(mean: &[[f32; 4]], moment: &[[f32; 4]], spp: u32) -> f32 {
 /// The ε of the relative MSE, var / (mean² + ε): keeps dark pixels from dominating.
 const RELATIVE_EPSILON: f64 = 0.01;
 
-/// Path traces `settings.spp` samples per pixel, calling `progress(done, total)` after each
-/// submitted batch.
-pub fn path_trace(
-    ctx: &Context,
-    scene: &GpuScene,
-    camera: &Camera,
-    settings: &PathSettings,
-    mut progress: impl FnMut(u32, u32),
-) -> Result<PathImage> {
-    if settings.spp == 0 {
-        return Err(Error::Invalid("samples per pixel must be at least 1".into()));
-    }
-    let pass = PathTracePass::for_scene(ctx, scene, settings.microfacet, settings.heuristic)?;
-    let target = PathTarget::new(ctx, settings.size)?;
-    let mut params = PathTracePass::params(scene, camera, settings);
-    // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
-    let pixels = settings.size.0 as u64 * settings.size.1 as u64;
-    let batch = ((1u64 << 22) / pixels.max(1)).clamp(1, 64) as u32;
-    let mut timer = GpuTimer::new(ctx, 1)?;
-    let mut gpu_ms = 0.0;
-    let mut done = 0;
-    while done < settings.spp {
-        let count = batch.min(settings.spp - done);
-        ctx.submit(|cmd| {
-            timer.reset(cmd);
-            timer.begin(cmd, "pathtrace")?;
-            for s in done..done + count {
-                params.sample_index = s;
-                pass.record(ctx, cmd, scene, &target, &params)?;
-            }
-            timer.end(cmd)
-        })?;
-        gpu_ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
-        done += count;
-        progress(done, settings.spp);
-        if let Some(goal) = settings.target_error {
-            if done >= 16 && done < settings.spp {
-                let error = relative_error(&target.accum.read(ctx)?, &target.moment.read(ctx)?, done);
-                if error <= goal {
-                    log::info!("relative error {error:.4} <= {goal} after {done} spp: stopping");
-                    break;
-                }
-            }
-        }
-    }
-    let stats: Vec<PathStats> = target.stats.read(ctx)?;
-    Ok(PathImage {
-        size: settings.size,
-        spp: done,
-        mean: target.accum.read(ctx)?,
-        moment: target.moment.read(ctx)?,
-        albedo: target.albedo.read(ctx)?,
-        normal_depth: target.normal_depth.read(ctx)?,
-        nonfinite_samples: stats[0].nonfinite_samples,
-        nonfinite_sources: stats[0].nonfinite_sources,
-        gpu_ms,
-    })
-}
-
 /// Settings of a hybrid (deferred) render.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct HybridSettings {
@@ -161,82 +114,7 @@ pub struct HybridImage {
     pub pass_ms: Vec<(String, f64)>,
 }
 
-/// Renders `scene` with the hybrid pipeline: the IBL precomputation (BRDF table, prefiltered
-/// environment, SH irradiance), G-buffer, deferred lighting, tonemap.
-pub fn hybrid(
-    ctx: &Context,
-    scene: &GpuScene,
-    camera: &Camera,
-    settings: &HybridSettings,
-) -> Result<HybridImage> {
-    settings.lighting.validate()?;
-    let size = settings.size;
-    let gbuffer = GBuffer::new(ctx, size)?;
-    let output = Image::storage_2d(ctx, "hybrid colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
-    let gbuffer_pass = GBufferPass::new(ctx, scene)?;
-    let display = Image::storage_2d(ctx, "hybrid display", size.0, size.1, raw::Format::R8G8B8A8_UNORM)?;
-    let deferred = DeferredPass::new(ctx, scene)?;
-    let tonemap = TonemapPass::new(ctx)?;
-    let gbuffer_params = GBufferPass::params(camera, size);
-    let deferred_params = DeferredPass::params(scene, camera, size, &settings.lighting);
-    let ibl = IblResources::new(ctx, scene, &settings.ibl)?;
-    // SSAO into `ao_raw`, blurred into `ao` (when the settings ask for it).
-    let ao_images = match &settings.ao {
-        Some(ao) => {
-            ao.validate()?;
-            let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
-            Some((
-                make("hybrid ssao")?,
-                make("hybrid ssao blurred")?,
-                SsaoPass::new(ctx)?,
-                AoBlurPass::new(ctx)?,
-            ))
-        }
-        None => None,
-    };
-    let mut timer = GpuTimer::new(ctx, 8)?;
-    ctx.submit(|cmd| {
-        output.init_general(ctx, cmd);
-        display.init_general(ctx, cmd);
-        timer.reset(cmd);
-        ibl.record(ctx, cmd, scene, Some(&mut timer))?;
-        timer.begin(cmd, "gbuffer")?;
-        gbuffer_pass.record(ctx, cmd, scene, &gbuffer.views(), &gbuffer_params)?;
-        timer.end(cmd)?;
-        let mut ao_view = None;
-        if let (Some(ao), Some((ao_raw, ao_blurred, ssao, blur))) = (&settings.ao, &ao_images) {
-            ao_raw.init_general(ctx, cmd);
-            ao_blurred.init_general(ctx, cmd);
-            timer.begin(cmd, "ssao")?;
-            ssao.record(ctx, cmd, &gbuffer.views(), ao_raw.view, &SsaoPass::params(camera, size, ao))?;
-            timer.end(cmd)?;
-            ao_view = Some(ao_raw.view);
-            if ao.blur {
-                timer.begin(cmd, "ao_blur")?;
-                let blur_params = AoBlurPass::params(camera, size);
-                blur.record(ctx, cmd, &gbuffer.views(), ao_raw.view, ao_blurred.view, &blur_params)?;
-                timer.end(cmd)?;
-                ao_view = Some(ao_blurred.view);
-            }
-        }
-        timer.begin(cmd, "lighting")?;
-        deferred.record(ctx, cmd, scene, &gbuffer.views(), output.view, &ibl, ao_view, &deferred_params)?;
-        timer.end(cmd)?;
-        timer.begin(cmd, "tonemap")?;
-        tonemap.record(ctx, cmd, output.view, display.view, size, settings.exposure, settings.curve)?;
-        timer.end(cmd)
-    })?;
-    let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
-    Ok(HybridImage {
-        size,
-        color: output.read(ctx)?,
-        display: display.read(ctx)?,
-        gbuffer: gbuffer.read(ctx)?,
-        pass_ms,
-    })
-}
-
-/// Which ambient occlusion estimator [`ambient_occlusion`] runs.
+/// Which ambient occlusion estimator [`Passes::ambient_occlusion`] runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AoMethod {
     /// Screen-space AO from the G-buffer ([`crate::passes::ao::SsaoPass`]).
@@ -260,9 +138,534 @@ pub struct AoImage {
     pub pass_ms: Vec<(String, f64)>,
 }
 
-/// Renders the G-buffer of `scene` seen by `camera` at `size` and its ambient occlusion by
-/// `method` (see [`crate::passes::ao`] for the definition both estimate), blurred when
-/// `settings.blur`.
+/// The images one hybrid frame reads and writes, all storage images of one size in `GENERAL`
+/// layout (umbra's or a host's).
+pub struct HybridTargets<'a> {
+    /// The G-buffer ([`crate::passes::gbuffer`] formats).
+    pub gbuffer: &'a GBufferViews,
+    /// `R32_SFLOAT` images for SSAO and its blur (used when the settings ask for AO).
+    pub ao: Option<(raw::ImageView, raw::ImageView)>,
+    /// `R32G32B32A32_SFLOAT` linear radiance.
+    pub hdr: raw::ImageView,
+    /// `R8G8B8A8_UNORM` display image (sRGB-encoded); `None`: no tonemap.
+    pub ldr: Option<raw::ImageView>,
+}
+
+/// A lazily built pipeline.
+fn built<T>(cell: &OnceLock<T>, build: impl FnOnce() -> Result<T>) -> Result<&T> {
+    if let Some(pass) = cell.get() {
+        return Ok(pass);
+    }
+    let pass = build()?;
+    Ok(cell.get_or_init(|| pass))
+}
+
+/// Every pass's pipeline for scenes with one set of features ([`SceneFeatures`]: what the
+/// kernels are specialised on), each built once, on first use; and the recording of whole
+/// frames from them. Never submits in `record_*`; the one-shot renders submit and read back.
+pub struct Passes {
+    ctx: Context,
+    features: SceneFeatures,
+    gbuffer: OnceLock<GBufferPass>,
+    deferred: OnceLock<DeferredPass>,
+    ssao: OnceLock<SsaoPass>,
+    ao_blur: OnceLock<AoBlurPass>,
+    rtao: OnceLock<RtaoPass>,
+    tonemap: OnceLock<TonemapPass>,
+    /// One per (microfacet, heuristic), index [`path_index`].
+    path: [OnceLock<PathTracePass>; 4],
+    resolve: OnceLock<ResolvePass>,
+}
+
+fn path_index(microfacet: Microfacet, heuristic: Heuristic) -> usize {
+    (microfacet == Microfacet::Beckmann) as usize * 2 + (heuristic == Heuristic::Balance) as usize
+}
+
+impl Passes {
+    /// The passes for `scene`'s features (no pipeline is built yet).
+    pub fn new(ctx: &Context, scene: &GpuScene) -> Self {
+        Self {
+            ctx: ctx.clone(),
+            features: scene.features(),
+            gbuffer: OnceLock::new(),
+            deferred: OnceLock::new(),
+            ssao: OnceLock::new(),
+            ao_blur: OnceLock::new(),
+            rtao: OnceLock::new(),
+            tonemap: OnceLock::new(),
+            path: Default::default(),
+            resolve: OnceLock::new(),
+        }
+    }
+
+    /// The scene features the pipelines are specialised for.
+    pub fn features(&self) -> SceneFeatures {
+        self.features
+    }
+
+    /// Refuses a scene whose features differ from the pipelines' (its textures, lights or
+    /// transmission would be silently ignored, or paid for without being there).
+    fn check(&self, scene: &GpuScene) -> Result<()> {
+        let features = scene.features();
+        if features != self.features {
+            return Err(Error::Invalid(format!(
+                "the passes were built for a scene with {:?}, this one has {features:?}: build new passes",
+                self.features
+            )));
+        }
+        Ok(())
+    }
+
+    fn gbuffer_pass(&self, scene: &GpuScene) -> Result<&GBufferPass> {
+        built(&self.gbuffer, || GBufferPass::new(&self.ctx, scene))
+    }
+
+    fn deferred_pass(&self, scene: &GpuScene) -> Result<&DeferredPass> {
+        built(&self.deferred, || DeferredPass::new(&self.ctx, scene))
+    }
+
+    fn ssao_pass(&self) -> Result<&SsaoPass> {
+        built(&self.ssao, || SsaoPass::new(&self.ctx))
+    }
+
+    fn blur_pass(&self) -> Result<&AoBlurPass> {
+        built(&self.ao_blur, || AoBlurPass::new(&self.ctx))
+    }
+
+    fn rtao_pass(&self, scene: &GpuScene) -> Result<&RtaoPass> {
+        built(&self.rtao, || RtaoPass::new(&self.ctx, scene))
+    }
+
+    fn tonemap_pass(&self) -> Result<&TonemapPass> {
+        built(&self.tonemap, || TonemapPass::new(&self.ctx))
+    }
+
+    /// Builds every pipeline now (the path tracer's for `microfacet` and `heuristic`), not at
+    /// first use: for a host that records frames against a deadline.
+    pub fn prepare(&self, scene: &GpuScene, microfacet: Microfacet, heuristic: Heuristic) -> Result<()> {
+        self.check(scene)?;
+        self.gbuffer_pass(scene)?;
+        self.deferred_pass(scene)?;
+        self.rtao_pass(scene)?;
+        self.ssao_pass()?;
+        self.blur_pass()?;
+        self.tonemap_pass()?;
+        built(&self.resolve, || ResolvePass::new(&self.ctx))?;
+        self.path_pass(scene, microfacet, heuristic).map(|_| ())
+    }
+
+    /// The path tracer's pipeline for `microfacet` and `heuristic` (built now if it was not:
+    /// an embedding host calls this before recording a frame).
+    pub fn path_pass(
+        &self,
+        scene: &GpuScene,
+        microfacet: Microfacet,
+        heuristic: Heuristic,
+    ) -> Result<&PathTracePass> {
+        self.check(scene)?;
+        built(&self.path[path_index(microfacet, heuristic)], || {
+            PathTracePass::for_scene(&self.ctx, scene, microfacet, heuristic)
+        })
+    }
+
+    /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.
+    pub fn record_gbuffer(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        target: &GBufferViews,
+    ) -> Result<()> {
+        self.check(scene)?;
+        let params = GBufferPass::params(camera, target.size);
+        self.gbuffer_pass(scene)?.record(&self.ctx, cmd, scene, target, &params)
+    }
+
+    /// Records SSAO of `gbuffer` into `raw_ao` and, when `settings.blur`, its depth-aware blur
+    /// into `blurred` (`R32_SFLOAT`, the G-buffer's size). Returns the view holding the result.
+    pub fn record_ssao(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        raw_ao: raw::ImageView,
+        blurred: raw::ImageView,
+        settings: &AoSettings,
+    ) -> Result<raw::ImageView> {
+        self.record_ssao_timed(cmd, camera, gbuffer, (raw_ao, blurred), settings, None)
+    }
+
+    fn record_ssao_timed(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        (raw_ao, blurred): (raw::ImageView, raw::ImageView),
+        settings: &AoSettings,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<raw::ImageView> {
+        settings.validate()?;
+        let size = gbuffer.size;
+        timed(&mut timer, cmd, "ssao", || {
+            self.ssao_pass()?.record(
+                &self.ctx,
+                cmd,
+                gbuffer,
+                raw_ao,
+                &SsaoPass::params(camera, size, settings),
+            )
+        })?;
+        if !settings.blur {
+            return Ok(raw_ao);
+        }
+        timed(&mut timer, cmd, "ao_blur", || {
+            let params = AoBlurPass::params(camera, size);
+            self.blur_pass()?.record(&self.ctx, cmd, gbuffer, raw_ao, blurred, &params)
+        })?;
+        Ok(blurred)
+    }
+
+    /// Records ray-traced AO of `gbuffer` (`settings.samples` rays of length `settings.radius`
+    /// per pixel) into `output` (`R32_SFLOAT`, the G-buffer's size).
+    pub fn record_rtao(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        settings: &AoSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.validate()?;
+        let params = RtaoPass::params(camera, gbuffer.size, settings);
+        self.rtao_pass(scene)?.record(&self.ctx, cmd, scene, gbuffer, output, &params)
+    }
+
+    /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the
+    /// scene's precomputed `ibl` and an ambient-occlusion image `ao` (or none).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_lighting(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        ibl: &IblResources,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        ao: Option<raw::ImageView>,
+        settings: &LightingSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.validate()?;
+        let params = DeferredPass::params(scene, camera, gbuffer.size, settings);
+        self.deferred_pass(scene)?.record(&self.ctx, cmd, scene, gbuffer, output, ibl, ao, &params)
+    }
+
+    /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`
+    /// (`R8G8B8A8_UNORM`, sRGB-encoded values).
+    pub fn record_tonemap(
+        &self,
+        cmd: raw::CommandBuffer,
+        src: raw::ImageView,
+        dst: raw::ImageView,
+        size: (u32, u32),
+        exposure_stops: f32,
+        curve: ToneCurve,
+    ) -> Result<()> {
+        self.tonemap_pass()?.record(&self.ctx, cmd, src, dst, size, exposure_stops, curve)
+    }
+
+    /// Records one hybrid frame into `targets`: G-buffer, SSAO and its blur (when
+    /// `settings.ao`), deferred lighting with `ibl` × AO, tonemap (when `targets.ldr`), each
+    /// timed under its name when a `timer` is given. The one place the hybrid frame is wired.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_hybrid(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        ibl: &IblResources,
+        camera: &Camera,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.lighting.validate()?;
+        let gbuffer = targets.gbuffer;
+        timed(&mut timer, cmd, "gbuffer", || self.record_gbuffer(cmd, scene, camera, gbuffer))?;
+        let ao = match (&settings.ao, targets.ao) {
+            (Some(ao), Some(images)) => {
+                Some(self.record_ssao_timed(cmd, camera, gbuffer, images, ao, timer.as_deref_mut())?)
+            }
+            (Some(_), None) => {
+                return Err(Error::Invalid("the settings ask for SSAO but no AO images were given".into()))
+            }
+            (None, _) => None,
+        };
+        timed(&mut timer, cmd, "lighting", || {
+            self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, ao, &settings.lighting)
+        })?;
+        if let Some(ldr) = targets.ldr {
+            timed(&mut timer, cmd, "tonemap", || {
+                self.record_tonemap(cmd, targets.hdr, ldr, gbuffer.size, settings.exposure, settings.curve)
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Records path-traced samples `first .. first + count` of `settings` into `target`
+    /// (sample 0 restarts the running mean). `settings.size` must be the target's.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_path_samples(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        target: &PathTarget,
+        settings: &PathSettings,
+        first: u32,
+        count: u32,
+    ) -> Result<()> {
+        if settings.size != target.size {
+            return Err(Error::Invalid(format!(
+                "path settings are for {:?} but the target is {:?}",
+                settings.size, target.size
+            )));
+        }
+        let pass = self.path_pass(scene, settings.microfacet, settings.heuristic)?;
+        let mut params = PathTracePass::params(scene, camera, settings);
+        for sample in first..first + count {
+            params.sample_index = sample;
+            pass.record(&self.ctx, cmd, scene, target, &params)?;
+        }
+        Ok(())
+    }
+
+    /// Records the copy of `target`'s running mean into `output` (`R32G32B32A32_SFLOAT`, the
+    /// target's size).
+    pub fn record_path_resolve(
+        &self,
+        cmd: raw::CommandBuffer,
+        target: &PathTarget,
+        output: raw::ImageView,
+    ) -> Result<()> {
+        built(&self.resolve, || ResolvePass::new(&self.ctx))?.record(&self.ctx, cmd, target, output)
+    }
+
+    /// Path traces `settings.spp` samples per pixel, calling `progress(done, total)` after each
+    /// submitted batch.
+    pub fn path_trace(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        settings: &PathSettings,
+        mut progress: impl FnMut(u32, u32),
+    ) -> Result<PathImage> {
+        let ctx = &self.ctx;
+        if settings.spp == 0 {
+            return Err(Error::Invalid("samples per pixel must be at least 1".into()));
+        }
+        self.path_pass(scene, settings.microfacet, settings.heuristic)?;
+        let target = PathTarget::new(ctx, settings.size)?;
+        // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
+        let pixels = settings.size.0 as u64 * settings.size.1 as u64;
+        let batch = ((1u64 << 22) / pixels.max(1)).clamp(1, 64) as u32;
+        let mut timer = GpuTimer::new(ctx, 1)?;
+        let mut gpu_ms = 0.0;
+        let mut done = 0;
+        while done < settings.spp {
+            let count = batch.min(settings.spp - done);
+            ctx.submit(|cmd| {
+                timer.reset(cmd);
+                timer.begin(cmd, "pathtrace")?;
+                self.record_path_samples(cmd, scene, camera, &target, settings, done, count)?;
+                timer.end(cmd)
+            })?;
+            gpu_ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+            done += count;
+            progress(done, settings.spp);
+            if let Some(goal) = settings.target_error {
+                if done >= 16 && done < settings.spp {
+                    let error = relative_error(&target.accum.read(ctx)?, &target.moment.read(ctx)?, done);
+                    if error <= goal {
+                        log::info!("relative error {error:.4} <= {goal} after {done} spp: stopping");
+                        break;
+                    }
+                }
+            }
+        }
+        let stats: Vec<PathStats> = target.stats.read(ctx)?;
+        Ok(PathImage {
+            size: settings.size,
+            spp: done,
+            mean: target.accum.read(ctx)?,
+            moment: target.moment.read(ctx)?,
+            albedo: target.albedo.read(ctx)?,
+            normal_depth: target.normal_depth.read(ctx)?,
+            nonfinite_samples: stats[0].nonfinite_samples,
+            nonfinite_sources: stats[0].nonfinite_sources,
+            gpu_ms,
+        })
+    }
+
+    /// Renders `scene` with the hybrid pipeline: the IBL precomputation (BRDF table, prefiltered
+    /// environment, SH irradiance) for `settings.ibl`, then [`Passes::record_hybrid`].
+    pub fn hybrid(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        settings: &HybridSettings,
+    ) -> Result<HybridImage> {
+        let ctx = &self.ctx;
+        self.check(scene)?;
+        settings.lighting.validate()?;
+        if let Some(ao) = &settings.ao {
+            ao.validate()?;
+        }
+        let size = settings.size;
+        let gbuffer = GBuffer::new(ctx, size)?;
+        let output =
+            Image::storage_2d(ctx, "hybrid colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
+        let display = Image::storage_2d(ctx, "hybrid display", size.0, size.1, raw::Format::R8G8B8A8_UNORM)?;
+        let ibl = IblResources::new(ctx, scene, &settings.ibl)?;
+        let ao_images = match &settings.ao {
+            Some(_) => {
+                let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
+                Some((make("hybrid ssao")?, make("hybrid ssao blurred")?))
+            }
+            None => None,
+        };
+        let views = gbuffer.views();
+        let targets = HybridTargets {
+            gbuffer: &views,
+            ao: ao_images.as_ref().map(|(a, b)| (a.view, b.view)),
+            hdr: output.view,
+            ldr: Some(display.view),
+        };
+        let mut timer = GpuTimer::new(ctx, 8)?;
+        ctx.submit(|cmd| {
+            output.init_general(ctx, cmd);
+            display.init_general(ctx, cmd);
+            if let Some((a, b)) = &ao_images {
+                a.init_general(ctx, cmd);
+                b.init_general(ctx, cmd);
+            }
+            timer.reset(cmd);
+            ibl.record(ctx, cmd, scene, Some(&mut timer))?;
+            self.record_hybrid(cmd, scene, &ibl, camera, &targets, settings, Some(&mut timer))
+        })?;
+        let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
+        Ok(HybridImage {
+            size,
+            color: output.read(ctx)?,
+            display: display.read(ctx)?,
+            gbuffer: gbuffer.read(ctx)?,
+            pass_ms,
+        })
+    }
+
+    /// Renders the G-buffer of `scene` seen by `camera` at `size` and its ambient occlusion by
+    /// `method` (see [`crate::passes::ao`] for the definition both estimate), blurred when
+    /// `settings.blur`.
+    pub fn ambient_occlusion(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        size: (u32, u32),
+        method: AoMethod,
+        settings: &AoSettings,
+    ) -> Result<AoImage> {
+        let ctx = &self.ctx;
+        settings.validate()?;
+        let gbuffer = GBuffer::new(ctx, size)?;
+        let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
+        let raw_ao = make("ambient occlusion")?;
+        let blurred = make("ambient occlusion blurred")?;
+        let views = gbuffer.views();
+        let mut timer = GpuTimer::new(ctx, 3)?;
+        ctx.submit(|cmd| {
+            raw_ao.init_general(ctx, cmd);
+            blurred.init_general(ctx, cmd);
+            timer.reset(cmd);
+            timer.begin(cmd, "gbuffer")?;
+            self.record_gbuffer(cmd, scene, camera, &views)?;
+            timer.end(cmd)?;
+            match method {
+                AoMethod::Ssao => {
+                    // SSAO without its blur; the blur follows for both methods.
+                    let unblurred = AoSettings { blur: false, ..*settings };
+                    self.record_ssao_timed(
+                        cmd,
+                        camera,
+                        &views,
+                        (raw_ao.view, blurred.view),
+                        &unblurred,
+                        Some(&mut timer),
+                    )?;
+                }
+                AoMethod::Rtao => {
+                    timer.begin(cmd, "rtao")?;
+                    self.record_rtao(cmd, scene, camera, &views, raw_ao.view, settings)?;
+                    timer.end(cmd)?;
+                }
+            }
+            if settings.blur {
+                timer.begin(cmd, "ao_blur")?;
+                let params = AoBlurPass::params(camera, size);
+                self.blur_pass()?.record(ctx, cmd, &views, raw_ao.view, blurred.view, &params)?;
+                timer.end(cmd)?;
+            }
+            Ok(())
+        })?;
+        let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
+        let unblurred: Vec<f32> = raw_ao.read(ctx)?;
+        let values = if settings.blur { blurred.read(ctx)? } else { unblurred.clone() };
+        Ok(AoImage { size, values, unblurred, gbuffer: gbuffer.read(ctx)?, pass_ms })
+    }
+}
+
+/// Runs `record` between `timer.begin(name)` and `timer.end()` when there is a timer.
+fn timed(
+    timer: &mut Option<&mut GpuTimer>,
+    cmd: raw::CommandBuffer,
+    name: &str,
+    record: impl FnOnce() -> Result<()>,
+) -> Result<()> {
+    if let Some(t) = timer.as_deref_mut() {
+        t.begin(cmd, name)?;
+    }
+    record()?;
+    if let Some(t) = timer.as_deref_mut() {
+        t.end(cmd)?;
+    }
+    Ok(())
+}
+
+/// Path traces `scene` once ([`Passes::path_trace`] with passes built for this render).
+pub fn path_trace(
+    ctx: &Context,
+    scene: &GpuScene,
+    camera: &Camera,
+    settings: &PathSettings,
+    progress: impl FnMut(u32, u32),
+) -> Result<PathImage> {
+    Passes::new(ctx, scene).path_trace(scene, camera, settings, progress)
+}
+
+/// Renders `scene` once with the hybrid pipeline ([`Passes::hybrid`] with passes built for this
+/// render).
+pub fn hybrid(
+    ctx: &Context,
+    scene: &GpuScene,
+    camera: &Camera,
+    settings: &HybridSettings,
+) -> Result<HybridImage> {
+    Passes::new(ctx, scene).hybrid(scene, camera, settings)
+}
+
+/// Renders ambient occlusion once ([`Passes::ambient_occlusion`] with passes built for this
+/// render).
 pub fn ambient_occlusion(
     ctx: &Context,
     scene: &GpuScene,
@@ -271,47 +674,5 @@ pub fn ambient_occlusion(
     method: AoMethod,
     settings: &AoSettings,
 ) -> Result<AoImage> {
-    settings.validate()?;
-    let gbuffer = GBuffer::new(ctx, size)?;
-    let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
-    let raw_ao = make("ambient occlusion")?;
-    let blurred = make("ambient occlusion blurred")?;
-    let gbuffer_pass = GBufferPass::new(ctx, scene)?;
-    let ssao = SsaoPass::new(ctx)?;
-    let rtao = RtaoPass::new(ctx, scene)?;
-    let blur = AoBlurPass::new(ctx)?;
-    let gbuffer_params = GBufferPass::params(camera, size);
-    let params = ao_params(camera, size, settings);
-    let blur_params = AoBlurPass::params(camera, size);
-    let views = gbuffer.views();
-    let mut timer = GpuTimer::new(ctx, 3)?;
-    ctx.submit(|cmd| {
-        raw_ao.init_general(ctx, cmd);
-        blurred.init_general(ctx, cmd);
-        timer.reset(cmd);
-        timer.begin(cmd, "gbuffer")?;
-        gbuffer_pass.record(ctx, cmd, scene, &views, &gbuffer_params)?;
-        timer.end(cmd)?;
-        match method {
-            AoMethod::Ssao => {
-                timer.begin(cmd, "ssao")?;
-                ssao.record(ctx, cmd, &views, raw_ao.view, &params)?;
-            }
-            AoMethod::Rtao => {
-                timer.begin(cmd, "rtao")?;
-                rtao.record(ctx, cmd, scene, &views, raw_ao.view, &params)?;
-            }
-        }
-        timer.end(cmd)?;
-        if settings.blur {
-            timer.begin(cmd, "ao_blur")?;
-            blur.record(ctx, cmd, &views, raw_ao.view, blurred.view, &blur_params)?;
-            timer.end(cmd)?;
-        }
-        Ok(())
-    })?;
-    let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
-    let unblurred: Vec<f32> = raw_ao.read(ctx)?;
-    let values = if settings.blur { blurred.read(ctx)? } else { unblurred.clone() };
-    Ok(AoImage { size, values, unblurred, gbuffer: gbuffer.read(ctx)?, pass_ms })
+    Passes::new(ctx, scene).ambient_occlusion(scene, camera, size, method, settings)
 }

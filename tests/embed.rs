@@ -149,3 +149,64 @@ fn embedded_path_tracing_equals_render_path_trace() {
         gpu.submit(|cmd| renderer.record_path_samples(cmd, &camera, &target, &wrong, 0, 1)).unwrap_err();
     assert!(err.to_string().contains("target is"), "{err}");
 }
+
+/// The whole hybrid frame recorded through the embedding API into the caller's images (one
+/// `record_hybrid` call: G-buffer, SSAO and its blur, lighting, tonemap) is exactly the one-shot
+/// `render::hybrid` of the same settings: both go through the one orchestrator. Passes built for
+/// one scene's features refuse a scene with others instead of silently ignoring its textures.
+#[test]
+fn embedded_hybrid_frame_equals_render_hybrid() {
+    use umbra::embed::Renderer;
+    use umbra::passes::ao::AoSettings;
+    use umbra::passes::gbuffer::GBuffer;
+    use umbra::render::{hybrid, HybridSettings, HybridTargets, Passes};
+    use umbra::scene::Scene;
+    use umbra::vk::{raw, GpuTimer, Image};
+
+    let gpu = common::Gpu::new();
+    let scene = Scene::cornell_box();
+    let camera = scene.camera(None).unwrap();
+    let renderer = Renderer::new(&gpu, &scene).unwrap();
+    let size = (40, 32);
+    let settings = HybridSettings { size, ao: Some(AoSettings::default()), ..HybridSettings::default() };
+    let gbuffer = GBuffer::new(&gpu, size).unwrap();
+    let image = |name, format| Image::storage_2d(&gpu, name, size.0, size.1, format).unwrap();
+    let hdr = image("hdr", raw::Format::R32G32B32A32_SFLOAT);
+    let ldr = image("ldr", raw::Format::R8G8B8A8_UNORM);
+    let ao = [image("ao", raw::Format::R32_SFLOAT), image("ao blurred", raw::Format::R32_SFLOAT)];
+    let views = gbuffer.views();
+    let targets = HybridTargets {
+        gbuffer: &views,
+        ao: Some((ao[0].view, ao[1].view)),
+        hdr: hdr.view,
+        ldr: Some(ldr.view),
+    };
+    let mut timer = GpuTimer::new(&gpu, 8).unwrap();
+    gpu.submit(|cmd| {
+        for i in [&hdr, &ldr, &ao[0], &ao[1]] {
+            i.init_general(&gpu, cmd);
+        }
+        timer.reset(cmd);
+        renderer.record_hybrid(cmd, &camera, &targets, &settings, Some(&mut timer))
+    })
+    .unwrap();
+    let names: Vec<String> = timer.read().unwrap().into_iter().map(|t| t.name).collect();
+    assert_eq!(names, ["gbuffer", "ssao", "ao_blur", "lighting", "tonemap"]);
+    let reference = hybrid(&gpu, renderer.scene(), &camera, &settings).unwrap();
+    let color: Vec<[f32; 4]> = hdr.read(&gpu).unwrap();
+    let display: Vec<[u8; 4]> = ldr.read(&gpu).unwrap();
+    assert!(color.iter().any(|p| p[0] > 0.0), "the frame is black");
+    assert!(color == reference.color, "the embedded frame differs from render::hybrid");
+    assert!(display == reference.display, "the embedded display image differs from render::hybrid");
+
+    // Passes for the Cornell box (no textures) given a textured scene.
+    let textured = umbra::gpu::scene::GpuScene::upload(
+        &gpu,
+        &Scene::load(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/textured.glb")))
+            .unwrap(),
+    )
+    .unwrap();
+    let passes = Passes::new(&gpu, renderer.scene());
+    let err = passes.hybrid(&textured, &camera, &settings).unwrap_err().to_string();
+    assert!(err.contains("build new passes"), "{err}");
+}

@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
-use umbra::render::{ambient_occlusion, hybrid, path_trace, AoMethod, HybridSettings, PathSettings};
+use umbra::render::{AoMethod, HybridSettings, PathSettings};
 use umbra::scene::{Camera, Scene};
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
@@ -127,7 +127,6 @@ pub fn errors(image: &[[f32; 4]], reference: &[[f32; 4]]) -> (f64, f64) {
 
 /// A reference render, cached in `out` as a raw little-endian f32 file keyed by its settings.
 fn reference(
-    ctx: &Context,
     renderer: &Renderer,
     camera: &Camera,
     key: &str,
@@ -147,7 +146,9 @@ fn reference(
         }
     }
     let bar = super::progress_bar(settings.spp as u64, &format!("{key}: reference"));
-    let image = path_trace(ctx, renderer.scene(), camera, settings, |done, _| bar.set_position(done as u64))?;
+    let image = renderer
+        .passes()
+        .path_trace(renderer.scene(), camera, settings, |done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     // The reference's own error: its variance of the mean, relative, as `errors` weighs it.
     let variance = image.variance_of_mean();
@@ -176,7 +177,7 @@ pub fn run_scene(
     let renderer = Renderer::new(ctx, scene)?;
     let path_settings =
         PathSettings { size: s.size, spp: s.reference_spp, seed: 0x5eed, env, ..PathSettings::default() };
-    let (reference, floor) = reference(ctx, &renderer, camera, key, &path_settings, &s.out)?;
+    let (reference, floor) = reference(&renderer, camera, key, &path_settings, &s.out)?;
     let mut points = Vec::new();
 
     // Path tracing: one accumulation, read at every power of two.
@@ -254,7 +255,7 @@ pub fn run_scene(
         let is_once = |name: &str| name.starts_with("ibl");
         let (ms, image) = timed(
             s.repeats,
-            || hybrid(ctx, renderer.scene(), camera, &settings),
+            || renderer.passes().hybrid(renderer.scene(), camera, &settings),
             |image| image.pass_ms.iter().filter(|(name, _)| !is_once(name)).map(|(_, ms)| ms).sum(),
         )?;
         if precompute_ms.is_empty() {
@@ -285,7 +286,7 @@ pub fn run_scene(
     chart::write(&s.out.join(format!("suite-{key}-flip")), &flip_chart, &flip_points)?;
 
     // Ambient occlusion: SSAO (blurred) and RTAO against a many-ray RTAO reference.
-    let (ao_points, ao_floor) = ambient_occlusion_sweep(ctx, renderer.scene(), camera, s)?;
+    let (ao_points, ao_floor) = ambient_occlusion_sweep(&renderer, camera, s)?;
     let ao_title =
         format!("ambient occlusion, r = {} — {} — {}×{}", s.ao_radius, scene.name, s.size.0, s.size.1);
     let ao_chart =
@@ -332,14 +333,19 @@ fn chart_points(points: &[Point]) -> Vec<ChartPoint<'_>> {
 /// SSAO at each kernel size and RTAO at each ray count against an RTAO reference; the error is
 /// the MSE over pixels with a surface, the time the AO passes' (G-buffer excluded).
 fn ambient_occlusion_sweep(
-    ctx: &Context,
-    scene: &umbra::gpu::scene::GpuScene,
+    renderer: &Renderer,
     camera: &Camera,
     s: &SuiteSettings,
 ) -> Result<(Vec<Point>, f64)> {
+    let (passes, scene) = (renderer.passes(), renderer.scene());
     let settings = |samples, seed| AoSettings { samples, radius: s.ao_radius, seed, ..AoSettings::default() };
-    let reference =
-        ambient_occlusion(ctx, scene, camera, s.size, AoMethod::Rtao, &settings(s.ao_reference_rays, 99))?;
+    let reference = passes.ambient_occlusion(
+        scene,
+        camera,
+        s.size,
+        AoMethod::Rtao,
+        &settings(s.ao_reference_rays, 99),
+    )?;
     let surface: Vec<bool> = reference.gbuffer.depth.iter().map(|&d| d > 0.0).collect();
     let count = surface.iter().filter(|&&x| x).count().max(1) as f64;
     let floor = reference
@@ -363,7 +369,7 @@ fn ambient_occlusion_sweep(
         run_settings.blur = ao_method == AoMethod::Ssao;
         let (ms, image) = timed(
             s.repeats,
-            || ambient_occlusion(ctx, scene, camera, s.size, ao_method, &run_settings),
+            || passes.ambient_occlusion(scene, camera, s.size, ao_method, &run_settings),
             |image| image.pass_ms.iter().filter(|(name, _)| name != "gbuffer").map(|(_, ms)| ms).sum(),
         )?;
         let mse = image

@@ -6,18 +6,18 @@
 
 pub mod bvh;
 pub mod cli;
+pub mod color;
 pub mod embed;
 pub mod environment;
 pub mod error;
-pub mod geometry;
 pub mod gpu;
-pub mod ibl;
 pub mod kernels;
 pub mod output;
 pub mod passes;
+pub mod procedural;
 pub mod render;
 pub mod scene;
-pub mod tonemap;
+pub mod split_sum;
 pub mod vk;
 
 pub use error::{Error, Result};

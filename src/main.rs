@@ -130,8 +130,8 @@ enum ToneArg {
 }
 
 impl ToneArg {
-    fn curve(self) -> umbra::tonemap::ToneCurve {
-        use umbra::tonemap::ToneCurve;
+    fn curve(self) -> umbra::color::ToneCurve {
+        use umbra::color::ToneCurve;
         match self {
             ToneArg::Clamp => ToneCurve::Clamp,
             ToneArg::Aces => ToneCurve::Aces,
@@ -230,7 +230,7 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     let (w, h) = settings.size;
     let rgba: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
-    let display = umbra::tonemap::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
+    let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
     umbra::output::write_png(&args.output, w, h, &display)
         .with_context(|| format!("writing {}", args.output.display()))?;
     println!("wrote {}", args.output.display());
@@ -362,7 +362,7 @@ fn render_ao(
         .values
         .iter()
         .flat_map(|&v| {
-            let g = (umbra::output::srgb_encode(v.clamp(0.0, 1.0)) * 255.0).round() as u8;
+            let g = (umbra::color::srgb_encode(v.clamp(0.0, 1.0)) * 255.0).round() as u8;
             [g, g, g, 255]
         })
         .collect();
@@ -440,7 +440,7 @@ fn run(cli: Cli) -> Result<()> {
                 let (x, y, hsh) = (p[0] / w as f32, p[1] / h as f32, p[3] / 65535.0);
                 p.copy_from_slice(&[x, y, hsh, 1.0]);
             }
-            umbra::output::write_png(&output, w, h, &umbra::output::to_srgb8(&rgba, 1.0))
+            umbra::output::write_png(&output, w, h, &umbra::color::to_srgb8(&rgba, 1.0))
                 .with_context(|| format!("writing {}", output.display()))?;
             if let Some(path) = exr {
                 umbra::output::write_exr(

@@ -73,39 +73,6 @@ pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<Channel>)> {
     Ok((size.0, size.1, channels))
 }
 
-/// The inverse sRGB transfer function: an encoded value in [0, 1] to linear.
-pub fn srgb_decode(encoded: f32) -> f32 {
-    if encoded <= 0.040_45 {
-        encoded / 12.92
-    } else {
-        ((encoded + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// The sRGB transfer function of a linear value in [0, 1].
-pub fn srgb_encode(linear: f32) -> f32 {
-    if linear <= 0.003_130_8 {
-        12.92 * linear
-    } else {
-        1.055 * linear.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Linear RGBA (4 floats per pixel) scaled by `exposure`, clamped to [0, 1], sRGB-encoded to
-/// 8 bits. NaN becomes 0. Alpha is written linear.
-pub fn to_srgb8(rgba: &[f32], exposure: f32) -> Vec<u8> {
-    rgba.chunks_exact(4)
-        .flat_map(|p| {
-            let q = |v: f32, encode: bool| {
-                let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-                let v = if encode { srgb_encode(v) } else { v };
-                (v * 255.0 + 0.5) as u8
-            };
-            [q(p[0] * exposure, true), q(p[1] * exposure, true), q(p[2] * exposure, true), q(p[3], false)]
-        })
-        .collect()
-}
-
 /// Writes 8-bit sRGB RGBA as PNG.
 pub fn write_png(path: &Path, width: u32, height: u32, srgb8: &[u8]) -> Result<()> {
     image::save_buffer(path, srgb8, width, height, image::ExtendedColorType::Rgba8)

@@ -545,7 +545,7 @@ fn cli_writes_ao_png_and_exr() {
         let ao = &channels.iter().find(|c| c.0 == "Y").expect("a Y channel").1;
         assert!(ao.iter().any(|&v| v < 0.9), "{mode}: the Cornell box shows no occlusion");
         for (pixel, &v) in grey.pixels().zip(ao) {
-            let expected = umbra::output::srgb_encode(v.clamp(0.0, 1.0)) * 255.0;
+            let expected = umbra::color::srgb_encode(v.clamp(0.0, 1.0)) * 255.0;
             assert!((pixel[0] as f32 - expected).abs() <= 0.5 + 1e-3, "{mode}: PNG {} vs EXR {v}", pixel[0]);
         }
     }
@@ -569,7 +569,7 @@ fn cli_writes_ao_png_and_exr() {
 fn rtao_with_many_rays_is_not_cut_short() {
     let gpu = Gpu::new();
     let mut quads = Quads::new().floor();
-    let mut rng = umbra::geometry::Rng::new(7);
+    let mut rng = umbra::procedural::Rng::new(7);
     let s = &mut quads.scene;
     for _ in 0..30_000 {
         let c = Vec3::new(rng.range(-1.0, 1.0), rng.range(0.02, 0.5), rng.range(-1.0, 1.0));

@@ -8,8 +8,8 @@ use glam::Vec3;
 use umbra::bvh::gpu::{GpuBvh, GpuBvhNode, Query, RayTracer};
 use umbra::bvh::reference::{same_hit, Reference};
 use umbra::bvh::{BuildOptions, Bvh, Hit, Ray};
-use umbra::geometry::{icosphere, random_soup, terrain, Mesh, Rng};
 use umbra::gpu::layout::{TraceHit, TraceRay};
+use umbra::procedural::{icosphere, random_soup, terrain, Mesh, Rng};
 
 /// Rays per scene for the GPU-against-reference tests.
 const RAYS: usize = 100_000;

@@ -97,7 +97,7 @@ fn render_hybrid_writes_png_and_gbuffer_aovs() {
     let channel = |n: &str| &channels.iter().find(|c| c.0 == n).unwrap().1;
     let rgba: Vec<f32> =
         (0..w * h).flat_map(|i| [channel("R")[i], channel("G")[i], channel("B")[i], 1.0]).collect();
-    let expected_png = umbra::tonemap::to_display8(&rgba, 1.0, umbra::tonemap::ToneCurve::default());
+    let expected_png = umbra::color::to_display8(&rgba, 1.0, umbra::color::ToneCurve::default());
     let worst = decoded.as_raw().iter().zip(&expected_png).map(|(&a, &b)| (a as i32 - b as i32).abs()).max();
     assert!(worst <= Some(1), "PNG differs from the tonemapped EXR colour by {worst:?} steps");
     assert!(channel("R").iter().sum::<f32>() > 0.0, "the Cornell box is lit");

@@ -217,8 +217,8 @@ fn deferred_shading_counts_every_one_of_many_punctual_lights() {
 /// values (worked by hand from their definitions).
 #[test]
 fn tonemap_kernel_matches_its_cpu_twin() {
+    use umbra::color::tone_curve;
     use umbra::passes::tonemap::{ToneCurve, TonemapPass};
-    use umbra::tonemap::tone_curve;
     // Known values. PBR Neutral: grey 0.5 loses the 0.04 offset and is otherwise untouched; grey
     // 1.0 -> 0.96 -> compressed to 1 - 0.24² / 0.44. ACES fit: black stays black; both matrices'
     // rows sum to 1, so grey 1 maps to the fit at 1: (1.0245786 - 0.000090537) / (0.983729 +
@@ -257,7 +257,7 @@ fn tonemap_kernel_matches_its_cpu_twin() {
         .unwrap();
         let got: Vec<[u8; 4]> = dst.read(&gpu).unwrap();
         let flat: Vec<f32> = texels.iter().flatten().copied().collect();
-        let expected = umbra::tonemap::to_display8(&flat, 0.5f32.exp2(), curve);
+        let expected = umbra::color::to_display8(&flat, 0.5f32.exp2(), curve);
         let worst =
             got.iter().flatten().zip(&expected).map(|(&g, &e)| (g as i32 - e as i32).abs()).max().unwrap();
         assert!(worst <= 1, "{curve:?}: GPU and CPU differ by {worst} steps");

@@ -5,9 +5,9 @@ mod common;
 
 use common::Gpu;
 use umbra::gpu::scene::GpuScene;
-use umbra::ibl::{lut_coordinates, lut_entry, lut_reference, LUT_SIZE};
 use umbra::passes::ibl::{IblResources, IblSettings};
 use umbra::scene::Scene;
+use umbra::split_sum::{lut_coordinates, lut_entry, lut_reference, LUT_SIZE};
 
 fn scene_file(name: &str) -> Scene {
     Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name))
@@ -64,7 +64,9 @@ fn brdf_lut_matches_cpu_quadrature() {
 }
 
 use umbra::environment::EnvironmentMap;
-use umbra::ibl::{irradiance_brute_force, sh9_irradiance, sh9_irradiance_coefficients, texel_direction};
+use umbra::split_sum::{
+    irradiance_brute_force, sh9_irradiance, sh9_irradiance_coefficients, texel_direction,
+};
 
 /// A synthetic map of `w` × `h` from a radiance function of direction.
 fn synthetic_map(w: usize, h: usize, f: impl Fn([f64; 3]) -> [f64; 3]) -> EnvironmentMap {
@@ -780,7 +782,7 @@ fn prefiltered_levels_match_brute_force() {
     let settings = IblSettings::default();
     let ibl = IblResources::build(&gpu, &scene, &settings).unwrap();
     let levels: Vec<[f32; 4]> = ibl.prefiltered.read(&gpu).unwrap();
-    let sizes = umbra::ibl::prefiltered_level_sizes((w as u32, h as u32));
+    let sizes = umbra::split_sum::prefiltered_level_sizes((w as u32, h as u32));
     // Source cells: direction, solid angle, radiance.
     let sub = 4usize;
     let mut cells = Vec::with_capacity(w * h * sub * sub);

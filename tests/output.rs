@@ -1,6 +1,7 @@
 //! EXR layers and PNG encoding.
 
-use umbra::output::{read_exr_channels, srgb_encode, to_srgb8, write_exr, Layer};
+use umbra::color::{srgb_encode, to_srgb8};
+use umbra::output::{read_exr_channels, write_exr, Layer};
 
 #[test]
 fn exr_keeps_named_layers_bit_exact() {

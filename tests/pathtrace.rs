@@ -5,10 +5,10 @@ mod common;
 
 use common::Gpu;
 use glam::Vec3;
-use umbra::geometry::{icosphere, Mesh};
 use umbra::gpu::layout::GpuCamera;
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::pathtrace::Microfacet;
+use umbra::procedural::{icosphere, Mesh};
 use umbra::render::{path_trace, PathImage, PathSettings};
 use umbra::scene::{Camera, Material, Scene};
 
@@ -517,7 +517,7 @@ fn textures_wrap_decode_and_transform() {
     let gpu = Gpu::new();
     // 2×2 texels: red, green / blue, white (sRGB 200 = linear 0.578).
     let texels: [[u8; 4]; 4] = [[200, 0, 0, 255], [0, 200, 0, 255], [0, 0, 200, 255], [200, 200, 200, 255]];
-    let linear = |c: u8| umbra::output::srgb_decode(c as f32 / 255.0);
+    let linear = |c: u8| umbra::color::srgb_decode(c as f32 / 255.0);
     let quad = facing_quad();
     let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0); // sees x, y in about ±0.83
     for (wrap, offset) in
@@ -1028,7 +1028,7 @@ fn sampled_punctual_lights_match_evaluating_each() {
     let ball = icosphere(2, Vec3::new(0.3, 0.6, -0.2), 0.6);
     let grey =
         Material { metallic: 0.0, specular_factor: 0.0, base_color_factor: [0.5; 4], ..Default::default() };
-    let mut rng = umbra::geometry::Rng::new(5);
+    let mut rng = umbra::procedural::Rng::new(5);
     let mut lights: Vec<umbra::scene::Light> = (0..16)
         .map(|k| {
             let mut light = point_light(

@@ -663,7 +663,7 @@ fn stats(bvh: &Bvh, options: &BuildOptions, triangles: usize) -> BvhStats {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Rng;
+    use crate::procedural::Rng;
 
     /// Sort keys order like `total_cmp` on the centroid, then by position: negative values,
     /// both zeros, ties, tiny and huge magnitudes.

@@ -344,7 +344,7 @@ gpu_structs! {
         size: uvec2,
         /// Linear multiplier (2^stops).
         exposure: float,
-        /// [`crate::tonemap::ToneCurve::code`]: 0 clamp, 1 ACES (Hill's fit), 2 Khronos PBR Neutral.
+        /// [`crate::color::ToneCurve::code`]: 0 clamp, 1 ACES (Hill's fit), 2 Khronos PBR Neutral.
         curve: uint,
     }
 

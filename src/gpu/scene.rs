@@ -430,7 +430,7 @@ fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
         .iter()
         .map(|light| {
             let [r, g, b] = light.color.map(|c| c * light.intensity);
-            let luminance = (0.2126 * r + 0.7152 * g + 0.0722 * b).max(0.0);
+            let luminance = crate::color::luminance([r, g, b]).max(0.0);
             let cone = 0.5 * (light.inner_cone_angle.cos() + light.outer_cone_angle.cos());
             f64::from(luminance)
                 * f64::from(match light.kind {
@@ -494,8 +494,7 @@ impl GpuTextures {
         if self.texels.is_empty() {
             // The texel buffer starts with the sRGB decoding table (texture.glsl reads it: a
             // table lookup costs CPU devices far less than pow, and is exact for 8-bit codes).
-            self.texels
-                .extend((0..256).map(|code| crate::output::srgb_decode(code as f32 / 255.0).to_bits()));
+            self.texels.extend((0..256).map(|code| crate::color::srgb_decode(code as f32 / 255.0).to_bits()));
         }
         use crate::scene::{Filter, Wrap};
         let wrap = |w: Wrap, clamp: u32, mirror: u32| match w {

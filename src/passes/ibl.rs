@@ -10,7 +10,7 @@ use crate::gpu::kernels::{ibl_downsample, ibl_lut, ibl_prefilter, ibl_sh};
 use crate::gpu::layout::IblParams;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
-use crate::ibl::{chain_level_sizes, prefiltered_level_sizes, IBL_LEVELS, LUT_SIZE};
+use crate::split_sum::{chain_level_sizes, prefiltered_level_sizes, IBL_LEVELS, LUT_SIZE};
 use crate::vk::{barrier, raw, Buffer, Context, GpuTimer};
 use gpu_allocator::MemoryLocation;
 

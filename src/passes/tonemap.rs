@@ -1,12 +1,12 @@
 //! The display transform on the GPU (`spirv/tonemap.comp`): a linear `R32G32B32A32_SFLOAT` image
 //! × exposure, through a [`ToneCurve`], sRGB-encoded into an `R8G8B8A8_UNORM` image. Both images
-//! in `GENERAL` layout; a compute-to-compute barrier follows. [`crate::tonemap`] is its CPU twin.
+//! in `GENERAL` layout; a compute-to-compute barrier follows. [`crate::color`] is its CPU twin.
 
+pub use crate::color::ToneCurve;
 use crate::error::Result;
 use crate::gpu::kernels::tonemap;
 use crate::gpu::layout::TonemapParams;
 use crate::gpu::Pipeline;
-pub use crate::tonemap::ToneCurve;
 use crate::vk::{barrier, raw, Context};
 
 /// `tonemap.comp`.

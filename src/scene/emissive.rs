@@ -1,8 +1,8 @@
 //! The emissive-triangle table: which triangles emit, with how much power, and a CDF to pick one
 //! in proportion to its power (next-event estimation on the GPU walks the same arrays).
 
-use super::texture::luminance;
 use super::{Material, Texture};
+use crate::color::luminance;
 use glam::Vec3;
 
 /// Every emitting triangle with its power and a normalised CDF over the powers.

@@ -6,6 +6,7 @@
 //! once, however many textures share it.
 
 use super::source::{self, Asset, Origin};
+use crate::color::{luminance, srgb_decode, srgb_encode};
 use crate::error::Result;
 use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 use rayon::prelude::*;
@@ -117,7 +118,7 @@ impl Texture {
         let decode: [f32; 256] = std::array::from_fn(|v| {
             let c = v as f32 / 255.0;
             if self.srgb {
-                srgb_to_linear(c)
+                srgb_decode(c)
             } else {
                 c
             }
@@ -165,7 +166,7 @@ impl Texture {
         let decode: [f32; 256] = std::array::from_fn(|v| {
             let c = v as f32 / 255.0;
             if self.srgb {
-                srgb_to_linear(c)
+                srgb_decode(c)
             } else {
                 c
             }
@@ -200,7 +201,7 @@ impl Texture {
             let rgba8 = next
                 .iter()
                 .flat_map(|t| {
-                    let colour = |c: f32| if self.srgb { linear_to_srgb(c) } else { c };
+                    let colour = |c: f32| if self.srgb { srgb_encode(c) } else { c };
                     [colour(t[0]), colour(t[1]), colour(t[2]), t[3]]
                         .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
                 })
@@ -230,29 +231,6 @@ fn box_weights(src: u32, dst: u32) -> Vec<Vec<(u32, f32)>> {
                 .collect()
         })
         .collect()
-}
-
-/// The sRGB transfer function.
-fn linear_to_srgb(c: f32) -> f32 {
-    if c <= 0.0031308 {
-        c * 12.92
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Rec. 709 luminance of linear RGB.
-pub(super) fn luminance([r, g, b]: [f32; 3]) -> f32 {
-    0.2126 * r + 0.7152 * g + 0.0722 * b
-}
-
-/// The sRGB transfer function, inverted.
-fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// One texture a material uses: which image, sampled how, in which colour space.

@@ -14,7 +14,7 @@ use glam::Vec3;
 use rays::{RayReport, RayScene, RaySettings};
 use serde_json::json;
 use std::path::PathBuf;
-use umbra::geometry::{icosphere, terrain};
+use umbra::procedural::{icosphere, terrain};
 use umbra::vk::{Context, ContextDesc};
 
 #[derive(Parser)]

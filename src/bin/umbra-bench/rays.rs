@@ -10,8 +10,8 @@ use std::time::Instant;
 use umbra::bvh::gpu::{GpuBvh, Query, RayBatch, RayTracer};
 use umbra::bvh::reference::{same_hit, Reference};
 use umbra::bvh::{BuildOptions, Bvh, BvhStats, Ray};
-use umbra::geometry::Rng;
 use umbra::gpu::layout::{TraceHit, TraceRay};
+use umbra::procedural::Rng;
 use umbra::vk::{Context, GpuTimer};
 
 /// A scene to trace: triangles and a view.

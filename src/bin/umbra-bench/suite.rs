@@ -103,7 +103,7 @@ const REL_EPSILON: f64 = 0.01;
 pub fn flip_mean(image: &[[f32; 4]], reference: &[[f32; 4]], (w, h): (u32, u32)) -> f64 {
     let rgb8 = |v: &[[f32; 4]]| -> nv_flip::FlipImageRgb8 {
         let flat: Vec<f32> = v.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
-        let rgba = umbra::tonemap::to_display8(&flat, 1.0, umbra::tonemap::ToneCurve::KhronosPbrNeutral);
+        let rgba = umbra::color::to_display8(&flat, 1.0, umbra::color::ToneCurve::KhronosPbrNeutral);
         let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
         nv_flip::FlipImageRgb8::with_data(w, h, &rgb)
     };

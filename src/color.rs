@@ -1,6 +1,46 @@
-//! Display transforms: exposure, a tone curve, sRGB encoding. The same curves run on the GPU
-//! (`spirv/tonemap.comp`, for the hybrid pipeline and embedding hosts) and here (for path-traced
-//! PNGs and as the reference the kernel is tested against).
+//! Colour conversions, all in one place: the sRGB transfer function both ways, Rec. 709
+//! luminance, and the display transforms (exposure, a tone curve, sRGB encoding to 8 bits). The
+//! same curves run on the GPU (`spirv/tonemap.comp`, [`crate::passes::tonemap`], for the hybrid
+//! pipeline and embedding hosts) and here (for path-traced PNGs and as the reference the kernel is
+//! tested against); `texture.glsl` decodes sRGB with a table of [`srgb_decode`].
+
+/// The inverse sRGB transfer function: an encoded value in [0, 1] to linear.
+pub fn srgb_decode(encoded: f32) -> f32 {
+    if encoded <= 0.040_45 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The sRGB transfer function of a linear value in [0, 1].
+pub fn srgb_encode(linear: f32) -> f32 {
+    if linear <= 0.003_130_8 {
+        12.92 * linear
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Rec. 709 luminance of linear RGB.
+pub fn luminance([r, g, b]: [f32; 3]) -> f32 {
+    0.2126 * r + 0.7152 * g + 0.0722 * b
+}
+
+/// Linear RGBA (4 floats per pixel) scaled by `exposure`, clamped to [0, 1], sRGB-encoded to
+/// 8 bits. NaN becomes 0. Alpha is written linear.
+pub fn to_srgb8(rgba: &[f32], exposure: f32) -> Vec<u8> {
+    rgba.chunks_exact(4)
+        .flat_map(|p| {
+            let q = |v: f32, encode: bool| {
+                let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+                let v = if encode { srgb_encode(v) } else { v };
+                (v * 255.0 + 0.5) as u8
+            };
+            [q(p[0] * exposure, true), q(p[1] * exposure, true), q(p[2] * exposure, true), q(p[3], false)]
+        })
+        .collect()
+}
 
 /// The tone curve applied after exposure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -76,7 +116,7 @@ pub fn to_display8(rgba: &[f32], exposure: f32, curve: ToneCurve) -> Vec<u8> {
     rgba.chunks_exact(4)
         .flat_map(|p| {
             let [r, g, b] = tone_curve([p[0] * exposure, p[1] * exposure, p[2] * exposure], curve)
-                .map(|v| q(crate::output::srgb_encode(v)));
+                .map(|v| q(srgb_encode(v)));
             [r, g, b, q(if p[3].is_nan() { 0.0 } else { p[3].clamp(0.0, 1.0) })]
         })
         .collect()

@@ -1,4 +1,6 @@
-//! Argument parsers shared by the `umbra` and `umbra-bench` binaries.
+//! Argument parsers and `main` shared by the `umbra` and `umbra-bench` binaries: a module of each
+//! binary (`umbra-bench` includes this file by path), not of the library, which needs neither
+//! `anyhow` nor `env_logger`.
 
 /// Parses `WIDTHxHEIGHT` (both positive, at most 16384).
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {

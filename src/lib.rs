@@ -5,7 +5,6 @@
 #![warn(missing_docs)]
 
 pub mod bvh;
-pub mod cli;
 pub mod color;
 pub mod embed;
 pub mod environment;

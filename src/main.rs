@@ -1,5 +1,7 @@
 //! The `umbra` command-line renderer.
 
+mod cli;
+
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -21,7 +23,7 @@ enum Command {
     /// Render the foundation test pattern (a known function of the pixel) to PNG and/or EXR.
     Pattern {
         /// Image size as WIDTHxHEIGHT.
-        #[arg(long, default_value = "256x256", value_parser = umbra::cli::parse_size)]
+        #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
         size: (u32, u32),
         /// PNG output path.
         #[arg(short, long, default_value = "pattern.png")]
@@ -43,7 +45,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 64)]
     spp: u32,
     /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "256x256", value_parser = umbra::cli::parse_size)]
+    #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
     size: (u32, u32),
     /// Scattering events per path (1 = direct light only).
     #[arg(long, default_value_t = 8)]
@@ -70,7 +72,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1.0)]
     env_strength: f32,
     /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
-    #[arg(long, value_parser = umbra::cli::parse_rgb, default_value = "0,0,0")]
+    #[arg(long, value_parser = cli::parse_rgb, default_value = "0,0,0")]
     env_color: [f32; 3],
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
     #[arg(long)]
@@ -391,7 +393,7 @@ fn render_ao(
 }
 
 fn main() {
-    umbra::cli::main(|| run(Cli::parse()));
+    cli::main(|| run(Cli::parse()));
 }
 
 fn run(cli: Cli) -> Result<()> {

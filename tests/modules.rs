@@ -23,7 +23,6 @@ const LAYERS: &[(&str, u32)] = &[
     ("passes", 2),
     ("render", 3),
     ("embed", 4),
-    ("cli", 5),
 ];
 
 /// The `crate::<module>` paths in the code of `text` (comments removed).
@@ -64,8 +63,9 @@ fn upward_references(src: &Path) -> Vec<(String, String, String)> {
         let relative = file.strip_prefix(src).unwrap();
         let top = relative.components().next().unwrap().as_os_str().to_string_lossy();
         let module = top.trim_end_matches(".rs").to_string();
-        // The binaries and the crate root are not library modules.
-        if ["main", "lib", "bin"].contains(&module.as_str()) {
+        // The binaries (main.rs, bin/, and cli.rs, which both binaries include) and the crate root
+        // are not library modules.
+        if ["main", "lib", "bin", "cli"].contains(&module.as_str()) {
             continue;
         }
         let own =

@@ -96,6 +96,7 @@ pub(crate) struct Shared {
     /// recorded or submitted, so a failed submission names the pass (see [`Context::last_pass`]).
     pub passes: Mutex<HashMap<vk::CommandBuffer, &'static str>>,
     /// A failure the next [`Context::submit`] reports instead of submitting (tests only).
+    #[cfg(feature = "testing")]
     pub injected_fault: Mutex<Option<vk::Result>>,
     /// The GPU-written breadcrumb of each command buffer [`Context::submit`] is recording or
     /// has submitted (see [`super::breadcrumb`]); a host's command buffers have none.
@@ -382,6 +383,7 @@ impl Context {
                 validation,
                 owned,
                 passes: Mutex::new(HashMap::new()),
+                #[cfg(feature = "testing")]
                 injected_fault: Mutex::new(None),
                 trails: Mutex::new(HashMap::new()),
                 crumbs: Mutex::new(Vec::new()),
@@ -413,7 +415,8 @@ impl Context {
     /// Fault injection for tests of the reporting path: the next [`Context::submit`] records its
     /// work as usual but, instead of submitting it, fails with `result` as `vkQueueSubmit2` would
     /// (`ERROR_DEVICE_LOST`, `ERROR_OUT_OF_DEVICE_MEMORY`, ...). Nothing reaches the queue, so
-    /// the context stays usable.
+    /// the context stays usable. Only with the `testing` feature, which umbra's tests turn on.
+    #[cfg(feature = "testing")]
     #[doc(hidden)]
     pub fn inject_submit_fault(&self, result: vk::Result) {
         *self.shared.injected_fault.lock().unwrap_or_else(|p| p.into_inner()) = Some(result);

@@ -4,6 +4,8 @@
 //! `build` times the BVH build alone (CPU only, no Vulkan).
 
 mod chart;
+#[path = "../../cli.rs"]
+mod cli;
 mod passes;
 mod rays;
 mod suite;
@@ -34,7 +36,7 @@ enum Command {
         #[arg(long)]
         quick: bool,
         /// Image size.
-        #[arg(long, default_value = "128x128", value_parser = umbra::cli::parse_size)]
+        #[arg(long, default_value = "128x128", value_parser = cli::parse_size)]
         size: (u32, u32),
         /// Samples per pixel of each reference (cached in the output folder).
         #[arg(long, default_value_t = 2048)]
@@ -50,7 +52,7 @@ enum Command {
         repeats: usize,
         /// Constant environment (sky) radiance r,g,b around every scene, lighting it besides its
         /// own lights (the hybrid approximates it with split-sum IBL and SSAO).
-        #[arg(long, value_parser = umbra::cli::parse_rgb, default_value = "0.5,0.5,0.5")]
+        #[arg(long, value_parser = cli::parse_rgb, default_value = "0.5,0.5,0.5")]
         env_color: [f32; 3],
         /// AO radius in scene units for SSAO and RTAO.
         #[arg(long, default_value_t = 0.5)]
@@ -68,7 +70,7 @@ enum Command {
         #[arg(long)]
         quick: bool,
         /// Rays per kind as a WIDTHxHEIGHT primary-ray image.
-        #[arg(long, default_value = "512x512", value_parser = umbra::cli::parse_size)]
+        #[arg(long, default_value = "512x512", value_parser = cli::parse_size)]
         size: (u32, u32),
         /// Timed repeats per ray kind (after one warm-up); the median is reported.
         #[arg(long, default_value_t = 5)]
@@ -95,7 +97,7 @@ enum Command {
         /// A glTF scene (its first camera, or one framing it); the Cornell box when absent.
         scene: Option<PathBuf>,
         /// Image size.
-        #[arg(long, default_value = "256x256", value_parser = umbra::cli::parse_size)]
+        #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
         size: (u32, u32),
         /// Timed repeats (after one warm-up).
         #[arg(long, default_value_t = 10)]
@@ -126,7 +128,7 @@ enum Command {
 }
 
 fn main() {
-    umbra::cli::main(|| run(Cli::parse()));
+    cli::main(|| run(Cli::parse()));
 }
 
 /// `umbra-bench build` for one scene: a warm-up build, then `builds` timed ones.

@@ -153,7 +153,7 @@ macro_rules! glsl_field {
 }
 
 macro_rules! gpu_structs {
-    ($($(#[$meta:meta])* struct $name:ident {
+    ($($(#[$meta:meta])* $role:ident $name:ident {
         $($(#[$fmeta:meta])* $field:ident : $ty:tt $(as $rust:ty)?),* $(,)?
     })*) => {
         fn glsl_structs() -> Vec<GlslStruct> {
@@ -222,6 +222,8 @@ macro_rules! scene_bindings {
 
 struct GlslKernel {
     name: &'static str,
+    /// A `test_kernel`: compiled only with the `testing` feature.
+    test: bool,
     scene: &'static str,
     features: Vec<&'static str>,
     push: &'static str,
@@ -231,7 +233,7 @@ struct GlslKernel {
 }
 
 macro_rules! kernels {
-    ($($(#[$meta:meta])* $kernel:ident {
+    ($($(#[$meta:meta])* $role:ident $kernel:ident {
         scene: $scene:ident $([$($feature:ident),* $(,)?])?,
         push: $push:ty,
         spec: { $($spec:ident : $sty:tt = $sdef:expr),* $(,)? },
@@ -240,6 +242,7 @@ macro_rules! kernels {
         fn glsl_kernels() -> Vec<GlslKernel> {
             vec![$(GlslKernel {
                 name: stringify!($kernel),
+                test: stringify!($role) == "test_kernel",
                 scene: stringify!($scene),
                 features: vec![$($(stringify!($feature)),*)?],
                 push: stringify!($push),
@@ -442,6 +445,13 @@ fn main() {
         eprintln!("error: {e}");
         println!("cargo:warning={e}");
         std::process::exit(1);
+    }
+
+    // The test kernels only for the library the tests build (the `testing` feature).
+    if std::env::var_os("CARGO_FEATURE_TESTING").is_none() {
+        let tests: Vec<String> =
+            glsl_kernels().iter().filter(|k| k.test).map(|k| format!("{}.comp", k.name)).collect();
+        kernels.retain(|k| !tests.contains(k));
     }
 
     let compiler = Compiler::acquire().expect("glslang initialises");

@@ -23,6 +23,10 @@
 // and each struct's size assertion catch a misplaced one. `as` gives a field another Rust type of
 // the same size (bytes read on the GPU as `uint`s).
 //
+// Items marked `test_struct` and `test_kernel` exist only for umbra's own tests: the library
+// has them (hidden from its docs) only with the `testing` feature, which the tests turn on, and
+// build.rs compiles those kernels only then.
+//
 // Bindings: `name: access kind arg`, access `readonly`, `writeonly`, `readwrite` or `coherent`;
 // kind `buffer` (arg `[T]`: a runtime array, or `T`: one struct), `image` (arg: its storage
 // format), `texels` (a storage texel buffer read as `uimageBuffer`, arg: its format). The scene's
@@ -63,8 +67,7 @@ gpu_structs! {
     }
 
     /// Push constants of `test_buffer.comp` and `texture_wrap_test.comp`.
-    #[doc(hidden)]
-    struct BufferTestParams {
+    test_struct BufferTestParams {
         /// Number of elements.
         count: uint,
         /// Added to each tripled element.
@@ -72,8 +75,7 @@ gpu_structs! {
     }
 
     /// What `spin_test.comp` shares with the host.
-    #[doc(hidden)]
-    struct SpinState {
+    test_struct SpinState {
         /// Set non-zero by the host to release the spinning invocations.
         release: uint,
         /// Iterations of all invocations.
@@ -359,8 +361,7 @@ gpu_structs! {
     }
 
     /// Push constants of `sample_test.comp` (the sampling tests' kernel).
-    #[doc(hidden)]
-    struct SampleTestParams {
+    test_struct SampleTestParams {
         /// Outgoing direction (local frame).
         wo: vec3,
         /// Microfacet alpha.
@@ -440,8 +441,7 @@ gpu_structs! {
     }
 
     /// Push constants of `light_sample_test.comp` (tests only).
-    #[doc(hidden)]
-    struct LightTestParams {
+    test_struct LightTestParams {
         /// Shading point (world).
         point: vec3,
         /// Padding.
@@ -528,7 +528,7 @@ scene_bindings! {
 
 kernels! {
     /// The progressive path tracer.
-    pathtrace {
+    kernel pathtrace {
         scene: full [lights, punctual, env_map, textures, transmission, alpha],
         push: PathParams,
         spec: { beckmann: bool = false, power_heuristic: bool = true },
@@ -547,7 +547,7 @@ kernels! {
     }
 
     /// A path target's running mean into an image.
-    resolve {
+    kernel resolve {
         scene: none,
         push: ResolveParams,
         spec: {},
@@ -560,7 +560,7 @@ kernels! {
     }
 
     /// The ray-cast G-buffer.
-    gbuffer {
+    kernel gbuffer {
         scene: full [textures, alpha],
         push: GBufferParams,
         spec: {},
@@ -579,7 +579,7 @@ kernels! {
     }
 
     /// Deferred lighting of a G-buffer.
-    deferred {
+    kernel deferred {
         scene: full [textures, lights, punctual, env_map, alpha, transmission],
         push: DeferredParams,
         spec: { beckmann: bool = false },
@@ -608,7 +608,7 @@ kernels! {
     }
 
     /// Screen-space ambient occlusion.
-    ssao {
+    kernel ssao {
         scene: none,
         push: AoParams,
         spec: {},
@@ -623,7 +623,7 @@ kernels! {
     }
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
-    rtao {
+    kernel rtao {
         scene: full [textures, alpha],
         push: AoParams,
         spec: {},
@@ -640,7 +640,7 @@ kernels! {
     }
 
     /// The depth-aware AO blur.
-    ao_blur {
+    kernel ao_blur {
         scene: none,
         push: AoBlurParams,
         spec: {},
@@ -657,7 +657,7 @@ kernels! {
     }
 
     /// HDR to display.
-    tonemap {
+    kernel tonemap {
         scene: none,
         push: TonemapParams,
         spec: {},
@@ -670,7 +670,7 @@ kernels! {
     }
 
     /// The split-sum BRDF table.
-    ibl_lut {
+    kernel ibl_lut {
         scene: none,
         push: IblParams,
         spec: {},
@@ -681,7 +681,7 @@ kernels! {
     }
 
     /// One level of the environment's box-filtered chain.
-    ibl_downsample {
+    kernel ibl_downsample {
         scene: full [],
         push: IblParams,
         spec: {},
@@ -692,7 +692,7 @@ kernels! {
     }
 
     /// One roughness level of the prefiltered environment.
-    ibl_prefilter {
+    kernel ibl_prefilter {
         scene: full [],
         push: IblParams,
         spec: {},
@@ -705,7 +705,7 @@ kernels! {
     }
 
     /// SH9 irradiance of the environment.
-    ibl_sh {
+    kernel ibl_sh {
         scene: full [],
         push: IblParams,
         spec: {},
@@ -716,7 +716,7 @@ kernels! {
     }
 
     /// Rays through the BVH (tests and the ray-throughput benchmark).
-    trace {
+    kernel trace {
         scene: bvh,
         push: TraceParams,
         spec: { trace_any: bool = false },
@@ -730,7 +730,7 @@ kernels! {
 
     /// Test-only: a pattern into an image.
     #[doc(hidden)]
-    test_pattern {
+    kernel test_pattern {
         scene: none,
         push: PatternParams,
         spec: { pattern_multiplier: uint = 1 },
@@ -741,8 +741,7 @@ kernels! {
     }
 
     /// Test-only: `out = 3 in + add`.
-    #[doc(hidden)]
-    test_buffer {
+    test_kernel test_buffer {
         scene: none,
         push: BufferTestParams,
         spec: {},
@@ -755,8 +754,7 @@ kernels! {
     }
 
     /// Test-only: hangs until released (the breadcrumb test).
-    #[doc(hidden)]
-    spin_test {
+    test_kernel spin_test {
         scene: none,
         push: (),
         spec: { max_iterations: uint = 0x1000000 },
@@ -767,8 +765,7 @@ kernels! {
     }
 
     /// Test-only: samplers and pdfs of bsdf.glsl for the chi-square tests.
-    #[doc(hidden)]
-    sample_test {
+    test_kernel sample_test {
         scene: none,
         push: SampleTestParams,
         spec: { beckmann: bool = false },
@@ -781,8 +778,7 @@ kernels! {
     }
 
     /// Test-only: light sampling of environment.glsl and shading.glsl.
-    #[doc(hidden)]
-    light_sample_test {
+    test_kernel light_sample_test {
         scene: full [],
         push: LightTestParams,
         spec: {},
@@ -795,8 +791,7 @@ kernels! {
     }
 
     /// Test-only: texture.glsl's wrap modes.
-    #[doc(hidden)]
-    texture_wrap_test {
+    test_kernel texture_wrap_test {
         scene: none,
         push: BufferTestParams,
         spec: {},

@@ -4,7 +4,7 @@
 //! block and, in [`kernels`], one module per kernel with its typed resources, push constants and
 //! specialization constants. `build.rs` reads the same file to write the GLSL declarations, and
 //! `tests/layout.rs` checks every compiled kernel against [`gpu_layouts`] and
-//! [`kernels::ALL`] through naga, so neither side can drift.
+//! [`kernels::all`] through naga, so neither side can drift.
 
 use super::kernel::{Access, BindingDesc, BindingKind, SpecDesc};
 use bytemuck::{Pod, Zeroable};
@@ -63,23 +63,53 @@ macro_rules! field_ty {
     };
 }
 
+/// An item as its role in `interface.rs` has it: `struct` and `kernel` always, `test_struct`
+/// and `test_kernel` with the `testing` feature only (and hidden from the docs).
+macro_rules! gated {
+    (struct, $($item:item)*) => { $($item)* };
+    (kernel, $($item:item)*) => { $($item)* };
+    (test_struct, $($item:item)*) => { $(#[cfg(feature = "testing")] #[doc(hidden)] $item)* };
+    (test_kernel, $($item:item)*) => { $(#[cfg(feature = "testing")] #[doc(hidden)] $item)* };
+}
+
+/// A statement as its role has it (see [`gated`]).
+macro_rules! gated_statement {
+    (struct, $s:stmt) => {
+        $s
+    };
+    (kernel, $s:stmt) => {
+        $s
+    };
+    (test_struct, $s:stmt) => {
+        #[cfg(feature = "testing")]
+        $s
+    };
+    (test_kernel, $s:stmt) => {
+        #[cfg(feature = "testing")]
+        $s
+    };
+}
+
 macro_rules! gpu_structs {
-    ($($(#[$meta:meta])* struct $name:ident {
+    ($($(#[$meta:meta])* $role:ident $name:ident {
         $($(#[$fmeta:meta])* $field:ident : $ty:tt $(as $rust:ty)?),* $(,)?
     })*) => {
         $(
-            $(#[$meta])*
-            #[repr(C)]
-            #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-            pub struct $name {
-                $($(#[$fmeta])* pub $field: field_ty!($ty $(as $rust)?),)*
-            }
+            gated!($role,
+                $(#[$meta])*
+                #[repr(C)]
+                #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+                pub struct $name {
+                    $($(#[$fmeta])* pub $field: field_ty!($ty $(as $rust)?),)*
+                }
+            );
         )*
 
         /// Every host/GPU struct pair: each member's name, offset and size, and the struct's
         /// size (which is also its array stride).
         pub fn gpu_layouts() -> Vec<StructLayout> {
-            vec![$({
+            let mut layouts = Vec::new();
+            $(gated_statement!($role, layouts.push({
                 let zero = <$name as Zeroable>::zeroed();
                 StructLayout {
                     name: stringify!($name),
@@ -90,7 +120,8 @@ macro_rules! gpu_structs {
                         size: std::mem::size_of_val(&zero.$field),
                     }),*],
                 }
-            }),*]
+            }));)*
+            layouts
         }
     };
 }
@@ -244,7 +275,7 @@ macro_rules! scene_descriptors {
 }
 
 macro_rules! kernels {
-    ($($(#[$meta:meta])* $kernel:ident {
+    ($($(#[$meta:meta])* $role:ident $kernel:ident {
         scene: $scene:ident $([$($feature:ident),* $(,)?])?,
         push: $push:ty,
         spec: { $($spec:ident : $sty:tt = $sdef:expr),* $(,)? },
@@ -258,7 +289,7 @@ macro_rules! kernels {
         /// [`Push`]: crate::gpu::kernels::pathtrace::Push
         /// [`Spec`]: crate::gpu::kernels::pathtrace::Spec
         pub mod kernels {
-            $(
+            $(gated!($role,
                 $(#[$meta])*
                 #[allow(unused_imports)]
                 pub mod $kernel {
@@ -318,10 +349,14 @@ macro_rules! kernels {
                         const INTERFACE: &'static KernelInterface = &INTERFACE;
                     }
                 }
-            )*
+            );)*
 
-            /// Every kernel's interface.
-            pub static ALL: &[&crate::gpu::kernel::KernelInterface] = &[$(&$kernel::INTERFACE),*];
+            /// Every kernel's interface (the test kernels' with the `testing` feature).
+            pub fn all() -> Vec<&'static crate::gpu::kernel::KernelInterface> {
+                let mut all = Vec::new();
+                $(gated_statement!($role, all.push(&$kernel::INTERFACE));)*
+                all
+            }
         }
     };
 }
@@ -368,7 +403,9 @@ const _: () = assert!(size_of::<GBufferParams>() == 80);
 const _: () = assert!(size_of::<AoParams>() == 112);
 const _: () = assert!(size_of::<AoBlurParams>() == 80);
 const _: () = assert!(size_of::<IblParams>() == 48);
+#[cfg(feature = "testing")]
 const _: () = assert!(size_of::<LightTestParams>() == 64);
+#[cfg(feature = "testing")]
 const _: () = assert!(size_of::<SampleTestParams>() == 32);
 
 impl TraceHit {

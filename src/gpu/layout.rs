@@ -107,6 +107,7 @@ macro_rules! gpu_structs {
 
         /// Every host/GPU struct pair: each member's name, offset and size, and the struct's
         /// size (which is also its array stride).
+        #[allow(clippy::vec_init_then_push)] // some pushes are cfg'd out
         pub fn gpu_layouts() -> Vec<StructLayout> {
             let mut layouts = Vec::new();
             $(gated_statement!($role, layouts.push({
@@ -352,6 +353,7 @@ macro_rules! kernels {
             );)*
 
             /// Every kernel's interface (the test kernels' with the `testing` feature).
+            #[allow(clippy::vec_init_then_push)] // some pushes are cfg'd out
             pub fn all() -> Vec<&'static crate::gpu::kernel::KernelInterface> {
                 let mut all = Vec::new();
                 $(gated_statement!($role, all.push(&$kernel::INTERFACE));)*

@@ -29,6 +29,32 @@ pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
     }
 }
 
+/// Parses a finite number (NaN and the infinities refused).
+pub fn parse_finite(s: &str) -> Result<f32, String> {
+    let x: f32 = s.trim().parse().map_err(|e| format!("'{s}': {e}"))?;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!("'{s}' is not a finite number"))
+    }
+}
+
+/// Parses a finite number at least 0.
+pub fn parse_non_negative(s: &str) -> Result<f32, String> {
+    match parse_finite(s)? {
+        x if x >= 0.0 => Ok(x),
+        _ => Err(format!("'{s}' is negative: must be at least 0")),
+    }
+}
+
+/// Parses a finite number greater than 0.
+pub fn parse_positive(s: &str) -> Result<f32, String> {
+    match parse_finite(s)? {
+        x if x > 0.0 => Ok(x),
+        _ => Err(format!("'{s}' must be greater than 0")),
+    }
+}
+
 /// A binary's `main`: logging at `info` (`RUST_LOG` overrides), then `run`; an error is printed
 /// once with its causes and the process exits with status 1 (never a panic).
 pub fn main(run: impl FnOnce() -> anyhow::Result<()>) {

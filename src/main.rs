@@ -69,16 +69,16 @@ struct RenderArgs {
     #[arg(long)]
     env: Option<PathBuf>,
     /// Multiplier of the environment map.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = cli::parse_non_negative)]
     env_strength: f32,
     /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
     #[arg(long, value_parser = cli::parse_rgb, default_value = "0,0,0")]
     env_color: [f32; 3],
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
-    #[arg(long)]
+    #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
     /// Exposure in stops for the PNG.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = cli::parse_finite)]
     exposure: f32,
     /// Tone curve for the PNG.
     #[arg(long, value_enum, default_value = "neutral")]
@@ -96,7 +96,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 16)]
     ao_samples: u32,
     /// AO modes and hybrid SSAO: the occlusion radius in scene units (metres).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = cli::parse_positive)]
     ao_radius: f32,
     /// AO modes: skip the depth-aware blur (ao blurs by default, rtao never does).
     #[arg(long)]
@@ -107,6 +107,16 @@ struct RenderArgs {
     /// EXR output: linear colour, albedo, normal, depth and variance layers.
     #[arg(long)]
     exr: Option<PathBuf>,
+    /// A texture image that cannot be read or decoded: refuse the scene (error), or warn once
+    /// per image and render its slots with the material's factors alone (warn).
+    #[arg(long, value_enum, default_value = "error")]
+    missing_textures: MissingTexturesArg,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MissingTexturesArg {
+    Error,
+    Warn,
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -157,7 +167,14 @@ enum HeuristicArg {
 fn render(args: RenderArgs) -> Result<()> {
     use umbra::passes::pathtrace::{Heuristic, Microfacet};
     let scene = match &args.scene {
-        Some(path) => umbra::scene::Scene::load(path)?,
+        Some(path) => {
+            use umbra::scene::{LoadOptions, MissingTextures};
+            let missing_textures = match args.missing_textures {
+                MissingTexturesArg::Error => MissingTextures::Error,
+                MissingTexturesArg::Warn => MissingTextures::Warn,
+            };
+            umbra::scene::Scene::load_with(path, &LoadOptions { missing_textures })?
+        }
         None => umbra::scene::Scene::cornell_box(),
     };
     let camera = scene.camera(args.camera)?;

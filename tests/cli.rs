@@ -55,6 +55,28 @@ fn absurd_size_is_rejected_by_the_parser() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("at most 16384"));
 }
 
+/// Every number on the command line is checked by the parser: NaN, infinities, negatives and
+/// zeros where they make no sense are refused naming the flag and the value, before any work.
+#[test]
+fn non_finite_and_negative_numbers_are_rejected_by_the_parser() {
+    for (flag, value, says) in [
+        ("--env-strength", "nan", "not a finite number"),
+        ("--env-strength", "-1", "negative"),
+        ("--exposure", "inf", "not a finite number"),
+        ("--ao-radius", "0", "greater than 0"),
+        ("--ao-radius", "-0.5", "greater than 0"),
+        ("--target-error", "NaN", "not a finite number"),
+        ("--env-color", "1,nan,1", "non-negative numbers"),
+        ("--spp", "-4", "not in 0..=4294967295"),
+    ] {
+        let out = umbra().args(["render", &format!("{flag}={value}")]).output().expect("run umbra");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flag} {value} accepted");
+        assert!(stderr.contains(flag) && stderr.contains(says), "{flag} {value}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+}
+
 /// `--mode hybrid` writes the tonemapped PNG and an EXR with the colour and every G-buffer AOV;
 /// the PNG is the EXR's colour through the default tone curve (the GPU pass and its CPU twin).
 #[test]

@@ -912,6 +912,63 @@ fn missing_files_are_named() {
     );
 }
 
+/// `MissingTextures::Warn` (the CLI's `--missing-textures warn`): a texture file that cannot be
+/// read, or an image that cannot be decoded, is named once in the scene's warnings and its
+/// slots fall back to the material's factors (the specification's neutral value); every other
+/// texture and slot stays. The default still refuses the scene.
+#[test]
+fn missing_textures_can_be_warned_about_and_neutralised() {
+    use umbra::scene::{LoadOptions, MissingTextures};
+    let warn = LoadOptions { missing_textures: MissingTextures::Warn };
+    let reference = load(&scenes_dir().join("textured.glb"));
+    let path = write_gltf("lenient", |json| json["images"][0] = json!({ "uri": "gone.png" }));
+    assert_scene_error(Scene::load(&path), "scene.gltf", "gone.png");
+    let scene = Scene::load_with(&path, &warn).expect("a missing texture is a warning");
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert!(
+        scene.warnings[0].contains("scene.gltf") && scene.warnings[0].contains("gone.png"),
+        "{:?}",
+        scene.warnings
+    );
+    // Every slot that used image 0 is empty now; every other slot is as before.
+    let image_of =
+        |s: &Scene, t: u32| reference.textures[t as usize].name.clone() == s.textures[t as usize].name;
+    let mut dropped = 0;
+    for (m, r) in scene.materials.iter().zip(&reference.materials) {
+        let slots = |m: &umbra::scene::Material| {
+            [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture]
+        };
+        for (now, before) in slots(m).into_iter().zip(slots(r)) {
+            match (now, before) {
+                (Some(a), Some(b)) => {
+                    assert_eq!(a, b);
+                    assert!(image_of(&scene, a.texture), "a surviving slot changed image");
+                }
+                (None, Some(_)) => dropped += 1,
+                (None, None) => {}
+                (Some(_), None) => panic!("a slot appeared"),
+            }
+        }
+    }
+    assert!(dropped >= 1, "no slot used the missing image");
+    assert_eq!(scene.positions, reference.positions);
+    std::fs::remove_dir_all(path.parent().unwrap()).ok();
+
+    // An undecodable image likewise.
+    let (json, mut bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let view = &json["bufferViews"][json["images"][1]["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap() as usize;
+    bin[at..at + 8].copy_from_slice(b"garbage!");
+    let dir = std::env::temp_dir().join(format!("umbra-scene-garbage-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("garbage.glb");
+    std::fs::write(&file, to_glb(&json, &bin)).unwrap();
+    let scene = Scene::load_with(&file, &warn).expect("an undecodable texture is a warning");
+    assert_eq!(scene.warnings.len(), 1);
+    assert!(scene.warnings[0].contains("image 1 (embedded): cannot decode"), "{:?}", scene.warnings);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn undecodable_images_are_named() {
     let (json, mut bin) = read_glb(&scenes_dir().join("textured.glb"));
@@ -1101,4 +1158,139 @@ fn split_triangles_carry_their_shading_in_every_reference() {
         let input = arrays.bvh.prim_order[i];
         assert_eq!(t.light_pmf > 0.0, input == big || (input < 400 && input % 50 == 0), "reference {i}");
     }
+}
+
+/// One out-of-spec punctual light (a spot whose inner cone exceeds its outer, an absurd
+/// intensity, a negative one) is an error naming the file, the light and the field: it once made
+/// every light of the file vanish without a word (its infinite radiance turned each sample NaN,
+/// and NaN samples are dropped).
+#[test]
+fn out_of_range_lights_are_errors_naming_them() {
+    let with_light = |light: Value| {
+        let (mut json, bin) = read_glb(&scenes_dir().join("spheres.glb"));
+        json["extensions"]["KHR_lights_punctual"]["lights"].as_array_mut().unwrap().push(light);
+        to_glb(&json, &bin)
+    };
+    let spot = with_light(json!({"type": "spot", "name": "lamp", "intensity": 10.0,
+        "spot": {"innerConeAngle": 1.0, "outerConeAngle": 0.5}}));
+    assert_scene_error(
+        Scene::from_glb_bytes("spot.glb", &spot),
+        "spot.glb",
+        "KHR_lights_punctual light 1 ('lamp'): spot innerConeAngle 1 must be less than outerConeAngle 0.5",
+    );
+    let bright = with_light(json!({"type": "point", "intensity": 1e30}));
+    assert_scene_error(
+        Scene::from_glb_bytes("bright.glb", &bright),
+        "bright.glb",
+        "light 1: intensity is 1e+30, must be within [0, 100000000000000000000]",
+    );
+    let negative = with_light(json!({"type": "directional", "intensity": -2.0}));
+    assert_scene_error(
+        Scene::from_glb_bytes("negative.glb", &negative),
+        "negative.glb",
+        "light 1: intensity is -2.0, must be within [0,",
+    );
+    let wide = with_light(json!({"type": "spot", "spot": {"outerConeAngle": 2.0}}));
+    assert_scene_error(
+        Scene::from_glb_bytes("wide.glb", &wide),
+        "wide.glb",
+        "outerConeAngle is 2.0, must be within [0, 1.57",
+    );
+    let range = with_light(json!({"type": "point", "range": 0.0}));
+    assert_scene_error(
+        Scene::from_glb_bytes("range.glb", &range),
+        "range.glb",
+        "range is 0.0, must be greater than 0",
+    );
+    let colour = with_light(json!({"type": "point", "color": [1.0, 2.0, 0.5]}));
+    assert_scene_error(
+        Scene::from_glb_bytes("colour.glb", &colour),
+        "colour.glb",
+        "color[1] is 2.0, must be within [0, 1]",
+    );
+    // The spheres' own light alone loads, and is there.
+    let (json, bin) = read_glb(&scenes_dir().join("spheres.glb"));
+    assert_eq!(Scene::from_glb_bytes("ok.glb", &to_glb(&json, &bin)).unwrap().lights.len(), 1);
+}
+
+/// Material factors, extension parameters, texture transforms, camera planes and node transforms
+/// outside their specified ranges: each an error naming the element, its index and the field;
+/// several at once are all named.
+#[test]
+fn out_of_range_values_are_errors_naming_the_element() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let case = |edit: &dyn Fn(&mut Value), phrase: &str| {
+        let mut json = base.clone();
+        edit(&mut json);
+        assert_scene_error(Scene::from_glb_bytes("range.glb", &to_glb(&json, &bin)), "range.glb", phrase);
+    };
+    let material = |json: &mut Value| json["materials"][0].clone();
+    let name = material(&mut base.clone())["name"].as_str().map(|n| format!(" ('{n}')")).unwrap_or_default();
+    let m0 = format!("material 0{name}");
+    case(
+        &|j| j["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.5, 0.5, 0.5, 1.0]),
+        &format!("{m0}: baseColorFactor[0] is 1.5, must be within [0, 1]"),
+    );
+    case(
+        &|j| j["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(-0.1),
+        &format!("{m0}: metallicFactor is -0.1"),
+    );
+    case(
+        &|j| j["materials"][0]["emissiveFactor"] = json!([0.0, 3.0, 0.0]),
+        &format!("{m0}: emissiveFactor[1] is 3.0"),
+    );
+    case(
+        &|j| j["materials"][0]["extensions"] = json!({"KHR_materials_ior": {"ior": -1.5}}),
+        &format!("{m0} KHR_materials_ior: ior is -1.5, must be at least 1 (or 0)"),
+    );
+    case(&|j| j["materials"][0]["extensions"] = json!({"KHR_materials_ior": {"ior": 0.5}}), "ior is 0.5");
+    case(
+        &|j| {
+            j["materials"][0]["extensions"] =
+                json!({"KHR_materials_transmission": {"transmissionFactor": 2.0}})
+        },
+        "KHR_materials_transmission: transmissionFactor is 2.0",
+    );
+    case(
+        &|j| j["materials"][0]["extensions"] = json!({"KHR_materials_volume": {"attenuationDistance": 0.0}}),
+        "KHR_materials_volume: attenuationDistance is 0.0, must be greater than 0",
+    );
+    case(
+        &|j| {
+            j["materials"][0]["extensions"] =
+                json!({"KHR_materials_emissive_strength": {"emissiveStrength": -1.0}})
+        },
+        "emissiveStrength is -1.0, must be at least 0",
+    );
+    case(
+        &|j| {
+            j["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+                json!({"KHR_texture_transform": {"scale": [1.0, 1e39]}})
+        },
+        "baseColorTexture KHR_texture_transform: scale[1] is 1e+39, must be a finite 32-bit float",
+    );
+    case(
+        &|j| {
+            j["cameras"] =
+                json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 1.0, "zfar": 0.5}}]);
+        },
+        "camera 0: zfar 0.5 must be greater than znear 1",
+    );
+    case(&|j| j["nodes"][0]["scale"] = json!([1.0, 1e39, 1.0]), "node 0");
+    // Several problems: the first five named, the rest counted.
+    case(
+        &|j| {
+            for k in ["metallicFactor", "roughnessFactor"] {
+                j["materials"][0]["pbrMetallicRoughness"][k] = json!(7.0);
+            }
+            j["materials"][0]["alphaCutoff"] = json!(-1.0);
+        },
+        "roughnessFactor is 7.0",
+    );
+    // A node that puts a mesh beyond the BVH's reach is named, not a BVH node.
+    case(&|j| j["nodes"][0]["translation"] = json!([0.0, 2e18, 0.0]), "node 0");
+    case(
+        &|j| j["nodes"][0]["translation"] = json!([0.0, 2e18, 0.0]),
+        "umbra's BVH takes world coordinates within ±5e17",
+    );
 }

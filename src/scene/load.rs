@@ -5,6 +5,7 @@ use super::accessor::Reader;
 use super::geometry::{read_primitive, LocalPrimitive, Wanted};
 use super::source::{self, Asset, Origin};
 use super::texture::TextureSet;
+use super::LoadOptions;
 use super::{Camera, EmissiveTable, Instance, Light, Material, Scene};
 use crate::error::Result;
 use glam::{Mat3, Mat4, Quat, Vec3};
@@ -13,7 +14,7 @@ use std::path::Path;
 use std::rc::Rc;
 
 /// Loads the scene in `bytes`; `base` is the folder external files are relative to.
-pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
+pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &LoadOptions) -> Result<Scene> {
     let origin = Origin::new(name, base.map(Path::to_path_buf));
     let asset = source::open(&origin, bytes)?;
     let mut textures = TextureSet::default();
@@ -22,7 +23,17 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>) -> Result<Scen
     let mut builder = Builder::new(&origin, &asset, materials);
     builder.walk()?;
     let mut scene = builder.finish()?;
-    scene.textures = textures.decode(&origin, &asset)?;
+    let (decoded, failed, warnings) = textures.decode(&origin, &asset, options.missing_textures)?;
+    scene.textures = decoded;
+    // The slots of unreadable images take the neutral value: no texture, the factors alone.
+    for m in &mut scene.materials {
+        for slot in m.texture_slots_mut() {
+            if slot.is_some_and(|t| failed.contains(&t.texture)) {
+                *slot = None;
+            }
+        }
+    }
+    scene.warnings.extend(warnings);
     scene.emissive = EmissiveTable::build(
         &scene.positions,
         &scene.triangles,
@@ -185,12 +196,25 @@ impl<'a> Builder<'a> {
                 .error(format!("{}: an instance transform is not finite", node_label(node))));
         }
         let first_triangle = self.scene.triangles.len();
+        let first_vertex = self.scene.positions.len();
         for primitive in mesh.primitives() {
             if let Some(local) = self.local_primitive(mesh, &primitive)? {
                 let material = self.material_index(local.material);
                 self.append(&local, world, material)?;
                 self.dropped += local.dropped;
             }
+        }
+        // Beyond what the GPU BVH's quantized boxes reach: refused here, where the node that put
+        // the mesh there can be named.
+        let reach = self.scene.positions[first_vertex..].iter().flatten().fold(0.0f32, |m, x| m.max(x.abs()));
+        if reach > super::MAX_COORDINATE {
+            return Err(self.origin.error(format!(
+                "{} places mesh {} at coordinates up to {reach:e}; umbra's BVH takes world coordinates within \
+                 ±{:e} (check the node's and its parents' translation and scale)",
+                node_label(node),
+                mesh.index(),
+                super::MAX_COORDINATE
+            )));
         }
         self.scene.instances.push(Instance {
             name: node.name().unwrap_or_default().to_owned(),

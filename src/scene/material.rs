@@ -34,6 +34,22 @@ pub struct TextureRef {
     pub scale: f32,
 }
 
+impl Material {
+    /// Every texture slot, for changing them all (a missing image's uses are dropped).
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 8] {
+        [
+            &mut self.base_color_texture,
+            &mut self.metallic_roughness_texture,
+            &mut self.normal_texture,
+            &mut self.occlusion_texture,
+            &mut self.emissive_texture,
+            &mut self.specular_texture,
+            &mut self.specular_color_texture,
+            &mut self.transmission_texture,
+        ]
+    }
+}
+
 impl TextureRef {
     /// Applies [`TextureRef::transform`] to a UV coordinate.
     pub fn transform_uv(&self, [u, v]: [f32; 2]) -> [f32; 2] {

@@ -23,12 +23,18 @@
 //! read with the `gltf` crate's JSON model; umbra resolves buffers (GLB `BIN` chunk, external
 //! `.bin` next to the file, `data:` URIs) and decodes images itself.
 
+/// The largest world-space coordinate (in magnitude) a scene may have: the GPU BVH's per-node
+/// grids have 255 steps of at most 2^52 (`bvh::gpu`), about 1.1e18 across, which a scene within
+/// ±5e17 never exceeds.
+pub const MAX_COORDINATE: f32 = 5e17;
+
 mod accessor;
 mod camera;
 mod emissive;
 mod geometry;
 mod load;
 mod material;
+mod ranges;
 mod source;
 mod texture;
 
@@ -96,6 +102,28 @@ pub struct Scene {
     pub emissive: EmissiveTable,
     /// Every placed mesh instance, in the order its triangles appear.
     pub instances: Vec<Instance>,
+    /// What loading replaced under [`LoadOptions`] (each missing texture file once), also logged
+    /// as warnings.
+    pub warnings: Vec<String>,
+}
+
+/// What to do with a texture image that cannot be read or decoded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MissingTextures {
+    /// Refuse the scene, naming the image (the default).
+    #[default]
+    Error,
+    /// Warn once per image and render its slots with the specification's neutral value: the
+    /// material's factors alone, as if the slot had no texture (real-world assets ship with
+    /// missing files).
+    Warn,
+}
+
+/// How [`Scene::load_with`] treats imperfect input.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Texture images that cannot be read or decoded.
+    pub missing_textures: MissingTextures,
 }
 
 /// One mesh placed by one node (or one `EXT_mesh_gpu_instancing` instance of a node).
@@ -136,18 +164,23 @@ impl Scene {
     /// Loads a `.gltf` or `.glb` file (told apart by content, not extension), resolving external
     /// buffers and images relative to it.
     pub fn load(path: &Path) -> Result<Scene> {
+        Self::load_with(path, &LoadOptions::default())
+    }
+
+    /// [`Scene::load`] with `options` (a lenient treatment of missing textures).
+    pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         let bytes = std::fs::read(path).map_err(|e| Error::Scene {
             path: path.to_path_buf(),
             message: format!("cannot read the scene file: {e}"),
         })?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        load::load(&path.display().to_string(), &bytes, Some(&base))
+        load::load(&path.display().to_string(), &bytes, Some(&base), options)
     }
 
     /// Loads a scene from memory (GLB, or glTF JSON whose buffers and images are all embedded).
     /// `name` names the scene in errors. Nothing outside `bytes` is read.
     pub fn from_glb_bytes(name: &str, bytes: &[u8]) -> Result<Scene> {
-        load::load(name, bytes, None)
+        load::load(name, bytes, None, &LoadOptions::default())
     }
 
     /// The embedded default scene: the classic Cornell box (`scenes/cornell-box.glb`).

@@ -65,6 +65,7 @@ pub(super) fn open<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<Asset<'a>> {
         if bytes.starts_with(b"glTF") { split_glb(origin, bytes)? } else { (bytes, None) };
     let root = parse_json(origin, json_bytes)?;
     check_extensions(origin, &root)?;
+    super::ranges::check(origin, json_bytes)?;
     let document = validate(origin, root)?;
     let buffers = load_buffers(origin, &document, bin)?;
     check_views(origin, &document, &buffers)?;

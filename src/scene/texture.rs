@@ -6,6 +6,7 @@
 //! once, however many textures share it.
 
 use super::source::{self, Asset, Origin};
+use super::MissingTextures;
 use crate::color::{luminance, srgb_decode, srgb_encode};
 use crate::error::Result;
 use gltf::texture::{MagFilter, MinFilter, WrappingMode};
@@ -260,20 +261,45 @@ impl TextureSet {
         })
     }
 
-    /// Decodes every image in use (each once, in parallel) into the scene's textures.
-    pub fn decode(self, origin: &Origin, asset: &Asset) -> Result<Vec<super::Texture>> {
+    /// Decodes every image in use (each once, in parallel) into the scene's textures. An image
+    /// that cannot be read or decoded is an error, or with [`MissingTextures::Warn`] a warning
+    /// (logged, and returned once per image) and a 1×1 white stand-in whose uses are returned so
+    /// the materials can drop them.
+    pub fn decode(
+        self,
+        origin: &Origin,
+        asset: &Asset,
+        missing: MissingTextures,
+    ) -> Result<(Vec<super::Texture>, Vec<u32>, Vec<String>)> {
         let mut images: Vec<usize> = self.uses.iter().map(|u| u.image).collect();
         images.sort_unstable();
         images.dedup();
-        let decoded: HashMap<usize, Decoded> = images
-            .par_iter()
-            .map(|&image| decode_image(origin, asset, image).map(|d| (image, d)))
-            .collect::<Result<_>>()?;
-        Ok(self
+        let results: Vec<(usize, Result<Decoded>)> =
+            images.par_iter().map(|&image| (image, decode_image(origin, asset, image))).collect();
+        let mut decoded = HashMap::new();
+        let mut warnings = Vec::new();
+        for (image, result) in results {
+            match (result, missing) {
+                (Ok(d), _) => {
+                    decoded.insert(image, d);
+                }
+                (Err(e), MissingTextures::Error) => return Err(e),
+                (Err(e), MissingTextures::Warn) => {
+                    let warning = format!("{e}; its texture slots use the material's factors alone");
+                    log::warn!("{warning}");
+                    warnings.push(warning);
+                }
+            }
+        }
+        let failed = (0..self.uses.len() as u32)
+            .filter(|&i| !decoded.contains_key(&self.uses[i as usize].image))
+            .collect();
+        let white = Decoded { name: "missing".into(), width: 1, height: 1, rgba8: vec![255; 4] };
+        let textures = self
             .uses
             .iter()
             .map(|u| {
-                let image = &decoded[&u.image];
+                let image = decoded.get(&u.image).unwrap_or(&white);
                 Texture {
                     name: image.name.clone(),
                     width: image.width,
@@ -283,7 +309,8 @@ impl TextureSet {
                     sampler: u.sampler,
                 }
             })
-            .collect())
+            .collect();
+        Ok((textures, failed, warnings))
     }
 }
 

@@ -4,6 +4,8 @@
 //! `build` times the BVH build alone (CPU only, no Vulkan).
 
 mod chart;
+// Shared with `umbra`, which uses parsers this binary does not.
+#[allow(dead_code)]
 #[path = "../../cli.rs"]
 mod cli;
 mod passes;
@@ -55,7 +57,7 @@ enum Command {
         #[arg(long, value_parser = cli::parse_rgb, default_value = "0.5,0.5,0.5")]
         env_color: [f32; 3],
         /// AO radius in scene units for SSAO and RTAO.
-        #[arg(long, default_value_t = 0.5)]
+        #[arg(long, default_value_t = 0.5, value_parser = cli::parse_positive)]
         ao_radius: f32,
         /// glTF scenes to run as well (their first camera, or one framing them).
         #[arg(long = "gltf")]

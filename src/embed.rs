@@ -98,11 +98,15 @@ impl Renderer {
     }
 
     /// Takes changed materials, textures or lights of `scene` (same geometry) without rebuilding
-    /// the BVH, and re-specialises the pipelines for them.
+    /// the BVH. The pipelines are re-specialised only when what the scene has changes (textures,
+    /// emitters, punctual lights, transmission): a recoloured material or a moved light keeps
+    /// them, so an engine can update every frame without compiling a kernel.
     pub fn update_scene(&mut self, scene: &Scene) -> Result<()> {
         self.scene.update(&self.ctx, scene)?;
-        self.passes = Passes::new(&self.ctx, &self.scene);
-        self.passes.prepare(&self.scene, self.path_options.0, self.path_options.1)?;
+        if self.scene.features() != self.passes.features() {
+            self.passes = Passes::new(&self.ctx, &self.scene);
+            self.passes.prepare(&self.scene, self.path_options.0, self.path_options.1)?;
+        }
         Ok(())
     }
 

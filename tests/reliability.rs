@@ -308,15 +308,19 @@ fn failed_submissions_name_the_last_pass() {
     }
 }
 
-/// The GPU-written breadcrumb: a kernel that hangs until the host releases it, recorded between
-/// two quick ones into one submission, makes `submit` time out naming the hanging kernel as the
-/// one running on the GPU (dispatch 2 of 3, the first finished), not the last one recorded;
-/// waiting for the held submission times out too, naming the same pass. Released, the GPU
-/// finishes the work (the third dispatch's output is right), and the
-/// submission's fence, pool and breadcrumb, kept while it ran, are freed without a validation
-/// message.
-#[test]
-fn a_hung_submission_names_the_pass_the_gpu_was_running() {
+/// What [`hung_submission`] saw: the submission's error and what waiting for the still-held
+/// submission said.
+struct Hung {
+    err: Error,
+    still: umbra::Result<()>,
+}
+
+/// A kernel that hangs until the host releases it, recorded between two quick ones into one
+/// submission with a 1.5 s timeout (and `wait_fault` injected into the wait, if given). Whatever
+/// happens, the host releases the GPU afterwards and checks that it finished the work: the
+/// dispatch after the spin ran, a later submission finishes normally, and the submission's
+/// fence, pool and breadcrumb, kept while it ran, are freed without a validation message.
+fn hung_submission(wait_fault: Option<raw::Result>) -> Hung {
     let gpu = Gpu::new();
     let quick = Pipeline::<test_buffer::Kernel>::plain(&gpu).unwrap();
     let spin = Pipeline::<spin_test::Kernel>::plain(&gpu).unwrap();
@@ -334,9 +338,12 @@ fn a_hung_submission_names_the_pass_the_gpu_was_running() {
     let timeout = Duration::from_millis(1500);
     gpu.set_submit_timeout(timeout);
     assert_eq!(gpu.submit_timeout(), timeout);
+    if let Some(fault) = wait_fault {
+        gpu.inject_wait_fault(fault);
+    }
     let started = Instant::now();
     let (sender, receiver) = std::sync::mpsc::channel();
-    let (result, waited) = std::thread::scope(|s| {
+    let (result, waited, still) = std::thread::scope(|s| {
         s.spawn(|| {
             let result = gpu.submit(|cmd| {
                 for (k, output) in outputs.iter().enumerate() {
@@ -364,31 +371,15 @@ fn a_hung_submission_names_the_pass_the_gpu_was_running() {
         gpu.set_submit_timeout(Duration::from_millis(200));
         let still = gpu.wait_idle();
         release.store(1, Ordering::SeqCst);
-        (result, (waited, still))
+        (result, waited, still)
     });
-    let (waited, still) = waited;
     let err = match result {
         Ok(Err(e)) => e,
         Ok(Ok(())) => panic!("the submission finished although the kernel was never released"),
         Err(_) => panic!("submit did not return within 60 s despite its {timeout:?} timeout"),
     };
-    let message = err.to_string();
-    eprintln!("{message} (after {waited:?})");
-    match &err {
-        Error::Timeout { seconds, pass: Some(pass) } => {
-            assert_eq!(*seconds, 1.5);
-            assert_eq!(pass, "spin_test, dispatch 2 of 3: running or next to run on the GPU; 1 finished");
-        }
-        other => panic!("expected a timeout naming spin_test: {other}"),
-    }
-    assert!(message.starts_with("GPU work did not finish within 1.5 s (pass spin_test"), "{message}");
+    eprintln!("{err} (after {waited:?})");
     assert!(waited >= timeout && waited < Duration::from_secs(30), "{waited:?}");
-    match still {
-        Err(Error::Timeout { pass: Some(pass), .. }) => {
-            assert!(pass.starts_with("spin_test, dispatch 2 of 3"))
-        }
-        other => panic!("expected waiting for the held submission to time out: {other:?}"),
-    }
 
     // Released, the GPU finishes; the abandoned submission is reclaimed.
     gpu.set_submit_timeout(Duration::from_secs(600));
@@ -402,6 +393,51 @@ fn a_hung_submission_names_the_pass_the_gpu_was_running() {
     // A later submission finishes normally.
     let out: Vec<u32> = outputs[0].read(&gpu).unwrap();
     assert_eq!(out, (0..64).map(|v| 3 * v).collect::<Vec<_>>());
+    Hung { err, still }
+}
+
+/// The GPU-written breadcrumb: the hung submission makes `submit` time out naming the hanging
+/// kernel as the one running on the GPU (dispatch 2 of 3, the first finished), not the last one
+/// recorded; waiting for the held submission times out too, naming the same pass.
+#[test]
+fn a_hung_submission_names_the_pass_the_gpu_was_running() {
+    let Hung { err, still, .. } = hung_submission(None);
+    let message = err.to_string();
+    match &err {
+        Error::Timeout { seconds, pass: Some(pass) } => {
+            assert_eq!(*seconds, 1.5);
+            assert_eq!(pass, "spin_test, dispatch 2 of 3: running or next to run on the GPU; 1 finished");
+        }
+        other => panic!("expected a timeout naming spin_test: {other}"),
+    }
+    assert!(message.starts_with("GPU work did not finish within 1.5 s (pass spin_test"), "{message}");
+    match still {
+        Err(Error::Timeout { pass: Some(pass), .. }) => {
+            assert!(pass.starts_with("spin_test, dispatch 2 of 3"))
+        }
+        other => panic!("expected waiting for the held submission to time out: {other:?}"),
+    }
+}
+
+/// A device lost while the GPU runs a submission (injected into the wait, after the work was
+/// really submitted and the GPU got as far as the hanging kernel): the error names the call, the
+/// result and the pass the GPU had reached, from the breadcrumb it writes per dispatch
+/// (spin_test, dispatch 2 of 3), not the last pass recorded (test_buffer, dispatch 3).
+#[test]
+fn a_lost_device_names_the_pass_the_gpu_reached() {
+    let Hung { err, .. } = hung_submission(Some(raw::Result::ERROR_DEVICE_LOST));
+    match &err {
+        Error::Vulkan {
+            call: "vkWaitForFences",
+            result: raw::Result::ERROR_DEVICE_LOST,
+            pass: Some(pass),
+        } => {
+            assert_eq!(pass, "spin_test, dispatch 2 of 3: running or next to run on the GPU; 1 finished");
+        }
+        other => panic!("expected a lost device naming spin_test: {other}"),
+    }
+    let message = err.to_string();
+    assert!(message.contains("vkWaitForFences") && message.contains("device has been lost"), "{message}");
 }
 
 /// Hybrid renders are deterministic: the same seeds give the same bytes (colour and display),

@@ -120,12 +120,20 @@ impl Context {
                     device.queue_submit2(*queue, &submit, fence).call("vkQueueSubmit2")?;
                 }
                 submitted = true;
-                match device.wait_for_fences(&[fence], true, timeout_ns) {
-                    Err(vk::Result::TIMEOUT) => {
-                        timed_out = true;
+                // Fault injection (the `testing` feature): the work runs, then the wait reports
+                // the fault, as a device lost while (or after) the GPU ran it would.
+                #[cfg(feature = "testing")]
+                let wait_fault = shared.injected_wait_fault.lock().unwrap_or_else(|p| p.into_inner()).take();
+                #[cfg(not(feature = "testing"))]
+                let wait_fault: Option<vk::Result> = None;
+                let waited = device.wait_for_fences(&[fence], true, timeout_ns);
+                timed_out = waited == Err(vk::Result::TIMEOUT);
+                match (waited, wait_fault) {
+                    (_, Some(fault)) => Err(fault).call("vkWaitForFences"),
+                    (Err(vk::Result::TIMEOUT), None) => {
                         Err(Error::Timeout { seconds: timeout_ns as f64 * 1e-9, pass: None })
                     }
-                    other => other.call("vkWaitForFences").map(|()| value),
+                    (other, None) => other.call("vkWaitForFences").map(|()| value),
                 }
             })();
             let trail =

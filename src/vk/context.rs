@@ -98,6 +98,9 @@ pub(crate) struct Shared {
     /// A failure the next [`Context::submit`] reports instead of submitting (tests only).
     #[cfg(feature = "testing")]
     pub injected_fault: Mutex<Option<vk::Result>>,
+    /// A failure the next [`Context::submit`]'s wait reports after submitting (tests only).
+    #[cfg(feature = "testing")]
+    pub injected_wait_fault: Mutex<Option<vk::Result>>,
     /// The GPU-written breadcrumb of each command buffer [`Context::submit`] is recording or
     /// has submitted (see [`super::breadcrumb`]); a host's command buffers have none.
     pub trails: Mutex<HashMap<vk::CommandBuffer, Trail>>,
@@ -108,6 +111,17 @@ pub(crate) struct Shared {
     pub abandoned: Mutex<Vec<Abandoned>>,
     /// [`Context::submit`]'s timeout in nanoseconds.
     pub submit_timeout_ns: AtomicU64,
+}
+
+/// GPU memory held through a context's allocator ([`Context::memory_report`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryReport {
+    /// Bytes in live allocations.
+    pub allocated_bytes: u64,
+    /// Bytes in the memory blocks that hold them (what the device has given).
+    pub capacity_bytes: u64,
+    /// Live allocations.
+    pub allocations: usize,
 }
 
 /// What a timed-out submission holds until the GPU is done with it.
@@ -385,6 +399,8 @@ impl Context {
                 passes: Mutex::new(HashMap::new()),
                 #[cfg(feature = "testing")]
                 injected_fault: Mutex::new(None),
+                #[cfg(feature = "testing")]
+                injected_wait_fault: Mutex::new(None),
                 trails: Mutex::new(HashMap::new()),
                 crumbs: Mutex::new(Vec::new()),
                 abandoned: Mutex::new(Vec::new()),
@@ -420,6 +436,28 @@ impl Context {
     #[doc(hidden)]
     pub fn inject_submit_fault(&self, result: vk::Result) {
         *self.shared.injected_fault.lock().unwrap_or_else(|p| p.into_inner()) = Some(result);
+    }
+
+    /// Fault injection for tests of the device-loss path: the next [`Context::submit`] submits
+    /// its work for real and waits for it as usual (up to its timeout), then fails with `result`
+    /// as `vkWaitForFences` would on a lost device, so the error names the pass the GPU had
+    /// reached (its breadcrumb), not the last one recorded. Only with the `testing` feature.
+    #[cfg(feature = "testing")]
+    #[doc(hidden)]
+    pub fn inject_wait_fault(&self, result: vk::Result) {
+        *self.shared.injected_wait_fault.lock().unwrap_or_else(|p| p.into_inner()) = Some(result);
+    }
+
+    /// GPU memory held through the context's allocator (a host's own, when it shared one):
+    /// bytes in live allocations, bytes in the memory blocks that hold them, and how many
+    /// allocations there are. For leak checks and budgets.
+    pub fn memory_report(&self) -> MemoryReport {
+        let report = self.shared.allocator().generate_report();
+        MemoryReport {
+            allocated_bytes: report.total_allocated_bytes,
+            capacity_bytes: report.total_capacity_bytes,
+            allocations: report.allocations.len(),
+        }
     }
 
     /// The logical device.

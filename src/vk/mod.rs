@@ -11,7 +11,7 @@ mod pipeline;
 mod timer;
 
 pub use buffer::{Buffer, TexelBuffer};
-pub use context::{Context, ContextDesc, DeviceInfo, HostDevice};
+pub use context::{Context, ContextDesc, DeviceInfo, HostDevice, MemoryReport};
 pub use debug::ValidationLog;
 pub use image::Image;
 pub use pipeline::{ComputePipeline, Descriptor, PipelineDesc};

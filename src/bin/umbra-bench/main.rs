@@ -92,6 +92,10 @@ enum Command {
         /// Only the `--gltf` scenes, not the generated terrains.
         #[arg(long)]
         no_terrain: bool,
+        /// Write each scene's triangles, rays and umbra's hits to this folder, for a peer
+        /// (`src/bin/umbra-bench/peers.py` traces the same rays with Embree).
+        #[arg(long)]
+        dump: Option<PathBuf>,
     },
     /// GPU time per pass (G-buffer, deferred lighting, one path-traced sample per pixel) on one
     /// scene, median over repeats after a warm-up.
@@ -244,18 +248,25 @@ fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Rays { quick, size, repeats, sweep, gltf, out, row_order, no_terrain } => {
+        Command::Rays { quick, size, repeats, sweep, gltf, out, row_order, no_terrain, dump } => {
             let ctx = Context::new(&ContextDesc::default())?;
             let device = ctx.info().name.clone();
             let (scenes, settings) = if quick {
                 (
                     vec![terrain_scene("terrain", 177)],
-                    RaySettings { size: (128, 128), repeats: 3, builds: 1, sweep: true, row_order },
+                    RaySettings {
+                        size: (128, 128),
+                        repeats: 3,
+                        builds: 1,
+                        sweep: true,
+                        row_order,
+                        dump: dump.clone(),
+                    },
                 )
             } else {
                 (
                     vec![terrain_scene("terrain", 351), terrain_scene("terrain", 704)],
-                    RaySettings { size, repeats, builds: 5, sweep, row_order },
+                    RaySettings { size, repeats, builds: 5, sweep, row_order, dump: dump.clone() },
                 )
             };
             let mut scenes = if no_terrain { Vec::new() } else { scenes };

@@ -43,6 +43,9 @@ pub struct RaySettings {
     pub sweep: bool,
     /// Primary rays in row order instead of 8×8 tiles (to measure what ray order costs).
     pub row_order: bool,
+    /// Write the scene's triangles, each kind's rays and umbra's answers here, for a peer to
+    /// trace exactly the same rays (`peers.py`).
+    pub dump: Option<std::path::PathBuf>,
 }
 
 pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<RayReport> {
@@ -73,6 +76,20 @@ pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<Ra
     let (shadow_batch, _) = validated(Query::Any, &shadow)?;
     let (diffuse_batch, _) = validated(Query::Closest, &diffuse)?;
 
+    if let Some(dir) = &settings.dump {
+        let hits = |batch: &RayBatch| batch.read_hits(ctx);
+        dump(
+            dir,
+            scene,
+            &bvh,
+            [
+                ("primary", &primary, hits(&primary_batch)?),
+                ("shadow", &shadow, hits(&shadow_batch)?),
+                ("diffuse", &diffuse, hits(&diffuse_batch)?),
+            ],
+        )?;
+    }
+
     let mut kinds = Vec::new();
     for (kind, query, batch) in [
         ("primary", Query::Closest, &primary_batch),
@@ -91,6 +108,50 @@ pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<Ra
         sweep,
         kinds,
     })
+}
+
+/// A file-name stem for `name`: letters and digits, the rest `-`.
+pub fn slug(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '-' }).collect()
+}
+
+/// Writes, little-endian, `<slug>-triangles.f32` (9 floats per triangle, input order) and per
+/// kind `<slug>-<kind>.f32` (8 floats per ray: origin, tmin, direction, tmax) and
+/// `<slug>-<kind>.u32` (umbra's answer per ray: the input triangle hit or 0xffffffff; any hit:
+/// 1 occluded, 0 clear).
+fn dump(
+    dir: &std::path::Path,
+    scene: &RayScene,
+    bvh: &Bvh,
+    kinds: [(&str, &Vec<Ray>, Vec<TraceHit>); 3],
+) -> Result<()> {
+    use anyhow::Context as _;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let stem = slug(&scene.name);
+    let write = |name: String, bytes: &[u8]| {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))
+    };
+    let triangles: Vec<f32> =
+        scene.triangles.iter().flat_map(|t| t.iter().flat_map(|v| v.to_array())).collect();
+    write(format!("{stem}-triangles.f32"), bytemuck::cast_slice(&triangles))?;
+    for (kind, rays, hits) in kinds {
+        let floats: Vec<f32> = rays
+            .iter()
+            .flat_map(|r| [r.origin.x, r.origin.y, r.origin.z, r.tmin, r.dir.x, r.dir.y, r.dir.z, r.tmax])
+            .collect();
+        write(format!("{stem}-{kind}.f32"), bytemuck::cast_slice(&floats))?;
+        let answers: Vec<u32> = hits
+            .iter()
+            .map(|h| match kind {
+                "shadow" => h.t as u32,
+                _ if h.tri == TraceHit::MISS => u32::MAX,
+                _ => bvh.tris[h.tri as usize].v0[3].to_bits(),
+            })
+            .collect();
+        write(format!("{stem}-{kind}.u32"), bytemuck::cast_slice(&answers))?;
+    }
+    Ok(())
 }
 
 fn primary_rays(scene: &RayScene, (w, h): (u32, u32), row_order: bool) -> Vec<Ray> {

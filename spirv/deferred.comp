@@ -128,7 +128,7 @@ void main() {
         Surface s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w);
         if (HAS_TRANSMISSION) {
             // Seen from outside (wo on the front): glass (ior) behind the surface.
-            s.eta = materials[mat.x].params.y;
+            s.eta = material_vec(mat.x, 3u).y;
         }
 
         // Image-based lighting (split sum), times ambient occlusion.

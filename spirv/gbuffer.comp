@@ -51,7 +51,7 @@ void main() {
     if (dot(ng, wo) < 0.0) {
         ng = -ng;
     }
-    uint material = triangles[tri].material;
+    uint material = tri_material(tri);
     vec3 n = shading_normal_lod(tri, hit.bary, ng, uv, cone_lod);
     Surface s = material_surface_lod(material, uv, cone_lod);
 

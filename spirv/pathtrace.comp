@@ -100,7 +100,7 @@ void main() {
         if (!front) {
             ng = -ng;
         }
-        uint material = triangles[tri].material;
+        uint material = tri_material(tri);
         vec3 n = shading_normal(tri, hit.bary, ng, uv);
         vec3 t;
         vec3 b;
@@ -109,7 +109,7 @@ void main() {
         Surface s = material_surface(material, uv);
         if (HAS_TRANSMISSION) {
             // A refracting boundary: glass (ior) behind the front face, air behind the back.
-            float ior = materials[material].params.y;
+            float ior = material_vec(material, 3u).y;
             s.eta = front ? ior : 1.0 / ior;
         }
         if (depth == 0u) {

@@ -126,6 +126,7 @@ fn environment_file_with_bad_texels_is_named_and_renders_finite() {
 fn texel_bytes(buffer: &str) -> Option<u64> {
     match buffer {
         b if b.starts_with("bvh ") => Some(16),
+        "scene triangles" | "scene vertices" | "scene materials" => Some(16),
         "scene texels" => Some(4),
         _ => None,
     }

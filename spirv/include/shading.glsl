@@ -16,6 +16,43 @@
 #include "bsdf.glsl"
 #include "texture.glsl"
 
+// Texel k of material `id` (fourteen per GpuMaterial: base_color, emissive_rough, specular,
+// params, flags, textures, tex_transform[0..8]), as floats or as unsigned integers.
+vec4 material_vec(uint id, uint k) {
+    return uintBitsToFloat(imageLoad(material_texels, int(14u * id + k)));
+}
+
+uvec4 material_uvec(uint id, uint k) {
+    return imageLoad(material_texels, int(14u * id + k));
+}
+
+// The scene's triangles and vertices, read as texels (on llvmpipe a texel read is a branch-free
+// gather, a storage-buffer read a loop over the lanes): a GpuTriangle is two RGBA32UI texels,
+// a GpuVertex three (float bits).
+uvec3 tri_indices(uint tri) {
+    return imageLoad(triangle_texels, int(2u * tri)).xyz;
+}
+
+uint tri_material(uint tri) {
+    return imageLoad(triangle_texels, int(2u * tri)).w;
+}
+
+float tri_light_pmf(uint tri) {
+    return uintBitsToFloat(imageLoad(triangle_texels, int(2u * tri + 1u)).x);
+}
+
+vec4 vertex_normal_u(uint i) {
+    return uintBitsToFloat(imageLoad(vertex_texels, int(3u * i)));
+}
+
+vec4 vertex_v_uv1(uint i) {
+    return uintBitsToFloat(imageLoad(vertex_texels, int(3u * i + 1u)));
+}
+
+vec4 vertex_tangent(uint i) {
+    return uintBitsToFloat(imageLoad(vertex_texels, int(3u * i + 2u)));
+}
+
 // Whether light arriving along wi (unit, towards the light) reaches p: wi above both the shading
 // frame (t, b, n) and the geometric surface ng — or, on a surface that `transmits`, below both —
 // and nothing on the shadow ray, which leaves from wi's side, and ends just short of `target`
@@ -39,12 +76,12 @@ uint material_texture_uv(uint id, uint slot, vec4 uv, out vec2 t) {
     // OpSpecConstantOp, which naga rejects.
     uint tex = 0u;
     if (HAS_TEXTURES) {
-        tex = materials[id].textures[slot];
+        tex = material_uvec(id, 5u)[slot];
     }
     t = vec2(0.0);
     if (tex != 0u) {
-        vec4 r0 = materials[id].tex_transform[2u * slot];
-        vec4 r1 = materials[id].tex_transform[2u * slot + 1u];
+        vec4 r0 = material_vec(id, 6u + (2u * slot));
+        vec4 r1 = material_vec(id, 6u + (2u * slot + 1u));
         vec2 st = r0.w != 0.0 ? uv.zw : uv.xy;
         t = vec2(dot(r0.xyz, vec3(st, 1.0)), dot(r1.xyz, vec3(st, 1.0)));
     }
@@ -76,8 +113,8 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
     if (max(cone_lod.x, cone_lod.y) <= LOD_LEVEL0.x) {
         return texture_sample(tex, t);
     }
-    vec4 r0 = materials[id].tex_transform[2u * slot];
-    vec4 r1 = materials[id].tex_transform[2u * slot + 1u];
+    vec4 r0 = material_vec(id, 6u + (2u * slot));
+    vec4 r1 = material_vec(id, 6u + (2u * slot + 1u));
     float texel_area = float(textures[tex].width) * float(textures[tex].height) * abs(r0.x * r1.y - r0.y * r1.x);
     float lod = (r0.w != 0.0 ? cone_lod.y : cone_lod.x) + 0.5 * log2(texel_area);
     return texture_sample_lod(tex, t, lod);
@@ -91,18 +128,18 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.base = base;
     s.metallic = metallic;
     s.alpha = max(roughness * roughness, ALPHA_MIN);
-    float ior = materials[id].params.y;
+    float ior = material_vec(id, 3u).y;
     float f0 = (ior - 1.0) / (ior + 1.0);
-    s.f0 = min(vec3(f0 * f0) * materials[id].specular.rgb, vec3(1.0)) * materials[id].specular.w;
-    s.f90 = materials[id].specular.w;
+    s.f0 = min(vec3(f0 * f0) * material_vec(id, 2u).rgb, vec3(1.0)) * material_vec(id, 2u).w;
+    s.f90 = material_vec(id, 2u).w;
     // Transmission only where the kernel is specialised for it (HAS_TRANSMISSION); a refracting
     // boundary's eta depends on the side the ray arrives from, so the caller sets it.
     s.transmission = 0.0;
     s.eta = 1.0;
     s.thin = true;
     if (HAS_TRANSMISSION) {
-        s.transmission = clamp(materials[id].params.z, 0.0, 1.0);
-        s.thin = (materials[id].flags.x & MATERIAL_VOLUME) == 0u;
+        s.transmission = clamp(material_vec(id, 3u).z, 0.0, 1.0);
+        s.thin = (material_uvec(id, 4u).x & MATERIAL_VOLUME) == 0u;
     }
     return s;
 }
@@ -110,19 +147,19 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
 // Material `id` at the hit's UV sets, textures applied, filtered for a ray cone's `cone_lod`
 // (see material_texture_lod).
 Surface material_surface_lod(uint id, vec4 uv, vec2 cone_lod) {
-    vec3 base = materials[id].base_color.rgb * material_texture_lod(id, 0u, uv, cone_lod).rgb;
+    vec3 base = material_vec(id, 0u).rgb * material_texture_lod(id, 0u, uv, cone_lod).rgb;
     vec4 mr = material_texture_lod(id, 1u, uv, cone_lod);
-    float metallic = clamp(materials[id].params.x * mr.b, 0.0, 1.0);
-    float roughness = clamp(materials[id].emissive_rough.w * mr.g, 0.0, 1.0);
+    float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
+    float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
     return material_surface_from(id, base, metallic, roughness);
 }
 
 // Material `id` at the hit's UV sets, textures applied (level 0).
 Surface material_surface(uint id, vec4 uv) {
-    vec3 base = materials[id].base_color.rgb * material_texture(id, 0u, uv).rgb;
+    vec3 base = material_vec(id, 0u).rgb * material_texture(id, 0u, uv).rgb;
     vec4 mr = material_texture(id, 1u, uv);
-    float metallic = clamp(materials[id].params.x * mr.b, 0.0, 1.0);
-    float roughness = clamp(materials[id].emissive_rough.w * mr.g, 0.0, 1.0);
+    float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
+    float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
     return material_surface_from(id, base, metallic, roughness);
 }
 
@@ -140,12 +177,13 @@ vec3 tri_normal(uint tri) {
 vec4 tri_uv(uint tri, vec2 bary) {
     vec4 uv = vec4(0.0);
     if (HAS_TEXTURES) {
-        uint i0 = triangles[tri].v0;
-        uint i1 = triangles[tri].v1;
-        uint i2 = triangles[tri].v2;
-        vec4 a = vec4(vertices[i0].normal_u.w, vertices[i0].v_uv1.xyz);
-        vec4 b = vec4(vertices[i1].normal_u.w, vertices[i1].v_uv1.xyz);
-        vec4 c = vec4(vertices[i2].normal_u.w, vertices[i2].v_uv1.xyz);
+        uvec3 idx = tri_indices(tri);
+        uint i0 = idx.x;
+        uint i1 = idx.y;
+        uint i2 = idx.z;
+        vec4 a = vec4(vertex_normal_u(i0).w, vertex_v_uv1(i0).xyz);
+        vec4 b = vec4(vertex_normal_u(i1).w, vertex_v_uv1(i1).xyz);
+        vec4 c = vec4(vertex_normal_u(i2).w, vertex_v_uv1(i2).xyz);
         uv = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
     }
     return uv;
@@ -158,12 +196,13 @@ vec4 tri_uv(uint tri, vec2 bary) {
 // 0.5 log2(UV area / world area) of the triangle. material_texture_lod adds each texture's
 // 0.5 log2(texel count) and its transform's scale. A triangle without UV area gives -inf: level 0.
 vec2 ray_cone_lod(uint tri, float width, vec3 dir, vec3 ng) {
-    uint i0 = triangles[tri].v0;
-    uint i1 = triangles[tri].v1;
-    uint i2 = triangles[tri].v2;
-    vec4 a = vec4(vertices[i0].normal_u.w, vertices[i0].v_uv1.xyz);
-    vec4 e1 = vec4(vertices[i1].normal_u.w, vertices[i1].v_uv1.xyz) - a;
-    vec4 e2 = vec4(vertices[i2].normal_u.w, vertices[i2].v_uv1.xyz) - a;
+    uvec3 idx = tri_indices(tri);
+    uint i0 = idx.x;
+    uint i1 = idx.y;
+    uint i2 = idx.z;
+    vec4 a = vec4(vertex_normal_u(i0).w, vertex_v_uv1(i0).xyz);
+    vec4 e1 = vec4(vertex_normal_u(i1).w, vertex_v_uv1(i1).xyz) - a;
+    vec4 e2 = vec4(vertex_normal_u(i2).w, vertex_v_uv1(i2).xyz) - a;
     // Both areas doubled: the factor cancels in the ratio.
     vec2 uv_area = abs(vec2(e1.x * e2.y - e1.y * e2.x, e1.z * e2.w - e1.w * e2.z));
     float world_area = length(tri_normal(tri));
@@ -173,13 +212,13 @@ vec2 ray_cone_lod(uint tri, float width, vec3 dir, vec3 ng) {
 // Radiance the triangle emits at barycentrics `bary` towards a viewer on the side of `towards`
 // (unit normal n), emissive texture filtered for a ray cone's `cone_lod` (see material_texture_lod).
 vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
-    uint m = triangles[tri].material;
+    uint m = tri_material(tri);
     bool front = dot(n, towards) > 0.0;
-    bool two_sided = (materials[m].flags.x & MATERIAL_DOUBLE_SIDED) != 0u;
+    bool two_sided = (material_uvec(m, 4u).x & MATERIAL_DOUBLE_SIDED) != 0u;
     if (!(front || two_sided)) {
         return vec3(0.0);
     }
-    vec3 e = materials[m].emissive_rough.rgb;
+    vec3 e = material_vec(m, 1u).rgb;
     if (HAS_TEXTURES && any(greaterThan(e, vec3(0.0)))) {
         e *= material_texture_lod(m, 2u, tri_uv(tri, bary), cone_lod).rgb;
     }
@@ -214,23 +253,24 @@ uint pick_light(float u, uint count) {
 // where it keeps the normal above the geometry; the normal map filtered for a ray cone's `cone_lod`
 // (see material_texture_lod; LOD_LEVEL0 for level 0).
 vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
-    uint i0 = triangles[tri].v0;
-    uint i1 = triangles[tri].v1;
-    uint i2 = triangles[tri].v2;
+    uvec3 idx = tri_indices(tri);
+    uint i0 = idx.x;
+    uint i1 = idx.y;
+    uint i2 = idx.z;
     float b0 = 1.0 - bary.x - bary.y;
-    vec3 n = b0 * vertices[i0].normal_u.xyz + bary.x * vertices[i1].normal_u.xyz
-        + bary.y * vertices[i2].normal_u.xyz;
+    vec3 n = b0 * vertex_normal_u(i0).xyz + bary.x * vertex_normal_u(i1).xyz
+        + bary.y * vertex_normal_u(i2).xyz;
     float n_len = length(n);
     n = (n_len > 0.0 && !isnan(n_len) && !isinf(n_len)) ? n / n_len : ng;
     if (dot(n, ng) < 0.0) {
         n = -n;
     }
     if (HAS_TEXTURES) {
-        uint material = triangles[tri].material;
-        if (materials[material].textures.w != 0u) {
-            vec4 ta = vertices[i0].tangent;
-            vec4 tb = vertices[i1].tangent;
-            vec4 tc = vertices[i2].tangent;
+        uint material = tri_material(tri);
+        if (material_uvec(material, 5u).w != 0u) {
+            vec4 ta = vertex_tangent(i0);
+            vec4 tb = vertex_tangent(i1);
+            vec4 tc = vertex_tangent(i2);
             vec4 tg = b0 * ta + bary.x * tb + bary.y * tc;
             vec3 tt = tg.xyz - n * dot(n, tg.xyz);
             float tl = length(tt);
@@ -238,7 +278,7 @@ vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
                 tt /= tl;
                 vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
                 vec3 nm = material_texture_lod(material, 3u, uv, cone_lod).rgb * 2.0 - 1.0;
-                nm.xy *= materials[material].tex_transform[7].w;
+                nm.xy *= material_vec(material, 6u + (7)).w;
                 vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
                 if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
                     n = mapped;
@@ -310,7 +350,7 @@ bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, ve
 // `dist` on emissive triangle `tri` (area `area`, unit normal ng), arriving from direction wo
 // (unit, towards the ray's origin): what MIS weighs emission found by BSDF sampling against.
 float emissive_pdf(uint tri, float area, float dist, vec3 ng, vec3 wo) {
-    return triangles[tri].light_pmf / area * dist * dist / abs(dot(ng, wo));
+    return tri_light_pmf(tri) / area * dist * dist / abs(dot(ng, wo));
 }
 
 // Whether light sampling at a surface covers the side below it too (a transmitting material,
@@ -368,10 +408,10 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
 // the ray (origin and direction) and the triangle, so each ray draws afresh (jittered camera
 // rays, each path vertex) and the mean over samples is the blend.
 bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir) {
-    uint m = triangles[tri].material;
-    float alpha = materials[m].base_color.a * material_texture(m, 0u, tri_uv(tri, bary)).a;
+    uint m = tri_material(tri);
+    float alpha = material_vec(m, 0u).a * material_texture(m, 0u, tri_uv(tri, bary)).a;
     if (floatBitsToUint(bvh_tri_v(tri, 1u).w) == 1u) {
-        return alpha >= materials[m].params.w;
+        return alpha >= material_vec(m, 3u).w;
     }
     uvec4 h = pcg4d(uvec4(floatBitsToUint(origin) ^ floatBitsToUint(dir).yzx, tri));
     return float(h.x >> 8) * (1.0 / 16777216.0) < alpha;

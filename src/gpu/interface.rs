@@ -504,12 +504,13 @@ scene_bindings! {
     bvh_node_texels: readonly texels rgba32ui,
     /// BVH triangles ([`BvhTri`]), three RGBA32UI texels each.
     bvh_tri_texels: readonly texels rgba32ui,
-    /// [`GpuTriangle`]s in BVH order.
-    triangles: readonly buffer [GpuTriangle],
-    /// [`GpuVertex`]s.
-    vertices: readonly buffer [GpuVertex],
-    /// [`GpuMaterial`]s.
-    materials: readonly buffer [GpuMaterial],
+    /// [`GpuTriangle`]s in BVH order, two RGBA32UI texels each (`shading.glsl` reads them:
+    /// on llvmpipe a texel read is a gather, a storage-buffer read a loop over the lanes).
+    triangle_texels: readonly texels rgba32ui,
+    /// [`GpuVertex`]s, three RGBA32UI texels each (float bits).
+    vertex_texels: readonly texels rgba32ui,
+    /// [`GpuMaterial`]s, fourteen RGBA32UI texels each (float bits but for `flags`, `textures`).
+    material_texels: readonly texels rgba32ui,
     /// [`GpuTexture`]s.
     textures: readonly buffer [GpuTexture],
     /// The sRGB decoding table, then every texture's RGBA8 texels, one R32UI texel each.

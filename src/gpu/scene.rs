@@ -14,12 +14,12 @@ use glam::Vec3;
 pub struct GpuScene {
     /// BVH nodes and triangles.
     pub bvh: GpuBvh,
-    /// `GpuTriangle`s in BVH order.
-    pub triangles: Buffer,
-    /// `GpuVertex`s.
-    pub vertices: Buffer,
-    /// `GpuMaterial`s.
-    pub materials: Buffer,
+    /// `GpuTriangle`s in BVH order, as RGBA32UI texels (two each).
+    pub triangles: TexelBuffer,
+    /// `GpuVertex`s, as RGBA32UI texels (three each).
+    pub vertices: TexelBuffer,
+    /// `GpuMaterial`s, as RGBA32UI texels (fourteen each).
+    pub materials: TexelBuffer,
     /// `GpuLightTri`s (an empty list still gets a minimal buffer: see [`Buffer::new`]).
     pub lights: Buffer,
     /// Emissive triangles in the sampling table.
@@ -85,7 +85,8 @@ impl SceneArrays {
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
-    /// two and the scene texels are texel buffers, the others storage buffers).
+    /// two, the triangles, vertices and materials are texel buffers of 16-byte texels, the scene
+    /// texels one of 4-byte texels, the others storage buffers).
     pub fn buffer_sizes(&self) -> [(&'static str, u64); 8] {
         fn bytes<T>(v: &[T]) -> u64 {
             std::mem::size_of_val(v) as u64
@@ -103,10 +104,10 @@ impl SceneArrays {
     }
 
     /// Checks that every buffer of the scene `name` fits `device`'s `maxStorageBufferRange`
-    /// (128 MiB on lavapipe), or for the BVH `maxTexelBufferElements` texels of 16 bytes (2 GiB
-    /// on lavapipe), or for the scene texels `maxTexelBufferElements` texels of 4 bytes (512 MiB
-    /// on lavapipe): one error naming the scene, the buffer, both sizes and what to
-    /// reduce, before anything is allocated. [`GpuScene::upload`] calls it; a test can pass a
+    /// (128 MiB on lavapipe), or for the BVH, triangles, vertices and materials
+    /// `maxTexelBufferElements` texels of 16 bytes (2 GiB on lavapipe), or for the scene texels
+    /// `maxTexelBufferElements` texels of 4 bytes (512 MiB on lavapipe): one error naming the
+    /// scene, the buffer, both sizes and what to reduce, before anything is allocated. [`GpuScene::upload`] calls it; a test can pass a
     /// [`DeviceInfo`] with a lowered limit.
     pub fn check_limits(&self, name: &str, device: &DeviceInfo) -> Result<()> {
         fits(name, &self.buffer_sizes(), device)
@@ -134,11 +135,13 @@ fn remedy(buffer: &str) -> &'static str {
     }
 }
 
-/// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers are
-/// storage texel buffers of 16-byte texels, the scene texels one of 4-byte texels, every other
-/// one a storage buffer.
+/// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers and
+/// the triangles and vertices are storage texel buffers of 16-byte texels, the scene texels one
+/// of 4-byte texels, every other one a storage buffer.
 fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str) {
-    if buffer.starts_with("bvh ") {
+    if buffer.starts_with("bvh ")
+        || ["scene triangles", "scene vertices", "scene materials"].contains(&buffer)
+    {
         (device.max_texel_buffer_elements as u64 * 16, "texel", "maxTexelBufferElements × 16 bytes")
     } else if buffer == "scene texels" {
         (device.max_texel_buffer_elements as u64 * 4, "texel", "maxTexelBufferElements × 4 bytes")
@@ -286,9 +289,9 @@ impl GpuScene {
         SceneResources {
             bvh_node_texels: &self.bvh.nodes,
             bvh_tri_texels: &self.bvh.tris,
-            triangles: &self.triangles,
-            vertices: &self.vertices,
-            materials: &self.materials,
+            triangle_texels: &self.triangles,
+            vertex_texels: &self.vertices,
+            material_texels: &self.materials,
             textures: &self.textures,
             scene_texels: &self.texels,
             lights: &self.lights,
@@ -336,9 +339,9 @@ impl GpuScene {
         let alpha_modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
         Ok(Self {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
-            triangles: Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?,
-            vertices: Buffer::upload(ctx, "scene vertices", &arrays.vertices, usage)?,
-            materials: Buffer::upload(ctx, "scene materials", &arrays.materials, usage)?,
+            triangles: upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?,
+            vertices: upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?,
+            materials: upload_rgba32ui(ctx, "scene materials", &arrays.materials)?,
             lights: Buffer::upload(ctx, "scene lights", &arrays.lights, usage)?,
             light_count: arrays.lights.len() as u32,
             punctual: Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?,
@@ -379,9 +382,9 @@ impl GpuScene {
         }
         let arrays = ShadingArrays::new(scene, &self.prim_order);
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
-        self.triangles = Buffer::upload(ctx, "scene triangles", &arrays.triangles, usage)?;
-        self.vertices = Buffer::upload(ctx, "scene vertices", &arrays.vertices, usage)?;
-        self.materials = Buffer::upload(ctx, "scene materials", &arrays.materials, usage)?;
+        self.triangles = upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?;
+        self.vertices = upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?;
+        self.materials = upload_rgba32ui(ctx, "scene materials", &arrays.materials)?;
         self.lights = Buffer::upload(ctx, "scene lights", &arrays.lights, usage)?;
         self.light_count = arrays.lights.len() as u32;
         self.punctual = Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?;
@@ -392,6 +395,11 @@ impl GpuScene {
         self.has_transmission = transmits(&arrays.materials);
         Ok(())
     }
+}
+
+/// Uploads 16-byte-aligned structs as a storage texel buffer of RGBA32UI texels.
+fn upload_rgba32ui<T: bytemuck::Pod>(ctx: &Context, name: &str, items: &[T]) -> Result<TexelBuffer> {
+    TexelBuffer::upload(ctx, name, items, raw::Format::R32G32B32A32_UINT, 16)
 }
 
 /// Uploads the scene texels as a storage texel buffer of R32UI words.

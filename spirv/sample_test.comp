@@ -1,6 +1,7 @@
 #version 460
 // Test-only: draws directions with the renderer's own sampling routines (sampling.glsl,
-// bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests.
+// bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests (modes 0
+// and 1); mode 2 evaluates bsdf_eval for tests/brdf.rs.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/sample_test.glsl"
 
@@ -44,6 +45,23 @@ void main() {
     }
     vec3 wo = params.wo;
     float alpha = params.alpha;
+    if (params.mode == 2u) {
+        // bsdf_eval of an opaque glTF metallic-roughness surface (ior 1.5, specular 1), each
+        // case three vec4s: (wo, alpha), (wi, metallic), (base colour, unused).
+        vec4 o = directions[3u * i];
+        vec4 d = directions[3u * i + 1u];
+        Surface s;
+        s.base = directions[3u * i + 2u].rgb;
+        s.metallic = d.w;
+        s.f0 = vec3(0.04);
+        s.f90 = 1.0;
+        s.alpha = o.w;
+        s.transmission = 0.0;
+        s.eta = 1.5;
+        s.thin = true;
+        results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
+        return;
+    }
     if (params.mode == 0u) {
         vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
         vec3 wi;

@@ -366,7 +366,7 @@ gpu_structs! {
         wo: vec3,
         /// Microfacet alpha.
         alpha: float,
-        /// 0 sample, 1 evaluate the pdf.
+        /// 0 sample, 1 evaluate the pdf, 2 evaluate the BSDF of opaque surfaces (tests/brdf.rs).
         mode: uint,
         /// Number of samples or directions.
         count: uint,

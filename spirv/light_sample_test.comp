@@ -64,7 +64,7 @@ void main() {
         results[i] = vec4(d, pdf);
     } else if (mode == 2u) {
         uint k = pick_light(u.x, params.light_count);
-        results[i] = vec4(float(k), lights[k].pmf, float(lights[k].tri), 0.0);
+        results[i] = vec4(float(k), light_cdf_pmf_area(k).y, float(light_tri(k)), 0.0);
     } else if (mode == 3u) {
         results[i] = vec4(sample_triangle(u.xy), 0.0, 0.0);
     } else if (mode == 4u) {

@@ -50,14 +50,15 @@ fn repeat_and_mirror_wrapping_are_exact() {
     let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
     let input = Buffer::upload(&gpu, "wrap cases", &cases, usage).unwrap();
     let output = Buffer::upload(&gpu, "wrapped", &vec![0i32; 2 * cases.len()], usage).unwrap();
-    let textures = Buffer::upload(&gpu, "no textures", &[0u32; 16], usage).unwrap();
+    let textures =
+        TexelBuffer::upload(&gpu, "no textures", &[0u32; 8], raw::Format::R32G32B32A32_UINT, 16).unwrap();
     let texels = TexelBuffer::upload(&gpu, "no texels", &[0u32], raw::Format::R32_UINT, 4).unwrap();
     let pipeline = Pipeline::<texture_wrap_test::Kernel>::plain(&gpu).unwrap();
     gpu.submit(|cmd| {
         let resources = texture_wrap_test::Resources {
             cases: &input,
             wrapped: &output,
-            textures: &textures,
+            texture_texels: &textures,
             scene_texels: &texels,
         };
         pipeline.record(cmd, &resources, &BufferTestParams { count, add: 0 }, [count, 1, 1], [64, 1, 1])

@@ -26,6 +26,12 @@ uvec4 material_uvec(uint id, uint k) {
     return imageLoad(material_texels, int(14u * id + k));
 }
 
+// An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
+// vec4 k (GpuLight: position_range, direction_kind, intensity, cone), read as texels.
+uint light_tri(uint k) { return imageLoad(light_texels, int(k)).x; }
+vec3 light_cdf_pmf_area(uint k) { return uintBitsToFloat(imageLoad(light_texels, int(k)).yzw); }
+vec4 punctual_vec(uint k, uint field) { return uintBitsToFloat(imageLoad(punctual_texels, int(4u * k + field))); }
+
 // The scene's triangles and vertices, read as texels (on llvmpipe a texel read is a branch-free
 // gather, a storage-buffer read a loop over the lanes): a GpuTriangle is two RGBA32UI texels,
 // a GpuVertex three (float bits).
@@ -115,7 +121,7 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
     }
     vec4 r0 = material_vec(id, 6u + (2u * slot));
     vec4 r1 = material_vec(id, 6u + (2u * slot + 1u));
-    float texel_area = float(textures[tex].width) * float(textures[tex].height) * abs(r0.x * r1.y - r0.y * r1.x);
+    float texel_area = float(texture_info(tex).y) * float(texture_info(tex).z) * abs(r0.x * r1.y - r0.y * r1.x);
     float lod = (r0.w != 0.0 ? cone_lod.y : cone_lod.x) + 0.5 * log2(texel_area);
     return texture_sample_lod(tex, t, lod);
 }
@@ -237,7 +243,7 @@ uint pick_light(float u, uint count) {
     uint hi = count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (lights[mid].cdf <= u) {
+        if (light_cdf_pmf_area(mid).x <= u) {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -299,8 +305,8 @@ vec3 shading_normal(uint tri, vec2 bary, vec3 ng, vec4 uv) {
 // attenuation (KHR_lights_punctual: intensity / d^2 with the recommended range window and a
 // smooth spot falloff). 0 when the light cannot reach p.
 vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 position) {
-    vec4 pr = punctual[k].position_range;
-    vec4 dk = punctual[k].direction_kind;
+    vec4 pr = punctual_vec(k, 0u);
+    vec4 dk = punctual_vec(k, 1u);
     position = pr.xyz;
     to_point = dk.w != LIGHT_DIRECTIONAL;
     float attenuation = 1.0;
@@ -317,12 +323,12 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
             attenuation *= window * window;
         }
         if (dk.w == LIGHT_SPOT) {
-            vec4 cone = punctual[k].cone;
+            vec4 cone = punctual_vec(k, 3u);
             float spot = clamp((dot(-wi, dk.xyz) - cone.x) * cone.y, 0.0, 1.0);
             attenuation *= spot * spot;
         }
     }
-    return punctual[k].intensity.rgb * attenuation;
+    return punctual_vec(k, 2u).rgb * attenuation;
 }
 
 // Next-event estimation on the emissive triangles: one of `count` by power (u.x), a uniform point
@@ -331,7 +337,7 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
 bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 u, uint count,
                      out vec3 wi_local, out vec3 l_emit, out float light_pdf) {
     uint k = pick_light(u.x, count);
-    uint ltri = lights[k].tri;
+    uint ltri = light_tri(k);
     vec2 lb = sample_triangle(u.yz);
     vec3 lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u)
         + lb.y * tri_vertex(ltri, 2u);
@@ -341,7 +347,7 @@ bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, ve
     vec3 wi = to_light * inversesqrt(dist2);
     l_emit = emitted(ltri, lb, ln, -wi);
     float cos_l = abs(dot(ln, wi));
-    light_pdf = lights[k].pmf / lights[k].area * dist2 / cos_l;
+    light_pdf = light_cdf_pmf_area(k).y / light_cdf_pmf_area(k).z * dist2 / cos_l;
     return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0
         && light_reaches(p, ng, t, b, n, transmits, wi, true, lp, wi_local);
 }
@@ -372,7 +378,7 @@ uint pick_punctual(float u, uint count) {
     uint hi = count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (punctual[mid].intensity.w <= u) {
+        if (punctual_vec(mid, 2u).w <= u) {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -389,7 +395,7 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
     vec3 sum = vec3(0.0);
     for (uint j = 0u; j < min(count, PUNCTUAL_ALL); ++j) {
         uint k = every ? j : pick_punctual((float(j) + u) * (1.0 / float(PUNCTUAL_ALL)), count);
-        float weight = every ? 1.0 : 1.0 / (float(PUNCTUAL_ALL) * punctual[k].cone.z);
+        float weight = every ? 1.0 : 1.0 / (float(PUNCTUAL_ALL) * punctual_vec(k, 3u).z);
         vec3 wi;
         bool to_point;
         vec3 position;

@@ -5,7 +5,7 @@
 // that take one sample per pixel (the G-buffer's ray cones).
 //
 // The including kernel declares, before including this file:
-//   readonly buffer ... { GpuTexture textures[]; };
+//   layout(rgba32ui) uniform readonly uimageBuffer texture_texels;  // GpuTextures, 2 texels each
 //   layout(r32ui) uniform readonly uimageBuffer scene_texels;  // the sRGB table (256 f32 bits),
 //                                                              // then RGBA8 texels
 // (a storage texel buffer, as the BVH's: see bvh.glsl)
@@ -13,6 +13,10 @@
 #define UMBRA_TEXTURE_GLSL
 
 uint texture_word(uint i) { return imageLoad(scene_texels, int(i)).x; }
+
+// GpuTexture `tex`: (offset, width, height, flags), then (levels, ...).
+uvec4 texture_info(uint tex) { return imageLoad(texture_texels, int(2u * tex)); }
+uint texture_levels(uint tex) { return imageLoad(texture_texels, int(2u * tex + 1u)).x; }
 
 // i modulo n (n > 0), in [0, n), without integer division: CPU devices divide integers one lane
 // at a time, and the two `%` of ((i % n) + n) % n were half the G-buffer's time on the
@@ -41,7 +45,7 @@ int texture_wrap(int i, int size, bool clamp_mode, bool mirror) {
 
 // Texel (x, y), wrapped, of the w × h level that starts at texel `offset` of texture `tex`.
 vec4 texture_texel_at(uint tex, uint offset, int w, int h, int x, int y) {
-    uint flags = textures[tex].flags;
+    uint flags = texture_info(tex).w;
     x = texture_wrap(x, w, (flags & TEXTURE_WRAP_S_CLAMP) != 0u, (flags & TEXTURE_WRAP_S_MIRROR) != 0u);
     y = texture_wrap(y, h, (flags & TEXTURE_WRAP_T_CLAMP) != 0u, (flags & TEXTURE_WRAP_T_MIRROR) != 0u);
     uint bits = texture_word(offset + uint(y * w + x));
@@ -56,7 +60,7 @@ vec4 texture_texel_at(uint tex, uint offset, int w, int h, int x, int y) {
 }
 
 vec4 texture_texel(uint tex, int x, int y) {
-    return texture_texel_at(tex, textures[tex].offset, int(textures[tex].width), int(textures[tex].height), x, y);
+    return texture_texel_at(tex, texture_info(tex).x, int(texture_info(tex).y), int(texture_info(tex).z), x, y);
 }
 
 // One level (w × h texels from `offset`) at uv: bilinear when `linear`, else the nearest texel.
@@ -76,15 +80,15 @@ vec4 texture_filter(uint tex, uint offset, int w, int h, vec2 uv, bool linear) {
 
 // Linear RGBA of texture `tex` at uv (v down, as glTF): level 0, magnification filter.
 vec4 texture_sample(uint tex, vec2 uv) {
-    return texture_filter(tex, textures[tex].offset, int(textures[tex].width), int(textures[tex].height), uv,
-                          (textures[tex].flags & TEXTURE_LINEAR) != 0u);
+    return texture_filter(tex, texture_info(tex).x, int(texture_info(tex).y), int(texture_info(tex).z), uv,
+                          (texture_info(tex).w & TEXTURE_LINEAR) != 0u);
 }
 
 // Where mip level `level` of texture `tex` starts in the texel buffer, and its size.
 void texture_level(uint tex, uint level, out uint offset, out int w, out int h) {
-    offset = textures[tex].offset;
-    w = int(textures[tex].width);
-    h = int(textures[tex].height);
+    offset = texture_info(tex).x;
+    w = int(texture_info(tex).y);
+    h = int(texture_info(tex).z);
     for (uint k = 0u; k < level; ++k) {
         offset += uint(w * h);
         w = max(w / 2, 1);
@@ -97,7 +101,7 @@ vec4 texture_sample_level(uint tex, uint level, vec2 uv) {
     uint offset;
     int w, h;
     texture_level(tex, level, offset, w, h);
-    return texture_filter(tex, offset, w, h, uv, (textures[tex].flags & TEXTURE_MIN_LINEAR) != 0u);
+    return texture_filter(tex, offset, w, h, uv, (texture_info(tex).w & TEXTURE_MIN_LINEAR) != 0u);
 }
 
 // Linear RGBA of texture `tex` at uv for level of detail `lod` (log2 of texels per pixel
@@ -108,9 +112,9 @@ vec4 texture_sample_lod(uint tex, vec2 uv, float lod) {
     // One code path for magnified and minified lanes (they share SIMD lanes on CPU devices, where
     // separate paths would both run): level l0 with the filter for its side of lod 0, and for
     // *_MIPMAP_LINEAR a second, coarser level only where the blend needs it.
-    uint flags = textures[tex].flags;
+    uint flags = texture_info(tex).w;
     bool minified = lod > 0.0;
-    uint top = textures[tex].levels - 1u;
+    uint top = texture_levels(tex) - 1u;
     float l = minified ? min(lod, float(top)) : 0.0;
     bool mip_linear = (flags & TEXTURE_MIP_LINEAR) != 0u;
     uint l0 = mip_linear ? uint(l) : min(uint(l + 0.5), top);

@@ -511,14 +511,14 @@ scene_bindings! {
     vertex_texels: readonly texels rgba32ui,
     /// [`GpuMaterial`]s, fourteen RGBA32UI texels each (float bits but for `flags`, `textures`).
     material_texels: readonly texels rgba32ui,
-    /// [`GpuTexture`]s.
-    textures: readonly buffer [GpuTexture],
+    /// [`GpuTexture`]s, two RGBA32UI texels each.
+    texture_texels: readonly texels rgba32ui,
     /// The sRGB decoding table, then every texture's RGBA8 texels, one R32UI texel each.
     scene_texels: readonly texels r32ui,
-    /// The emissive-triangle sampling table ([`GpuLightTri`]).
-    lights: readonly buffer [GpuLightTri],
-    /// Punctual lights ([`GpuLight`]).
-    punctual: readonly buffer [GpuLight],
+    /// The emissive-triangle sampling table ([`GpuLightTri`]), one RGBA32UI texel each.
+    light_texels: readonly texels rgba32ui,
+    /// Punctual lights ([`GpuLight`]), four RGBA32UI texels each.
+    punctual_texels: readonly texels rgba32ui,
     /// Environment texels: rgb radiance, density over (u, v).
     env_texels: readonly buffer [vec4],
     /// The environment's row CDF.
@@ -801,8 +801,8 @@ kernels! {
             cases: readonly buffer [ivec2],
             /// The wrapped coordinates.
             wrapped: readwrite buffer [int],
-            /// The textures.
-            textures: readonly buffer [GpuTexture],
+            /// The textures, two RGBA32UI texels each.
+            texture_texels: readonly texels rgba32ui,
             /// Their texels.
             scene_texels: readonly texels r32ui,
         }

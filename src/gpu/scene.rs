@@ -20,12 +20,12 @@ pub struct GpuScene {
     pub vertices: TexelBuffer,
     /// `GpuMaterial`s, as RGBA32UI texels (fourteen each).
     pub materials: TexelBuffer,
-    /// `GpuLightTri`s (an empty list still gets a minimal buffer: see [`Buffer::new`]).
-    pub lights: Buffer,
+    /// `GpuLightTri`s as RGBA32UI texels (an empty list still gets one texel).
+    pub lights: TexelBuffer,
     /// Emissive triangles in the sampling table.
     pub light_count: u32,
-    /// `GpuLight`s.
-    pub punctual: Buffer,
+    /// `GpuLight`s as RGBA32UI texels (four each).
+    pub punctual: TexelBuffer,
     /// Punctual lights.
     pub punctual_count: u32,
     /// Environment texels: rgb radiance, density over (u, v) (a dummy texel when there is none).
@@ -34,8 +34,8 @@ pub struct GpuScene {
     pub env_marginal: Buffer,
     /// Environment per-row CDFs.
     pub env_conditional: Buffer,
-    /// `GpuTexture`s.
-    pub textures: Buffer,
+    /// `GpuTexture`s as RGBA32UI texels (two each).
+    pub textures: TexelBuffer,
     /// `scene_texels`, R32UI texels (`texture.glsl` reads them with `imageLoad`): the sRGB
     /// decoding table (256 `f32` bits), then the RGBA8 texels of every texture.
     pub texels: TexelBuffer,
@@ -85,7 +85,7 @@ impl SceneArrays {
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
-    /// two, the triangles, vertices and materials are texel buffers of 16-byte texels, the scene
+    /// two, the triangles, vertices, materials and lights are texel buffers of 16-byte texels, the scene
     /// texels one of 4-byte texels, the others storage buffers).
     pub fn buffer_sizes(&self) -> [(&'static str, u64); 8] {
         fn bytes<T>(v: &[T]) -> u64 {
@@ -104,7 +104,7 @@ impl SceneArrays {
     }
 
     /// Checks that every buffer of the scene `name` fits `device`'s `maxStorageBufferRange`
-    /// (128 MiB on lavapipe), or for the BVH, triangles, vertices and materials
+    /// (128 MiB on lavapipe), or for the BVH, triangles, vertices, materials and lights
     /// `maxTexelBufferElements` texels of 16 bytes (2 GiB on lavapipe), or for the scene texels
     /// `maxTexelBufferElements` texels of 4 bytes (512 MiB on lavapipe): one error naming the
     /// scene, the buffer, both sizes and what to reduce, before anything is allocated. [`GpuScene::upload`] calls it; a test can pass a
@@ -136,11 +136,12 @@ fn remedy(buffer: &str) -> &'static str {
 }
 
 /// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers and
-/// the triangles and vertices are storage texel buffers of 16-byte texels, the scene texels one
-/// of 4-byte texels, every other one a storage buffer.
+/// the triangles, vertices, materials and lights are storage texel buffers of 16-byte texels,
+/// the scene texels one of 4-byte texels, every other one a storage buffer.
 fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str) {
     if buffer.starts_with("bvh ")
-        || ["scene triangles", "scene vertices", "scene materials"].contains(&buffer)
+        || ["scene triangles", "scene vertices", "scene materials", "scene lights", "scene punctual lights"]
+            .contains(&buffer)
     {
         (device.max_texel_buffer_elements as u64 * 16, "texel", "maxTexelBufferElements × 16 bytes")
     } else if buffer == "scene texels" {
@@ -292,10 +293,10 @@ impl GpuScene {
             triangle_texels: &self.triangles,
             vertex_texels: &self.vertices,
             material_texels: &self.materials,
-            textures: &self.textures,
+            texture_texels: &self.textures,
             scene_texels: &self.texels,
-            lights: &self.lights,
-            punctual: &self.punctual,
+            light_texels: &self.lights,
+            punctual_texels: &self.punctual,
             env_texels: &self.env_texels,
             env_marginal: &self.env_marginal,
             env_conditional: &self.env_conditional,
@@ -342,11 +343,11 @@ impl GpuScene {
             triangles: upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?,
             vertices: upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?,
             materials: upload_rgba32ui(ctx, "scene materials", &arrays.materials)?,
-            lights: Buffer::upload(ctx, "scene lights", &arrays.lights, usage)?,
+            lights: upload_rgba32ui(ctx, "scene lights", &arrays.lights)?,
             light_count: arrays.lights.len() as u32,
-            punctual: Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?,
+            punctual: upload_rgba32ui(ctx, "scene punctual lights", &arrays.punctual)?,
             punctual_count: arrays.punctual.len() as u32,
-            textures: Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?,
+            textures: upload_rgba32ui(ctx, "scene textures", &arrays.textures)?,
             texels: upload_texels(ctx, &arrays.texels)?,
             texture_count: arrays.textures.len() as u32,
             has_transmission: transmits(&arrays.materials),
@@ -381,15 +382,14 @@ impl GpuScene {
             )));
         }
         let arrays = ShadingArrays::new(scene, &self.prim_order);
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         self.triangles = upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?;
         self.vertices = upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?;
         self.materials = upload_rgba32ui(ctx, "scene materials", &arrays.materials)?;
-        self.lights = Buffer::upload(ctx, "scene lights", &arrays.lights, usage)?;
+        self.lights = upload_rgba32ui(ctx, "scene lights", &arrays.lights)?;
         self.light_count = arrays.lights.len() as u32;
-        self.punctual = Buffer::upload(ctx, "scene punctual lights", &arrays.punctual, usage)?;
+        self.punctual = upload_rgba32ui(ctx, "scene punctual lights", &arrays.punctual)?;
         self.punctual_count = arrays.punctual.len() as u32;
-        self.textures = Buffer::upload(ctx, "scene textures", &arrays.textures, usage)?;
+        self.textures = upload_rgba32ui(ctx, "scene textures", &arrays.textures)?;
         self.texels = upload_texels(ctx, &arrays.texels)?;
         self.texture_count = arrays.textures.len() as u32;
         self.has_transmission = transmits(&arrays.materials);

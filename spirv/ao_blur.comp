@@ -14,13 +14,25 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "camera.glsl"
 
 // The view-space position (camera at the origin) of `pixel`'s surface at `depth`.
+// The camera, copied out of the push constants once per invocation: its vec3 fields read from
+// push-constant memory inside the loops cost llvmpipe a load each time (field by field: naga
+// cannot read the OpCopyLogical a whole-struct copy compiles to).
+vec3 cam_origin;
+vec3 cam_forward;
+vec3 cam_right;
+vec3 cam_up;
+
 vec3 view_position(ivec2 pixel, float depth) {
-    vec3 forward = params.camera.forward;
-    vec3 dir = camera_ray(forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, params.size);
+    vec3 forward = cam_forward;
+    vec3 dir = camera_ray(forward, cam_right, cam_up, vec2(pixel) + 0.5, params.size);
     return dir * (depth / dot(dir, forward));
 }
 
 void main() {
+    cam_origin = params.camera.origin;
+    cam_forward = params.camera.forward;
+    cam_right = params.camera.right;
+    cam_up = params.camera.up;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(params.size);
     if (any(greaterThanEqual(pixel, size))) {

@@ -22,23 +22,31 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "gbuffer.glsl"
 
 // The 4x4 Bayer matrix: 16 distinct rotations over each 4x4 tile.
+// The camera, copied out of the push constants once per invocation: its vec3 fields read from
+// push-constant memory inside the loops cost llvmpipe a load each time (field by field: naga
+// cannot read the OpCopyLogical a whole-struct copy compiles to).
+vec3 cam_origin;
+vec3 cam_forward;
+vec3 cam_right;
+vec3 cam_up;
+
 const uint BAYER4[16] = uint[16](0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
 const float GOLDEN = 0.61803398874989485;
 
 vec3 position_at(ivec2 pixel, float depth) {
-    return gbuffer_position(params.camera.origin, params.camera.forward, params.camera.right,
-                            params.camera.up, pixel, params.size, depth);
+    return gbuffer_position(cam_origin, cam_forward, cam_right,
+                            cam_up, pixel, params.size, depth);
 }
 
 // Whether point q (world) is behind the depth buffer's surface, within range of p at depth d0.
 bool occluded(vec3 q, float d0, float radius, float bias) {
-    vec3 v = q - params.camera.origin;
-    float dq = dot(v, params.camera.forward);
+    vec3 v = q - cam_origin;
+    float dq = dot(v, cam_forward);
     if (dq <= 0.0) {
         return false;
     }
-    vec3 right = params.camera.right;
-    vec3 up = params.camera.up;
+    vec3 right = cam_right;
+    vec3 up = cam_up;
     vec2 ndc = vec2(dot(v, right) / dot(right, right), dot(v, up) / dot(up, up)) / dq;
     vec2 size = vec2(params.size);
     vec2 pos = vec2(0.5 * (ndc.x + 1.0), 0.5 * (1.0 - ndc.y)) * size;
@@ -56,6 +64,10 @@ bool occluded(vec3 q, float d0, float radius, float bias) {
 }
 
 void main() {
+    cam_origin = params.camera.origin;
+    cam_forward = params.camera.forward;
+    cam_right = params.camera.right;
+    cam_up = params.camera.up;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uvec2 size = params.size;
     if (any(greaterThanEqual(uvec2(pixel), size))) {

@@ -1217,6 +1217,11 @@ fn out_of_range_lights_are_errors_naming_them() {
         "colour.glb",
         "color[1] is 2.0, must be within [0, 1]",
     );
+    // A zero scale on the light's node leaves it no direction: an error naming the node.
+    let (mut json, bin) = read_glb(&scenes_dir().join("spheres.glb"));
+    json["nodes"][51]["scale"] = json!([1.0, 0.0, 1.0]);
+    assert_scene_error(Scene::from_glb_bytes("flat.glb", &to_glb(&json, &bin)), "flat.glb", "node 51");
+    assert_scene_error(Scene::from_glb_bytes("flat.glb", &to_glb(&json, &bin)), "flat.glb", "degenerate");
     // The spheres' own light alone loads, and is there.
     let (json, bin) = read_glb(&scenes_dir().join("spheres.glb"));
     assert_eq!(Scene::from_glb_bytes("ok.glb", &to_glb(&json, &bin)).unwrap().lights.len(), 1);

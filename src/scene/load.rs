@@ -117,6 +117,17 @@ impl<'a> Builder<'a> {
 
     /// Adds what one node carries: a camera, a light, a mesh (possibly GPU-instanced).
     fn place(&mut self, node: &gltf::Node, world: Mat4) -> Result<()> {
+        // A camera or light looks down its node's -Z: a zero scale on the way leaves it no
+        // direction (it would silently fall back to a default one).
+        if (node.camera().is_some() || node.light().is_some())
+            && !(Mat3::from_mat4(world).determinant().abs() > 1e-18)
+        {
+            return Err(self.origin.error(format!(
+                "{}: its world transform is degenerate (a zero scale here or in a parent), so the camera \
+                 or light it carries has no direction",
+                node_label(node)
+            )));
+        }
         if let Some(camera) = node.camera() {
             let camera = Camera::from_gltf(self.origin, &self.asset.document, camera.index(), world)?;
             self.scene.cameras.extend(camera);

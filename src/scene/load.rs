@@ -120,7 +120,7 @@ impl<'a> Builder<'a> {
         // A camera or light looks down its node's -Z: a zero scale on the way leaves it no
         // direction (it would silently fall back to a default one).
         if (node.camera().is_some() || node.light().is_some())
-            && !(Mat3::from_mat4(world).determinant().abs() > 1e-18)
+            && Mat3::from_mat4(world).determinant().abs() <= 1e-18
         {
             return Err(self.origin.error(format!(
                 "{}: its world transform is degenerate (a zero scale here or in a parent), so the camera \

@@ -240,6 +240,10 @@ impl Passes {
         built(&self.tonemap, || TonemapPass::new(&self.ctx))
     }
 
+    fn resolve_pass(&self) -> Result<&ResolvePass> {
+        built(&self.resolve, || ResolvePass::new(&self.ctx))
+    }
+
     /// Builds every pipeline now (the path tracer's for `microfacet` and `heuristic`), not at
     /// first use: for a host that records frames against a deadline.
     pub fn prepare(&self, scene: &GpuScene, microfacet: Microfacet, heuristic: Heuristic) -> Result<()> {
@@ -250,7 +254,7 @@ impl Passes {
         self.ssao_pass()?;
         self.blur_pass()?;
         self.tonemap_pass()?;
-        built(&self.resolve, || ResolvePass::new(&self.ctx))?;
+        self.resolve_pass()?;
         self.path_pass(scene, microfacet, heuristic).map(|_| ())
     }
 
@@ -450,7 +454,7 @@ impl Passes {
         target: &PathTarget,
         output: raw::ImageView,
     ) -> Result<()> {
-        built(&self.resolve, || ResolvePass::new(&self.ctx))?.record(&self.ctx, cmd, target, output)
+        self.resolve_pass()?.record(&self.ctx, cmd, target, output)
     }
 
     /// Path traces `settings.spp` samples per pixel, calling `progress(done, total)` after each

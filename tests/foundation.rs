@@ -13,6 +13,17 @@ fn pattern_pipeline(gpu: &Gpu, multiplier: u32) -> Pipeline<test_pattern::Kernel
         .expect("test_pattern pipeline")
 }
 
+/// Records test_pattern.comp over `params.size` into `image` (8×8 workgroups).
+fn record_pattern(
+    pipeline: &Pipeline<test_pattern::Kernel>,
+    cmd: raw::CommandBuffer,
+    image: &Image,
+    params: &PatternParams,
+) -> umbra::Result<()> {
+    let [w, h] = params.size;
+    pipeline.record(cmd, &test_pattern::Resources { out_image: &image.view }, params, [w, h, 1], [8, 8, 1])
+}
+
 /// The CPU twin of `pattern_hash` in test_pattern.comp.
 fn pattern_hash(mut x: u32) -> u32 {
     x ^= x >> 16;
@@ -33,13 +44,7 @@ fn pattern_1080p_reads_back_exactly() {
     let pipeline = pattern_pipeline(&gpu, multiplier);
     gpu.submit(|cmd| {
         image.init_general(&gpu, cmd);
-        pipeline.record(
-            cmd,
-            &test_pattern::Resources { out_image: &image.view },
-            &params,
-            [w, h, 1],
-            [8, 8, 1],
-        )
+        record_pattern(&pipeline, cmd, &image, &params)
     })
     .unwrap();
     let texels: Vec<f32> = image.read(&gpu).unwrap();
@@ -74,14 +79,7 @@ fn timestamps_give_positive_durations() {
         image.init_general(&gpu, cmd);
         for pass in ["first", "second"] {
             timer.begin(cmd, pass)?;
-            let params = PatternParams { size: [w, h], seed: 1, frame: 0 };
-            pipeline.record(
-                cmd,
-                &test_pattern::Resources { out_image: &image.view },
-                &params,
-                [w, h, 1],
-                [8, 8, 1],
-            )?;
+            record_pattern(&pipeline, cmd, &image, &PatternParams { size: [w, h], seed: 1, frame: 0 })?;
             timer.end(cmd)?;
             umbra::vk::barrier::compute_to_compute(&gpu, cmd);
         }
@@ -193,9 +191,7 @@ fn contexts_coexist_across_threads() {
                 let pipeline = pattern_pipeline(&gpu, 1);
                 gpu.submit(|cmd| {
                     image.init_general(&gpu, cmd);
-                    let params = PatternParams { size: [16, 16], seed, frame: 0 };
-                    let resources = test_pattern::Resources { out_image: &image.view };
-                    pipeline.record(cmd, &resources, &params, [16, 16, 1], [8, 8, 1])
+                    record_pattern(&pipeline, cmd, &image, &PatternParams { size: [16, 16], seed, frame: 0 })
                 })
                 .unwrap();
                 let texels: Vec<f32> = image.read(&gpu).unwrap();

@@ -34,6 +34,15 @@
 // or only its BVH (`scene: bvh`); a kernel's own bindings follow from `SCENE_BINDINGS` on (from 0
 // without a scene), in the order written.
 
+/// The scene features a kernel can be specialised on (`scene: full [...]` below): `HAS_<NAME>` in
+/// GLSL, its specialization-constant id the index here; a feature a kernel does not list is a
+/// plain `false` there.
+pub const SCENE_FEATURES: [&str; 6] = ["textures", "alpha", "lights", "punctual", "env_map", "transmission"];
+
+/// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
+/// others follow in order.
+pub const FIRST_KERNEL_SPEC_ID: u32 = 8;
+
 gpu_structs! {
     /// A pinhole camera as every kernel that casts rays from it reads it (`camera.glsl`).
     struct GpuCamera {

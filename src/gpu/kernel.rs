@@ -8,6 +8,8 @@ use crate::error::{Error, Result};
 use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc};
 use std::marker::PhantomData;
 
+pub use super::layout::{FIRST_KERNEL_SPEC_ID, SCENE_FEATURES};
+
 /// How a binding is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Access {
@@ -96,12 +98,6 @@ pub struct KernelInterface {
     /// Its own specialization constants, ids from [`FIRST_KERNEL_SPEC_ID`] in order.
     pub spec: &'static [SpecDesc],
 }
-
-/// The scene features a kernel can be specialised on: `HAS_<NAME>` in GLSL, constant id = index.
-pub const SCENE_FEATURES: [&str; 6] = ["textures", "alpha", "lights", "punctual", "env_map", "transmission"];
-
-/// The constant id of a kernel's first own specialization constant.
-pub const FIRST_KERNEL_SPEC_ID: u32 = 8;
 
 impl KernelInterface {
     /// The binding number of the kernel's first own binding.

@@ -15,8 +15,15 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "random.glsl"
 #include "gbuffer.glsl"
 #include "environment.glsl"
+#define UMBRA_SHADOW_MAPS
 #include "shading.glsl"
+#include "shadow.glsl"
 #include "ibl.glsl"
+
+// Shadow maps instead of shadow rays for the punctual lights (src/passes/shadow.rs).
+float punctual_shadow(uint k, vec3 p, vec3 ng, vec3 wi) {
+    return shadow_map_visibility(k, p, ng, wi, params.camera.origin, params.camera.forward, gl_GlobalInvocationID.xy);
+}
 
 // The punctual light pick's stream (the emissive samples draw from RNG_EMISSIVE_NEE).
 const uint RNG_DEFERRED_PUNCTUAL = 2u;

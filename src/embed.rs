@@ -10,14 +10,19 @@
 //! // per frame, inside the host's command buffer:
 //! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;   // or the host writes its own
 //! let ao = renderer.record_ssao(cmd, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
-//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, Some(ao), &lighting)?;
+//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, Some(ao), None, &lighting)?;
 //! renderer.record_tonemap(cmd, hdr_view, ldr_view, size, 0.0, ToneCurve::KhronosPbrNeutral)?;
 //! // or progressive path tracing, a few samples per frame, resolved into the host's image:
 //! renderer.record_path_samples(cmd, &camera, &target, &path_settings, first_sample, count)?;
 //! renderer.record_path_resolve(cmd, &target, hdr_view)?;
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
-//!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view) }, &settings, None)?;
+//!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None },
+//!     &settings, None)?;
+//! // shadow maps instead of shadow rays: placed once, re-recorded when a light, the geometry
+//! // or (for a directional light's cascades) the camera changes:
+//! let maps = renderer.shadow_maps(&camera, size, &shadow_settings)?;
+//! renderer.record_shadow_maps(cmd, &maps)?;  // then `Some(&maps)` where `None` stands above
 //! ```
 //!
 //! Every `record_*` goes through [`crate::render::Passes`], the orchestrator that owns the
@@ -50,6 +55,7 @@ use crate::passes::deferred::LightingSettings;
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathSettings, PathTarget};
+use crate::passes::shadow::{ShadowMaps, ShadowSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
 use crate::scene::{Camera, Scene};
@@ -193,7 +199,9 @@ impl Renderer {
     }
 
     /// Records deferred lighting of `gbuffer` (umbra's or the host's own) seen from `camera` into
-    /// `output` (`R32G32B32A32_SFLOAT`, the G-buffer's size).
+    /// `output` (`R32G32B32A32_SFLOAT`, the G-buffer's size), the punctual lights shadowed by
+    /// `shadows` (recorded before) or by shadow rays.
+    #[allow(clippy::too_many_arguments)]
     pub fn record_lighting(
         &self,
         cmd: raw::CommandBuffer,
@@ -201,9 +209,38 @@ impl Renderer {
         gbuffer: &GBufferViews,
         output: raw::ImageView,
         ao: Option<raw::ImageView>,
+        shadows: Option<&ShadowMaps>,
         settings: &LightingSettings,
     ) -> Result<()> {
-        self.passes.record_lighting(cmd, &self.scene, &self.ibl, camera, gbuffer, output, ao, settings)
+        self.passes.record_lighting(
+            cmd,
+            &self.scene,
+            &self.ibl,
+            camera,
+            gbuffer,
+            output,
+            ao,
+            shadows,
+            settings,
+        )
+    }
+
+    /// Places and allocates shadow maps for the scene's punctual lights, seen by `camera` over an
+    /// image of `size` (directional cascades follow the view), by `settings`.
+    pub fn shadow_maps(
+        &self,
+        camera: &Camera,
+        size: (u32, u32),
+        settings: &ShadowSettings,
+    ) -> Result<ShadowMaps> {
+        self.passes.shadow_maps(&self.scene, camera, size, settings)
+    }
+
+    /// Records the rendering of `maps` (when a light, the geometry or, for cascades, the camera
+    /// changed). After the host's submission completes, [`ShadowMaps::check`] says whether their
+    /// tile lists sufficed ([`ShadowMaps::reserve`] and record again if not).
+    pub fn record_shadow_maps(&self, cmd: raw::CommandBuffer, maps: &ShadowMaps) -> Result<()> {
+        self.passes.record_shadow_maps(cmd, &self.scene, maps)
     }
 
     /// Records a whole hybrid frame into the host's `targets` (G-buffer, SSAO and blur when

@@ -5,6 +5,7 @@ mod cli;
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
+use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
 use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
 
 #[derive(Parser)]
@@ -86,6 +87,38 @@ struct RenderArgs {
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles.
     #[arg(long, default_value_t = 4)]
     shadow_rays: u32,
+    /// Hybrid: how punctual lights are shadowed: shadow rays (rt) or a shadow map read with the
+    /// nearest texel (hard), percentage-closer filtering (pcf), percentage-closer soft shadows
+    /// (pcss) or moment shadow maps (moments).
+    #[arg(long, value_enum, default_value = "rt")]
+    shadows: ShadowsArg,
+    /// Hybrid shadow maps: width = height of each layer in texels (16 to 2048).
+    #[arg(long, default_value_t = ShadowSettings::default().map_size)]
+    shadow_map_size: u32,
+    /// Hybrid shadow maps: constant depth bias, in texels.
+    #[arg(long, default_value_t = ShadowSettings::default().depth_bias, value_parser = cli::parse_non_negative)]
+    shadow_bias: f32,
+    /// Hybrid shadow maps: slope-scaled depth bias, in texels per unit of tan(angle to the light).
+    #[arg(long, default_value_t = ShadowSettings::default().slope_bias, value_parser = cli::parse_non_negative)]
+    shadow_slope_bias: f32,
+    /// Hybrid shadow maps: normal offset of the receiver, in texels.
+    #[arg(long, default_value_t = ShadowSettings::default().normal_bias, value_parser = cli::parse_non_negative)]
+    shadow_normal_bias: f32,
+    /// Hybrid shadow maps: PCF filter radius in texels.
+    #[arg(long, default_value_t = ShadowSettings::default().pcf_radius, value_parser = cli::parse_positive)]
+    pcf_radius: f32,
+    /// Hybrid shadow maps (pcss): radius of point and spot lights, metres.
+    #[arg(long, default_value_t = ShadowSettings::default().light_radius, value_parser = cli::parse_non_negative)]
+    light_radius: f32,
+    /// Hybrid shadow maps (pcss): angular radius of directional lights, degrees (the sun: 0.27).
+    #[arg(long, default_value_t = ShadowSettings::default().sun_angle.to_degrees(), value_parser = cli::parse_non_negative)]
+    sun_angle: f32,
+    /// Hybrid shadow maps: cascades of a directional light.
+    #[arg(long, default_value_t = ShadowSettings::default().cascades)]
+    cascades: u32,
+    /// Hybrid shadow maps: cascade split scheme, 0 uniform to 1 logarithmic.
+    #[arg(long, default_value_t = ShadowSettings::default().cascade_split, value_parser = cli::parse_non_negative)]
+    cascade_split: f32,
     /// Hybrid: no SSAO (the image-based light is not occluded).
     #[arg(long)]
     no_ao: bool,
@@ -111,6 +144,15 @@ struct RenderArgs {
     /// per image and render its slots with the material's factors alone (warn).
     #[arg(long, value_enum, default_value = "error")]
     missing_textures: MissingTexturesArg,
+}
+
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+enum ShadowsArg {
+    Rt,
+    Hard,
+    Pcf,
+    Pcss,
+    Moments,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -166,6 +208,10 @@ enum HeuristicArg {
 
 fn render(args: RenderArgs) -> Result<()> {
     use umbra::passes::pathtrace::{Heuristic, Microfacet};
+    if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
+        anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
+    }
+    shadow_settings(&args).validate()?;
     let scene = match &args.scene {
         Some(path) => {
             use umbra::scene::{LoadOptions, MissingTextures};
@@ -277,6 +323,30 @@ fn render(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// The hybrid's shadow settings from the flags.
+fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
+    let method = match args.shadows {
+        ShadowsArg::Rt => ShadowMethod::RayTraced,
+        ShadowsArg::Hard => ShadowMethod::Hard,
+        ShadowsArg::Pcf => ShadowMethod::Pcf,
+        ShadowsArg::Pcss => ShadowMethod::Pcss,
+        ShadowsArg::Moments => ShadowMethod::Moments,
+    };
+    ShadowSettings {
+        method,
+        map_size: args.shadow_map_size,
+        cascades: args.cascades,
+        cascade_split: args.cascade_split,
+        depth_bias: args.shadow_bias,
+        slope_bias: args.shadow_slope_bias,
+        normal_bias: args.shadow_normal_bias,
+        pcf_radius: args.pcf_radius,
+        light_radius: args.light_radius,
+        sun_angle: args.sun_angle.to_radians(),
+        ..Default::default()
+    }
+}
+
 fn render_hybrid(
     ctx: &Context,
     scene: &umbra::gpu::scene::GpuScene,
@@ -303,6 +373,7 @@ fn render_hybrid(
             seed: args.seed,
             ..Default::default()
         }),
+        shadows: shadow_settings(args),
     };
     let image = umbra::render::hybrid(ctx, scene, camera, &settings)?;
     let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();

@@ -20,6 +20,7 @@ use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
 pub use crate::passes::pathtrace::PathSettings;
 use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass, ResolvePass};
+use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
 use crate::vk::{raw, Context, GpuTimer, Image};
@@ -97,6 +98,8 @@ pub struct HybridSettings {
     pub ibl: IblSettings,
     /// SSAO (and its blur) multiplying the image-based (ambient) light; `None`: no occlusion.
     pub ao: Option<AoSettings>,
+    /// How punctual lights are shadowed (shadow rays by default, or shadow maps).
+    pub shadows: ShadowSettings,
 }
 
 /// A hybrid render: the linear image, its G-buffer and the GPU time of each pass.
@@ -149,6 +152,9 @@ pub struct HybridTargets<'a> {
     pub hdr: raw::ImageView,
     /// `R8G8B8A8_UNORM` display image (sRGB-encoded); `None`: no tonemap.
     pub ldr: Option<raw::ImageView>,
+    /// The shadow maps, already recorded ([`Passes::record_shadow_maps`]), when the settings'
+    /// shadow method reads maps.
+    pub shadows: Option<&'a ShadowMaps>,
 }
 
 /// A lazily built pipeline.
@@ -167,7 +173,9 @@ pub struct Passes {
     ctx: Context,
     features: SceneFeatures,
     gbuffer: OnceLock<GBufferPass>,
-    deferred: OnceLock<DeferredPass>,
+    /// One per shadow method, index [`ShadowMethod::index`].
+    deferred: [OnceLock<DeferredPass>; 5],
+    shadow: OnceLock<ShadowPass>,
     ssao: OnceLock<SsaoPass>,
     ao_blur: OnceLock<AoBlurPass>,
     rtao: OnceLock<RtaoPass>,
@@ -188,7 +196,8 @@ impl Passes {
             ctx: ctx.clone(),
             features: scene.features(),
             gbuffer: OnceLock::new(),
-            deferred: OnceLock::new(),
+            deferred: Default::default(),
+            shadow: OnceLock::new(),
             ssao: OnceLock::new(),
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
@@ -220,8 +229,12 @@ impl Passes {
         built(&self.gbuffer, || GBufferPass::new(&self.ctx, scene))
     }
 
-    fn deferred_pass(&self, scene: &GpuScene) -> Result<&DeferredPass> {
-        built(&self.deferred, || DeferredPass::new(&self.ctx, scene))
+    fn deferred_pass(&self, scene: &GpuScene, method: ShadowMethod) -> Result<&DeferredPass> {
+        built(&self.deferred[method.index()], || DeferredPass::new(&self.ctx, scene, method))
+    }
+
+    fn shadow_pass(&self, scene: &GpuScene) -> Result<&ShadowPass> {
+        built(&self.shadow, || ShadowPass::new(&self.ctx, scene))
     }
 
     fn ssao_pass(&self) -> Result<&SsaoPass> {
@@ -249,7 +262,7 @@ impl Passes {
     pub fn prepare(&self, scene: &GpuScene, microfacet: Microfacet, heuristic: Heuristic) -> Result<()> {
         self.check(scene)?;
         self.gbuffer_pass(scene)?;
-        self.deferred_pass(scene)?;
+        self.deferred_pass(scene, ShadowMethod::RayTraced)?;
         self.rtao_pass(scene)?;
         self.ssao_pass()?;
         self.blur_pass()?;
@@ -347,7 +360,9 @@ impl Passes {
     }
 
     /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the
-    /// scene's precomputed `ibl` and an ambient-occlusion image `ao` (or none).
+    /// scene's precomputed `ibl`, an ambient-occlusion image `ao` (or none) and the punctual
+    /// lights shadowed by `shadows`' maps (recorded before; their method picks the filter), or
+    /// by shadow rays when `None`.
     #[allow(clippy::too_many_arguments)]
     pub fn record_lighting(
         &self,
@@ -358,12 +373,60 @@ impl Passes {
         gbuffer: &GBufferViews,
         output: raw::ImageView,
         ao: Option<raw::ImageView>,
+        shadows: Option<&ShadowMaps>,
         settings: &LightingSettings,
     ) -> Result<()> {
         self.check(scene)?;
         settings.validate()?;
         let params = DeferredPass::params(scene, camera, gbuffer.size, settings);
-        self.deferred_pass(scene)?.record(&self.ctx, cmd, scene, gbuffer, output, ibl, ao, &params)
+        let method = shadows.map_or(ShadowMethod::RayTraced, |m| m.settings.method);
+        self.deferred_pass(scene, method)?
+            .record(&self.ctx, cmd, scene, gbuffer, output, ibl, ao, shadows, &params)
+    }
+
+    /// Places and allocates the shadow maps of `scene`'s punctual lights for `camera` over an
+    /// image of `size` (nothing is recorded: [`Passes::record_shadow_maps`] renders them).
+    pub fn shadow_maps(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        size: (u32, u32),
+        settings: &ShadowSettings,
+    ) -> Result<ShadowMaps> {
+        let plan = ShadowPlan::new(&scene.punctual_lights, scene.bounds, camera, size, settings)?;
+        ShadowMaps::new(&self.ctx, plan, settings, scene.bvh_stats.references as u32)
+    }
+
+    /// Records the rendering of every layer of `maps` (after a light, the geometry or, for
+    /// directional cascades, the camera changed). Never submits. After the submission,
+    /// [`ShadowMaps::check`] says whether the tile lists sufficed.
+    pub fn record_shadow_maps(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        maps: &ShadowMaps,
+    ) -> Result<()> {
+        self.check(scene)?;
+        self.shadow_pass(scene)?.record(&self.ctx, cmd, scene, maps)
+    }
+
+    /// Renders `maps` now (submits and waits), growing their tile lists and rendering again
+    /// when they overflowed; returns the GPU milliseconds of the last rendering.
+    pub fn render_shadow_maps(&self, scene: &GpuScene, maps: &mut ShadowMaps) -> Result<f64> {
+        let ctx = &self.ctx;
+        for _ in 0..2 {
+            let mut timer = GpuTimer::new(ctx, 1)?;
+            ctx.submit(|cmd| {
+                timer.reset(cmd);
+                timed(&mut Some(&mut timer), cmd, "shadow_maps", || self.record_shadow_maps(cmd, scene, maps))
+            })?;
+            let ms = timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+            match maps.check(ctx)? {
+                None => return Ok(ms),
+                Some(entries) => maps.reserve(ctx, entries)?,
+            }
+        }
+        Err(Error::Invalid("shadow maps: the tile lists overflowed twice".into()))
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`
@@ -407,8 +470,28 @@ impl Passes {
             }
             (None, _) => None,
         };
+        let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
+            (false, _) => None,
+            (true, Some(maps)) => Some(maps),
+            (true, None) => {
+                return Err(Error::Invalid(format!(
+                    "the settings shadow by '{}' but no shadow maps were given",
+                    settings.shadows.method.name()
+                )))
+            }
+        };
         timed(&mut timer, cmd, "lighting", || {
-            self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, ao, &settings.lighting)
+            self.record_lighting(
+                cmd,
+                scene,
+                ibl,
+                camera,
+                gbuffer,
+                targets.hdr,
+                ao,
+                shadows,
+                &settings.lighting,
+            )
         })?;
         if let Some(ldr) = targets.ldr {
             timed(&mut timer, cmd, "tonemap", || {
@@ -540,12 +623,21 @@ impl Passes {
             }
             None => None,
         };
+        let mut shadow_ms = None;
+        let shadows = if settings.shadows.method.uses_maps() {
+            let mut maps = self.shadow_maps(scene, camera, size, &settings.shadows)?;
+            shadow_ms = Some(self.render_shadow_maps(scene, &mut maps)?);
+            Some(maps)
+        } else {
+            None
+        };
         let views = gbuffer.views();
         let targets = HybridTargets {
             gbuffer: &views,
             ao: ao_images.as_ref().map(|(a, b)| (a.view, b.view)),
             hdr: output.view,
             ldr: Some(display.view),
+            shadows: shadows.as_ref(),
         };
         let mut timer = GpuTimer::new(ctx, 8)?;
         ctx.submit(|cmd| {
@@ -559,7 +651,10 @@ impl Passes {
             ibl.record(ctx, cmd, scene, Some(&mut timer))?;
             self.record_hybrid(cmd, scene, &ibl, camera, &targets, settings, Some(&mut timer))
         })?;
-        let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
+        let mut pass_ms: Vec<(String, f64)> = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
+        if let Some(ms) = shadow_ms {
+            pass_ms.insert(0, ("shadow_maps".to_string(), ms));
+        }
         Ok(HybridImage {
             size,
             color: output.read(ctx)?,

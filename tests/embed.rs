@@ -80,6 +80,7 @@ fn update_scene_equals_a_fresh_renderer() {
                 &gbuffer.views(),
                 hdr.view,
                 None,
+                None,
                 &LightingSettings::default(),
             )
         })
@@ -180,6 +181,7 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
         ao: Some((ao[0].view, ao[1].view)),
         hdr: hdr.view,
         ldr: Some(ldr.view),
+        shadows: None,
     };
     let mut timer = GpuTimer::new(&gpu, 8).unwrap();
     gpu.submit(|cmd| {

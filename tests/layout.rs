@@ -111,7 +111,8 @@ fn glsl_type(module: &Module, ty: naga::Handle<naga::Type>) -> String {
     };
     match &t.inner {
         TypeInner::Struct { .. } => t.name.clone().unwrap_or_default(),
-        TypeInner::Scalar(s) => scalar(s).0.to_string(),
+        // naga types an array that atomics touch as atomic: in GLSL it is the plain scalar.
+        TypeInner::Scalar(s) | TypeInner::Atomic(s) => scalar(s).0.to_string(),
         TypeInner::Vector { size, scalar: s } => format!("{}vec{}", scalar(s).1, *size as u8),
         other => format!("{other:?}"),
     }

@@ -82,6 +82,7 @@ fn record_frames(
         ao: Some((ao.view, blurred.view)),
         hdr: hdr.view,
         ldr: Some(ldr.view),
+        shadows: None,
     };
     let path_settings = PathSettings { size: SIZE, max_bounces: 2, ..PathSettings::default() };
     ctx.submit(|cmd| {

@@ -59,19 +59,26 @@ vec4 vertex_tangent(uint i) {
     return uintBitsToFloat(imageLoad(vertex_texels, int(3u * i + 2u)));
 }
 
-// Whether light arriving along wi (unit, towards the light) reaches p: wi above both the shading
-// frame (t, b, n) and the geometric surface ng — or, on a surface that `transmits`, below both —
-// and nothing on the shadow ray, which leaves from wi's side, and ends just short of `target`
-// when `to_point` and is unbounded otherwise. Also gives wi in the frame.
-bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 wi, bool to_point, vec3 target,
-                   out vec3 wi_local) {
+// Which side of the surface light arriving along wi (unit, towards the light) comes from: 1 above
+// both the shading frame (t, b, n) and the geometric surface ng, -1 below both on a surface that
+// `transmits`, 0 otherwise (it cannot light the surface). Also gives wi in the frame.
+float light_side(vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 wi, out vec3 wi_local) {
     wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
     bool above = wi_local.z > 0.0 && dot(wi, ng) > 0.0;
     bool below = transmits && wi_local.z < 0.0 && dot(wi, ng) < 0.0;
-    if (!above && !below) {
+    return above ? 1.0 : (below ? -1.0 : 0.0);
+}
+
+// Whether light arriving along wi reaches p: from a side that can light it (light_side) and
+// nothing on the shadow ray, which leaves from wi's side, and ends just short of `target` when
+// `to_point` and is unbounded otherwise. Also gives wi in the frame.
+bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 wi, bool to_point, vec3 target,
+                   out vec3 wi_local) {
+    float side = light_side(ng, t, b, n, transmits, wi, wi_local);
+    if (side == 0.0) {
         return false;
     }
-    vec3 o = offset_ray(p, below ? -ng : ng);
+    vec3 o = offset_ray(p, side * ng);
     return to_point ? !bvh_any(o, target - o, 0.0, 0.9999) : !bvh_any(o, wi, 0.0, BVH_INF);
 }
 
@@ -387,6 +394,25 @@ uint pick_punctual(float u, uint count) {
     return lo;
 }
 
+#ifdef UMBRA_SHADOW_MAPS
+// Defined by a kernel that includes this file with UMBRA_SHADOW_MAPS defined: light k's
+// visibility at p from its shadow map, ng facing the light's side, wi towards the light.
+float punctual_shadow(uint k, vec3 p, vec3 ng, vec3 wi);
+#endif
+
+// How much of punctual light k arriving along wi reaches p (0 or 1 with shadow rays; a filtered
+// fraction from a shadow map when the kernel has them, SHADOW_MAPS); wi in the frame.
+float punctual_visibility(uint k, vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 wi, bool to_point,
+                          vec3 position, out vec3 wi_local) {
+#ifdef UMBRA_SHADOW_MAPS
+    if (SHADOW_MAPS) {
+        float side = light_side(ng, t, b, n, transmits, wi, wi_local);
+        return side == 0.0 ? 0.0 : punctual_shadow(k, p, side * ng, wi);
+    }
+#endif
+    return light_reaches(p, ng, t, b, n, transmits, wi, to_point, position, wi_local) ? 1.0 : 0.0;
+}
+
 // Direct light from the `count` punctual lights at p (one shadow ray per light evaluated, u
 // places the strata when they are sampled): delta distributions, so light sampling is the only
 // strategy; through a transmitting surface too.
@@ -401,9 +427,11 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
         vec3 position;
         vec3 li = punctual_incident(k, p, wi, to_point, position);
         vec3 wi_local;
-        if (any(greaterThan(li, vec3(0.0)))
-            && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, to_point, position, wi_local)) {
-            sum += weight * bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * li;
+        if (any(greaterThan(li, vec3(0.0)))) {
+            float visible = punctual_visibility(k, p, ng, t, b, n, surface_transmits(s), wi, to_point, position, wi_local);
+            if (visible > 0.0) {
+                sum += weight * visible * bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * li;
+            }
         }
     }
     return sum;

@@ -349,6 +349,102 @@ gpu_structs! {
         pad1: uint,
     }
 
+    /// One shadow-map layer (a spot light's map, a cube face, a cascade) as the rasterizer and
+    /// the lighting pass read it: six RGBA32UI texels in `shadow_texels` (float bits but for
+    /// `offset`, `size`, `kind`).
+    struct GpuShadowLayer {
+        /// First row of the world → light-texel transform: `(x w, y w, depth, w)` = rows ·
+        /// (p, 1), x and y in texels of the layer (texel centres at +0.5), depth the linear depth
+        /// in world units (along the light's axis), w the perspective divisor (1 for orthographic
+        /// layers; the depth itself for perspective ones).
+        row0: vec4,
+        /// Second row (y w).
+        row1: vec4,
+        /// Third row (linear depth).
+        row2: vec4,
+        /// Fourth row (w).
+        row3: vec4,
+        /// First texel of the layer in the map.
+        offset: uint,
+        /// Width = height in texels.
+        size: uint,
+        /// [`SHADOW_ORTHOGRAPHIC`] or [`SHADOW_PERSPECTIVE`].
+        kind: uint,
+        /// Padding.
+        pad0: uint,
+        /// World size of one texel: orthographic, its side; perspective, its side per unit of
+        /// depth.
+        texel_world: float,
+        /// The moment map's depth range: depth 0 maps to 0, `depth_far` to 1.
+        depth_far: float,
+        /// Directional cascades: the view depth (along the camera's forward axis) this cascade
+        /// covers up to; 0 for other layers.
+        split: float,
+        /// Padding.
+        pad1: float,
+    }
+
+    /// Push constants of the shadow rasterizer's kernels (`shadow_bin`, `shadow_scan`,
+    /// `shadow_raster`): one layer.
+    struct ShadowRasterParams {
+        /// The layer's transform, [`GpuShadowLayer::row0`]..`row3`.
+        row0: vec4,
+        /// Second row.
+        row1: vec4,
+        /// Third row.
+        row2: vec4,
+        /// Fourth row.
+        row3: vec4,
+        /// Width = height of the layer in texels.
+        size: uint,
+        /// Tiles per side ([`SHADOW_TILE`] texels each).
+        tiles: uint,
+        /// Triangles in the BVH.
+        tri_count: uint,
+        /// First texel of the layer in the map.
+        offset: uint,
+        /// Entries the tile lists hold.
+        capacity: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+        /// Padding.
+        pad2: uint,
+    }
+
+    /// What the shadow rasterizer reports: the largest need over the layers rendered.
+    struct ShadowStats {
+        /// Tile-list entries one layer needed.
+        entries: uint,
+        /// Triangles in the fullest tile.
+        tile_max: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
+    /// Push constants of `shadow_moments.comp`.
+    struct ShadowMomentParams {
+        /// First texel of the layer.
+        offset: uint,
+        /// Width = height of the layer.
+        size: uint,
+        /// Box-filter radius in texels.
+        radius: uint,
+        /// 0: depth → moments, filtered along x; 1: moments filtered along y.
+        direction: uint,
+        /// Depth mapped to moment depth 1 ([`GpuShadowLayer::depth_far`]).
+        depth_far: float,
+        /// Padding.
+        pad0: float,
+        /// Padding.
+        pad1: float,
+        /// Padding.
+        pad2: float,
+    }
+
     /// Push constants of `tonemap.comp`.
     struct TonemapParams {
         /// Width, height.
@@ -504,6 +600,22 @@ gpu_constants! {
     LIGHT_SPOT: float = 1.0;
     /// `GpuLight::direction_kind.w` of a directional light.
     LIGHT_DIRECTIONAL: float = 2.0;
+    /// `GpuShadowLayer::kind`: an orthographic layer (directional lights).
+    SHADOW_ORTHOGRAPHIC: uint = 0;
+    /// `GpuShadowLayer::kind`: a perspective layer (spot lights, cube faces).
+    SHADOW_PERSPECTIVE: uint = 1;
+    /// A light's shadow record (`shadow_texels`): no map, shadow rays.
+    SHADOW_LIGHT_NONE: uint = 0;
+    /// A light's shadow record: one layer.
+    SHADOW_LIGHT_SINGLE: uint = 1;
+    /// A light's shadow record: six cube faces (+x, −x, +y, −y, +z, −z).
+    SHADOW_LIGHT_CUBE: uint = 2;
+    /// A light's shadow record: cascades over the view depth.
+    SHADOW_LIGHT_CASCADES: uint = 3;
+    /// Side of a shadow rasterizer tile in texels (its workgroup is one tile).
+    SHADOW_TILE: uint = 16;
+    /// Texels of `shadow_texels` before the lights' records: the filter settings.
+    SHADOW_HEADER_TEXELS: uint = 2;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
 }
@@ -592,7 +704,13 @@ kernels! {
     kernel deferred {
         scene: full [textures, lights, punctual, env_map, alpha, transmission],
         push: DeferredParams,
-        spec: { beckmann: bool = false },
+        spec: {
+            beckmann: bool = false,
+            shadow_maps: bool = false,
+            shadow_pcf: bool = false,
+            shadow_pcss: bool = false,
+            shadow_moments: bool = false
+        },
         bindings: {
             /// View-space depth.
             gb_depth: readonly image r32f,
@@ -604,6 +722,13 @@ kernels! {
             gb_emission: readonly image rgba16f,
             /// Material index, octahedral geometric normal.
             gb_material: readonly image rg32ui,
+            /// Shadow maps: the filter settings, each punctual light's record, the layers
+            /// ([`GpuShadowLayer`]); one texel when the lights cast shadow rays.
+            shadow_texels: readonly texels rgba32ui,
+            /// Shadow maps: linear depth per texel, every layer.
+            shadow_depth: readonly texels r32f,
+            /// Shadow maps: filtered depth moments per texel (`moments` only).
+            shadow_moments: readonly texels rgba32f,
             /// The lit image.
             out_color: writeonly image rgba32f,
             /// The split-sum BRDF table.
@@ -722,6 +847,70 @@ kernels! {
         bindings: {
             /// The nine coefficients.
             sh: readwrite buffer [vec4],
+        }
+    }
+
+    /// Shadow maps, step 1 and 3: each triangle counts itself into (`fill` false) or enters
+    /// itself in (`fill` true) the list of every tile its light-space box overlaps.
+    kernel shadow_bin {
+        scene: bvh,
+        push: ShadowRasterParams,
+        spec: { fill: bool = false },
+        bindings: {
+            /// Triangles per tile (counted, then filled again from 0).
+            tile_count: readwrite buffer [uint],
+            /// First entry of each tile's list.
+            tile_start: readwrite buffer [uint],
+            /// The lists: triangle indices in BVH order.
+            tile_tris: readwrite buffer [uint],
+        }
+    }
+
+    /// Shadow maps, step 2: the tiles' list offsets (an exclusive prefix sum of the counts).
+    kernel shadow_scan {
+        scene: none,
+        push: ShadowRasterParams,
+        spec: {},
+        bindings: {
+            /// Triangles per tile (set back to 0 for the fill).
+            tile_count: readwrite buffer [uint],
+            /// First entry of each tile's list.
+            tile_start: readwrite buffer [uint],
+            /// The largest need seen.
+            stats: readwrite buffer ShadowStats,
+        }
+    }
+
+    /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
+    /// homogeneous edge functions, a tie rule), nearest linear depth written.
+    kernel shadow_raster {
+        scene: full [textures, alpha],
+        push: ShadowRasterParams,
+        spec: {},
+        bindings: {
+            /// Triangles per tile (set back to 0 once read, for the next layer).
+            tile_count: readwrite buffer [uint],
+            /// First entry of each tile's list.
+            tile_start: readonly buffer [uint],
+            /// The lists.
+            tile_tris: readonly buffer [uint],
+            /// The map: linear depth per texel (infinity where nothing is).
+            shadow_depth: writeonly texels r32f,
+        }
+    }
+
+    /// Moment shadow maps: depth to its four moments, box-filtered along x, then along y.
+    kernel shadow_moments {
+        scene: none,
+        push: ShadowMomentParams,
+        spec: {},
+        bindings: {
+            /// The depth map.
+            shadow_depth: readonly texels r32f,
+            /// Moments filtered along x (written in direction 0, read in 1).
+            moments_x: readwrite texels rgba32f,
+            /// Moments filtered along both axes (written in direction 1).
+            shadow_moments: writeonly texels rgba32f,
         }
     }
 

@@ -28,6 +28,10 @@ pub struct GpuScene {
     pub punctual: TexelBuffer,
     /// Punctual lights.
     pub punctual_count: u32,
+    /// The punctual lights as uploaded (shadow maps are placed from them on the host).
+    pub punctual_lights: Vec<GpuLight>,
+    /// The geometry's bounding box (min, max), from the BVH's root.
+    pub bounds: [[f32; 3]; 2],
     /// Environment texels: rgb radiance, density over (u, v) (a dummy texel when there is none).
     pub env_texels: Buffer,
     /// Environment row CDF.
@@ -347,6 +351,8 @@ impl GpuScene {
             light_count: arrays.lights.len() as u32,
             punctual: upload_rgba32ui(ctx, "scene punctual lights", &arrays.punctual)?,
             punctual_count: arrays.punctual.len() as u32,
+            punctual_lights: arrays.punctual.clone(),
+            bounds: arrays.bvh.nodes.first().map_or([[0.0; 3]; 2], |n| [n.aabb_min, n.aabb_max]),
             textures: upload_rgba32ui(ctx, "scene textures", &arrays.textures)?,
             texels: upload_texels(ctx, &arrays.texels)?,
             texture_count: arrays.textures.len() as u32,
@@ -389,6 +395,7 @@ impl GpuScene {
         self.light_count = arrays.lights.len() as u32;
         self.punctual = upload_rgba32ui(ctx, "scene punctual lights", &arrays.punctual)?;
         self.punctual_count = arrays.punctual.len() as u32;
+        self.punctual_lights = arrays.punctual.clone();
         self.textures = upload_rgba32ui(ctx, "scene textures", &arrays.textures)?;
         self.texels = upload_texels(ctx, &arrays.texels)?;
         self.texture_count = arrays.textures.len() as u32;

@@ -10,13 +10,14 @@
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
+use super::shadow::{ShadowMaps, ShadowMethod};
 use crate::error::{Error, Result};
 use crate::gpu::kernels::deferred;
 use crate::gpu::layout::{DeferredParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Context, Image};
+use crate::vk::{barrier, raw, Context, Image, TexelBuffer};
 
 /// What the lighting pass computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,11 +81,14 @@ pub enum IblLookup {
     Dominant,
 }
 
-/// `deferred.comp`, specialised for the scene's features.
+/// `deferred.comp`, specialised for the scene's features and a shadow method.
 pub struct DeferredPass {
     pipeline: Pipeline<deferred::Kernel>,
+    method: ShadowMethod,
     /// 1×1 `R32_SFLOAT` of 1.0: the ambient occlusion when the caller has none.
     no_ao: Image,
+    /// One-texel stand-ins for the shadow maps' bindings when the lights cast rays.
+    no_shadow: [TexelBuffer; 3],
 }
 
 impl DeferredPass {
@@ -92,12 +96,30 @@ impl DeferredPass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
-    /// an environment map).
-    pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        let pipeline = Pipeline::for_scene(ctx, scene, &deferred::Spec { beckmann: false })?;
+    /// an environment map) and for shadows by `method`.
+    pub fn new(ctx: &Context, scene: &GpuScene, method: ShadowMethod) -> Result<Self> {
+        let spec = deferred::Spec {
+            beckmann: false,
+            shadow_maps: method.uses_maps(),
+            shadow_pcf: method == ShadowMethod::Pcf,
+            shadow_pcss: method == ShadowMethod::Pcss,
+            shadow_moments: method == ShadowMethod::Moments,
+        };
+        let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
         no_ao.write(ctx, &[1.0f32])?;
-        Ok(Self { pipeline, no_ao })
+        let no_shadow = [
+            TexelBuffer::upload(ctx, "no shadow records", &[[0u32; 4]], raw::Format::R32G32B32A32_UINT, 16)?,
+            TexelBuffer::upload(ctx, "no shadow depth", &[0.0f32], raw::Format::R32_SFLOAT, 4)?,
+            TexelBuffer::upload(
+                ctx,
+                "no shadow moments",
+                &[[0.0f32; 4]],
+                raw::Format::R32G32B32A32_SFLOAT,
+                16,
+            )?,
+        ];
+        Ok(Self { pipeline, method, no_ao, no_shadow })
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -127,7 +149,8 @@ impl DeferredPass {
     /// Records the pass (G-buffer in, `output` written: an `R32G32B32A32_SFLOAT` storage image in
     /// `GENERAL` layout of the G-buffer's size) and a compute-to-compute barrier after it. Never
     /// submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `ao` is an
-    /// `R32_SFLOAT` image of the G-buffer's size in `GENERAL` layout (1 = unoccluded), or none.
+    /// `R32_SFLOAT` image of the G-buffer's size in `GENERAL` layout (1 = unoccluded), or none;
+    /// `shadows` the maps (recorded before this pass) when the pass was built for a map method.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -138,8 +161,26 @@ impl DeferredPass {
         output: raw::ImageView,
         ibl: &IblResources,
         ao: Option<raw::ImageView>,
+        shadows: Option<&ShadowMaps>,
         params: &DeferredParams,
     ) -> Result<()> {
+        let [no_records, no_depth, no_moments] = &self.no_shadow;
+        let (shadow_texels, shadow_depth, shadow_moments) = match (self.method.uses_maps(), shadows) {
+            (false, _) => (no_records, no_depth, no_moments),
+            (true, Some(maps)) if maps.settings.method == self.method => {
+                (&maps.texels, &maps.depth, &maps.moments)
+            }
+            (true, maps) => {
+                return Err(Error::Invalid(format!(
+                    "the lighting pass shadows by '{}' but was given {}",
+                    self.method.name(),
+                    maps.map_or("no shadow maps".to_string(), |m| format!(
+                        "maps for '{}'",
+                        m.settings.method.name()
+                    ))
+                )))
+            }
+        };
         let resources = deferred::Resources {
             scene,
             gb_depth: &gbuffer.depth,
@@ -147,6 +188,9 @@ impl DeferredPass {
             gb_base: &gbuffer.base,
             gb_emission: &gbuffer.emission,
             gb_material: &gbuffer.material,
+            shadow_texels,
+            shadow_depth,
+            shadow_moments,
             out_color: &output,
             ibl_lut: &ibl.lut,
             ibl_prefiltered: &ibl.prefiltered,

@@ -5,4 +5,5 @@ pub mod deferred;
 pub mod gbuffer;
 pub mod ibl;
 pub mod pathtrace;
+pub mod shadow;
 pub mod tonemap;

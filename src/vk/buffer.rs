@@ -143,6 +143,21 @@ impl TexelBuffer {
         let zeroed = [T::zeroed()];
         let data = if data.is_empty() { &zeroed[..] } else { data };
         let buffer = Buffer::upload(ctx, name, data, vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER)?;
+        Self::view(buffer, name, format, texel_bytes)
+    }
+
+    /// A device-local texel buffer of `texels` (at least one) `format` texels of `texel_bytes`
+    /// bytes each, contents undefined until a kernel or a copy writes them.
+    pub fn new(ctx: &Context, name: &str, texels: u64, format: vk::Format, texel_bytes: u64) -> Result<Self> {
+        let usage = vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let buffer = Buffer::new(ctx, name, texels.max(1) * texel_bytes, usage, MemoryLocation::GpuOnly)?;
+        Self::view(buffer, name, format, texel_bytes)
+    }
+
+    /// Views `buffer` as `format` texels, checking the device's `maxTexelBufferElements`.
+    fn view(buffer: Buffer, name: &str, format: vk::Format, texel_bytes: u64) -> Result<Self> {
         let shared = &buffer.shared;
         let texels = buffer.size / texel_bytes;
         let limit = shared.info.max_texel_buffer_elements as u64;

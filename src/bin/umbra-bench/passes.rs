@@ -54,6 +54,7 @@ pub fn run(
         ao: Some((ao_raw.view, ao_blurred.view)),
         hdr: output.view,
         ldr: None,
+        shadows: None,
     };
     let settings = HybridSettings {
         size,

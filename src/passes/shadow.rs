@@ -1,0 +1,602 @@
+//! Shadow maps: the real-time alternative to the lighting pass's shadow rays for punctual lights.
+//!
+//! A compute rasterizer (no graphics pipeline) renders the scene's BVH triangles into one depth
+//! map per layer: one for a spot light (a perspective map over its cone), six for a point light
+//! (a cube: one perspective map per axis direction), and cascades for a directional light
+//! (orthographic maps over slices of the camera's view depth, after Zhang et al. 2006's practical
+//! split scheme, each sized by the slice's bounding sphere and its centre snapped to whole texels
+//! so the maps do not shimmer as the camera turns or moves). Per layer four kernels run:
+//! `shadow_bin` counts each triangle into the tiles (16×16 texels) its light-space box overlaps,
+//! `shadow_scan` turns the counts into list offsets, `shadow_bin` again fills the lists, and
+//! `shadow_raster` runs one workgroup per tile, one invocation per texel, over the tile's list:
+//! watertight homogeneous edge functions with a tie rule, alpha cut-outs as in the traversal, the
+//! nearest linear depth stored. [`ShadowMethod::Moments`] adds their four moments, box-filtered.
+//!
+//! The lighting pass (`deferred.comp`, `shadow.glsl`) then reads them with the chosen filter
+//! instead of casting a shadow ray per punctual light; emissive triangles and the environment
+//! keep their own methods. Cube faces and spot maps are rendered with a guard band a little
+//! wider than the face, so a filter centred inside the face never reads past the map (seams).
+//!
+//! The maps depend on the lights and the geometry, and for directional lights on the camera:
+//! [`ShadowMaps::plan`] places the layers, and a host re-records them only when one of those
+//! changes.
+
+use crate::error::{Error, Result};
+use crate::gpu::kernels::{shadow_bin, shadow_moments, shadow_raster, shadow_scan};
+use crate::gpu::layout::{
+    GpuLight, GpuShadowLayer, ShadowMomentParams, ShadowRasterParams, ShadowStats, SHADOW_HEADER_TEXELS,
+    SHADOW_LIGHT_CASCADES, SHADOW_LIGHT_CUBE, SHADOW_LIGHT_SINGLE, SHADOW_ORTHOGRAPHIC, SHADOW_PERSPECTIVE,
+    SHADOW_TILE,
+};
+use crate::gpu::scene::GpuScene;
+use crate::gpu::Pipeline;
+use crate::scene::Camera;
+use crate::vk::{barrier, raw, Buffer, Context, TexelBuffer};
+use glam::{Vec3, Vec4};
+use gpu_allocator::MemoryLocation;
+
+/// How the lighting pass shadows punctual lights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ShadowMethod {
+    /// One shadow ray per light and pixel through the BVH: exact (for a point source).
+    #[default]
+    RayTraced,
+    /// A shadow map, the nearest texel compared.
+    Hard,
+    /// Percentage-closer filtering: 16 rotated Poisson taps of [`ShadowSettings::pcf_radius`]
+    /// texels, each a bilinear compare.
+    Pcf,
+    /// Percentage-closer soft shadows (Fernando 2005): a blocker search, the penumbra from the
+    /// light's size ([`ShadowSettings::light_radius`], [`ShadowSettings::sun_angle`]), PCF of it.
+    Pcss,
+    /// Moment shadow maps (Peters and Klein 2015, Hamburger 4MSM), filtered before lookup.
+    Moments,
+}
+
+impl ShadowMethod {
+    /// Every method, in the order of their names.
+    pub const ALL: [ShadowMethod; 5] = [
+        ShadowMethod::RayTraced,
+        ShadowMethod::Hard,
+        ShadowMethod::Pcf,
+        ShadowMethod::Pcss,
+        ShadowMethod::Moments,
+    ];
+
+    /// The method's name in the CLI and scripts: `rt`, `hard`, `pcf`, `pcss`, `moments`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShadowMethod::RayTraced => "rt",
+            ShadowMethod::Hard => "hard",
+            ShadowMethod::Pcf => "pcf",
+            ShadowMethod::Pcss => "pcss",
+            ShadowMethod::Moments => "moments",
+        }
+    }
+
+    /// The method named `name` ([`ShadowMethod::name`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// Whether the method reads shadow maps.
+    pub fn uses_maps(self) -> bool {
+        self != ShadowMethod::RayTraced
+    }
+
+    /// Index in [`ShadowMethod::ALL`].
+    pub fn index(self) -> usize {
+        Self::ALL.iter().position(|&m| m == self).unwrap_or(0)
+    }
+}
+
+/// Shadow-map settings. Biases and radii are in texels of the layer at the receiver, so one
+/// value suits every resolution and distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowSettings {
+    /// The method; the others apply to the map methods only.
+    pub method: ShadowMethod,
+    /// Width = height of every layer, texels.
+    pub map_size: u32,
+    /// Cascades of a directional light.
+    pub cascades: u32,
+    /// The split scheme: 0 uniform in view depth, 1 logarithmic, between: the blend (Zhang et
+    /// al. 2006's practical scheme).
+    pub cascade_split: f32,
+    /// Constant depth bias, texels.
+    pub depth_bias: f32,
+    /// Slope-scaled depth bias, texels per unit of tan θ (θ between normal and light).
+    pub slope_bias: f32,
+    /// Normal offset: the receiver moves this many texels along its geometric normal.
+    pub normal_bias: f32,
+    /// PCF's filter radius, texels.
+    pub pcf_radius: f32,
+    /// Radius of point and spot lights for PCSS, metres.
+    pub light_radius: f32,
+    /// Angular radius of directional lights for PCSS, radians (the sun: 0.00465).
+    pub sun_angle: f32,
+    /// The largest filter radius (PCSS's search and penumbra), texels; also sets the guard band
+    /// of cube faces and spot maps.
+    pub max_radius: f32,
+    /// Box-filter radius of the moment maps, texels.
+    pub moment_blur: u32,
+    /// Moment bias α of 4MSM (towards two equal spikes at 0 and 1).
+    pub moment_bias: f32,
+}
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        Self {
+            method: ShadowMethod::RayTraced,
+            map_size: 1024,
+            cascades: 4,
+            cascade_split: 0.75,
+            depth_bias: 1.0,
+            slope_bias: 1.0,
+            normal_bias: 1.0,
+            pcf_radius: 1.5,
+            light_radius: 0.05,
+            sun_angle: 0.00465,
+            max_radius: 16.0,
+            moment_blur: 2,
+            moment_bias: 3e-5,
+        }
+    }
+}
+
+/// Spot lights with a wider cone than this get a cube map (one perspective map would stretch).
+const SPOT_SINGLE_MAP_MAX_ANGLE: f32 = 60.0 * std::f32::consts::PI / 180.0;
+
+impl ShadowSettings {
+    /// The largest map side: a triangle covering the map loops over every tile when binning,
+    /// and CPU devices cut an invocation's loops short past 65,535 iterations.
+    pub const MAX_MAP_SIZE: u32 = 2048;
+    /// The smallest map side.
+    pub const MIN_MAP_SIZE: u32 = 16;
+    /// The most cascades.
+    pub const MAX_CASCADES: u32 = 8;
+
+    /// Checks every setting, naming the one out of range.
+    pub fn validate(&self) -> Result<()> {
+        let fail = |what: String| Err(Error::Invalid(format!("shadow maps: {what}")));
+        if !(Self::MIN_MAP_SIZE..=Self::MAX_MAP_SIZE).contains(&self.map_size) {
+            return fail(format!(
+                "map size {} must be {} to {} texels",
+                self.map_size,
+                Self::MIN_MAP_SIZE,
+                Self::MAX_MAP_SIZE
+            ));
+        }
+        if !(1..=Self::MAX_CASCADES).contains(&self.cascades) {
+            return fail(format!("{} cascades: must be 1 to {}", self.cascades, Self::MAX_CASCADES));
+        }
+        if !(0.0..=1.0).contains(&self.cascade_split) {
+            return fail(format!("cascade split {} must be in [0, 1]", self.cascade_split));
+        }
+        for (name, value, max) in [
+            ("depth bias", self.depth_bias, 64.0),
+            ("slope bias", self.slope_bias, 64.0),
+            ("normal bias", self.normal_bias, 64.0),
+            ("light radius", self.light_radius, f32::MAX),
+            ("sun angle", self.sun_angle, 0.5),
+        ] {
+            if !(value.is_finite() && (0.0..=max).contains(&value)) {
+                return fail(format!("{name} {value} must be finite, at least 0 and at most {max}"));
+            }
+        }
+        let guard_max = self.map_size as f32 / 8.0;
+        if !(self.max_radius.is_finite() && self.max_radius >= 0.5 && self.max_radius <= guard_max) {
+            return fail(format!(
+                "largest filter radius {} texels must be 0.5 to {guard_max} (an eighth of the map size {})",
+                self.max_radius, self.map_size
+            ));
+        }
+        if !(self.pcf_radius.is_finite() && self.pcf_radius > 0.0 && self.pcf_radius <= self.max_radius) {
+            return fail(format!(
+                "PCF radius {} texels must be above 0 and at most the largest filter radius {}",
+                self.pcf_radius, self.max_radius
+            ));
+        }
+        if self.moment_blur as f32 > self.max_radius {
+            return fail(format!(
+                "moment blur radius {} texels must be at most the largest filter radius {}",
+                self.moment_blur, self.max_radius
+            ));
+        }
+        if !(self.moment_bias.is_finite() && self.moment_bias > 0.0 && self.moment_bias < 0.1) {
+            return fail(format!("moment bias {} must be in (0, 0.1)", self.moment_bias));
+        }
+        Ok(())
+    }
+
+    /// Texels around a cube face or spot cone the map renders beyond it, so filters centred in
+    /// the face stay inside the map.
+    fn guard(&self) -> u32 {
+        self.max_radius.max(self.pcf_radius).max(self.moment_blur as f32).ceil() as u32 + 2
+    }
+}
+
+/// Where the layers of every punctual light are and how each is placed: what
+/// [`ShadowMaps::plan`] computes on the host.
+#[derive(Debug, Clone)]
+pub struct ShadowPlan {
+    /// Every layer in order, lights in scene order.
+    pub layers: Vec<GpuShadowLayer>,
+    /// Per punctual light: (its first layer, layer count, `SHADOW_LIGHT_*`).
+    pub lights: Vec<(u32, u32, u32)>,
+}
+
+impl ShadowPlan {
+    /// Places the layers of `lights` for a scene within `bounds`, seen by `camera` over an image
+    /// of `size` (directional cascades follow the view).
+    pub fn new(
+        lights: &[GpuLight],
+        bounds: [[f32; 3]; 2],
+        camera: &Camera,
+        size: (u32, u32),
+        settings: &ShadowSettings,
+    ) -> Result<Self> {
+        settings.validate()?;
+        let (lo, hi) = (Vec3::from(bounds[0]), Vec3::from(bounds[1]));
+        let corners: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::new([lo.x, hi.x][i & 1], [lo.y, hi.y][(i >> 1) & 1], [lo.z, hi.z][i >> 2]))
+            .collect();
+        let s = settings.map_size;
+        let mut plan = ShadowPlan { layers: Vec::new(), lights: Vec::new() };
+        for light in lights {
+            let first = plan.layers.len() as u32;
+            let position = Vec3::from_slice(&light.position_range[..3]);
+            let direction = Vec3::from_slice(&light.direction_kind[..3]).normalize_or(Vec3::NEG_Z);
+            let kind = light.direction_kind[3];
+            let far = corners.iter().map(|c| c.distance(position)).fold(1e-6, f32::max);
+            let record = if kind == GpuLight::DIRECTIONAL {
+                plan.layers.extend(cascades(direction, &corners, camera, size, settings));
+                SHADOW_LIGHT_CASCADES
+            } else if kind == GpuLight::SPOT && light.cone[0] >= SPOT_SINGLE_MAP_MAX_ANGLE.cos() {
+                let tan = (1.0 - light.cone[0] * light.cone[0]).max(0.0).sqrt() / light.cone[0];
+                plan.layers.push(perspective(position, direction, tan, far, s, settings.guard()));
+                SHADOW_LIGHT_SINGLE
+            } else {
+                for axis in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z] {
+                    plan.layers.push(perspective(position, axis, 1.0, far, s, settings.guard()));
+                }
+                SHADOW_LIGHT_CUBE
+            };
+            plan.lights.push((first, plan.layers.len() as u32 - first, record));
+        }
+        for (i, layer) in plan.layers.iter_mut().enumerate() {
+            layer.offset = i as u32 * s * s;
+            layer.size = s;
+        }
+        Ok(plan)
+    }
+
+    /// The `shadow_texels` the lighting pass reads: the filter settings, each light's record
+    /// (the texel of its first layer, the layer count, the kind), then six texels per layer.
+    pub fn texels(&self, settings: &ShadowSettings) -> Vec<[u32; 4]> {
+        let f = |v: [f32; 4]| v.map(f32::to_bits);
+        let mut out = vec![
+            f([settings.depth_bias, settings.slope_bias, settings.normal_bias, settings.pcf_radius]),
+            f([settings.light_radius, settings.sun_angle.tan(), settings.max_radius, settings.moment_bias]),
+        ];
+        debug_assert_eq!(out.len() as u32, SHADOW_HEADER_TEXELS);
+        let layers_at = SHADOW_HEADER_TEXELS + self.lights.len() as u32;
+        out.extend(self.lights.iter().map(|&(first, count, kind)| [layers_at + 6 * first, count, kind, 0]));
+        for l in &self.layers {
+            out.extend([l.row0, l.row1, l.row2, l.row3].map(f));
+            out.push([l.offset, l.size, l.kind, 0]);
+            out.push(f([l.texel_world, l.depth_far, l.split, 0.0]));
+        }
+        out
+    }
+}
+
+/// A perspective layer from `origin` looking along `axis` over a square of half-angle tangent
+/// `tan` (widened by `guard` texels each side), depths up to `far`.
+fn perspective(origin: Vec3, axis: Vec3, tan: f32, far: f32, size: u32, guard: u32) -> GpuShadowLayer {
+    let s = size as f32;
+    let tan = tan * s / (s - 2.0 * guard as f32);
+    let right = axis.any_orthonormal_vector();
+    let up = axis.cross(right);
+    let half = 0.5 * s;
+    let row = |v: Vec3| v.extend(-v.dot(origin)).to_array();
+    GpuShadowLayer {
+        row0: row(half * (right / tan + axis)),
+        row1: row(half * (-up / tan + axis)),
+        row2: row(axis),
+        row3: row(axis),
+        kind: SHADOW_PERSPECTIVE,
+        texel_world: 2.0 * tan / s,
+        depth_far: far,
+        ..Default::default()
+    }
+}
+
+/// A directional light's cascades over the view depth of `camera` (image `size`), each an
+/// orthographic layer around the bounding sphere of its slice of the view frustum, centred on a
+/// whole texel; depth measured along the light from the scene's nearest corner.
+fn cascades(
+    direction: Vec3,
+    corners: &[Vec3],
+    camera: &Camera,
+    size: (u32, u32),
+    settings: &ShadowSettings,
+) -> Vec<GpuShadowLayer> {
+    let s = settings.map_size as f32;
+    let eye = Vec3::from(camera.position);
+    let forward = Vec3::from(camera.forward).normalize();
+    let tan_y = (camera.yfov * 0.5).tan();
+    let tan_x = tan_y * camera.aspect.unwrap_or(size.0 as f32 / size.1.max(1) as f32);
+    let k2 = tan_x * tan_x + tan_y * tan_y;
+    let scene_far = corners.iter().map(|c| (*c - eye).dot(forward)).fold(0.0f32, f32::max);
+    let near = camera.znear.max(1e-4);
+    let far = scene_far.max(near * 1.01);
+    let n = settings.cascades;
+    let split = |i: u32| {
+        let t = i as f32 / n as f32;
+        let log = near * (far / near).powf(t);
+        let uniform = near + (far - near) * t;
+        settings.cascade_split * log + (1.0 - settings.cascade_split) * uniform
+    };
+    let right = direction.any_orthonormal_vector();
+    let up = direction.cross(right);
+    let depth0 = corners.iter().map(|c| c.dot(direction)).fold(f32::INFINITY, f32::min);
+    let depth1 = corners.iter().map(|c| c.dot(direction)).fold(f32::NEG_INFINITY, f32::max);
+    let widen = s / (s - 2.0 * settings.guard() as f32);
+    (0..n)
+        .map(|i| {
+            let (za, zb) = (if i == 0 { 0.0 } else { split(i) }, split(i + 1));
+            // The smallest sphere around the slice's eight corners has its centre on the axis.
+            let zc = ((1.0 + k2) * 0.5 * (za + zb)).min(zb);
+            let radius = ((zc - za).powi(2) + za * za * k2).max((zb - zc).powi(2) + zb * zb * k2).sqrt();
+            let texel = 2.0 * radius * widen / s;
+            let centre = eye + forward * zc;
+            let snap = |v: f32| (v / texel).floor() * texel;
+            let (cx, cy) = (snap(centre.dot(right)), snap(centre.dot(up)));
+            GpuShadowLayer {
+                row0: (right / texel).extend(-cx / texel + 0.5 * s).to_array(),
+                row1: (-up / texel).extend(cy / texel + 0.5 * s).to_array(),
+                row2: direction.extend(-depth0).to_array(),
+                row3: Vec4::W.to_array(),
+                kind: SHADOW_ORTHOGRAPHIC,
+                texel_world: texel,
+                depth_far: (depth1 - depth0).max(1e-6),
+                split: if i + 1 == n { f32::MAX } else { zb },
+                ..Default::default()
+            }
+        })
+        .collect()
+}
+
+/// Every layer's depth (and moments) for one scene's punctual lights, with the rasterizer's
+/// working buffers, placed by a [`ShadowPlan`].
+pub struct ShadowMaps {
+    /// The settings they were made with.
+    pub settings: ShadowSettings,
+    /// The placement.
+    pub plan: ShadowPlan,
+    /// The lighting pass's records ([`ShadowPlan::texels`]).
+    pub texels: TexelBuffer,
+    /// Linear depth per texel, every layer (R32_SFLOAT texels).
+    pub depth: TexelBuffer,
+    /// Moments filtered along x (RGBA32_SFLOAT; one texel unless the method is moments).
+    moments_x: TexelBuffer,
+    /// Filtered moments (RGBA32_SFLOAT; one texel unless the method is moments).
+    pub moments: TexelBuffer,
+    tile_count: Buffer,
+    tile_start: Buffer,
+    tile_tris: Buffer,
+    stats: Buffer,
+    capacity: u32,
+}
+
+impl ShadowMaps {
+    /// Allocates the maps `plan` places (for a BVH of `triangles` triangles), refusing more than
+    /// [`ShadowMaps::MAX_BYTES`].
+    pub fn new(ctx: &Context, plan: ShadowPlan, settings: &ShadowSettings, triangles: u32) -> Result<Self> {
+        let s = settings.map_size as u64;
+        let layers = plan.layers.len() as u64;
+        let moments = settings.method == ShadowMethod::Moments;
+        let bytes = layers * s * s * if moments { 4 + 32 } else { 4 };
+        if bytes > Self::MAX_BYTES {
+            return Err(Error::Invalid(format!(
+                "shadow maps: {layers} layers of {s}x{s} need {} MiB, more than {} MiB: lower --shadow-map-size",
+                bytes >> 20,
+                Self::MAX_BYTES >> 20
+            )));
+        }
+        let tiles = (settings.map_size.div_ceil(SHADOW_TILE) as u64).pow(2);
+        let capacity = (4 * triangles as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
+        let texels = TexelBuffer::upload(
+            ctx,
+            "shadow records",
+            &plan.texels(settings),
+            raw::Format::R32G32B32A32_UINT,
+            16,
+        )?;
+        let f32x4 = raw::Format::R32G32B32A32_SFLOAT;
+        let moment_texels = if moments { layers * s * s } else { 1 };
+        let storage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        let stats = Buffer::new(
+            ctx,
+            "shadow stats",
+            std::mem::size_of::<ShadowStats>() as u64,
+            storage | raw::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(Self {
+            settings: *settings,
+            texels,
+            depth: TexelBuffer::new(ctx, "shadow depth", layers * s * s, raw::Format::R32_SFLOAT, 4)?,
+            moments_x: TexelBuffer::new(ctx, "shadow moments x", moment_texels, f32x4, 16)?,
+            moments: TexelBuffer::new(ctx, "shadow moments", moment_texels, f32x4, 16)?,
+            tile_count: Buffer::new(ctx, "shadow tile counts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
+            tile_start: Buffer::new(ctx, "shadow tile starts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
+            tile_tris: Buffer::new(
+                ctx,
+                "shadow tile lists",
+                4 * capacity as u64,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            stats,
+            capacity,
+            plan,
+        })
+    }
+
+    /// The most memory the maps of one scene may take.
+    pub const MAX_BYTES: u64 = 1 << 30;
+
+    /// Tile-list entries the maps hold.
+    pub fn capacity(&self) -> u32 {
+        self.capacity
+    }
+
+    /// Triangles one tile may hold: each texel's invocation loops over them, and CPU devices
+    /// (llvmpipe) cut an invocation's loops short past 65,535 iterations.
+    pub const MAX_TILE_TRIANGLES: u32 = 60_000;
+
+    /// What the last submitted rendering needed (read back; submits a copy): the tile-list
+    /// entries and the fullest tile's triangles of the neediest layer.
+    pub fn stats(&self, ctx: &Context) -> Result<ShadowStats> {
+        Ok(self.stats.read::<ShadowStats>(ctx)?[0])
+    }
+
+    /// After a submitted rendering: `None` when every layer's tile lists fit, else the entries
+    /// needed (the maps are incomplete: [`ShadowMaps::reserve`] them and render again). An error
+    /// when a tile held more than [`ShadowMaps::MAX_TILE_TRIANGLES`].
+    pub fn check(&self, ctx: &Context) -> Result<Option<u32>> {
+        let stats = self.stats(ctx)?;
+        if stats.tile_max > Self::MAX_TILE_TRIANGLES {
+            return Err(Error::Invalid(format!(
+                "shadow maps: one {SHADOW_TILE}x{SHADOW_TILE} tile holds {} triangles, more than {}: raise the map size",
+                stats.tile_max,
+                Self::MAX_TILE_TRIANGLES
+            )));
+        }
+        Ok((stats.entries > self.capacity).then_some(stats.entries))
+    }
+
+    /// Grows the tile lists to hold `entries` (and a quarter more).
+    pub fn reserve(&mut self, ctx: &Context, entries: u32) -> Result<()> {
+        let capacity = entries.saturating_add(entries / 4).min(u32::MAX / 8);
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        self.tile_tris =
+            Buffer::new(ctx, "shadow tile lists", 4 * capacity as u64, usage, MemoryLocation::GpuOnly)?;
+        self.capacity = capacity;
+        Ok(())
+    }
+
+    /// Reads every layer's depth back (tests and dumps), row-major per layer.
+    pub fn read_depth(&self, ctx: &Context) -> Result<Vec<f32>> {
+        let n = self.plan.layers.len() * (self.settings.map_size as usize).pow(2);
+        Ok(self.depth.buffer.read::<f32>(ctx)?[..n].to_vec())
+    }
+}
+
+/// The shadow-map kernels.
+pub struct ShadowPass {
+    count: Pipeline<shadow_bin::Kernel>,
+    fill: Pipeline<shadow_bin::Kernel>,
+    scan: Pipeline<shadow_scan::Kernel>,
+    raster: Pipeline<shadow_raster::Kernel>,
+    moments: Pipeline<shadow_moments::Kernel>,
+}
+
+impl ShadowPass {
+    /// Builds the pipelines (the rasterizer's alpha test as the scene needs it).
+    pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
+        Ok(Self {
+            count: Pipeline::new(ctx, &shadow_bin::Spec { fill: false }, None)?,
+            fill: Pipeline::new(ctx, &shadow_bin::Spec { fill: true }, None)?,
+            scan: Pipeline::plain(ctx)?,
+            raster: Pipeline::for_scene(ctx, scene, &shadow_raster::Spec {})?,
+            moments: Pipeline::plain(ctx)?,
+        })
+    }
+
+    /// Records every layer of `maps` (and their moments when the method needs them), each
+    /// step behind a compute barrier. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        maps: &ShadowMaps,
+    ) -> Result<()> {
+        let device = ctx.device();
+        // SAFETY: recording into a command buffer in the recording state; the buffers outlive it.
+        unsafe {
+            device.cmd_fill_buffer(cmd, maps.tile_count.raw, 0, raw::WHOLE_SIZE, 0);
+            device.cmd_fill_buffer(cmd, maps.stats.raw, 0, raw::WHOLE_SIZE, 0);
+        }
+        barrier::transfer_to_compute(ctx, cmd);
+        let s = maps.settings.map_size;
+        let tiles = s.div_ceil(SHADOW_TILE);
+        let tri_count = scene.bvh_stats.references as u32;
+        let bins = shadow_bin::Resources {
+            bvh: &scene.bvh,
+            tile_count: &maps.tile_count,
+            tile_start: &maps.tile_start,
+            tile_tris: &maps.tile_tris,
+        };
+        for layer in &maps.plan.layers {
+            let params = ShadowRasterParams {
+                row0: layer.row0,
+                row1: layer.row1,
+                row2: layer.row2,
+                row3: layer.row3,
+                size: s,
+                tiles,
+                tri_count,
+                offset: layer.offset,
+                capacity: maps.capacity,
+                ..Default::default()
+            };
+            self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])?;
+            barrier::compute_to_compute(ctx, cmd);
+            let scan = shadow_scan::Resources {
+                tile_count: &maps.tile_count,
+                tile_start: &maps.tile_start,
+                stats: &maps.stats,
+            };
+            self.scan.record(cmd, &scan, &params, [256, 1, 1], [256, 1, 1])?;
+            barrier::compute_to_compute(ctx, cmd);
+            self.fill.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])?;
+            barrier::compute_to_compute(ctx, cmd);
+            let raster = shadow_raster::Resources {
+                scene,
+                tile_count: &maps.tile_count,
+                tile_start: &maps.tile_start,
+                tile_tris: &maps.tile_tris,
+                shadow_depth: &maps.depth,
+            };
+            let texels = tiles * SHADOW_TILE;
+            self.raster.record(cmd, &raster, &params, [texels, texels, 1], [SHADOW_TILE, SHADOW_TILE, 1])?;
+            barrier::compute_to_compute(ctx, cmd);
+        }
+        if maps.settings.method == ShadowMethod::Moments {
+            let resources = shadow_moments::Resources {
+                shadow_depth: &maps.depth,
+                moments_x: &maps.moments_x,
+                shadow_moments: &maps.moments,
+            };
+            for layer in &maps.plan.layers {
+                for direction in 0..2 {
+                    let params = ShadowMomentParams {
+                        offset: layer.offset,
+                        size: s,
+                        radius: maps.settings.moment_blur,
+                        direction,
+                        depth_far: layer.depth_far,
+                        ..Default::default()
+                    };
+                    self.moments.record(cmd, &resources, &params, [s, s, 1], [8, 8, 1])?;
+                    barrier::compute_to_compute(ctx, cmd);
+                }
+            }
+        }
+        Ok(())
+    }
+}

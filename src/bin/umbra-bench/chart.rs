@@ -13,13 +13,17 @@ const FONT: &[u8] = include_bytes!("fonts/DejaVuSans.ttf");
 const SIZE: (u32, u32) = (900, 600);
 
 /// Colours of the methods, in first-seen order.
-const COLOURS: [RGBColor; 6] = [
+const COLOURS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
     RGBColor(255, 127, 14),
     RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
 ];
 
 /// One point of a chart: a method at one setting.

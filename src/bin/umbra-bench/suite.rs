@@ -9,6 +9,10 @@
 //!   IBL × AO) at a sweep of shadow rays per pixel, also without SSAO and without IBL, and at a
 //!   sweep of SSAO kernel sizes; the time is the median over repeats of the sum of its per-frame
 //!   passes (the IBL precomputation, once per scene, is reported apart).
+//! - `hybrid, <filter> shadow maps` (scenes with punctual lights): the hybrid at 4 shadow rays
+//!   with its punctual lights shadowed by maps (hard, PCF, PCSS, moments) at a sweep of map
+//!   sizes; the time includes rendering the maps every frame (a moving light; a static one pays
+//!   only the lighting pass).
 //! - `ssao` and `rtao` on a second chart: ambient occlusion against a many-ray RTAO reference.
 //!
 //! A third chart per scene plots the mean LDR-FLIP (NVIDIA's perceptual difference of the
@@ -39,6 +43,8 @@ pub struct SuiteSettings {
     pub max_spp: u32,
     /// Shadow-ray counts of the hybrid sweeps.
     pub shadow_rays: Vec<u32>,
+    /// Shadow-map sizes of the hybrid's shadow-map series (scenes with punctual lights).
+    pub shadow_map_sizes: Vec<u32>,
     /// SSAO kernel sizes of the hybrid's SSAO sweep and of the AO chart.
     pub ssao_samples: Vec<u32>,
     /// RTAO ray counts of the AO chart.
@@ -228,16 +234,27 @@ pub fn run_scene(
     // SSAO kernel size at 4 shadow rays.
     let ssao = |samples| AoSettings { samples, radius: s.ao_radius, seed: 1, ..AoSettings::default() };
     let mut precompute_ms = Vec::new();
-    let mut sweeps: Vec<(&str, &'static str, u32, Option<AoSettings>, bool)> = Vec::new();
+    use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
+    let rt = ShadowSettings::default();
+    let mut sweeps: Vec<(String, &'static str, u32, Option<AoSettings>, bool, ShadowSettings)> = Vec::new();
     for &rays in &s.shadow_rays {
-        sweeps.push(("hybrid", "shadow_rays", rays, Some(ssao(16)), true));
-        sweeps.push(("hybrid, no SSAO", "shadow_rays", rays, None, true));
-        sweeps.push(("hybrid, no IBL", "shadow_rays", rays, Some(ssao(16)), false));
+        sweeps.push(("hybrid".into(), "shadow_rays", rays, Some(ssao(16)), true, rt));
+        sweeps.push(("hybrid, no SSAO".into(), "shadow_rays", rays, None, true, rt));
+        sweeps.push(("hybrid, no IBL".into(), "shadow_rays", rays, Some(ssao(16)), false, rt));
     }
     for &samples in &s.ssao_samples {
-        sweeps.push(("hybrid, SSAO sweep", "ssao_samples", samples, Some(ssao(samples)), true));
+        sweeps.push(("hybrid, SSAO sweep".into(), "ssao_samples", samples, Some(ssao(samples)), true, rt));
     }
-    for (method, unit, value, ao, ibl) in sweeps {
+    if renderer.scene().punctual_count > 0 {
+        for method in [ShadowMethod::Hard, ShadowMethod::Pcf, ShadowMethod::Pcss, ShadowMethod::Moments] {
+            for &map_size in &s.shadow_map_sizes {
+                let shadows = ShadowSettings { method, map_size, ..rt };
+                let label = format!("hybrid, {} shadow maps", method.name());
+                sweeps.push((label, "map_size", map_size, Some(ssao(16)), true, shadows));
+            }
+        }
+    }
+    for (method, unit, value, ao, ibl, shadows) in sweeps {
         let rays = if unit == "shadow_rays" { value } else { 4 };
         let settings = HybridSettings {
             size: s.size,
@@ -249,6 +266,7 @@ pub fn run_scene(
                 ..LightingSettings::default()
             },
             ao,
+            shadows,
             ..HybridSettings::default()
         };
         // The IBL tables and prefiltered maps are computed once per scene, not per frame.
@@ -263,7 +281,7 @@ pub fn run_scene(
         }
         let (rmse, rel_mse) = errors(&image.color, &reference);
         let flip = Some(flip_mean(&image.color, &reference, s.size));
-        points.push(Point { method: method.into(), unit, value, ms, rmse, rel_mse, flip });
+        points.push(Point { method, unit, value, ms, rmse, rel_mse, flip });
     }
     let title = format!("{} — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name);
     let stem = s.out.join(format!("suite-{key}"));

@@ -1,14 +1,19 @@
 #version 460
-// Shadow maps, binning: one invocation per BVH triangle enters it in the list of every tile of
-// the layer its box overlaps (`FILL`), or counts it there first (the two passes around
-// shadow_scan.comp's prefix sum). Triangles appear in BVH order, pieces of a presplit triangle
-// once each (they rasterize to the same depth).
+// Shadow maps, step 1 (`FILL` false) and 3 (`FILL` true), one invocation per BVH triangle
+// (pieces of a presplit triangle each once: they rasterize to the same depth). A triangle whose
+// texel box spans at most SHADOW_DIRECT_SPAN texels a side rasterizes itself in step 1: it
+// loops over its box and keeps the nearest depth of each covered texel in the scratch layer
+// with atomicMin on the float's bits (positive floats order as their bits). A larger one counts
+// itself into every tile its box overlaps and does not lie wholly outside of (step 1), then
+// enters itself in their lists and writes its edge functions and depths for shadow_raster.comp
+// (step 3, after shadow_scan.comp's prefix sum).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_bin.glsl"
 
 layout(local_size_x = 64) in;
 
-#include "bvh.glsl"
+const bool BECKMANN = false;
+#include "shading.glsl"
 #include "shadow_raster.glsl"
 
 void main() {
@@ -16,12 +21,51 @@ void main() {
     if (tri >= params.tri_count) {
         return;
     }
-    uvec4 range;
-    if (!shadow_tile_range(shadow_vertex(tri, 0u), shadow_vertex(tri, 1u), shadow_vertex(tri, 2u), range)) {
+    vec4 a = shadow_vertex(tri, 0u);
+    vec4 b = shadow_vertex(tri, 1u);
+    vec4 c = shadow_vertex(tri, 2u);
+    uvec4 box;
+    bool bounded;
+    if (!shadow_texel_box(a, b, c, box, bounded)) {
         return;
     }
+    vec3 e0;
+    vec3 e1;
+    vec3 e2;
+    if (!shadow_edges(a, b, c, e0, e1, e2)) {
+        return;
+    }
+    if (bounded && all(lessThan(box.zw - box.xy, uvec2(SHADOW_DIRECT_SPAN)))) {
+        if (FILL) {
+            return;
+        }
+        vec3 d = vec3(a.z, b.z, c.z);
+        for (uint y = box.y; y <= box.w; ++y) {
+            for (uint x = box.x; x <= box.z; ++x) {
+                float depth;
+                vec2 bary;
+                if (shadow_covers(e0, e1, e2, d, uvec2(x, y), depth, bary) && shadow_opaque(tri, bary, uvec2(x, y))) {
+                    atomicMin(shadow_scratch[y * params.size + x], floatBitsToUint(depth));
+                }
+            }
+        }
+        return;
+    }
+    if (FILL) {
+        tile_setup[3u * tri] = vec4(e0, a.z);
+        tile_setup[3u * tri + 1u] = vec4(e1, b.z);
+        tile_setup[3u * tri + 2u] = vec4(e2, c.z);
+    }
+    uvec4 range = box / SHADOW_TILE;
     for (uint ty = range.y; ty <= range.w; ++ty) {
         for (uint tx = range.x; tx <= range.z; ++tx) {
+            // Skip a tile wholly outside one edge (at all four corner texel centres: the edge
+            // function is linear, so at every centre between them too).
+            vec2 lo = vec2(uvec2(tx, ty) * SHADOW_TILE) + 0.5;
+            vec2 hi = lo + float(SHADOW_TILE - 1u);
+            if (shadow_edge_outside(e0, lo, hi) || shadow_edge_outside(e1, lo, hi) || shadow_edge_outside(e2, lo, hi)) {
+                continue;
+            }
             uint t = ty * params.tiles + tx;
             if (FILL) {
                 uint slot = tile_start[t] + atomicAdd(tile_count[t], 1u);

@@ -407,22 +407,37 @@ impl Passes {
         maps: &ShadowMaps,
     ) -> Result<()> {
         self.check(scene)?;
-        self.shadow_pass(scene)?.record(&self.ctx, cmd, scene, maps)
+        self.shadow_pass(scene)?.record(&self.ctx, cmd, scene, maps, None)
     }
 
     /// Renders `maps` now (submits and waits), growing their tile lists and rendering again
-    /// when they overflowed; returns the GPU milliseconds of the last rendering.
-    pub fn render_shadow_maps(&self, scene: &GpuScene, maps: &mut ShadowMaps) -> Result<f64> {
+    /// when they overflowed; returns the GPU milliseconds of each step of the last rendering
+    /// (summed over the layers, by kernel).
+    pub fn render_shadow_maps(&self, scene: &GpuScene, maps: &mut ShadowMaps) -> Result<Vec<(String, f64)>> {
         let ctx = &self.ctx;
+        self.check(scene)?;
         for _ in 0..2 {
-            let mut timer = GpuTimer::new(ctx, 1)?;
+            let mut timer = GpuTimer::new(ctx, ShadowPass::timer_entries(maps))?;
             ctx.submit(|cmd| {
                 timer.reset(cmd);
-                timed(&mut Some(&mut timer), cmd, "shadow_maps", || self.record_shadow_maps(cmd, scene, maps))
+                self.shadow_pass(scene)?.record(ctx, cmd, scene, maps, Some(&mut timer))
             })?;
-            let ms = timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+            let mut steps: Vec<(String, f64)> = Vec::new();
+            for t in timer.read()? {
+                match steps.iter_mut().find(|(name, _)| *name == t.name) {
+                    Some(step) => step.1 += t.ms,
+                    None => steps.push((t.name, t.ms)),
+                }
+            }
+            let stats = maps.stats(ctx)?;
+            log::debug!(
+                "shadow maps: {} layers, at most {} tile-list entries and {} triangles in a tile per layer",
+                maps.plan.layers.len(),
+                stats.entries,
+                stats.tile_max
+            );
             match maps.check(ctx)? {
-                None => return Ok(ms),
+                None => return Ok(steps),
                 Some(entries) => maps.reserve(ctx, entries)?,
             }
         }
@@ -623,10 +638,10 @@ impl Passes {
             }
             None => None,
         };
-        let mut shadow_ms = None;
+        let mut shadow_ms = Vec::new();
         let shadows = if settings.shadows.method.uses_maps() {
             let mut maps = self.shadow_maps(scene, camera, size, &settings.shadows)?;
-            shadow_ms = Some(self.render_shadow_maps(scene, &mut maps)?);
+            shadow_ms = self.render_shadow_maps(scene, &mut maps)?;
             Some(maps)
         } else {
             None
@@ -651,10 +666,8 @@ impl Passes {
             ibl.record(ctx, cmd, scene, Some(&mut timer))?;
             self.record_hybrid(cmd, scene, &ibl, camera, &targets, settings, Some(&mut timer))
         })?;
-        let mut pass_ms: Vec<(String, f64)> = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
-        if let Some(ms) = shadow_ms {
-            pass_ms.insert(0, ("shadow_maps".to_string(), ms));
-        }
+        let mut pass_ms = shadow_ms;
+        pass_ms.extend(timer.read()?.into_iter().map(|t| (t.name, t.ms)));
         Ok(HybridImage {
             size,
             color: output.read(ctx)?,

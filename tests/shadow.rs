@@ -108,72 +108,98 @@ fn texel_ray(l: &GpuShadowLayer, px: f32, py: f32) -> (Ray, f32) {
 /// the depth of the first surface a ray from the light through the texel's centre meets in the
 /// BVH (the reference), within 1e-4 of the depth plus 1e-5 of the layer's range; where they
 /// differ, a ray 1e-3 texel away must agree (the centre lies on an edge: ties may go either
-/// way), and such texels are under 0.5 %.
+/// way) or the ray's triangle is within 3° of edge-on, and such texels are under 0.5 %. Two scenes: textured.glb (large triangles: the tiled
+/// path) and a floor, a box and an icosphere (small triangles too: each rasterizes itself).
 #[test]
 fn rasterized_depth_matches_rays_through_the_bvh() {
     let gpu = Gpu::new();
-    let mut scene =
+    let sun = light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.3, -1.0, 0.2), 2.0);
+    let mut textured =
         Scene::load(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/textured.glb")))
             .unwrap();
-    scene.lights.push(light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.3, -1.0, 0.2), 2.0));
-    let kinds: Vec<_> = scene.lights.iter().map(|l| l.kind).collect();
+    textured.lights.push(sun.clone());
+    let kinds: Vec<_> = textured.lights.iter().map(|l| l.kind).collect();
     assert!(kinds.contains(&LightKind::Point) && kinds.contains(&LightKind::Spot), "{kinds:?}");
-    let arrays = SceneArrays::new(&scene).unwrap();
-    let gpu_scene = GpuScene::from_arrays(&gpu, &arrays).unwrap();
-    let passes = Passes::new(&gpu, &gpu_scene);
-    let settings = ShadowSettings {
-        method: ShadowMethod::Hard,
-        map_size: 96,
-        cascades: 2,
-        max_radius: 4.0,
-        ..Default::default()
-    };
-    let cam = scene.camera(None).unwrap();
-    let mut maps = passes.shadow_maps(&gpu_scene, &cam, (64, 64), &settings).unwrap();
-    passes.render_shadow_maps(&gpu_scene, &mut maps).unwrap();
-    let depth = maps.read_depth(&gpu).unwrap();
-    let s = settings.map_size as usize;
-    let (mut covered, mut edges, mut bad) = (0, 0, Vec::new());
-    for (li, l) in maps.plan.layers.iter().enumerate() {
-        let tolerance = |d: f32| 1e-4 * d.abs() + 1e-5 * l.depth_far;
-        let cast = |px: f32, py: f32| {
-            let (ray, scale) = texel_ray(l, px, py);
-            arrays.bvh.closest(&ray).map_or(f32::INFINITY, |h| (h.t * scale).max(0.0))
+    let mixed = build(
+        "mixed",
+        &[
+            quad(Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -2.0)),
+            cuboid(Vec3::new(-1.0, 0.0, -0.2), Vec3::new(-0.4, 0.7, 0.4)),
+            umbra::procedural::icosphere(3, Vec3::new(0.6, 0.5, 0.1), 0.45).soup(),
+        ],
+        vec![
+            light(LightKind::Point, Vec3::new(0.2, 1.6, 0.9), Vec3::NEG_Y, 5.0),
+            light(LightKind::Spot, Vec3::new(-1.5, 2.0, 1.5), Vec3::new(0.6, -0.8, -0.6), 5.0),
+            sun,
+        ],
+        camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
+    );
+    for scene in [textured, mixed] {
+        let arrays = SceneArrays::new(&scene).unwrap();
+        let gpu_scene = GpuScene::from_arrays(&gpu, &arrays).unwrap();
+        let passes = Passes::new(&gpu, &gpu_scene);
+        let settings = ShadowSettings {
+            method: ShadowMethod::Hard,
+            map_size: 96,
+            cascades: 2,
+            max_radius: 4.0,
+            ..Default::default()
         };
-        for y in 0..s {
-            for x in 0..s {
-                let got = depth[li * s * s + y * s + x];
-                let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
-                let want = cast(cx, cy);
-                covered += want.is_finite() as usize;
-                let agree =
-                    |w: f32| (got.is_infinite() && w.is_infinite()) || (got - w).abs() <= tolerance(w);
-                if agree(want) {
-                    continue;
-                }
-                let near = [(1e-3, 0.0), (-1e-3, 0.0), (0.0, 1e-3), (0.0, -1e-3)];
-                if near.iter().any(|(dx, dy)| agree(cast(cx + dx, cy + dy))) {
-                    edges += 1;
-                } else {
-                    bad.push((li, x, y, got, want));
+        let cam = scene.camera(None).unwrap();
+        let mut maps = passes.shadow_maps(&gpu_scene, &cam, (64, 64), &settings).unwrap();
+        passes.render_shadow_maps(&gpu_scene, &mut maps).unwrap();
+        let depth = maps.read_depth(&gpu).unwrap();
+        let s = settings.map_size as usize;
+        let (mut covered, mut edges, mut bad) = (0, 0, Vec::new());
+        for (li, l) in maps.plan.layers.iter().enumerate() {
+            let tolerance = |d: f32| 1e-4 * d.abs() + 1e-5 * l.depth_far;
+            let hit = |px: f32, py: f32| {
+                let (ray, scale) = texel_ray(l, px, py);
+                arrays.bvh.closest(&ray).map_or((f32::INFINITY, 1.0), |h| {
+                    let [a, b, c] = arrays.bvh.tris[h.tri as usize].vertices();
+                    let cos = (b - a).cross(c - a).normalize_or_zero().dot(ray.dir.normalize()).abs();
+                    ((h.t * scale).max(0.0), cos)
+                })
+            };
+            let cast = |px: f32, py: f32| hit(px, py).0;
+            for y in 0..s {
+                for x in 0..s {
+                    let got = depth[li * s * s + y * s + x];
+                    let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let (want, cos) = hit(cx, cy);
+                    covered += want.is_finite() as usize;
+                    let agree =
+                        |w: f32| (got.is_infinite() && w.is_infinite()) || (got - w).abs() <= tolerance(w);
+                    if agree(want) {
+                        continue;
+                    }
+                    let near = [(1e-3, 0.0), (-1e-3, 0.0), (0.0, 1e-3), (0.0, -1e-3)];
+                    // On an edge, or on a triangle seen within 3° of edge-on (whose depth
+                    // changes by tens of texels' worth across one texel).
+                    if cos < 0.05 || near.iter().any(|(dx, dy)| agree(cast(cx + dx, cy + dy))) {
+                        edges += 1;
+                    } else {
+                        bad.push((li, x, y, got, want));
+                    }
                 }
             }
         }
+        eprintln!(
+            "{}: {} layers of {s}²: {covered} texels covered, {edges} on edges, {} wrong",
+            scene.name,
+            maps.plan.layers.len(),
+            bad.len()
+        );
+        assert_eq!(maps.plan.layers.len(), 6 + 1 + 2, "a cube, a spot map, two cascades");
+        assert!(covered > s * s, "too little geometry in the maps: {covered}");
+        assert!(
+            bad.is_empty(),
+            "{} texels differ from the ray cast, e.g. {:?}",
+            bad.len(),
+            &bad[..bad.len().min(5)]
+        );
+        assert!(edges * 200 < covered, "{edges} edge texels of {covered}");
     }
-    eprintln!(
-        "{} layers of {s}²: {covered} texels covered, {edges} on edges, {} wrong",
-        maps.plan.layers.len(),
-        bad.len()
-    );
-    assert_eq!(maps.plan.layers.len(), 6 + 1 + 2, "a cube, a spot map, two cascades");
-    assert!(covered > s * s, "too little geometry in the maps: {covered}");
-    assert!(
-        bad.is_empty(),
-        "{} texels differ from the ray cast, e.g. {:?}",
-        bad.len(),
-        &bad[..bad.len().min(5)]
-    );
-    assert!(edges * 200 < covered, "{edges} edge texels of {covered}");
 }
 
 /// A closed icosphere (5,120 triangles sharing bit-identical vertices) leaves no texel inside

@@ -614,6 +614,9 @@ gpu_constants! {
     SHADOW_LIGHT_CASCADES: uint = 3;
     /// Side of a shadow rasterizer tile in texels (its workgroup is one tile).
     SHADOW_TILE: uint = 16;
+    /// The largest box (texels a side) a triangle rasterizes itself in: smaller ones loop over
+    /// their own texels, larger ones go through the tiles.
+    SHADOW_DIRECT_SPAN: uint = 16;
     /// Texels of `shadow_texels` before the lights' records: the filter settings.
     SHADOW_HEADER_TEXELS: uint = 2;
     /// The G-buffer's material index where no surface was hit.
@@ -850,10 +853,12 @@ kernels! {
         }
     }
 
-    /// Shadow maps, step 1 and 3: each triangle counts itself into (`fill` false) or enters
-    /// itself in (`fill` true) the list of every tile its light-space box overlaps.
+    /// Shadow maps, step 1 and 3: a triangle whose box in the layer spans at most
+    /// [`SHADOW_DIRECT_SPAN`] texels a side rasterizes itself (step 1, `atomicMin` into the
+    /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
+    /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: bvh,
+        scene: full [textures, alpha],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -863,6 +868,11 @@ kernels! {
             tile_start: readwrite buffer [uint],
             /// The lists: triangle indices in BVH order.
             tile_tris: readwrite buffer [uint],
+            /// One layer's depth bits from the small triangles (infinity's bits where none).
+            shadow_scratch: readwrite buffer [uint],
+            /// Per large triangle (by BVH index) its oriented edge functions and vertex depths,
+            /// three `vec4`s (written by the fill, step 3).
+            tile_setup: readwrite buffer [vec4],
         }
     }
 
@@ -894,6 +904,10 @@ kernels! {
             tile_start: readonly buffer [uint],
             /// The lists.
             tile_tris: readonly buffer [uint],
+            /// `shadow_bin`'s `tile_setup`, read as RGBA32F texels.
+            setup_texels: readonly texels rgba32f,
+            /// The small triangles' depth bits (read, then reset to infinity's for the next layer).
+            shadow_scratch: readwrite buffer [uint],
             /// The map: linear depth per texel (infinity where nothing is).
             shadow_depth: writeonly texels r32f,
         }

@@ -31,7 +31,7 @@ use crate::gpu::layout::{
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Buffer, Context, TexelBuffer};
+use crate::vk::{barrier, raw, Buffer, Context, GpuTimer, TexelBuffer};
 use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 
@@ -386,6 +386,10 @@ pub struct ShadowMaps {
     tile_count: Buffer,
     tile_start: Buffer,
     tile_tris: Buffer,
+    /// One layer of depth bits for the small triangles' `atomicMin`.
+    scratch: Buffer,
+    /// The large triangles' edge functions and depths (three `vec4` each).
+    setup: TexelBuffer,
     stats: Buffer,
     capacity: u32,
 }
@@ -406,7 +410,7 @@ impl ShadowMaps {
             )));
         }
         let tiles = (settings.map_size.div_ceil(SHADOW_TILE) as u64).pow(2);
-        let capacity = (4 * triangles as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
+        let capacity = (8 * triangles as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
         let texels = TexelBuffer::upload(
             ctx,
             "shadow records",
@@ -415,6 +419,7 @@ impl ShadowMaps {
             16,
         )?;
         let f32x4 = raw::Format::R32G32B32A32_SFLOAT;
+        let no_usage = raw::BufferUsageFlags::empty();
         let moment_texels = if moments { layers * s * s } else { 1 };
         let storage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
         let stats = Buffer::new(
@@ -427,9 +432,16 @@ impl ShadowMaps {
         Ok(Self {
             settings: *settings,
             texels,
-            depth: TexelBuffer::new(ctx, "shadow depth", layers * s * s, raw::Format::R32_SFLOAT, 4)?,
-            moments_x: TexelBuffer::new(ctx, "shadow moments x", moment_texels, f32x4, 16)?,
-            moments: TexelBuffer::new(ctx, "shadow moments", moment_texels, f32x4, 16)?,
+            depth: TexelBuffer::new(
+                ctx,
+                "shadow depth",
+                layers * s * s,
+                raw::Format::R32_SFLOAT,
+                4,
+                no_usage,
+            )?,
+            moments_x: TexelBuffer::new(ctx, "shadow moments x", moment_texels, f32x4, 16, no_usage)?,
+            moments: TexelBuffer::new(ctx, "shadow moments", moment_texels, f32x4, 16, no_usage)?,
             tile_count: Buffer::new(ctx, "shadow tile counts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
             tile_start: Buffer::new(ctx, "shadow tile starts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
             tile_tris: Buffer::new(
@@ -438,6 +450,15 @@ impl ShadowMaps {
                 4 * capacity as u64,
                 storage,
                 MemoryLocation::GpuOnly,
+            )?,
+            scratch: Buffer::new(ctx, "shadow scratch layer", 4 * s * s, storage, MemoryLocation::GpuOnly)?,
+            setup: TexelBuffer::new(
+                ctx,
+                "shadow triangle set-ups",
+                3 * triangles as u64,
+                f32x4,
+                16,
+                raw::BufferUsageFlags::STORAGE_BUFFER,
             )?,
             stats,
             capacity,
@@ -508,38 +529,59 @@ impl ShadowPass {
     /// Builds the pipelines (the rasterizer's alpha test as the scene needs it).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
         Ok(Self {
-            count: Pipeline::new(ctx, &shadow_bin::Spec { fill: false }, None)?,
-            fill: Pipeline::new(ctx, &shadow_bin::Spec { fill: true }, None)?,
+            count: Pipeline::for_scene(ctx, scene, &shadow_bin::Spec { fill: false })?,
+            fill: Pipeline::for_scene(ctx, scene, &shadow_bin::Spec { fill: true })?,
             scan: Pipeline::plain(ctx)?,
             raster: Pipeline::for_scene(ctx, scene, &shadow_raster::Spec {})?,
             moments: Pipeline::plain(ctx)?,
         })
     }
 
+    /// Timer entries [`ShadowPass::record`] uses for `maps`: one per step and layer.
+    pub fn timer_entries(maps: &ShadowMaps) -> u32 {
+        maps.plan.layers.len() as u32 * 6
+    }
+
     /// Records every layer of `maps` (and their moments when the method needs them), each
-    /// step behind a compute barrier. Never submits.
+    /// step behind a compute barrier, each timed under its kernel's name into `timer` when
+    /// given (room for [`ShadowPass::timer_entries`]). Never submits.
     pub fn record(
         &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
         scene: &GpuScene,
         maps: &ShadowMaps,
+        mut timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
+        let mut step = |name: &str, record: &mut dyn FnMut() -> Result<()>| -> Result<()> {
+            if let Some(t) = timer.as_deref_mut() {
+                t.begin(cmd, name)?;
+            }
+            record()?;
+            barrier::compute_to_compute(ctx, cmd);
+            if let Some(t) = timer.as_deref_mut() {
+                t.end(cmd)?;
+            }
+            Ok(())
+        };
         let device = ctx.device();
         // SAFETY: recording into a command buffer in the recording state; the buffers outlive it.
         unsafe {
             device.cmd_fill_buffer(cmd, maps.tile_count.raw, 0, raw::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, maps.stats.raw, 0, raw::WHOLE_SIZE, 0);
+            device.cmd_fill_buffer(cmd, maps.scratch.raw, 0, raw::WHOLE_SIZE, f32::INFINITY.to_bits());
         }
         barrier::transfer_to_compute(ctx, cmd);
         let s = maps.settings.map_size;
         let tiles = s.div_ceil(SHADOW_TILE);
         let tri_count = scene.bvh_stats.references as u32;
         let bins = shadow_bin::Resources {
-            bvh: &scene.bvh,
+            scene,
             tile_count: &maps.tile_count,
             tile_start: &maps.tile_start,
             tile_tris: &maps.tile_tris,
+            shadow_scratch: &maps.scratch,
+            tile_setup: &maps.setup.buffer,
         };
         for layer in &maps.plan.layers {
             let params = ShadowRasterParams {
@@ -554,27 +596,31 @@ impl ShadowPass {
                 capacity: maps.capacity,
                 ..Default::default()
             };
-            self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            step("shadow_bin", &mut || {
+                self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])
+            })?;
             let scan = shadow_scan::Resources {
                 tile_count: &maps.tile_count,
                 tile_start: &maps.tile_start,
                 stats: &maps.stats,
             };
-            self.scan.record(cmd, &scan, &params, [256, 1, 1], [256, 1, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
-            self.fill.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            step("shadow_scan", &mut || self.scan.record(cmd, &scan, &params, [256, 1, 1], [256, 1, 1]))?;
+            step("shadow_fill", &mut || {
+                self.fill.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])
+            })?;
             let raster = shadow_raster::Resources {
                 scene,
                 tile_count: &maps.tile_count,
                 tile_start: &maps.tile_start,
                 tile_tris: &maps.tile_tris,
+                setup_texels: &maps.setup,
+                shadow_scratch: &maps.scratch,
                 shadow_depth: &maps.depth,
             };
             let texels = tiles * SHADOW_TILE;
-            self.raster.record(cmd, &raster, &params, [texels, texels, 1], [SHADOW_TILE, SHADOW_TILE, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            step("shadow_raster", &mut || {
+                self.raster.record(cmd, &raster, &params, [texels, texels, 1], [SHADOW_TILE, SHADOW_TILE, 1])
+            })?;
         }
         if maps.settings.method == ShadowMethod::Moments {
             let resources = shadow_moments::Resources {
@@ -592,8 +638,9 @@ impl ShadowPass {
                         depth_far: layer.depth_far,
                         ..Default::default()
                     };
-                    self.moments.record(cmd, &resources, &params, [s, s, 1], [8, 8, 1])?;
-                    barrier::compute_to_compute(ctx, cmd);
+                    step("shadow_moments", &mut || {
+                        self.moments.record(cmd, &resources, &params, [s, s, 1], [8, 8, 1])
+                    })?;
                 }
             }
         }

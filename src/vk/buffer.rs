@@ -147,9 +147,19 @@ impl TexelBuffer {
     }
 
     /// A device-local texel buffer of `texels` (at least one) `format` texels of `texel_bytes`
-    /// bytes each, contents undefined until a kernel or a copy writes them.
-    pub fn new(ctx: &Context, name: &str, texels: u64, format: vk::Format, texel_bytes: u64) -> Result<Self> {
-        let usage = vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER
+    /// bytes each, contents undefined until a kernel or a copy writes them; `usage` adds to the
+    /// texel-buffer and transfer usages (`STORAGE_BUFFER`: a kernel may also bind
+    /// [`TexelBuffer::buffer`] as a storage buffer).
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        texels: u64,
+        format: vk::Format,
+        texel_bytes: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Self> {
+        let usage = usage
+            | vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let buffer = Buffer::new(ctx, name, texels.max(1) * texel_bytes, usage, MemoryLocation::GpuOnly)?;

@@ -235,26 +235,35 @@ pub fn run_scene(
     let ssao = |samples| AoSettings { samples, radius: s.ao_radius, seed: 1, ..AoSettings::default() };
     let mut precompute_ms = Vec::new();
     use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
+    /// One hybrid setting: its series, what its value counts, the value, SSAO, IBL, shadows.
+    struct Sweep(String, &'static str, u32, Option<AoSettings>, bool, ShadowSettings);
     let rt = ShadowSettings::default();
-    let mut sweeps: Vec<(String, &'static str, u32, Option<AoSettings>, bool, ShadowSettings)> = Vec::new();
+    let mut sweeps: Vec<Sweep> = Vec::new();
     for &rays in &s.shadow_rays {
-        sweeps.push(("hybrid".into(), "shadow_rays", rays, Some(ssao(16)), true, rt));
-        sweeps.push(("hybrid, no SSAO".into(), "shadow_rays", rays, None, true, rt));
-        sweeps.push(("hybrid, no IBL".into(), "shadow_rays", rays, Some(ssao(16)), false, rt));
+        sweeps.push(Sweep("hybrid".into(), "shadow_rays", rays, Some(ssao(16)), true, rt));
+        sweeps.push(Sweep("hybrid, no SSAO".into(), "shadow_rays", rays, None, true, rt));
+        sweeps.push(Sweep("hybrid, no IBL".into(), "shadow_rays", rays, Some(ssao(16)), false, rt));
     }
     for &samples in &s.ssao_samples {
-        sweeps.push(("hybrid, SSAO sweep".into(), "ssao_samples", samples, Some(ssao(samples)), true, rt));
+        sweeps.push(Sweep(
+            "hybrid, SSAO sweep".into(),
+            "ssao_samples",
+            samples,
+            Some(ssao(samples)),
+            true,
+            rt,
+        ));
     }
     if renderer.scene().punctual_count > 0 {
         for method in [ShadowMethod::Hard, ShadowMethod::Pcf, ShadowMethod::Pcss, ShadowMethod::Moments] {
             for &map_size in &s.shadow_map_sizes {
                 let shadows = ShadowSettings { method, map_size, ..rt };
                 let label = format!("hybrid, {} shadow maps", method.name());
-                sweeps.push((label, "map_size", map_size, Some(ssao(16)), true, shadows));
+                sweeps.push(Sweep(label, "map_size", map_size, Some(ssao(16)), true, shadows));
             }
         }
     }
-    for (method, unit, value, ao, ibl, shadows) in sweeps {
+    for Sweep(method, unit, value, ao, ibl, shadows) in sweeps {
         let rays = if unit == "shadow_rays" { value } else { 4 };
         let settings = HybridSettings {
             size: s.size,

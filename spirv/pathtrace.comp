@@ -21,6 +21,16 @@ float mis_weight(float a, float b) {
     return a / (a + b);
 }
 
+// The MIS weight of emission that BSDF sampling found (density a) against light sampling
+// (density b). UNWEIGHTED_BSDF_HITS (the `testing` feature's deliberately biased variant) leaves
+// it out: such emission counts fully, on top of light sampling's weighted share.
+float bsdf_hit_weight(float a, float b) {
+    if (UNWEIGHTED_BSDF_HITS) {
+        return 1.0;
+    }
+    return mis_weight(a, b);
+}
+
 // Non-finite sources (PathStats.nonfinite_sources bits): the stages whose contribution (or, for
 // BSDF sampling, weight and pdf) was NaN or Inf.
 const uint NONFINITE_ENVIRONMENT = 1u;
@@ -64,7 +74,7 @@ void main() {
             if (HAS_ENV_MAP) {
                 float w = 1.0;
                 if (params.env_nee != 0u && prev_pdf > 0.0) {
-                    w = mis_weight(prev_pdf, env_pdf(dir, params.env_size));
+                    w = bsdf_hit_weight(prev_pdf, env_pdf(dir, params.env_size));
                 }
                 vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
                 radiance += c;
@@ -88,7 +98,7 @@ void main() {
             float w = 1.0;
             if (HAS_LIGHTS && prev_pdf > 0.0) {
                 float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
-                w = mis_weight(prev_pdf, light_pdf);
+                w = bsdf_hit_weight(prev_pdf, light_pdf);
             }
             vec3 c = throughput * le * w;
             radiance += c;

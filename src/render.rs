@@ -181,12 +181,18 @@ pub struct Passes {
     rtao: OnceLock<RtaoPass>,
     tonemap: OnceLock<TonemapPass>,
     /// One per (microfacet, heuristic), index [`path_index`].
-    path: [OnceLock<PathTracePass>; 4],
+    path: [OnceLock<PathTracePass>; 6],
     resolve: OnceLock<ResolvePass>,
 }
 
 fn path_index(microfacet: Microfacet, heuristic: Heuristic) -> usize {
-    (microfacet == Microfacet::Beckmann) as usize * 2 + (heuristic == Heuristic::Balance) as usize
+    let heuristic = match heuristic {
+        Heuristic::Power => 0,
+        Heuristic::Balance => 1,
+        #[cfg(feature = "testing")]
+        Heuristic::UnweightedBsdfHits => 2,
+    };
+    (microfacet == Microfacet::Beckmann) as usize * 3 + heuristic
 }
 
 impl Passes {

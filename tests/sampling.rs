@@ -11,7 +11,7 @@
 
 mod common;
 
-use common::Gpu;
+use common::{gamma_q, Gpu};
 use glam::Vec3;
 use umbra::gpu::kernels::{light_sample_test, sample_test};
 use umbra::gpu::layout::{LightTestParams, SampleTestParams};
@@ -117,68 +117,6 @@ fn cell_of(d: Vec3) -> usize {
     let phi = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
     let p = ((phi / std::f32::consts::TAU * PHI_CELLS as f32) as usize).min(PHI_CELLS - 1);
     t * PHI_CELLS + p
-}
-
-/// Regularised upper incomplete gamma Q(a, x) (Numerical Recipes' gammq).
-fn gamma_q(a: f64, x: f64) -> f64 {
-    let ln_gamma = |z: f64| {
-        // Lanczos approximation (g = 7, n = 9).
-        const C: [f64; 9] = [
-            0.999_999_999_999_809_9,
-            676.520_368_121_885_1,
-            -1_259.139_216_722_402_8,
-            771.323_428_777_653_1,
-            -176.615_029_162_140_6,
-            12.507_343_278_686_905,
-            -0.138_571_095_265_720_12,
-            9.984_369_578_019_572e-6,
-            1.505_632_735_149_311_6e-7,
-        ];
-        let z = z - 1.0;
-        let mut s = C[0];
-        for (i, c) in C.iter().enumerate().skip(1) {
-            s += c / (z + i as f64);
-        }
-        let t = z + 7.5;
-        0.5 * (2.0 * std::f64::consts::PI).ln() + (z + 0.5) * t.ln() - t + s.ln()
-    };
-    if x <= 0.0 {
-        return 1.0;
-    }
-    if x < a + 1.0 {
-        let (mut sum, mut term, mut n) = (1.0 / a, 1.0 / a, a);
-        for _ in 0..10_000 {
-            n += 1.0;
-            term *= x / n;
-            sum += term;
-            if term.abs() < sum.abs() * 1e-15 {
-                break;
-            }
-        }
-        1.0 - sum * (-x + a * x.ln() - ln_gamma(a)).exp()
-    } else {
-        // Lentz's continued fraction.
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..10_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            d = if d.abs() < tiny { tiny } else { d };
-            c = b + an / c;
-            c = if c.abs() < tiny { tiny } else { c };
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-15 {
-                break;
-            }
-        }
-        (-x + a * x.ln() - ln_gamma(a)).exp() * h
-    }
 }
 
 /// The chi-square p-value of `sampler`'s samples against its (possibly deliberately wrong) pdf,

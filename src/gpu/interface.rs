@@ -656,7 +656,7 @@ kernels! {
     kernel pathtrace {
         scene: full [lights, punctual, env_map, textures, transmission, alpha],
         push: PathParams,
-        spec: { beckmann: bool = false, power_heuristic: bool = true },
+        spec: { beckmann: bool = false, power_heuristic: bool = true, unweighted_bsdf_hits: bool = false },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).
             accum: readwrite buffer [vec4],

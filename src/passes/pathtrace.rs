@@ -27,6 +27,11 @@ pub enum Heuristic {
     Power,
     /// The balance heuristic.
     Balance,
+    /// Deliberately biased, for tests that must catch it: emission found by BSDF sampling
+    /// counts without its MIS weight (light sampling keeps its power-heuristic weight).
+    #[cfg(feature = "testing")]
+    #[doc(hidden)]
+    UnweightedBsdfHits,
 }
 
 /// Settings of a path-traced render.
@@ -128,7 +133,11 @@ impl PathTracePass {
     ) -> Result<Self> {
         let spec = pathtrace::Spec {
             beckmann: microfacet == Microfacet::Beckmann,
-            power_heuristic: heuristic == Heuristic::Power,
+            power_heuristic: heuristic != Heuristic::Balance,
+            #[cfg(feature = "testing")]
+            unweighted_bsdf_hits: heuristic == Heuristic::UnweightedBsdfHits,
+            #[cfg(not(feature = "testing"))]
+            unweighted_bsdf_hits: false,
         };
         Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)? })
     }

@@ -29,6 +29,20 @@ pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
     }
 }
 
+/// Parses `X,Y,Z`: a direction (three finite numbers, not all zero).
+#[allow(dead_code)] // one binary uses it
+pub fn parse_direction(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("'{s}': {e}"))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) && v.iter().any(|c| *c != 0.0) => Ok([*x, *y, *z]),
+        _ => Err(format!("'{s}' is not a direction X,Y,Z (three finite numbers, not all zero)")),
+    }
+}
+
 /// Parses a finite number (NaN and the infinities refused).
 pub fn parse_finite(s: &str) -> Result<f32, String> {
     let x: f32 = s.trim().parse().map_err(|e| format!("'{s}': {e}"))?;

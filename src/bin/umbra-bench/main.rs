@@ -10,6 +10,7 @@ mod chart;
 mod cli;
 mod passes;
 mod rays;
+mod shadows;
 mod suite;
 
 use anyhow::{Context as _, Result};
@@ -114,6 +115,35 @@ enum Command {
         /// Where to write passes.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
+    },
+    /// Shadow maps against shadow rays on one scene: the maps' GPU time by step, the lighting
+    /// pass with each filter, and each lit image's error against the ray-traced one (JSON and a
+    /// Markdown table).
+    Shadows {
+        /// A glTF scene (its first camera, or one framing it); the Cornell box when absent.
+        scene: Option<PathBuf>,
+        /// Image size.
+        #[arg(long, default_value = "1920x1080", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Width = height of each map layer.
+        #[arg(long, default_value_t = 2048)]
+        map_size: u32,
+        /// Cascades of a directional light.
+        #[arg(long, default_value_t = 4)]
+        cascades: u32,
+        /// Add a sun shining along X,Y,Z (added anyway, along 0.25,-1,0.15, to a scene without
+        /// punctual lights).
+        #[arg(long, value_parser = cli::parse_direction)]
+        sun: Option<[f32; 3]>,
+        /// Timed repeats (after a warm-up).
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Where to write shadows.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
     },
     /// BVH build time and SAH cost only (CPU, no Vulkan): the generated terrains of `rays` and
     /// any glTF files, built repeatedly; prints the median and fastest build.
@@ -306,6 +336,16 @@ fn run(cli: Cli) -> Result<()> {
         Command::Passes { scene, size, repeats, shadow_rays, out } => {
             run_passes(scene, size, repeats, shadow_rays, out)?
         }
+        Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {
+            Some(path) => {
+                let text =
+                    std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+                let doc: serde_json::Value =
+                    serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+                print!("{}", shadows::table(&doc));
+            }
+            None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
+        },
         Command::Suite {
             quick,
             size,
@@ -489,6 +529,71 @@ fn run_passes(
         "shadow_rays": shadow_rays,
         "passes": timings.iter().map(|t| json!({"pass": t.name, "median_ms": t.median_ms, "min_ms": t.min_ms})).collect::<Vec<_>>(),
     });
+    std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+fn run_shadows(
+    scene: Option<PathBuf>,
+    size: (u32, u32),
+    map_size: u32,
+    cascades: u32,
+    sun: Option<[f32; 3]>,
+    repeats: usize,
+    out: PathBuf,
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    let mut loaded = match &scene {
+        Some(path) => umbra::scene::Scene::load(path)?,
+        None => umbra::scene::Scene::cornell_box(),
+    };
+    if sun.is_some() || loaded.lights.is_empty() {
+        let direction = Vec3::from(sun.unwrap_or([0.25, -1.0, 0.15])).normalize();
+        loaded.lights.push(umbra::scene::Light {
+            name: "sun".into(),
+            kind: umbra::scene::LightKind::Directional,
+            position: [0.0; 3],
+            direction: direction.into(),
+            color: [1.0; 3],
+            intensity: 5.0,
+            range: None,
+            inner_cone_angle: 0.0,
+            outer_cone_angle: std::f32::consts::PI,
+        });
+    }
+    let camera = bench_camera(&loaded);
+    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
+    let settings = umbra::passes::shadow::ShadowSettings { map_size, cascades, ..Default::default() };
+    let layers = umbra::passes::shadow::ShadowPlan::new(
+        &gpu_scene.punctual_lights,
+        gpu_scene.bounds,
+        &camera,
+        size,
+        &settings,
+    )?
+    .layers
+    .len();
+    let timings = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, &settings)?;
+    let doc = shadows::to_json(
+        &ctx.info().name,
+        &loaded.name,
+        gpu_scene.bvh_stats.triangles,
+        size,
+        &settings,
+        layers,
+        &timings,
+    );
+    print!("{}", shadows::table(&doc));
+    for t in &timings {
+        let steps: Vec<String> = t.steps.iter().map(|(name, ms)| format!("{name} {ms:.1} ms")).collect();
+        if !steps.is_empty() {
+            println!("  {}: {}", t.method, steps.join(", "));
+        }
+    }
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let path = out.join("shadows.json");
     std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
         .with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());

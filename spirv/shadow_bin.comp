@@ -1,6 +1,6 @@
 #version 460
-// Shadow maps, step 1 (`FILL` false) and 3 (`FILL` true), one invocation per BVH triangle
-// (pieces of a presplit triangle each once: they rasterize to the same depth). A triangle whose
+// Shadow maps, step 1 (`FILL` false) and 3 (`FILL` true), one invocation per scene triangle
+// (`raster_tris`: the BVH holds a split triangle once per piece, each the whole triangle). A triangle whose
 // texel box spans at most SHADOW_DIRECT_SPAN texels a side rasterizes itself in step 1: it
 // loops over its box and keeps the nearest depth of each covered texel in the scratch layer
 // with atomicMin on the float's bits (positive floats order as their bits). A larger one counts
@@ -17,10 +17,10 @@ const bool BECKMANN = false;
 #include "shadow_raster.glsl"
 
 void main() {
-    uint tri = gl_GlobalInvocationID.x;
-    if (tri >= params.tri_count) {
+    if (gl_GlobalInvocationID.x >= params.tri_count) {
         return;
     }
+    uint tri = raster_tris[gl_GlobalInvocationID.x];
     vec4 a = shadow_vertex(tri, 0u);
     vec4 b = shadow_vertex(tri, 1u);
     vec4 c = shadow_vertex(tri, 2u);

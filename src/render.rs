@@ -400,7 +400,7 @@ impl Passes {
         settings: &ShadowSettings,
     ) -> Result<ShadowMaps> {
         let plan = ShadowPlan::new(&scene.punctual_lights, scene.bounds, camera, size, settings)?;
-        ShadowMaps::new(&self.ctx, plan, settings, scene.bvh_stats.references as u32)
+        ShadowMaps::new(&self.ctx, plan, settings, scene)
     }
 
     /// Records the rendering of every layer of `maps` (after a light, the geometry or, for

@@ -399,7 +399,7 @@ gpu_structs! {
         size: uint,
         /// Tiles per side ([`SHADOW_TILE`] texels each).
         tiles: uint,
-        /// Triangles in the BVH.
+        /// Triangles to rasterize (`raster_tris`).
         tri_count: uint,
         /// First texel of the layer in the map.
         offset: uint,
@@ -862,6 +862,9 @@ kernels! {
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
+            /// The BVH positions to rasterize, one per scene triangle (the BVH repeats a split
+            /// triangle once per piece).
+            raster_tris: readonly buffer [uint],
             /// Triangles per tile (counted, then filled again from 0).
             tile_count: readwrite buffer [uint],
             /// First entry of each tile's list.

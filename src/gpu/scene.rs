@@ -307,6 +307,20 @@ impl GpuScene {
         }
     }
 
+    /// One BVH position per scene triangle (its first): the BVH holds the pieces a build split
+    /// off a large triangle as copies of the whole triangle, which a rasterizer must draw once.
+    pub fn unique_triangles(&self) -> Vec<u32> {
+        let mut seen = vec![false; self.bvh_stats.triangles];
+        let mut out = Vec::with_capacity(self.bvh_stats.triangles);
+        for (position, &input) in self.prim_order.iter().enumerate() {
+            if let Some(first) = seen.get_mut(input as usize).filter(|s| !**s) {
+                *first = true;
+                out.push(position as u32);
+            }
+        }
+        out
+    }
+
     /// What the scene has, for the kernels specialised on it.
     pub fn features(&self) -> super::kernel::SceneFeatures {
         super::kernel::SceneFeatures::of(self)

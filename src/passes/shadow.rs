@@ -388,6 +388,9 @@ pub struct ShadowMaps {
     tile_tris: Buffer,
     /// One layer of depth bits for the small triangles' `atomicMin`.
     scratch: Buffer,
+    /// The BVH positions to rasterize ([`GpuScene::unique_triangles`]).
+    raster_tris: Buffer,
+    raster_count: u32,
     /// The large triangles' edge functions and depths (three `vec4` each).
     setup: TexelBuffer,
     stats: Buffer,
@@ -395,9 +398,11 @@ pub struct ShadowMaps {
 }
 
 impl ShadowMaps {
-    /// Allocates the maps `plan` places (for a BVH of `triangles` triangles), refusing more than
+    /// Allocates the maps `plan` places for `scene`, refusing more than
     /// [`ShadowMaps::MAX_BYTES`].
-    pub fn new(ctx: &Context, plan: ShadowPlan, settings: &ShadowSettings, triangles: u32) -> Result<Self> {
+    pub fn new(ctx: &Context, plan: ShadowPlan, settings: &ShadowSettings, scene: &GpuScene) -> Result<Self> {
+        let unique = scene.unique_triangles();
+        let triangles = scene.bvh_stats.references as u32;
         let s = settings.map_size as u64;
         let layers = plan.layers.len() as u64;
         let moments = settings.method == ShadowMethod::Moments;
@@ -410,7 +415,7 @@ impl ShadowMaps {
             )));
         }
         let tiles = (settings.map_size.div_ceil(SHADOW_TILE) as u64).pow(2);
-        let capacity = (8 * triangles as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
+        let capacity = (4 * unique.len() as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
         let texels = TexelBuffer::upload(
             ctx,
             "shadow records",
@@ -452,6 +457,13 @@ impl ShadowMaps {
                 MemoryLocation::GpuOnly,
             )?,
             scratch: Buffer::new(ctx, "shadow scratch layer", 4 * s * s, storage, MemoryLocation::GpuOnly)?,
+            raster_tris: Buffer::upload(
+                ctx,
+                "shadow triangles",
+                &unique,
+                raw::BufferUsageFlags::STORAGE_BUFFER,
+            )?,
+            raster_count: unique.len() as u32,
             setup: TexelBuffer::new(
                 ctx,
                 "shadow triangle set-ups",
@@ -574,9 +586,10 @@ impl ShadowPass {
         barrier::transfer_to_compute(ctx, cmd);
         let s = maps.settings.map_size;
         let tiles = s.div_ceil(SHADOW_TILE);
-        let tri_count = scene.bvh_stats.references as u32;
+        let tri_count = maps.raster_count;
         let bins = shadow_bin::Resources {
             scene,
+            raster_tris: &maps.raster_tris,
             tile_count: &maps.tile_count,
             tile_start: &maps.tile_start,
             tile_tris: &maps.tile_tris,

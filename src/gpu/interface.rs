@@ -854,7 +854,7 @@ kernels! {
     }
 
     /// Shadow maps, step 1 and 3: a triangle whose box in the layer spans at most
-    /// [`SHADOW_DIRECT_SPAN`] texels a side rasterizes itself (step 1, `atomicMin` into the
+    /// `SHADOW_DIRECT_SPAN` texels a side rasterizes itself (step 1, `atomicMin` into the
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {

@@ -226,7 +226,9 @@ impl Renderer {
     }
 
     /// Places and allocates shadow maps for the scene's punctual lights, seen by `camera` over an
-    /// image of `size` (directional cascades follow the view), by `settings`.
+    /// image of `size` (directional cascades follow the view), by `settings`. The placement is
+    /// fixed: after a light or (with a directional light) the camera moves, or after
+    /// [`Self::update_scene`] changes the lights, make new maps.
     pub fn shadow_maps(
         &self,
         camera: &Camera,

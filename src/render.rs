@@ -480,6 +480,23 @@ impl Passes {
     ) -> Result<()> {
         self.check(scene)?;
         settings.lighting.validate()?;
+        let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
+            (false, _) => None,
+            (true, Some(maps)) if maps.settings.method == settings.shadows.method => Some(maps),
+            (true, Some(maps)) => {
+                return Err(Error::Invalid(format!(
+                    "the settings shadow by '{}' but the maps given were made for '{}'",
+                    settings.shadows.method.name(),
+                    maps.settings.method.name()
+                )))
+            }
+            (true, None) => {
+                return Err(Error::Invalid(format!(
+                    "the settings shadow by '{}' but no shadow maps were given",
+                    settings.shadows.method.name()
+                )))
+            }
+        };
         let gbuffer = targets.gbuffer;
         timed(&mut timer, cmd, "gbuffer", || self.record_gbuffer(cmd, scene, camera, gbuffer))?;
         let ao = match (&settings.ao, targets.ao) {
@@ -490,16 +507,6 @@ impl Passes {
                 return Err(Error::Invalid("the settings ask for SSAO but no AO images were given".into()))
             }
             (None, _) => None,
-        };
-        let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
-            (false, _) => None,
-            (true, Some(maps)) => Some(maps),
-            (true, None) => {
-                return Err(Error::Invalid(format!(
-                    "the settings shadow by '{}' but no shadow maps were given",
-                    settings.shadows.method.name()
-                )))
-            }
         };
         timed(&mut timer, cmd, "lighting", || {
             self.record_lighting(

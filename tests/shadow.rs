@@ -482,3 +482,75 @@ fn cube_map_faces_meet_without_seams() {
     assert!(acne < 0.01 && leak < 0.05, "acne {acne}, leak {leak}");
     assert!(lit_dim * 100 < lit, "{lit_dim} of {lit} lit pixels dimmed by the cube's PCF");
 }
+
+/// PCSS: the penumbra widens with the light's size. The sun's angular radius from 0.25° to 3°
+/// widens the band of the floor in partial shadow (visibility strictly between 0.05 and 0.95)
+/// by more than 3× (the penumbra's width is proportional to the angle where the blocker search
+/// finds the box; measured about 5×), and the umbra stays: the floor the rays shadow far from
+/// the box's outline stays dark.
+#[test]
+fn pcss_penumbrae_widen_with_the_light_size() {
+    let gpu = Gpu::new();
+    let stage = Stage::sun_and_box();
+    let base =
+        ShadowSettings { method: ShadowMethod::Pcss, map_size: 1024, cascades: 1, ..Default::default() };
+    let small = ShadowSettings { sun_angle: 0.25f32.to_radians(), ..base };
+    let large = ShadowSettings { sun_angle: 3f32.to_radians(), ..base };
+    let (rays, maps) = stage.visibility(&gpu, 128, &[small, large]);
+    let penumbra = |m: &[Option<f32>]| m.iter().filter(|v| v.is_some_and(|v| v > 0.05 && v < 0.95)).count();
+    let (narrow, wide) = (penumbra(&maps[0]), penumbra(&maps[1]));
+    let (_, leak) = disagreement(&rays, &maps[1]);
+    eprintln!("PCSS penumbra pixels: sun 0.25° {narrow}, 3° {wide}; shadowed floor lit at 3°: {leak:.3}");
+    assert!(narrow > 0 && wide > 3 * narrow, "penumbra {narrow} -> {wide}");
+    assert!(leak < 0.5, "the umbra vanished: {leak}");
+}
+
+/// The embedding API's shadow maps (placed by `Renderer::shadow_maps`, recorded by
+/// `record_shadow_maps` into the host's command buffer, read by `record_lighting`) give the
+/// one-shot hybrid's image for the same settings, bit for bit.
+#[test]
+fn embedded_shadow_maps_match_the_one_shot_render() {
+    use umbra::embed::Renderer;
+    use umbra::passes::deferred::LightingSettings;
+    use umbra::passes::gbuffer::GBuffer;
+    use umbra::vk::{raw, Image};
+    let gpu = Gpu::new();
+    let stage = Stage::sun_and_box();
+    let mut soups = vec![stage.floor.clone()];
+    soups.extend(stage.occluders.iter().cloned());
+    let scene = build("stage", &soups, vec![stage.light.clone()], stage.camera);
+    let size = (48, 48);
+    let shadows = ShadowSettings { method: ShadowMethod::Pcf, map_size: 256, ..Default::default() };
+    let lighting = LightingSettings::default();
+    let settings = HybridSettings { size, ao: None, shadows, lighting, ..Default::default() };
+    let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    let one_shot = umbra::render::hybrid(&gpu, &gpu_scene, &stage.camera, &settings).unwrap().color;
+
+    let renderer = Renderer::new(&gpu, &scene).unwrap();
+    let maps = renderer.shadow_maps(&stage.camera, size, &shadows).unwrap();
+    let gbuffer = GBuffer::new(&gpu, size).unwrap();
+    let hdr = Image::storage_2d(&gpu, "hdr", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+    gpu.submit(|cmd| {
+        hdr.init_general(&gpu, cmd);
+        renderer.record_shadow_maps(cmd, &maps)?;
+        renderer.record_gbuffer(cmd, &stage.camera, &gbuffer.views())?;
+        renderer.record_lighting(cmd, &stage.camera, &gbuffer.views(), hdr.view, None, Some(&maps), &lighting)
+    })
+    .unwrap();
+    assert_eq!(maps.check(&gpu).unwrap(), None, "the tile lists overflowed");
+    let embedded: Vec<[f32; 4]> = hdr.read(&gpu).unwrap();
+    let lit = one_shot.iter().filter(|p| p[1] > 0.01).count();
+    assert!(lit > 500, "only {lit} lit pixels");
+    assert!(embedded == one_shot, "the embedded frame differs from the one-shot render");
+    // A frame whose settings ask for maps but that is given none is refused, naming the method.
+    let targets = umbra::render::HybridTargets {
+        gbuffer: &gbuffer.views(),
+        ao: None,
+        hdr: hdr.view,
+        ldr: None,
+        shadows: None,
+    };
+    let refused = gpu.submit(|cmd| renderer.record_hybrid(cmd, &stage.camera, &targets, &settings, None));
+    let message = refused.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(message.contains("'pcf'") && message.contains("no shadow maps"), "{message}");
+}

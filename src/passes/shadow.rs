@@ -18,8 +18,8 @@
 //! wider than the face, so a filter centred inside the face never reads past the map (seams).
 //!
 //! The maps depend on the lights and the geometry, and for directional lights on the camera:
-//! [`ShadowMaps::plan`] places the layers, and a host re-records them only when one of those
-//! changes.
+//! [`ShadowPlan::new`] places the layers (a moved light or camera needs a new plan, so new
+//! [`ShadowMaps`]), and a host re-records them only when one of those changes.
 
 use crate::error::{Error, Result};
 use crate::gpu::kernels::{shadow_bin, shadow_moments, shadow_raster, shadow_scan};
@@ -216,8 +216,8 @@ impl ShadowSettings {
     }
 }
 
-/// Where the layers of every punctual light are and how each is placed: what
-/// [`ShadowMaps::plan`] computes on the host.
+/// Where the layers of every punctual light are and how each is placed, computed on the host
+/// ([`ShadowPlan::new`]).
 #[derive(Debug, Clone)]
 pub struct ShadowPlan {
     /// Every layer in order, lights in scene order.

@@ -405,10 +405,47 @@ pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// The Cornell box with its ceiling lamp replaced by a point light of the same on-axis intensity
+/// (radiance × area) just below the lamp's centre: the shadow maps' test scene (a cube map).
+fn cornell_point_light() -> umbra::scene::Scene {
+    let mut scene = umbra::scene::Scene::cornell_box();
+    scene.name = "Cornell box, point light".into();
+    let (mut area, mut centre, mut radiance) = (0.0f32, Vec3::ZERO, [0.0f32; 3]);
+    for &t in &scene.emissive.triangles {
+        let [a, b, c] = scene.triangles[t as usize].map(|i| Vec3::from(scene.positions[i as usize]));
+        let da = 0.5 * (b - a).cross(c - a).length();
+        area += da;
+        centre += da * (a + b + c) / 3.0;
+        radiance = scene.materials[scene.triangle_material[t as usize] as usize].emissive;
+    }
+    let centre = centre / area.max(1e-12);
+    for &t in &scene.emissive.triangles.clone() {
+        let m = scene.triangle_material[t as usize] as usize;
+        scene.materials[m].emissive = [0.0; 3];
+    }
+    scene.update_emissive();
+    let peak = radiance.iter().copied().fold(1e-12f32, f32::max);
+    scene.lights.push(umbra::scene::Light {
+        name: "lamp".into(),
+        kind: umbra::scene::LightKind::Point,
+        position: (centre - Vec3::Y * 0.01).into(),
+        direction: [0.0, -1.0, 0.0],
+        color: radiance.map(|c| c / peak),
+        intensity: peak * area,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: std::f32::consts::PI,
+    });
+    scene
+}
+
 fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
     std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
+    if !quick {
+        scenes.push(("cornell-point".to_string(), cornell_point_light()));
+    }
     let repo_scenes: &[&str] = if quick { &["spheres"] } else { &["spheres", "textured"] };
     for name in repo_scenes {
         let path = PathBuf::from("scenes").join(format!("{name}.glb"));

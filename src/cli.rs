@@ -16,31 +16,27 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// Three comma-separated numbers, if `s` holds three and `ok` accepts them.
+fn parse_three(s: &str, ok: impl Fn(&[f32; 3]) -> bool) -> Option<Result<[f32; 3], String>> {
+    let v: Result<Vec<f32>, _> = s.split(',').map(|c| c.trim().parse::<f32>()).collect();
+    match v {
+        Err(e) => Some(Err(format!("'{s}': {e}"))),
+        Ok(v) => <[f32; 3]>::try_from(v.as_slice()).ok().filter(|v| ok(v)).map(Ok),
+    }
+}
+
 /// Parses `R,G,B` (three finite, non-negative numbers).
 pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|c| c.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("'{s}': {e}"))?;
-    match v.as_slice() {
-        [r, g, b] if v.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok([*r, *g, *b]),
-        _ => Err(format!("'{s}' is not three non-negative numbers R,G,B")),
-    }
+    parse_three(s, |v| v.iter().all(|c| c.is_finite() && *c >= 0.0))
+        .unwrap_or_else(|| Err(format!("'{s}' is not three non-negative numbers R,G,B")))
 }
 
 /// Parses `X,Y,Z`: a direction (three finite numbers, not all zero).
 #[allow(dead_code)] // one binary uses it
 pub fn parse_direction(s: &str) -> Result<[f32; 3], String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|c| c.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("'{s}': {e}"))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) && v.iter().any(|c| *c != 0.0) => Ok([*x, *y, *z]),
-        _ => Err(format!("'{s}' is not a direction X,Y,Z (three finite numbers, not all zero)")),
-    }
+    parse_three(s, |v| v.iter().all(|c| c.is_finite()) && v.iter().any(|c| *c != 0.0)).unwrap_or_else(|| {
+        Err(format!("'{s}' is not a direction X,Y,Z (three finite numbers, not all zero)"))
+    })
 }
 
 /// Parses a finite number (NaN and the infinities refused).

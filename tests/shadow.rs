@@ -9,7 +9,7 @@ use glam::{Mat3, Vec3};
 use umbra::bvh::traverse::Ray;
 use umbra::gpu::layout::{GpuShadowLayer, SHADOW_PERSPECTIVE};
 use umbra::gpu::scene::{GpuScene, SceneArrays};
-use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
+use umbra::passes::shadow::{ShadowMethod, ShadowPlan, ShadowSettings};
 use umbra::render::{HybridSettings, Passes};
 use umbra::scene::{Camera, Light, LightKind, Material, Scene};
 
@@ -104,6 +104,30 @@ fn texel_ray(l: &GpuShadowLayer, px: f32, py: f32) -> (Ray, f32) {
     }
 }
 
+/// Hard shadow maps of `scene`'s lights (`size`² layers, `cascades` for a sun), seen from its
+/// camera over a 64×64 image: the placement and every layer's depth, read back.
+fn hard_maps(
+    gpu: &Gpu,
+    gpu_scene: &GpuScene,
+    scene: &Scene,
+    size: u32,
+    cascades: u32,
+) -> (ShadowPlan, Vec<f32>) {
+    let passes = Passes::new(gpu, gpu_scene);
+    let settings = ShadowSettings {
+        method: ShadowMethod::Hard,
+        map_size: size,
+        cascades,
+        max_radius: 4.0,
+        ..Default::default()
+    };
+    let camera = scene.camera(None).unwrap();
+    let mut maps = passes.shadow_maps(gpu_scene, &camera, (64, 64), &settings).unwrap();
+    passes.render_shadow_maps(gpu_scene, &mut maps).unwrap();
+    let depth = maps.read_depth(gpu).unwrap();
+    (maps.plan.clone(), depth)
+}
+
 /// Every texel of every layer (a point light's cube, a spot's map, a sun's two cascades) holds
 /// the depth of the first surface a ray from the light through the texel's centre meets in the
 /// BVH (the reference), within 1e-4 of the depth plus 1e-5 of the layer's range; where they
@@ -137,21 +161,10 @@ fn rasterized_depth_matches_rays_through_the_bvh() {
     for scene in [textured, mixed] {
         let arrays = SceneArrays::new(&scene).unwrap();
         let gpu_scene = GpuScene::from_arrays(&gpu, &arrays).unwrap();
-        let passes = Passes::new(&gpu, &gpu_scene);
-        let settings = ShadowSettings {
-            method: ShadowMethod::Hard,
-            map_size: 96,
-            cascades: 2,
-            max_radius: 4.0,
-            ..Default::default()
-        };
-        let cam = scene.camera(None).unwrap();
-        let mut maps = passes.shadow_maps(&gpu_scene, &cam, (64, 64), &settings).unwrap();
-        passes.render_shadow_maps(&gpu_scene, &mut maps).unwrap();
-        let depth = maps.read_depth(&gpu).unwrap();
-        let s = settings.map_size as usize;
+        let (plan, depth) = hard_maps(&gpu, &gpu_scene, &scene, 96, 2);
+        let s = 96;
         let (mut covered, mut edges, mut bad) = (0, 0, Vec::new());
-        for (li, l) in maps.plan.layers.iter().enumerate() {
+        for (li, l) in plan.layers.iter().enumerate() {
             let tolerance = |d: f32| 1e-4 * d.abs() + 1e-5 * l.depth_far;
             let hit = |px: f32, py: f32| {
                 let (ray, scale) = texel_ray(l, px, py);
@@ -187,10 +200,10 @@ fn rasterized_depth_matches_rays_through_the_bvh() {
         eprintln!(
             "{}: {} layers of {s}²: {covered} texels covered, {edges} on edges, {} wrong",
             scene.name,
-            maps.plan.layers.len(),
+            plan.layers.len(),
             bad.len()
         );
-        assert_eq!(maps.plan.layers.len(), 6 + 1 + 2, "a cube, a spot map, two cascades");
+        assert_eq!(plan.layers.len(), 6 + 1 + 2, "a cube, a spot map, two cascades");
         assert!(covered > s * s, "too little geometry in the maps: {covered}");
         assert!(
             bad.is_empty(),
@@ -222,21 +235,10 @@ fn closed_mesh_rasterizes_without_cracks() {
     ];
     let scene = build("icosphere", &[sphere], lights, camera(centre + Vec3::new(0.0, 0.5, 4.0), centre));
     let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let passes = Passes::new(&gpu, &gpu_scene);
-    let settings = ShadowSettings {
-        method: ShadowMethod::Hard,
-        map_size: 256,
-        cascades: 1,
-        max_radius: 4.0,
-        ..Default::default()
-    };
-    let cam = scene.camera(None).unwrap();
-    let mut maps = passes.shadow_maps(&gpu_scene, &cam, (64, 64), &settings).unwrap();
-    passes.render_shadow_maps(&gpu_scene, &mut maps).unwrap();
-    let depth = maps.read_depth(&gpu).unwrap();
-    let s = settings.map_size as usize;
+    let (plan, depth) = hard_maps(&gpu, &gpu_scene, &scene, 256, 1);
+    let s = 256;
     let mut inside_total = 0;
-    for (li, l) in maps.plan.layers.iter().enumerate() {
+    for (li, l) in plan.layers.iter().enumerate() {
         let (mut inside, mut holes) = (0, 0);
         for y in 0..s {
             for x in 0..s {
@@ -257,7 +259,7 @@ fn closed_mesh_rasterizes_without_cracks() {
         assert_eq!(holes, 0, "layer {li}: {holes} empty texels of {inside} inside the outline");
         inside_total += inside;
     }
-    eprintln!("{inside_total} texels inside outlines over {} layers, none empty", maps.plan.layers.len());
+    eprintln!("{inside_total} texels inside outlines over {} layers, none empty", plan.layers.len());
     assert!(inside_total > 8_000, "the sphere covers too little of the maps: {inside_total}");
 }
 

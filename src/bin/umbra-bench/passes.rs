@@ -24,6 +24,32 @@ pub struct PassTiming {
     pub min_ms: f64,
 }
 
+/// What a benchmarked hybrid frame renders into: a G-buffer, a linear colour image (in `GENERAL`
+/// layout) and the scene's image-based lighting tables (the default settings).
+pub struct FrameImages {
+    /// The G-buffer.
+    pub gbuffer: GBuffer,
+    /// `R32G32B32A32_SFLOAT` linear colour.
+    pub output: Image,
+    /// The split-sum tables.
+    pub ibl: umbra::passes::ibl::IblResources,
+}
+
+impl FrameImages {
+    /// The images for frames of `size` and `scene`'s IBL tables.
+    pub fn new(ctx: &Context, scene: &GpuScene, size: (u32, u32)) -> Result<Self> {
+        let gbuffer = GBuffer::new(ctx, size)?;
+        let output =
+            Image::storage_2d(ctx, "bench colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
+        let ibl = umbra::passes::ibl::IblResources::build(ctx, scene, &Default::default())?;
+        ctx.submit(|cmd| {
+            output.init_general(ctx, cmd);
+            Ok(())
+        })?;
+        Ok(Self { gbuffer, output, ibl })
+    }
+}
+
 /// Times every pass at `size`, `repeats` times after one warm-up submission.
 pub fn run(
     ctx: &Context,
@@ -34,15 +60,12 @@ pub fn run(
     lighting: &LightingSettings,
 ) -> Result<Vec<PassTiming>> {
     let passes = Passes::new(ctx, scene);
-    let gbuffer = GBuffer::new(ctx, size)?;
-    let output = Image::storage_2d(ctx, "bench colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
-    let ibl = umbra::passes::ibl::IblResources::build(ctx, scene, &Default::default())?;
+    let FrameImages { gbuffer, output, ibl } = FrameImages::new(ctx, scene, size)?;
     let target = PathTarget::new(ctx, size)?;
     let path_settings = PathSettings { size, env: lighting.env, ..PathSettings::default() };
     let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
     let (ao_raw, ao_blurred) = (make("bench ssao")?, make("bench ssao blurred")?);
     ctx.submit(|cmd| {
-        output.init_general(ctx, cmd);
         ao_raw.init_general(ctx, cmd);
         ao_blurred.init_general(ctx, cmd);
         Ok(())

@@ -10,11 +10,10 @@ use serde_json::{json, Value};
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
-use umbra::passes::gbuffer::GBuffer;
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
 use umbra::render::{HybridSettings, HybridTargets, Passes};
 use umbra::scene::Camera;
-use umbra::vk::{raw, Context, GpuTimer, Image};
+use umbra::vk::{Context, GpuTimer};
 
 /// One method's measurements.
 pub struct ShadowTiming {
@@ -44,13 +43,8 @@ pub fn run(
     shadows: &ShadowSettings,
 ) -> Result<Vec<ShadowTiming>> {
     let passes = Passes::new(ctx, scene);
-    let gbuffer = GBuffer::new(ctx, size)?;
-    let output = Image::storage_2d(ctx, "bench colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
-    let ibl = umbra::passes::ibl::IblResources::build(ctx, scene, &Default::default())?;
-    ctx.submit(|cmd| {
-        output.init_general(ctx, cmd);
-        Ok(())
-    })?;
+    let super::passes::FrameImages { gbuffer, output, ibl } =
+        super::passes::FrameImages::new(ctx, scene, size)?;
     let views = gbuffer.views();
     let lighting = LightingSettings { env: [0.2; 3], ..LightingSettings::default() };
     let mut reference: Option<Vec<[f32; 4]>> = None;

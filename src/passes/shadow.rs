@@ -4,8 +4,9 @@
 //! map per layer: one for a spot light (a perspective map over its cone), six for a point light
 //! (a cube: one perspective map per axis direction), and cascades for a directional light
 //! (orthographic maps over slices of the camera's view depth, after Zhang et al. 2006's practical
-//! split scheme, each sized by the slice's bounding sphere and its centre snapped to whole texels
-//! so the maps do not shimmer as the camera turns or moves). Per layer four kernels run:
+//! split scheme up to the scene's farthest corner rounded up to a power of two, each sized by the
+//! slice's bounding sphere and its centre snapped to whole texels so the maps do not shimmer as
+//! the camera turns or moves). Per layer four kernels run:
 //! `shadow_bin` counts each triangle into the tiles (16×16 texels) its light-space box overlaps,
 //! `shadow_scan` turns the counts into list offsets, `shadow_bin` again fills the lists, and
 //! `shadow_raster` runs one workgroup per tile, one invocation per texel, over the tile's list:
@@ -328,9 +329,12 @@ fn cascades(
     let tan_y = (camera.yfov * 0.5).tan();
     let tan_x = tan_y * camera.aspect.unwrap_or(size.0 as f32 / size.1.max(1) as f32);
     let k2 = tan_x * tan_x + tan_y * tan_y;
-    let scene_far = corners.iter().map(|c| (*c - eye).dot(forward)).fold(0.0f32, f32::max);
+    // The cascades reach the scene's farthest corner from the eye, rounded up to a power of two:
+    // independent of where the camera looks, and of small moves, so the slices (and with them
+    // each cascade's texel size) stay put while the view changes.
     let near = camera.znear.max(1e-4);
-    let far = scene_far.max(near * 1.01);
+    let reach = corners.iter().map(|c| c.distance(eye)).fold(near * 1.01, f32::max);
+    let far = reach.log2().ceil().exp2();
     let n = settings.cascades;
     let split = |i: u32| {
         let t = i as f32 / n as f32;

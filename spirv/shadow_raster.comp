@@ -30,7 +30,7 @@ void main() {
     }
     float nearest = BVH_INF;
     for (uint j = 0u; j < count; ++j) {
-        uint tri = imageLoad(tile_tri_texels, int(start + j)).x;
+        uint tri = tile_tris[start + j];
         vec4 r0 = imageLoad(setup_texels, int(3u * tri));
         vec4 r1 = imageLoad(setup_texels, int(3u * tri + 1u));
         vec4 r2 = imageLoad(setup_texels, int(3u * tri + 2u));

@@ -905,8 +905,8 @@ kernels! {
             tile_count: readwrite buffer [uint],
             /// First entry of each tile's list.
             tile_start: readonly buffer [uint],
-            /// The lists (`shadow_bin`'s `tile_tris`), read as R32UI texels.
-            tile_tri_texels: readonly texels r32ui,
+            /// The lists.
+            tile_tris: readonly buffer [uint],
             /// `shadow_bin`'s `tile_setup`, read as RGBA32F texels.
             setup_texels: readonly texels rgba32f,
             /// The small triangles' depth bits (read, then reset to infinity's for the next layer).

@@ -389,8 +389,7 @@ pub struct ShadowMaps {
     pub moments: TexelBuffer,
     tile_count: Buffer,
     tile_start: Buffer,
-    /// The tiles' lists (written as a storage buffer, read as texels).
-    tile_tris: TexelBuffer,
+    tile_tris: Buffer,
     /// One layer of depth bits for the small triangles' `atomicMin`.
     scratch: Buffer,
     /// The BVH positions to rasterize ([`GpuScene::unique_triangles`]).
@@ -454,7 +453,13 @@ impl ShadowMaps {
             moments: TexelBuffer::new(ctx, "shadow moments", moment_texels, f32x4, 16, no_usage)?,
             tile_count: Buffer::new(ctx, "shadow tile counts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
             tile_start: Buffer::new(ctx, "shadow tile starts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
-            tile_tris: tile_lists(ctx, capacity)?,
+            tile_tris: Buffer::new(
+                ctx,
+                "shadow tile lists",
+                4 * capacity as u64,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
             scratch: Buffer::new(ctx, "shadow scratch layer", 4 * s * s, storage, MemoryLocation::GpuOnly)?,
             raster_tris: Buffer::upload(
                 ctx,
@@ -513,7 +518,9 @@ impl ShadowMaps {
     /// Grows the tile lists to hold `entries` (and a quarter more).
     pub fn reserve(&mut self, ctx: &Context, entries: u32) -> Result<()> {
         let capacity = entries.saturating_add(entries / 4).min(u32::MAX / 8);
-        self.tile_tris = tile_lists(ctx, capacity)?;
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        self.tile_tris =
+            Buffer::new(ctx, "shadow tile lists", 4 * capacity as u64, usage, MemoryLocation::GpuOnly)?;
         self.capacity = capacity;
         Ok(())
     }
@@ -523,14 +530,6 @@ impl ShadowMaps {
         let n = self.plan.layers.len() * (self.settings.map_size as usize).pow(2);
         Ok(self.depth.buffer.read::<f32>(ctx)?[..n].to_vec())
     }
-}
-
-/// The tiles' lists of `capacity` entries: the fill writes them as a storage buffer, the
-/// rasterizer reads them as R32UI texels (on llvmpipe a texel read is a gather, a storage-buffer
-/// read a loop over the lanes).
-fn tile_lists(ctx: &Context, capacity: u32) -> Result<TexelBuffer> {
-    let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
-    TexelBuffer::new(ctx, "shadow tile lists", capacity as u64, raw::Format::R32_UINT, 4, usage)
 }
 
 /// The shadow-map kernels.
@@ -597,7 +596,7 @@ impl ShadowPass {
             raster_tris: &maps.raster_tris,
             tile_count: &maps.tile_count,
             tile_start: &maps.tile_start,
-            tile_tris: &maps.tile_tris.buffer,
+            tile_tris: &maps.tile_tris,
             shadow_scratch: &maps.scratch,
             tile_setup: &maps.setup.buffer,
         };
@@ -630,7 +629,7 @@ impl ShadowPass {
                 scene,
                 tile_count: &maps.tile_count,
                 tile_start: &maps.tile_start,
-                tile_tri_texels: &maps.tile_tris,
+                tile_tris: &maps.tile_tris,
                 setup_texels: &maps.setup,
                 shadow_scratch: &maps.scratch,
                 shadow_depth: &maps.depth,

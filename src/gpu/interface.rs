@@ -619,6 +619,12 @@ gpu_constants! {
     SHADOW_DIRECT_SPAN: uint = 16;
     /// Texels of `shadow_texels` before the lights' records: the filter settings.
     SHADOW_HEADER_TEXELS: uint = 2;
+    /// `pathtrace`'s `strategy`: light sampling and BSDF sampling weighed by MIS.
+    STRATEGY_MIS: uint = 0;
+    /// `pathtrace`'s `strategy`: BSDF sampling alone (punctual lights still by light sampling).
+    STRATEGY_BSDF: uint = 1;
+    /// `pathtrace`'s `strategy`: light sampling alone (emitters still seen by camera rays).
+    STRATEGY_LIGHT: uint = 2;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
 }
@@ -656,7 +662,13 @@ kernels! {
     kernel pathtrace {
         scene: full [lights, punctual, env_map, textures, transmission, alpha],
         push: PathParams,
-        spec: { beckmann: bool = false, power_heuristic: bool = true, unweighted_bsdf_hits: bool = false },
+        spec: {
+            beckmann: bool = false,
+            ggx_walter: bool = false,
+            power_heuristic: bool = true,
+            unweighted_bsdf_hits: bool = false,
+            strategy: uint = 0
+        },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).
             accum: readwrite buffer [vec4],
@@ -984,7 +996,7 @@ kernels! {
     test_kernel sample_test {
         scene: none,
         push: SampleTestParams,
-        spec: { beckmann: bool = false },
+        spec: { beckmann: bool = false, ggx_walter: bool = false },
         bindings: {
             /// Directions at which to evaluate pdfs.
             directions: readonly buffer [vec4],

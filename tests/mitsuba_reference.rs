@@ -16,16 +16,22 @@
 //!   radiance (background, a light seen directly) have no variance in either renderer and must
 //!   agree to 10⁻⁵.
 //!
-//! Three statistics, each at
-//! α = 1 − (1 − 0.001)^(1/12) (Šidák over 3 statistics × 4 scenes: 0.001 in all):
+//! Each scene is rendered with its default estimator (GGX or Beckmann as the reference, the power
+//! heuristic, MIS), and the Cornell box and the spheres under the sky with every other estimator
+//! that can be tested at this sample count ([`estimators`]: Walter's GGX sampling, the balance
+//! heuristic, BSDF or light sampling alone). Three statistics per comparison (two for BSDF
+//! sampling alone in the Cornell box), each at α = 1 − (1 − 0.001)^(1/43) (Šidák over the
+//! 3 × 4 statistics of the scenes and the 31 of the other estimators: 0.001 in all; [`alpha`]
+//! counts them):
 //! - pixels: the count of pixel channels with |z| > 3.29 (two-sided 0.001 each) is at most the
 //!   binomial(n, 0.001) quantile at 1 − α: localised errors (orientation, a texture, a light);
 //! - blocks: the pixels are averaged over 4×4 blocks (z of the block means, which are much closer
 //!   to normal than single pixels with fireflies) and Σ z² is tested against χ²(blocks × 3);
 //! - image: the image mean of each channel, z against N(0, 1), two-sided, Šidák over the channels.
 //!
-//! The deliberately biased variants (a base colour 2 % darker, emission found by BSDF sampling
-//! counted without its MIS weight) must be rejected by the same test.
+//! The deliberately biased variants (a base colour 2 % darker, also under BSDF sampling alone
+//! without the per-pixel statistic; emission found by BSDF sampling counted without its MIS
+//! weight) must be rejected by the same test.
 //! `UMBRA_MITSUBA_DEBUG=DIR` writes umbra's image, the reference and z for every comparison.
 
 mod common;

@@ -2,7 +2,7 @@
 // Progressive path tracer: one sample per pixel per dispatch, accumulated as a running mean with
 // its second moment. Next-event estimation on emissive triangles, BSDF sampling, multiple
 // importance sampling (power or balance heuristic), Russian roulette; or, for comparison, either
-// strategy alone (STRATEGY).
+// strategy alone (LIGHT_SAMPLING, BSDF_HITS).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/pathtrace.glsl"
 #include "pixel.glsl"
@@ -14,14 +14,15 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "environment.glsl"
 #include "shading.glsl"
 
-// Which strategies find the emitters (STRATEGY, `Strategy` in src/passes/pathtrace.rs): light
-// sampling (next-event estimation of the emissive triangles and the environment map) and BSDF
-// sampling (emission that a BSDF-sampled ray hits); MIS weighs them where both run. Under every
-// strategy, punctual lights (delta lights: no ray hits them) are found by light sampling only,
-// and emission that light sampling cannot find (a constant environment, the map with env_nee
-// off, any light-sampling density of 0) by BSDF sampling only. Camera rays see emitters always.
-const bool LIGHT_SAMPLING = STRATEGY != STRATEGY_BSDF;
-const bool BSDF_HITS = STRATEGY != STRATEGY_LIGHT;
+// Which strategies find the emitters (LIGHT_SAMPLING and BSDF_HITS, never both false: `Strategy`
+// in src/passes/pathtrace.rs): light sampling (next-event estimation of the emissive triangles
+// and the environment map) and BSDF sampling (emission that a BSDF-sampled ray hits); MIS weighs
+// them where both run. Under every strategy, punctual lights (delta lights: no ray hits them) are
+// found by light sampling only, and emission that light sampling cannot find (a constant
+// environment, the map with env_nee off, any light-sampling density of 0) by BSDF sampling only.
+// Camera rays see emitters always. (Specialization constants are only ever tested here, never
+// negated or combined with one another: naga's SPIR-V reader rejects the constant such an
+// expression makes, OpSpecConstantOp.)
 
 float mis_weight(float a, float b) {
     if (POWER_HEURISTIC) {
@@ -36,16 +37,16 @@ float mis_weight(float a, float b) {
 // it. UNWEIGHTED_BSDF_HITS (the `testing` feature's deliberately biased variant) leaves MIS out:
 // such emission counts fully, on top of light sampling's weighted share.
 float bsdf_hit_weight(float a, float b) {
-    if (!LIGHT_SAMPLING) {
-        return 1.0;
-    }
-    if (!BSDF_HITS) {
+    if (LIGHT_SAMPLING) {
+        if (BSDF_HITS) {
+            if (UNWEIGHTED_BSDF_HITS) {
+                return 1.0;
+            }
+            return mis_weight(a, b);
+        }
         return b > 0.0 ? 0.0 : 1.0;
     }
-    if (UNWEIGHTED_BSDF_HITS) {
-        return 1.0;
-    }
-    return mis_weight(a, b);
+    return 1.0;
 }
 
 // The weight of a light sample (density a) against BSDF sampling (density b): MIS, or 1 with
@@ -154,7 +155,7 @@ void main() {
         }
 
         // Next-event estimation: one emissive triangle by power, a uniform point on it.
-        if (LIGHT_SAMPLING && HAS_LIGHTS && params.light_count > 0u) {
+        if (HAS_LIGHTS && params.light_count > 0u && LIGHT_SAMPLING) {
             vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
             vec3 wi_local;
             vec3 l_emit;
@@ -178,7 +179,7 @@ void main() {
         }
 
         // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
-        if (LIGHT_SAMPLING && HAS_ENV_MAP && params.env_nee != 0u) {
+        if (HAS_ENV_MAP && params.env_nee != 0u && LIGHT_SAMPLING) {
             vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
             float pdf;
             vec3 wi = env_sample(u, params.env_size, pdf);

@@ -619,12 +619,6 @@ gpu_constants! {
     SHADOW_DIRECT_SPAN: uint = 16;
     /// Texels of `shadow_texels` before the lights' records: the filter settings.
     SHADOW_HEADER_TEXELS: uint = 2;
-    /// `pathtrace`'s `strategy`: light sampling and BSDF sampling weighed by MIS.
-    STRATEGY_MIS: uint = 0;
-    /// `pathtrace`'s `strategy`: BSDF sampling alone (punctual lights still by light sampling).
-    STRATEGY_BSDF: uint = 1;
-    /// `pathtrace`'s `strategy`: light sampling alone (emitters still seen by camera rays).
-    STRATEGY_LIGHT: uint = 2;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
 }
@@ -667,7 +661,8 @@ kernels! {
             ggx_walter: bool = false,
             power_heuristic: bool = true,
             unweighted_bsdf_hits: bool = false,
-            strategy: uint = 0
+            light_sampling: bool = true,
+            bsdf_hits: bool = true
         },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).

@@ -3,9 +3,7 @@
 
 use crate::error::Result;
 use crate::gpu::kernels::{pathtrace, resolve};
-use crate::gpu::layout::{
-    GpuCamera, PathParams, PathStats, ResolveParams, STRATEGY_BSDF, STRATEGY_LIGHT, STRATEGY_MIS,
-};
+use crate::gpu::layout::{GpuCamera, PathParams, PathStats, ResolveParams};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::scene::Camera;
@@ -100,12 +98,9 @@ impl Strategy {
         }
     }
 
-    fn spec(self) -> u32 {
-        match self {
-            Strategy::Mis => STRATEGY_MIS,
-            Strategy::Bsdf => STRATEGY_BSDF,
-            Strategy::Light => STRATEGY_LIGHT,
-        }
+    /// The kernel's (`light_sampling`, `bsdf_hits`): which strategies run.
+    fn spec(self) -> (bool, bool) {
+        (self != Strategy::Bsdf, self != Strategy::Light)
     }
 }
 
@@ -240,6 +235,7 @@ impl PathTracePass {
     /// and what the options leave out cost nothing.
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
         let PathOptions { microfacet, heuristic, strategy } = options;
+        let (light_sampling, bsdf_hits) = strategy.spec();
         let spec = pathtrace::Spec {
             beckmann: microfacet == Microfacet::Beckmann,
             ggx_walter: microfacet == Microfacet::GgxWalter,
@@ -248,7 +244,8 @@ impl PathTracePass {
             unweighted_bsdf_hits: heuristic == Heuristic::UnweightedBsdfHits,
             #[cfg(not(feature = "testing"))]
             unweighted_bsdf_hits: false,
-            strategy: strategy.spec(),
+            light_sampling,
+            bsdf_hits,
         };
         Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)? })
     }

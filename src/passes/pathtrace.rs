@@ -65,7 +65,8 @@ impl Heuristic {
 }
 
 /// Which sampling strategies find the emitters (emissive triangles and the environment map).
-/// Each is unbiased on its own; they differ in noise (BENCHMARKS.md, "Estimators").
+/// Each is unbiased on its own; they differ in noise (BENCHMARKS.md, "The estimators side by
+/// side").
 ///
 /// Under every strategy, punctual lights (delta lights, which no ray can hit) are found by light
 /// sampling alone, and emission that light sampling cannot find (a constant environment, the

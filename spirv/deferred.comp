@@ -15,6 +15,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "random.glsl"
 #include "gbuffer.glsl"
 #include "environment.glsl"
+const bool GGX_WALTER = false;  // the BSDF is evaluated here, never sampled
 #define UMBRA_SHADOW_MAPS
 #include "shading.glsl"
 #include "shadow.glsl"

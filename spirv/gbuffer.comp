@@ -10,6 +10,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 const bool BECKMANN = false;
+const bool GGX_WALTER = false;
 // HAS_TRANSMISSION is not specialised: the hybrid passes shade reflection only (see
 // src/passes/deferred.rs).
 

@@ -16,6 +16,7 @@
 layout(local_size_x = 64) in;
 
 const bool BECKMANN = false;
+const bool GGX_WALTER = false;
 
 #include "random.glsl"
 #include "environment.glsl"

@@ -1,7 +1,8 @@
 #version 460
 // Progressive path tracer: one sample per pixel per dispatch, accumulated as a running mean with
 // its second moment. Next-event estimation on emissive triangles, BSDF sampling, multiple
-// importance sampling (power or balance heuristic), Russian roulette.
+// importance sampling (power or balance heuristic), Russian roulette; or, for comparison, either
+// strategy alone (LIGHT_SAMPLING, BSDF_HITS).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/pathtrace.glsl"
 #include "pixel.glsl"
@@ -13,6 +14,16 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "environment.glsl"
 #include "shading.glsl"
 
+// Which strategies find the emitters (LIGHT_SAMPLING and BSDF_HITS, never both false: `Strategy`
+// in src/passes/pathtrace.rs): light sampling (next-event estimation of the emissive triangles
+// and the environment map) and BSDF sampling (emission that a BSDF-sampled ray hits); MIS weighs
+// them where both run. Under every strategy, punctual lights (delta lights: no ray hits them) are
+// found by light sampling only, and emission that light sampling cannot find (a constant
+// environment, the map with env_nee off, any light-sampling density of 0) by BSDF sampling only.
+// Camera rays see emitters always. (Specialization constants are only ever tested here, never
+// negated or combined with one another: naga's SPIR-V reader rejects the constant such an
+// expression makes, OpSpecConstantOp.)
+
 float mis_weight(float a, float b) {
     if (POWER_HEURISTIC) {
         a *= a;
@@ -21,14 +32,27 @@ float mis_weight(float a, float b) {
     return a / (a + b);
 }
 
-// The MIS weight of emission that BSDF sampling found (density a) against light sampling
-// (density b). UNWEIGHTED_BSDF_HITS (the `testing` feature's deliberately biased variant) leaves
-// it out: such emission counts fully, on top of light sampling's weighted share.
+// The weight of emission that BSDF sampling found (density a) against light sampling (density
+// b): MIS, 1 without light sampling, and with light sampling alone 0 wherever it could have found
+// it. UNWEIGHTED_BSDF_HITS (the `testing` feature's deliberately biased variant) leaves MIS out:
+// such emission counts fully, on top of light sampling's weighted share.
 float bsdf_hit_weight(float a, float b) {
-    if (UNWEIGHTED_BSDF_HITS) {
-        return 1.0;
+    if (LIGHT_SAMPLING) {
+        if (BSDF_HITS) {
+            if (UNWEIGHTED_BSDF_HITS) {
+                return 1.0;
+            }
+            return mis_weight(a, b);
+        }
+        return b > 0.0 ? 0.0 : 1.0;
     }
-    return mis_weight(a, b);
+    return 1.0;
+}
+
+// The weight of a light sample (density a) against BSDF sampling (density b): MIS, or 1 with
+// light sampling alone.
+float light_sample_weight(float a, float b) {
+    return BSDF_HITS ? mis_weight(a, b) : 1.0;
 }
 
 // Non-finite sources (PathStats.nonfinite_sources bits): the stages whose contribution (or, for
@@ -131,7 +155,7 @@ void main() {
         }
 
         // Next-event estimation: one emissive triangle by power, a uniform point on it.
-        if (HAS_LIGHTS && params.light_count > 0u) {
+        if (HAS_LIGHTS && params.light_count > 0u && LIGHT_SAMPLING) {
             vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
             vec3 wi_local;
             vec3 l_emit;
@@ -139,7 +163,7 @@ void main() {
             if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
                                 light_pdf)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
-                float w = mis_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
+                float w = light_sample_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
                 vec3 c = throughput * f * abs(wi_local.z) * l_emit * (w / light_pdf);
                 radiance += c;
                 nonfinite |= nonfinite_bit(c, NONFINITE_EMISSIVE_NEE);
@@ -155,14 +179,14 @@ void main() {
         }
 
         // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
-        if (HAS_ENV_MAP && params.env_nee != 0u) {
+        if (HAS_ENV_MAP && params.env_nee != 0u && LIGHT_SAMPLING) {
             vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
             float pdf;
             vec3 wi = env_sample(u, params.env_size, pdf);
             vec3 wi_local;
             if (pdf > 0.0 && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, false, wi, wi_local)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
-                float w = mis_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
+                float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
                 vec3 le = env_radiance(wi, params.env_size) * params.env;
                 vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
                 radiance += c;

@@ -16,6 +16,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 const bool BECKMANN = false;
+const bool GGX_WALTER = false;
 
 #include "random.glsl"
 #include "sampling.glsl"

@@ -13,6 +13,7 @@
 layout(local_size_x = 64) in;
 
 const bool BECKMANN = false;
+const bool GGX_WALTER = false;
 #include "shading.glsl"
 #include "shadow_raster.glsl"
 

@@ -13,6 +13,7 @@
 layout(local_size_x = 16, local_size_y = 16) in;
 
 const bool BECKMANN = false;
+const bool GGX_WALTER = false;
 #include "shading.glsl"
 #include "shadow_raster.glsl"
 

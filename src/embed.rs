@@ -54,7 +54,7 @@ use crate::passes::ao::AoSettings;
 use crate::passes::deferred::LightingSettings;
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::ibl::{IblResources, IblSettings};
-use crate::passes::pathtrace::{Heuristic, Microfacet, PathSettings, PathTarget};
+use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
 use crate::passes::shadow::{ShadowMaps, ShadowSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
@@ -68,7 +68,7 @@ pub struct Renderer {
     scene: GpuScene,
     ibl: IblResources,
     passes: Passes,
-    path_options: (Microfacet, Heuristic),
+    path_options: PathOptions,
 }
 
 impl Renderer {
@@ -81,9 +81,9 @@ impl Renderer {
     /// A renderer for a scene already on the GPU (with its environment map, if any).
     pub fn with_gpu_scene(ctx: &Context, scene: GpuScene) -> Result<Self> {
         let passes = Passes::new(ctx, &scene);
-        let path_options = (Microfacet::Ggx, Heuristic::Power);
+        let path_options = PathOptions::default();
         // Built now, not at the first frame: a host records frames against a deadline.
-        passes.prepare(&scene, path_options.0, path_options.1)?;
+        passes.prepare(&scene, path_options)?;
         Ok(Self {
             ibl: IblResources::build(ctx, &scene, &IblSettings::default())?,
             passes,
@@ -111,17 +111,17 @@ impl Renderer {
         self.scene.update(&self.ctx, scene)?;
         if self.scene.features() != self.passes.features() {
             self.passes = Passes::new(&self.ctx, &self.scene);
-            self.passes.prepare(&self.scene, self.path_options.0, self.path_options.1)?;
+            self.passes.prepare(&self.scene, self.path_options)?;
         }
         Ok(())
     }
 
-    /// Chooses the path tracer's default microfacet model and MIS heuristic (GGX and the power
-    /// heuristic at first) and builds its pipeline now. Settings with other options also work:
-    /// their pipeline is built when first recorded.
-    pub fn set_path_tracer(&mut self, microfacet: Microfacet, heuristic: Heuristic) -> Result<()> {
-        self.passes.path_pass(&self.scene, microfacet, heuristic)?;
-        self.path_options = (microfacet, heuristic);
+    /// Chooses the path tracer's default options (microfacet sampling, MIS heuristic, strategy:
+    /// GGX, the power heuristic and MIS at first) and builds its pipeline now. Settings with other
+    /// options also work: their pipeline is built when first recorded.
+    pub fn set_path_tracer(&mut self, options: PathOptions) -> Result<()> {
+        self.passes.path_pass(&self.scene, options)?;
+        self.path_options = options;
         Ok(())
     }
 

@@ -60,12 +60,17 @@ struct RenderArgs {
     /// Which of the file's cameras (0-based; default the first, or one framing the scene).
     #[arg(long)]
     camera: Option<usize>,
-    /// Microfacet distribution of the specular lobes.
+    /// Microfacet distribution of the specular lobes and its sampling: GGX from visible normals,
+    /// GGX from D(h)·cos θh (Walter et al. 2007), Beckmann.
     #[arg(long, value_enum, default_value = "ggx")]
     microfacet: MicrofacetArg,
     /// MIS heuristic.
     #[arg(long, value_enum, default_value = "power")]
     heuristic: HeuristicArg,
+    /// Sampling strategies for emitters: light and BSDF sampling weighted by MIS, BSDF sampling
+    /// alone, or light sampling alone (punctual lights are always light-sampled).
+    #[arg(long, value_enum, default_value = "mis")]
+    strategy: StrategyArg,
     /// Equirectangular environment map (EXR or Radiance HDR), importance-sampled.
     #[arg(long)]
     env: Option<PathBuf>,
@@ -197,7 +202,15 @@ impl ToneArg {
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum MicrofacetArg {
     Ggx,
+    GgxWalter,
     Beckmann,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum StrategyArg {
+    Mis,
+    Bsdf,
+    Light,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -207,7 +220,7 @@ enum HeuristicArg {
 }
 
 fn render(args: RenderArgs) -> Result<()> {
-    use umbra::passes::pathtrace::{Heuristic, Microfacet};
+    use umbra::passes::pathtrace::{Heuristic, Microfacet, Strategy};
     if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
         anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
     }
@@ -250,11 +263,17 @@ fn render(args: RenderArgs) -> Result<()> {
         seed: args.seed,
         microfacet: match args.microfacet {
             MicrofacetArg::Ggx => Microfacet::Ggx,
+            MicrofacetArg::GgxWalter => Microfacet::GgxWalter,
             MicrofacetArg::Beckmann => Microfacet::Beckmann,
         },
         heuristic: match args.heuristic {
             HeuristicArg::Power => Heuristic::Power,
             HeuristicArg::Balance => Heuristic::Balance,
+        },
+        strategy: match args.strategy {
+            StrategyArg::Mis => Strategy::Mis,
+            StrategyArg::Bsdf => Strategy::Bsdf,
+            StrategyArg::Light => Strategy::Light,
         },
         env: if args.env.is_some() { [args.env_strength; 3] } else { args.env_color },
         env_nee: true,

@@ -19,7 +19,7 @@ use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
 pub use crate::passes::pathtrace::PathSettings;
-use crate::passes::pathtrace::{Heuristic, Microfacet, PathTarget, PathTracePass, ResolvePass};
+use crate::passes::pathtrace::{PathOptions, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
@@ -180,19 +180,9 @@ pub struct Passes {
     ao_blur: OnceLock<AoBlurPass>,
     rtao: OnceLock<RtaoPass>,
     tonemap: OnceLock<TonemapPass>,
-    /// One per (microfacet, heuristic), index [`path_index`].
-    path: [OnceLock<PathTracePass>; 6],
+    /// One per [`PathOptions`], index [`PathOptions::index`].
+    path: [OnceLock<PathTracePass>; PathOptions::COUNT],
     resolve: OnceLock<ResolvePass>,
-}
-
-fn path_index(microfacet: Microfacet, heuristic: Heuristic) -> usize {
-    let heuristic = match heuristic {
-        Heuristic::Power => 0,
-        Heuristic::Balance => 1,
-        #[cfg(feature = "testing")]
-        Heuristic::UnweightedBsdfHits => 2,
-    };
-    (microfacet == Microfacet::Beckmann) as usize * 3 + heuristic
 }
 
 impl Passes {
@@ -263,9 +253,9 @@ impl Passes {
         built(&self.resolve, || ResolvePass::new(&self.ctx))
     }
 
-    /// Builds every pipeline now (the path tracer's for `microfacet` and `heuristic`), not at
-    /// first use: for a host that records frames against a deadline.
-    pub fn prepare(&self, scene: &GpuScene, microfacet: Microfacet, heuristic: Heuristic) -> Result<()> {
+    /// Builds every pipeline now (the path tracer's for `options`), not at first use: for a host
+    /// that records frames against a deadline.
+    pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
         self.check(scene)?;
         self.gbuffer_pass(scene)?;
         self.deferred_pass(scene, ShadowMethod::RayTraced)?;
@@ -274,21 +264,14 @@ impl Passes {
         self.blur_pass()?;
         self.tonemap_pass()?;
         self.resolve_pass()?;
-        self.path_pass(scene, microfacet, heuristic).map(|_| ())
+        self.path_pass(scene, options).map(|_| ())
     }
 
-    /// The path tracer's pipeline for `microfacet` and `heuristic` (built now if it was not:
-    /// an embedding host calls this before recording a frame).
-    pub fn path_pass(
-        &self,
-        scene: &GpuScene,
-        microfacet: Microfacet,
-        heuristic: Heuristic,
-    ) -> Result<&PathTracePass> {
+    /// The path tracer's pipeline for `options` (built now if it was not: an embedding host
+    /// calls this before recording a frame).
+    pub fn path_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&PathTracePass> {
         self.check(scene)?;
-        built(&self.path[path_index(microfacet, heuristic)], || {
-            PathTracePass::for_scene(&self.ctx, scene, microfacet, heuristic)
-        })
+        built(&self.path[options.index()], || PathTracePass::for_scene(&self.ctx, scene, options))
     }
 
     /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.
@@ -548,7 +531,7 @@ impl Passes {
                 settings.size, target.size
             )));
         }
-        let pass = self.path_pass(scene, settings.microfacet, settings.heuristic)?;
+        let pass = self.path_pass(scene, settings.options())?;
         let mut params = PathTracePass::params(scene, camera, settings);
         for sample in first..first + count {
             params.sample_index = sample;
@@ -581,7 +564,7 @@ impl Passes {
         if settings.spp == 0 {
             return Err(Error::Invalid("samples per pixel must be at least 1".into()));
         }
-        self.path_pass(scene, settings.microfacet, settings.heuristic)?;
+        self.path_pass(scene, settings.options())?;
         let target = PathTarget::new(ctx, settings.size)?;
         // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
         let pixels = settings.size.0 as u64 * settings.size.1 as u64;

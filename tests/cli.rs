@@ -163,6 +163,34 @@ fn render_cornell_box_writes_png_and_exr_layers() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--microfacet ggx-walter` and `--strategy bsdf|light` reach the kernel: each renders the lit
+/// Cornell box with validation on, and differently from the defaults with the same seed.
+#[test]
+fn render_sampling_options_reach_the_kernel() {
+    let dir = std::env::temp_dir().join(format!("umbra-sampling-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let red = |name: &str, options: &[&str]| {
+        let exr = dir.join(format!("{name}.exr"));
+        run_validated(
+            umbra()
+                .args(["render", "--size", "16x12", "--spp", "2", "-o"])
+                .arg(dir.join(format!("{name}.png")))
+                .arg("--exr")
+                .arg(&exr)
+                .args(options),
+        );
+        let (_, _, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+        channels.into_iter().find(|c| c.0 == "R").unwrap().1
+    };
+    let default = red("default", &[]);
+    for options in [["--microfacet", "ggx-walter"], ["--strategy", "bsdf"], ["--strategy", "light"]] {
+        let image = red(options[1], &options);
+        assert!(image.iter().sum::<f32>() > 0.0, "{options:?}: black");
+        assert_ne!(image, default, "{options:?}: the same image as the defaults");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn render_of_a_bad_file_names_it() {
     let dir = std::env::temp_dir().join(format!("umbra-bad-{}", std::process::id()));

@@ -16,16 +16,22 @@
 //!   radiance (background, a light seen directly) have no variance in either renderer and must
 //!   agree to 10⁻⁵.
 //!
-//! Three statistics, each at
-//! α = 1 − (1 − 0.001)^(1/12) (Šidák over 3 statistics × 4 scenes: 0.001 in all):
+//! Each scene is rendered with its default estimator (GGX or Beckmann as the reference, the power
+//! heuristic, MIS), and the Cornell box and the spheres under the sky with every other estimator
+//! that can be tested at this sample count ([`estimators`]: Walter's GGX sampling, the balance
+//! heuristic, BSDF or light sampling alone). Three statistics per comparison (two for BSDF
+//! sampling alone in the Cornell box), each at α = 1 − (1 − 0.001)^(1/43) (Šidák over the
+//! 3 × 4 statistics of the scenes and the 31 of the other estimators: 0.001 in all; [`alpha`]
+//! counts them):
 //! - pixels: the count of pixel channels with |z| > 3.29 (two-sided 0.001 each) is at most the
 //!   binomial(n, 0.001) quantile at 1 − α: localised errors (orientation, a texture, a light);
 //! - blocks: the pixels are averaged over 4×4 blocks (z of the block means, which are much closer
 //!   to normal than single pixels with fireflies) and Σ z² is tested against χ²(blocks × 3);
 //! - image: the image mean of each channel, z against N(0, 1), two-sided, Šidák over the channels.
 //!
-//! The deliberately biased variants (a base colour 2 % darker, emission found by BSDF sampling
-//! counted without its MIS weight) must be rejected by the same test.
+//! The deliberately biased variants (a base colour 2 % darker, also under BSDF sampling alone
+//! without the per-pixel statistic; emission found by BSDF sampling counted without its MIS
+//! weight) must be rejected by the same test.
 //! `UMBRA_MITSUBA_DEBUG=DIR` writes umbra's image, the reference and z for every comparison.
 
 mod common;
@@ -33,13 +39,16 @@ mod common;
 use common::{gamma_q, Gpu};
 use std::path::{Path, PathBuf};
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::pathtrace::{Heuristic, Microfacet};
+use umbra::passes::pathtrace::{Heuristic, Microfacet, PathOptions, Strategy};
 use umbra::render::{path_trace, PathImage, PathSettings};
 use umbra::scene::Scene;
 
-/// The family's significance: 0.001 over the 3 statistics of each of the 4 scenes (Šidák).
+/// The family's significance: 0.001 over every statistic of every comparison (Šidák): the 3 of
+/// each of the 4 scenes with its default estimator, and the 3 (or 2) of every other estimator of
+/// [`estimators`].
 fn alpha() -> f64 {
-    1.0 - (1.0 - 1e-3f64).powf(1.0 / 12.0)
+    let statistics = 3 * SCENES.len() + estimators().iter().map(|e| 2 + e.pixel_test as usize).sum::<usize>();
+    1.0 - (1.0 - 1e-3f64).powf(1.0 / statistics as f64)
 }
 
 /// z beyond which a single pixel channel counts as an outlier (two-sided 0.001).
@@ -52,6 +61,8 @@ struct Case {
     name: &'static str,
     gltf: &'static str,
     environment: bool,
+    /// The reference's microfacet distribution (GGX or Beckmann), which umbra's default estimator
+    /// for it samples.
     microfacet: Microfacet,
     size: (u32, u32),
     /// umbra's samples per pixel.
@@ -90,6 +101,66 @@ const TEXTURED: Case = Case {
     size: (64, 48),
     spp: 1024,
 };
+const SCENES: [&Case; 4] = [&CORNELL, &SPHERES, &SPHERES_BECKMANN, &TEXTURED];
+
+/// One more estimator of a reference's scene than its default (the case's microfacet, the power
+/// heuristic, MIS), with its samples per pixel.
+struct Estimator {
+    case: &'static Case,
+    options: PathOptions,
+    spp: u32,
+    /// Whether the per-pixel statistic applies (blocks and the image mean always do).
+    pixel_test: bool,
+}
+
+/// Every estimator compared with the references besides the defaults: per scene with an area
+/// light or an environment map, each microfacet sampling of its distribution (GGX: visible
+/// normals and Walter's D(h) cos θh) × {MIS with the power and the balance heuristic, BSDF
+/// sampling alone, light sampling alone} (the heuristic only matters to MIS), but for two
+/// exclusions, measured (tests/reference/README.md, "Estimators"):
+/// - under the sky (spheres-sky, spheres-sky-beckmann), either strategy alone: BSDF sampling
+///   finds the sun (one texel: 56 % of the sky's power on 0.02 % of the sphere) in a few of a
+///   pixel's 1,024 samples or none, and light sampling finds the sky's reflection in the roughness-0 spheres (α 10⁻⁴)
+///   essentially never. umbra's pixel then comes out low with an estimated variance near 0:
+///   hundreds of pixel channels beyond |z| 3.29, blocks χ²/dof 5 to 20, all of them too dark.
+///   That is a variance umbra cannot estimate at a test's sample count, not a bias it could show;
+/// - BSDF sampling alone in the Cornell box: the per-pixel statistic (not the blocks, not the
+///   image mean), because a dark pixel's samples may all miss the light, so that its estimated
+///   variance is 0 (495 channels beyond |z| 3.29 at 1,024 spp, 95 at 4,096, 21 at 16,384, bound
+///   20; blocks χ²/dof 0.97, 0.95, 0.98).
+fn estimators() -> Vec<Estimator> {
+    let mut out = Vec::new();
+    for case in [&CORNELL, &SPHERES, &SPHERES_BECKMANN] {
+        let samplings: &[Microfacet] = match case.microfacet {
+            Microfacet::Beckmann => &[Microfacet::Beckmann],
+            _ => &[Microfacet::Ggx, Microfacet::GgxWalter],
+        };
+        for &microfacet in samplings {
+            for (strategy, heuristic) in [
+                (Strategy::Mis, Heuristic::Power),
+                (Strategy::Mis, Heuristic::Balance),
+                (Strategy::Bsdf, Heuristic::Power),
+                (Strategy::Light, Heuristic::Power),
+            ] {
+                let options = PathOptions { microfacet, heuristic, strategy };
+                if options == default_options(case) {
+                    continue; // the scene's own test
+                }
+                if case.environment && strategy != Strategy::Mis {
+                    continue; // not testable at a test's sample count (above)
+                }
+                let pixel_test = strategy != Strategy::Bsdf;
+                out.push(Estimator { case, options, spp: case.spp, pixel_test });
+            }
+        }
+    }
+    out
+}
+
+/// The estimator each scene's own test uses.
+fn default_options(case: &Case) -> PathOptions {
+    PathOptions { microfacet: case.microfacet, ..Default::default() }
+}
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -122,12 +193,13 @@ fn reference_samples(case: &Case) -> u64 {
     meta["spp_per_render"].as_u64().unwrap() * meta["renders"].as_u64().unwrap()
 }
 
-/// umbra's render of `case` (Russian roulette off, as in the reference), after `edit` changed
-/// the loaded scene.
+/// umbra's render of `case` with `options` at `spp` (Russian roulette off, as in the reference),
+/// after `edit` changed the loaded scene.
 fn render(
     gpu: &Gpu,
     case: &Case,
-    heuristic: Heuristic,
+    options: PathOptions,
+    spp: u32,
     seed: u32,
     edit: impl FnOnce(&mut Scene),
 ) -> PathImage {
@@ -142,12 +214,13 @@ fn render(
     }
     let settings = PathSettings {
         size: case.size,
-        spp: case.spp,
+        spp,
         seed,
         max_bounces: 8,
         rr_depth: 1 << 20,
-        microfacet: case.microfacet,
-        heuristic,
+        microfacet: options.microfacet,
+        heuristic: options.heuristic,
+        strategy: options.strategy,
         env: if case.environment { [1.0; 3] } else { [0.0; 3] },
         ..Default::default()
     };
@@ -190,11 +263,11 @@ struct Agreement {
 }
 
 impl Agreement {
-    /// Why the images disagree beyond noise, or None.
-    fn rejection(&self) -> Option<String> {
+    /// Why the images disagree beyond noise, or None; `pixels`: with the per-pixel statistic.
+    fn rejection(&self, pixels: bool) -> Option<String> {
         let alpha = alpha();
         let mut why = Vec::new();
-        if self.beyond > self.beyond_bound {
+        if pixels && self.beyond > self.beyond_bound {
             why.push(format!(
                 "{} pixel channels beyond |z| {PIXEL_Z} (at most {})",
                 self.beyond, self.beyond_bound
@@ -336,11 +409,29 @@ fn write_debug(
 
 fn agrees(case: &Case) {
     let gpu = Gpu::new();
-    let image = render(&gpu, case, Heuristic::Power, 1, |_| {});
+    let image = render(&gpu, case, default_options(case), case.spp, 1, |_| {});
     let agreement = compare(case, &image, &reference(case), case.name);
-    if let Some(why) = agreement.rejection() {
+    if let Some(why) = agreement.rejection(true) {
         panic!("{}: umbra and Mitsuba disagree beyond noise: {why}", case.name);
     }
+}
+
+/// Every estimator of [`estimators`] for `case` sampling `microfacet` agrees with the reference.
+fn estimators_agree(case: &Case, microfacet: Microfacet) {
+    let gpu = Gpu::new();
+    let reference = reference(case);
+    let mut failures = Vec::new();
+    for e in estimators().iter().filter(|e| std::ptr::eq(e.case, case) && e.options.microfacet == microfacet)
+    {
+        let o = e.options;
+        let label =
+            format!("{} {} {} {}", case.name, microfacet.name(), o.strategy.name(), o.heuristic.name());
+        let image = render(&gpu, case, o, e.spp, 1, |_| {});
+        if let Some(why) = compare(case, &image, &reference, &label).rejection(e.pixel_test) {
+            failures.push(format!("{label}: {why}"));
+        }
+    }
+    assert!(failures.is_empty(), "umbra and Mitsuba disagree beyond noise:\n{}", failures.join("\n"));
 }
 
 /// Scales every material's base colour factor by `factor`.
@@ -372,17 +463,24 @@ fn textured_scene_with_point_and_spot_lights_agrees_with_mitsuba() {
     agrees(&TEXTURED);
 }
 
-/// A base colour 2 % darker on every material must be told apart from the reference.
+/// A base colour 2 % darker on every material must be told apart from the reference: with the
+/// default estimator, and with BSDF sampling alone in the Cornell box, which is tested without
+/// the per-pixel statistic ([`estimators`]).
 #[test]
 fn a_two_percent_darker_base_colour_is_rejected() {
     let gpu = Gpu::new();
-    for case in [&CORNELL, &TEXTURED] {
-        let image = render(&gpu, case, Heuristic::Power, 1, |scene| scale_base_colour(scene, 0.98));
-        let agreement = compare(case, &image, &reference(case), &format!("{} base colour -2%", case.name));
+    let bsdf_only = PathOptions { strategy: Strategy::Bsdf, ..default_options(&CORNELL) };
+    for (case, options, pixels) in [
+        (&CORNELL, default_options(&CORNELL), true),
+        (&TEXTURED, default_options(&TEXTURED), true),
+        (&CORNELL, bsdf_only, false),
+    ] {
+        let image = render(&gpu, case, options, case.spp, 1, |scene| scale_base_colour(scene, 0.98));
+        let label = format!("{} {} base colour -2%", case.name, options.strategy.name());
+        let agreement = compare(case, &image, &reference(case), &label);
         assert!(
-            agreement.rejection().is_some(),
-            "{}: a 2 % darker base colour passed: {agreement:?}",
-            case.name
+            agreement.rejection(pixels).is_some(),
+            "{label}: a 2 % darker base colour passed: {agreement:?}"
         );
     }
 }
@@ -392,8 +490,38 @@ fn a_two_percent_darker_base_colour_is_rejected() {
 fn a_missing_mis_weight_is_rejected() {
     let gpu = Gpu::new();
     for case in [&CORNELL, &SPHERES] {
-        let image = render(&gpu, case, Heuristic::UnweightedBsdfHits, 1, |_| {});
+        let options = PathOptions { heuristic: Heuristic::UnweightedBsdfHits, ..default_options(case) };
+        let image = render(&gpu, case, options, case.spp, 1, |_| {});
         let agreement = compare(case, &image, &reference(case), &format!("{} without MIS weight", case.name));
-        assert!(agreement.rejection().is_some(), "{}: a missing MIS weight passed: {agreement:?}", case.name);
+        assert!(
+            agreement.rejection(true).is_some(),
+            "{}: a missing MIS weight passed: {agreement:?}",
+            case.name
+        );
     }
+}
+
+#[test]
+fn cornell_box_estimators_agree_with_mitsuba() {
+    estimators_agree(&CORNELL, Microfacet::Ggx);
+}
+
+#[test]
+fn cornell_box_estimators_with_walter_sampling_agree_with_mitsuba() {
+    estimators_agree(&CORNELL, Microfacet::GgxWalter);
+}
+
+#[test]
+fn spheres_under_the_sky_estimators_agree_with_mitsuba() {
+    estimators_agree(&SPHERES, Microfacet::Ggx);
+}
+
+#[test]
+fn spheres_under_the_sky_estimators_with_walter_sampling_agree_with_mitsuba() {
+    estimators_agree(&SPHERES, Microfacet::GgxWalter);
+}
+
+#[test]
+fn beckmann_spheres_under_the_sky_estimators_agree_with_mitsuba() {
+    estimators_agree(&SPHERES_BECKMANN, Microfacet::Beckmann);
 }

@@ -159,14 +159,14 @@ fn metal_albedo(mu: f64, alpha: f64, microfacet: Microfacet) -> f64 {
     use std::f64::consts::PI;
     let a2 = alpha * alpha;
     let d = |hz: f64| match microfacet {
-        Microfacet::Ggx => a2 / (PI * (hz * hz * (a2 - 1.0) + 1.0).powi(2)),
+        Microfacet::Ggx | Microfacet::GgxWalter => a2 / (PI * (hz * hz * (a2 - 1.0) + 1.0).powi(2)),
         Microfacet::Beckmann => {
             let c2 = hz * hz;
             (-(1.0 - c2) / c2 / a2).exp() / (PI * a2 * c2 * c2)
         }
     };
     let g1 = |c: f64| match microfacet {
-        Microfacet::Ggx => 2.0 * c / (c + (a2 + (1.0 - a2) * c * c).sqrt()),
+        Microfacet::Ggx | Microfacet::GgxWalter => 2.0 * c / (c + (a2 + (1.0 - a2) * c * c).sqrt()),
         Microfacet::Beckmann => {
             let b = c / (alpha * (1.0 - c * c).sqrt());
             if b >= 1.6 {
@@ -194,14 +194,14 @@ fn metal_albedo(mu: f64, alpha: f64, microfacet: Microfacet) -> f64 {
 }
 
 /// A metal sphere (base colour 1, so F = 1) under a constant environment of 1, GGX (VNDF
-/// sampling) and Beckmann (half-vector sampling): each pixel
+/// sampling and Walter's D(h) cos θh sampling) and Beckmann (half-vector sampling): each pixel
 /// converges to the numerically integrated directional albedo at its view angle. A wrong pdf or
 /// sampling weight shifts the mean. Pixels are pooled in bins of view angle (single pixels at
 /// 64 spp are too skewed for a z-test: most samples are near 1 with a rare tail) and each bin
 /// is z-tested at significance 0.01 with a Šidák correction over the bins.
 #[test]
 fn metal_spheres_match_integrated_albedo() {
-    for microfacet in [Microfacet::Ggx, Microfacet::Beckmann] {
+    for microfacet in Microfacet::ALL {
         metal_sphere_matches_integrated_albedo(microfacet);
     }
 }

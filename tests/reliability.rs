@@ -255,7 +255,7 @@ fn failed_submissions_name_the_last_pass() {
     let gpu = Gpu::new();
     let (device_scene, camera) = cornell_box(&gpu);
     let settings = PathSettings { size: (8, 8), spp: 1, ..Default::default() };
-    let pass = PathTracePass::for_scene(&gpu, &device_scene, Default::default(), Default::default()).unwrap();
+    let pass = PathTracePass::for_scene(&gpu, &device_scene, Default::default()).unwrap();
     let resolve = umbra::passes::pathtrace::ResolvePass::new(&gpu).unwrap();
     let target = PathTarget::new(&gpu, settings.size).unwrap();
     let output =
@@ -494,8 +494,7 @@ fn ten_thousand_samples_equal_a_float64_accumulation() {
 
     // Every sample alone: zero the accumulator, trace sample s, copy the result out.
     let start = std::time::Instant::now();
-    let pass =
-        PathTracePass::for_scene(&gpu, &device_scene, settings.microfacet, settings.heuristic).unwrap();
+    let pass = PathTracePass::for_scene(&gpu, &device_scene, settings.options()).unwrap();
     let target = PathTarget::new(&gpu, settings.size).unwrap();
     let mut params = PathTracePass::params(&device_scene, &camera, &settings);
     let row = (PIXELS * 16) as u64;

@@ -2,7 +2,9 @@
 //! kernel (`spirv/sample_test.comp`) that includes the renderer's own `sampling.glsl` and
 //! `bsdf.glsl`: the histogram of sampled directions must match the pdf the same code reports,
 //! integrated over each cell (Mitsuba's chi2 test, pbrt's bsdfs_test). Cells with an expected
-//! count below 5 are pooled; significance 0.01 with a Šidák correction over all cases.
+//! count below 5 are pooled; significance 0.01 with a Šidák correction over all cases. Each
+//! microfacet sampling is tested (GGX from visible normals, GGX from D(h) cos θh as Walter et al.
+//! 2007 sample it, Beckmann), alone and inside the dielectric BSDF.
 //! Light sampling goes through a second test kernel (`spirv/light_sample_test.comp`, the
 //! renderer's environment.glsl and shading.glsl): `env_sample` against `env_pdf` on a real HDR
 //! sky, and next-event estimation on emissive triangles against the light pdf the path tracer's
@@ -16,13 +18,15 @@ use glam::Vec3;
 use umbra::gpu::kernels::{light_sample_test, sample_test};
 use umbra::gpu::layout::{LightTestParams, SampleTestParams};
 use umbra::gpu::Pipeline;
+use umbra::passes::pathtrace::Microfacet;
 use umbra::vk::{raw, Buffer, MemoryLocation};
 
 const THETA_CELLS: usize = 16; // in cos θ over [−1, 1]
 const PHI_CELLS: usize = 32;
 const SUB: usize = 64; // pdf evaluations per cell side
 const SAMPLES: u32 = 400_000;
-/// The cap around wi = −wo integrated in polar coordinates for Beckmann (see `chi_square`):
+/// The cap around wi = −wo integrated in polar coordinates for half-vector sampling from
+/// D(h) cos θh (see `chi_square`):
 /// radius (radians; the grid spacing is about 0.003), rings and spokes.
 const CAP_RADIUS: f64 = 0.1;
 const CAP_RINGS: usize = 512;
@@ -32,12 +36,14 @@ const CAP_SPOKES: usize = 4000;
 enum Sampler {
     Cosine,
     Microfacet {
-        beckmann: bool,
+        microfacet: Microfacet,
         alpha: f32,
         theta_degrees: f32,
     },
-    /// The whole BSDF of a white transmissive dielectric (GGX): reflection + transmission.
+    /// The whole BSDF of a white transmissive dielectric (GGX, either sampling): reflection +
+    /// transmission.
     Dielectric {
+        microfacet: Microfacet,
         kind: Dielectric,
         alpha: f32,
         theta_degrees: f32,
@@ -55,15 +61,18 @@ enum Dielectric {
     Thin = 4,
 }
 
-struct Kernel {
-    ggx: Pipeline<sample_test::Kernel>,
-    beckmann: Pipeline<sample_test::Kernel>,
-}
+/// The kernel specialised for each [`Microfacet`], in [`Microfacet::ALL`] order.
+struct Kernel([Pipeline<sample_test::Kernel>; 3]);
 
 impl Kernel {
     fn new(gpu: &Gpu) -> Self {
-        let make = |beckmann| Pipeline::new(gpu, &sample_test::Spec { beckmann }, None).unwrap();
-        Self { ggx: make(false), beckmann: make(true) }
+        Self(Microfacet::ALL.map(|m| {
+            let spec = sample_test::Spec {
+                beckmann: m == Microfacet::Beckmann,
+                ggx_walter: m == Microfacet::GgxWalter,
+            };
+            Pipeline::new(gpu, &spec, None).unwrap()
+        }))
     }
 
     /// Runs the kernel: mode 0 samples `count` directions, mode 1 evaluates the pdf at `dirs`.
@@ -76,18 +85,18 @@ impl Kernel {
         dirs: &[[f32; 4]],
         count: u32,
     ) -> Vec<[f32; 4]> {
-        let (pipeline, wo, alpha, which) = match sampler {
-            Sampler::Cosine => (&self.ggx, Vec3::Z, 1.0, 0),
-            Sampler::Microfacet { beckmann, alpha, theta_degrees } => {
+        let (microfacet, wo, alpha, which) = match sampler {
+            Sampler::Cosine => (Microfacet::Ggx, Vec3::Z, 1.0, 0),
+            Sampler::Microfacet { microfacet, alpha, theta_degrees } => {
                 let t = theta_degrees.to_radians();
-                let p = if beckmann { &self.beckmann } else { &self.ggx };
-                (p, Vec3::new(t.sin(), 0.0, t.cos()), alpha, 1)
+                (microfacet, Vec3::new(t.sin(), 0.0, t.cos()), alpha, 1)
             }
-            Sampler::Dielectric { kind, alpha, theta_degrees } => {
+            Sampler::Dielectric { microfacet, kind, alpha, theta_degrees } => {
                 let t = theta_degrees.to_radians();
-                (&self.ggx, Vec3::new(t.sin(), 0.0, t.cos()), alpha, kind as u32)
+                (microfacet, Vec3::new(t.sin(), 0.0, t.cos()), alpha, kind as u32)
             }
         };
+        let pipeline = &self.0[microfacet as usize];
         // A deliberately wrong pdf evaluates with a scaled alpha (sampling keeps the true one).
         let alpha = if mode == 1 { alpha * pdf_alpha_scale } else { alpha };
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
@@ -123,8 +132,9 @@ fn cell_of(d: Vec3) -> usize {
 /// and the pdf's total mass over the sphere.
 fn chi_square(gpu: &Gpu, kernel: &Kernel, sampler: Sampler, pdf_alpha_scale: f32) -> (f64, f64, usize, f64) {
     let samples = kernel.run(gpu, sampler, 1.0, 0, &[], SAMPLES);
-    // Samples the code reports with pdf 0 are failures it discards (Beckmann's half vectors
-    // can face away from wo): they form one more cell, expected to hold the pdf's missing mass.
+    // Samples the code reports with pdf 0 are failures it discards (half vectors sampled from
+    // D(h) cos θh can face away from wo): they form one more cell, expected to hold the pdf's
+    // missing mass.
     let mut observed = vec![0.0f64; THETA_CELLS * PHI_CELLS];
     let mut discarded = 0.0;
     for s in &samples {
@@ -153,12 +163,17 @@ fn chi_square(gpu: &Gpu, kernel: &Kernel, sampler: Sampler, pdf_alpha_scale: f32
     let pdfs = kernel.run(gpu, sampler, pdf_alpha_scale, 1, &dirs, dirs.len() as u32);
     let cell_area = 2.0 / (THETA_CELLS * SUB) as f64 * std::f64::consts::TAU / (PHI_CELLS * SUB) as f64;
     let mut expected = vec![0.0f64; THETA_CELLS * PHI_CELLS];
-    // Beckmann's half-vector pdf D(h) cos θ_h / (4 wo·h) has an integrable 1/r singularity at
-    // wi = −wo (wo·h → r/2 at angular distance r from −wo), which the grid under-integrates: in
-    // a cap around −wo the pdf is integrated in polar coordinates about −wo instead, where the
-    // Jacobian sin r cancels the singularity.
+    // The half-vector pdf D(h) cos θ_h / (4 wo·h) of Beckmann and of GGX sampled as Walter does
+    // has an integrable 1/r singularity at wi = −wo (wo·h → r/2 at angular distance r from −wo),
+    // which the grid under-integrates: in a cap around −wo the pdf is integrated in polar
+    // coordinates about −wo instead, where the Jacobian sin r cancels the singularity. (Inside the
+    // dielectric, wi near −wo is transmission, whose pdf has no such singularity.)
     let cap = match sampler {
-        Sampler::Microfacet { beckmann: true, theta_degrees, .. } => {
+        Sampler::Microfacet {
+            microfacet: Microfacet::Beckmann | Microfacet::GgxWalter,
+            theta_degrees,
+            ..
+        } => {
             let t = (theta_degrees as f64).to_radians();
             Some(-glam::DVec3::new(t.sin(), 0.0, t.cos()))
         }
@@ -193,10 +208,15 @@ fn chi_square(gpu: &Gpu, kernel: &Kernel, sampler: Sampler, pdf_alpha_scale: f32
     }
     let mass: f64 = expected.iter().sum();
     let n = samples.len() as f64;
-    // Only Beckmann's half-vector sampling and the dielectric (a reflection leaving its side, a
-    // refraction beyond the critical angle) can discard; VNDF sampling never may. The discarded
-    // fraction is the pdf's missing mass (checked loosely: the mass comes from quadrature).
-    if matches!(sampler, Sampler::Microfacet { beckmann: true, .. } | Sampler::Dielectric { .. }) {
+    // Only sampling from D(h) cos θh (Beckmann, GGX as Walter) and the dielectric (a reflection
+    // leaving its side, a refraction beyond the critical angle) can discard; VNDF sampling never
+    // may. The discarded fraction is the pdf's missing mass (checked loosely: the mass comes from
+    // quadrature).
+    if matches!(
+        sampler,
+        Sampler::Microfacet { microfacet: Microfacet::Beckmann | Microfacet::GgxWalter, .. }
+            | Sampler::Dielectric { .. }
+    ) {
         let missing = 1.0 - mass;
         assert!(
             (discarded / n - missing).abs() < 0.02,
@@ -255,17 +275,19 @@ fn pooled_chi_square(observed: &[f64], expected: &[f64], n: f64) -> (f64, f64, u
 
 fn cases() -> Vec<Sampler> {
     let mut cases = vec![Sampler::Cosine];
-    for beckmann in [false, true] {
+    for microfacet in Microfacet::ALL {
         for alpha in [0.05, 0.2, 0.5, 1.0] {
             for theta_degrees in [0.0, 30.0, 60.0, 85.0] {
-                cases.push(Sampler::Microfacet { beckmann, alpha, theta_degrees });
+                cases.push(Sampler::Microfacet { microfacet, alpha, theta_degrees });
             }
         }
     }
-    for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin] {
-        for alpha in [0.1, 0.5] {
-            for theta_degrees in [30.0, 60.0] {
-                cases.push(Sampler::Dielectric { kind, alpha, theta_degrees });
+    for microfacet in [Microfacet::Ggx, Microfacet::GgxWalter] {
+        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin] {
+            for alpha in [0.1, 0.5] {
+                for theta_degrees in [30.0, 60.0] {
+                    cases.push(Sampler::Dielectric { microfacet, kind, alpha, theta_degrees });
+                }
             }
         }
     }
@@ -293,16 +315,29 @@ fn samplers_match_their_pdfs() {
     assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
 }
 
-/// The test has power: sampling GGX but reporting the pdf of a 10 % larger alpha is rejected.
+/// The test has power: sampling but reporting the pdf of a 10 % larger alpha is rejected, for
+/// each microfacet sampling and for the dielectric with either GGX sampling.
 #[test]
 fn a_wrong_pdf_is_rejected() {
     let gpu = Gpu::new();
     let kernel = Kernel::new(&gpu);
     let alpha = 1.0 - 0.99f64.powf(1.0 / cases().len() as f64);
     for case in [
-        Sampler::Microfacet { beckmann: false, alpha: 0.5, theta_degrees: 30.0 },
-        Sampler::Microfacet { beckmann: true, alpha: 0.2, theta_degrees: 60.0 },
-        Sampler::Dielectric { kind: Dielectric::Entering, alpha: 0.5, theta_degrees: 30.0 },
+        Sampler::Microfacet { microfacet: Microfacet::Ggx, alpha: 0.5, theta_degrees: 30.0 },
+        Sampler::Microfacet { microfacet: Microfacet::GgxWalter, alpha: 0.5, theta_degrees: 30.0 },
+        Sampler::Microfacet { microfacet: Microfacet::Beckmann, alpha: 0.2, theta_degrees: 60.0 },
+        Sampler::Dielectric {
+            microfacet: Microfacet::Ggx,
+            kind: Dielectric::Entering,
+            alpha: 0.5,
+            theta_degrees: 30.0,
+        },
+        Sampler::Dielectric {
+            microfacet: Microfacet::GgxWalter,
+            kind: Dielectric::Entering,
+            alpha: 0.5,
+            theta_degrees: 30.0,
+        },
     ] {
         let (p, chi2, dof, _) = chi_square(&gpu, &kernel, case, 1.1);
         eprintln!("wrong pdf {case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.2e}");

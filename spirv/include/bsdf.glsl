@@ -14,7 +14,10 @@
 // the transmitted angle and total internal reflection gives F = 1).
 //
 // The microfacet distribution is GGX (the specification) or, for comparison, Beckmann: the
-// including kernel declares `const bool BECKMANN` (a specialization constant).
+// including kernel declares `const bool BECKMANN` (a specialization constant). Half vectors are
+// sampled from GGX's visible normals (Heitz 2018) or, with `const bool GGX_WALTER` (also the
+// kernel's), from D(h) cos(theta_h) as Walter et al. 2007 do, for reflection and transmission
+// alike; Beckmann always samples D(h) cos(theta_h). The BSDF itself is the same either way.
 #ifndef UMBRA_BSDF_GLSL
 #define UMBRA_BSDF_GLSL
 
@@ -60,14 +63,21 @@ float micro_visibility(vec3 wo, vec3 wi, float a) {
     return 0.25 * v;
 }
 
-// A half vector for wo: GGX visible normals, or Beckmann D(h) cos(theta_h).
+// A half vector for wo: GGX visible normals, GGX D(h) cos(theta_h) (GGX_WALTER), or Beckmann
+// D(h) cos(theta_h).
 vec3 micro_sample(vec3 wo, float a, vec2 u) {
-    return BECKMANN ? sample_beckmann(a, u) : sample_ggx_vndf(wo, a, u);
+    if (BECKMANN) {
+        return sample_beckmann(a, u);
+    }
+    return GGX_WALTER ? sample_ggx_walter(a, u) : sample_ggx_vndf(wo, a, u);
 }
 
 // Density of the half vector h under micro_sample(wo).
 float micro_pdf_h(vec3 wo, vec3 h, float a) {
-    return BECKMANN ? pdf_beckmann(h, a) : pdf_ggx_vndf(wo, h, a);
+    if (BECKMANN) {
+        return pdf_beckmann(h, a);
+    }
+    return GGX_WALTER ? pdf_ggx_walter(h, a) : pdf_ggx_vndf(wo, h, a);
 }
 
 // Solid-angle density of wi = reflect(-wo, h) under micro_sample.

@@ -76,6 +76,24 @@ float pdf_ggx_vndf(vec3 wo, vec3 h, float a) {
     return ggx_g1_over_cos(wo, a) * max(0.0, dot(wo, h)) * ggx_d(h, a);
 }
 
+// Half-vector sampling proportional to D(h) cos(theta_h) (Walter et al. 2007, eq. 35-36:
+// tan^2(theta_h) = a^2 u / (1 - u)), blind to wo: half vectors facing away from wo are possible
+// and have no density under micro_pdf (bsdf.glsl), so the caller discards them. cos and sin are
+// taken from u directly (cos^2 = (1 - u) / (1 - u + a^2 u)), without 1 - cos^2, which would
+// round to zero for small a.
+vec3 sample_ggx_walter(float a, vec2 u) {
+    float d = (1.0 - u.x) + a * a * u.x;
+    float c = sqrt((1.0 - u.x) / d);
+    float s = a * sqrt(u.x / d);
+    float phi = 2.0 * PI * u.y;
+    return vec3(s * cos(phi), s * sin(phi), c);
+}
+
+// Density of the half vector h under sample_ggx_walter: D(h) cos(theta_h).
+float pdf_ggx_walter(vec3 h, float a) {
+    return ggx_d(h, a) * max(h.z, 0.0);
+}
+
 // ---- Beckmann, alpha = roughness^2 ----
 
 float beckmann_d(vec3 h, float a) {

@@ -5,8 +5,8 @@
 //
 // The including kernel reads the whole scene (`scene: full` in src/gpu/interface.rs): its
 // generated kernel/<name>.glsl declares the scene's bindings and HAS_* constants. It declares
-// `const bool BECKMANN` unless that is one of its specialization constants. This file includes
-// bvh.glsl, bsdf.glsl and texture.glsl.
+// `const bool BECKMANN` and `const bool GGX_WALTER` unless they are among its specialization
+// constants. This file includes bvh.glsl, bsdf.glsl and texture.glsl.
 #ifndef UMBRA_SHADING_GLSL
 #define UMBRA_SHADING_GLSL
 

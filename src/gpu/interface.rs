@@ -656,7 +656,14 @@ kernels! {
     kernel pathtrace {
         scene: full [lights, punctual, env_map, textures, transmission, alpha],
         push: PathParams,
-        spec: { beckmann: bool = false, power_heuristic: bool = true, unweighted_bsdf_hits: bool = false },
+        spec: {
+            beckmann: bool = false,
+            ggx_walter: bool = false,
+            power_heuristic: bool = true,
+            unweighted_bsdf_hits: bool = false,
+            light_sampling: bool = true,
+            bsdf_hits: bool = true
+        },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).
             accum: readwrite buffer [vec4],
@@ -984,7 +991,7 @@ kernels! {
     test_kernel sample_test {
         scene: none,
         push: SampleTestParams,
-        spec: { beckmann: bool = false },
+        spec: { beckmann: bool = false, ggx_walter: bool = false },
         bindings: {
             /// Directions at which to evaluate pdfs.
             directions: readonly buffer [vec4],

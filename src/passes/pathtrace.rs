@@ -9,14 +9,32 @@ use crate::gpu::Pipeline;
 use crate::scene::Camera;
 use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation};
 
-/// The microfacet distribution of the specular lobes.
+/// The microfacet distribution of the specular lobes, and how their half vectors are sampled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Microfacet {
-    /// GGX with visible-normal sampling (the glTF specification).
+    /// GGX (the glTF specification) with visible-normal sampling (Heitz 2018).
     #[default]
     Ggx,
+    /// The same GGX BSDF with Walter et al. 2007's sampling: half vectors from D(h) cos θh,
+    /// blind to the outgoing direction (for reflection and transmission alike), so some face away
+    /// from it and are discarded. Noisier than [`Microfacet::Ggx`]; the same mean.
+    GgxWalter,
     /// Beckmann with Walter et al.'s half-vector sampling.
     Beckmann,
+}
+
+impl Microfacet {
+    /// Every value, in [`PathOptions::index`] order.
+    pub const ALL: [Microfacet; 3] = [Microfacet::Ggx, Microfacet::GgxWalter, Microfacet::Beckmann];
+
+    /// The command line's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Microfacet::Ggx => "ggx",
+            Microfacet::GgxWalter => "ggx-walter",
+            Microfacet::Beckmann => "beckmann",
+        }
+    }
 }
 
 /// How light sampling and BSDF sampling are combined.
@@ -34,6 +52,86 @@ pub enum Heuristic {
     UnweightedBsdfHits,
 }
 
+impl Heuristic {
+    /// The command line's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Heuristic::Power => "power",
+            Heuristic::Balance => "balance",
+            #[cfg(feature = "testing")]
+            Heuristic::UnweightedBsdfHits => "unweighted-bsdf-hits",
+        }
+    }
+}
+
+/// Which sampling strategies find the emitters (emissive triangles and the environment map).
+/// Each is unbiased on its own; they differ in noise (BENCHMARKS.md, "The estimators side by
+/// side").
+///
+/// Under every strategy, punctual lights (delta lights, which no ray can hit) are found by light
+/// sampling alone, and emission that light sampling cannot find (a constant environment, the
+/// environment map with [`PathSettings::env_nee`] off) by BSDF sampling alone. Camera rays see
+/// emitters directly under every strategy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Strategy {
+    /// Light sampling (next-event estimation) and BSDF sampling, weighted by multiple importance
+    /// sampling ([`Heuristic`]).
+    #[default]
+    Mis,
+    /// BSDF sampling alone: emission counts where a BSDF-sampled ray hits it; no next-event
+    /// estimation but for punctual lights. The heuristic is not used.
+    Bsdf,
+    /// Light sampling alone: next-event estimation; emission that a BSDF-sampled ray hits is not
+    /// counted (where light sampling could have found it). The heuristic is not used.
+    Light,
+}
+
+impl Strategy {
+    /// Every value, in [`PathOptions::index`] order.
+    pub const ALL: [Strategy; 3] = [Strategy::Mis, Strategy::Bsdf, Strategy::Light];
+
+    /// The command line's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Mis => "mis",
+            Strategy::Bsdf => "bsdf",
+            Strategy::Light => "light",
+        }
+    }
+
+    /// The kernel's (`light_sampling`, `bsdf_hits`): which strategies run.
+    fn spec(self) -> (bool, bool) {
+        (self != Strategy::Bsdf, self != Strategy::Light)
+    }
+}
+
+/// What the path tracer's pipeline is specialised on: the estimator, apart from the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PathOptions {
+    /// Microfacet distribution and its sampling.
+    pub microfacet: Microfacet,
+    /// MIS heuristic (used by [`Strategy::Mis`] only).
+    pub heuristic: Heuristic,
+    /// Sampling strategies.
+    pub strategy: Strategy,
+}
+
+impl PathOptions {
+    /// How many distinct [`PathOptions::index`] values there are.
+    pub const COUNT: usize = 27;
+
+    /// A dense index below [`PathOptions::COUNT`], one per value (a pipeline cache's slot).
+    pub fn index(self) -> usize {
+        let heuristic = match self.heuristic {
+            Heuristic::Power => 0,
+            Heuristic::Balance => 1,
+            #[cfg(feature = "testing")]
+            Heuristic::UnweightedBsdfHits => 2,
+        };
+        (self.microfacet as usize * 3 + heuristic) * 3 + self.strategy as usize
+    }
+}
+
 /// Settings of a path-traced render.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathSettings {
@@ -47,10 +145,12 @@ pub struct PathSettings {
     pub rr_depth: u32,
     /// Seed of the counter-based random numbers.
     pub seed: u32,
-    /// Microfacet distribution.
+    /// Microfacet distribution and its sampling.
     pub microfacet: Microfacet,
     /// MIS heuristic.
     pub heuristic: Heuristic,
+    /// Sampling strategies (MIS of both, or either alone).
+    pub strategy: Strategy,
     /// Constant environment radiance (linear rgb) seen by rays that leave the scene, or, when
     /// the scene has an environment map, the map's multiplier.
     pub env: [f32; 3],
@@ -72,10 +172,18 @@ impl Default for PathSettings {
             seed: 0,
             microfacet: Microfacet::Ggx,
             heuristic: Heuristic::Power,
+            strategy: Strategy::Mis,
             env: [0.0; 3],
             env_nee: true,
             target_error: None,
         }
+    }
+}
+
+impl PathSettings {
+    /// The options the pipeline is specialised on.
+    pub fn options(&self) -> PathOptions {
+        PathOptions { microfacet: self.microfacet, heuristic: self.heuristic, strategy: self.strategy }
     }
 }
 
@@ -123,21 +231,22 @@ impl PathTracePass {
     /// Workgroup size of the kernel.
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
-    /// The pipeline for `scene`: specialised so that what the scene lacks (emissive triangles,
-    /// punctual lights, an environment map, textures, transmission, alpha) costs nothing.
-    pub fn for_scene(
-        ctx: &Context,
-        scene: &GpuScene,
-        microfacet: Microfacet,
-        heuristic: Heuristic,
-    ) -> Result<Self> {
+    /// The pipeline for `scene` and `options`: specialised so that what the scene lacks
+    /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha)
+    /// and what the options leave out cost nothing.
+    pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
+        let PathOptions { microfacet, heuristic, strategy } = options;
+        let (light_sampling, bsdf_hits) = strategy.spec();
         let spec = pathtrace::Spec {
             beckmann: microfacet == Microfacet::Beckmann,
+            ggx_walter: microfacet == Microfacet::GgxWalter,
             power_heuristic: heuristic != Heuristic::Balance,
             #[cfg(feature = "testing")]
             unweighted_bsdf_hits: heuristic == Heuristic::UnweightedBsdfHits,
             #[cfg(not(feature = "testing"))]
             unweighted_bsdf_hits: false,
+            light_sampling,
+            bsdf_hits,
         };
         Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)? })
     }

@@ -1,13 +1,15 @@
 //! `umbra-bench`: umbra's measurements. `suite` charts every method's GPU time against its error
 //! to a converged reference; `rays` is the ray-throughput mode (BVH build statistics and Mrays/s
 //! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass;
-//! `build` times the BVH build alone (CPU only, no Vulkan).
+//! `build` times the BVH build alone (CPU only, no Vulkan); `shadows` compares shadow maps with
+//! shadow rays; `mis` the path tracer's estimators against Mitsuba references.
 
 mod chart;
 // Shared with `umbra`, which uses parsers this binary does not.
 #[allow(dead_code)]
 #[path = "../../cli.rs"]
 mod cli;
+mod mis;
 mod passes;
 mod rays;
 mod shadows;
@@ -139,6 +141,30 @@ enum Command {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
         /// Where to write shadows.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
+    /// The path tracer's estimators side by side (the MIS figure, measured): each microfacet
+    /// sampling × {MIS power, MIS balance, BSDF sampling alone, light sampling alone} on the
+    /// scenes of Mitsuba references, relative MSE against the reference at one sample count
+    /// (JSON and a Markdown table). Run from the repository root.
+    Mis {
+        /// Mitsuba references (NAME.json and NAME.exr in --reference-dir).
+        #[arg(long, value_delimiter = ',', default_value = "spheres-sky,spheres-sky-beckmann,cornell")]
+        references: Vec<String>,
+        /// Folder of the references.
+        #[arg(long, default_value = "tests/reference/mitsuba")]
+        reference_dir: PathBuf,
+        /// Samples per pixel of every render.
+        #[arg(long, default_value_t = 64)]
+        spp: u32,
+        /// Independent renders per estimator (their relative MSEs are averaged).
+        #[arg(long, default_value_t = 8)]
+        seeds: u32,
+        /// Where to write mis.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
         /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
@@ -337,14 +363,18 @@ fn run(cli: Cli) -> Result<()> {
             run_passes(scene, size, repeats, shadow_rays, out)?
         }
         Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {
-            Some(path) => {
-                let text =
-                    std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-                let doc: serde_json::Value =
-                    serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-                print!("{}", shadows::table(&doc));
-            }
+            Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
             None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
+        },
+        Command::Mis { references, reference_dir, spp, seeds, out, table } => match table {
+            Some(path) => print!("{}", mis::table(&read_json(&path)?)),
+            None => {
+                let ctx = Context::new(&ContextDesc::default())?;
+                let measurements = mis::run(&ctx, &reference_dir, &references, spp, seeds)?;
+                let doc = mis::to_json(&ctx.info().name, spp, seeds, &measurements);
+                print!("{}", mis::table(&doc));
+                write_json(&out, "mis.json", &doc)?;
+            }
         },
         Command::Suite {
             quick,
@@ -629,9 +659,20 @@ fn run_shadows(
             println!("  {}: {}", t.method, steps.join(", "));
         }
     }
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let path = out.join("shadows.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
+    write_json(&out, "shadows.json", &doc)
+}
+
+/// An earlier run's JSON (for `--table`).
+fn read_json(path: &std::path::Path) -> Result<serde_json::Value> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
+}
+
+/// Writes `doc` to `out/name` (creating `out`) and says so.
+fn write_json(out: &std::path::Path, name: &str, doc: &serde_json::Value) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let path = out.join(name);
+    std::fs::write(&path, serde_json::to_string_pretty(doc)?)
         .with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());
     Ok(())

@@ -68,6 +68,10 @@ enum Command {
         /// Where to write suite.json, suite.csv, the charts and the cached references.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
+        /// Print the Markdown tables of an earlier run's suite.json and exit (nothing is
+        /// rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
     },
     /// BVH build statistics and ray throughput (Mrays/s) for primary, shadow and diffuse rays.
     Rays {
@@ -387,7 +391,12 @@ fn run(cli: Cli) -> Result<()> {
             ao_radius,
             gltf,
             out,
+            table,
         } => {
+            if let Some(path) = table {
+                print!("{}", suite::table(&read_json(&path)?));
+                return Ok(());
+            }
             let settings = if quick {
                 suite::SuiteSettings {
                     size: (64, 64),

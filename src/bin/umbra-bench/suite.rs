@@ -443,3 +443,89 @@ pub fn csv(results: &[SceneResult]) -> String {
     }
     text
 }
+
+/// The Markdown tables of a run's JSON (what BENCHMARKS.md shows): per scene, path tracing at
+/// 1, 8, 32 and 256 spp, the hybrid at 4 shadow rays (with SSAO and IBL, without each, and with
+/// 1024² PCF shadow maps where the scene has punctual lights), each as GPU time, relative MSE (r)
+/// and mean LDR-FLIP (F); then ambient occlusion's MSE.
+pub fn table(doc: &serde_json::Value) -> String {
+    use serde_json::Value;
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    let time = |ms: f64| match ms {
+        ms if ms >= 1000.0 => format!("{:.1} s", ms / 1000.0),
+        ms if ms >= 10.0 => format!("{ms:.0} ms"),
+        ms => format!("{ms:.1} ms"),
+    };
+    // `n` significant digits, written out (0.48, 0.060, 0.0021).
+    let sig = |x: f64, n: i32| {
+        let digits = (n - 1 - x.abs().log10().floor() as i32).max(0) as usize;
+        format!("{x:.digits$}")
+    };
+    let two = |x: f64| sig(x, 2);
+    fn find<'a>(
+        points: &'a serde_json::Value,
+        method: &str,
+        unit: &str,
+        value: u64,
+    ) -> Option<&'a serde_json::Value> {
+        points.as_array().and_then(|ps| {
+            ps.iter()
+                .find(|p| p["method"] == method && p["unit"] == unit && p["value"].as_u64() == Some(value))
+        })
+    }
+    let mut out = format!(
+        "{}×{}, {}-spp references, {}:\n\n\
+         | scene | path 1 spp | path 8 spp | path 32 spp | path 256 spp | hybrid (4 shadow rays, SSAO 16, IBL) | without SSAO | without IBL | with PCF maps 1024² |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
+        doc["size"][0],
+        doc["size"][1],
+        doc["reference_spp"],
+        doc["device"].as_str().unwrap_or("?"),
+    );
+    let scenes = doc["scenes"].as_array().cloned().unwrap_or_default();
+    for scene in &scenes {
+        let points = &scene["points"];
+        let cell = |method: &str, unit: &str, value: u64| {
+            find(points, method, unit, value).map_or("—".to_string(), |p| {
+                format!(
+                    "{}: r {}, F {:.3}",
+                    time(num(&p["gpu_ms"])),
+                    two(num(&p["rel_mse"])),
+                    num(&p["flip"])
+                )
+            })
+        };
+        let mut row = format!("| {} |", scene["scene"].as_str().unwrap_or("?"));
+        for spp in [1, 8, 32, 256] {
+            row += &format!(" {} |", cell("pathtrace", "spp", spp));
+        }
+        for method in ["hybrid", "hybrid, no SSAO", "hybrid, no IBL"] {
+            row += &format!(" {} |", cell(method, "shadow_rays", 4));
+        }
+        row += &format!(" {} |\n", cell("hybrid, pcf shadow maps", "map_size", 1024));
+        out += &row;
+    }
+    out += "\nAmbient occlusion, MSE against the RTAO reference (surface pixels):\n\n\
+            | scene | SSAO 4 / 16 / 32 directions (+ blur) | RTAO 1 / 4 / 16 / 64 rays |\n|---|---|---|\n";
+    for scene in &scenes {
+        let points = &scene["ao_points"];
+        let cells = |method: &str, unit: &str, values: &[u64]| {
+            let cells: Vec<String> = values
+                .iter()
+                .map(|&v| {
+                    find(points, method, unit, v).map_or("—".to_string(), |p| {
+                        format!("{} {}", time(num(&p["gpu_ms"])), sig(num(&p["mse"]), 3))
+                    })
+                })
+                .collect();
+            cells.join(" / ")
+        };
+        out += &format!(
+            "| {} | {} | {} |\n",
+            scene["scene"].as_str().unwrap_or("?"),
+            cells("ssao", "ssao_samples", &[4, 16, 32]),
+            cells("rtao", "rays", &[1, 4, 16, 64])
+        );
+    }
+    out
+}

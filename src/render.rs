@@ -418,13 +418,6 @@ impl Passes {
                     None => steps.push((t.name, t.ms)),
                 }
             }
-            let stats = maps.stats(ctx)?;
-            log::debug!(
-                "shadow maps: {} layers, at most {} tile-list entries and {} triangles in a tile per layer",
-                maps.plan.layers.len(),
-                stats.entries,
-                stats.tile_max
-            );
             match maps.check(ctx)? {
                 None => return Ok(steps),
                 Some(entries) => maps.reserve(ctx, entries)?,

@@ -53,14 +53,12 @@ float shadow_map_depth(ShadowLayer l, ivec2 q) {
 // The receiver's plane (through the shaded point, normal ng) as a depth over the layer's texels
 // around it: depth(centre + o) = d + dot(g, o) (receiver-plane depth bias, Isidoro 2006), so each
 // compared texel is compared with the receiver's depth at that texel, not at its centre. From
-// the Jacobian of (x, y, depth) along two tangents of the plane; the gradient is limited to
-// `limit` depth per texel (the plane seen edge-on has none).
-vec2 shadow_receiver_gradient(ShadowLayer l, vec3 q, vec3 ng, float limit) {
+// the Jacobian of (x, y, depth) along two tangents of the plane at the receiver, which the
+// layer places at texel `uv` with divisor `w`; the gradient is limited to `limit` depth per texel
+// (the plane seen edge-on has none).
+vec2 shadow_receiver_gradient(ShadowLayer l, vec2 uv, float w, vec3 ng, float limit) {
     vec3 t1 = normalize(cross(ng, abs(ng.x) > 0.5 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
     vec3 t2 = cross(ng, t1);
-    vec4 q1 = vec4(q, 1.0);
-    float w = dot(l.row3, q1);
-    vec2 uv = vec2(dot(l.row0, q1), dot(l.row1, q1)) / w;
     vec3 j1 = vec3((dot(l.row0.xyz, t1) - uv.x * dot(l.row3.xyz, t1)) / w,
                    (dot(l.row1.xyz, t1) - uv.y * dot(l.row3.xyz, t1)) / w, dot(l.row2.xyz, t1));
     vec3 j2 = vec3((dot(l.row0.xyz, t2) - uv.x * dot(l.row3.xyz, t2)) / w,
@@ -152,14 +150,14 @@ bool shadow_pick_layer(uint k, vec3 p, vec3 view_origin, vec3 view_forward, out 
         vec3 a = abs(v);
         uint face = a.x >= a.y && a.x >= a.z ? (v.x > 0.0 ? 0u : 1u)
                   : (a.y >= a.z ? (v.y > 0.0 ? 2u : 3u) : (v.z > 0.0 ? 4u : 5u));
-        first += 6u * face;
+        first += SHADOW_LAYER_TEXELS * face;
     } else if (rec.z == SHADOW_LIGHT_CASCADES) {
         float depth = dot(p - view_origin, view_forward);
         uint j = 0u;
-        while (j + 1u < rec.y && shadow_header(first + 6u * j + 5u).z < depth) {
+        while (j + 1u < rec.y && shadow_header(first + SHADOW_LAYER_TEXELS * j + 5u).z < depth) {
             ++j;
         }
-        first += 6u * j;
+        first += SHADOW_LAYER_TEXELS * j;
         if (shadow_header(first + 5u).z < depth) {
             lit = true;
             return false;
@@ -192,11 +190,10 @@ float shadow_map_visibility(uint k, vec3 p, vec3 ng, vec3 wi, vec3 view_origin, 
     }
     vec2 uv = h.xy / h.w;
     float d = h.z - texel * (bias.x + bias.y * tan_t);
-    vec2 g = shadow_receiver_gradient(l, q.xyz, ng, 10.0 * texel);
     if (SHADOW_MOMENTS) {
-        vec2 g = uv - 0.5;
-        ivec2 c = clamp(ivec2(floor(g)), ivec2(0), ivec2(int(l.size) - 2));
-        vec2 f = clamp(g - vec2(c), 0.0, 1.0);
+        vec2 corner = uv - 0.5;
+        ivec2 c = clamp(ivec2(floor(corner)), ivec2(0), ivec2(int(l.size) - 2));
+        vec2 f = clamp(corner - vec2(c), 0.0, 1.0);
         int i = int(l.offset) + c.y * int(l.size) + c.x;
         vec4 m = mix(mix(imageLoad(shadow_moments, i), imageLoad(shadow_moments, i + 1), f.x),
                      mix(imageLoad(shadow_moments, i + int(l.size)), imageLoad(shadow_moments, i + int(l.size) + 1), f.x),
@@ -205,6 +202,7 @@ float shadow_map_visibility(uint k, vec3 p, vec3 ng, vec3 wi, vec3 view_origin, 
     }
     // Spec constants only as plain `if` conditions (`!A && !B` on them would be an
     // OpSpecConstantOp, which naga rejects).
+    vec2 g = shadow_receiver_gradient(l, uv, h.w, ng, 10.0 * texel);
     bool filtered = false;
     if (SHADOW_PCF) {
         filtered = true;

@@ -619,6 +619,8 @@ gpu_constants! {
     SHADOW_DIRECT_SPAN: uint = 16;
     /// Texels of `shadow_texels` before the lights' records: the filter settings.
     SHADOW_HEADER_TEXELS: uint = 2;
+    /// Texels of one [`GpuShadowLayer`] in `shadow_texels` (its 96 bytes).
+    SHADOW_LAYER_TEXELS: uint = 6;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
 }

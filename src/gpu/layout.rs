@@ -398,6 +398,7 @@ const _: () = assert!(size_of::<GpuMaterial>() == 224);
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);
+const _: () = assert!(size_of::<GpuShadowLayer>() == 16 * SHADOW_LAYER_TEXELS as usize);
 // Push constants: at most 128 bytes, the least every Vulkan device offers.
 const _: () = assert!(size_of::<PathParams>() == 128);
 const _: () = assert!(size_of::<DeferredParams>() == 128);

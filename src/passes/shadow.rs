@@ -26,8 +26,8 @@ use crate::error::{Error, Result};
 use crate::gpu::kernels::{shadow_bin, shadow_moments, shadow_raster, shadow_scan};
 use crate::gpu::layout::{
     GpuLight, GpuShadowLayer, ShadowMomentParams, ShadowRasterParams, ShadowStats, SHADOW_HEADER_TEXELS,
-    SHADOW_LIGHT_CASCADES, SHADOW_LIGHT_CUBE, SHADOW_LIGHT_SINGLE, SHADOW_ORTHOGRAPHIC, SHADOW_PERSPECTIVE,
-    SHADOW_TILE,
+    SHADOW_LAYER_TEXELS, SHADOW_LIGHT_CASCADES, SHADOW_LIGHT_CUBE, SHADOW_LIGHT_SINGLE, SHADOW_ORTHOGRAPHIC,
+    SHADOW_PERSPECTIVE, SHADOW_TILE,
 };
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
@@ -273,7 +273,7 @@ impl ShadowPlan {
     }
 
     /// The `shadow_texels` the lighting pass reads: the filter settings, each light's record
-    /// (the texel of its first layer, the layer count, the kind), then six texels per layer.
+    /// (the texel of its first layer, the layer count, the kind), then each layer's texels.
     pub fn texels(&self, settings: &ShadowSettings) -> Vec<[u32; 4]> {
         let f = |v: [f32; 4]| v.map(f32::to_bits);
         let mut out = vec![
@@ -282,12 +282,14 @@ impl ShadowPlan {
         ];
         debug_assert_eq!(out.len() as u32, SHADOW_HEADER_TEXELS);
         let layers_at = SHADOW_HEADER_TEXELS + self.lights.len() as u32;
-        out.extend(self.lights.iter().map(|&(first, count, kind)| [layers_at + 6 * first, count, kind, 0]));
-        for l in &self.layers {
-            out.extend([l.row0, l.row1, l.row2, l.row3].map(f));
-            out.push([l.offset, l.size, l.kind, 0]);
-            out.push(f([l.texel_world, l.depth_far, l.split, 0.0]));
-        }
+        out.extend(
+            self.lights
+                .iter()
+                .map(|&(first, count, kind)| [layers_at + SHADOW_LAYER_TEXELS * first, count, kind, 0]),
+        );
+        // The layers as they lie in memory, `SHADOW_LAYER_TEXELS` texels each (`shadow.glsl`
+        // reads them field by field).
+        out.extend_from_slice(bytemuck::cast_slice::<GpuShadowLayer, [u32; 4]>(&self.layers));
         out
     }
 }
@@ -453,13 +455,7 @@ impl ShadowMaps {
             moments: TexelBuffer::new(ctx, "shadow moments", moment_texels, f32x4, 16, no_usage)?,
             tile_count: Buffer::new(ctx, "shadow tile counts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
             tile_start: Buffer::new(ctx, "shadow tile starts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
-            tile_tris: Buffer::new(
-                ctx,
-                "shadow tile lists",
-                4 * capacity as u64,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
+            tile_tris: tile_lists(ctx, capacity)?,
             scratch: Buffer::new(ctx, "shadow scratch layer", 4 * s * s, storage, MemoryLocation::GpuOnly)?,
             raster_tris: Buffer::upload(
                 ctx,
@@ -505,6 +501,12 @@ impl ShadowMaps {
     /// when a tile held more than [`ShadowMaps::MAX_TILE_TRIANGLES`].
     pub fn check(&self, ctx: &Context) -> Result<Option<u32>> {
         let stats = self.stats(ctx)?;
+        log::debug!(
+            "shadow maps: {} layers, at most {} tile-list entries and {} triangles in a tile per layer",
+            self.plan.layers.len(),
+            stats.entries,
+            stats.tile_max
+        );
         if stats.tile_max > Self::MAX_TILE_TRIANGLES {
             return Err(Error::Invalid(format!(
                 "shadow maps: one {SHADOW_TILE}x{SHADOW_TILE} tile holds {} triangles, more than {}: raise the map size",
@@ -518,9 +520,7 @@ impl ShadowMaps {
     /// Grows the tile lists to hold `entries` (and a quarter more).
     pub fn reserve(&mut self, ctx: &Context, entries: u32) -> Result<()> {
         let capacity = entries.saturating_add(entries / 4).min(u32::MAX / 8);
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
-        self.tile_tris =
-            Buffer::new(ctx, "shadow tile lists", 4 * capacity as u64, usage, MemoryLocation::GpuOnly)?;
+        self.tile_tris = tile_lists(ctx, capacity)?;
         self.capacity = capacity;
         Ok(())
     }
@@ -530,6 +530,12 @@ impl ShadowMaps {
         let n = self.plan.layers.len() * (self.settings.map_size as usize).pow(2);
         Ok(self.depth.buffer.read::<f32>(ctx)?[..n].to_vec())
     }
+}
+
+/// The tiles' lists: `capacity` triangle indices.
+fn tile_lists(ctx: &Context, capacity: u32) -> Result<Buffer> {
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+    Buffer::new(ctx, "shadow tile lists", 4 * capacity as u64, usage, MemoryLocation::GpuOnly)
 }
 
 /// The shadow-map kernels.

@@ -574,7 +574,16 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             }
             let ao =
                 renderer.record_ssao(cmd, &camera, gbuffer, image(7).view, image(8).view, &ao_settings)?;
-            renderer.record_lighting(cmd, &camera, gbuffer, image(5).view, Some(ao), None, &lighting)?;
+            renderer.record_lighting(
+                cmd,
+                &camera,
+                gbuffer,
+                image(5).view,
+                Some(ao),
+                None,
+                None,
+                &lighting,
+            )?;
             renderer.record_tonemap(cmd, image(5).view, image(6).view, size, 0.0, curve)?;
         }
 

@@ -2,7 +2,9 @@
 // Deferred lighting of the G-buffer (gbuffer.comp) with the path tracer's BSDF and lights:
 // emission, punctual lights and emissive triangles with ray-traced shadows (area lights sampled,
 // `shadow_rays` shadow rays per pixel, so shadows are soft), and split-sum image-based lighting
-// (ibl.glsl; `ibl`) multiplied by ambient occlusion. One bounce: no indirect light beyond what IBL approximates.
+// (ibl.glsl; `ibl`) multiplied by ambient occlusion; with a probe volume (`probes`,
+// probes.glsl), indirect diffuse light from the probes. Without probes, no indirect light beyond
+// what IBL approximates.
 // Transmissive materials (KHR_materials_transmission) transmit the prefiltered environment seen
 // through their one interface: straight on for thin-walled ones, refracted once for volumes (no
 // exit refraction, no second surface: the G-buffer knows only the first).
@@ -20,6 +22,7 @@ const bool GGX_WALTER = false;  // the BSDF is evaluated here, never sampled
 #include "shading.glsl"
 #include "shadow.glsl"
 #include "ibl.glsl"
+#include "probes.glsl"
 
 // Shadow maps instead of shadow rays for the punctual lights (src/passes/shadow.rs).
 float punctual_shadow(uint k, vec3 p, vec3 ng, vec3 wi) {
@@ -60,7 +63,12 @@ vec3 ibl_level(uint k, vec3 r) {
 // n.wo > 0: the prefiltered environment times the table's specular albedo, plus the diffuse
 // colour times irradiance / pi times the table's diffuse Fresnel weighting, blended by metallic
 // as bsdf_eval blends.
-vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
+//
+// With an irradiance probe volume (PROBES), its irradiance at p replaces the environment's as the
+// diffuse lobe's light: it carries the environment with its occlusion and the light that
+// surfaces reflect (src/passes/probes.rs); the specular and transmitted parts stay the split
+// sum's, and without `ibl` only the probes' diffuse light remains.
+vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv) {
     // The prefiltered map assumed n = v = r; a rough lobe actually leans from the mirror direction
     // towards the normal: look up along the dominant direction (Lagarde and de Rousiers 2014,
     // "Moving Frostbite to PBR", eq. 56, with alpha as their linear roughness).
@@ -70,13 +78,14 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
         r = normalize(mix(n, r, smooth_ * (sqrt(smooth_) + s.alpha)));
     }
     vec4 table = ibl_table(nv, roughness);
-    vec3 specular_light = params.env;
-    vec3 irradiance_over_pi = params.env;
-    vec3 transmitted_light = params.env;
+    vec3 env = params.ibl != 0u ? params.env : vec3(0.0);
+    vec3 specular_light = env;
+    vec3 irradiance_over_pi = env;
+    vec3 transmitted_light = env;
     // Transmission: the view ray continues through a thin wall, or refracts into a volume
     // (total internal reflection cannot happen entering the denser medium from outside).
     vec3 through = s.thin ? -wo : refract(-wo, n, 1.0 / s.eta);
-    if (HAS_ENV_MAP) {
+    if (HAS_ENV_MAP && params.ibl != 0u) {
         float lod = clamp(roughness, 0.0, 1.0) * float(IBL_LEVELS - 1u);
         uint k0 = min(uint(lod), IBL_LEVELS - 1u);
         uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
@@ -91,6 +100,9 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 n, vec3 wo, float nv) {
             e += ibl_sh[k].rgb * y[k];
         }
         irradiance_over_pi *= max(e, vec3(0.0)) * INV_PI;
+    }
+    if (PROBES) {
+        irradiance_over_pi = probe_volume_irradiance(p, n, wo) * INV_PI;
     }
     vec3 dielectric_spec = s.f0 * table.x + s.f90 * table.y;
     float diffuse_weight = 1.0 - max3(s.f0) * table.z - s.f90 * table.w;
@@ -139,10 +151,14 @@ void main() {
             s.eta = material_vec(mat.x, 3u).y;
         }
 
-        // Image-based lighting (split sum), times ambient occlusion.
-        if (params.ibl != 0u) {
+        // Image-based lighting (split sum) and the probes' irradiance, times ambient occlusion.
+        bool ambient = params.ibl != 0u;
+        if (PROBES) {
+            ambient = true;
+        }
+        if (ambient) {
             float ao = imageLoad(ao_image, min(pixel, imageSize(ao_image) - 1)).x;
-            radiance += ao * ibl_lighting(s, normal_rough.w, n, wo, wo_local.z);
+            radiance += ao * ibl_lighting(s, normal_rough.w, p, n, wo, wo_local.z);
         }
 
         // Punctual lights: one shadow ray each.

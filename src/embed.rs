@@ -10,19 +10,23 @@
 //! // per frame, inside the host's command buffer:
 //! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;   // or the host writes its own
 //! let ao = renderer.record_ssao(cmd, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
-//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, Some(ao), None, &lighting)?;
+//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, Some(ao), None, None, &lighting)?;
 //! renderer.record_tonemap(cmd, hdr_view, ldr_view, size, 0.0, ToneCurve::KhronosPbrNeutral)?;
 //! // or progressive path tracing, a few samples per frame, resolved into the host's image:
 //! renderer.record_path_samples(cmd, &camera, &target, &path_settings, first_sample, count)?;
 //! renderer.record_path_resolve(cmd, &target, hdr_view)?;
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
-//!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None },
+//!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
+//!     probes: None },
 //!     &settings, None)?;
 //! // shadow maps instead of shadow rays: placed once, re-recorded when a light, the geometry
 //! // or (for a directional light's cascades) the camera changes:
 //! let maps = renderer.shadow_maps(&camera, size, &shadow_settings)?;
 //! renderer.record_shadow_maps(cmd, &maps)?;  // then `Some(&maps)` where `None` stands above
+//! // indirect diffuse light from irradiance probes: baked once, or a budget updated per frame:
+//! let mut probes = renderer.probe_volume(&ProbeSettings::default())?;
+//! renderer.record_probe_update(cmd, &mut probes, 64, &lighting)?;  // `Some(&probes)` above
 //! ```
 //!
 //! Every `record_*` goes through [`crate::render::Passes`], the orchestrator that owns the
@@ -55,6 +59,7 @@ use crate::passes::deferred::LightingSettings;
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
+use crate::passes::probes::{ProbeSettings, ProbeVolume};
 use crate::passes::shadow::{ShadowMaps, ShadowSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
@@ -200,7 +205,8 @@ impl Renderer {
 
     /// Records deferred lighting of `gbuffer` (umbra's or the host's own) seen from `camera` into
     /// `output` (`R32G32B32A32_SFLOAT`, the G-buffer's size), the punctual lights shadowed by
-    /// `shadows` (recorded before) or by shadow rays.
+    /// `shadows` (recorded before) or by shadow rays, the diffuse lobe lit by `probes` (updated
+    /// before) when given.
     #[allow(clippy::too_many_arguments)]
     pub fn record_lighting(
         &self,
@@ -210,6 +216,7 @@ impl Renderer {
         output: raw::ImageView,
         ao: Option<raw::ImageView>,
         shadows: Option<&ShadowMaps>,
+        probes: Option<&ProbeVolume>,
         settings: &LightingSettings,
     ) -> Result<()> {
         self.passes.record_lighting(
@@ -221,8 +228,36 @@ impl Renderer {
             output,
             ao,
             shadows,
+            probes,
             settings,
         )
+    }
+
+    /// A probe volume over the scene by `settings`, its probes inactive until updated
+    /// ([`Self::record_probe_update`]) or baked ([`Self::bake_probes`]); or a loaded bake.
+    pub fn probe_volume(&self, settings: &ProbeSettings) -> Result<ProbeVolume> {
+        ProbeVolume::new(&self.ctx, &self.scene, settings)
+    }
+
+    /// Records an update of `budget` probes of `volume` (round robin over the volume), blended
+    /// into their maps with the volume's hysteresis (a running mean over a probe's first
+    /// updates), under the environment of `lighting`: indirect light that follows moved lights
+    /// and changed materials over the next frames. Never submits.
+    pub fn record_probe_update(
+        &self,
+        cmd: raw::CommandBuffer,
+        volume: &mut ProbeVolume,
+        budget: u32,
+        lighting: &LightingSettings,
+    ) -> Result<()> {
+        let blend_min = 1.0 - volume.settings.hysteresis;
+        self.passes.record_probe_update(cmd, &self.scene, volume, budget, blend_min, lighting)
+    }
+
+    /// Bakes `volume` now (submits on the context's queue and waits; call it while no command
+    /// buffer of the renderer is pending), under the environment of `lighting`.
+    pub fn bake_probes(&self, volume: &mut ProbeVolume, lighting: &LightingSettings) -> Result<()> {
+        self.passes.bake_probes(&self.scene, volume, lighting, |_, _| {}).map(|_| ())
     }
 
     /// Places and allocates shadow maps for the scene's punctual lights, seen by `camera` over an

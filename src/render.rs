@@ -20,6 +20,7 @@ use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
 pub use crate::passes::pathtrace::PathSettings;
 use crate::passes::pathtrace::{PathOptions, PathTarget, PathTracePass, ResolvePass};
+use crate::passes::probes::{ProbePass, ProbeVolume};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
@@ -155,6 +156,9 @@ pub struct HybridTargets<'a> {
     /// The shadow maps, already recorded ([`Passes::record_shadow_maps`]), when the settings'
     /// shadow method reads maps.
     pub shadows: Option<&'a ShadowMaps>,
+    /// A probe volume, already updated or baked, lighting the diffuse lobe; `None`: the
+    /// environment's split-sum irradiance.
+    pub probes: Option<&'a ProbeVolume>,
 }
 
 /// A lazily built pipeline.
@@ -173,9 +177,11 @@ pub struct Passes {
     ctx: Context,
     features: SceneFeatures,
     gbuffer: OnceLock<GBufferPass>,
-    /// One per shadow method, index [`ShadowMethod::index`].
-    deferred: [OnceLock<DeferredPass>; 5],
+    /// One per shadow method and with or without probes, index 2 [`ShadowMethod::index`] +
+    /// probes.
+    deferred: [OnceLock<DeferredPass>; 10],
     shadow: OnceLock<ShadowPass>,
+    probe: OnceLock<ProbePass>,
     ssao: OnceLock<SsaoPass>,
     ao_blur: OnceLock<AoBlurPass>,
     rtao: OnceLock<RtaoPass>,
@@ -194,6 +200,7 @@ impl Passes {
             gbuffer: OnceLock::new(),
             deferred: Default::default(),
             shadow: OnceLock::new(),
+            probe: OnceLock::new(),
             ssao: OnceLock::new(),
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
@@ -225,8 +232,14 @@ impl Passes {
         built(&self.gbuffer, || GBufferPass::new(&self.ctx, scene))
     }
 
-    fn deferred_pass(&self, scene: &GpuScene, method: ShadowMethod) -> Result<&DeferredPass> {
-        built(&self.deferred[method.index()], || DeferredPass::new(&self.ctx, scene, method))
+    fn deferred_pass(&self, scene: &GpuScene, method: ShadowMethod, probes: bool) -> Result<&DeferredPass> {
+        built(&self.deferred[2 * method.index() + probes as usize], || {
+            DeferredPass::new(&self.ctx, scene, method, probes)
+        })
+    }
+
+    fn probe_pass(&self, scene: &GpuScene) -> Result<&ProbePass> {
+        built(&self.probe, || ProbePass::new(&self.ctx, scene))
     }
 
     fn shadow_pass(&self, scene: &GpuScene) -> Result<&ShadowPass> {
@@ -258,7 +271,7 @@ impl Passes {
     pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
         self.check(scene)?;
         self.gbuffer_pass(scene)?;
-        self.deferred_pass(scene, ShadowMethod::RayTraced)?;
+        self.deferred_pass(scene, ShadowMethod::RayTraced, false)?;
         self.rtao_pass(scene)?;
         self.ssao_pass()?;
         self.blur_pass()?;
@@ -351,7 +364,8 @@ impl Passes {
     /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the
     /// scene's precomputed `ibl`, an ambient-occlusion image `ao` (or none) and the punctual
     /// lights shadowed by `shadows`' maps (recorded before; their method picks the filter), or
-    /// by shadow rays when `None`.
+    /// by shadow rays when `None`, and the diffuse lobe lit by `probes` (updated before) when
+    /// given.
     #[allow(clippy::too_many_arguments)]
     pub fn record_lighting(
         &self,
@@ -363,14 +377,60 @@ impl Passes {
         output: raw::ImageView,
         ao: Option<raw::ImageView>,
         shadows: Option<&ShadowMaps>,
+        probes: Option<&ProbeVolume>,
         settings: &LightingSettings,
     ) -> Result<()> {
         self.check(scene)?;
         settings.validate()?;
         let params = DeferredPass::params(scene, camera, gbuffer.size, settings);
         let method = shadows.map_or(ShadowMethod::RayTraced, |m| m.settings.method);
-        self.deferred_pass(scene, method)?
-            .record(&self.ctx, cmd, scene, gbuffer, output, ibl, ao, shadows, &params)
+        self.deferred_pass(scene, method, probes.is_some())?
+            .record(&self.ctx, cmd, scene, gbuffer, output, ibl, ao, shadows, probes, &params)
+    }
+
+    /// Records one update of `count` probes of `volume` (from where the last update stopped,
+    /// wrapping), each new estimate weighed at least `blend_min` against the old (1: replace,
+    /// 0: running mean), under the environment of `settings` (the lighting's). Never submits.
+    pub fn record_probe_update(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        volume: &mut ProbeVolume,
+        count: u32,
+        blend_min: f32,
+        settings: &LightingSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.validate()?;
+        self.probe_pass(scene)?.record(&self.ctx, cmd, scene, volume, count, blend_min, settings.env)
+    }
+
+    /// Bakes `volume` now (submits and waits): its [`ProbeVolume::bake_schedule`] of sweeps over
+    /// every probe under the environment of `settings`, calling `progress(done, total)` after
+    /// each sweep. Returns the GPU milliseconds of all sweeps.
+    pub fn bake_probes(
+        &self,
+        scene: &GpuScene,
+        volume: &mut ProbeVolume,
+        settings: &LightingSettings,
+        mut progress: impl FnMut(u32, u32),
+    ) -> Result<f64> {
+        let ctx = &self.ctx;
+        let schedule = volume.bake_schedule();
+        let count = volume.grid.count();
+        let mut timer = GpuTimer::new(ctx, 1)?;
+        let mut ms = 0.0;
+        for (i, blend_min) in schedule.iter().enumerate() {
+            ctx.submit(|cmd| {
+                timer.reset(cmd);
+                timer.begin(cmd, "probes")?;
+                self.record_probe_update(cmd, scene, volume, count, *blend_min, settings)?;
+                timer.end(cmd)
+            })?;
+            ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+            progress(i as u32 + 1, schedule.len() as u32);
+        }
+        Ok(ms)
     }
 
     /// Places and allocates the shadow maps of `scene`'s punctual lights for `camera` over an
@@ -494,6 +554,7 @@ impl Passes {
                 targets.hdr,
                 ao,
                 shadows,
+                targets.probes,
                 &settings.lighting,
             )
         })?;
@@ -608,6 +669,17 @@ impl Passes {
         camera: &Camera,
         settings: &HybridSettings,
     ) -> Result<HybridImage> {
+        self.hybrid_with_probes(scene, camera, settings, None)
+    }
+
+    /// [`Passes::hybrid`] with the diffuse lobe lit by a (baked) probe volume.
+    pub fn hybrid_with_probes(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        settings: &HybridSettings,
+        probes: Option<&ProbeVolume>,
+    ) -> Result<HybridImage> {
         let ctx = &self.ctx;
         self.check(scene)?;
         settings.lighting.validate()?;
@@ -642,6 +714,7 @@ impl Passes {
             hdr: output.view,
             ldr: Some(display.view),
             shadows: shadows.as_ref(),
+            probes,
         };
         let mut timer = GpuTimer::new(ctx, 8)?;
         ctx.submit(|cmd| {

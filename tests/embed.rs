@@ -81,6 +81,7 @@ fn update_scene_equals_a_fresh_renderer() {
                 hdr.view,
                 None,
                 None,
+                None,
                 &LightingSettings::default(),
             )
         })
@@ -182,6 +183,7 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
         hdr: hdr.view,
         ldr: Some(ldr.view),
         shadows: None,
+        probes: None,
     };
     let mut timer = GpuTimer::new(&gpu, 8).unwrap();
     gpu.submit(|cmd| {

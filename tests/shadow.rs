@@ -548,7 +548,16 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
         hdr.init_general(&gpu, cmd);
         renderer.record_shadow_maps(cmd, &maps)?;
         renderer.record_gbuffer(cmd, &stage.camera, &gbuffer.views())?;
-        renderer.record_lighting(cmd, &stage.camera, &gbuffer.views(), hdr.view, None, Some(&maps), &lighting)
+        renderer.record_lighting(
+            cmd,
+            &stage.camera,
+            &gbuffer.views(),
+            hdr.view,
+            None,
+            Some(&maps),
+            None,
+            &lighting,
+        )
     })
     .unwrap();
     assert_eq!(maps.check(&gpu).unwrap(), None, "the tile lists overflowed");
@@ -563,6 +572,7 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
         hdr: hdr.view,
         ldr: None,
         shadows: None,
+        probes: None,
     };
     let refused = gpu.submit(|cmd| renderer.record_hybrid(cmd, &stage.camera, &targets, &settings, None));
     let message = refused.err().map(|e| e.to_string()).unwrap_or_default();

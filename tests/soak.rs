@@ -83,6 +83,7 @@ fn record_frames(
         hdr: hdr.view,
         ldr: Some(ldr.view),
         shadows: None,
+        probes: None,
     };
     let path_settings = PathSettings { size: SIZE, max_bounces: 2, ..PathSettings::default() };
     ctx.submit(|cmd| {

@@ -413,6 +413,62 @@ gpu_structs! {
         pad2: uint,
     }
 
+    /// The probe volume's grid, the first [`PROBE_HEADER_TEXELS`] texels of `probe_texels`
+    /// (`probes.glsl`): probe (i, j, k) sits at `origin + spacing * (i, j, k)`.
+    struct GpuProbeGrid {
+        /// Position of probe (0, 0, 0).
+        origin: vec3,
+        /// How far a shaded point moves along its normal before it samples the probes (world
+        /// units).
+        normal_bias: float,
+        /// Distance between neighbouring probes per axis.
+        spacing: vec3,
+        /// How far a shaded point moves towards the viewer before it samples the probes.
+        view_bias: float,
+        /// Probes per axis.
+        counts: uvec3,
+        /// `PROBE_VISIBILITY` when the Chebyshev visibility test weighs the probes.
+        flags: uint,
+    }
+
+    /// Push constants of `probe_trace.comp` and `probe_blend.comp`: one update of a range of
+    /// probes.
+    struct ProbeUpdateParams {
+        /// The update's random rotation of the ray directions, row 0 (xyz).
+        rotation0: vec4,
+        /// Row 1.
+        rotation1: vec4,
+        /// Row 2.
+        rotation2: vec4,
+        /// Constant environment radiance, or the environment map's multiplier.
+        env: vec3,
+        /// Rays per probe (a multiple of [`PROBE_RAY_GROUP`], at most [`PROBE_MAX_RAYS`]).
+        rays: uint,
+        /// Environment map width and height.
+        env_size: uvec2,
+        /// The first probe updated (the range wraps around the volume).
+        first_probe: uint,
+        /// Probes updated.
+        probe_count: uint,
+        /// Emissive triangles in the sampling table.
+        light_count: uint,
+        /// Punctual lights.
+        punctual_count: uint,
+        /// Seed of the random numbers (the update's index).
+        seed: uint,
+        /// The least weight of the new estimate against the old (1: replace, 0: running mean).
+        blend_min: float,
+        /// Distance a ray that misses records (and the cap of every recorded distance).
+        max_distance: float,
+        /// Light at a ray's hit includes the volume's irradiance (1: multi-bounce) or only the
+        /// direct light (0).
+        bounce: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
     /// What the shadow rasterizer reports: the largest need over the layers rendered.
     struct ShadowStats {
         /// Tile-list entries one layer needed.
@@ -621,6 +677,21 @@ gpu_constants! {
     SHADOW_HEADER_TEXELS: uint = 2;
     /// Texels of one [`GpuShadowLayer`] in `shadow_texels` (its 96 bytes).
     SHADOW_LAYER_TEXELS: uint = 6;
+    /// Texels of `probe_texels` before the probes' states: the grid ([`GpuProbeGrid`]).
+    PROBE_HEADER_TEXELS: uint = 3;
+    /// Interior texels a side of a probe's octahedral irradiance map (one more each side is the
+    /// border that makes bilinear filtering wrap).
+    PROBE_IRRADIANCE_TEXELS: uint = 6;
+    /// Interior texels a side of a probe's octahedral distance map.
+    PROBE_DISTANCE_TEXELS: uint = 14;
+    /// Rays of one `probe_trace` workgroup: rays per probe come in multiples of it.
+    PROBE_RAY_GROUP: uint = 64;
+    /// Most rays per probe and update (the blend keeps them in shared memory).
+    PROBE_MAX_RAYS: uint = 256;
+    /// A probe's state `x`: the probe is active (not inside geometry).
+    PROBE_ACTIVE: uint = 1;
+    /// [`GpuProbeGrid::flags`]: weigh probes by Chebyshev visibility.
+    PROBE_VISIBILITY: uint = 1;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
 }
@@ -721,7 +792,8 @@ kernels! {
             shadow_maps: bool = false,
             shadow_pcf: bool = false,
             shadow_pcss: bool = false,
-            shadow_moments: bool = false
+            shadow_moments: bool = false,
+            probes: bool = false
         },
         bindings: {
             /// View-space depth.
@@ -751,6 +823,12 @@ kernels! {
             ibl_sh: readonly buffer [vec4],
             /// Ambient occlusion multiplying the IBL term (1 = unoccluded); 1×1 for none.
             ao_image: readonly image r32f,
+            /// Probe volume: the grid and the probes' states; one texel without probes.
+            probe_texels: readonly texels rgba32ui,
+            /// Probe volume: octahedral irradiance.
+            probe_irradiance: readonly texels rgba32f,
+            /// Probe volume: octahedral distance moments.
+            probe_distance: readonly texels rgba32f,
         }
     }
 
@@ -940,6 +1018,39 @@ kernels! {
         }
     }
 
+    /// Irradiance probes, update step 1: each probe's rays traced and shaded.
+    kernel probe_trace {
+        scene: full [textures, alpha, lights, punctual, env_map],
+        push: ProbeUpdateParams,
+        spec: {},
+        bindings: {
+            /// The grid and each probe's state (active, updates since the last replacement,
+            /// back-face hits).
+            probe_texels: readonly texels rgba32ui,
+            /// Octahedral irradiance per probe (multi-bounce reads the previous update).
+            probe_irradiance: readonly texels rgba32f,
+            /// Octahedral mean and mean squared distance per probe.
+            probe_distance: readonly texels rgba32f,
+            /// Per ray of the update: radiance rgb, distance (negative on a back face).
+            probe_rays: readwrite buffer [vec4],
+        }
+    }
+    /// Irradiance probes, update step 2: the rays blended into each probe's maps and state.
+    kernel probe_blend {
+        scene: none,
+        push: ProbeUpdateParams,
+        spec: {},
+        bindings: {
+            /// The rays `probe_trace` traced.
+            probe_rays: readonly buffer [vec4],
+            /// The grid and the probes' states (updated).
+            probe_texels: readwrite texels rgba32ui,
+            /// Irradiance maps (blended).
+            probe_irradiance: readwrite texels rgba32f,
+            /// Distance maps (blended).
+            probe_distance: readwrite texels rgba32f,
+        }
+    }
     /// Rays through the BVH (tests and the ray-throughput benchmark).
     kernel trace {
         scene: bvh,

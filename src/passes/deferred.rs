@@ -6,10 +6,13 @@
 //! surface with the environment (a constant or the scene's map). Transmissive materials transmit
 //! the prefiltered environment through their one interface (straight on when thin-walled,
 //! refracted once into a volume); the G-buffer holds only the first surface, so a volume's exit
-//! and anything behind a transmissive surface but the environment are not seen.
+//! and anything behind a transmissive surface but the environment are not seen. With a probe
+//! volume ([`ProbeVolume`]) the diffuse lobe takes its irradiance (indirect light and the
+//! occluded environment) instead of the environment's.
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
+use super::probes::ProbeVolume;
 use super::shadow::{ShadowMaps, ShadowMethod};
 use crate::error::{Error, Result};
 use crate::gpu::kernels::deferred;
@@ -89,6 +92,10 @@ pub struct DeferredPass {
     no_ao: Image,
     /// One-texel stand-ins for the shadow maps' bindings when the lights cast rays.
     no_shadow: [TexelBuffer; 3],
+    /// Whether the pass reads a probe volume.
+    probes: bool,
+    /// One-texel stand-ins for the probe volume's bindings when there is none.
+    no_probes: [TexelBuffer; 2],
 }
 
 impl DeferredPass {
@@ -96,14 +103,16 @@ impl DeferredPass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
-    /// an environment map) and for shadows by `method`.
-    pub fn new(ctx: &Context, scene: &GpuScene, method: ShadowMethod) -> Result<Self> {
+    /// an environment map), for shadows by `method` and for indirect diffuse light from a probe
+    /// volume when `probes`.
+    pub fn new(ctx: &Context, scene: &GpuScene, method: ShadowMethod, probes: bool) -> Result<Self> {
         let spec = deferred::Spec {
             beckmann: false,
             shadow_maps: method.uses_maps(),
             shadow_pcf: method == ShadowMethod::Pcf,
             shadow_pcss: method == ShadowMethod::Pcss,
             shadow_moments: method == ShadowMethod::Moments,
+            probes,
         };
         let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
@@ -119,7 +128,11 @@ impl DeferredPass {
                 16,
             )?,
         ];
-        Ok(Self { pipeline, method, no_ao, no_shadow })
+        let no_probes = [
+            TexelBuffer::upload(ctx, "no probe states", &[[0u32; 4]], raw::Format::R32G32B32A32_UINT, 16)?,
+            TexelBuffer::upload(ctx, "no probe maps", &[[0.0f32; 4]], raw::Format::R32G32B32A32_SFLOAT, 16)?,
+        ];
+        Ok(Self { pipeline, method, no_ao, no_shadow, probes, no_probes })
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -150,7 +163,8 @@ impl DeferredPass {
     /// `GENERAL` layout of the G-buffer's size) and a compute-to-compute barrier after it. Never
     /// submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `ao` is an
     /// `R32_SFLOAT` image of the G-buffer's size in `GENERAL` layout (1 = unoccluded), or none;
-    /// `shadows` the maps (recorded before this pass) when the pass was built for a map method.
+    /// `shadows` the maps (recorded before this pass) when the pass was built for a map method;
+    /// `probes` the probe volume (updated before this pass) when it was built for probes.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -162,8 +176,21 @@ impl DeferredPass {
         ibl: &IblResources,
         ao: Option<raw::ImageView>,
         shadows: Option<&ShadowMaps>,
+        probes: Option<&ProbeVolume>,
         params: &DeferredParams,
     ) -> Result<()> {
+        let [no_states, no_maps] = &self.no_probes;
+        let (probe_texels, probe_irradiance, probe_distance) = match (self.probes, probes) {
+            (false, None) => (no_states, no_maps, no_maps),
+            (true, Some(v)) => (&v.texels, &v.irradiance, &v.distance),
+            (built, _) => {
+                return Err(Error::Invalid(format!(
+                    "the lighting pass was built {} probes but was given {}",
+                    if built { "with" } else { "without" },
+                    if built { "none" } else { "a volume" }
+                )))
+            }
+        };
         let [no_records, no_depth, no_moments] = &self.no_shadow;
         let (shadow_texels, shadow_depth, shadow_moments) = match (self.method.uses_maps(), shadows) {
             (false, _) => (no_records, no_depth, no_moments),
@@ -196,6 +223,9 @@ impl DeferredPass {
             ibl_prefiltered: &ibl.prefiltered,
             ibl_sh: &ibl.sh,
             ao_image: &ao.unwrap_or(self.no_ao.view),
+            probe_texels,
+            probe_irradiance,
+            probe_distance,
         };
         self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);

@@ -5,5 +5,6 @@ pub mod deferred;
 pub mod gbuffer;
 pub mod ibl;
 pub mod pathtrace;
+pub mod probes;
 pub mod shadow;
 pub mod tonemap;

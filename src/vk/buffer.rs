@@ -129,7 +129,8 @@ pub struct TexelBuffer {
 }
 
 impl TexelBuffer {
-    /// Uploads `data` (through [`Buffer::upload`]) and views it as `format` texels of
+    /// Uploads `data` (through [`Buffer::upload`]; readable back with [`Buffer::read`]) and
+    /// views it as `format` texels of
     /// `texel_bytes` bytes each. An empty list uploads one zeroed element, never read: a view
     /// needs at least one texel. The texel count must be within the device's
     /// `maxTexelBufferElements`.
@@ -142,7 +143,8 @@ impl TexelBuffer {
     ) -> Result<Self> {
         let zeroed = [T::zeroed()];
         let data = if data.is_empty() { &zeroed[..] } else { data };
-        let buffer = Buffer::upload(ctx, name, data, vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER)?;
+        let usage = vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let buffer = Buffer::upload(ctx, name, data, usage)?;
         Self::view(buffer, name, format, texel_bytes)
     }
 

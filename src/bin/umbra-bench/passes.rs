@@ -78,6 +78,7 @@ pub fn run(
         hdr: output.view,
         ldr: None,
         shadows: None,
+        probes: None,
     };
     let settings = HybridSettings {
         size,

@@ -65,8 +65,14 @@ pub fn run(
                 maps_ms.push(steps.iter().map(|s| s.1).sum::<f64>());
             }
         }
-        let targets =
-            HybridTargets { gbuffer: &views, ao: None, hdr: output.view, ldr: None, shadows: maps.as_ref() };
+        let targets = HybridTargets {
+            gbuffer: &views,
+            ao: None,
+            hdr: output.view,
+            ldr: None,
+            shadows: maps.as_ref(),
+            probes: None,
+        };
         let hybrid = HybridSettings {
             size,
             lighting,

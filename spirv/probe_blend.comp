@@ -6,10 +6,10 @@
 // interior texel across the edge, so it computes the same value). Irradiance is pi times the
 // cosine-weighted mean of the rays' radiance about the texel's direction (a ratio estimator,
 // exact for constant radiance); distance the mean and mean square of the rays' distances weighed
-// by cos^DISTANCE_SHARPNESS. The new estimate replaces the old with weight max(blend_min,
-// 1 / (updates + 1)): a running mean over the updates since the last replacement (blend_min 0),
-// an exponential one (hysteresis 1 - blend_min), or a replacement (blend_min 1, which restarts
-// the count). A probe with more than PROBE_BACKFACE_LIMIT of its rays on back faces is inside
+// by cos^DISTANCE_SHARPNESS. A probe's first `warmup` updates replace its maps (each adds a bounce
+// of light: the trace reads the volume); later ones blend the new estimate in with weight
+// max(blend_min, 1 / (updates since the last replacement + 1)): a running mean (blend_min 0) or,
+// after its first 1 / blend_min updates, an exponential one (hysteresis 1 - blend_min). A probe with more than PROBE_BACKFACE_LIMIT of its rays on back faces is inside
 // geometry and is switched off.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/probe_blend.glsl"
@@ -50,7 +50,7 @@ void main() {
     barrier();
 
     uvec4 state = probe_state(probe);
-    float alpha = max(params.blend_min, 1.0 / float(state.y + 1u));
+    float alpha = state.w < params.warmup ? 1.0 : max(params.blend_min, 1.0 / float(state.y + 1u));
     uvec2 texel = gl_LocalInvocationID.xy;
 
     vec3 d = probe_texel_direction(texel, PROBE_DISTANCE_SIDE);
@@ -91,6 +91,6 @@ void main() {
         bool inside = float(backfaces) > PROBE_BACKFACE_LIMIT * float(rays);
         uint updates = alpha >= 1.0 ? 1u : min(state.y + 1u, 0x7fffffffu);
         imageStore(probe_texels, int(PROBE_HEADER_TEXELS + probe),
-                   uvec4(inside ? 0u : PROBE_ACTIVE, updates, backfaces, 0u));
+                   uvec4(inside ? 0u : PROBE_ACTIVE, updates, backfaces, min(state.w + 1u, 0x7fffffffu)));
     }
 }

@@ -4,9 +4,9 @@
 // per ray the radiance coming back and the distance to the hit. The radiance is what the lighting
 // pass does not compute itself: a miss brings the environment; a hit brings the light its surface
 // reflects towards the probe, shaded with the path tracer's BSDF and lights (shading.glsl):
-// direct light from the punctual lights and one emissive-triangle sample with shadow rays, plus,
-// with `bounce`, the volume's irradiance at the hit (the previous update: one more bounce each
-// update) through the surface's diffuse lobe. A hit's own emission is left out: the lighting pass
+// direct light from the punctual lights and one emissive-triangle sample with shadow rays, plus
+// the volume's irradiance at the hit (the previous update: one more bounce each update) through
+// the surface's diffuse lobe. A hit's own emission is left out: the lighting pass
 // samples emitters as direct light. A back face (of a single-sided material) records no light and
 // a fifth of its distance as a negative number: the probe may be inside geometry (probe_blend
 // counts them) and sees that surface nearer than it is. Transmission is not modelled: a
@@ -88,12 +88,10 @@ void main() {
                         radiance += bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * l_emit / light_pdf;
                     }
                 }
-                if (params.bounce != 0u) {
-                    // The diffuse lobe's albedo (bsdf_eval's dielectric diffuse term, its Fresnel
-                    // at the viewing angle) times irradiance / pi.
-                    float diffuse = (1.0 - max3(dielectric_fresnel(s, wo_local.z))) * (1.0 - s.metallic);
-                    radiance += diffuse * s.base * INV_PI * probe_volume_irradiance(p, n, wo);
-                }
+                // The diffuse lobe's albedo (bsdf_eval's dielectric diffuse term, its Fresnel at the
+                // viewing angle) times irradiance / pi.
+                float diffuse = (1.0 - max3(dielectric_fresnel(s, wo_local.z))) * (1.0 - s.metallic);
+                radiance += diffuse * s.base * INV_PI * probe_volume_irradiance(p, n, wo);
             }
             result = vec4(radiance, t);
         }

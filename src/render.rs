@@ -389,8 +389,9 @@ impl Passes {
     }
 
     /// Records one update of `count` probes of `volume` (from where the last update stopped,
-    /// wrapping), each new estimate weighed at least `blend_min` against the old (1: replace,
-    /// 0: running mean), under the environment of `settings` (the lighting's). Never submits.
+    /// wrapping): a probe's first [`crate::passes::probes::ProbeSettings::bounces`] updates
+    /// replace its maps, later ones weigh the new estimate at least `blend_min` against the old
+    /// (0: a running mean), under the environment of `settings` (the lighting's). Never submits.
     pub fn record_probe_update(
         &self,
         cmd: raw::CommandBuffer,
@@ -405,9 +406,10 @@ impl Passes {
         self.probe_pass(scene)?.record(&self.ctx, cmd, scene, volume, count, blend_min, settings.env)
     }
 
-    /// Bakes `volume` now (submits and waits): its [`ProbeVolume::bake_schedule`] of sweeps over
-    /// every probe under the environment of `settings`, calling `progress(done, total)` after
-    /// each sweep. Returns the GPU milliseconds of all sweeps.
+    /// Bakes `volume` now (submits and waits): [`ProbeVolume::bake_sweeps`] sweeps over every
+    /// probe, a running mean after the replacing ones, under the environment of `settings`,
+    /// calling `progress(done, total)` after each sweep. Returns the GPU milliseconds of all
+    /// sweeps.
     pub fn bake_probes(
         &self,
         scene: &GpuScene,
@@ -416,19 +418,19 @@ impl Passes {
         mut progress: impl FnMut(u32, u32),
     ) -> Result<f64> {
         let ctx = &self.ctx;
-        let schedule = volume.bake_schedule();
+        let sweeps = volume.bake_sweeps();
         let count = volume.grid.count();
         let mut timer = GpuTimer::new(ctx, 1)?;
         let mut ms = 0.0;
-        for (i, blend_min) in schedule.iter().enumerate() {
+        for sweep in 1..=sweeps {
             ctx.submit(|cmd| {
                 timer.reset(cmd);
                 timer.begin(cmd, "probes")?;
-                self.record_probe_update(cmd, scene, volume, count, *blend_min, settings)?;
+                self.record_probe_update(cmd, scene, volume, count, 0.0, settings)?;
                 timer.end(cmd)
             })?;
             ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
-            progress(i as u32 + 1, schedule.len() as u32);
+            progress(sweep, sweeps);
         }
         Ok(ms)
     }

@@ -4,86 +4,14 @@
 
 mod common;
 
-use common::Gpu;
+use common::{build, camera, cuboid, light, quad, Gpu};
 use glam::{Mat3, Vec3};
 use umbra::bvh::traverse::Ray;
 use umbra::gpu::layout::{GpuShadowLayer, SHADOW_PERSPECTIVE};
 use umbra::gpu::scene::{GpuScene, SceneArrays};
 use umbra::passes::shadow::{ShadowMethod, ShadowPlan, ShadowSettings};
 use umbra::render::{HybridSettings, Passes};
-use umbra::scene::{Camera, Light, LightKind, Material, Scene};
-
-/// A scene from triangle soups, one material per soup (the glTF default material made
-/// dielectric, so shading is Lambert-dominated), face normals.
-fn build(name: &str, soups: &[Vec<[Vec3; 3]>], lights: Vec<Light>, camera: Camera) -> Scene {
-    let mut scene = Scene { name: name.into(), ..Default::default() };
-    for (m, soup) in soups.iter().enumerate() {
-        scene.materials.push(Material { metallic: 0.0, roughness: 1.0, ..Default::default() });
-        for tri in soup {
-            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
-            let first = scene.positions.len() as u32;
-            for v in tri {
-                scene.positions.push(v.to_array());
-                scene.normals.push(n.to_array());
-            }
-            scene.triangles.push([first, first + 1, first + 2]);
-            scene.triangle_material.push(m as u32);
-        }
-    }
-    scene.lights = lights;
-    scene.cameras = vec![camera];
-    scene
-}
-
-/// Two triangles of the quad centre ± u ± v, facing u × v.
-fn quad(centre: Vec3, u: Vec3, v: Vec3) -> Vec<[Vec3; 3]> {
-    let (a, b, c, d) = (centre - u - v, centre + u - v, centre + u + v, centre - u + v);
-    vec![[a, b, c], [a, c, d]]
-}
-
-/// An axis-aligned box's twelve triangles, facing out.
-fn cuboid(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
-    let c = 0.5 * (lo + hi);
-    let h = 0.5 * (hi - lo);
-    let mut out = Vec::new();
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let n = Vec3::AXES[axis] * sign;
-            let u = Vec3::AXES[(axis + 1) % 3] * h[(axis + 1) % 3];
-            let v = Vec3::AXES[(axis + 2) % 3] * h[(axis + 2) % 3];
-            let (u, v) = if sign > 0.0 { (u, v) } else { (v, u) };
-            out.extend(quad(c + n * h[axis], u, v));
-        }
-    }
-    out
-}
-
-fn light(kind: LightKind, position: Vec3, direction: Vec3, intensity: f32) -> Light {
-    Light {
-        name: String::new(),
-        kind,
-        position: position.to_array(),
-        direction: direction.normalize().to_array(),
-        color: [1.0; 3],
-        intensity,
-        range: None,
-        inner_cone_angle: 0.0,
-        outer_cone_angle: if kind == LightKind::Spot { 0.5 } else { std::f32::consts::PI },
-    }
-}
-
-fn camera(position: Vec3, target: Vec3) -> Camera {
-    let forward = (target - position).normalize();
-    let up = (Vec3::Y - forward * forward.dot(Vec3::Y)).normalize();
-    Camera {
-        position: position.to_array(),
-        forward: forward.to_array(),
-        up: up.to_array(),
-        yfov: 0.8,
-        aspect: None,
-        znear: 0.05,
-    }
-}
+use umbra::scene::{Camera, Light, LightKind, Scene};
 
 /// The ray through layer `l`'s texel centre (px, py) and the factor turning its hit distance
 /// into the layer's linear depth.

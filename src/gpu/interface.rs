@@ -460,9 +460,9 @@ gpu_structs! {
         blend_min: float,
         /// Distance a ray that misses records (and the cap of every recorded distance).
         max_distance: float,
-        /// Light at a ray's hit includes the volume's irradiance (1: multi-bounce) or only the
-        /// direct light (0).
-        bounce: uint,
+        /// Updates of a probe's life that replace its maps instead of blending (each adds a
+        /// bounce of light before any averaging starts).
+        warmup: uint,
         /// Padding.
         pad0: uint,
         /// Padding.
@@ -1025,7 +1025,7 @@ kernels! {
         spec: {},
         bindings: {
             /// The grid and each probe's state (active, updates since the last replacement,
-            /// back-face hits).
+            /// back-face hits, updates in all).
             probe_texels: readonly texels rgba32ui,
             /// Octahedral irradiance per probe (multi-bounce reads the previous update).
             probe_irradiance: readonly texels rgba32f,

@@ -20,10 +20,10 @@
 //! and Chebyshev visibility from the distance moments, and lights the diffuse lobe with it (times
 //! ambient occlusion); the specular lobe keeps the split sum.
 //!
-//! Two schedules: [`ProbeVolume::bake_schedule`] (a few sweeps over all probes that replace the
-//! maps, one bounce each, then sweeps that average: a running mean that converges to the probes'
-//! multi-bounce irradiance) and, for an embedding host, a budget of probes per frame blended with
-//! hysteresis ([`ProbeSettings::hysteresis`]).
+//! A probe's first [`ProbeSettings::bounces`] updates replace its maps (each adds a bounce of
+//! light, the trace reading the volume); later ones average: a bake runs sweeps over all probes
+//! as a running mean that converges to the probes' multi-bounce irradiance; an embedding host
+//! updates a budget of probes per frame, blended with hysteresis ([`ProbeSettings::hysteresis`]).
 
 use crate::error::{Error, Result};
 use crate::gpu::kernels::{probe_blend, probe_trace};
@@ -57,7 +57,8 @@ pub struct ProbeSettings {
     pub normal_bias: f32,
     /// How far it moves towards the viewer, as a fraction of the smallest spacing.
     pub view_bias: f32,
-    /// Sweeps over all probes that replace their maps (one bounce each) before the bake averages.
+    /// Updates of a probe that replace its maps (one bounce of light each) before updates
+    /// average.
     pub bounces: u32,
     /// Sweeps of the bake that average (a running mean over them).
     pub sweeps: u32,
@@ -185,7 +186,7 @@ pub struct ProbeVolume {
     pub grid: ProbeGrid,
     /// The grid ([`GpuProbeGrid`], [`PROBE_HEADER_TEXELS`] texels), then per probe its state:
     /// [`PROBE_ACTIVE`] bit, updates since the maps were last replaced, back-face hits of the last
-    /// update (RGBA32_UINT).
+    /// update, updates in all (RGBA32_UINT).
     pub texels: TexelBuffer,
     /// Octahedral irradiance maps, [`IRRADIANCE_MAP_TEXELS`] per probe (RGBA32_SFLOAT, rgb).
     pub irradiance: TexelBuffer,
@@ -274,14 +275,10 @@ impl ProbeVolume {
     /// Most probes one dispatch updates.
     pub const MAX_CHUNK: u32 = 4096;
 
-    /// The bake's sweeps over all probes, in order: the least weight of each sweep's new estimate
-    /// (1: replace, for [`ProbeSettings::bounces`] sweeps, then 0: a running mean over
-    /// [`ProbeSettings::sweeps`]).
-    pub fn bake_schedule(&self) -> Vec<f32> {
-        let s = &self.settings;
-        std::iter::repeat_n(1.0, s.bounces as usize)
-            .chain(std::iter::repeat_n(0.0, s.sweeps as usize))
-            .collect()
+    /// Sweeps over all probes a bake runs: [`ProbeSettings::bounces`] that replace the maps, then
+    /// [`ProbeSettings::sweeps`] that average.
+    pub fn bake_sweeps(&self) -> u32 {
+        self.settings.bounces + self.settings.sweeps
     }
 
     /// Updates recorded so far.
@@ -355,8 +352,9 @@ impl ProbePass {
 
     /// Records one update of `count` probes of `volume` from its cursor on (wrapping), in
     /// dispatches of at most [`ProbeVolume::MAX_CHUNK`] probes, each new estimate weighed at
-    /// least `blend_min` against the old, under environment `env` (the lighting's constant or
-    /// map multiplier). Never submits; ends with a compute → compute barrier.
+    /// least `blend_min` against the old once a probe's first [`ProbeSettings::bounces`] updates
+    /// have replaced its maps, under environment `env` (the lighting's constant or map
+    /// multiplier). Never submits; ends with a compute → compute barrier.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -391,7 +389,7 @@ impl ProbePass {
                 seed: volume.updates,
                 blend_min,
                 max_distance: 4.0 * diagonal,
-                bounce: 1,
+                warmup: volume.settings.bounces,
                 ..Default::default()
             };
             let trace = probe_trace::Resources {

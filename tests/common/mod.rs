@@ -1,10 +1,13 @@
 //! Shared test harness: a validated context that fails the test on any validation message,
 //! including those raised while the context is destroyed; the regularised incomplete gamma
-//! function behind the statistical tests' chi-square and normal p-values.
+//! function behind the statistical tests' chi-square and normal p-values; scenes built in code
+//! from triangle soups.
 #![allow(dead_code)]
 
+use glam::Vec3;
 use std::ops::Deref;
 use std::sync::Arc;
+use umbra::scene::{Camera, Light, LightKind, Material, Scene};
 use umbra::vk::{Context, ContextDesc, ValidationLog};
 
 /// A context with `VK_LAYER_KHRONOS_validation` on. Dropping it destroys the device and then
@@ -115,5 +118,94 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
             }
         }
         (-x + a * x.ln() - ln_gamma(a)).exp() * h
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scenes built in code
+
+/// A scene from triangle soups, one material per soup (the glTF default material made
+/// dielectric, so shading is Lambert-dominated), face normals.
+pub fn build(name: &str, soups: &[Vec<[Vec3; 3]>], lights: Vec<Light>, camera: Camera) -> Scene {
+    let lambert = Material { metallic: 0.0, roughness: 1.0, ..Default::default() };
+    let soups: Vec<_> = soups.iter().map(|s| (s.clone(), lambert.clone())).collect();
+    build_with(name, &soups, lights, camera)
+}
+
+/// A scene from triangle soups, each with its material, face normals; the emissive-triangle
+/// table built.
+pub fn build_with(
+    name: &str,
+    soups: &[(Vec<[Vec3; 3]>, Material)],
+    lights: Vec<Light>,
+    camera: Camera,
+) -> Scene {
+    let mut scene = Scene { name: name.into(), ..Default::default() };
+    for (m, (soup, material)) in soups.iter().enumerate() {
+        scene.materials.push(material.clone());
+        for tri in soup {
+            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+            let first = scene.positions.len() as u32;
+            for v in tri {
+                scene.positions.push(v.to_array());
+                scene.normals.push(n.to_array());
+            }
+            scene.triangles.push([first, first + 1, first + 2]);
+            scene.triangle_material.push(m as u32);
+        }
+    }
+    scene.lights = lights;
+    scene.cameras = vec![camera];
+    scene.update_emissive();
+    scene
+}
+
+/// Two triangles of the quad centre ± u ± v, facing u × v.
+pub fn quad(centre: Vec3, u: Vec3, v: Vec3) -> Vec<[Vec3; 3]> {
+    let (a, b, c, d) = (centre - u - v, centre + u - v, centre + u + v, centre - u + v);
+    vec![[a, b, c], [a, c, d]]
+}
+
+/// An axis-aligned box's twelve triangles, facing out.
+pub fn cuboid(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
+    let c = 0.5 * (lo + hi);
+    let h = 0.5 * (hi - lo);
+    let mut out = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = Vec3::AXES[axis] * sign;
+            let u = Vec3::AXES[(axis + 1) % 3] * h[(axis + 1) % 3];
+            let v = Vec3::AXES[(axis + 2) % 3] * h[(axis + 2) % 3];
+            let (u, v) = if sign > 0.0 { (u, v) } else { (v, u) };
+            out.extend(quad(c + n * h[axis], u, v));
+        }
+    }
+    out
+}
+
+pub fn light(kind: LightKind, position: Vec3, direction: Vec3, intensity: f32) -> Light {
+    Light {
+        name: String::new(),
+        kind,
+        position: position.to_array(),
+        direction: direction.normalize().to_array(),
+        color: [1.0; 3],
+        intensity,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: if kind == LightKind::Spot { 0.5 } else { std::f32::consts::PI },
+    }
+}
+
+pub fn camera(position: Vec3, target: Vec3) -> Camera {
+    let forward = (target - position).normalize();
+    let up = (Vec3::Y - forward * forward.dot(Vec3::Y)).normalize();
+    Camera {
+        position: position.to_array(),
+        forward: forward.to_array(),
+        up: up.to_array(),
+        yfov: 0.8,
+        aspect: None,
+        znear: 0.05,
     }
 }

@@ -11,6 +11,7 @@ mod chart;
 mod cli;
 mod mis;
 mod passes;
+mod probes;
 mod rays;
 mod shadows;
 mod suite;
@@ -145,6 +146,38 @@ enum Command {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
         /// Where to write shadows.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
+    /// Irradiance probes on the speed/accuracy chart: the hybrid without and with baked probes
+    /// at a sweep of spacings, frame time and error against a converged path-traced reference
+    /// (JSON and a Markdown table), on the Cornell box and Dabrovic Sponza under a sun.
+    Probes {
+        /// Dabrovic Sponza (skipped with a warning when absent); a sun is added.
+        #[arg(long, default_value = "../shared/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb")]
+        sponza: PathBuf,
+        /// More glTF scenes (their first camera, or one framing them).
+        #[arg(long = "gltf")]
+        gltf: Vec<PathBuf>,
+        /// Image size.
+        #[arg(long, default_value = "192x144", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of each reference (cached in the output folder).
+        #[arg(long, default_value_t = 1024)]
+        reference_spp: u32,
+        /// Probe spacings, as the scene's longest side / n.
+        #[arg(long, value_delimiter = ',', default_value = "4,8,16")]
+        per_side: Vec<u32>,
+        /// Timed repeats (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Constant environment (sky) radiance r,g,b (as the suite's).
+        #[arg(long, value_parser = cli::parse_rgb, default_value = "0.5,0.5,0.5")]
+        env_color: [f32; 3],
+        /// Where to write probes.json and the cached references.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
         /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
@@ -370,6 +403,29 @@ fn run(cli: Cli) -> Result<()> {
             Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
             None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
         },
+        Command::Probes { sponza, gltf, size, reference_spp, per_side, repeats, env_color, out, table } => {
+            match table {
+                Some(path) => print!("{}", probes::table(&read_json(&path)?)),
+                None => {
+                    let settings = suite::SuiteSettings {
+                        size,
+                        reference_spp,
+                        max_spp: 1,
+                        shadow_rays: vec![4],
+                        shadow_map_sizes: vec![],
+                        probes_per_side: per_side,
+                        ssao_samples: vec![16],
+                        rtao_rays: vec![],
+                        ao_reference_rays: 0,
+                        ao_radius: 0.5,
+                        repeats,
+                        env: env_color,
+                        out,
+                    };
+                    run_probes(&settings, &sponza, &gltf)?
+                }
+            }
+        }
         Command::Mis { references, reference_dir, spp, seeds, out, table } => match table {
             Some(path) => print!("{}", mis::table(&read_json(&path)?)),
             None => {
@@ -404,6 +460,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_spp: 32,
                     shadow_rays: vec![1, 4, 16],
                     shadow_map_sizes: vec![128, 512],
+                    probes_per_side: vec![4, 8],
                     ssao_samples: vec![4, 16],
                     rtao_rays: vec![1, 4, 16],
                     ao_reference_rays: 256,
@@ -419,6 +476,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_spp,
                     shadow_rays,
                     shadow_map_sizes: vec![128, 256, 512, 1024, 2048],
+                    probes_per_side: vec![4, 8, 16],
                     ssao_samples: vec![4, 8, 16, 32],
                     rtao_rays: vec![1, 2, 4, 8, 16, 32, 64],
                     ao_reference_rays: 1024,
@@ -626,18 +684,7 @@ fn run_shadows(
         None => umbra::scene::Scene::cornell_box(),
     };
     if sun.is_some() || loaded.lights.is_empty() {
-        let direction = Vec3::from(sun.unwrap_or([0.25, -1.0, 0.15])).normalize();
-        loaded.lights.push(umbra::scene::Light {
-            name: "sun".into(),
-            kind: umbra::scene::LightKind::Directional,
-            position: [0.0; 3],
-            direction: direction.into(),
-            color: [1.0; 3],
-            intensity: 5.0,
-            range: None,
-            inner_cone_angle: 0.0,
-            outer_cone_angle: std::f32::consts::PI,
-        });
+        add_sun(&mut loaded, sun.unwrap_or(DEFAULT_SUN));
     }
     let camera = bench_camera(&loaded);
     let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
@@ -672,6 +719,54 @@ fn run_shadows(
 }
 
 /// An earlier run's JSON (for `--table`).
+/// The sun the benchmarks add to scenes without punctual lights.
+const DEFAULT_SUN: [f32; 3] = [0.25, -1.0, 0.15];
+
+/// Adds a directional light of 5 lux shining along `direction`.
+fn add_sun(scene: &mut umbra::scene::Scene, direction: [f32; 3]) {
+    scene.lights.push(umbra::scene::Light {
+        name: "sun".into(),
+        kind: umbra::scene::LightKind::Directional,
+        position: [0.0; 3],
+        direction: Vec3::from(direction).normalize().into(),
+        color: [1.0; 3],
+        intensity: 5.0,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: std::f32::consts::PI,
+    });
+}
+
+/// The probes comparison on the Cornell box, Sponza under a sun (when present) and `gltf`.
+fn run_probes(settings: &suite::SuiteSettings, sponza: &std::path::Path, gltf: &[PathBuf]) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
+    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
+    match umbra::scene::Scene::load(sponza) {
+        Ok(mut scene) => {
+            add_sun(&mut scene, DEFAULT_SUN);
+            scene.name = format!("{} under a sun", scene.name);
+            scenes.push(("sponza-sun".into(), scene));
+        }
+        Err(e) => log::warn!("skipping Sponza: {e}"),
+    }
+    for path in gltf {
+        let key = path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+        scenes.push((key, umbra::scene::Scene::load(path)?));
+    }
+    let mut results = Vec::new();
+    for (key, scene) in &scenes {
+        let camera = bench_camera(scene);
+        results.push(
+            probes::run_scene(&ctx, key, scene, &camera, settings, &settings.probes_per_side)
+                .with_context(|| scene.name.clone())?,
+        );
+    }
+    let doc = probes::to_json(&ctx.info().name, settings, &results);
+    print!("{}", probes::table(&doc));
+    write_json(&settings.out, "probes.json", &doc)
+}
+
 fn read_json(path: &std::path::Path) -> Result<serde_json::Value> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))

@@ -13,6 +13,9 @@
 //!   with its punctual lights shadowed by maps (hard, PCF, PCSS, moments) at a sweep of map
 //!   sizes; the time includes rendering the maps every frame (a moving light; a static one pays
 //!   only the lighting pass).
+//! - `hybrid + probes`: the hybrid at 4 shadow rays with irradiance probes baked at a sweep of
+//!   spacings (the scene's longest side / n) lighting its diffuse lobe; the bake is reported
+//!   apart, as precomputation.
 //! - `ssao` and `rtao` on a second chart: ambient occlusion against a many-ray RTAO reference.
 //!
 //! A third chart per scene plots the mean LDR-FLIP (NVIDIA's perceptual difference of the
@@ -47,6 +50,8 @@ pub struct SuiteSettings {
     pub shadow_map_sizes: Vec<u32>,
     /// SSAO kernel sizes of the hybrid's SSAO sweep and of the AO chart.
     pub ssao_samples: Vec<u32>,
+    /// Probe spacings of the hybrid's probe series, as the scene's longest side / n.
+    pub probes_per_side: Vec<u32>,
     /// RTAO ray counts of the AO chart.
     pub rtao_rays: Vec<u32>,
     /// Rays per pixel of the RTAO reference.
@@ -181,8 +186,7 @@ pub fn run_scene(
 ) -> Result<SceneResult> {
     let env = s.env;
     let renderer = Renderer::new(ctx, scene)?;
-    let path_settings =
-        PathSettings { size: s.size, spp: s.reference_spp, seed: 0x5eed, env, ..PathSettings::default() };
+    let path_settings = reference_settings(s);
     let (reference, floor) = reference(&renderer, camera, key, &path_settings, &s.out)?;
     let mut points = Vec::new();
 
@@ -278,19 +282,19 @@ pub fn run_scene(
             shadows,
             ..HybridSettings::default()
         };
-        // The IBL tables and prefiltered maps are computed once per scene, not per frame.
-        let is_once = |name: &str| name.starts_with("ibl");
-        let (ms, image) = timed(
-            s.repeats,
-            || renderer.passes().hybrid(renderer.scene(), camera, &settings),
-            |image| image.pass_ms.iter().filter(|(name, _)| !is_once(name)).map(|(_, ms)| ms).sum(),
-        )?;
+        let (ms, image) =
+            timed(s.repeats, || renderer.passes().hybrid(renderer.scene(), camera, &settings), frame_ms)?;
         if precompute_ms.is_empty() {
             precompute_ms = image.pass_ms.iter().filter(|(name, _)| is_once(name)).cloned().collect();
         }
         let (rmse, rel_mse) = errors(&image.color, &reference);
         let flip = Some(flip_mean(&image.color, &reference, s.size));
         points.push(Point { method, unit, value, ms, rmse, rel_mse, flip });
+    }
+    // Irradiance probes, baked once per scene and spacing.
+    for p in super::probes::series(ctx, &renderer, camera, &reference, s, &s.probes_per_side)? {
+        precompute_ms.push((format!("probes bake 1/{} ({} probes)", p.point.value, p.probes), p.bake_ms));
+        points.push(p.point);
     }
     let title = format!("{} — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name);
     let stem = s.out.join(format!("suite-{key}"));
@@ -331,9 +335,35 @@ pub fn run_scene(
     })
 }
 
+/// The IBL tables and prefiltered maps are computed once per scene, not per frame.
+fn is_once(pass: &str) -> bool {
+    pass.starts_with("ibl")
+}
+
+/// A hybrid frame's GPU milliseconds: its passes less the once-per-scene precomputation.
+pub fn frame_ms(image: &umbra::render::HybridImage) -> f64 {
+    image.pass_ms.iter().filter(|(name, _)| !is_once(name)).map(|(_, ms)| ms).sum()
+}
+
+/// The path tracer's settings of the suite's references.
+fn reference_settings(s: &SuiteSettings) -> PathSettings {
+    PathSettings { size: s.size, spp: s.reference_spp, seed: 0x5eed, env: s.env, ..PathSettings::default() }
+}
+
+/// The suite's reference of a scene (`key` names its cache file in `s.out`): the image and its
+/// own relative MSE.
+pub fn reference_for(
+    renderer: &Renderer,
+    camera: &Camera,
+    key: &str,
+    s: &SuiteSettings,
+) -> Result<(Vec<[f32; 4]>, f64)> {
+    reference(renderer, camera, key, &reference_settings(s), &s.out)
+}
+
 /// Runs `run` for half a second of warm-up, then `repeats` times (at least once): the median of
 /// `frame_ms` over the repeats, and the last result.
-fn timed<T>(
+pub fn timed<T>(
     repeats: usize,
     mut run: impl FnMut() -> umbra::Result<T>,
     frame_ms: impl Fn(&T) -> f64,

@@ -1,0 +1,215 @@
+//! Irradiance probes on the speed/accuracy chart: the hybrid (4 shadow rays, IBL) without probes
+//! (with and without SSAO) and with baked probes at a sweep of spacings (the scene's longest
+//! side / n; no SSAO: the probes' visibility is the occlusion, and SSAO's radius is the suite's
+//! scene-wide one, which on top of the probes darkens twice),
+//! each point's frame time (median GPU time of its per-frame passes after a warm-up; the bake is
+//! reported apart, as the one-off cost it is), its relative MSE and LDR-FLIP against a converged
+//! path-traced reference (the suite's, cached), and the probes' count and bake time. `suite`
+//! runs the same series on its scenes; `probes` runs it alone, with Sponza and a sun.
+
+use super::suite::{self, Point, SuiteSettings};
+use anyhow::Result;
+use serde_json::{json, Value};
+use umbra::embed::Renderer;
+use umbra::passes::ao::AoSettings;
+use umbra::passes::deferred::LightingSettings;
+use umbra::passes::probes::{ProbeSettings, ProbeVolume};
+use umbra::render::HybridSettings;
+use umbra::scene::Camera;
+
+/// The series' name on the charts and in the JSON.
+pub const SERIES: &str = "hybrid + probes";
+
+/// One baked volume's point.
+pub struct ProbePoint {
+    /// The chart's point (unit `probes_per_side`).
+    pub point: Point,
+    /// Probes in the volume.
+    pub probes: u32,
+    /// Of them active (outside geometry).
+    pub active: u32,
+    /// GPU milliseconds of the bake.
+    pub bake_ms: f64,
+}
+
+/// The hybrid's settings of the probe series (without SSAO) and of the points without probes it
+/// is compared with (with and without it): 4 shadow rays, split-sum IBL, under `s.env`.
+pub fn hybrid_settings(s: &SuiteSettings, ssao: bool) -> HybridSettings {
+    HybridSettings {
+        size: s.size,
+        lighting: LightingSettings { shadow_rays: 4, seed: 1, env: s.env, ..LightingSettings::default() },
+        ao: ssao.then(|| AoSettings { samples: 16, radius: s.ao_radius, seed: 1, ..AoSettings::default() }),
+        ..HybridSettings::default()
+    }
+}
+
+/// Bakes a volume at each spacing of `per_side` (the scene's longest side / n) and times the
+/// hybrid with it against `reference`.
+pub fn series(
+    ctx: &umbra::vk::Context,
+    renderer: &Renderer,
+    camera: &Camera,
+    reference: &[[f32; 4]],
+    s: &SuiteSettings,
+    per_side: &[u32],
+) -> Result<Vec<ProbePoint>> {
+    let settings = hybrid_settings(s, false);
+    let [lo, hi] = renderer.scene().bounds;
+    let longest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+    let mut out = Vec::new();
+    for &n in per_side {
+        let probe_settings = ProbeSettings { spacing: Some(longest / n as f32), ..ProbeSettings::default() };
+        let mut volume = ProbeVolume::new(ctx, renderer.scene(), &probe_settings)?;
+        let bar = super::progress_bar(volume.bake_sweeps() as u64, &format!("probes 1/{n}: bake"));
+        let bake_ms =
+            renderer.passes().bake_probes(renderer.scene(), &mut volume, &settings.lighting, |done, _| {
+                bar.set_position(done as u64)
+            })?;
+        bar.finish_and_clear();
+        let (ms, image) = suite::timed(
+            s.repeats,
+            || renderer.passes().hybrid_with_probes(renderer.scene(), camera, &settings, Some(&volume)),
+            suite::frame_ms,
+        )?;
+        let (rmse, rel_mse) = suite::errors(&image.color, reference);
+        let flip = Some(suite::flip_mean(&image.color, reference, s.size));
+        let active = volume.read_active(ctx)?.iter().filter(|a| **a).count() as u32;
+        out.push(ProbePoint {
+            point: Point {
+                method: SERIES.into(),
+                unit: "probes_per_side",
+                value: n,
+                ms,
+                rmse,
+                rel_mse,
+                flip,
+            },
+            probes: volume.grid.count(),
+            active,
+            bake_ms,
+        });
+    }
+    Ok(out)
+}
+
+/// One scene's run of the `probes` command: the hybrid without probes, then the series.
+pub struct SceneProbes {
+    /// The scene's name.
+    pub scene: String,
+    /// Triangles.
+    pub triangles: usize,
+    /// The reference's own relative MSE.
+    pub floor: f64,
+    /// The hybrid without probes, with SSAO and without.
+    pub plain: [Point; 2],
+    /// With probes, by spacing.
+    pub probes: Vec<ProbePoint>,
+}
+
+/// Runs the comparison on one scene.
+pub fn run_scene(
+    ctx: &umbra::vk::Context,
+    key: &str,
+    scene: &umbra::scene::Scene,
+    camera: &Camera,
+    s: &SuiteSettings,
+    per_side: &[u32],
+) -> Result<SceneProbes> {
+    let renderer = Renderer::new(ctx, scene)?;
+    let (reference, floor) = suite::reference_for(&renderer, camera, key, s)?;
+    let mut plain = Vec::new();
+    for (ssao, method) in [(true, "hybrid"), (false, "hybrid, no SSAO")] {
+        let settings = hybrid_settings(s, ssao);
+        let (ms, image) = suite::timed(
+            s.repeats,
+            || renderer.passes().hybrid(renderer.scene(), camera, &settings),
+            suite::frame_ms,
+        )?;
+        let (rmse, rel_mse) = suite::errors(&image.color, &reference);
+        let flip = Some(suite::flip_mean(&image.color, &reference, s.size));
+        plain.push(Point { method: method.into(), unit: "shadow_rays", value: 4, ms, rmse, rel_mse, flip });
+    }
+    let plain: [Point; 2] = plain.try_into().map_err(|_| anyhow::anyhow!("two hybrid points"))?;
+    let probes = series(ctx, &renderer, camera, &reference, s, per_side)?;
+    Ok(SceneProbes {
+        scene: scene.name.clone(),
+        triangles: renderer.scene().bvh_stats.triangles,
+        floor,
+        plain,
+        probes,
+    })
+}
+
+/// The JSON document of a run.
+pub fn to_json(device: &str, s: &SuiteSettings, scenes: &[SceneProbes]) -> Value {
+    let point = |p: &Point| json!({ "gpu_ms": p.ms, "rel_mse": p.rel_mse, "flip": p.flip, "rmse": p.rmse });
+    json!({
+        "device": device,
+        "size": [s.size.0, s.size.1],
+        "reference_spp": s.reference_spp,
+        "repeats": s.repeats,
+        "scenes": scenes.iter().map(|r| json!({
+            "scene": r.scene,
+            "triangles": r.triangles,
+            "reference_rel_mse_floor": r.floor,
+            "hybrid": point(&r.plain[0]),
+            "hybrid_no_ssao": point(&r.plain[1]),
+            "probes": r.probes.iter().map(|p| {
+                let mut v = point(&p.point);
+                v["per_side"] = json!(p.point.value);
+                v["probes"] = json!(p.probes);
+                v["active"] = json!(p.active);
+                v["bake_ms"] = json!(p.bake_ms);
+                v
+            }).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The Markdown table of a run's JSON (what BENCHMARKS.md shows).
+pub fn table(doc: &Value) -> String {
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    let mut out = format!(
+        "{}×{}, {}-spp references, {}; hybrid = 4 shadow rays, IBL (SSAO 16 where said; the probes' \
+         irradiance replaces the IBL's diffuse part); ratios against the hybrid with SSAO:\n\n\
+         | scene | probes (longest side / n) | active | bake | frame | ÷ hybrid frame | rel. MSE | ÷ hybrid rel. MSE | FLIP |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        doc["size"][0],
+        doc["size"][1],
+        doc["reference_spp"],
+        doc["device"].as_str().unwrap_or("?"),
+    );
+    for scene in doc["scenes"].as_array().cloned().unwrap_or_default() {
+        let name = scene["scene"].as_str().unwrap_or("?");
+        let plain = &scene["hybrid"];
+        let (plain_ms, plain_rel) = (num(&plain["gpu_ms"]), num(&plain["rel_mse"]));
+        out += &format!(
+            "| {name} | none (SSAO) | — | — | {plain_ms:.1} ms | 1 | {plain_rel:.4} | 1 | {:.3} |\n",
+            num(&plain["flip"])
+        );
+        let bare = &scene["hybrid_no_ssao"];
+        out += &format!(
+            "| {name} | none (no SSAO) | — | — | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
+            num(&bare["gpu_ms"]),
+            num(&bare["gpu_ms"]) / plain_ms,
+            num(&bare["rel_mse"]),
+            num(&bare["rel_mse"]) / plain_rel,
+            num(&bare["flip"])
+        );
+        for p in scene["probes"].as_array().cloned().unwrap_or_default() {
+            out += &format!(
+                "| {name} | {} (1/{}) | {} | {:.0} ms | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
+                p["probes"],
+                p["per_side"],
+                p["active"],
+                num(&p["bake_ms"]),
+                num(&p["gpu_ms"]),
+                num(&p["gpu_ms"]) / plain_ms,
+                num(&p["rel_mse"]),
+                num(&p["rel_mse"]) / plain_rel,
+                num(&p["flip"]),
+            );
+        }
+    }
+    out
+}

@@ -142,7 +142,9 @@ void main() {
         // Image-based lighting (split sum), times ambient occlusion.
         if (params.ibl != 0u) {
             float ao = imageLoad(ao_image, min(pixel, imageSize(ao_image) - 1)).x;
-            radiance += ao * ibl_lighting(s, normal_rough.w, n, wo, wo_local.z);
+            // The material's occlusion map (glTF occlusionTexture): ambient light only.
+            float occlusion = imageLoad(gb_emission, pixel).a;
+            radiance += ao * occlusion * ibl_lighting(s, normal_rough.w, n, wo, wo_local.z);
         }
 
         // Punctual lights: one shadow ray each.

@@ -178,6 +178,16 @@ Surface material_surface_lod(uint id, vec4 uv, vec2 cone_lod) {
     return material_surface_from(id, base, metallic, roughness);
 }
 
+// Material `id`'s ambient occlusion at the hit's UV sets (glTF occlusionTexture: 1 + strength
+// (r - 1); 1 without one), filtered for a ray cone's `cone_lod` (see material_texture_lod). It
+// scales only image-based (ambient) light, and only in the hybrid renderer (gbuffer.comp stores
+// it): the path tracer traces occlusion itself.
+float material_occlusion_lod(uint id, vec4 uv, vec2 cone_lod) {
+    float r = material_texture_lod(id, MATERIAL_SLOT_OCCLUSION, uv, cone_lod).r;
+    float strength = material_slot_row(id, MATERIAL_SLOT_OCCLUSION, 1u).w;
+    return 1.0 + strength * (r - 1.0);
+}
+
 // Material `id` at the hit's UV sets, textures applied (level 0).
 Surface material_surface(uint id, vec4 uv) {
     vec3 base = material_vec(id, 0u).rgb * material_texture(id, MATERIAL_SLOT_BASE_COLOR, uv).rgb;

@@ -591,7 +591,9 @@ gpu_constants! {
     /// Slot of the normal map (its scale in `tex_transform`'s second row, w).
     MATERIAL_SLOT_NORMAL: uint = 3;
     /// Slot of the occlusion map (glTF `occlusionTexture`, R; its strength in `tex_transform`'s
-    /// second row, w).
+    /// second row, w). Only the hybrid renderer reads it: the G-buffer stores 1 + strength (r − 1)
+    /// and the lighting pass scales the image-based (ambient) light by it, never direct light. The
+    /// path tracer ignores it: it traces the occlusion itself.
     MATERIAL_SLOT_OCCLUSION: uint = 4;
     /// Texture slots a material has (each with two `tex_transform` rows).
     MATERIAL_TEXTURE_SLOTS: uint = 5;
@@ -723,7 +725,7 @@ kernels! {
             gb_normal: writeonly image rgba16f,
             /// Base colour, metallic.
             gb_base: writeonly image rgba16f,
-            /// Emission.
+            /// Emission, material occlusion.
             gb_emission: writeonly image rgba16f,
             /// Material index, octahedral geometric normal.
             gb_material: writeonly image rg32ui,
@@ -748,7 +750,7 @@ kernels! {
             gb_normal: readonly image rgba16f,
             /// Base colour, metallic.
             gb_base: readonly image rgba16f,
-            /// Emission.
+            /// Emission, material occlusion.
             gb_emission: readonly image rgba16f,
             /// Material index, octahedral geometric normal.
             gb_material: readonly image rg32ui,

@@ -7,6 +7,9 @@
 //! the prefiltered environment through their one interface (straight on when thin-walled,
 //! refracted once into a volume); the G-buffer holds only the first surface, so a volume's exit
 //! and anything behind a transmissive surface but the environment are not seen.
+//!
+//! The material's occlusion map (glTF `occlusionTexture`, the G-buffer's `emission` alpha) scales
+//! the image-based light too; direct light is never scaled by it nor by the ambient-occlusion image.
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;

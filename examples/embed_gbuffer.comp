@@ -84,6 +84,7 @@ void main() {
     imageStore(gb_depth, pixel, vec4(best * dot(d, cam.forward.xyz)));
     imageStore(gb_normal, pixel, vec4(n, materials[m].emission_roughness.w));
     imageStore(gb_base, pixel, materials[m].base_metallic);
-    imageStore(gb_emission, pixel, vec4(min(emission, vec3(65504.0)), 0.0));
+    // Alpha: the material's ambient occlusion, 1 without an occlusion map (umbra's contract).
+    imageStore(gb_emission, pixel, vec4(min(emission, vec3(65504.0)), 1.0));
     imageStore(gb_material, pixel, uvec4(m, packSnorm2x16(oct_encode(n)), 0u, 0u));
 }

@@ -158,7 +158,10 @@ void main() {
         }
         if (ambient) {
             float ao = imageLoad(ao_image, min(pixel, imageSize(ao_image) - 1)).x;
-            radiance += ao * ibl_lighting(s, normal_rough.w, p, n, wo, wo_local.z);
+            // The material's occlusion map (glTF occlusionTexture): ambient light only (the
+            // probes' indirect light too, as glTF says of indirect light).
+            float occlusion = imageLoad(gb_emission, pixel).a;
+            radiance += ao * occlusion * ibl_lighting(s, normal_rough.w, p, n, wo, wo_local.z);
         }
 
         // Punctual lights: one shadow ray each.

@@ -55,11 +55,16 @@ void main() {
     uint material = tri_material(tri);
     vec3 n = shading_normal_lod(tri, hit.bary, ng, uv, cone_lod);
     Surface s = material_surface_lod(material, uv, cone_lod);
+    // The occlusion map, for the lighting pass's image-based (ambient) light.
+    float occlusion = 1.0;
+    if (HAS_TEXTURES) {
+        occlusion = material_occlusion_lod(material, uv, cone_lod);
+    }
 
     // View-space depth: distance along the camera's forward axis.
     imageStore(gb_depth, pixel, vec4(hit.t * dot(dir, forward)));
     imageStore(gb_normal, pixel, vec4(n, sqrt(s.alpha)));
     imageStore(gb_base, pixel, vec4(s.base, s.metallic));
-    imageStore(gb_emission, pixel, vec4(min(le, vec3(65504.0)), 0.0));
+    imageStore(gb_emission, pixel, vec4(min(le, vec3(65504.0)), occlusion));
     imageStore(gb_material, pixel, uvec4(material, packSnorm2x16(oct_encode(ng)), 0u, 0u));
 }

@@ -2,7 +2,9 @@
 // Progressive path tracer: one sample per pixel per dispatch, accumulated as a running mean with
 // its second moment. Next-event estimation on emissive triangles, BSDF sampling, multiple
 // importance sampling (power or balance heuristic), Russian roulette; or, for comparison, either
-// strategy alone (LIGHT_SAMPLING, BSDF_HITS).
+// strategy alone (LIGHT_SAMPLING, BSDF_HITS). Materials' occlusion maps (glTF occlusionTexture)
+// are not read: the paths trace the occlusion they stand in for (the hybrid renderer applies
+// them to its image-based light).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/pathtrace.glsl"
 #include "pixel.glsl"

@@ -16,14 +16,25 @@
 #include "bsdf.glsl"
 #include "texture.glsl"
 
-// Texel k of material `id` (fourteen per GpuMaterial: base_color, emissive_rough, specular,
-// params, flags, textures, tex_transform[0..8]), as floats or as unsigned integers.
+// Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
+// specular, params, flags, textures[0..2], tex_transform[0..10]), as floats or as unsigned
+// integers.
 vec4 material_vec(uint id, uint k) {
-    return uintBitsToFloat(imageLoad(material_texels, int(14u * id + k)));
+    return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
 }
 
 uvec4 material_uvec(uint id, uint k) {
-    return imageLoad(material_texels, int(14u * id + k));
+    return imageLoad(material_texels, int(MATERIAL_TEXELS * id + k));
+}
+
+// Material `id`'s texture in `slot` (MATERIAL_SLOT_*): its index + 1, 0 when the slot is empty.
+uint material_slot_texture(uint id, uint slot) {
+    return material_uvec(id, 5u + slot / 4u)[slot % 4u];
+}
+
+// Row `row` (0 or 1) of the texture transform of `slot` (GpuMaterial::tex_transform).
+vec4 material_slot_row(uint id, uint slot, uint row) {
+    return material_vec(id, 7u + 2u * slot + row);
 }
 
 // An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
@@ -89,20 +100,20 @@ uint material_texture_uv(uint id, uint slot, vec4 uv, out vec2 t) {
     // OpSpecConstantOp, which naga rejects.
     uint tex = 0u;
     if (HAS_TEXTURES) {
-        tex = material_uvec(id, 5u)[slot];
+        tex = material_slot_texture(id, slot);
     }
     t = vec2(0.0);
     if (tex != 0u) {
-        vec4 r0 = material_vec(id, 6u + (2u * slot));
-        vec4 r1 = material_vec(id, 6u + (2u * slot + 1u));
+        vec4 r0 = material_slot_row(id, slot, 0u);
+        vec4 r1 = material_slot_row(id, slot, 1u);
         vec2 st = r0.w != 0.0 ? uv.zw : uv.xy;
         t = vec2(dot(r0.xyz, vec3(st, 1.0)), dot(r1.xyz, vec3(st, 1.0)));
     }
     return tex;
 }
 
-// Material texture `slot` (0 base colour, 1 metallic-roughness, 2 emissive, 3 normal) at the hit's UV
-// sets (uv.xy = uv0, uv.zw = uv1), level 0; white when the slot is empty.
+// Material texture `slot` (MATERIAL_SLOT_*) at the hit's UV sets (uv.xy = uv0, uv.zw = uv1),
+// level 0; white when the slot is empty.
 vec4 material_texture(uint id, uint slot, vec4 uv) {
     vec2 t;
     uint tex = material_texture_uv(id, slot, uv, t);
@@ -126,8 +137,8 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
     if (max(cone_lod.x, cone_lod.y) <= LOD_LEVEL0.x) {
         return texture_sample(tex, t);
     }
-    vec4 r0 = material_vec(id, 6u + (2u * slot));
-    vec4 r1 = material_vec(id, 6u + (2u * slot + 1u));
+    vec4 r0 = material_slot_row(id, slot, 0u);
+    vec4 r1 = material_slot_row(id, slot, 1u);
     float texel_area = float(texture_info(tex).y) * float(texture_info(tex).z) * abs(r0.x * r1.y - r0.y * r1.x);
     float lod = (r0.w != 0.0 ? cone_lod.y : cone_lod.x) + 0.5 * log2(texel_area);
     return texture_sample_lod(tex, t, lod);
@@ -160,17 +171,27 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
 // Material `id` at the hit's UV sets, textures applied, filtered for a ray cone's `cone_lod`
 // (see material_texture_lod).
 Surface material_surface_lod(uint id, vec4 uv, vec2 cone_lod) {
-    vec3 base = material_vec(id, 0u).rgb * material_texture_lod(id, 0u, uv, cone_lod).rgb;
-    vec4 mr = material_texture_lod(id, 1u, uv, cone_lod);
+    vec3 base = material_vec(id, 0u).rgb * material_texture_lod(id, MATERIAL_SLOT_BASE_COLOR, uv, cone_lod).rgb;
+    vec4 mr = material_texture_lod(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv, cone_lod);
     float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
     float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
     return material_surface_from(id, base, metallic, roughness);
 }
 
+// Material `id`'s ambient occlusion at the hit's UV sets (glTF occlusionTexture: 1 + strength
+// (r - 1); 1 without one), filtered for a ray cone's `cone_lod` (see material_texture_lod). It
+// scales only image-based (ambient) light, and only in the hybrid renderer (gbuffer.comp stores
+// it): the path tracer traces occlusion itself.
+float material_occlusion_lod(uint id, vec4 uv, vec2 cone_lod) {
+    float r = material_texture_lod(id, MATERIAL_SLOT_OCCLUSION, uv, cone_lod).r;
+    float strength = material_slot_row(id, MATERIAL_SLOT_OCCLUSION, 1u).w;
+    return 1.0 + strength * (r - 1.0);
+}
+
 // Material `id` at the hit's UV sets, textures applied (level 0).
 Surface material_surface(uint id, vec4 uv) {
-    vec3 base = material_vec(id, 0u).rgb * material_texture(id, 0u, uv).rgb;
-    vec4 mr = material_texture(id, 1u, uv);
+    vec3 base = material_vec(id, 0u).rgb * material_texture(id, MATERIAL_SLOT_BASE_COLOR, uv).rgb;
+    vec4 mr = material_texture(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv);
     float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
     float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
     return material_surface_from(id, base, metallic, roughness);
@@ -233,7 +254,7 @@ vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
     }
     vec3 e = material_vec(m, 1u).rgb;
     if (HAS_TEXTURES && any(greaterThan(e, vec3(0.0)))) {
-        e *= material_texture_lod(m, 2u, tri_uv(tri, bary), cone_lod).rgb;
+        e *= material_texture_lod(m, MATERIAL_SLOT_EMISSIVE, tri_uv(tri, bary), cone_lod).rgb;
     }
     return e;
 }
@@ -280,7 +301,7 @@ vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
     }
     if (HAS_TEXTURES) {
         uint material = tri_material(tri);
-        if (material_uvec(material, 5u).w != 0u) {
+        if (material_slot_texture(material, MATERIAL_SLOT_NORMAL) != 0u) {
             vec4 ta = vertex_tangent(i0);
             vec4 tb = vertex_tangent(i1);
             vec4 tc = vertex_tangent(i2);
@@ -290,8 +311,8 @@ vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
             if (tl > 1e-8) {
                 tt /= tl;
                 vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
-                vec3 nm = material_texture_lod(material, 3u, uv, cone_lod).rgb * 2.0 - 1.0;
-                nm.xy *= material_vec(material, 6u + (7)).w;
+                vec3 nm = material_texture_lod(material, MATERIAL_SLOT_NORMAL, uv, cone_lod).rgb * 2.0 - 1.0;
+                nm.xy *= material_slot_row(material, MATERIAL_SLOT_NORMAL, 1u).w;
                 vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
                 if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
                     n = mapped;
@@ -443,7 +464,7 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
 // rays, each path vertex) and the mean over samples is the blend.
 bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir) {
     uint m = tri_material(tri);
-    float alpha = material_vec(m, 0u).a * material_texture(m, 0u, tri_uv(tri, bary)).a;
+    float alpha = material_vec(m, 0u).a * material_texture(m, MATERIAL_SLOT_BASE_COLOR, tri_uv(tri, bary)).a;
     if (floatBitsToUint(bvh_tri_v(tri, 1u).w) == 1u) {
         return alpha >= material_vec(m, 3u).w;
     }

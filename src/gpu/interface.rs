@@ -210,12 +210,14 @@ gpu_structs! {
         params: vec4,
         /// `x`: `MATERIAL_*` bits.
         flags: uvec4,
-        /// Base colour, metallic-roughness, emissive, normal texture: index + 1 (0: none).
-        textures: uvec4,
+        /// The texture of each slot (`MATERIAL_SLOT_*`; slot k is `textures[k / 4][k % 4]`):
+        /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, then occlusion;
+        /// the last three entries are unused (0).
+        textures: [uvec4; 2],
         /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
-        /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; the normal slot's row1.w is
-        /// the normal scale.
-        tex_transform: [vec4; 8],
+        /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; row1.w is the normal slot's
+        /// normal scale and the occlusion slot's strength (1 for the other slots).
+        tex_transform: [vec4; 10],
     }
 
     /// A texture in the shared texel buffer (RGBA8, one `uint` per texel, row-major).
@@ -634,6 +636,23 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_volume` with a thickness: transmission refracts
     /// (else it is thin-walled).
     MATERIAL_VOLUME: uint = 2;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 272 bytes).
+    MATERIAL_TEXELS: uint = 17;
+    /// [`GpuMaterial::textures`] slot of the base colour texture.
+    MATERIAL_SLOT_BASE_COLOR: uint = 0;
+    /// Slot of the metallic-roughness texture.
+    MATERIAL_SLOT_METALLIC_ROUGHNESS: uint = 1;
+    /// Slot of the emissive texture.
+    MATERIAL_SLOT_EMISSIVE: uint = 2;
+    /// Slot of the normal map (its scale in `tex_transform`'s second row, w).
+    MATERIAL_SLOT_NORMAL: uint = 3;
+    /// Slot of the occlusion map (glTF `occlusionTexture`, R; its strength in `tex_transform`'s
+    /// second row, w). Only the hybrid renderer reads it: the G-buffer stores 1 + strength (r − 1)
+    /// and the lighting pass scales the image-based (ambient) light by it, never direct light. The
+    /// path tracer ignores it: it traces the occlusion itself.
+    MATERIAL_SLOT_OCCLUSION: uint = 4;
+    /// Texture slots a material has (each with two `tex_transform` rows).
+    MATERIAL_TEXTURE_SLOTS: uint = 5;
     /// `GpuTexture::flags`: clamp s.
     TEXTURE_WRAP_S_CLAMP: uint = 1;
     /// `GpuTexture::flags`: mirror s.
@@ -706,7 +725,8 @@ scene_bindings! {
     triangle_texels: readonly texels rgba32ui,
     /// [`GpuVertex`]s, three RGBA32UI texels each (float bits).
     vertex_texels: readonly texels rgba32ui,
-    /// [`GpuMaterial`]s, fourteen RGBA32UI texels each (float bits but for `flags`, `textures`).
+    /// [`GpuMaterial`]s, [`MATERIAL_TEXELS`] RGBA32UI texels each (float bits but for `flags`,
+    /// `textures`).
     material_texels: readonly texels rgba32ui,
     /// [`GpuTexture`]s, two RGBA32UI texels each.
     texture_texels: readonly texels rgba32ui,
@@ -776,7 +796,7 @@ kernels! {
             gb_normal: writeonly image rgba16f,
             /// Base colour, metallic.
             gb_base: writeonly image rgba16f,
-            /// Emission.
+            /// Emission, material occlusion.
             gb_emission: writeonly image rgba16f,
             /// Material index, octahedral geometric normal.
             gb_material: writeonly image rg32ui,
@@ -802,7 +822,7 @@ kernels! {
             gb_normal: readonly image rgba16f,
             /// Base colour, metallic.
             gb_base: readonly image rgba16f,
-            /// Emission.
+            /// Emission, material occlusion.
             gb_emission: readonly image rgba16f,
             /// Material index, octahedral geometric normal.
             gb_material: readonly image rg32ui,

@@ -394,7 +394,12 @@ const _: () = assert!(size_of::<TraceRay>() == 32);
 const _: () = assert!(size_of::<TraceHit>() == 16);
 const _: () = assert!(size_of::<GpuTriangle>() == 32);
 const _: () = assert!(size_of::<GpuVertex>() == 48);
-const _: () = assert!(size_of::<GpuMaterial>() == 224);
+const _: () = assert!(size_of::<GpuMaterial>() == 16 * MATERIAL_TEXELS as usize);
+// shading.glsl reads a material's texture slots from texel 5 on and their transforms from texel 7
+// on, two texels per slot.
+const _: () = assert!(offset_of!(GpuMaterial, textures) == 16 * 5);
+const _: () = assert!(offset_of!(GpuMaterial, tex_transform) == 16 * 7);
+const _: () = assert!(size_of::<GpuMaterial>() == 16 * (7 + 2 * MATERIAL_TEXTURE_SLOTS as usize));
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);

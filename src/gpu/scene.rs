@@ -1,7 +1,10 @@
 //! The scene on the GPU: the BVH, triangles in BVH order, vertex attributes, materials and the
 //! emissive-triangle sampling table, uploaded once as storage buffers.
 
-use super::layout::{GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources};
+use super::layout::{
+    GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources,
+    MATERIAL_TEXTURE_SLOTS,
+};
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
@@ -18,7 +21,7 @@ pub struct GpuScene {
     pub triangles: TexelBuffer,
     /// `GpuVertex`s, as RGBA32UI texels (three each).
     pub vertices: TexelBuffer,
-    /// `GpuMaterial`s, as RGBA32UI texels (fourteen each).
+    /// `GpuMaterial`s, as RGBA32UI texels (`MATERIAL_TEXELS` each).
     pub materials: TexelBuffer,
     /// `GpuLightTri`s as RGBA32UI texels (an empty list still gets one texel).
     pub lights: TexelBuffer,
@@ -247,21 +250,26 @@ impl ShadingArrays {
             .materials
             .iter()
             .map(|m| GpuMaterial {
+                // In MATERIAL_SLOT_* order.
                 textures: [
-                    gpu_textures.slot(scene, m.base_color_texture.as_ref()),
-                    gpu_textures.slot(scene, m.metallic_roughness_texture.as_ref()),
-                    gpu_textures.slot(scene, m.emissive_texture.as_ref()),
-                    if scene.tangents.is_empty() {
-                        0
-                    } else {
-                        gpu_textures.slot(scene, m.normal_texture.as_ref())
-                    },
+                    [
+                        gpu_textures.slot(scene, m.base_color_texture.as_ref()),
+                        gpu_textures.slot(scene, m.metallic_roughness_texture.as_ref()),
+                        gpu_textures.slot(scene, m.emissive_texture.as_ref()),
+                        if scene.tangents.is_empty() {
+                            0
+                        } else {
+                            gpu_textures.slot(scene, m.normal_texture.as_ref())
+                        },
+                    ],
+                    [gpu_textures.slot(scene, m.occlusion_texture.as_ref()), 0, 0, 0],
                 ],
                 tex_transform: transforms([
                     m.base_color_texture.as_ref(),
                     m.metallic_roughness_texture.as_ref(),
                     m.emissive_texture.as_ref(),
                     m.normal_texture.as_ref(),
+                    m.occlusion_texture.as_ref(),
                 ]),
                 base_color: m.base_color_factor,
                 emissive_rough: [m.emissive[0], m.emissive[1], m.emissive[2], m.roughness],
@@ -561,10 +569,13 @@ impl GpuTextures {
     }
 }
 
-/// The UV transforms of the four texture slots as GPU rows (identity for an empty slot), with
-/// the UV set in the first row's `w` and the slot's scale (the normal scale) in the second's.
-fn transforms(slots: [Option<&crate::scene::TextureRef>; 4]) -> [[f32; 4]; 8] {
-    let mut rows = [[0.0; 4]; 8];
+/// The UV transforms of the texture slots (`MATERIAL_SLOT_*` order) as GPU rows (identity for an
+/// empty slot), with the UV set in the first row's `w` and the slot's scale (the normal scale, the
+/// occlusion strength; 1 otherwise) in the second's.
+fn transforms(
+    slots: [Option<&crate::scene::TextureRef>; MATERIAL_TEXTURE_SLOTS as usize],
+) -> [[f32; 4]; 2 * MATERIAL_TEXTURE_SLOTS as usize] {
+    let mut rows = [[0.0; 4]; 2 * MATERIAL_TEXTURE_SLOTS as usize];
     for (k, slot) in slots.iter().enumerate() {
         let (m, set, scale) = match slot {
             Some(r) => (r.transform, r.tex_coord as f32, r.scale),

@@ -9,6 +9,10 @@
 //! and anything behind a transmissive surface but the environment are not seen. With a probe
 //! volume ([`ProbeVolume`]) the diffuse lobe takes its irradiance (indirect light and the
 //! occluded environment) instead of the environment's.
+//!
+//! The material's occlusion map (glTF `occlusionTexture`, the G-buffer's `emission` alpha) scales
+//! the image-based light and the probes' light too; direct light is never scaled by it nor by the
+//! ambient-occlusion image.
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;

@@ -6,11 +6,15 @@
 //! | `depth` | `R32_SFLOAT` | view-space depth (distance along the camera's forward axis); 0 where no surface |
 //! | `normal` | `R16G16B16A16_SFLOAT` | world-space shading normal xyz (interpolated, normal-mapped, facing the camera's side of the geometry), perceptual roughness √α in w (α floored as the BSDF floors it) |
 //! | `base` | `R16G16B16A16_SFLOAT` | linear base colour rgb (textures applied, mipmapped ones filtered for the pixel's ray cone), metallic in a |
-//! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504), 0 in a |
+//! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504); the material's ambient occlusion in a (glTF `occlusionTexture`: 1 + strength (r − 1), filtered like the other textures; 1 without one), which the lighting pass multiplies into the image-based (ambient) light only |
 //! | `material` | `R32G32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16` |
 //!
 //! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
-//! with a compute-to-compute barrier.
+//! with a compute-to-compute barrier. Where no surface was hit, `depth`, `normal`, `base` and
+//! `emission` (its a included) are 0.
+//!
+//! A host that writes its own G-buffer must write the occlusion too: 1 in `emission`'s a where a
+//! surface has no occlusion map (0 there darkens the image-based light to nothing).
 
 use crate::error::Result;
 use crate::gpu::kernels::gbuffer;
@@ -31,7 +35,7 @@ pub struct GBuffer {
     pub normal: Image,
     /// Base colour and metallic.
     pub base: Image,
-    /// Emitted radiance.
+    /// Emitted radiance and the material's occlusion.
     pub emission: Image,
     /// Material index and geometric normal.
     pub material: Image,
@@ -106,7 +110,7 @@ pub struct GBufferViews {
     pub normal: raw::ImageView,
     /// `R16G16B16A16_SFLOAT` base colour and metallic.
     pub base: raw::ImageView,
-    /// `R16G16B16A16_SFLOAT` emission.
+    /// `R16G16B16A16_SFLOAT` emission rgb, material occlusion a (1 for none).
     pub emission: raw::ImageView,
     /// `R32G32_UINT` material index and geometric normal.
     pub material: raw::ImageView,
@@ -130,7 +134,7 @@ pub struct GBufferData {
     pub normal: Vec<[f32; 4]>,
     /// Base colour rgb, metallic.
     pub base: Vec<[f32; 4]>,
-    /// Emitted radiance rgb.
+    /// Emitted radiance rgb, the material's occlusion (1 for none; 0 where no surface).
     pub emission: Vec<[f32; 4]>,
     /// Material index, packed geometric normal.
     pub material: Vec<[u32; 2]>,

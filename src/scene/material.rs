@@ -107,7 +107,9 @@ pub struct Material {
     pub metallic_roughness_texture: Option<TextureRef>,
     /// Tangent-space normal map (linear); `scale` scales its XY.
     pub normal_texture: Option<TextureRef>,
-    /// Ambient occlusion in R (linear); `scale` is the strength.
+    /// Ambient occlusion in R (linear); `scale` is the strength. The hybrid renderer scales its
+    /// image-based (ambient) light by 1 + strength (r − 1), never direct light; the path tracer
+    /// ignores it (it traces occlusion itself).
     pub occlusion_texture: Option<TextureRef>,
     /// Emission (sRGB RGB), multiplied by `emissive`.
     pub emissive_texture: Option<TextureRef>,

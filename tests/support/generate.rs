@@ -208,6 +208,50 @@ pub fn textured() -> Vec<u8> {
     g.finish(nodes, &["KHR_texture_transform", "KHR_lights_punctual"])
 }
 
+/// A rough white 2 m square facing the camera (+Z) and filling its view, for the occlusion-map
+/// tests (tests/occlusion_map.rs; not in `scenes/`). With `occlusion: Some(strength)` it has an
+/// occlusion map that is black on its left half and white on its right (16 × 16, nearest); every
+/// variant has a 1 × 1 white base colour texture, so all of them run the same specialised
+/// kernels. With `sun`, a directional light shines on it straight on.
+pub fn occlusion_square(occlusion: Option<f64>, sun: bool) -> Vec<u8> {
+    let mut g = Gltf::new();
+    let nearest = g.push("samplers", json!({ "magFilter": 9728, "minFilter": 9728 }));
+    let white = g.png_image("white", 1, 1, &[255, 255, 255]);
+    let white = g.push("textures", json!({ "source": white, "sampler": nearest }));
+    let mut material = json!({
+        "name": "square",
+        "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.8, 0.8, 1.0], "baseColorTexture": { "index": white },
+            "metallicFactor": 0.0, "roughnessFactor": 0.7 }
+    });
+    if let Some(strength) = occlusion {
+        let halves =
+            g.png_image("halves", 16, 16, &texels(16, 16, |x, _| if x < 8 { [0; 3] } else { [255; 3] }));
+        let halves = g.push("textures", json!({ "source": halves, "sampler": nearest }));
+        material["occlusionTexture"] = json!({ "index": halves, "strength": strength });
+    }
+    let material = g.push("materials", material);
+    let mut square = Mesh::default();
+    square.quad(Vec3::ZERO, Vec3::X, Vec3::Y);
+    let square = vec![g.primitive(&square, material)];
+    let square = g.mesh("square", square);
+    let mut nodes = vec![
+        g.push("nodes", json!({ "name": "square", "mesh": square })),
+        // 2 m away, seeing ±0.8 m.
+        g.camera_node("camera", [0.0, 0.0, 2.0], json!([0.0, 0.0, 0.0, 1.0]), 2.0 * 0.4f64.atan(), 1.0),
+    ];
+    let mut extensions = Vec::new();
+    if sun {
+        let light = g.light(json!({ "name": "sun", "type": "directional", "intensity": 2.0 }));
+        // A directional light shines along its node's -Z: straight at the square.
+        nodes.push(g.push(
+            "nodes",
+            json!({ "name": "sun", "extensions": { "KHR_lights_punctual": { "light": light } } }),
+        ));
+        extensions.push("KHR_lights_punctual");
+    }
+    g.finish(nodes, &extensions)
+}
+
 /// One wedge mesh placed by twelve nodes: a rotated ring of eight, a nested arm (translation,
 /// uniform scale, rotation, and a `matrix` node), a mirrored node (scale -1 in x) with a child.
 /// A second scene, not the default, holds one more node that must not be loaded.

@@ -18,6 +18,7 @@ use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
+use crate::passes::lightmap::{LightmapLayout, LightmapPass, LightmapSettings, Lightmaps};
 pub use crate::passes::pathtrace::PathSettings;
 use crate::passes::pathtrace::{PathOptions, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::probes::{ProbePass, ProbeVolume};
@@ -182,6 +183,7 @@ pub struct Passes {
     deferred: [OnceLock<DeferredPass>; 10],
     shadow: OnceLock<ShadowPass>,
     probe: OnceLock<ProbePass>,
+    lightmap: OnceLock<LightmapPass>,
     ssao: OnceLock<SsaoPass>,
     ao_blur: OnceLock<AoBlurPass>,
     rtao: OnceLock<RtaoPass>,
@@ -201,6 +203,7 @@ impl Passes {
             deferred: Default::default(),
             shadow: OnceLock::new(),
             probe: OnceLock::new(),
+            lightmap: OnceLock::new(),
             ssao: OnceLock::new(),
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
@@ -486,6 +489,24 @@ impl Passes {
             }
         }
         Err(Error::Invalid("shadow maps: the tile lists overflowed twice".into()))
+    }
+
+    /// Bakes the lightmaps of `layout` (see [`crate::passes::lightmap`]) now (submits and
+    /// waits) under the environment of `lighting`, the bounces beyond the first from `probes`
+    /// when given, calling `progress(done, total)` samples; returns them read back and dilated.
+    pub fn bake_lightmaps(
+        &self,
+        scene: &GpuScene,
+        layout: &LightmapLayout,
+        settings: &LightmapSettings,
+        lighting: &LightingSettings,
+        probes: Option<&ProbeVolume>,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<Lightmaps> {
+        self.check(scene)?;
+        lighting.validate()?;
+        let pass = built(&self.lightmap, || LightmapPass::new(&self.ctx, scene))?;
+        pass.bake(&self.ctx, scene, layout, settings, lighting.env, probes, progress)
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`

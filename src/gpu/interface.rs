@@ -471,6 +471,28 @@ gpu_structs! {
         pad1: uint,
     }
 
+    /// Push constants of `lightmap_bake.comp`: one sample for every lightmap texel.
+    struct LightmapParams {
+        /// Constant environment radiance, or the environment map's multiplier.
+        env: vec3,
+        /// Texels of all the lightmaps.
+        texel_count: uint,
+        /// Environment map width and height.
+        env_size: uvec2,
+        /// The sample's index (0 restarts the running means).
+        sample_index: uint,
+        /// Seed of the random numbers.
+        seed: uint,
+        /// Emissive triangles in the sampling table.
+        light_count: uint,
+        /// Punctual lights.
+        punctual_count: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+    }
+
     /// What the shadow rasterizer reports: the largest need over the layers rendered.
     struct ShadowStats {
         /// Tile-list entries one layer needed.
@@ -1038,6 +1060,27 @@ kernels! {
         }
     }
 
+    /// Lightmaps: one sample of each texel's irradiance.
+    kernel lightmap_bake {
+        scene: full [textures, alpha, lights, punctual, env_map],
+        push: LightmapParams,
+        spec: {},
+        bindings: {
+            /// Per texel two RGBA32F texels: the world position and 1 where a triangle covers the
+            /// texel (0: none, skipped), then the unit normal.
+            lightmap_texels: readonly texels rgba32f,
+            /// A probe volume for the light beyond the first bounce (its states all inactive
+            /// when there is none): the grid and states.
+            probe_texels: readonly texels rgba32ui,
+            /// The volume's irradiance maps.
+            probe_irradiance: readonly texels rgba32f,
+            /// The volume's distance maps.
+            probe_distance: readonly texels rgba32f,
+            /// Per texel the running means: emitters' irradiance rgb and the mean square of its
+            /// red channel, then the same of the ambient irradiance.
+            lightmap_accum: readwrite buffer [vec4],
+        }
+    }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
         scene: full [textures, alpha, lights, punctual, env_map],

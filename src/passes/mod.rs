@@ -4,6 +4,7 @@ pub mod ao;
 pub mod deferred;
 pub mod gbuffer;
 pub mod ibl;
+pub mod lightmap;
 pub mod pathtrace;
 pub mod probes;
 pub mod shadow;

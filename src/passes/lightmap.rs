@@ -1,0 +1,389 @@
+//! Lightmaps: irradiance baked into textures over a second UV set (`TEXCOORD_1`, glTF's usual
+//! lightmap set).
+//!
+//! Every material whose triangles carry a `TEXCOORD_1` chart (a triangle whose three UV1
+//! coordinates span an area) gets one square map over UV1 ∈ [0, 1]² ([`LightmapLayout`]): each
+//! texel whose centre a triangle covers records the world position and the interpolated normal
+//! there (a CPU rasterizer in UV space; where charts overlap the last triangle wins). The bake
+//! (`lightmap_bake.comp`) then averages samples of each texel's irradiance in two layers:
+//!
+//! - `emitters`: direct irradiance from the emissive triangles (light sampling with shadow rays);
+//! - `ambient`: irradiance from the environment and from the light that surfaces reflect (a
+//!   cosine-distributed gather ray per sample, its hit shaded with the path tracer's BSDF and
+//!   lights as the probes' rays are, `gather.glsl`; the bounces beyond come from a probe volume
+//!   when one is given, else there are none).
+//!
+//! The punctual lights' direct light is in neither: the lighting pass computes it with its own
+//! shadows. A texel whose centre no triangle covers stays empty, and bilinear filtering next to a
+//! chart's border reads it: the seam, a dark line along every chart's edge. [`Lightmaps::dilate`]
+//! fills empty texels from their covered neighbours, a ring per pass.
+
+use crate::error::{Error, Result};
+use crate::gpu::kernels::lightmap_bake;
+use crate::gpu::layout::LightmapParams;
+use crate::gpu::scene::GpuScene;
+use crate::gpu::Pipeline;
+use crate::output::{write_exr, Layer};
+use crate::passes::probes::ProbeVolume;
+use crate::scene::Scene;
+use crate::vk::{barrier, raw, Buffer, Context, TexelBuffer};
+use glam::{Vec2, Vec3};
+use gpu_allocator::MemoryLocation;
+use std::path::{Path, PathBuf};
+
+/// How lightmaps are laid out and baked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightmapSettings {
+    /// Texels a side of each material's map.
+    pub size: u32,
+    /// Samples per texel.
+    pub samples: u32,
+    /// Seed of the samples.
+    pub seed: u32,
+    /// Rings of empty texels [`Lightmaps::dilate`] fills after the bake.
+    pub dilation: u32,
+}
+
+impl Default for LightmapSettings {
+    fn default() -> Self {
+        Self { size: 128, samples: 256, seed: 0, dilation: 2 }
+    }
+}
+
+impl LightmapSettings {
+    /// Most texels of all maps together.
+    pub const MAX_TEXELS: u64 = 1 << 24;
+
+    /// Checks the settings.
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=4096).contains(&self.size) {
+            return Err(Error::Invalid(format!(
+                "lightmap size {}: must be 1 to 4096 texels a side",
+                self.size
+            )));
+        }
+        if self.samples == 0 {
+            return Err(Error::Invalid("lightmaps need at least one sample per texel".into()));
+        }
+        Ok(())
+    }
+}
+
+/// One texel's record for the bake: world position with coverage (w: 1 covered, 0 empty), then
+/// the unit normal (w unused).
+pub type LightmapTexel = [[f32; 4]; 2];
+
+/// Where each material's lightmap texels lie in the world.
+#[derive(Debug, Clone)]
+pub struct LightmapLayout {
+    /// Texels a side of each map.
+    pub size: u32,
+    /// The material of each map, in map order.
+    pub materials: Vec<u32>,
+    /// Every map's texels, map after map, rows from the top (UV1 v = 0).
+    pub texels: Vec<LightmapTexel>,
+}
+
+impl LightmapLayout {
+    /// Rasterizes the UV1 charts of `scene` into maps of `size`² texels, one per material with a
+    /// chart. A scene without `TEXCOORD_1` (or without any chart of area) has no maps.
+    pub fn new(scene: &Scene, size: u32) -> Result<Self> {
+        let mut by_material: Vec<Vec<usize>> = vec![Vec::new(); scene.materials.len()];
+        if !scene.uv1.is_empty() {
+            for (t, tri) in scene.triangles.iter().enumerate() {
+                let [a, b, c] = tri.map(|i| Vec2::from(scene.uv1[i as usize]));
+                if (b - a).perp_dot(c - a).abs() > 1e-12 {
+                    by_material[scene.triangle_material[t] as usize].push(t);
+                }
+            }
+        }
+        let materials: Vec<u32> =
+            (0..by_material.len()).filter(|&m| !by_material[m].is_empty()).map(|m| m as u32).collect();
+        let per_map = size as u64 * size as u64;
+        if materials.len() as u64 * per_map > LightmapSettings::MAX_TEXELS {
+            return Err(Error::Invalid(format!(
+                "{} lightmaps of {size}² texels are more than {} texels: lower the lightmap size",
+                materials.len(),
+                LightmapSettings::MAX_TEXELS
+            )));
+        }
+        let mut texels = vec![[[0.0f32; 4]; 2]; materials.len() * per_map as usize];
+        for (k, &m) in materials.iter().enumerate() {
+            let map = &mut texels[k * per_map as usize..(k + 1) * per_map as usize];
+            for &t in &by_material[m as usize] {
+                rasterize(scene, t, size, map);
+            }
+        }
+        Ok(Self { size, materials, texels })
+    }
+
+    /// Texels of one map.
+    pub fn texels_per_map(&self) -> usize {
+        (self.size * self.size) as usize
+    }
+
+    /// Whether each texel is covered by a triangle.
+    pub fn covered(&self) -> Vec<bool> {
+        self.texels.iter().map(|t| t[0][3] != 0.0).collect()
+    }
+}
+
+/// Writes triangle `t`'s texels (those whose centre it covers) into `map`.
+fn rasterize(scene: &Scene, t: usize, size: u32, map: &mut [LightmapTexel]) {
+    let tri = scene.triangles[t];
+    let uv = tri.map(|i| Vec2::from(scene.uv1[i as usize]) * size as f32);
+    let pos = tri.map(|i| Vec3::from(scene.positions[i as usize]));
+    let nrm = tri.map(|i| Vec3::from(scene.normals[i as usize]));
+    let face = (pos[1] - pos[0]).cross(pos[2] - pos[0]).normalize_or_zero();
+    let area = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]);
+    let lo = uv[0].min(uv[1]).min(uv[2]).floor().max(Vec2::ZERO);
+    let hi = uv[0].max(uv[1]).max(uv[2]).ceil().min(Vec2::splat(size as f32));
+    // Texel centres on an edge belong to the triangle: a small tolerance in UV texels².
+    let eps = -1e-5 * area.abs();
+    for y in lo.y as u32..hi.y as u32 {
+        for x in lo.x as u32..hi.x as u32 {
+            let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let w0 = (uv[2] - uv[1]).perp_dot(p - uv[1]) / area;
+            let w1 = (uv[0] - uv[2]).perp_dot(p - uv[2]) / area;
+            let w2 = 1.0 - w0 - w1;
+            if w0 * area.abs() < eps || w1 * area.abs() < eps || w2 * area.abs() < eps {
+                continue;
+            }
+            let world = w0 * pos[0] + w1 * pos[1] + w2 * pos[2];
+            let mut n = (w0 * nrm[0] + w1 * nrm[1] + w2 * nrm[2]).normalize_or(face);
+            if n.dot(face) < 0.0 {
+                n = -n;
+            }
+            map[(y * size + x) as usize] = [world.extend(1.0).to_array(), n.extend(0.0).to_array()];
+        }
+    }
+}
+
+/// Baked lightmaps, read back: per map and texel the two layers' irradiance.
+#[derive(Debug, Clone)]
+pub struct Lightmaps {
+    /// Texels a side of each map.
+    pub size: u32,
+    /// The material of each map.
+    pub materials: Vec<u32>,
+    /// Direct irradiance from the emissive triangles, every map's texels in turn.
+    pub emitters: Vec<[f32; 3]>,
+    /// Irradiance from the environment and reflected light.
+    pub ambient: Vec<[f32; 3]>,
+    /// The standard error of each texel's `emitters` red channel (0 for empty texels).
+    pub emitters_error: Vec<f32>,
+    /// Whether a triangle covers the texel (or, after [`Lightmaps::dilate`], a filled one).
+    pub covered: Vec<bool>,
+    /// Samples per texel.
+    pub samples: u32,
+}
+
+impl Lightmaps {
+    /// Fills `rings` rings of empty texels around each chart: an empty texel with covered
+    /// neighbours (of its 8) takes their mean, ring by ring, so bilinear lookups across a chart's
+    /// border read its own values instead of empty ones.
+    pub fn dilate(&mut self, rings: u32) {
+        let s = self.size as i64;
+        let per_map = (s * s) as usize;
+        for _ in 0..rings {
+            let covered = self.covered.clone();
+            let (emitters, ambient) = (self.emitters.clone(), self.ambient.clone());
+            for map in 0..self.materials.len() {
+                let base = map * per_map;
+                for y in 0..s {
+                    for x in 0..s {
+                        let i = base + (y * s + x) as usize;
+                        if covered[i] {
+                            continue;
+                        }
+                        let (mut e, mut a, mut n) = ([0.0f32; 3], [0.0f32; 3], 0.0f32);
+                        for (dx, dy) in (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (dx, dy))) {
+                            let (nx, ny) = (x + dx, y + dy);
+                            if (dx, dy) == (0, 0) || nx < 0 || ny < 0 || nx >= s || ny >= s {
+                                continue;
+                            }
+                            let j = base + (ny * s + nx) as usize;
+                            if covered[j] {
+                                (0..3).for_each(|c| {
+                                    e[c] += emitters[j][c];
+                                    a[c] += ambient[j][c];
+                                });
+                                n += 1.0;
+                            }
+                        }
+                        if n > 0.0 {
+                            self.emitters[i] = e.map(|v| v / n);
+                            self.ambient[i] = a.map(|v| v / n);
+                            self.covered[i] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Bilinear lookup of `layer` (one map's texels) at UV1 `uv` (texel centres at (i + ½)/size,
+    /// clamped at the map's edges).
+    pub fn sample(layer: &[[f32; 3]], size: u32, uv: [f32; 2]) -> [f32; 3] {
+        let s = size as f32;
+        let p = Vec2::from(uv) * s - 0.5;
+        let base = p.floor();
+        let f = p - base;
+        let at = |x: f32, y: f32| {
+            let (x, y) = (x.clamp(0.0, s - 1.0) as usize, y.clamp(0.0, s - 1.0) as usize);
+            layer[y * size as usize + x]
+        };
+        let (a, b, c, d) = (
+            at(base.x, base.y),
+            at(base.x + 1.0, base.y),
+            at(base.x, base.y + 1.0),
+            at(base.x + 1.0, base.y + 1.0),
+        );
+        [0, 1, 2].map(|k| {
+            (a[k] * (1.0 - f.x) + b[k] * f.x) * (1.0 - f.y) + (c[k] * (1.0 - f.x) + d[k] * f.x) * f.y
+        })
+    }
+
+    /// Map `k`'s texels of `layer`.
+    pub fn map<'a>(&self, layer: &'a [[f32; 3]], k: usize) -> &'a [[f32; 3]] {
+        let n = (self.size * self.size) as usize;
+        &layer[k * n..(k + 1) * n]
+    }
+
+    /// Writes one EXR per map into `dir` (`lightmap-<material>.exr`, layers `emitters` and
+    /// `ambient`, channels R, G, B); returns the paths.
+    pub fn write_exr(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.to_path_buf(), source: e })?;
+        let mut paths = Vec::new();
+        for (k, m) in self.materials.iter().enumerate() {
+            let flat =
+                |layer: &[[f32; 3]]| self.map(layer, k).iter().flatten().copied().collect::<Vec<f32>>();
+            let (emitters, ambient) = (flat(&self.emitters), flat(&self.ambient));
+            let path = dir.join(format!("lightmap-{m}.exr"));
+            let rgb = ["R", "G", "B"];
+            let s = self.size as usize;
+            write_exr(
+                &path,
+                s,
+                s,
+                &[
+                    Layer { name: "emitters", channels: &rgb, data: &emitters },
+                    Layer { name: "ambient", channels: &rgb, data: &ambient },
+                ],
+            )?;
+            paths.push(path);
+        }
+        Ok(paths)
+    }
+}
+
+/// The bake kernel.
+pub struct LightmapPass {
+    pipeline: Pipeline<lightmap_bake::Kernel>,
+    /// Stand-ins for the probe volume's bindings when there is none (every probe inactive).
+    no_probes: [TexelBuffer; 2],
+}
+
+impl LightmapPass {
+    /// Builds the pipeline for `scene`'s features.
+    pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
+        let no_probes = [
+            TexelBuffer::upload(ctx, "no probe states", &[[0u32; 4]; 4], raw::Format::R32G32B32A32_UINT, 16)?,
+            TexelBuffer::upload(ctx, "no probe maps", &[[0.0f32; 4]], raw::Format::R32G32B32A32_SFLOAT, 16)?,
+        ];
+        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &lightmap_bake::Spec {})?, no_probes })
+    }
+
+    /// Bakes `layout`'s maps by `settings` under environment `env`, the bounces beyond the
+    /// first from `probes` when given; submits a batch of samples at a time, calling
+    /// `progress(done, total)`; reads the maps back, dilated by `settings.dilation` rings.
+    #[allow(clippy::too_many_arguments)]
+    pub fn bake(
+        &self,
+        ctx: &Context,
+        scene: &GpuScene,
+        layout: &LightmapLayout,
+        settings: &LightmapSettings,
+        env: [f32; 3],
+        probes: Option<&ProbeVolume>,
+        mut progress: impl FnMut(u32, u32),
+    ) -> Result<Lightmaps> {
+        settings.validate()?;
+        let count = layout.texels.len();
+        if count == 0 {
+            return Err(Error::Invalid(
+                "the scene has no lightmap charts: no triangle carries a TEXCOORD_1 of any area".into(),
+            ));
+        }
+        let texels = TexelBuffer::upload(
+            ctx,
+            "lightmap texels",
+            &layout.texels,
+            raw::Format::R32G32B32A32_SFLOAT,
+            16,
+        )?;
+        let accum = Buffer::new(
+            ctx,
+            "lightmap accumulation",
+            count as u64 * 32,
+            raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        let [no_states, no_maps] = &self.no_probes;
+        let resources = lightmap_bake::Resources {
+            scene,
+            lightmap_texels: &texels,
+            probe_texels: probes.map_or(no_states, |p| &p.texels),
+            probe_irradiance: probes.map_or(no_maps, |p| &p.irradiance),
+            probe_distance: probes.map_or(no_maps, |p| &p.distance),
+            lightmap_accum: &accum,
+        };
+        let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
+        // About 2^22 texel-samples per submission.
+        let batch = ((1u64 << 22) / count as u64).clamp(1, 64) as u32;
+        let mut done = 0;
+        while done < settings.samples {
+            let n = batch.min(settings.samples - done);
+            ctx.submit(|cmd| {
+                for sample_index in done..done + n {
+                    let params = LightmapParams {
+                        env,
+                        texel_count: count as u32,
+                        env_size: [env_w, env_h],
+                        sample_index,
+                        seed: settings.seed,
+                        light_count: scene.light_count,
+                        punctual_count: scene.punctual_count,
+                        ..Default::default()
+                    };
+                    self.pipeline.record(cmd, &resources, &params, [count as u32, 1, 1], [64, 1, 1])?;
+                    barrier::compute_to_compute(ctx, cmd);
+                }
+                Ok(())
+            })?;
+            done += n;
+            progress(done, settings.samples);
+        }
+        let sums: Vec<[f32; 4]> = accum.read(ctx)?;
+        let covered = layout.covered();
+        let n = settings.samples as f32;
+        let mut maps = Lightmaps {
+            size: layout.size,
+            materials: layout.materials.clone(),
+            emitters: Vec::with_capacity(count),
+            ambient: Vec::with_capacity(count),
+            emitters_error: Vec::with_capacity(count),
+            covered: covered.clone(),
+            samples: settings.samples,
+        };
+        for (i, &on) in covered.iter().enumerate() {
+            let (e, a) = if on { (sums[2 * i], sums[2 * i + 1]) } else { ([0.0; 4], [0.0; 4]) };
+            maps.emitters.push([e[0], e[1], e[2]]);
+            maps.ambient.push([a[0], a[1], a[2]]);
+            let variance = (e[3] - e[0] * e[0]).max(0.0) * n / (n - 1.0).max(1.0);
+            maps.emitters_error.push((variance / n).sqrt());
+        }
+        maps.dilate(settings.dilation);
+        Ok(maps)
+    }
+}

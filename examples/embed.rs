@@ -382,7 +382,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         ("normal", vk::Format::R16G16B16A16_SFLOAT),
         ("base", vk::Format::R16G16B16A16_SFLOAT),
         ("emission", vk::Format::R16G16B16A16_SFLOAT),
-        ("material", vk::Format::R32G32_UINT),
+        ("material", vk::Format::R32G32B32A32_UINT),
     ];
     let mut images = Vec::new();
     for set in ["host", "umbra"] {
@@ -579,9 +579,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
                 &camera,
                 gbuffer,
                 image(5).view,
-                Some(ao),
-                None,
-                None,
+                &umbra::passes::deferred::LightingInputs { ao: Some(ao), ..Default::default() },
                 &lighting,
             )?;
             renderer.record_tonemap(cmd, image(5).view, image(6).view, size, 0.0, curve)?;

@@ -25,7 +25,7 @@ layout(set = 0, binding = 2, r32f) uniform writeonly image2D gb_depth;
 layout(set = 0, binding = 3, rgba16f) uniform writeonly image2D gb_normal;
 layout(set = 0, binding = 4, rgba16f) uniform writeonly image2D gb_base;
 layout(set = 0, binding = 5, rgba16f) uniform writeonly image2D gb_emission;
-layout(set = 0, binding = 6, rg32ui) uniform writeonly uimage2D gb_material;
+layout(set = 0, binding = 6, rgba32ui) uniform writeonly uimage2D gb_material;
 layout(push_constant) uniform Push {
     vec4 origin;
     vec4 forward;

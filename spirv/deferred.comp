@@ -45,6 +45,34 @@ vec4 ibl_table(float nv, float roughness) {
     return mix(a, b, f.y);
 }
 
+// Material `material`'s lightmap (its ambient layer, src/passes/lightmap.rs) at UV1 `uv`,
+// bilinear with the texel centres at (i + 1/2) / size, clamped at the map's edges; false when the
+// material has no map.
+bool lightmap_irradiance(uint material, vec2 uv, out vec3 e) {
+    e = vec3(0.0);
+    vec4 header = imageLoad(lightmap_texels, 0);
+    uint materials = uint(header.y);
+    if (material >= materials) {
+        return false;
+    }
+    uint map = uint(imageLoad(lightmap_texels, int(1u + material)).x);
+    if (map == 0u) {
+        return false;
+    }
+    uint size = uint(header.x);
+    int base = int(1u + materials + (map - 1u) * size * size);
+    vec2 p = clamp(uv * float(size) - 0.5, vec2(0.0), vec2(float(size) - 1.0));
+    uvec2 i0 = uvec2(p);
+    uvec2 i1 = min(i0 + 1u, uvec2(size - 1u));
+    vec2 f = p - vec2(i0);
+    vec3 a = mix(imageLoad(lightmap_texels, base + int(i0.y * size + i0.x)).rgb,
+                 imageLoad(lightmap_texels, base + int(i0.y * size + i1.x)).rgb, f.x);
+    vec3 b = mix(imageLoad(lightmap_texels, base + int(i1.y * size + i0.x)).rgb,
+                 imageLoad(lightmap_texels, base + int(i1.y * size + i1.x)).rgb, f.x);
+    e = mix(a, b, f.y);
+    return true;
+}
+
 // Prefiltered level k at direction r: level 0 is the map itself (nearest, as env_radiance).
 vec3 ibl_level(uint k, vec3 r) {
     uvec2 src = params.env_size;
@@ -67,8 +95,9 @@ vec3 ibl_level(uint k, vec3 r) {
 // With an irradiance probe volume (PROBES), its irradiance at p replaces the environment's as the
 // diffuse lobe's light: it carries the environment with its occlusion and the light that
 // surfaces reflect (src/passes/probes.rs); the specular and transmitted parts stay the split
-// sum's, and without `ibl` only the probes' diffuse light remains.
-vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv) {
+// sum's, and without `ibl` only the probes' diffuse light remains. A material with a lightmap
+// (LIGHTMAPS) takes its ambient irradiance at UV1 `uv1` instead of both.
+vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv, uint material, vec2 uv1) {
     // The prefiltered map assumed n = v = r; a rough lobe actually leans from the mirror direction
     // towards the normal: look up along the dominant direction (Lagarde and de Rousiers 2014,
     // "Moving Frostbite to PBR", eq. 56, with alpha as their linear roughness).
@@ -104,6 +133,12 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv)
     if (PROBES) {
         irradiance_over_pi = probe_volume_irradiance(p, n, wo) * INV_PI;
     }
+    if (LIGHTMAPS) {
+        vec3 e;
+        if (lightmap_irradiance(material, uv1, e)) {
+            irradiance_over_pi = e * INV_PI;
+        }
+    }
     vec3 dielectric_spec = s.f0 * table.x + s.f90 * table.y;
     float diffuse_weight = 1.0 - max3(s.f0) * table.z - s.f90 * table.w;
     // The diffuse lobe's share `transmission` transmits instead (as bsdf.glsl splits it).
@@ -134,7 +169,7 @@ void main() {
     vec3 p = params.camera.origin + dir * (depth / dot(dir, forward));
     vec4 normal_rough = imageLoad(gb_normal, pixel);
     vec4 base_metal = imageLoad(gb_base, pixel);
-    uvec2 mat = imageLoad(gb_material, pixel).xy;
+    uvec4 mat = imageLoad(gb_material, pixel);
     vec3 radiance = imageLoad(gb_emission, pixel).rgb;
 
     vec3 n = normalize(normal_rough.xyz);
@@ -156,12 +191,16 @@ void main() {
         if (PROBES) {
             ambient = true;
         }
+        if (LIGHTMAPS) {
+            ambient = true;
+        }
         if (ambient) {
             float ao = imageLoad(ao_image, min(pixel, imageSize(ao_image) - 1)).x;
             // The material's occlusion map (glTF occlusionTexture): ambient light only (the
             // probes' indirect light too, as glTF says of indirect light).
             float occlusion = imageLoad(gb_emission, pixel).a;
-            radiance += ao * occlusion * ibl_lighting(s, normal_rough.w, p, n, wo, wo_local.z);
+            radiance += ao * occlusion
+                * ibl_lighting(s, normal_rough.w, p, n, wo, wo_local.z, mat.x, uintBitsToFloat(mat.zw));
         }
 
         // Punctual lights: one shadow ray each.

@@ -66,5 +66,5 @@ void main() {
     imageStore(gb_normal, pixel, vec4(n, sqrt(s.alpha)));
     imageStore(gb_base, pixel, vec4(s.base, s.metallic));
     imageStore(gb_emission, pixel, vec4(min(le, vec3(65504.0)), occlusion));
-    imageStore(gb_material, pixel, uvec4(material, packSnorm2x16(oct_encode(ng)), 0u, 0u));
+    imageStore(gb_material, pixel, uvec4(material, packSnorm2x16(oct_encode(ng)), floatBitsToUint(tri_uv1(tri, hit.bary))));
 }

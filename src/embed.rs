@@ -10,7 +10,8 @@
 //! // per frame, inside the host's command buffer:
 //! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;   // or the host writes its own
 //! let ao = renderer.record_ssao(cmd, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
-//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view, Some(ao), None, None, &lighting)?;
+//! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view,
+//!     &LightingInputs { ao: Some(ao), ..Default::default() }, &lighting)?;
 //! renderer.record_tonemap(cmd, hdr_view, ldr_view, size, 0.0, ToneCurve::KhronosPbrNeutral)?;
 //! // or progressive path tracing, a few samples per frame, resolved into the host's image:
 //! renderer.record_path_samples(cmd, &camera, &target, &path_settings, first_sample, count)?;
@@ -18,15 +19,15 @@
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
 //!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
-//!     probes: None },
+//!     probes: None, lightmaps: None },
 //!     &settings, None)?;
 //! // shadow maps instead of shadow rays: placed once, re-recorded when a light, the geometry
 //! // or (for a directional light's cascades) the camera changes:
 //! let maps = renderer.shadow_maps(&camera, size, &shadow_settings)?;
-//! renderer.record_shadow_maps(cmd, &maps)?;  // then `Some(&maps)` where `None` stands above
+//! renderer.record_shadow_maps(cmd, &maps)?;  // then `shadows: Some(&maps)` in the inputs
 //! // indirect diffuse light from irradiance probes: baked once, or a budget updated per frame:
 //! let mut probes = renderer.probe_volume(&ProbeSettings::default())?;
-//! renderer.record_probe_update(cmd, &mut probes, 64, &lighting)?;  // `Some(&probes)` above
+//! renderer.record_probe_update(cmd, &mut probes, 64, &lighting)?;  // `probes: Some(&probes)`
 //! ```
 //!
 //! Every `record_*` goes through [`crate::render::Passes`], the orchestrator that owns the
@@ -55,7 +56,7 @@
 use crate::error::Result;
 use crate::gpu::scene::GpuScene;
 use crate::passes::ao::AoSettings;
-use crate::passes::deferred::LightingSettings;
+use crate::passes::deferred::{LightingInputs, LightingSettings};
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
@@ -204,33 +205,19 @@ impl Renderer {
     }
 
     /// Records deferred lighting of `gbuffer` (umbra's or the host's own) seen from `camera` into
-    /// `output` (`R32G32B32A32_SFLOAT`, the G-buffer's size), the punctual lights shadowed by
-    /// `shadows` (recorded before) or by shadow rays, the diffuse lobe lit by `probes` (updated
-    /// before) when given.
-    #[allow(clippy::too_many_arguments)]
+    /// `output` (`R32G32B32A32_SFLOAT`, the G-buffer's size) with the optional `inputs`: ambient
+    /// occlusion, shadow maps (recorded before; else shadow rays), a probe volume (updated
+    /// before) and lightmaps lighting the diffuse lobe.
     pub fn record_lighting(
         &self,
         cmd: raw::CommandBuffer,
         camera: &Camera,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
-        ao: Option<raw::ImageView>,
-        shadows: Option<&ShadowMaps>,
-        probes: Option<&ProbeVolume>,
+        inputs: &LightingInputs<'_>,
         settings: &LightingSettings,
     ) -> Result<()> {
-        self.passes.record_lighting(
-            cmd,
-            &self.scene,
-            &self.ibl,
-            camera,
-            gbuffer,
-            output,
-            ao,
-            shadows,
-            probes,
-            settings,
-        )
+        self.passes.record_lighting(cmd, &self.scene, &self.ibl, camera, gbuffer, output, inputs, settings)
     }
 
     /// A probe volume over the scene by `settings`, its probes inactive until updated

@@ -15,10 +15,10 @@ use crate::gpu::layout::PathStats;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::SceneFeatures;
 use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
-use crate::passes::deferred::{DeferredPass, LightingSettings};
+use crate::passes::deferred::{DeferredPass, LightingInputs, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
-use crate::passes::lightmap::{LightmapLayout, LightmapPass, LightmapSettings, Lightmaps};
+use crate::passes::lightmap::{GpuLightmaps, LightmapLayout, LightmapPass, LightmapSettings, Lightmaps};
 pub use crate::passes::pathtrace::PathSettings;
 use crate::passes::pathtrace::{PathOptions, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::probes::{ProbePass, ProbeVolume};
@@ -160,6 +160,8 @@ pub struct HybridTargets<'a> {
     /// A probe volume, already updated or baked, lighting the diffuse lobe; `None`: the
     /// environment's split-sum irradiance.
     pub probes: Option<&'a ProbeVolume>,
+    /// Baked lightmaps lighting the diffuse lobe of the materials that have one.
+    pub lightmaps: Option<&'a GpuLightmaps>,
 }
 
 /// A lazily built pipeline.
@@ -178,9 +180,9 @@ pub struct Passes {
     ctx: Context,
     features: SceneFeatures,
     gbuffer: OnceLock<GBufferPass>,
-    /// One per shadow method and with or without probes, index 2 [`ShadowMethod::index`] +
-    /// probes.
-    deferred: [OnceLock<DeferredPass>; 10],
+    /// One per shadow method, with or without probes, with or without lightmaps: index
+    /// 4 [`ShadowMethod::index`] + 2 lightmaps + probes.
+    deferred: [OnceLock<DeferredPass>; 20],
     shadow: OnceLock<ShadowPass>,
     probe: OnceLock<ProbePass>,
     lightmap: OnceLock<LightmapPass>,
@@ -235,9 +237,15 @@ impl Passes {
         built(&self.gbuffer, || GBufferPass::new(&self.ctx, scene))
     }
 
-    fn deferred_pass(&self, scene: &GpuScene, method: ShadowMethod, probes: bool) -> Result<&DeferredPass> {
-        built(&self.deferred[2 * method.index() + probes as usize], || {
-            DeferredPass::new(&self.ctx, scene, method, probes)
+    fn deferred_pass(
+        &self,
+        scene: &GpuScene,
+        method: ShadowMethod,
+        probes: bool,
+        lightmaps: bool,
+    ) -> Result<&DeferredPass> {
+        built(&self.deferred[4 * method.index() + 2 * lightmaps as usize + probes as usize], || {
+            DeferredPass::new(&self.ctx, scene, method, probes, lightmaps)
         })
     }
 
@@ -274,7 +282,7 @@ impl Passes {
     pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
         self.check(scene)?;
         self.gbuffer_pass(scene)?;
-        self.deferred_pass(scene, ShadowMethod::RayTraced, false)?;
+        self.deferred_pass(scene, ShadowMethod::RayTraced, false, false)?;
         self.rtao_pass(scene)?;
         self.ssao_pass()?;
         self.blur_pass()?;
@@ -365,10 +373,9 @@ impl Passes {
     }
 
     /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the
-    /// scene's precomputed `ibl`, an ambient-occlusion image `ao` (or none) and the punctual
-    /// lights shadowed by `shadows`' maps (recorded before; their method picks the filter), or
-    /// by shadow rays when `None`, and the diffuse lobe lit by `probes` (updated before) when
-    /// given.
+    /// scene's precomputed `ibl` and the optional `inputs` (ambient occlusion, shadow maps
+    /// instead of shadow rays, a probe volume and lightmaps for the diffuse lobe), each recorded
+    /// before.
     #[allow(clippy::too_many_arguments)]
     pub fn record_lighting(
         &self,
@@ -378,17 +385,15 @@ impl Passes {
         camera: &Camera,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
-        ao: Option<raw::ImageView>,
-        shadows: Option<&ShadowMaps>,
-        probes: Option<&ProbeVolume>,
+        inputs: &LightingInputs<'_>,
         settings: &LightingSettings,
     ) -> Result<()> {
         self.check(scene)?;
         settings.validate()?;
         let params = DeferredPass::params(scene, camera, gbuffer.size, settings);
-        let method = shadows.map_or(ShadowMethod::RayTraced, |m| m.settings.method);
-        self.deferred_pass(scene, method, probes.is_some())?
-            .record(&self.ctx, cmd, scene, gbuffer, output, ibl, ao, shadows, probes, &params)
+        let method = inputs.shadows.map_or(ShadowMethod::RayTraced, |m| m.settings.method);
+        self.deferred_pass(scene, method, inputs.probes.is_some(), inputs.lightmaps.is_some())?
+            .record(&self.ctx, cmd, scene, gbuffer, output, ibl, inputs, &params)
     }
 
     /// Records one update of `count` probes of `volume` (from where the last update stopped,
@@ -568,18 +573,8 @@ impl Passes {
             (None, _) => None,
         };
         timed(&mut timer, cmd, "lighting", || {
-            self.record_lighting(
-                cmd,
-                scene,
-                ibl,
-                camera,
-                gbuffer,
-                targets.hdr,
-                ao,
-                shadows,
-                targets.probes,
-                &settings.lighting,
-            )
+            let inputs = LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps };
+            self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &settings.lighting)
         })?;
         if let Some(ldr) = targets.ldr {
             timed(&mut timer, cmd, "tonemap", || {
@@ -703,6 +698,19 @@ impl Passes {
         settings: &HybridSettings,
         probes: Option<&ProbeVolume>,
     ) -> Result<HybridImage> {
+        self.hybrid_with(scene, camera, settings, probes, None)
+    }
+
+    /// [`Passes::hybrid`] with the diffuse lobe lit by a (baked) probe volume and by lightmaps
+    /// where the materials have them.
+    pub fn hybrid_with(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        settings: &HybridSettings,
+        probes: Option<&ProbeVolume>,
+        lightmaps: Option<&GpuLightmaps>,
+    ) -> Result<HybridImage> {
         let ctx = &self.ctx;
         self.check(scene)?;
         settings.lighting.validate()?;
@@ -738,6 +746,7 @@ impl Passes {
             ldr: Some(display.view),
             shadows: shadows.as_ref(),
             probes,
+            lightmaps,
         };
         let mut timer = GpuTimer::new(ctx, 8)?;
         ctx.submit(|cmd| {

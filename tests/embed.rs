@@ -79,9 +79,7 @@ fn update_scene_equals_a_fresh_renderer() {
                 camera,
                 &gbuffer.views(),
                 hdr.view,
-                None,
-                None,
-                None,
+                &umbra::passes::deferred::LightingInputs::default(),
                 &LightingSettings::default(),
             )
         })
@@ -184,6 +182,7 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
         ldr: Some(ldr.view),
         shadows: None,
         probes: None,
+        lightmaps: None,
     };
     let mut timer = GpuTimer::new(&gpu, 8).unwrap();
     gpu.submit(|cmd| {

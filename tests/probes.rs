@@ -8,7 +8,7 @@ use common::{build_with, camera, cuboid, light, quad, Gpu};
 use glam::Vec3;
 use umbra::gpu::layout::PROBE_ACTIVE;
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::deferred::LightingSettings;
+use umbra::passes::deferred::{LightingInputs, LightingSettings};
 use umbra::passes::probes::{ProbeGrid, ProbeSettings, ProbeVolume, IRRADIANCE_MAP_TEXELS};
 use umbra::render::{HybridSettings, Passes, PathSettings};
 use umbra::scene::{LightKind, Material, Scene};
@@ -260,9 +260,7 @@ fn budgeted_probe_updates_in_a_host_frame_converge_to_the_bake() {
                     &camera,
                     &gbuffer.views(),
                     hdr.view,
-                    None,
-                    None,
-                    Some(&volume),
+                    &LightingInputs { probes: Some(&volume), ..Default::default() },
                     &lighting,
                 )?;
             }

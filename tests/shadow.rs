@@ -481,9 +481,7 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
             &stage.camera,
             &gbuffer.views(),
             hdr.view,
-            None,
-            Some(&maps),
-            None,
+            &umbra::passes::deferred::LightingInputs { shadows: Some(&maps), ..Default::default() },
             &lighting,
         )
     })
@@ -501,6 +499,7 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
         ldr: None,
         shadows: None,
         probes: None,
+        lightmaps: None,
     };
     let refused = gpu.submit(|cmd| renderer.record_hybrid(cmd, &stage.camera, &targets, &settings, None));
     let message = refused.err().map(|e| e.to_string()).unwrap_or_default();

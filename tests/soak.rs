@@ -84,6 +84,7 @@ fn record_frames(
         ldr: Some(ldr.view),
         shadows: None,
         probes: None,
+        lightmaps: None,
     };
     let path_settings = PathSettings { size: SIZE, max_bounces: 2, ..PathSettings::default() };
     ctx.submit(|cmd| {

@@ -223,6 +223,16 @@ vec4 tri_uv(uint tri, vec2 bary) {
     return uv;
 }
 
+// UV set 1 at barycentrics (b1, b2) of triangle `tri`, whether or not the kernel reads textures
+// (the lightmaps' set).
+vec2 tri_uv1(uint tri, vec2 bary) {
+    uvec3 idx = tri_indices(tri);
+    vec2 a = vertex_v_uv1(idx.x).yz;
+    vec2 b = vertex_v_uv1(idx.y).yz;
+    vec2 c = vertex_v_uv1(idx.z).yz;
+    return (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
+}
+
 // The texture-independent part of a ray cone's level of detail at a hit of triangle `tri`
 // (Akenine-Möller et al., "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
 // Tracing Gems ch. 20), for UV set 0 in x and set 1 in y: log2(width / |ng·dir|) for a cone of

@@ -820,8 +820,8 @@ kernels! {
             gb_base: writeonly image rgba16f,
             /// Emission, material occlusion.
             gb_emission: writeonly image rgba16f,
-            /// Material index, octahedral geometric normal.
-            gb_material: writeonly image rg32ui,
+            /// Material index, octahedral geometric normal, UV1 (float bits).
+            gb_material: writeonly image rgba32ui,
         }
     }
 
@@ -835,7 +835,8 @@ kernels! {
             shadow_pcf: bool = false,
             shadow_pcss: bool = false,
             shadow_moments: bool = false,
-            probes: bool = false
+            probes: bool = false,
+            lightmaps: bool = false
         },
         bindings: {
             /// View-space depth.
@@ -846,8 +847,8 @@ kernels! {
             gb_base: readonly image rgba16f,
             /// Emission, material occlusion.
             gb_emission: readonly image rgba16f,
-            /// Material index, octahedral geometric normal.
-            gb_material: readonly image rg32ui,
+            /// Material index, octahedral geometric normal, UV1 (float bits).
+            gb_material: readonly image rgba32ui,
             /// Shadow maps: the filter settings, each punctual light's record, the layers
             /// ([`GpuShadowLayer`]); one texel when the lights cast shadow rays.
             shadow_texels: readonly texels rgba32ui,
@@ -871,6 +872,9 @@ kernels! {
             probe_irradiance: readonly texels rgba32f,
             /// Probe volume: octahedral distance moments.
             probe_distance: readonly texels rgba32f,
+            /// Lightmaps: the header (texels a side, materials), per material its map's index + 1
+            /// (0: none), then every map's ambient irradiance (rgb); one texel without lightmaps.
+            lightmap_texels: readonly texels rgba32f,
         }
     }
 
@@ -899,8 +903,8 @@ kernels! {
             gb_depth: readonly image r32f,
             /// Octahedral normal, roughness.
             gb_normal: readonly image rgba16f,
-            /// Material index, octahedral geometric normal.
-            gb_material: readonly image rg32ui,
+            /// Material index, octahedral geometric normal, UV1 (float bits).
+            gb_material: readonly image rgba32ui,
             /// AO, accumulated over batches of rays.
             out_ao: readwrite image r32f,
         }

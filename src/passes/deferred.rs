@@ -16,6 +16,7 @@
 
 use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
+use super::lightmap::GpuLightmaps;
 use super::probes::ProbeVolume;
 use super::shadow::{ShadowMaps, ShadowMethod};
 use crate::error::{Error, Result};
@@ -77,6 +78,23 @@ impl LightingSettings {
     }
 }
 
+/// What the lighting pass reads besides the G-buffer, each optional.
+#[derive(Clone, Copy, Default)]
+pub struct LightingInputs<'a> {
+    /// Ambient occlusion (`R32_SFLOAT`, the G-buffer's size, `GENERAL`; 1 = unoccluded)
+    /// multiplying the ambient light; `None`: unoccluded.
+    pub ao: Option<raw::ImageView>,
+    /// Shadow maps for the punctual lights (recorded before; their method picks the filter);
+    /// `None`: shadow rays.
+    pub shadows: Option<&'a ShadowMaps>,
+    /// An irradiance probe volume (updated or baked before) lighting the diffuse lobe; `None`:
+    /// the environment's split-sum irradiance.
+    pub probes: Option<&'a ProbeVolume>,
+    /// Baked lightmaps lighting the diffuse lobe of the materials that have one (over the
+    /// probes), at the G-buffer's UV1.
+    pub lightmaps: Option<&'a GpuLightmaps>,
+}
+
 /// The direction along which the split sum reads its prefiltered environment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum IblLookup {
@@ -98,6 +116,8 @@ pub struct DeferredPass {
     no_shadow: [TexelBuffer; 3],
     /// Whether the pass reads a probe volume.
     probes: bool,
+    /// Whether the pass reads lightmaps.
+    lightmaps: bool,
     /// One-texel stand-ins for the probe volume's bindings when there is none.
     no_probes: [TexelBuffer; 2],
 }
@@ -107,9 +127,15 @@ impl DeferredPass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
-    /// an environment map), for shadows by `method` and for indirect diffuse light from a probe
-    /// volume when `probes`.
-    pub fn new(ctx: &Context, scene: &GpuScene, method: ShadowMethod, probes: bool) -> Result<Self> {
+    /// an environment map), for shadows by `method`, and for indirect diffuse light from a probe
+    /// volume when `probes` and from lightmaps when `lightmaps`.
+    pub fn new(
+        ctx: &Context,
+        scene: &GpuScene,
+        method: ShadowMethod,
+        probes: bool,
+        lightmaps: bool,
+    ) -> Result<Self> {
         let spec = deferred::Spec {
             beckmann: false,
             shadow_maps: method.uses_maps(),
@@ -117,6 +143,7 @@ impl DeferredPass {
             shadow_pcss: method == ShadowMethod::Pcss,
             shadow_moments: method == ShadowMethod::Moments,
             probes,
+            lightmaps,
         };
         let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
@@ -136,7 +163,7 @@ impl DeferredPass {
             TexelBuffer::upload(ctx, "no probe states", &[[0u32; 4]], raw::Format::R32G32B32A32_UINT, 16)?,
             TexelBuffer::upload(ctx, "no probe maps", &[[0.0f32; 4]], raw::Format::R32G32B32A32_SFLOAT, 16)?,
         ];
-        Ok(Self { pipeline, method, no_ao, no_shadow, probes, no_probes })
+        Ok(Self { pipeline, method, no_ao, no_shadow, probes, lightmaps, no_probes })
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -165,10 +192,9 @@ impl DeferredPass {
 
     /// Records the pass (G-buffer in, `output` written: an `R32G32B32A32_SFLOAT` storage image in
     /// `GENERAL` layout of the G-buffer's size) and a compute-to-compute barrier after it. Never
-    /// submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `ao` is an
-    /// `R32_SFLOAT` image of the G-buffer's size in `GENERAL` layout (1 = unoccluded), or none;
-    /// `shadows` the maps (recorded before this pass) when the pass was built for a map method;
-    /// `probes` the probe volume (updated before this pass) when it was built for probes.
+    /// submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `inputs`
+    /// what else the pass was built to read (shadow maps for a map method, a probe volume,
+    /// lightmaps), recorded before it.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -178,12 +204,22 @@ impl DeferredPass {
         gbuffer: &GBufferViews,
         output: raw::ImageView,
         ibl: &IblResources,
-        ao: Option<raw::ImageView>,
-        shadows: Option<&ShadowMaps>,
-        probes: Option<&ProbeVolume>,
+        inputs: &LightingInputs<'_>,
         params: &DeferredParams,
     ) -> Result<()> {
+        let LightingInputs { ao, shadows, probes, lightmaps } = *inputs;
         let [no_states, no_maps] = &self.no_probes;
+        let lightmap_texels = match (self.lightmaps, lightmaps) {
+            (false, None) => no_maps,
+            (true, Some(l)) => &l.texels,
+            (built, _) => {
+                return Err(Error::Invalid(format!(
+                    "the lighting pass was built {} lightmaps but was given {}",
+                    if built { "with" } else { "without" },
+                    if built { "none" } else { "some" }
+                )))
+            }
+        };
         let (probe_texels, probe_irradiance, probe_distance) = match (self.probes, probes) {
             (false, None) => (no_states, no_maps, no_maps),
             (true, Some(v)) => (&v.texels, &v.irradiance, &v.distance),
@@ -230,6 +266,7 @@ impl DeferredPass {
             probe_texels,
             probe_irradiance,
             probe_distance,
+            lightmap_texels,
         };
         self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);

@@ -7,7 +7,7 @@
 //! | `normal` | `R16G16B16A16_SFLOAT` | world-space shading normal xyz (interpolated, normal-mapped, facing the camera's side of the geometry), perceptual roughness √α in w (α floored as the BSDF floors it) |
 //! | `base` | `R16G16B16A16_SFLOAT` | linear base colour rgb (textures applied, mipmapped ones filtered for the pixel's ray cone), metallic in a |
 //! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504); the material's ambient occlusion in a (glTF `occlusionTexture`: 1 + strength (r − 1), filtered like the other textures; 1 without one), which the lighting pass multiplies into the image-based (ambient) light only |
-//! | `material` | `R32G32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16` |
+//! | `material` | `R32G32B32A32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16`; z, w: the `TEXCOORD_1` coordinates as float bits (0 without them), where lightmaps are looked up |
 //!
 //! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
 //! with a compute-to-compute barrier. Where no surface was hit, `depth`, `normal`, `base` and
@@ -51,7 +51,7 @@ impl GBuffer {
             normal: make("gbuffer normal", raw::Format::R16G16B16A16_SFLOAT)?,
             base: make("gbuffer base", raw::Format::R16G16B16A16_SFLOAT)?,
             emission: make("gbuffer emission", raw::Format::R16G16B16A16_SFLOAT)?,
-            material: make("gbuffer material", raw::Format::R32G32_UINT)?,
+            material: make("gbuffer material", raw::Format::R32G32B32A32_UINT)?,
         };
         ctx.submit(|cmd| {
             for image in gbuffer.images() {
@@ -112,7 +112,7 @@ pub struct GBufferViews {
     pub base: raw::ImageView,
     /// `R16G16B16A16_SFLOAT` emission rgb, material occlusion a (1 for none).
     pub emission: raw::ImageView,
-    /// `R32G32_UINT` material index and geometric normal.
+    /// `R32G32B32A32_UINT` material index, geometric normal and UV1.
     pub material: raw::ImageView,
 }
 
@@ -137,7 +137,7 @@ pub struct GBufferData {
     /// Emitted radiance rgb, the material's occlusion (1 for none; 0 where no surface).
     pub emission: Vec<[f32; 4]>,
     /// Material index, packed geometric normal.
-    pub material: Vec<[u32; 2]>,
+    pub material: Vec<[u32; 4]>,
 }
 
 /// `gbuffer.comp`, specialised for whether the scene has textures and alpha-tested materials.

@@ -277,6 +277,36 @@ impl Lightmaps {
     }
 }
 
+/// Lightmaps on the GPU for the lighting pass: their `ambient` layers, which light the diffuse
+/// lobe of the materials that have a map (instead of the probes or the environment's
+/// irradiance), looked up bilinearly at the G-buffer's UV1.
+pub struct GpuLightmaps {
+    /// The header (texels a side, the number of materials), per material the index + 1 of its
+    /// map (0: none), then every map's texels (RGBA32_SFLOAT, rgb).
+    pub texels: TexelBuffer,
+}
+
+impl GpuLightmaps {
+    /// Uploads `maps` for a scene of `material_count` materials.
+    pub fn upload(ctx: &Context, maps: &Lightmaps, material_count: usize) -> Result<Self> {
+        if let Some(&m) = maps.materials.iter().find(|&&m| m as usize >= material_count) {
+            return Err(Error::Invalid(format!(
+                "a lightmap for material {m}, but the scene has {material_count} materials: baked for another scene"
+            )));
+        }
+        let mut texels = vec![[maps.size as f32, material_count as f32, 0.0, 0.0]];
+        let mut table = vec![[0.0f32; 4]; material_count];
+        for (k, &m) in maps.materials.iter().enumerate() {
+            table[m as usize][0] = (k + 1) as f32;
+        }
+        texels.extend(table);
+        texels.extend(maps.ambient.iter().map(|a| [a[0], a[1], a[2], 0.0]));
+        Ok(Self {
+            texels: TexelBuffer::upload(ctx, "lightmaps", &texels, raw::Format::R32G32B32A32_SFLOAT, 16)?,
+        })
+    }
+}
+
 /// The bake kernel.
 pub struct LightmapPass {
     pipeline: Pipeline<lightmap_bake::Kernel>,

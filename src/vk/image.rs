@@ -25,7 +25,7 @@ pub struct Image {
 /// Bytes per texel of the formats umbra reads back.
 fn texel_size(format: vk::Format) -> Option<u64> {
     match format {
-        vk::Format::R32G32B32A32_SFLOAT => Some(16),
+        vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => Some(16),
         vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT | vk::Format::R32G32_UINT => Some(8),
         vk::Format::R8G8B8A8_UNORM | vk::Format::R32_SFLOAT | vk::Format::R32_UINT => Some(4),
         _ => None,

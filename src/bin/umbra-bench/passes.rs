@@ -79,6 +79,7 @@ pub fn run(
         ldr: None,
         shadows: None,
         probes: None,
+        lightmaps: None,
     };
     let settings = HybridSettings {
         size,

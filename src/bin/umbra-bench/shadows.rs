@@ -72,6 +72,7 @@ pub fn run(
             ldr: None,
             shadows: maps.as_ref(),
             probes: None,
+            lightmaps: None,
         };
         let hybrid = HybridSettings {
             size,

@@ -7,6 +7,10 @@
 // probe volume's irradiance for the bounces beyond when one is bound). The irradiance estimates:
 // L cos / pdf for the light sample, pi L for the gather ray (pdf = cos / pi). Each mean keeps the
 // mean square of its red channel beside it, for the estimate's standard error.
+//
+// Specialised for `occlusion`, it bakes an ambient-occlusion map instead: the running mean of
+// the visibility of one cosine-distributed ray of length `radius` (RTAO's estimator, the ground
+// truth of src/passes/ao.rs), for glTF's occlusionTexture.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/lightmap_bake.glsl"
 
@@ -42,6 +46,16 @@ void main() {
     basis(n, t, b);
     uvec2 key = uvec2(i, 0x4c4du);
     uint sample_index = params.sample_index;
+
+    if (OCCLUSION) {
+        vec4 u = rand4(key, sample_index, RNG_LIGHTMAP_GATHER, params.seed);
+        vec3 d = sample_cosine_hemisphere(u.xy);
+        vec3 dir = normalize(d.x * t + d.y * b + d.z * n);
+        float open = bvh_any(offset_ray(p, n), dir, 0.0, params.radius) ? 0.0 : 1.0;
+        float old = sample_index == 0u ? 0.0 : lightmap_accum[2u * i].x;
+        lightmap_accum[2u * i] = vec4(old + (open - old) / float(sample_index + 1u), 0.0, 0.0, 0.0);
+        return;
+    }
 
     vec3 emitters = vec3(0.0);
     if (HAS_LIGHTS && params.light_count > 0u) {

@@ -18,7 +18,9 @@ use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingInputs, LightingSettings};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
-use crate::passes::lightmap::{GpuLightmaps, LightmapLayout, LightmapPass, LightmapSettings, Lightmaps};
+use crate::passes::lightmap::{
+    GpuLightmaps, LightmapLayout, LightmapPass, LightmapSettings, Lightmaps, OcclusionMaps,
+};
 pub use crate::passes::pathtrace::PathSettings;
 use crate::passes::pathtrace::{PathOptions, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::probes::{ProbePass, ProbeVolume};
@@ -512,6 +514,21 @@ impl Passes {
         lighting.validate()?;
         let pass = built(&self.lightmap, || LightmapPass::new(&self.ctx, scene))?;
         pass.bake(&self.ctx, scene, layout, settings, lighting.env, probes, progress)
+    }
+
+    /// Bakes ambient-occlusion maps over `layout`'s charts (rays of length `radius`, RTAO's
+    /// estimator) now, calling `progress(done, total)` samples; returns them dilated.
+    pub fn bake_occlusion(
+        &self,
+        scene: &GpuScene,
+        layout: &LightmapLayout,
+        settings: &LightmapSettings,
+        radius: f32,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<OcclusionMaps> {
+        self.check(scene)?;
+        let pass = built(&self.lightmap, || LightmapPass::new(&self.ctx, scene))?;
+        pass.bake_occlusion(&self.ctx, scene, layout, settings, radius, progress)
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`

@@ -226,3 +226,37 @@ fn lightmaps_light_the_hybrids_diffuse_lobe() {
         (0..plain.gbuffer.material.len()).filter(|&i| plain.gbuffer.material[i][0] == 1).collect();
     assert!(lamp.iter().all(|&i| plain.color[i] == mapped.color[i]), "a material without a map changed");
 }
+
+/// The baked occlusion map (`umbra bake --ao`): under the square (rays long enough to reach all
+/// of it), each texel's unoccluded fraction is 1 − the square's form factor, Lambert's formula
+/// over π; a z-test per texel with the Bernoulli variance a(1 − a)/N, at a family level of 0.001
+/// (Šidák). Rays shorter than the square's height see nothing: all 1.
+#[test]
+fn the_occlusion_map_is_one_less_the_occluders_form_factor() {
+    let gpu = Gpu::new();
+    let scene = floor_under_a_square_light(0.0);
+    let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    let passes = Passes::new(&gpu, &gpu_scene);
+    let settings = LightmapSettings { size: 32, samples: 1024, dilation: 0, ..Default::default() };
+    let layout = LightmapLayout::new(&scene, settings.size).unwrap();
+    let maps = passes.bake_occlusion(&gpu_scene, &layout, &settings, 10.0, |_, _| {}).unwrap();
+    let corners = emitter_corners();
+    let covered: Vec<usize> = (0..layout.texels.len()).filter(|&i| layout.texels[i][0][3] != 0.0).collect();
+    let per_texel = 1.0 - (1.0 - 0.001f64).powf(1.0 / covered.len() as f64);
+    let n = settings.samples as f64;
+    let mut worst = 0.0f64;
+    for &i in &covered {
+        let p = Vec3::from_slice(&layout.texels[i][0][..3]);
+        let expected = 1.0 - polygon_irradiance(p, Vec3::Y, &corners, 1.0) / std::f64::consts::PI;
+        let baked = maps.values[i] as f64;
+        let z = (baked - expected) / (expected * (1.0 - expected) / n).sqrt().max(1e-9);
+        worst = worst.max(z.abs());
+        assert!(
+            gamma_q(0.5, 0.5 * z * z) > per_texel,
+            "texel {i} at {p}: baked {baked:.4}, expected {expected:.4}, z = {z:.2}"
+        );
+    }
+    eprintln!("{} texels, worst |z| {worst:.2}", covered.len());
+    let short = passes.bake_occlusion(&gpu_scene, &layout, &settings, 0.4, |_, _| {}).unwrap();
+    assert!(covered.iter().all(|&i| short.values[i] == 1.0), "rays of 0.4 m reach a square 0.5 m up");
+}

@@ -487,10 +487,10 @@ gpu_structs! {
         light_count: uint,
         /// Punctual lights.
         punctual_count: uint,
+        /// Occlusion maps: the length of the occlusion rays (scene units).
+        radius: float,
         /// Padding.
         pad0: uint,
-        /// Padding.
-        pad1: uint,
     }
 
     /// What the shadow rasterizer reports: the largest need over the layers rendered.
@@ -1068,7 +1068,7 @@ kernels! {
     kernel lightmap_bake {
         scene: full [textures, alpha, lights, punctual, env_map],
         push: LightmapParams,
-        spec: {},
+        spec: { occlusion: bool = false },
         bindings: {
             /// Per texel two RGBA32F texels: the world position and 1 where a triangle covers the
             /// texel (0: none, skipped), then the unit normal.
@@ -1081,7 +1081,8 @@ kernels! {
             /// The volume's distance maps.
             probe_distance: readonly texels rgba32f,
             /// Per texel the running means: emitters' irradiance rgb and the mean square of its
-            /// red channel, then the same of the ambient irradiance.
+            /// red channel, then the same of the ambient irradiance (occlusion maps: the
+            /// unoccluded fraction in the first's x).
             lightmap_accum: readwrite buffer [vec4],
         }
     }

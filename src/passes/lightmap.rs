@@ -183,43 +183,7 @@ impl Lightmaps {
     /// neighbours (of its 8) takes their mean, ring by ring, so bilinear lookups across a chart's
     /// border read its own values instead of empty ones.
     pub fn dilate(&mut self, rings: u32) {
-        let s = self.size as i64;
-        let per_map = (s * s) as usize;
-        for _ in 0..rings {
-            let covered = self.covered.clone();
-            let (emitters, ambient) = (self.emitters.clone(), self.ambient.clone());
-            for map in 0..self.materials.len() {
-                let base = map * per_map;
-                for y in 0..s {
-                    for x in 0..s {
-                        let i = base + (y * s + x) as usize;
-                        if covered[i] {
-                            continue;
-                        }
-                        let (mut e, mut a, mut n) = ([0.0f32; 3], [0.0f32; 3], 0.0f32);
-                        for (dx, dy) in (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (dx, dy))) {
-                            let (nx, ny) = (x + dx, y + dy);
-                            if (dx, dy) == (0, 0) || nx < 0 || ny < 0 || nx >= s || ny >= s {
-                                continue;
-                            }
-                            let j = base + (ny * s + nx) as usize;
-                            if covered[j] {
-                                (0..3).for_each(|c| {
-                                    e[c] += emitters[j][c];
-                                    a[c] += ambient[j][c];
-                                });
-                                n += 1.0;
-                            }
-                        }
-                        if n > 0.0 {
-                            self.emitters[i] = e.map(|v| v / n);
-                            self.ambient[i] = a.map(|v| v / n);
-                            self.covered[i] = true;
-                        }
-                    }
-                }
-            }
-        }
+        dilate(self.size, &mut self.covered, &mut [&mut self.emitters, &mut self.ambient], rings);
     }
 
     /// Bilinear lookup of `layer` (one map's texels) at UV1 `uv` (texel centres at (i + ½)/size,
@@ -307,9 +271,87 @@ impl GpuLightmaps {
     }
 }
 
+/// Fills `rings` rings of empty texels of every map (`size`² texels each, in turn) in `layers`:
+/// an empty texel with covered neighbours (of its 8) takes their mean, ring by ring.
+fn dilate(size: u32, covered: &mut [bool], layers: &mut [&mut Vec<[f32; 3]>], rings: u32) {
+    let s = size as i64;
+    let per_map = (s * s) as usize;
+    for _ in 0..rings {
+        let before = covered.to_vec();
+        let old: Vec<Vec<[f32; 3]>> = layers.iter().map(|l| l.to_vec()).collect();
+        for i in 0..before.len() {
+            if before[i] {
+                continue;
+            }
+            let (base, local) = ((i / per_map) * per_map, (i % per_map) as i64);
+            let (x, y) = (local % s, local / s);
+            let mut sums = vec![[0.0f32; 3]; layers.len()];
+            let mut n = 0.0f32;
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if (dx, dy) == (0, 0) || nx < 0 || ny < 0 || nx >= s || ny >= s {
+                        continue;
+                    }
+                    let j = base + (ny * s + nx) as usize;
+                    if before[j] {
+                        for (sum, layer) in sums.iter_mut().zip(&old) {
+                            (0..3).for_each(|c| sum[c] += layer[j][c]);
+                        }
+                        n += 1.0;
+                    }
+                }
+            }
+            if n > 0.0 {
+                for (layer, sum) in layers.iter_mut().zip(&sums) {
+                    layer[i] = sum.map(|v| v / n);
+                }
+                covered[i] = true;
+            }
+        }
+    }
+}
+
+/// Baked ambient-occlusion maps over UV1 (for glTF's `occlusionTexture`, `texCoord` 1), one per
+/// material with a chart: per texel the unoccluded fraction of cosine-distributed rays of a given
+/// length (RTAO's estimator).
+#[derive(Debug, Clone)]
+pub struct OcclusionMaps {
+    /// Texels a side of each map.
+    pub size: u32,
+    /// The material of each map.
+    pub materials: Vec<u32>,
+    /// Every map's texels in turn (1 = open), dilated; 1 where no chart reaches.
+    pub values: Vec<f32>,
+}
+
+impl OcclusionMaps {
+    /// Writes one grey PNG per map into `dir` (`occlusion-<material>.png`, linear values in
+    /// 8 bits, as glTF reads an occlusion texture's red channel); returns the paths.
+    pub fn write_png(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.to_path_buf(), source: e })?;
+        let n = (self.size * self.size) as usize;
+        let mut paths = Vec::new();
+        for (k, m) in self.materials.iter().enumerate() {
+            let bytes: Vec<u8> = self.values[k * n..(k + 1) * n]
+                .iter()
+                .flat_map(|v| {
+                    let g = (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                    [g, g, g, 255]
+                })
+                .collect();
+            let path = dir.join(format!("occlusion-{m}.png"));
+            crate::output::write_png(&path, self.size, self.size, &bytes)?;
+            paths.push(path);
+        }
+        Ok(paths)
+    }
+}
+
 /// The bake kernel.
 pub struct LightmapPass {
     pipeline: Pipeline<lightmap_bake::Kernel>,
+    occlusion: Pipeline<lightmap_bake::Kernel>,
     /// Stand-ins for the probe volume's bindings when there is none (every probe inactive).
     no_probes: [TexelBuffer; 2],
 }
@@ -321,7 +363,11 @@ impl LightmapPass {
             TexelBuffer::upload(ctx, "no probe states", &[[0u32; 4]; 4], raw::Format::R32G32B32A32_UINT, 16)?,
             TexelBuffer::upload(ctx, "no probe maps", &[[0.0f32; 4]], raw::Format::R32G32B32A32_SFLOAT, 16)?,
         ];
-        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &lightmap_bake::Spec {})?, no_probes })
+        Ok(Self {
+            pipeline: Pipeline::for_scene(ctx, scene, &lightmap_bake::Spec { occlusion: false })?,
+            occlusion: Pipeline::for_scene(ctx, scene, &lightmap_bake::Spec { occlusion: true })?,
+            no_probes,
+        })
     }
 
     /// Bakes `layout`'s maps by `settings` under environment `env`, the bounces beyond the
@@ -336,8 +382,72 @@ impl LightmapPass {
         settings: &LightmapSettings,
         env: [f32; 3],
         probes: Option<&ProbeVolume>,
-        mut progress: impl FnMut(u32, u32),
+        progress: impl FnMut(u32, u32),
     ) -> Result<Lightmaps> {
+        let sums = self.run(ctx, scene, layout, settings, env, 0.0, probes, progress)?;
+        let covered = layout.covered();
+        let n = settings.samples as f32;
+        let count = layout.texels.len();
+        let mut maps = Lightmaps {
+            size: layout.size,
+            materials: layout.materials.clone(),
+            emitters: Vec::with_capacity(count),
+            ambient: Vec::with_capacity(count),
+            emitters_error: Vec::with_capacity(count),
+            covered: covered.clone(),
+            samples: settings.samples,
+        };
+        for (i, &on) in covered.iter().enumerate() {
+            let (e, a) = if on { (sums[2 * i], sums[2 * i + 1]) } else { ([0.0; 4], [0.0; 4]) };
+            maps.emitters.push([e[0], e[1], e[2]]);
+            maps.ambient.push([a[0], a[1], a[2]]);
+            let variance = (e[3] - e[0] * e[0]).max(0.0) * n / (n - 1.0).max(1.0);
+            maps.emitters_error.push((variance / n).sqrt());
+        }
+        maps.dilate(settings.dilation);
+        Ok(maps)
+    }
+
+    /// Bakes ambient-occlusion maps of `layout` by `settings` (samples, seed, dilation) with
+    /// occlusion rays of length `radius`, dilated; texels no chart reaches are 1.
+    pub fn bake_occlusion(
+        &self,
+        ctx: &Context,
+        scene: &GpuScene,
+        layout: &LightmapLayout,
+        settings: &LightmapSettings,
+        radius: f32,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<OcclusionMaps> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(Error::Invalid(format!("occlusion radius {radius} must be a positive distance")));
+        }
+        let sums = self.run(ctx, scene, layout, settings, [0.0; 3], radius, None, progress)?;
+        let mut covered = layout.covered();
+        let mut values: Vec<[f32; 3]> =
+            covered.iter().enumerate().map(|(i, &on)| [if on { sums[2 * i][0] } else { 1.0 }; 3]).collect();
+        dilate(layout.size, &mut covered, &mut [&mut values], settings.dilation);
+        Ok(OcclusionMaps {
+            size: layout.size,
+            materials: layout.materials.clone(),
+            values: values.iter().map(|v| v[0]).collect(),
+        })
+    }
+
+    /// Runs `settings.samples` samples of every texel (occlusion rays of `radius` when it is
+    /// positive, irradiance otherwise) and reads the running means back.
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &self,
+        ctx: &Context,
+        scene: &GpuScene,
+        layout: &LightmapLayout,
+        settings: &LightmapSettings,
+        env: [f32; 3],
+        radius: f32,
+        probes: Option<&ProbeVolume>,
+        mut progress: impl FnMut(u32, u32),
+    ) -> Result<Vec<[f32; 4]>> {
         settings.validate()?;
         let count = layout.texels.len();
         if count == 0 {
@@ -368,6 +478,7 @@ impl LightmapPass {
             probe_distance: probes.map_or(no_maps, |p| &p.distance),
             lightmap_accum: &accum,
         };
+        let pipeline = if radius > 0.0 { &self.occlusion } else { &self.pipeline };
         let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
         // About 2^22 texel-samples per submission.
         let batch = ((1u64 << 22) / count as u64).clamp(1, 64) as u32;
@@ -384,9 +495,10 @@ impl LightmapPass {
                         seed: settings.seed,
                         light_count: scene.light_count,
                         punctual_count: scene.punctual_count,
+                        radius,
                         ..Default::default()
                     };
-                    self.pipeline.record(cmd, &resources, &params, [count as u32, 1, 1], [64, 1, 1])?;
+                    pipeline.record(cmd, &resources, &params, [count as u32, 1, 1], [64, 1, 1])?;
                     barrier::compute_to_compute(ctx, cmd);
                 }
                 Ok(())
@@ -394,26 +506,6 @@ impl LightmapPass {
             done += n;
             progress(done, settings.samples);
         }
-        let sums: Vec<[f32; 4]> = accum.read(ctx)?;
-        let covered = layout.covered();
-        let n = settings.samples as f32;
-        let mut maps = Lightmaps {
-            size: layout.size,
-            materials: layout.materials.clone(),
-            emitters: Vec::with_capacity(count),
-            ambient: Vec::with_capacity(count),
-            emitters_error: Vec::with_capacity(count),
-            covered: covered.clone(),
-            samples: settings.samples,
-        };
-        for (i, &on) in covered.iter().enumerate() {
-            let (e, a) = if on { (sums[2 * i], sums[2 * i + 1]) } else { ([0.0; 4], [0.0; 4]) };
-            maps.emitters.push([e[0], e[1], e[2]]);
-            maps.ambient.push([a[0], a[1], a[2]]);
-            let variance = (e[3] - e[0] * e[0]).max(0.0) * n / (n - 1.0).max(1.0);
-            maps.emitters_error.push((variance / n).sqrt());
-        }
-        maps.dilate(settings.dilation);
-        Ok(maps)
+        accum.read(ctx)
     }
 }

@@ -128,6 +128,74 @@ impl LightmapLayout {
     }
 }
 
+/// Gives every triangle of `scene` its own chart in a new `TEXCOORD_1` set, for scenes that
+/// carry none: per material, the triangles in a grid of square cells of a map of `size` texels,
+/// each laid flat (its first edge along u) at one scale for all of the material's triangles (the
+/// largest fills its cell), inside a gutter of two texels. Vertices are unshared first (each
+/// triangle gets its own three), so charts never meet; seams run along every edge, and the
+/// dilation's gutter keeps bilinear lookups inside each chart.
+pub fn unwrap_triangles(scene: &mut Scene, size: u32) {
+    let count = scene.triangles.len();
+    let old = std::mem::take(&mut scene.triangles);
+    let pick = |v: &Vec<[f32; 2]>| -> Vec<[f32; 2]> {
+        if v.is_empty() {
+            Vec::new()
+        } else {
+            old.iter().flat_map(|t| t.map(|i| v[i as usize])).collect()
+        }
+    };
+    let uv0 = pick(&scene.uv0);
+    let colors: Vec<[f32; 4]> = if scene.colors.is_empty() {
+        Vec::new()
+    } else {
+        old.iter().flat_map(|t| t.map(|i| scene.colors[i as usize])).collect()
+    };
+    let tangents: Vec<[f32; 4]> = if scene.tangents.is_empty() {
+        Vec::new()
+    } else {
+        old.iter().flat_map(|t| t.map(|i| scene.tangents[i as usize])).collect()
+    };
+    scene.positions = old.iter().flat_map(|t| t.map(|i| scene.positions[i as usize])).collect();
+    scene.normals = old.iter().flat_map(|t| t.map(|i| scene.normals[i as usize])).collect();
+    scene.uv0 = uv0;
+    scene.colors = colors;
+    scene.tangents = tangents;
+    scene.triangles = (0..count as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+    // Each triangle flat in its own frame: A at the origin, B along u.
+    let flat: Vec<[Vec2; 3]> = (0..count)
+        .map(|t| {
+            let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(scene.positions[3 * t + k]));
+            let u = (b - a).normalize_or_zero();
+            let n = (b - a).cross(c - a);
+            let v = n.cross(u).normalize_or_zero();
+            let p = |q: Vec3| Vec2::new((q - a).dot(u), (q - a).dot(v));
+            let (pa, pb, pc) = (p(a), p(b), p(c));
+            let lo = pa.min(pb).min(pc);
+            [pa - lo, pb - lo, pc - lo]
+        })
+        .collect();
+    let mut uv1 = vec![[0.0f32; 2]; 3 * count];
+    for m in 0..scene.materials.len() as u32 {
+        let tris: Vec<usize> = (0..count).filter(|&t| scene.triangle_material[t] == m).collect();
+        if tris.is_empty() {
+            continue;
+        }
+        let grid = (tris.len() as f32).sqrt().ceil() as usize;
+        let cell = 1.0 / grid as f32;
+        let gutter = 2.0 / size as f32;
+        let extent =
+            tris.iter().map(|&t| flat[t].iter().fold(0.0f32, |e, p| e.max(p.x).max(p.y))).fold(0.0, f32::max);
+        let scale = (cell - 2.0 * gutter).max(0.0) / extent.max(1e-12);
+        for (k, &t) in tris.iter().enumerate() {
+            let origin = Vec2::new((k % grid) as f32, (k / grid) as f32) * cell + gutter;
+            for (j, p) in flat[t].iter().enumerate() {
+                uv1[3 * t + j] = (origin + *p * scale).to_array();
+            }
+        }
+    }
+    scene.uv1 = uv1;
+}
+
 /// Writes triangle `t`'s texels (those whose centre it covers) into `map`.
 fn rasterize(scene: &Scene, t: usize, size: u32, map: &mut [LightmapTexel]) {
     let tri = scene.triangles[t];

@@ -171,6 +171,9 @@ enum Command {
         /// Probe spacings, as the scene's longest side / n.
         #[arg(long, value_delimiter = ',', default_value = "4,8,16")]
         per_side: Vec<u32>,
+        /// Lightmap sizes (texels a side) on the Cornell box, its triangles unwrapped.
+        #[arg(long, value_delimiter = ',', default_value = "32,64,128")]
+        lightmap_sizes: Vec<u32>,
         /// Timed repeats (after a warm-up); the median is reported.
         #[arg(long, default_value_t = 5)]
         repeats: usize,
@@ -403,29 +406,38 @@ fn run(cli: Cli) -> Result<()> {
             Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
             None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
         },
-        Command::Probes { sponza, gltf, size, reference_spp, per_side, repeats, env_color, out, table } => {
-            match table {
-                Some(path) => print!("{}", probes::table(&read_json(&path)?)),
-                None => {
-                    let settings = suite::SuiteSettings {
-                        size,
-                        reference_spp,
-                        max_spp: 1,
-                        shadow_rays: vec![4],
-                        shadow_map_sizes: vec![],
-                        probes_per_side: per_side,
-                        ssao_samples: vec![16],
-                        rtao_rays: vec![],
-                        ao_reference_rays: 0,
-                        ao_radius: 0.5,
-                        repeats,
-                        env: env_color,
-                        out,
-                    };
-                    run_probes(&settings, &sponza, &gltf)?
-                }
+        Command::Probes {
+            sponza,
+            gltf,
+            size,
+            reference_spp,
+            per_side,
+            lightmap_sizes,
+            repeats,
+            env_color,
+            out,
+            table,
+        } => match table {
+            Some(path) => print!("{}", probes::table(&read_json(&path)?)),
+            None => {
+                let settings = suite::SuiteSettings {
+                    size,
+                    reference_spp,
+                    max_spp: 1,
+                    shadow_rays: vec![4],
+                    shadow_map_sizes: vec![],
+                    probes_per_side: per_side,
+                    ssao_samples: vec![16],
+                    rtao_rays: vec![],
+                    ao_reference_rays: 0,
+                    ao_radius: 0.5,
+                    repeats,
+                    env: env_color,
+                    out,
+                };
+                run_probes(&settings, &sponza, &gltf, &lightmap_sizes)?
             }
-        }
+        },
         Command::Mis { references, reference_dir, spp, seeds, out, table } => match table {
             Some(path) => print!("{}", mis::table(&read_json(&path)?)),
             None => {
@@ -738,7 +750,12 @@ fn add_sun(scene: &mut umbra::scene::Scene, direction: [f32; 3]) {
 }
 
 /// The probes comparison on the Cornell box, Sponza under a sun (when present) and `gltf`.
-fn run_probes(settings: &suite::SuiteSettings, sponza: &std::path::Path, gltf: &[PathBuf]) -> Result<()> {
+fn run_probes(
+    settings: &suite::SuiteSettings,
+    sponza: &std::path::Path,
+    gltf: &[PathBuf],
+    lightmap_sizes: &[u32],
+) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
     std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
@@ -758,8 +775,16 @@ fn run_probes(settings: &suite::SuiteSettings, sponza: &std::path::Path, gltf: &
     for (key, scene) in &scenes {
         let camera = bench_camera(scene);
         results.push(
-            probes::run_scene(&ctx, key, scene, &camera, settings, &settings.probes_per_side)
-                .with_context(|| scene.name.clone())?,
+            probes::run_scene(
+                &ctx,
+                key,
+                scene,
+                &camera,
+                settings,
+                &settings.probes_per_side,
+                if key == "cornell" { lightmap_sizes } else { &[] },
+            )
+            .with_context(|| scene.name.clone())?,
         );
     }
     let doc = probes::to_json(&ctx.info().name, settings, &results);

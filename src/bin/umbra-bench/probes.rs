@@ -5,7 +5,10 @@
 //! each point's frame time (median GPU time of its per-frame passes after a warm-up; the bake is
 //! reported apart, as the one-off cost it is), its relative MSE and LDR-FLIP against a converged
 //! path-traced reference (the suite's, cached), and the probes' count and bake time. `suite`
-//! runs the same series on its scenes; `probes` runs it alone, with Sponza and a sun.
+//! runs the same series on its scenes; `probes` runs it alone, with Sponza and a sun, and on the
+//! Cornell box also lightmaps (its triangles unwrapped into charts of their own, baked at a sweep
+//! of map sizes, the bounces beyond the first from the 1/8 probe volume, which lights the
+//! unmapped rest).
 
 use super::suite::{self, Point, SuiteSettings};
 use anyhow::Result;
@@ -104,6 +107,83 @@ pub struct SceneProbes {
     pub plain: [Point; 2],
     /// With probes, by spacing.
     pub probes: Vec<ProbePoint>,
+    /// With lightmaps (and probes), by map size.
+    pub lightmaps: Vec<LightmapPoint>,
+}
+
+/// One lightmap bake's point.
+pub struct LightmapPoint {
+    /// Texels a side of each map.
+    pub size: u32,
+    /// Maps (materials with charts).
+    pub maps: usize,
+    /// GPU-and-readback milliseconds of the bake (wall clock: it submits in batches).
+    pub bake_ms: f64,
+    /// The frame.
+    pub point: Point,
+}
+
+/// Lightmaps on `scene` unwrapped (a chart per triangle), at each map size of `sizes`, with a
+/// probe volume at 1/8 of the longest side for the bounces beyond the first.
+pub fn lightmap_series(
+    ctx: &umbra::vk::Context,
+    scene: &umbra::scene::Scene,
+    camera: &Camera,
+    reference: &[[f32; 4]],
+    s: &SuiteSettings,
+    sizes: &[u32],
+) -> Result<Vec<LightmapPoint>> {
+    use umbra::passes::lightmap::{unwrap_triangles, GpuLightmaps, LightmapLayout, LightmapSettings};
+    let settings = hybrid_settings(s, false);
+    let mut out = Vec::new();
+    for &size in sizes {
+        let mut unwrapped = scene.clone();
+        unwrap_triangles(&mut unwrapped, size);
+        let renderer = Renderer::new(ctx, &unwrapped)?;
+        let [lo, hi] = renderer.scene().bounds;
+        let longest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+        let probe_settings = ProbeSettings { spacing: Some(longest / 8.0), ..ProbeSettings::default() };
+        let mut volume = ProbeVolume::new(ctx, renderer.scene(), &probe_settings)?;
+        renderer.passes().bake_probes(renderer.scene(), &mut volume, &settings.lighting, |_, _| {})?;
+        let layout = LightmapLayout::new(&unwrapped, size)?;
+        let lightmap_settings = LightmapSettings { size, samples: 256, ..LightmapSettings::default() };
+        let bar = super::progress_bar(lightmap_settings.samples as u64, &format!("lightmaps {size}²: bake"));
+        let start = std::time::Instant::now();
+        let maps = renderer.passes().bake_lightmaps(
+            renderer.scene(),
+            &layout,
+            &lightmap_settings,
+            &settings.lighting,
+            Some(&volume),
+            |done, _| bar.set_position(done as u64),
+        )?;
+        let bake_ms = start.elapsed().as_secs_f64() * 1e3;
+        bar.finish_and_clear();
+        let lightmaps = GpuLightmaps::upload(ctx, &maps, unwrapped.materials.len())?;
+        let (ms, image) = suite::timed(
+            s.repeats,
+            || {
+                renderer.passes().hybrid_with(
+                    renderer.scene(),
+                    camera,
+                    &settings,
+                    Some(&volume),
+                    Some(&lightmaps),
+                )
+            },
+            suite::frame_ms,
+        )?;
+        let (rmse, rel_mse) = suite::errors(&image.color, reference);
+        let flip = Some(suite::flip_mean(&image.color, reference, s.size));
+        let method = "hybrid + lightmaps".to_string();
+        out.push(LightmapPoint {
+            size,
+            maps: maps.materials.len(),
+            bake_ms,
+            point: Point { method, unit: "lightmap_size", value: size, ms, rmse, rel_mse, flip },
+        });
+    }
+    Ok(out)
 }
 
 /// Runs the comparison on one scene.
@@ -114,6 +194,7 @@ pub fn run_scene(
     camera: &Camera,
     s: &SuiteSettings,
     per_side: &[u32],
+    lightmap_sizes: &[u32],
 ) -> Result<SceneProbes> {
     let renderer = Renderer::new(ctx, scene)?;
     let (reference, floor) = suite::reference_for(&renderer, camera, key, s)?;
@@ -131,12 +212,14 @@ pub fn run_scene(
     }
     let plain: [Point; 2] = plain.try_into().map_err(|_| anyhow::anyhow!("two hybrid points"))?;
     let probes = series(ctx, &renderer, camera, &reference, s, per_side)?;
+    let lightmaps = lightmap_series(ctx, scene, camera, &reference, s, lightmap_sizes)?;
     Ok(SceneProbes {
         scene: scene.name.clone(),
         triangles: renderer.scene().bvh_stats.triangles,
         floor,
         plain,
         probes,
+        lightmaps,
     })
 }
 
@@ -159,6 +242,13 @@ pub fn to_json(device: &str, s: &SuiteSettings, scenes: &[SceneProbes]) -> Value
                 v["per_side"] = json!(p.point.value);
                 v["probes"] = json!(p.probes);
                 v["active"] = json!(p.active);
+                v["bake_ms"] = json!(p.bake_ms);
+                v
+            }).collect::<Vec<_>>(),
+            "lightmaps": r.lightmaps.iter().map(|p| {
+                let mut v = point(&p.point);
+                v["size"] = json!(p.size);
+                v["maps"] = json!(p.maps);
                 v["bake_ms"] = json!(p.bake_ms);
                 v
             }).collect::<Vec<_>>(),
@@ -202,6 +292,19 @@ pub fn table(doc: &Value) -> String {
                 p["probes"],
                 p["per_side"],
                 p["active"],
+                num(&p["bake_ms"]),
+                num(&p["gpu_ms"]),
+                num(&p["gpu_ms"]) / plain_ms,
+                num(&p["rel_mse"]),
+                num(&p["rel_mse"]) / plain_rel,
+                num(&p["flip"]),
+            );
+        }
+        for p in scene["lightmaps"].as_array().cloned().unwrap_or_default() {
+            out += &format!(
+                "| {name} | lightmaps {}² ({} maps) + probes 1/8 | — | {:.0} ms | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
+                p["size"],
+                p["maps"],
                 num(&p["bake_ms"]),
                 num(&p["gpu_ms"]),
                 num(&p["gpu_ms"]) / plain_ms,

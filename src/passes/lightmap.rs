@@ -577,3 +577,60 @@ impl LightmapPass {
         accum.read(ctx)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The unwrapped Cornell box: every triangle keeps its shape (edge lengths at one scale per
+    /// material) and its chart's box, grown by the gutter less one texel, meets no other chart of
+    /// its material; the layout then covers texels of every chart.
+    #[test]
+    fn unwrapped_charts_keep_their_shape_and_never_meet() {
+        let mut scene = Scene::cornell_box();
+        let before: Vec<[Vec3; 3]> = scene.triangle_soup();
+        let size = 128;
+        unwrap_triangles(&mut scene, size);
+        assert_eq!(scene.triangle_soup(), before, "unsharing vertices moved a triangle");
+        let boxes: Vec<(u32, Vec2, Vec2)> = scene
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(t, tri)| {
+                let uv = tri.map(|i| Vec2::from(scene.uv1[i as usize]) * size as f32);
+                (scene.triangle_material[t], uv[0].min(uv[1]).min(uv[2]), uv[0].max(uv[1]).max(uv[2]))
+            })
+            .collect();
+        for (i, a) in boxes.iter().enumerate() {
+            assert!(a.1.min_element() >= 0.0 && a.2.max_element() <= size as f32, "chart {i} leaves the map");
+            for b in &boxes[i + 1..] {
+                let apart = a.2.x + 1.0 <= b.1.x
+                    || b.2.x + 1.0 <= a.1.x
+                    || a.2.y + 1.0 <= b.1.y
+                    || b.2.y + 1.0 <= a.1.y;
+                assert!(a.0 != b.0 || apart, "charts meet: {a:?} {b:?}");
+            }
+        }
+        // One scale per material: UV edge length / world edge length is the same for all of its
+        // triangles.
+        for m in 0..scene.materials.len() as u32 {
+            let ratios: Vec<f32> = (0..scene.triangles.len())
+                .filter(|&t| scene.triangle_material[t] == m)
+                .map(|t| {
+                    let [a, b, _] = scene.triangles[t].map(|i| i as usize);
+                    let uv = Vec2::from(scene.uv1[b]) - Vec2::from(scene.uv1[a]);
+                    uv.length() / (Vec3::from(scene.positions[b]) - Vec3::from(scene.positions[a])).length()
+                })
+                .collect();
+            if let Some(&first) = ratios.first() {
+                assert!(
+                    ratios.iter().all(|r| (r / first - 1.0).abs() < 1e-3),
+                    "material {m}: scales {ratios:?}"
+                );
+            }
+        }
+        let layout = LightmapLayout::new(&scene, size).unwrap();
+        assert!(!layout.materials.is_empty());
+        assert!(layout.covered().iter().filter(|c| **c).count() > 1000, "the charts cover texels");
+    }
+}

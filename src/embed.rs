@@ -28,6 +28,9 @@
 //! // indirect diffuse light from irradiance probes: baked once, or a budget updated per frame:
 //! let mut probes = renderer.probe_volume(&ProbeSettings::default())?;
 //! renderer.record_probe_update(cmd, &mut probes, 64, &lighting)?;  // `probes: Some(&probes)`
+//! // or baked offline (`umbra bake`, or `bake_probes` then `save_probes`) and loaded:
+//! let hash = umbra::bake::scene_hash(&scene, environment_map.as_ref());  // once per scene
+//! let probes = renderer.load_probes(Path::new("level.probes"), hash, &lighting)?;
 //! ```
 //!
 //! Every `record_*` goes through [`crate::render::Passes`], the orchestrator that owns the
@@ -66,6 +69,7 @@ use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
 use crate::scene::{Camera, Scene};
 use crate::vk::{raw, Context, GpuTimer};
+use std::path::Path;
 
 /// umbra's passes and one scene on a (host's) device: the scene, its image-based lighting
 /// tables and the pipelines ([`Passes`], each built once).
@@ -245,6 +249,32 @@ impl Renderer {
     /// buffer of the renderer is pending), under the environment of `lighting`.
     pub fn bake_probes(&self, volume: &mut ProbeVolume, lighting: &LightingSettings) -> Result<()> {
         self.passes.bake_probes(&self.scene, volume, lighting, |_, _| {}).map(|_| ())
+    }
+
+    /// Saves a baked `volume` to `path` (the format of [`crate::bake`]), recording `scene_hash`
+    /// ([`crate::bake::scene_hash`] of the scene and environment map the renderer was given) and
+    /// the environment radiance of `lighting` it was baked under.
+    pub fn save_probes(
+        &self,
+        path: &Path,
+        volume: &ProbeVolume,
+        scene_hash: u64,
+        lighting: &LightingSettings,
+    ) -> Result<()> {
+        crate::bake::save_probes(&self.ctx, path, volume, scene_hash, lighting.env)
+    }
+
+    /// Loads the bake at `path` as a probe volume for this renderer's frames; an error
+    /// ([`crate::error::Error::Bake`]) unless the file is a whole bake made for `scene_hash`
+    /// ([`crate::bake::scene_hash`]) under the environment radiance of `lighting`. Uploads
+    /// through the context's queue and waits.
+    pub fn load_probes(
+        &self,
+        path: &Path,
+        scene_hash: u64,
+        lighting: &LightingSettings,
+    ) -> Result<ProbeVolume> {
+        crate::bake::load_probes(&self.ctx, path, scene_hash, lighting.env)
     }
 
     /// Places and allocates shadow maps for the scene's punctual lights, seen by `camera` over an

@@ -88,6 +88,17 @@ impl EnvironmentMap {
         Ok(Self { name: name.into(), width, height, texels })
     }
 
+    /// A stable 64-bit hash of the map's size and texels (not its name), as
+    /// [`crate::scene::Scene::content_hash`] is of a scene.
+    pub fn content_hash(&self) -> u64 {
+        let mut h = crate::scene::ContentHasher::new();
+        h.str("umbra environment 1");
+        h.len(self.width);
+        h.len(self.height);
+        h.f32s(self.texels.as_flattened());
+        h.finish()
+    }
+
     /// A constant map (one texel).
     pub fn constant(rgb: [f32; 3]) -> Self {
         Self { name: "constant".into(), width: 1, height: 1, texels: vec![rgb] }

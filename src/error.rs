@@ -71,6 +71,15 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// A probe bake file is not one, is damaged, or does not fit the scene it is loaded for
+    /// ([`crate::bake`]).
+    #[error("{path}: {message}")]
+    Bake {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong with it, and what to do.
+        message: String,
+    },
     /// Submitted GPU work did not finish within the context's submit timeout
     /// ([`crate::vk::Context::set_submit_timeout`]).
     #[error("GPU work did not finish within {seconds} s{}", pass_hint(.pass))]

@@ -5,7 +5,11 @@ mod cli;
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
+use umbra::gpu::scene::GpuScene;
+use umbra::passes::deferred::LightingSettings;
+use umbra::passes::probes::{ProbeSettings, ProbeVolume};
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
+use umbra::render::Passes;
 use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
 
 #[derive(Parser)]
@@ -19,6 +23,9 @@ struct Cli {
 enum Command {
     /// Render a glTF scene (or, without one, the embedded Cornell box).
     Render(RenderArgs),
+    /// Bake the irradiance probes of a scene (or the embedded Cornell box) to a file, for
+    /// `render --mode hybrid --probes FILE`.
+    Bake(BakeArgs),
     /// List the Vulkan devices and the one umbra would use.
     Info,
     /// Render the foundation test pattern (a known function of the pixel) to PNG and/or EXR.
@@ -35,10 +42,98 @@ enum Command {
     },
 }
 
+/// The scene and the environment that lights it: what `render` and `bake` share.
 #[derive(clap::Args)]
-struct RenderArgs {
+struct SceneArgs {
     /// A .gltf or .glb file; the embedded Cornell box when absent.
     scene: Option<PathBuf>,
+    /// Equirectangular environment map (EXR or Radiance HDR), importance-sampled.
+    #[arg(long)]
+    env: Option<PathBuf>,
+    /// Multiplier of the environment map.
+    #[arg(long, default_value_t = 1.0, value_parser = cli::parse_non_negative)]
+    env_strength: f32,
+    /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
+    #[arg(long, value_parser = cli::parse_rgb, default_value = "0,0,0")]
+    env_color: [f32; 3],
+    /// A texture image that cannot be read or decoded: refuse the scene (error), or warn once
+    /// per image and render its slots with the material's factors alone (warn).
+    #[arg(long, value_enum, default_value = "error")]
+    missing_textures: MissingTexturesArg,
+}
+
+/// How the irradiance probes are baked (`bake`, and `render --probes bake`); unset: the
+/// defaults of `ProbeSettings`.
+#[derive(clap::Args)]
+struct ProbeArgs {
+    /// Probes: distance between neighbouring probes, metres (default: the scene's longest side / 8).
+    #[arg(long, value_parser = cli::parse_positive)]
+    probe_spacing: Option<f32>,
+    /// Probes: rays per probe and sweep, a multiple of 64 up to 256 (default 128).
+    #[arg(long)]
+    probe_rays: Option<u32>,
+    /// Probes: sweeps that average after the bounces (default 32).
+    #[arg(long)]
+    probe_sweeps: Option<u32>,
+    /// Probes: sweeps that replace the maps, one bounce of light each (default 6).
+    #[arg(long)]
+    probe_bounces: Option<u32>,
+}
+
+impl ProbeArgs {
+    fn settings(&self) -> ProbeSettings {
+        let d = ProbeSettings::default();
+        ProbeSettings {
+            spacing: self.probe_spacing.or(d.spacing),
+            rays: self.probe_rays.unwrap_or(d.rays),
+            sweeps: self.probe_sweeps.unwrap_or(d.sweeps),
+            bounces: self.probe_bounces.unwrap_or(d.bounces),
+            ..d
+        }
+    }
+
+    /// The flags given, for refusing them where nothing is baked.
+    fn given(&self) -> Vec<&'static str> {
+        let flags = [
+            ("--probe-spacing", self.probe_spacing.is_some()),
+            ("--probe-rays", self.probe_rays.is_some()),
+            ("--probe-sweeps", self.probe_sweeps.is_some()),
+            ("--probe-bounces", self.probe_bounces.is_some()),
+        ];
+        flags.into_iter().filter(|f| f.1).map(|f| f.0).collect()
+    }
+}
+
+/// `--probes`: bake now, or load a file.
+#[derive(Clone)]
+enum ProbesArg {
+    Bake,
+    File(PathBuf),
+}
+
+fn parse_probes(s: &str) -> Result<ProbesArg, String> {
+    match s {
+        "" => Err("expected a bake file, or 'bake'".into()),
+        "bake" => Ok(ProbesArg::Bake),
+        _ => Ok(ProbesArg::File(s.into())),
+    }
+}
+
+#[derive(clap::Args)]
+struct BakeArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    probe: ProbeArgs,
+    /// The bake file to write (umbra's probe format, see the `umbra::bake` docs).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Rendering method.
     #[arg(long, value_enum, default_value = "pathtrace")]
     mode: Mode,
@@ -71,15 +166,6 @@ struct RenderArgs {
     /// alone, or light sampling alone (punctual lights are always light-sampled).
     #[arg(long, value_enum, default_value = "mis")]
     strategy: StrategyArg,
-    /// Equirectangular environment map (EXR or Radiance HDR), importance-sampled.
-    #[arg(long)]
-    env: Option<PathBuf>,
-    /// Multiplier of the environment map.
-    #[arg(long, default_value_t = 1.0, value_parser = cli::parse_non_negative)]
-    env_strength: f32,
-    /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
-    #[arg(long, value_parser = cli::parse_rgb, default_value = "0,0,0")]
-    env_color: [f32; 3],
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
     #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
@@ -124,6 +210,12 @@ struct RenderArgs {
     /// Hybrid shadow maps: cascade split scheme, 0 uniform to 1 logarithmic.
     #[arg(long, default_value_t = ShadowSettings::default().cascade_split, value_parser = cli::parse_non_negative)]
     cascade_split: f32,
+    /// Hybrid: indirect diffuse light from irradiance probes: a file from `umbra bake` (for this
+    /// scene and environment), or `bake` to bake them now (with the --probe-* settings).
+    #[arg(long, value_parser = parse_probes, value_name = "FILE|bake")]
+    probes: Option<ProbesArg>,
+    #[command(flatten)]
+    probe: ProbeArgs,
     /// Hybrid: no SSAO (the image-based light is not occluded).
     #[arg(long)]
     no_ao: bool,
@@ -145,10 +237,6 @@ struct RenderArgs {
     /// EXR output: linear colour, albedo, normal, depth and variance layers.
     #[arg(long)]
     exr: Option<PathBuf>,
-    /// A texture image that cannot be read or decoded: refuse the scene (error), or warn once
-    /// per image and render its slots with the material's factors alone (warn).
-    #[arg(long, value_enum, default_value = "error")]
-    missing_textures: MissingTexturesArg,
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -224,37 +312,22 @@ fn render(args: RenderArgs) -> Result<()> {
     if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
         anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
     }
-    shadow_settings(&args).validate()?;
-    let scene = match &args.scene {
-        Some(path) => {
-            use umbra::scene::{LoadOptions, MissingTextures};
-            let missing_textures = match args.missing_textures {
-                MissingTexturesArg::Error => MissingTextures::Error,
-                MissingTexturesArg::Warn => MissingTextures::Warn,
-            };
-            umbra::scene::Scene::load_with(path, &LoadOptions { missing_textures })?
-        }
-        None => umbra::scene::Scene::cornell_box(),
-    };
-    let camera = scene.camera(args.camera)?;
-    let ctx = Context::new(&ContextDesc::default())?;
-    let mut gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &scene)?;
-    if let Some(path) = &args.env {
-        let map = umbra::environment::EnvironmentMap::load(path)?;
-        log::info!("{}: {}×{} environment", path.display(), map.width, map.height);
-        gpu_scene.set_environment(&ctx, &map)?;
+    if args.probes.is_some() && args.mode != Mode::Hybrid {
+        anyhow::bail!("--probes applies to --mode hybrid (the path tracer traces its indirect light)");
     }
-    let stats = &gpu_scene.bvh_stats;
-    log::info!(
-        "{}: {} triangles, {} emissive; BVH {:.1} ms, {} references, {} nodes, SAH {:.2}",
-        scene.name,
-        stats.triangles,
-        gpu_scene.light_count,
-        stats.build_ms,
-        stats.references,
-        stats.nodes,
-        stats.sah_cost
-    );
+    let given = args.probe.given();
+    if !given.is_empty() && !matches!(args.probes, Some(ProbesArg::Bake)) {
+        anyhow::bail!(
+            "{} set{} how to bake probes: add --probes bake (a bake file keeps the settings it was made with)",
+            given.join(", "),
+            if given.len() == 1 { "s" } else { "" }
+        );
+    }
+    shadow_settings(&args).validate()?;
+    let loaded = args.scene.load()?;
+    let camera = loaded.scene.camera(args.camera)?;
+    let ctx = Context::new(&ContextDesc::default())?;
+    let gpu_scene = loaded.upload(&ctx)?;
     let settings = umbra::render::PathSettings {
         size: args.size,
         spp: args.spp,
@@ -275,12 +348,12 @@ fn render(args: RenderArgs) -> Result<()> {
             StrategyArg::Bsdf => Strategy::Bsdf,
             StrategyArg::Light => Strategy::Light,
         },
-        env: if args.env.is_some() { [args.env_strength; 3] } else { args.env_color },
+        env: args.scene.env_radiance(),
         env_nee: true,
         target_error: args.target_error,
     };
     if args.mode == Mode::Hybrid {
-        return render_hybrid(&ctx, &gpu_scene, &camera, &args, settings.env);
+        return render_hybrid(&ctx, &loaded, &gpu_scene, &camera, &args);
     }
     if matches!(args.mode, Mode::Ao | Mode::Rtao) {
         return render_ao(&ctx, &gpu_scene, &camera, &args);
@@ -342,6 +415,129 @@ fn render(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// A scene and its environment map, loaded, not yet on the GPU.
+struct LoadedScene {
+    scene: umbra::scene::Scene,
+    env_map: Option<umbra::environment::EnvironmentMap>,
+}
+
+impl SceneArgs {
+    /// Loads the scene (or the embedded Cornell box) and the environment map.
+    fn load(&self) -> Result<LoadedScene> {
+        let scene = match &self.scene {
+            Some(path) => {
+                use umbra::scene::{LoadOptions, MissingTextures};
+                let missing_textures = match self.missing_textures {
+                    MissingTexturesArg::Error => MissingTextures::Error,
+                    MissingTexturesArg::Warn => MissingTextures::Warn,
+                };
+                umbra::scene::Scene::load_with(path, &LoadOptions { missing_textures })?
+            }
+            None => umbra::scene::Scene::cornell_box(),
+        };
+        let env_map = match &self.env {
+            Some(path) => {
+                let map = umbra::environment::EnvironmentMap::load(path)?;
+                log::info!("{}: {}×{} environment", path.display(), map.width, map.height);
+                Some(map)
+            }
+            None => None,
+        };
+        Ok(LoadedScene { scene, env_map })
+    }
+
+    /// The lighting's environment radiance: the map's multiplier, or the constant colour.
+    fn env_radiance(&self) -> [f32; 3] {
+        if self.env.is_some() {
+            [self.env_strength; 3]
+        } else {
+            self.env_color
+        }
+    }
+}
+
+impl LoadedScene {
+    /// Builds the BVH and uploads the scene and its environment map.
+    fn upload(&self, ctx: &Context) -> Result<GpuScene> {
+        let mut gpu_scene = GpuScene::upload(ctx, &self.scene)?;
+        if let Some(map) = &self.env_map {
+            gpu_scene.set_environment(ctx, map)?;
+        }
+        let stats = &gpu_scene.bvh_stats;
+        log::info!(
+            "{}: {} triangles, {} emissive; BVH {:.1} ms, {} references, {} nodes, SAH {:.2}",
+            self.scene.name,
+            stats.triangles,
+            gpu_scene.light_count,
+            stats.build_ms,
+            stats.references,
+            stats.nodes,
+            stats.sah_cost
+        );
+        Ok(gpu_scene)
+    }
+
+    /// The hash a bake of this scene and environment records.
+    fn hash(&self) -> u64 {
+        umbra::bake::scene_hash(&self.scene, self.env_map.as_ref())
+    }
+}
+
+/// Bakes a probe volume over `scene` by `settings` under `lighting`'s environment, with a
+/// progress bar over the sweeps; prints the grid, the active probes and the GPU time.
+fn bake_probes(
+    ctx: &Context,
+    passes: &Passes,
+    scene: &GpuScene,
+    settings: &ProbeSettings,
+    lighting: &LightingSettings,
+) -> Result<ProbeVolume> {
+    let mut volume = ProbeVolume::new(ctx, scene, settings)?;
+    let g = volume.grid;
+    println!(
+        "probes: {}x{}x{} = {} probes, spacing {}, origin {:?}; {} rays; sweeps: {} bouncing, then {} averaging",
+        g.counts[0],
+        g.counts[1],
+        g.counts[2],
+        g.count(),
+        g.spacing[0],
+        g.origin,
+        settings.rays,
+        settings.bounces,
+        settings.sweeps
+    );
+    let sweeps = volume.bake_sweeps();
+    let bar = indicatif::ProgressBar::new(sweeps as u64).with_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} sweeps  ETA {eta}")
+            .expect("valid template"),
+    );
+    let start = std::time::Instant::now();
+    let gpu_ms = passes.bake_probes(scene, &mut volume, lighting, |done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let active = volume.read_active(ctx)?.iter().filter(|a| **a).count();
+    println!(
+        "baked: {active} of {} probes active, {sweeps} sweeps in {:.2} s (GPU {gpu_ms:.1} ms)",
+        g.count(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(volume)
+}
+
+fn bake(args: BakeArgs) -> Result<()> {
+    let settings = args.probe.settings();
+    settings.validate()?;
+    let loaded = args.scene.load()?;
+    let ctx = Context::new(&ContextDesc::default())?;
+    let gpu_scene = loaded.upload(&ctx)?;
+    let lighting = LightingSettings { env: args.scene.env_radiance(), ..Default::default() };
+    let passes = Passes::new(&ctx, &gpu_scene);
+    let volume = bake_probes(&ctx, &passes, &gpu_scene, &settings, &lighting)?;
+    let hash = loaded.hash();
+    umbra::bake::save_probes(&ctx, &args.output, &volume, hash, lighting.env)?;
+    println!("wrote {} (scene hash {hash:016x})", args.output.display());
+    Ok(())
+}
+
 /// The hybrid's shadow settings from the flags.
 fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
     let method = match args.shadows {
@@ -368,17 +564,17 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
 
 fn render_hybrid(
     ctx: &Context,
-    scene: &umbra::gpu::scene::GpuScene,
+    loaded: &LoadedScene,
+    scene: &GpuScene,
     camera: &umbra::scene::Camera,
     args: &RenderArgs,
-    env: [f32; 3],
 ) -> Result<()> {
     let settings = umbra::render::HybridSettings {
         size: args.size,
-        lighting: umbra::passes::deferred::LightingSettings {
+        lighting: LightingSettings {
             shadow_rays: args.shadow_rays,
             seed: args.seed,
-            env,
+            env: args.scene.env_radiance(),
             ibl: !args.no_ibl,
             ..Default::default()
         },
@@ -394,7 +590,27 @@ fn render_hybrid(
         }),
         shadows: shadow_settings(args),
     };
-    let image = umbra::render::hybrid(ctx, scene, camera, &settings)?;
+    let passes = Passes::new(ctx, scene);
+    let probes = match &args.probes {
+        None => None,
+        Some(ProbesArg::Bake) => {
+            Some(bake_probes(ctx, &passes, scene, &args.probe.settings(), &settings.lighting)?)
+        }
+        Some(ProbesArg::File(path)) => {
+            let volume = umbra::bake::load_probes(ctx, path, loaded.hash(), settings.lighting.env)?;
+            let g = volume.grid;
+            println!(
+                "probes: {} ({}x{}x{} probes, {} rays)",
+                path.display(),
+                g.counts[0],
+                g.counts[1],
+                g.counts[2],
+                volume.settings.rays
+            );
+            Some(volume)
+        }
+    };
+    let image = passes.hybrid_with_probes(scene, camera, &settings, probes.as_ref())?;
     let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();
     println!("hybrid: {}x{}; GPU {}", args.size.0, args.size.1, times.join(", "));
     let (w, h) = args.size;
@@ -446,7 +662,7 @@ fn render_hybrid(
 
 fn render_ao(
     ctx: &Context,
-    scene: &umbra::gpu::scene::GpuScene,
+    scene: &GpuScene,
     camera: &umbra::scene::Camera,
     args: &RenderArgs,
 ) -> Result<()> {
@@ -506,6 +722,7 @@ fn main() {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render(args)?,
+        Command::Bake(args) => bake(args)?,
         Command::Info => {
             for (name, ty) in Context::list_devices()? {
                 println!("{name} ({ty:?})");

@@ -204,3 +204,56 @@ fn render_of_a_bad_file_names_it() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `umbra bake` writes a bake of the Cornell box that `render --mode hybrid --probes FILE` loads:
+/// the probes add indirect light (a brighter image than without), the same image as baking in
+/// memory with the same settings (`--probes bake`); the file is refused for another scene, another
+/// environment and another mode, and --probe-* flags where nothing is baked.
+#[test]
+fn bake_then_render_with_the_probes() {
+    let dir = std::env::temp_dir().join(format!("umbra-bake-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bake = dir.join("cornell.probes");
+    let tiny =
+        ["--probe-spacing", "0.2", "--probe-rays", "64", "--probe-sweeps", "2", "--probe-bounces", "1"];
+    run_validated(umbra().args(["bake", "-o"]).arg(&bake).args(tiny));
+    let size = std::fs::metadata(&bake).expect("the bake was written").len() as usize;
+    assert_eq!(size, umbra::bake::HEADER_BYTES + 27 * umbra::bake::PROBE_BYTES, "3x3x3 probes");
+    let render = |name: &str, options: &[&str]| {
+        let exr = dir.join(format!("{name}.exr"));
+        run_validated(
+            umbra()
+                .args(["render", "--mode", "hybrid", "--size", "32x32", "-o"])
+                .arg(dir.join(format!("{name}.png")))
+                .arg("--exr")
+                .arg(&exr)
+                .args(options),
+        );
+        let (_, _, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+        let channel = |n: &str| channels.iter().find(|c| c.0 == n).unwrap().1.clone();
+        [channel("R"), channel("G"), channel("B")]
+    };
+    let mean =
+        |rgb: &[Vec<f32>; 3]| rgb.iter().flatten().map(|&v| v as f64).sum::<f64>() / rgb[0].len() as f64;
+    let plain = render("plain", &[]);
+    let loaded = render("loaded", &["--probes", bake.to_str().unwrap()]);
+    let in_memory = render("in-memory", &[&["--probes", "bake"][..], &tiny].concat());
+    eprintln!("mean rgb sum: plain {:.4}, probes {:.4}", mean(&plain), mean(&loaded));
+    assert!(mean(&loaded) > 1.05 * mean(&plain), "no indirect light: {} vs {}", mean(&loaded), mean(&plain));
+    assert_eq!(loaded, in_memory, "the loaded bake lights differently from the same bake in memory");
+
+    let refused = |args: &[&str], says: &[&str]| {
+        let out = umbra().args(args).arg("-o").arg(dir.join("refused.png")).output().expect("run umbra");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?} accepted: {stderr}");
+        assert!(says.iter().all(|s| stderr.contains(s)), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    };
+    let file = bake.to_str().unwrap();
+    let spheres = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spheres.glb");
+    refused(&["render", "--mode", "hybrid", spheres, "--probes", file], &["cornell.probes", "another scene"]);
+    refused(&["render", "--mode", "hybrid", "--env-color", "1,1,1", "--probes", file], &["environment"]);
+    refused(&["render", "--probes", file], &["--mode hybrid"]);
+    refused(&["render", "--mode", "hybrid", "--probe-rays", "64"], &["--probe-rays", "--probes bake"]);
+    std::fs::remove_dir_all(&dir).ok();
+}

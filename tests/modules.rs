@@ -22,6 +22,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("gpu", 1),
     ("passes", 2),
     ("render", 3),
+    ("bake", 3),
     ("embed", 4),
 ];
 

@@ -1308,3 +1308,48 @@ fn out_of_range_values_are_errors_naming_the_element() {
         "umbra's BVH takes world coordinates within ±5e17",
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// The content hash (what a probe bake records to refuse another scene)
+
+#[test]
+fn the_content_hash_follows_what_light_transport_reads() {
+    let cornell = Scene::cornell_box();
+    let hash = cornell.content_hash();
+    // The same content: loaded again, from the committed file, renamed, seen by other cameras.
+    assert_eq!(Scene::cornell_box().content_hash(), hash);
+    assert_eq!(load(&scenes_dir().join("cornell-box.glb")).content_hash(), hash);
+    let hash_after = |scene: &Scene, edit: &dyn Fn(&mut Scene)| {
+        let mut s = scene.clone();
+        edit(&mut s);
+        s.content_hash()
+    };
+    let same = hash_after(&cornell, &|s| {
+        s.name = "elsewhere.glb".into();
+        s.materials[0].name = "renamed".into();
+        s.cameras.clear();
+    });
+    assert_eq!(same, hash);
+    // Any change the probes would see.
+    let changes = |what: &str, edit: fn(&mut Scene)| {
+        assert_ne!(hash_after(&cornell, &edit), hash, "{what}");
+    };
+    changes("a vertex moved", |s| s.positions[0][1] += 1e-3);
+    changes("a normal turned", |s| s.normals[0][0] += 1e-3);
+    changes("a material's colour", |s| s.materials[0].base_color_factor[0] *= 0.5);
+    changes("a material's emission", |s| s.materials[0].emissive[0] += 1.0);
+    changes("a triangle's material", |s| s.triangle_material[0] = (s.triangle_material[0] + 1) % 4);
+    changes("a triangle's winding", |s| s.triangles[0].swap(1, 2));
+    // Punctual lights and textures.
+    let textured = load(&scenes_dir().join("textured.glb"));
+    let hash = textured.content_hash();
+    assert_ne!(hash_after(&textured, &|s| s.lights[0].intensity *= 2.0), hash, "a light's intensity");
+    assert_ne!(hash_after(&textured, &|s| s.lights[0].position[2] += 0.1), hash, "a light moved");
+    assert_ne!(hash_after(&textured, &|s| drop(s.lights.pop())), hash, "a light removed");
+    assert_ne!(hash_after(&textured, &|s| s.textures[0].rgba8[0] ^= 1), hash, "a texel");
+    assert_ne!(hash_after(&textured, &|s| s.textures[0].srgb ^= true), hash, "a texture's colour space");
+    assert_eq!(hash_after(&textured, &|s| s.lights[0].name = "renamed".into()), hash, "a light's name");
+    // Every committed scene hashes differently.
+    let hashes: HashSet<u64> = committed_scenes().iter().map(|p| load(p).content_hash()).collect();
+    assert_eq!(hashes.len(), committed_scenes().len());
+}

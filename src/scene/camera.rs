@@ -117,6 +117,38 @@ pub struct Light {
 }
 
 impl Light {
+    /// Adds everything but the name to a content hash ([`super::Scene::content_hash`]).
+    pub(super) fn hash_into(&self, h: &mut super::ContentHasher) {
+        let Light {
+            name: _,
+            kind,
+            position,
+            direction,
+            color,
+            intensity,
+            range,
+            inner_cone_angle,
+            outer_cone_angle,
+        } = self;
+        h.u32(match kind {
+            LightKind::Point => 0,
+            LightKind::Spot => 1,
+            LightKind::Directional => 2,
+        });
+        h.f32s(position);
+        h.f32s(direction);
+        h.f32s(color);
+        h.f32s(&[*intensity]);
+        match range {
+            None => h.u32(0),
+            Some(r) => {
+                h.u32(1);
+                h.f32s(&[*r]);
+            }
+        }
+        h.f32s(&[*inner_cone_angle, *outer_cone_angle]);
+    }
+
     /// A glTF light as placed by a node with transform `world`.
     pub(super) fn from_gltf(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> Self {
         use gltf::khr_lights_punctual::Kind;

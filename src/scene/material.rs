@@ -50,6 +50,69 @@ impl Material {
     }
 }
 
+impl Material {
+    /// Adds every parameter but the name to a content hash ([`super::Scene::content_hash`]).
+    pub(super) fn hash_into(&self, h: &mut super::ContentHasher) {
+        let Material {
+            name: _,
+            base_color_factor,
+            metallic,
+            roughness,
+            emissive,
+            ior,
+            specular_factor,
+            specular_color_factor,
+            transmission_factor,
+            volume,
+            alpha_mode,
+            alpha_cutoff,
+            double_sided,
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            occlusion_texture,
+            emissive_texture,
+            specular_texture,
+            specular_color_texture,
+            transmission_texture,
+        } = self;
+        h.f32s(base_color_factor);
+        h.f32s(&[*metallic, *roughness]);
+        h.f32s(emissive);
+        h.f32s(&[*ior, *specular_factor]);
+        h.f32s(specular_color_factor);
+        h.f32s(&[*transmission_factor]);
+        h.bool(*volume);
+        h.u32(match alpha_mode {
+            AlphaMode::Opaque => 0,
+            AlphaMode::Mask => 1,
+            AlphaMode::Blend => 2,
+        });
+        h.f32s(&[*alpha_cutoff]);
+        h.bool(*double_sided);
+        for slot in [
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            occlusion_texture,
+            emissive_texture,
+            specular_texture,
+            specular_color_texture,
+            transmission_texture,
+        ] {
+            match slot {
+                None => h.u32(0),
+                Some(TextureRef { texture, tex_coord, transform, scale }) => {
+                    h.u32(1);
+                    h.u32s(&[*texture, *tex_coord]);
+                    h.f32s(transform.as_flattened());
+                    h.f32s(&[*scale]);
+                }
+            }
+        }
+    }
+}
+
 impl TextureRef {
     /// Applies [`TextureRef::transform`] to a UV coordinate.
     pub fn transform_uv(&self, [u, v]: [f32; 2]) -> [f32; 2] {

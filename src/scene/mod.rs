@@ -32,6 +32,7 @@ mod accessor;
 mod camera;
 mod emissive;
 mod geometry;
+mod hash;
 mod load;
 mod material;
 mod ranges;
@@ -44,6 +45,7 @@ use std::path::{Path, PathBuf};
 
 pub use camera::{Camera, Light, LightKind};
 pub use emissive::EmissiveTable;
+pub use hash::ContentHasher;
 pub use material::{texture_transform, AlphaMode, Material, TextureRef, IDENTITY_TRANSFORM};
 pub use texture::{mip_level_count, Filter, MipLevel, Sampler, Texture, Wrap};
 
@@ -249,6 +251,65 @@ impl Scene {
             &self.materials,
             &self.textures,
         );
+    }
+
+    /// A stable 64-bit hash ([`ContentHasher`]) of everything light transport reads, the same
+    /// for the same content in every run, on every platform and whatever the file is called: a
+    /// bake of the scene's lighting records it to refuse another scene.
+    ///
+    /// It covers the vertex attributes (positions, normals, tangents, both UV sets, colours),
+    /// the triangles and each one's material, every material parameter and texture reference,
+    /// the textures (size, colour space, sampler, texels) and the punctual lights; emissive
+    /// triangles through their materials. Left out, as light transport does not read them: names
+    /// (of the scene, materials, textures, lights), cameras, the node instances (their triangles
+    /// are in), the emissive table (derived) and load warnings. An environment map lives outside
+    /// the scene: [`crate::environment::EnvironmentMap::content_hash`].
+    pub fn content_hash(&self) -> u64 {
+        // Destructured in full, so a new field fails to compile here until it is hashed or
+        // declared irrelevant.
+        let Scene {
+            name: _,
+            positions,
+            normals,
+            tangents,
+            uv0,
+            uv1,
+            colors,
+            triangles,
+            triangle_material,
+            materials,
+            textures,
+            cameras: _,
+            lights,
+            emissive: _,
+            instances: _,
+            warnings: _,
+        } = self;
+        let mut h = ContentHasher::new();
+        h.str("umbra scene 1");
+        h.len(positions.len());
+        h.f32s(positions.as_flattened());
+        h.len(normals.len());
+        h.f32s(normals.as_flattened());
+        h.len(tangents.len());
+        h.f32s(tangents.as_flattened());
+        h.len(uv0.len());
+        h.f32s(uv0.as_flattened());
+        h.len(uv1.len());
+        h.f32s(uv1.as_flattened());
+        h.len(colors.len());
+        h.f32s(colors.as_flattened());
+        h.len(triangles.len());
+        h.u32s(triangles.as_flattened());
+        h.len(triangle_material.len());
+        h.u32s(triangle_material);
+        h.len(materials.len());
+        materials.iter().for_each(|m| m.hash_into(&mut h));
+        h.len(textures.len());
+        textures.iter().for_each(|t| t.hash_into(&mut h));
+        h.len(lights.len());
+        lights.iter().for_each(|l| l.hash_into(&mut h));
+        h.finish()
     }
 
     /// Each triangle's three world-space vertices, in triangle order: the BVH builder's input.

@@ -114,6 +114,30 @@ pub struct Texture {
 }
 
 impl Texture {
+    /// Adds the size, colour space, sampler and texels (not the name) to a content hash
+    /// ([`super::Scene::content_hash`]).
+    pub(super) fn hash_into(&self, h: &mut super::ContentHasher) {
+        let Texture { name: _, width, height, rgba8, srgb, sampler } = self;
+        let Sampler { wrap_s, wrap_t, mag_filter, min_filter, mipmaps, mipmap_filter } = sampler;
+        h.u32s(&[*width, *height]);
+        h.bool(*srgb);
+        for wrap in [wrap_s, wrap_t] {
+            h.u32(match wrap {
+                Wrap::Repeat => 0,
+                Wrap::ClampToEdge => 1,
+                Wrap::MirroredRepeat => 2,
+            });
+        }
+        for filter in [mag_filter, min_filter, mipmap_filter] {
+            h.u32(match filter {
+                Filter::Nearest => 0,
+                Filter::Linear => 1,
+            });
+        }
+        h.bool(*mipmaps);
+        h.bytes(rgba8);
+    }
+
     /// Mean linear luminance (Rec. 709) of the RGB texels, decoding sRGB first when `srgb`.
     pub fn mean_luminance(&self) -> f32 {
         let decode: [f32; 256] = std::array::from_fn(|v| {

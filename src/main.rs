@@ -119,15 +119,54 @@ fn parse_probes(s: &str) -> Result<ProbesArg, String> {
     }
 }
 
+/// How lightmaps and occlusion maps are baked (`bake`, and `render --lightmaps bake`).
+#[derive(clap::Args)]
+struct LightmapArgs {
+    /// Lightmaps and occlusion maps: texels a side of each material's map.
+    #[arg(long, default_value_t = 128)]
+    lightmap_size: u32,
+    /// Lightmaps and occlusion maps: samples per texel.
+    #[arg(long, default_value_t = 256)]
+    lightmap_samples: u32,
+    /// Give every triangle its own chart in a new TEXCOORD_1 set (for scenes without one; the
+    /// scene's own set is replaced).
+    #[arg(long)]
+    unwrap: bool,
+}
+
+impl LightmapArgs {
+    fn settings(&self) -> umbra::passes::lightmap::LightmapSettings {
+        umbra::passes::lightmap::LightmapSettings {
+            size: self.lightmap_size,
+            samples: self.lightmap_samples,
+            ..Default::default()
+        }
+    }
+}
+
 #[derive(clap::Args)]
 struct BakeArgs {
     #[command(flatten)]
     scene: SceneArgs,
     #[command(flatten)]
     probe: ProbeArgs,
-    /// The bake file to write (umbra's probe format, see the `umbra::bake` docs).
+    #[command(flatten)]
+    lightmap: LightmapArgs,
+    /// The probe bake file to write (umbra's probe format, see the `umbra::bake` docs).
     #[arg(short, long)]
-    output: PathBuf,
+    output: Option<PathBuf>,
+    /// Also bake lightmaps over TEXCOORD_1 into this folder: lightmap-<material>.exr, layers
+    /// `emitters` (direct light of the emissive triangles) and `ambient` (the environment and
+    /// reflected light; the bounces beyond the first from the probes when they are baked too).
+    #[arg(long, value_name = "DIR")]
+    lightmaps: Option<PathBuf>,
+    /// Also bake ambient-occlusion maps over TEXCOORD_1 into this folder (occlusion-<material>.png,
+    /// for glTF's occlusionTexture with texCoord 1), with occlusion rays of --occlusion-radius.
+    #[arg(long, value_name = "DIR")]
+    ao_maps: Option<PathBuf>,
+    /// Occlusion maps: the occlusion rays' length in scene units.
+    #[arg(long, default_value_t = 0.5, value_parser = cli::parse_positive)]
+    occlusion_radius: f32,
 }
 
 #[derive(clap::Args)]
@@ -216,6 +255,12 @@ struct RenderArgs {
     probes: Option<ProbesArg>,
     #[command(flatten)]
     probe: ProbeArgs,
+    /// Hybrid: bake lightmaps now for the materials with TEXCOORD_1 charts (or, with --unwrap,
+    /// every triangle) and light their diffuse lobe with them (over the probes).
+    #[arg(long)]
+    lightmaps: bool,
+    #[command(flatten)]
+    lightmap: LightmapArgs,
     /// Hybrid: no SSAO (the image-based light is not occluded).
     #[arg(long)]
     no_ao: bool,
@@ -312,8 +357,10 @@ fn render(args: RenderArgs) -> Result<()> {
     if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
         anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
     }
-    if args.probes.is_some() && args.mode != Mode::Hybrid {
-        anyhow::bail!("--probes applies to --mode hybrid (the path tracer traces its indirect light)");
+    if (args.probes.is_some() || args.lightmaps) && args.mode != Mode::Hybrid {
+        anyhow::bail!(
+            "--probes and --lightmaps apply to --mode hybrid (the path tracer traces its indirect light)"
+        );
     }
     let given = args.probe.given();
     if !given.is_empty() && !matches!(args.probes, Some(ProbesArg::Bake)) {
@@ -324,7 +371,10 @@ fn render(args: RenderArgs) -> Result<()> {
         );
     }
     shadow_settings(&args).validate()?;
-    let loaded = args.scene.load()?;
+    let mut loaded = args.scene.load()?;
+    if args.lightmap.unwrap {
+        umbra::passes::lightmap::unwrap_triangles(&mut loaded.scene, args.lightmap.lightmap_size);
+    }
     let camera = loaded.scene.camera(args.camera)?;
     let ctx = Context::new(&ContextDesc::default())?;
     let gpu_scene = loaded.upload(&ctx)?;
@@ -524,18 +574,78 @@ fn bake_probes(
 }
 
 fn bake(args: BakeArgs) -> Result<()> {
+    if args.output.is_none() && args.lightmaps.is_none() && args.ao_maps.is_none() {
+        anyhow::bail!("nothing to bake: give -o FILE (probes), --lightmaps DIR or --ao-maps DIR");
+    }
     let settings = args.probe.settings();
     settings.validate()?;
-    let loaded = args.scene.load()?;
+    let mut loaded = args.scene.load()?;
+    if args.lightmap.unwrap {
+        umbra::passes::lightmap::unwrap_triangles(&mut loaded.scene, args.lightmap.lightmap_size);
+    }
     let ctx = Context::new(&ContextDesc::default())?;
     let gpu_scene = loaded.upload(&ctx)?;
     let lighting = LightingSettings { env: args.scene.env_radiance(), ..Default::default() };
     let passes = Passes::new(&ctx, &gpu_scene);
-    let volume = bake_probes(&ctx, &passes, &gpu_scene, &settings, &lighting)?;
-    let hash = loaded.hash();
-    umbra::bake::save_probes(&ctx, &args.output, &volume, hash, lighting.env)?;
-    println!("wrote {} (scene hash {hash:016x})", args.output.display());
+    let volume = match &args.output {
+        Some(output) => {
+            let volume = bake_probes(&ctx, &passes, &gpu_scene, &settings, &lighting)?;
+            let hash = loaded.hash();
+            umbra::bake::save_probes(&ctx, output, &volume, hash, lighting.env)?;
+            println!("wrote {} (scene hash {hash:016x})", output.display());
+            Some(volume)
+        }
+        None => None,
+    };
+    if let Some(dir) = &args.lightmaps {
+        let maps =
+            bake_lightmaps(&passes, &loaded.scene, &gpu_scene, &args.lightmap, &lighting, volume.as_ref())?;
+        for path in maps.write_exr(dir)? {
+            println!("wrote {}", path.display());
+        }
+    }
+    if let Some(dir) = &args.ao_maps {
+        let layout =
+            umbra::passes::lightmap::LightmapLayout::new(&loaded.scene, args.lightmap.lightmap_size)?;
+        let settings = args.lightmap.settings();
+        let bar = indicatif::ProgressBar::new(settings.samples as u64);
+        let maps =
+            passes.bake_occlusion(&gpu_scene, &layout, &settings, args.occlusion_radius, |done, _| {
+                bar.set_position(done as u64)
+            })?;
+        bar.finish_and_clear();
+        for path in maps.write_png(dir)? {
+            println!("wrote {}", path.display());
+        }
+    }
     Ok(())
+}
+
+/// Bakes the lightmaps of `scene`'s TEXCOORD_1 charts with a progress bar over the samples.
+fn bake_lightmaps(
+    passes: &Passes,
+    scene: &umbra::scene::Scene,
+    gpu_scene: &GpuScene,
+    args: &LightmapArgs,
+    lighting: &LightingSettings,
+    probes: Option<&ProbeVolume>,
+) -> Result<umbra::passes::lightmap::Lightmaps> {
+    let layout = umbra::passes::lightmap::LightmapLayout::new(scene, args.lightmap_size)?;
+    let settings = args.settings();
+    let bar = indicatif::ProgressBar::new(settings.samples as u64);
+    let start = std::time::Instant::now();
+    let maps = passes.bake_lightmaps(gpu_scene, &layout, &settings, lighting, probes, |done, _| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    println!(
+        "lightmaps: {} maps of {}², {} samples per texel, in {:.2} s",
+        maps.materials.len(),
+        maps.size,
+        maps.samples,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(maps)
 }
 
 /// The hybrid's shadow settings from the flags.
@@ -610,7 +720,21 @@ fn render_hybrid(
             Some(volume)
         }
     };
-    let image = passes.hybrid_with_probes(scene, camera, &settings, probes.as_ref())?;
+    let lightmaps = match args.lightmaps {
+        false => None,
+        true => {
+            let maps = bake_lightmaps(
+                &passes,
+                &loaded.scene,
+                scene,
+                &args.lightmap,
+                &settings.lighting,
+                probes.as_ref(),
+            )?;
+            Some(umbra::passes::lightmap::GpuLightmaps::upload(ctx, &maps, loaded.scene.materials.len())?)
+        }
+    };
+    let image = passes.hybrid_with(scene, camera, &settings, probes.as_ref(), lightmaps.as_ref())?;
     let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();
     println!("hybrid: {}x{}; GPU {}", args.size.0, args.size.1, times.join(", "));
     let (w, h) = args.size;

@@ -257,3 +257,35 @@ fn bake_then_render_with_the_probes() {
     refused(&["render", "--mode", "hybrid", "--probe-rays", "64"], &["--probe-rays", "--probes bake"]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `umbra bake --lightmaps DIR --ao-maps DIR --unwrap` writes a lightmap EXR (layers `emitters`,
+/// `ambient`) and an occlusion PNG per material; the Cornell box lit by its ceiling lamp gets
+/// direct light from the emitters and some ambient light; `render --lightmaps` uses them, and a
+/// scene without charts is refused, pointing to --unwrap.
+#[test]
+fn bake_lightmaps_and_occlusion_maps() {
+    let dir = std::env::temp_dir().join(format!("umbra-lightmap-cli-{}", std::process::id()));
+    let tiny = ["--lightmap-size", "16", "--lightmap-samples", "8"];
+    run_validated(
+        umbra().args(["bake", "--unwrap", "--lightmaps"]).arg(&dir).arg("--ao-maps").arg(&dir).args(tiny),
+    );
+    let exr = dir.join("lightmap-0.exr");
+    let (w, h, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+    assert_eq!((w, h), (16, 16));
+    let mean = |name: &str| {
+        let c = &channels.iter().find(|c| c.0 == name).unwrap_or_else(|| panic!("no {name} in {exr:?}")).1;
+        c.iter().map(|&v| v as f64).sum::<f64>() / c.len() as f64
+    };
+    assert!(mean("emitters.R") > 0.0 && mean("ambient.R") > 0.0, "the white walls' map is dark");
+    assert!(dir.join("occlusion-0.png").exists(), "no occlusion map");
+    run_validated(
+        umbra()
+            .args(["render", "--mode", "hybrid", "--size", "32x32", "--lightmaps", "--unwrap", "-o"])
+            .arg(dir.join("lit.png"))
+            .args(tiny),
+    );
+    let out = umbra().args(["bake", "--lightmaps"]).arg(&dir).output().expect("run umbra");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "a scene without TEXCOORD_1 baked: {stderr}");
+    assert!(stderr.contains("TEXCOORD_1") && stderr.contains("--unwrap"), "{stderr}");
+}

@@ -131,7 +131,8 @@ impl LightmapLayout {
 /// Gives every triangle of `scene` its own chart in a new `TEXCOORD_1` set, for scenes that
 /// carry none: per material, the triangles in a grid of square cells of a map of `size` texels,
 /// each laid flat (its first edge along u) at one scale for all of the material's triangles (the
-/// largest fills its cell), inside a gutter of two texels. Vertices are unshared first (each
+/// largest fills its cell), inside a gutter of two texels (a quarter of the cell in maps too small
+/// for that). Vertices are unshared first (each
 /// triangle gets its own three), so charts never meet; seams run along every edge, and the
 /// dilation's gutter keeps bilinear lookups inside each chart.
 pub fn unwrap_triangles(scene: &mut Scene, size: u32) {
@@ -182,7 +183,8 @@ pub fn unwrap_triangles(scene: &mut Scene, size: u32) {
         }
         let grid = (tris.len() as f32).sqrt().ceil() as usize;
         let cell = 1.0 / grid as f32;
-        let gutter = 2.0 / size as f32;
+        // Two texels, or a quarter of the cell in maps too small for that.
+        let gutter = (2.0 / size as f32).min(0.25 * cell);
         let extent =
             tris.iter().map(|&t| flat[t].iter().fold(0.0f32, |e, p| e.max(p.x).max(p.y))).fold(0.0, f32::max);
         let scale = (cell - 2.0 * gutter).max(0.0) / extent.max(1e-12);
@@ -520,7 +522,7 @@ impl LightmapPass {
         let count = layout.texels.len();
         if count == 0 {
             return Err(Error::Invalid(
-                "the scene has no lightmap charts: no triangle carries a TEXCOORD_1 of any area".into(),
+                "the scene has no lightmap charts: no triangle carries a TEXCOORD_1 of any area (unwrap_triangles, `umbra bake --unwrap`, gives each triangle one)".into(),
             ));
         }
         let texels = TexelBuffer::upload(

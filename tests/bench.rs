@@ -116,6 +116,7 @@ fn generated_tables_match_their_json() {
         ["shadows", "--table", "docs/bench/shadows-sponza.json"],
         ["shadows", "--table", "docs/bench/shadows-spheres.json"],
         ["mis", "--table", "docs/bench/mis.json"],
+        ["probes", "--table", "docs/bench/probes.json"],
     ] {
         let out =
             Command::new(env!("CARGO_BIN_EXE_umbra-bench")).current_dir(root).args(args).output().unwrap();

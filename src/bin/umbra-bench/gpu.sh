@@ -64,6 +64,9 @@ fi
 step pathtrace-cornell "$BIN/umbra" render --size "$SIZE" --spp 64 -o "$OUT/pathtrace-cornell.png"
 step pathtrace-spheres "$BIN/umbra" render scenes/spheres.glb --size "$SIZE" --spp 64 -o "$OUT/pathtrace-spheres.png"
 step suite "$BIN/umbra-bench" suite ${SUITE_ARGS:-} --out "$OUT/suite"
+sponza_args=()
+if [ -n "$SPONZA" ]; then sponza_args=(--sponza "$SPONZA"); fi
+step probes "$BIN/umbra-bench" probes --repeats "$REPEATS" "${sponza_args[@]}" --out "$OUT/probes"
 grep -h "^pathtrace:" "$OUT"/pathtrace-*.log 2>/dev/null
 echo "wrote $OUT"
 exit $status

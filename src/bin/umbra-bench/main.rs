@@ -762,7 +762,9 @@ fn run_probes(
     match umbra::scene::Scene::load(sponza) {
         Ok(mut scene) => {
             add_sun(&mut scene, DEFAULT_SUN);
-            scene.name = format!("{} under a sun", scene.name);
+            let stem =
+                sponza.file_stem().map_or_else(|| "sponza".into(), |s| s.to_string_lossy().into_owned());
+            scene.name = format!("{stem} under a sun");
             scenes.push(("sponza-sun".into(), scene));
         }
         Err(e) => log::warn!("skipping Sponza: {e}"),

@@ -213,6 +213,25 @@ pub fn run_scene(
     let plain: [Point; 2] = plain.try_into().map_err(|_| anyhow::anyhow!("two hybrid points"))?;
     let probes = series(ctx, &renderer, camera, &reference, s, per_side)?;
     let lightmaps = lightmap_series(ctx, scene, camera, &reference, s, lightmap_sizes)?;
+    // The chart: error against frame time, the points labelled by their setting.
+    let mut points: Vec<&Point> = plain.iter().collect();
+    points.extend(probes.iter().map(|p| &p.point));
+    points.extend(lightmaps.iter().map(|p| &p.point));
+    let chart_points: Vec<super::chart::ChartPoint> = points
+        .iter()
+        .map(|p| super::chart::ChartPoint {
+            method: &p.method,
+            unit: p.unit,
+            value: p.value,
+            ms: p.ms,
+            error: p.rel_mse,
+        })
+        .collect();
+    let title =
+        format!("{}: probes and lightmaps — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name);
+    let chart =
+        super::chart::Chart { title: &title, y_desc: "relative MSE vs converged path tracing (log)", floor };
+    super::chart::write(&s.out.join(format!("probes-{key}")), &chart, &chart_points)?;
     Ok(SceneProbes {
         scene: scene.name.clone(),
         triangles: renderer.scene().bvh_stats.triangles,
@@ -314,5 +333,13 @@ pub fn table(doc: &Value) -> String {
             );
         }
     }
+    let floors: Vec<String> = doc["scenes"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default()
+        .iter()
+        .map(|s| format!("{} {:.1e}", s["scene"].as_str().unwrap_or("?"), num(&s["reference_rel_mse_floor"])))
+        .collect();
+    out += &format!("\nThe references' own noise (relative MSE): {}.\n", floors.join(", "));
     out
 }

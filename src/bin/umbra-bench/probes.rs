@@ -305,32 +305,24 @@ pub fn table(doc: &Value) -> String {
             num(&bare["rel_mse"]) / plain_rel,
             num(&bare["flip"])
         );
-        for p in scene["probes"].as_array().cloned().unwrap_or_default() {
-            out += &format!(
-                "| {name} | {} (1/{}) | {} | {:.0} ms | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
-                p["probes"],
-                p["per_side"],
-                p["active"],
+        // A baked row: its label, active probes, bake and frame against the hybrid with SSAO.
+        let row = |label: String, active: String, p: &Value| {
+            format!(
+                "| {name} | {label} | {active} | {:.0} ms | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
                 num(&p["bake_ms"]),
                 num(&p["gpu_ms"]),
                 num(&p["gpu_ms"]) / plain_ms,
                 num(&p["rel_mse"]),
                 num(&p["rel_mse"]) / plain_rel,
                 num(&p["flip"]),
-            );
+            )
+        };
+        for p in scene["probes"].as_array().cloned().unwrap_or_default() {
+            out += &row(format!("{} (1/{})", p["probes"], p["per_side"]), p["active"].to_string(), &p);
         }
         for p in scene["lightmaps"].as_array().cloned().unwrap_or_default() {
-            out += &format!(
-                "| {name} | lightmaps {}² ({} maps) + probes 1/8 | — | {:.0} ms | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
-                p["size"],
-                p["maps"],
-                num(&p["bake_ms"]),
-                num(&p["gpu_ms"]),
-                num(&p["gpu_ms"]) / plain_ms,
-                num(&p["rel_mse"]),
-                num(&p["rel_mse"]) / plain_rel,
-                num(&p["flip"]),
-            );
+            out +=
+                &row(format!("lightmaps {}² ({} maps) + probes 1/8", p["size"], p["maps"]), "—".into(), &p);
         }
     }
     let floors: Vec<String> = doc["scenes"]

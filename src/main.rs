@@ -162,7 +162,7 @@ struct BakeArgs {
     lightmaps: Option<PathBuf>,
     /// Also bake ambient-occlusion maps over TEXCOORD_1 into this folder (occlusion-<material>.png,
     /// for glTF's occlusionTexture with texCoord 1), with occlusion rays of --occlusion-radius.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, alias = "ao", value_name = "DIR")]
     ao_maps: Option<PathBuf>,
     /// Occlusion maps: the occlusion rays' length in scene units.
     #[arg(long, default_value_t = 0.5, value_parser = cli::parse_positive)]

@@ -814,7 +814,7 @@ kernels! {
         bindings: {
             /// View-space depth.
             gb_depth: writeonly image r32f,
-            /// Octahedral normal, roughness.
+            /// Shading normal xyz, perceptual roughness.
             gb_normal: writeonly image rgba16f,
             /// Base colour, metallic.
             gb_base: writeonly image rgba16f,
@@ -841,7 +841,7 @@ kernels! {
         bindings: {
             /// View-space depth.
             gb_depth: readonly image r32f,
-            /// Octahedral normal, roughness.
+            /// Shading normal xyz, perceptual roughness.
             gb_normal: readonly image rgba16f,
             /// Base colour, metallic.
             gb_base: readonly image rgba16f,
@@ -886,7 +886,7 @@ kernels! {
         bindings: {
             /// View-space depth.
             gb_depth: readonly image r32f,
-            /// Octahedral normal, roughness.
+            /// Shading normal xyz, perceptual roughness.
             gb_normal: readonly image rgba16f,
             /// AO (1 = unoccluded).
             out_ao: writeonly image r32f,
@@ -901,7 +901,7 @@ kernels! {
         bindings: {
             /// View-space depth.
             gb_depth: readonly image r32f,
-            /// Octahedral normal, roughness.
+            /// Shading normal xyz, perceptual roughness.
             gb_normal: readonly image rgba16f,
             /// Material index, octahedral geometric normal, UV1 (float bits).
             gb_material: readonly image rgba32ui,
@@ -920,7 +920,7 @@ kernels! {
             ao_in: readonly image r32f,
             /// View-space depth.
             gb_depth: readonly image r32f,
-            /// Octahedral normal, roughness.
+            /// Shading normal xyz, perceptual roughness.
             gb_normal: readonly image rgba16f,
             /// The blurred AO.
             out_ao: writeonly image r32f,

@@ -55,6 +55,7 @@ void main() {
     uint material = tri_material(tri);
     vec3 n = shading_normal_lod(tri, hit.bary, ng, uv, cone_lod);
     Surface s = material_surface_lod(material, uv, cone_lod);
+    s.base *= tri_color(tri, hit.bary).rgb;
     // The occlusion map, for the lighting pass's image-based (ambient) light.
     float occlusion = 1.0;
     if (HAS_TEXTURES) {

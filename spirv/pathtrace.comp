@@ -143,6 +143,7 @@ void main() {
         basis(n, t, b);
         vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
         Surface s = material_surface(material, uv);
+        s.base *= tri_color(tri, hit.bary).rgb;
         if (HAS_TRANSMISSION) {
             // A refracting boundary: glass (ior) behind the front face, air behind the back.
             float ior = material_vec(material, 3u).y;

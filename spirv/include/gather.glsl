@@ -53,6 +53,7 @@ vec3 gather_radiance(vec3 origin, vec3 dir, vec3 env, uvec2 env_size, uint light
     basis(n, tt, bt);
     vec3 wo_local = vec3(dot(wo, tt), dot(wo, bt), dot(wo, n));
     Surface s = material_surface(material, uv);
+    s.base *= tri_color(tri, hit.bary).rgb;
     vec3 radiance = vec3(0.0);
     if (wo_local.z <= 0.0) {
         return radiance;

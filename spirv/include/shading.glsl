@@ -223,6 +223,26 @@ vec4 tri_uv(uint tri, vec2 bary) {
     return uv;
 }
 
+// COLOR_0 at barycentrics (b1, b2) of triangle `tri`, linear RGBA (opaque white in kernels not
+// specialised for vertex colours, HAS_COLORS); the vertex keeps it as sRGB-encoded RGBA8, decoded
+// through the sRGB table at the start of scene_texels (texture.glsl).
+vec4 vertex_color(uint i) {
+    uint bits = floatBitsToUint(vertex_v_uv1(i).w);
+    vec4 c = unpackUnorm4x8(bits);
+    c.rgb = vec3(uintBitsToFloat(texture_word(bits & 255u)), uintBitsToFloat(texture_word((bits >> 8) & 255u)),
+                 uintBitsToFloat(texture_word((bits >> 16) & 255u)));
+    return c;
+}
+
+vec4 tri_color(uint tri, vec2 bary) {
+    vec4 c = vec4(1.0);
+    if (HAS_COLORS) {
+        uvec3 idx = tri_indices(tri);
+        c = (1.0 - bary.x - bary.y) * vertex_color(idx.x) + bary.x * vertex_color(idx.y) + bary.y * vertex_color(idx.z);
+    }
+    return c;
+}
+
 // UV set 1 at barycentrics (b1, b2) of triangle `tri`, whether or not the kernel reads textures
 // (the lightmaps' set).
 vec2 tri_uv1(uint tri, vec2 bary) {
@@ -474,7 +494,8 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
 // rays, each path vertex) and the mean over samples is the blend.
 bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir) {
     uint m = tri_material(tri);
-    float alpha = material_vec(m, 0u).a * material_texture(m, MATERIAL_SLOT_BASE_COLOR, tri_uv(tri, bary)).a;
+    float alpha = material_vec(m, 0u).a * material_texture(m, MATERIAL_SLOT_BASE_COLOR, tri_uv(tri, bary)).a
+        * tri_color(tri, bary).a;
     if (floatBitsToUint(bvh_tri_v(tri, 1u).w) == 1u) {
         return alpha >= material_vec(m, 3u).w;
     }

@@ -37,7 +37,8 @@
 /// The scene features a kernel can be specialised on (`scene: full [...]` below): `HAS_<NAME>` in
 /// GLSL, its specialization-constant id the index here; a feature a kernel does not list is a
 /// plain `false` there.
-pub const SCENE_FEATURES: [&str; 6] = ["textures", "alpha", "lights", "punctual", "env_map", "transmission"];
+pub const SCENE_FEATURES: [&str; 7] =
+    ["textures", "alpha", "lights", "punctual", "env_map", "transmission", "colors"];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
 /// others follow in order.
@@ -192,7 +193,8 @@ gpu_structs! {
     struct GpuVertex {
         /// Normal xyz, uv0.x.
         normal_u: vec4,
-        /// uv0.y, uv1.xy, unused.
+        /// uv0.y, uv1.xy, then `COLOR_0` as the bits of sRGB-encoded RGBA8 (alpha linear;
+        /// opaque white where a primitive has none).
         v_uv1: vec4,
         /// Tangent xyz, bitangent sign (all 0 when the scene has no tangents).
         tangent: vec4,
@@ -769,7 +771,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -808,7 +810,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha],
+        scene: full [textures, alpha, colors],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -827,7 +829,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -895,7 +897,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha],
+        scene: full [textures, alpha, colors],
         push: AoParams,
         spec: {},
         bindings: {
@@ -991,7 +993,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha],
+        scene: full [textures, alpha, colors],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1030,7 +1032,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha],
+        scene: full [textures, alpha, colors],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1066,7 +1068,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1088,7 +1090,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -145,6 +145,8 @@ pub struct SceneFeatures {
     pub env_map: bool,
     /// Some material transmits.
     pub transmission: bool,
+    /// Some vertex has a `COLOR_0` other than opaque white.
+    pub colors: bool,
 }
 
 impl SceneFeatures {
@@ -157,6 +159,7 @@ impl SceneFeatures {
             punctual: scene.punctual_count > 0,
             env_map: scene.env_size.is_some(),
             transmission: scene.has_transmission,
+            colors: scene.has_colors,
         }
     }
 
@@ -169,6 +172,7 @@ impl SceneFeatures {
             "punctual" => self.punctual,
             "env_map" => self.env_map,
             "transmission" => self.transmission,
+            "colors" => self.colors,
             _ => return None,
         })
     }

@@ -54,6 +54,9 @@ pub struct GpuScene {
     /// Whether some triangle's material is alpha-masked or blended: the traversal in the shading
     /// kernels is specialised for the alpha test only then.
     pub has_alpha: bool,
+    /// Whether some vertex has a `COLOR_0` other than opaque white: the shading kernels read
+    /// vertex colours only then.
+    pub has_colors: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// Statistics of the BVH built for the scene.
@@ -233,14 +236,15 @@ impl ShadingArrays {
         for (t, &input) in triangles.iter_mut().zip(prim_order) {
             t.light_pmf = light_pmf[input as usize];
         }
-        let vertices = (0..scene.positions.len())
+        let vertices: Vec<GpuVertex> = (0..scene.positions.len())
             .map(|i| {
                 let n = scene.normals.get(i).copied().unwrap_or([0.0; 3]);
                 let uv0 = scene.uv0.get(i).copied().unwrap_or([0.0; 2]);
                 let uv1 = scene.uv1.get(i).copied().unwrap_or([0.0; 2]);
+                let color = scene.colors.get(i).copied().unwrap_or([1.0; 4]);
                 GpuVertex {
                     normal_u: [n[0], n[1], n[2], uv0[0]],
-                    v_uv1: [uv0[1], uv1[0], uv1[1], 0.0],
+                    v_uv1: [uv0[1], uv1[0], uv1[1], f32::from_bits(pack_color(color))],
                     tangent: scene.tangents.get(i).copied().unwrap_or([0.0; 4]),
                 }
             })
@@ -290,6 +294,9 @@ impl ShadingArrays {
             })
             .collect();
         let punctual = punctual_lights(scene);
+        if vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX) {
+            gpu_textures.srgb_table();
+        }
         let GpuTextures { textures, texels, .. } = gpu_textures;
         Self { triangles, vertices, materials, lights, punctual, textures, texels }
     }
@@ -380,6 +387,7 @@ impl GpuScene {
             texture_count: arrays.textures.len() as u32,
             has_transmission: transmits(&arrays.materials),
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
+            has_colors: arrays.vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -422,8 +430,17 @@ impl GpuScene {
         self.texels = upload_texels(ctx, &arrays.texels)?;
         self.texture_count = arrays.textures.len() as u32;
         self.has_transmission = transmits(&arrays.materials);
+        self.has_colors = arrays.vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX);
         Ok(())
     }
+}
+
+/// A linear `COLOR_0` as the GPU vertex keeps it: RGBA8, rgb sRGB-encoded (8 bits hold dark
+/// colours better so), alpha linear, red in the low byte (`unpackUnorm4x8`'s order).
+fn pack_color(c: [f32; 4]) -> u32 {
+    let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u32;
+    let rgb = [0, 1, 2].map(|k| byte(crate::color::srgb_encode(c[k])));
+    rgb[0] | rgb[1] << 8 | rgb[2] << 16 | byte(c[3]) << 24
 }
 
 /// Uploads 16-byte-aligned structs as a storage texel buffer of RGBA32UI texels.
@@ -521,6 +538,15 @@ struct GpuTextures {
 }
 
 impl GpuTextures {
+    /// Starts the texel buffer with the sRGB decoding table if it is not there yet (texture.glsl
+    /// reads it for sRGB textures and vertex colours: a table lookup costs CPU devices far less
+    /// than pow, and is exact for 8-bit codes).
+    fn srgb_table(&mut self) {
+        if self.texels.is_empty() {
+            self.texels.extend((0..256).map(|code| crate::color::srgb_decode(code as f32 / 255.0).to_bits()));
+        }
+    }
+
     /// The GPU slot value (texture index + 1, or 0 for none) of a material's texture reference.
     fn slot(&mut self, scene: &Scene, reference: Option<&crate::scene::TextureRef>) -> u32 {
         let Some(r) = reference else { return 0 };
@@ -528,11 +554,7 @@ impl GpuTextures {
         if let Some(&i) = self.index.get(&r.texture) {
             return i + 1;
         }
-        if self.texels.is_empty() {
-            // The texel buffer starts with the sRGB decoding table (texture.glsl reads it: a
-            // table lookup costs CPU devices far less than pow, and is exact for 8-bit codes).
-            self.texels.extend((0..256).map(|code| crate::color::srgb_decode(code as f32 / 255.0).to_bits()));
-        }
+        self.srgb_table();
         use crate::scene::{Filter, Wrap};
         let wrap = |w: Wrap, clamp: u32, mirror: u32| match w {
             Wrap::Repeat => 0,

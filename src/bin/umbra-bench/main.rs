@@ -563,10 +563,7 @@ fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> 
             Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
         }
     }
-    for path in gltf {
-        let key = path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
-        scenes.push((key, umbra::scene::Scene::load(path)?));
-    }
+    scenes.extend(load_gltf(gltf)?);
     let mut results = Vec::new();
     for (key, scene) in &scenes {
         let camera = bench_camera(scene);
@@ -769,10 +766,7 @@ fn run_probes(
         }
         Err(e) => log::warn!("skipping Sponza: {e}"),
     }
-    for path in gltf {
-        let key = path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
-        scenes.push((key, umbra::scene::Scene::load(path)?));
-    }
+    scenes.extend(load_gltf(gltf)?);
     let mut results = Vec::new();
     for (key, scene) in &scenes {
         let camera = bench_camera(scene);
@@ -792,6 +786,16 @@ fn run_probes(
     let doc = probes::to_json(&ctx.info().name, settings, &results);
     print!("{}", probes::table(&doc));
     write_json(&settings.out, "probes.json", &doc)
+}
+
+/// The `--gltf` scenes, each keyed by its file stem.
+fn load_gltf(gltf: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
+    gltf.iter()
+        .map(|path| {
+            let key = path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+            Ok((key, umbra::scene::Scene::load(path)?))
+        })
+        .collect()
 }
 
 fn read_json(path: &std::path::Path) -> Result<serde_json::Value> {

@@ -799,8 +799,14 @@ fn json_that_breaks_gltf_rules_is_rejected() {
 #[test]
 fn unsupported_required_extensions_are_named_and_optional_ones_ignored() {
     let (mut json, bin) = read_glb(&khronos("Box"));
-    json["extensionsUsed"] = json!(["KHR_draco_mesh_compression", "EXT_unknown"]);
-    Scene::from_glb_bytes("optional.glb", &to_glb(&json, &bin)).expect("optional extensions are ignored");
+    json["extensionsUsed"] = json!(["KHR_draco_mesh_compression", "KHR_texture_transform", "EXT_unknown"]);
+    let scene =
+        Scene::from_glb_bytes("optional.glb", &to_glb(&json, &bin)).expect("optional extensions are ignored");
+    // Named once, at warn level and in the scene's warnings; one umbra reads is not named.
+    assert_eq!(
+        scene.warnings,
+        vec!["optional.glb: ignoring optional glTF extensions KHR_draco_mesh_compression, EXT_unknown: rendered without them"]
+    );
     json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
     assert_scene_error(
         Scene::from_glb_bytes("draco.glb", &to_glb(&json, &bin)),

@@ -34,6 +34,7 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
         }
     }
     scene.warnings.extend(warnings);
+    scene.warnings.extend(asset.ignored_extensions.clone());
     scene.emissive = EmissiveTable::build(
         &scene.positions,
         &scene.triangles,

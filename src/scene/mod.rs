@@ -104,8 +104,8 @@ pub struct Scene {
     pub emissive: EmissiveTable,
     /// Every placed mesh instance, in the order its triangles appear.
     pub instances: Vec<Instance>,
-    /// What loading replaced under [`LoadOptions`] (each missing texture file once), also logged
-    /// as warnings.
+    /// What loading replaced under [`LoadOptions`] (each missing texture file once) and the
+    /// optional glTF extensions it ignored (one entry naming them all), also logged as warnings.
     pub warnings: Vec<String>,
 }
 

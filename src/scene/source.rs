@@ -57,6 +57,8 @@ impl Origin {
 pub(super) struct Asset<'a> {
     pub document: gltf::Document,
     pub buffers: Vec<Cow<'a, [u8]>>,
+    /// The one warning naming the optional extensions umbra ignores, if the file uses any.
+    pub ignored_extensions: Option<String>,
 }
 
 /// Parses and validates `bytes` (GLB or glTF JSON) and resolves its buffers.
@@ -64,12 +66,12 @@ pub(super) fn open<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<Asset<'a>> {
     let (json_bytes, bin) =
         if bytes.starts_with(b"glTF") { split_glb(origin, bytes)? } else { (bytes, None) };
     let root = parse_json(origin, json_bytes)?;
-    check_extensions(origin, &root)?;
+    let ignored_extensions = check_extensions(origin, &root)?;
     super::ranges::check(origin, json_bytes)?;
     let document = validate(origin, root)?;
     let buffers = load_buffers(origin, &document, bin)?;
     check_views(origin, &document, &buffers)?;
-    Ok(Asset { document, buffers })
+    Ok(Asset { document, buffers, ignored_extensions })
 }
 
 /// Splits a GLB file into its JSON chunk and optional BIN chunk.
@@ -135,8 +137,10 @@ fn parse_json(origin: &Origin, bytes: &[u8]) -> Result<json::Root> {
     Ok(root)
 }
 
-/// Rejects files that require an extension umbra lacks; notes optional ones it ignores.
-fn check_extensions(origin: &Origin, root: &json::Root) -> Result<()> {
+/// Rejects files that require an extension umbra lacks; names the optional ones it ignores in
+/// one warning (logged, and returned for the scene's warnings): what they add to the look is not
+/// rendered.
+fn check_extensions(origin: &Origin, root: &json::Root) -> Result<Option<String>> {
     let supported = |name: &&String| SUPPORTED_EXTENSIONS.contains(&name.as_str());
     let unsupported: Vec<&str> =
         root.extensions_required.iter().filter(|e| !supported(e)).map(String::as_str).collect();
@@ -147,10 +151,20 @@ fn check_extensions(origin: &Origin, root: &json::Root) -> Result<()> {
             unsupported.join(", ")
         )));
     }
-    for name in root.extensions_used.iter().filter(|e| !supported(e)) {
-        log::debug!("{}: ignoring optional glTF extension {name}", origin.name());
+    let ignored: Vec<&str> =
+        root.extensions_used.iter().filter(|e| !supported(e)).map(String::as_str).collect();
+    if ignored.is_empty() {
+        return Ok(None);
     }
-    Ok(())
+    let warning = format!(
+        "{}: ignoring optional glTF extension{} {}: rendered without {}",
+        origin.name(),
+        if ignored.len() == 1 { "" } else { "s" },
+        ignored.join(", "),
+        if ignored.len() == 1 { "it" } else { "them" }
+    );
+    log::warn!("{warning}");
+    Ok(Some(warning))
 }
 
 /// Runs the `gltf` crate's validation (indices in range, required fields, enum values).

@@ -294,7 +294,7 @@ impl ShadingArrays {
             })
             .collect();
         let punctual = punctual_lights(scene);
-        if vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX) {
+        if colored(&vertices) {
             gpu_textures.srgb_table();
         }
         let GpuTextures { textures, texels, .. } = gpu_textures;
@@ -387,7 +387,7 @@ impl GpuScene {
             texture_count: arrays.textures.len() as u32,
             has_transmission: transmits(&arrays.materials),
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
-            has_colors: arrays.vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX),
+            has_colors: colored(&arrays.vertices),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -430,9 +430,14 @@ impl GpuScene {
         self.texels = upload_texels(ctx, &arrays.texels)?;
         self.texture_count = arrays.textures.len() as u32;
         self.has_transmission = transmits(&arrays.materials);
-        self.has_colors = arrays.vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX);
+        self.has_colors = colored(&arrays.vertices);
         Ok(())
     }
+}
+
+/// Whether some vertex's colour (as [`pack_color`] packed it) differs from opaque white.
+fn colored(vertices: &[GpuVertex]) -> bool {
+    vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX)
 }
 
 /// A linear `COLOR_0` as the GPU vertex keeps it: RGBA8, rgb sRGB-encoded (8 bits hold dark

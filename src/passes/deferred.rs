@@ -159,10 +159,7 @@ impl DeferredPass {
                 16,
             )?,
         ];
-        let no_probes = [
-            TexelBuffer::upload(ctx, "no probe states", &[[0u32; 4]], raw::Format::R32G32B32A32_UINT, 16)?,
-            TexelBuffer::upload(ctx, "no probe maps", &[[0.0f32; 4]], raw::Format::R32G32B32A32_SFLOAT, 16)?,
-        ];
+        let no_probes = super::probes::no_probe_bindings(ctx)?;
         Ok(Self { pipeline, method, no_ao, no_shadow, probes, lightmaps, no_probes })
     }
 

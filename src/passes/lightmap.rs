@@ -138,29 +138,17 @@ impl LightmapLayout {
 pub fn unwrap_triangles(scene: &mut Scene, size: u32) {
     let count = scene.triangles.len();
     let old = std::mem::take(&mut scene.triangles);
-    let pick = |v: &Vec<[f32; 2]>| -> Vec<[f32; 2]> {
-        if v.is_empty() {
-            Vec::new()
-        } else {
-            old.iter().flat_map(|t| t.map(|i| v[i as usize])).collect()
+    // Each vertex attribute (absent ones stay empty) re-laid out three vertices per triangle.
+    fn unshare<T: Copy>(attribute: &mut Vec<T>, triangles: &[[u32; 3]]) {
+        if !attribute.is_empty() {
+            *attribute = triangles.iter().flat_map(|t| t.map(|i| attribute[i as usize])).collect();
         }
-    };
-    let uv0 = pick(&scene.uv0);
-    let colors: Vec<[f32; 4]> = if scene.colors.is_empty() {
-        Vec::new()
-    } else {
-        old.iter().flat_map(|t| t.map(|i| scene.colors[i as usize])).collect()
-    };
-    let tangents: Vec<[f32; 4]> = if scene.tangents.is_empty() {
-        Vec::new()
-    } else {
-        old.iter().flat_map(|t| t.map(|i| scene.tangents[i as usize])).collect()
-    };
-    scene.positions = old.iter().flat_map(|t| t.map(|i| scene.positions[i as usize])).collect();
-    scene.normals = old.iter().flat_map(|t| t.map(|i| scene.normals[i as usize])).collect();
-    scene.uv0 = uv0;
-    scene.colors = colors;
-    scene.tangents = tangents;
+    }
+    unshare(&mut scene.positions, &old);
+    unshare(&mut scene.normals, &old);
+    unshare(&mut scene.uv0, &old);
+    unshare(&mut scene.colors, &old);
+    unshare(&mut scene.tangents, &old);
     scene.triangles = (0..count as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
     // Each triangle flat in its own frame: A at the origin, B along u.
     let flat: Vec<[Vec2; 3]> = (0..count)
@@ -429,10 +417,7 @@ pub struct LightmapPass {
 impl LightmapPass {
     /// Builds the pipeline for `scene`'s features.
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        let no_probes = [
-            TexelBuffer::upload(ctx, "no probe states", &[[0u32; 4]; 4], raw::Format::R32G32B32A32_UINT, 16)?,
-            TexelBuffer::upload(ctx, "no probe maps", &[[0.0f32; 4]], raw::Format::R32G32B32A32_SFLOAT, 16)?,
-        ];
+        let no_probes = crate::passes::probes::no_probe_bindings(ctx)?;
         Ok(Self {
             pipeline: Pipeline::for_scene(ctx, scene, &lightmap_bake::Spec { occlusion: false })?,
             occlusion: Pipeline::for_scene(ctx, scene, &lightmap_bake::Spec { occlusion: true })?,

@@ -310,6 +310,17 @@ impl ProbeVolume {
     }
 }
 
+/// Stand-ins for a probe volume's bindings (`probe_texels`, and both maps) in kernels run without
+/// one: a zeroed grid header and one inactive probe, so `probe_volume_irradiance` finds no probe
+/// and gives 0; one map texel.
+pub fn no_probe_bindings(ctx: &Context) -> Result<[TexelBuffer; 2]> {
+    let states = [[0u32; 4]; PROBE_HEADER_TEXELS as usize + 1];
+    Ok([
+        TexelBuffer::upload(ctx, "no probe states", &states, raw::Format::R32G32B32A32_UINT, 16)?,
+        TexelBuffer::upload(ctx, "no probe maps", &[[0.0f32; 4]], raw::Format::R32G32B32A32_SFLOAT, 16)?,
+    ])
+}
+
 /// A uniformly random rotation (Shoemake 1992) from a hash of `seed`, as three rows.
 fn random_rotation(seed: u32) -> [[f32; 4]; 3] {
     let mut state = seed as u64 ^ 0x9E37_79B9_7F4A_7C15;

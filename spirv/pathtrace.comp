@@ -1,10 +1,10 @@
 #version 460
-// Progressive path tracer: one sample per pixel per dispatch, accumulated as a running mean with
-// its second moment. Next-event estimation on emissive triangles, BSDF sampling, multiple
-// importance sampling (power or balance heuristic), Russian roulette; or, for comparison, either
-// strategy alone (LIGHT_SAMPLING, BSDF_HITS). Materials' occlusion maps (glTF occlusionTexture)
-// are not read: the paths trace the occlusion they stand in for (the hybrid renderer applies
-// them to its image-based light).
+// Progressive path tracer: a run of samples per pixel per dispatch (path regeneration, main()),
+// accumulated as a running mean with its second moment. Next-event estimation on emissive
+// triangles, BSDF sampling, multiple importance sampling (power or balance heuristic), Russian
+// roulette; or, for comparison, either strategy alone (LIGHT_SAMPLING, BSDF_HITS). Materials'
+// occlusion maps (glTF occlusionTexture) are not read: the paths trace the occlusion they stand
+// in for (the hybrid renderer applies them to its image-based light).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/pathtrace.glsl"
 #include "pixel.glsl"
@@ -70,175 +70,248 @@ uint nonfinite_bit(vec3 v, uint bit) {
     return (any(isnan(v)) || any(isinf(v))) ? bit : 0u;
 }
 
-void main() {
-    uvec2 pixel = tile_pixel();
-    uvec2 size = params.size;
-    if (any(greaterThanEqual(pixel, size))) {
-        return;
-    }
-    uint index = pixel.y * size.x + pixel.x;
-    uint sample_index = params.sample_index;
+// One path: its ray, what it has gathered so far and what it carries.
+struct Path {
+    vec3 origin;
+    vec3 dir;
+    vec3 radiance;
+    vec3 throughput;
+    float prev_pdf;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
+    uint depth;      // scattering events so far
+    uint nonfinite;  // NONFINITE_* bits of the stages that produced a non-finite value
+};
+
+// Sample `sample_index` of `pixel`: its camera ray.
+Path camera_path(uvec2 pixel, uint sample_index) {
+    vec4 jitter = rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), params.seed);
+    Path path;
+    path.origin = params.camera.origin;
+    path.dir = camera_ray(params.camera.forward, params.camera.right, params.camera.up, vec2(pixel) + jitter.xy,
+                          params.size);
+    path.radiance = vec3(0.0);
+    path.throughput = vec3(1.0);
+    path.prev_pdf = 0.0;
+    path.depth = 0u;
+    path.nonfinite = 0u;
+    return path;
+}
+
+// Traces `path`'s ray and adds what it finds at the end: emission, direct light; then samples
+// the next ray. False when the path ends there. `aov`: record the first hit's base colour and
+// normal into `albedo` and `normal_depth`.
+bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout vec4 albedo,
+               inout vec4 normal_depth) {
     uint seed = params.seed;
-    uint max_bounces = params.max_bounces;
-    uint rr_depth = params.rr_depth;
+    uint depth = path.depth;
+    vec3 dir = path.dir;
+    vec3 throughput = path.throughput;
+    Hit hit;
+    if (!bvh_closest(path.origin, dir, 0.0, BVH_INF, hit)) {
+        if (HAS_ENV_MAP) {
+            float w = 1.0;
+            if (params.env_nee != 0u && path.prev_pdf > 0.0) {
+                w = bsdf_hit_weight(path.prev_pdf, env_pdf(dir, params.env_size));
+            }
+            vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
+            path.radiance += c;
+            path.nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
+        } else {
+            path.radiance += throughput * params.env;
+        }
+        return false;
+    }
+    uint tri = hit.tri;
+    vec3 ng = tri_normal(tri);
+    float area = 0.5 * length(ng);
+    ng = normalize(ng);
+    vec3 wo = -dir;
+    vec3 p = path.origin + hit.t * dir;
 
-    vec4 jitter = rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), seed);
-    vec3 origin = params.camera.origin;
-    vec3 dir = camera_ray(params.camera.forward, params.camera.right, params.camera.up,
-                          vec2(pixel) + jitter.xy, size);
+    // Emission, weighted against the light-sampling strategy that could have found it.
+    vec4 uv = tri_uv(tri, hit.bary);
+    vec3 le = emitted(tri, hit.bary, ng, wo);
+    if (any(greaterThan(le, vec3(0.0)))) {
+        float w = 1.0;
+        if (HAS_LIGHTS && path.prev_pdf > 0.0) {
+            float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
+            w = bsdf_hit_weight(path.prev_pdf, light_pdf);
+        }
+        vec3 c = throughput * le * w;
+        path.radiance += c;
+        path.nonfinite |= nonfinite_bit(c, NONFINITE_EMISSION);
+    }
 
-    vec3 radiance = vec3(0.0);
-    vec3 throughput = vec3(1.0);
-    uint nonfinite = 0u;  // NONFINITE_* bits of the stages that produced a non-finite value
-    float prev_pdf = 0.0;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
+    // Shading frame: interpolated, normal-mapped normal, on the same side as the viewer.
+    bool front = dot(ng, wo) >= 0.0;
+    if (!front) {
+        ng = -ng;
+    }
+    uint material = tri_material(tri);
+    vec3 n = shading_normal(tri, hit.bary, ng, uv);
+    vec3 t;
+    vec3 b;
+    basis(n, t, b);
+    vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
+    Surface s = material_surface(material, uv);
+    s.base *= tri_color(tri, hit.bary).rgb;
+    if (HAS_TRANSMISSION) {
+        // A refracting boundary: glass (ior) behind the front face, air behind the back.
+        float ior = material_vec(material, 3u).y;
+        s.eta = front ? ior : 1.0 / ior;
+    }
+    if (aov && depth == 0u) {
+        albedo = vec4(s.base, 1.0);
+        normal_depth = vec4(n, hit.t);
+    }
+    if (depth >= params.max_bounces || wo_local.z <= 0.0) {
+        return false;
+    }
+
+    // Next-event estimation: one emissive triangle by power, a uniform point on it.
+    if (HAS_LIGHTS && params.light_count > 0u && LIGHT_SAMPLING) {
+        vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
+        vec3 wi_local;
+        vec3 l_emit;
+        float light_pdf;
+        if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
+                            light_pdf)) {
+            vec3 f = bsdf_eval(s, wo_local, wi_local);
+            float w = light_sample_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
+            vec3 c = throughput * f * abs(wi_local.z) * l_emit * (w / light_pdf);
+            path.radiance += c;
+            path.nonfinite |= nonfinite_bit(c, NONFINITE_EMISSIVE_NEE);
+        }
+    }
+
+    // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
+    if (HAS_PUNCTUAL) {
+        float u = rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
+        vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
+        path.radiance += c;
+        path.nonfinite |= nonfinite_bit(c, NONFINITE_PUNCTUAL);
+    }
+
+    // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
+    if (HAS_ENV_MAP && params.env_nee != 0u && LIGHT_SAMPLING) {
+        vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
+        float pdf;
+        vec3 wi = env_sample(u, params.env_size, pdf);
+        vec3 wi_local;
+        if (pdf > 0.0 && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, false, wi, wi_local)) {
+            vec3 f = bsdf_eval(s, wo_local, wi_local);
+            float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
+            vec3 le = env_radiance(wi, params.env_size) * params.env;
+            vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
+            path.radiance += c;
+            path.nonfinite |= nonfinite_bit(c, NONFINITE_ENV_NEE);
+        }
+    }
+
+    // Continue the path by sampling the BSDF.
+    vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_BSDF), seed);
+    vec3 wi_local;
+    vec3 weight;
+    float pdf;
+    if (!bsdf_sample(s, wo_local, u.xyz, wi_local, weight, pdf)) {
+        return false;
+    }
+    vec3 wi = wi_local.x * t + wi_local.y * b + wi_local.z * n;
+    bool transmitted = wi_local.z < 0.0;
+    float side = dot(wi, ng);
+    if (transmitted ? side >= 0.0 : side <= 0.0) {
+        return false;  // the shading normal and the geometry disagree about the side
+    }
+    path.nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
+    throughput *= weight;
+    // Light sampling covers both sides of a transmitting surface, so an emitter or the
+    // environment reached either way is weighed by MIS against it.
+    path.prev_pdf = pdf;
+    if (depth + 1u >= params.rr_depth) {
+        float q = clamp(max3(throughput), 0.05, 1.0);
+        if (u.w >= q) {
+            return false;
+        }
+        throughput /= q;
+    }
+    path.throughput = throughput;
+    path.origin = offset_ray(p, transmitted ? -ng : ng);
+    path.dir = wi;
+    path.depth = depth + 1u;
+    return true;
+}
+
+// Samples params.sample_index .. + params.sample_count of one pixel. A SIMD machine runs a group
+// of lanes until its last lane is done, and path lengths differ (escapes, Russian roulette), so
+// a lane whose path ends starts its pixel's next sample in the same iteration (path
+// regeneration, Novák, Havran and Dachsbacher 2010) instead of idling until the longest path of
+// its group ends: the group then idles once per dispatch, not once per sample. Sample k draws the
+// numbers of sample k whichever dispatch and lane trace it, so the paths are those of one sample
+// per dispatch.
+// Returns the path segments it traced.
+uint trace_pixel(uvec2 pixel) {
+    uint index = pixel.y * params.size.x + pixel.x;
+    uint first = params.sample_index;
+    uint count = params.sample_count;
+
     vec4 albedo = vec4(params.env, 0.0);
     vec4 normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
-
-    for (uint depth = 0u;; ++depth) {
-        Hit hit;
-        if (!bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
-            if (HAS_ENV_MAP) {
-                float w = 1.0;
-                if (params.env_nee != 0u && prev_pdf > 0.0) {
-                    w = bsdf_hit_weight(prev_pdf, env_pdf(dir, params.env_size));
-                }
-                vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
-                radiance += c;
-                nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
-            } else {
-                radiance += throughput * params.env;
-            }
+    vec3 sum = vec3(0.0);   // of the finite samples
+    vec3 sum2 = vec3(0.0);  // of their squares
+    uint j = 0u;
+    uint segments = 0u;
+    Path path = camera_path(pixel, first);
+    while (true) {
+        ++segments;
+        if (path_step(path, pixel, first + j, first == 0u && j == 0u, albedo, normal_depth)) {
+            continue;
+        }
+        vec3 radiance = path.radiance;
+        if (any(isnan(radiance)) || any(isinf(radiance))) {
+            atomicAdd(stats.nonfinite_samples, 1u);
+            atomicOr(stats.nonfinite_sources, path.nonfinite);
+            radiance = vec3(0.0);
+        }
+        sum += radiance;
+        sum2 += radiance * radiance;
+        ++j;
+        if (j >= count) {
             break;
         }
-        uint tri = hit.tri;
-        vec3 ng = tri_normal(tri);
-        float area = 0.5 * length(ng);
-        ng = normalize(ng);
-        vec3 wo = -dir;
-        vec3 p = origin + hit.t * dir;
-
-        // Emission, weighted against the light-sampling strategy that could have found it.
-        vec4 uv = tri_uv(tri, hit.bary);
-        vec3 le = emitted(tri, hit.bary, ng, wo);
-        if (any(greaterThan(le, vec3(0.0)))) {
-            float w = 1.0;
-            if (HAS_LIGHTS && prev_pdf > 0.0) {
-                float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
-                w = bsdf_hit_weight(prev_pdf, light_pdf);
-            }
-            vec3 c = throughput * le * w;
-            radiance += c;
-            nonfinite |= nonfinite_bit(c, NONFINITE_EMISSION);
-        }
-
-        // Shading frame: interpolated, normal-mapped normal, on the same side as the viewer.
-        bool front = dot(ng, wo) >= 0.0;
-        if (!front) {
-            ng = -ng;
-        }
-        uint material = tri_material(tri);
-        vec3 n = shading_normal(tri, hit.bary, ng, uv);
-        vec3 t;
-        vec3 b;
-        basis(n, t, b);
-        vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
-        Surface s = material_surface(material, uv);
-        s.base *= tri_color(tri, hit.bary).rgb;
-        if (HAS_TRANSMISSION) {
-            // A refracting boundary: glass (ior) behind the front face, air behind the back.
-            float ior = material_vec(material, 3u).y;
-            s.eta = front ? ior : 1.0 / ior;
-        }
-        if (depth == 0u) {
-            albedo = vec4(s.base, 1.0);
-            normal_depth = vec4(n, hit.t);
-        }
-        if (depth >= max_bounces || wo_local.z <= 0.0) {
-            break;
-        }
-
-        // Next-event estimation: one emissive triangle by power, a uniform point on it.
-        if (HAS_LIGHTS && params.light_count > 0u && LIGHT_SAMPLING) {
-            vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
-            vec3 wi_local;
-            vec3 l_emit;
-            float light_pdf;
-            if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
-                                light_pdf)) {
-                vec3 f = bsdf_eval(s, wo_local, wi_local);
-                float w = light_sample_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
-                vec3 c = throughput * f * abs(wi_local.z) * l_emit * (w / light_pdf);
-                radiance += c;
-                nonfinite |= nonfinite_bit(c, NONFINITE_EMISSIVE_NEE);
-            }
-        }
-
-        // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
-        if (HAS_PUNCTUAL) {
-            float u = rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
-            vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
-            radiance += c;
-            nonfinite |= nonfinite_bit(c, NONFINITE_PUNCTUAL);
-        }
-
-        // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
-        if (HAS_ENV_MAP && params.env_nee != 0u && LIGHT_SAMPLING) {
-            vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
-            float pdf;
-            vec3 wi = env_sample(u, params.env_size, pdf);
-            vec3 wi_local;
-            if (pdf > 0.0 && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, false, wi, wi_local)) {
-                vec3 f = bsdf_eval(s, wo_local, wi_local);
-                float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
-                vec3 le = env_radiance(wi, params.env_size) * params.env;
-                vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
-                radiance += c;
-                nonfinite |= nonfinite_bit(c, NONFINITE_ENV_NEE);
-            }
-        }
-
-        // Continue the path by sampling the BSDF.
-        vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_BSDF), seed);
-        vec3 wi_local;
-        vec3 weight;
-        float pdf;
-        if (!bsdf_sample(s, wo_local, u.xyz, wi_local, weight, pdf)) {
-            break;
-        }
-        vec3 wi = wi_local.x * t + wi_local.y * b + wi_local.z * n;
-        bool transmitted = wi_local.z < 0.0;
-        float side = dot(wi, ng);
-        if (transmitted ? side >= 0.0 : side <= 0.0) {
-            break;  // the shading normal and the geometry disagree about the side
-        }
-        nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
-        throughput *= weight;
-        // Light sampling covers both sides of a transmitting surface, so an emitter or the
-        // environment reached either way is weighed by MIS against it.
-        prev_pdf = pdf;
-        if (depth + 1u >= rr_depth) {
-            float q = clamp(max3(throughput), 0.05, 1.0);
-            if (u.w >= q) {
-                break;
-            }
-            throughput /= q;
-        }
-        origin = offset_ray(p, transmitted ? -ng : ng);
-        dir = wi;
+        path = camera_path(pixel, first + j);
     }
 
-    if (any(isnan(radiance)) || any(isinf(radiance))) {
-        atomicAdd(stats.nonfinite_samples, 1u);
-        atomicOr(stats.nonfinite_sources, nonfinite);
-        radiance = vec3(0.0);
-    }
-    float n_samples = float(sample_index + 1u);
-    vec4 mean = sample_index == 0u ? vec4(0.0) : accum[index];
-    vec4 m2 = sample_index == 0u ? vec4(0.0) : moment[index];
-    accum[index] = vec4(mean.rgb + (radiance - mean.rgb) / n_samples, n_samples);
-    moment[index] = vec4(m2.rgb + (radiance * radiance - m2.rgb) / n_samples, 0.0);
-    if (sample_index == 0u) {
+    // The running mean and mean square over all samples so far.
+    float n_samples = float(first + count);
+    vec4 mean = first == 0u ? vec4(0.0) : accum[index];
+    vec4 m2 = first == 0u ? vec4(0.0) : moment[index];
+    accum[index] = vec4(mean.rgb + (sum - float(count) * mean.rgb) / n_samples, n_samples);
+    moment[index] = vec4(m2.rgb + (sum2 - float(count) * m2.rgb) / n_samples, 0.0);
+    if (first == 0u) {
         aov_albedo[index] = albedo;
         aov_normal_depth[index] = normal_depth;
+    }
+    return segments;
+}
+
+shared uint group_segments;
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) {
+        group_segments = 0u;
+    }
+    barrier();
+    uvec2 pixel = tile_pixel();
+    if (all(lessThan(pixel, params.size))) {
+        atomicAdd(group_segments, trace_pixel(pixel));
+    }
+    // One global atomic per workgroup: the segment count, 64 bits as two words (an add that
+    // wraps the low word carries one into the high word).
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        uint n = group_segments;
+        uint old = atomicAdd(stats.segments_lo, n);
+        if (old + n < old) {
+            atomicAdd(stats.segments_hi, 1u);
+        }
     }
 }

@@ -419,13 +419,15 @@ fn render(args: RenderArgs) -> Result<()> {
     bar.finish_and_clear();
     let pixels = (settings.size.0 * settings.size.1) as f64 * image.spp as f64;
     println!(
-        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s), estimated relative error {:.4}",
+        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s, {:.2} segments per sample), \
+         estimated relative error {:.4}",
         image.spp,
         settings.size.0,
         settings.size.1,
         start.elapsed().as_secs_f64(),
         image.gpu_ms,
         pixels / (image.gpu_ms * 1e3),
+        image.segments as f64 / pixels,
         image.relative_error()
     );
     if image.nonfinite_samples > 0 {

@@ -51,6 +51,9 @@ pub struct PathImage {
     pub nonfinite_sources: u32,
     /// GPU time of all the path-tracing dispatches, in milliseconds.
     pub gpu_ms: f64,
+    /// Path segments traced (closest-hit rays: camera rays and their continuations), over all
+    /// samples.
+    pub segments: u64,
 }
 
 impl PathImage {
@@ -622,11 +625,9 @@ impl Passes {
         }
         let pass = self.path_pass(scene, settings.options())?;
         let mut params = PathTracePass::params(scene, camera, settings);
-        for sample in first..first + count {
-            params.sample_index = sample;
-            pass.record(&self.ctx, cmd, scene, target, &params)?;
-        }
-        Ok(())
+        params.sample_index = first;
+        params.sample_count = count;
+        pass.record(&self.ctx, cmd, scene, target, &params)
     }
 
     /// Records the copy of `target`'s running mean into `output` (`R32G32B32A32_SFLOAT`, the
@@ -693,6 +694,7 @@ impl Passes {
             nonfinite_samples: stats[0].nonfinite_samples,
             nonfinite_sources: stats[0].nonfinite_sources,
             gpu_ms,
+            segments: stats[0].segments(),
         })
     }
 

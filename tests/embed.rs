@@ -113,8 +113,10 @@ fn update_scene_equals_a_fresh_renderer() {
 }
 
 /// Progressive path tracing through the embedding API — samples recorded in two batches into
-/// the caller's command buffers and resolved into the caller's image — gives exactly the running
-/// mean `render::path_trace` computes with the same settings.
+/// the caller's command buffers and resolved into the caller's image — gives the running mean
+/// `render::path_trace` computes with the same settings: the same samples, merged into the mean
+/// in two dispatches (2, then 4 samples) instead of one, so equal up to float rounding (a few ulps of the
+/// largest value; a wrong sample or a sample counted twice moves a pixel by far more).
 #[test]
 fn embedded_path_tracing_equals_render_path_trace() {
     use umbra::embed::Renderer;
@@ -142,7 +144,17 @@ fn embedded_path_tracing_equals_render_path_trace() {
     let embedded: Vec<[f32; 4]> = output.read(&gpu).unwrap();
     let reference = path_trace(&gpu, renderer.scene(), &camera, &settings, |_, _| {}).unwrap();
     assert!(embedded.iter().any(|p| p[0] > 0.0), "the resolved image is black");
-    assert!(embedded == reference.mean, "embedded samples differ from render::path_trace");
+    let scale = embedded.iter().flat_map(|p| p[..3].iter()).fold(0.0f32, |m, v| m.max(v.abs()));
+    let worst = embedded
+        .iter()
+        .zip(&reference.mean)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst <= 8.0 * f32::EPSILON * scale,
+        "embedded samples differ from render::path_trace by {worst}"
+    );
+    assert!(embedded.iter().zip(&reference.mean).all(|(a, b)| a[3] == b[3]), "sample counts differ");
 
     let wrong = PathSettings { size: (16, 16), ..settings };
     let err =

@@ -278,7 +278,7 @@ gpu_structs! {
         env_nee: uint,
         /// Image width and height.
         size: uvec2,
-        /// The sample index (one sample per pixel per dispatch).
+        /// The first sample of this dispatch.
         sample_index: uint,
         /// Seed of the random numbers.
         seed: uint,
@@ -292,8 +292,8 @@ gpu_structs! {
         punctual_count: uint,
         /// Environment map width and height.
         env_size: uvec2,
-        /// Padding.
-        pad0: uint,
+        /// Samples per pixel in this dispatch (`sample_index ..`), at least 1.
+        sample_count: uint,
         /// Padding.
         pad1: uint,
     }
@@ -304,10 +304,11 @@ gpu_structs! {
         nonfinite_samples: uint,
         /// Where they arose: bits of [`NONFINITE_SOURCES`].
         nonfinite_sources: uint,
-        /// Padding.
-        pad1: uint,
-        /// Padding.
-        pad2: uint,
+        /// Path segments traced (closest-hit rays: camera rays and continuations), modulo 2^32;
+        /// with `segments_hi`, a 64-bit count.
+        segments_lo: uint,
+        /// The count's high word (the carries out of `segments_lo`).
+        segments_hi: uint,
     }
 
     /// Push constants of `gbuffer.comp`.

@@ -484,3 +484,10 @@ impl GpuCamera {
         }
     }
 }
+
+impl PathStats {
+    /// The path segments counted, both words joined.
+    pub fn segments(&self) -> u64 {
+        (self.segments_hi as u64) << 32 | self.segments_lo as u64
+    }
+}

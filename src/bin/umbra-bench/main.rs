@@ -2,7 +2,8 @@
 //! to a converged reference; `rays` is the ray-throughput mode (BVH build statistics and Mrays/s
 //! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass;
 //! `build` times the BVH build alone (CPU only, no Vulkan); `shadows` compares shadow maps with
-//! shadow rays; `mis` the path tracer's estimators against Mitsuba references.
+//! shadow rays; `mis` the path tracer's estimators against Mitsuba references; `paths` the path
+//! tracer's throughput on a set of scenes.
 
 mod chart;
 // Shared with `umbra`, which uses parsers this binary does not.
@@ -11,6 +12,7 @@ mod chart;
 mod cli;
 mod mis;
 mod passes;
+mod paths;
 mod probes;
 mod rays;
 mod shadows;
@@ -205,6 +207,45 @@ enum Command {
         #[arg(long, default_value_t = 8)]
         seeds: u32,
         /// Where to write mis.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
+    /// The path tracer's throughput on a set of scenes: Msamples/s and path segments per second,
+    /// median of timed submissions after a warm-up, and each scene's ratio to the median of the
+    /// set (JSON and a Markdown table).
+    Paths {
+        /// glTF scenes; when none are given, the embedded Cornell box, scenes/*.glb and one .glb
+        /// of each model under --assets.
+        scenes: Vec<PathBuf>,
+        /// Sample models for the default set (each subfolder's first .glb, or its glTF-Binary's).
+        #[arg(long, default_value = "../shared/assets/gltf")]
+        assets: PathBuf,
+        /// Image size.
+        #[arg(long, default_value = "128x128", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of each timed submission.
+        #[arg(long, default_value_t = 16)]
+        spp: u32,
+        /// Timed submissions (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Scattering events per path.
+        #[arg(long, default_value_t = 8)]
+        max_bounces: u32,
+        /// Russian roulette from this many scattering events (`umbra render`'s default).
+        #[arg(long, default_value_t = 3)]
+        rr_depth: u32,
+        /// Constant environment radiance r,g,b around every scene (so scenes without lights are
+        /// lit), or the --env map's multiplier.
+        #[arg(long, value_parser = cli::parse_rgb, default_value = "0.5,0.5,0.5")]
+        env_color: [f32; 3],
+        /// An environment map (EXR or Radiance HDR) lighting every scene, importance-sampled.
+        #[arg(long)]
+        env: Option<PathBuf>,
+        /// Where to write paths.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
         /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
@@ -436,6 +477,39 @@ fn run(cli: Cli) -> Result<()> {
                     out,
                 };
                 run_probes(&settings, &sponza, &gltf, &lightmap_sizes)?
+            }
+        },
+        Command::Paths {
+            scenes,
+            assets,
+            size,
+            spp,
+            repeats,
+            max_bounces,
+            rr_depth,
+            env_color,
+            env,
+            out,
+            table,
+        } => match table {
+            Some(path) => print!("{}", paths::table(&read_json(&path)?)),
+            None => {
+                let ctx = Context::new(&ContextDesc::default())?;
+                let settings = paths::PathsSettings {
+                    size,
+                    spp,
+                    repeats,
+                    max_bounces,
+                    rr_depth,
+                    env: env_color,
+                    env_map: env,
+                };
+                let scenes =
+                    if scenes.is_empty() { default_path_scenes(&assets)? } else { load_gltf(&scenes)? };
+                let rows = paths::run(&ctx, &scenes, &settings)?;
+                let doc = paths::to_json(&ctx.info().name, &settings, &rows);
+                print!("{}", paths::table(&doc));
+                write_json(&out, "paths.json", &doc)?;
             }
         },
         Command::Mis { references, reference_dir, spp, seeds, out, table } => match table {
@@ -796,6 +870,43 @@ fn load_gltf(gltf: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
             Ok((key, umbra::scene::Scene::load(path)?))
         })
         .collect()
+}
+
+/// `umbra-bench paths`'s default set: the embedded Cornell box, the repository's scenes/*.glb
+/// and one .glb of each model folder under `assets` (skipped with a warning when absent), by name.
+fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::scene::Scene)>> {
+    let glb_in = |dir: &std::path::Path| -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+            .collect();
+        files.sort();
+        files
+    };
+    let mut files = glb_in(std::path::Path::new("scenes"));
+    match std::fs::read_dir(assets) {
+        Ok(entries) => {
+            let mut models: Vec<PathBuf> =
+                entries.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect();
+            models.sort();
+            for model in models {
+                let mut found = glb_in(&model);
+                found.extend(glb_in(&model.join("glTF-Binary")));
+                files.extend(found.into_iter().next());
+            }
+        }
+        Err(e) => log::warn!("{}: {e}; the sample models are left out", assets.display()),
+    }
+    let mut scenes = vec![("cornell-box (embedded)".to_string(), umbra::scene::Scene::cornell_box())];
+    for path in files {
+        let name =
+            path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+        scenes.push((name, umbra::scene::Scene::load(&path)?));
+    }
+    Ok(scenes)
 }
 
 fn read_json(path: &std::path::Path) -> Result<serde_json::Value> {

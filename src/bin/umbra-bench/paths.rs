@@ -1,0 +1,164 @@
+//! The path tracer's throughput on a set of scenes (`umbra-bench paths`): samples and path
+//! segments (closest-hit rays) per second, each the median of timed submissions after a warm-up,
+//! and each scene's ratio to the set's median (issue 25 asks that no scene fall more than 4×
+//! below it).
+
+use anyhow::Result;
+use serde_json::{json, Value};
+use std::path::PathBuf;
+use umbra::environment::EnvironmentMap;
+use umbra::gpu::layout::PathStats;
+use umbra::gpu::scene::GpuScene;
+use umbra::passes::pathtrace::PathTarget;
+use umbra::render::{Passes, PathSettings};
+use umbra::scene::Scene;
+use umbra::vk::{Context, GpuTimer};
+
+/// What every scene is rendered with.
+pub struct PathsSettings {
+    /// Image size.
+    pub size: (u32, u32),
+    /// Samples per pixel of each timed submission.
+    pub spp: u32,
+    /// Timed submissions (after the warm-up).
+    pub repeats: usize,
+    /// Scattering events per path.
+    pub max_bounces: u32,
+    /// Russian roulette from this many scattering events.
+    pub rr_depth: u32,
+    /// Constant environment radiance (or the map's multiplier).
+    pub env: [f32; 3],
+    /// An environment map lighting every scene.
+    pub env_map: Option<PathBuf>,
+}
+
+/// One scene's throughput.
+pub struct PathRow {
+    /// The scene's file name.
+    pub scene: String,
+    /// Triangles in its BVH.
+    pub triangles: usize,
+    /// Median GPU milliseconds of one timed submission.
+    pub median_ms: f64,
+    /// Path segments traced per sample (over the warm-up and the timed submissions).
+    pub segments_per_sample: f64,
+}
+
+/// Times `settings.spp` samples per pixel of each scene, `settings.repeats` times after a
+/// warm-up, with the same camera rule as the other benchmarks.
+pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) -> Result<Vec<PathRow>> {
+    let env_map = settings.env_map.as_deref().map(EnvironmentMap::load).transpose()?;
+    let mut rows = Vec::new();
+    for (name, scene) in scenes {
+        log::info!("{name}: path tracing");
+        let mut gpu_scene = GpuScene::upload(ctx, scene)?;
+        if let Some(map) = &env_map {
+            gpu_scene.set_environment(ctx, map)?;
+        }
+        let camera = super::bench_camera(scene);
+        let passes = Passes::new(ctx, &gpu_scene);
+        let target = PathTarget::new(ctx, settings.size)?;
+        let path = PathSettings {
+            size: settings.size,
+            spp: settings.spp,
+            max_bounces: settings.max_bounces,
+            rr_depth: settings.rr_depth,
+            env: settings.env,
+            ..PathSettings::default()
+        };
+        let spp = settings.spp;
+        let mut submitted = 0u32;
+        super::rays::warm_up(|| {
+            submitted += spp;
+            ctx.submit(|cmd| {
+                passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted - spp, spp)
+            })
+        })?;
+        let mut timer = GpuTimer::new(ctx, 1)?;
+        let mut ms = Vec::new();
+        for _ in 0..settings.repeats.max(1) {
+            ctx.submit(|cmd| {
+                timer.reset(cmd);
+                timer.begin(cmd, "pathtrace")?;
+                passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted, spp)?;
+                timer.end(cmd)
+            })?;
+            submitted += spp;
+            ms.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
+        }
+        let stats: Vec<PathStats> = target.stats.read(ctx)?;
+        let samples = settings.size.0 as f64 * settings.size.1 as f64 * submitted as f64;
+        rows.push(PathRow {
+            scene: name.clone(),
+            triangles: gpu_scene.bvh_stats.triangles,
+            median_ms: super::rays::median(&mut ms),
+            segments_per_sample: stats[0].segments() as f64 / samples,
+        });
+    }
+    Ok(rows)
+}
+
+/// The run as JSON: settings, then per scene its time, samples and segments per second.
+pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Value {
+    let samples = settings.size.0 as f64 * settings.size.1 as f64 * settings.spp as f64;
+    json!({
+        "device": device,
+        "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
+        "size": [settings.size.0, settings.size.1],
+        "spp": settings.spp,
+        "repeats": settings.repeats,
+        "max_bounces": settings.max_bounces,
+        "rr_depth": settings.rr_depth,
+        "env": settings.env,
+        "env_map": settings.env_map.as_ref().map(|p| p.display().to_string()),
+        "scenes": rows.iter().map(|r| json!({
+            "scene": r.scene,
+            "triangles": r.triangles,
+            "median_ms": r.median_ms,
+            "msamples_per_s": samples / (r.median_ms * 1e3),
+            "segments_per_sample": r.segments_per_sample,
+            "msegments_per_s": samples * r.segments_per_sample / (r.median_ms * 1e3),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The Markdown table of a run's JSON (what BENCHMARKS.md shows): each scene's throughput and
+/// its ratio to the median of the set.
+pub fn table(doc: &Value) -> String {
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    let scenes = doc["scenes"].as_array().cloned().unwrap_or_default();
+    let mut rates: Vec<f64> = scenes.iter().map(|s| num(&s["msamples_per_s"])).collect();
+    let median = super::rays::median(&mut rates);
+    let env = match doc["env_map"].as_str() {
+        Some(map) => format!("environment map {map}"),
+        None => format!("constant environment {}", doc["env"]),
+    };
+    let mut out = format!(
+        "{}×{}, {} spp per timed submission (median of {}), {} bounces, Russian roulette from {}, {env}; \
+         {} (LP_NUM_THREADS {}):\n\n\
+         | scene | triangles | ms | Msamples/s | ÷ median | segments per sample | Msegments/s |\n\
+         |---|---:|---:|---:|---:|---:|---:|\n",
+        doc["size"][0],
+        doc["size"][1],
+        doc["spp"],
+        doc["repeats"],
+        doc["max_bounces"],
+        doc["rr_depth"],
+        doc["device"].as_str().unwrap_or("?"),
+        doc["lp_num_threads"].as_str().unwrap_or("unset"),
+    );
+    for s in &scenes {
+        out += &format!(
+            "| {} | {} | {:.1} | {:.3} | {:.2} | {:.2} | {:.2} |\n",
+            s["scene"].as_str().unwrap_or("?"),
+            s["triangles"],
+            num(&s["median_ms"]),
+            num(&s["msamples_per_s"]),
+            num(&s["msamples_per_s"]) / median,
+            num(&s["segments_per_sample"]),
+            num(&s["msegments_per_s"]),
+        );
+    }
+    out += &format!("\nMedian of the set: {median:.3} Msamples/s.\n");
+    out
+}

@@ -942,6 +942,132 @@ fn alpha_mask_and_blend() {
     assert!(diff(&alone, &behind_opaque) > 0.01, "the opaque occluder should shadow (a test of the test)");
 }
 
+/// Alpha tests run after the traversal's walk, which restarts behind a cut-out hit
+/// (bvh.glsl's bvh_trace): layers of masked-away quads in front of an opaque one leave the
+/// opaque one seen, in the path tracer and in the G-buffer (its depth); a masked-away quad
+/// nearer a shaded floor than an opaque occluder, so that a shadow ray's walk ends on the masked
+/// candidate and has culled the occluder behind it, still leaves the floor in the occluder's
+/// shadow: the images with and without the masked quad are equal, in the path tracer and in the
+/// hybrid's ray-traced shadows. (Before each check, a test of the test: the masked quads at an
+/// alpha above the cutoff do change the image.)
+#[test]
+fn alpha_tests_restart_the_walk_behind_cut_out_hits() {
+    use umbra::scene::AlphaMode;
+    let gpu = Gpu::new();
+    let material = |grey: f32, alpha: f32, mode: AlphaMode| Material {
+        metallic: 0.0,
+        specular_factor: 0.0,
+        base_color_factor: [grey, grey, grey, alpha],
+        alpha_mode: mode,
+        alpha_cutoff: 0.5,
+        ..Default::default()
+    };
+    let at_z = |z: f32| {
+        let q = facing_quad();
+        Mesh {
+            positions: q.positions.iter().map(|p| *p + Vec3::new(0.0, 0.0, z)).collect(),
+            triangles: q.triangles,
+        }
+    };
+    let (front, middle, back) = (at_z(0.5), at_z(0.25), at_z(0.0));
+    let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 30.0);
+    let settings =
+        PathSettings { size: (16, 16), spp: 16, env: [1.0; 3], max_bounces: 1, ..Default::default() };
+    let layers = |alpha: f32| {
+        scene_of(
+            &[
+                (&front, material(0.9, alpha, AlphaMode::Mask), false),
+                (&middle, material(0.6, alpha, AlphaMode::Blend), false),
+                (&back, material(0.2, 1.0, AlphaMode::Opaque), false),
+            ],
+            cam,
+        )
+    };
+    let seen = render(&gpu, &layers(0.0), &settings);
+    assert!(
+        seen.mean.iter().take(16 * 16).all(|p| (p[1] - 0.2).abs() < 1e-3 || (p[1] - 1.0).abs() < 1e-5),
+        "every pixel shows the opaque quad (0.2) or the sky (1)"
+    );
+    assert!((seen.mean[8 * 16 + 8][1] - 0.2).abs() < 1e-3, "the centre shows the opaque quad");
+    let covered = render(&gpu, &layers(1.0), &settings);
+    assert!(
+        (covered.mean[8 * 16 + 8][1] - 0.9).abs() < 1e-3,
+        "a test of the test: the kept front quad is seen"
+    );
+    for (alpha, depth) in [(0.0, 2.0), (1.0, 1.5)] {
+        let device_scene = GpuScene::upload(&gpu, &layers(alpha)).unwrap();
+        let hybrid_settings = umbra::render::HybridSettings { size: (16, 16), ..Default::default() };
+        let image = umbra::render::hybrid(&gpu, &device_scene, &cam, &hybrid_settings).unwrap();
+        let d = image.gbuffer.depth[8 * 16 + 8];
+        assert!(
+            (d - depth).abs() < 1e-4,
+            "G-buffer depth with the masks at alpha {alpha}: {d}, expected {depth}"
+        );
+    }
+
+    // Shadows: a point light above a floor, an opaque occluder at y = 0.5 and a masked quad
+    // below it at y = 0.25 (nearer the floor: a shadow ray meets it first).
+    let floor = floor_quad(2.0);
+    let plate = |y: f32, scale: f32| Mesh {
+        positions: floor.positions.iter().map(|p| *p * scale + Vec3::new(0.0, y, 0.0)).collect(),
+        triangles: floor.triangles.clone(),
+    };
+    let (occluder, low) = (plate(0.5, 0.25), plate(0.25, 0.5));
+    let top = camera(Vec3::new(1.9, 0.2, 1.9), Vec3::ZERO, 50.0);
+    let white = material(1.0, 1.0, AlphaMode::Opaque);
+    let light = umbra::scene::Light {
+        name: "bulb".into(),
+        kind: umbra::scene::LightKind::Point,
+        position: [0.0, 1.0, 0.0],
+        direction: [0.0, -1.0, 0.0],
+        color: [1.0; 3],
+        intensity: 2.0,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: std::f32::consts::FRAC_PI_4,
+    };
+    let lit = |low_alpha: Option<f32>| {
+        let mut parts =
+            vec![(&floor, white.clone(), false), (&occluder, material(0.5, 1.0, AlphaMode::Opaque), false)];
+        if let Some(alpha) = low_alpha {
+            parts.push((&low, material(0.5, alpha, AlphaMode::Mask), false));
+        }
+        let mut scene = scene_of(&parts, top);
+        scene.lights.push(light.clone());
+        let settings =
+            PathSettings { size: (24, 24), spp: 4, env: [0.0; 3], max_bounces: 1, ..Default::default() };
+        let path = render(&gpu, &scene, &settings).mean;
+        let device_scene = GpuScene::upload(&gpu, &scene).unwrap();
+        let hybrid_settings = umbra::render::HybridSettings { size: (24, 24), ..Default::default() };
+        let hybrid = umbra::render::hybrid(&gpu, &device_scene, &top, &hybrid_settings).unwrap().color;
+        (path, hybrid)
+    };
+    let diff = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+        a.iter().zip(b).map(|(p, q)| (p[1] - q[1]).abs()).fold(0.0f32, f32::max)
+    };
+    let (path_alone, hybrid_alone) = lit(None);
+    let (path_masked, hybrid_masked) = lit(Some(0.0));
+    let (path_kept, hybrid_kept) = lit(Some(1.0));
+    assert!(
+        diff(&path_alone, &path_kept) > 0.01,
+        "a test of the test: the kept low quad changes the path-traced image"
+    );
+    assert!(
+        diff(&hybrid_alone, &hybrid_kept) > 0.01,
+        "a test of the test: the kept low quad changes the hybrid image"
+    );
+    assert!(
+        diff(&path_alone, &path_masked) < 1e-4,
+        "path tracer: the masked-away quad changes the shadow: {}",
+        diff(&path_alone, &path_masked)
+    );
+    assert!(
+        diff(&hybrid_alone, &hybrid_masked) < 1e-4,
+        "hybrid: the masked-away quad changes the shadow: {}",
+        diff(&hybrid_alone, &hybrid_masked)
+    );
+}
+
 /// A point light behind rough thin glass shines through it: next-event estimation covers the
 /// side below a transmitting surface (a delta light has no other strategy; before, the sheet
 /// stayed black). A point light of intensity 1 one unit below a rough (α = 0.25) thin sheet,

@@ -85,13 +85,17 @@ float bvh_next_up(float x) {
     return x > 0.0 ? uintBitsToFloat(bits + 1u) : (x == 0.0 ? uintBitsToFloat(1u) : uintBitsToFloat(bits - 1u));
 }
 
-// Watertight test against triangle i: true with t in (tmin, tmax), the barycentrics, and the
-// triangle's index in the input (`order`, which breaks ties between equally near hits).
-bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary, out uint order) {
+// Watertight test against triangle i: true with t in (tmin, tmax), the barycentrics, the
+// triangle's index in the input (`order`, which breaks ties between equally near hits) and its
+// alpha-mode bits (`alpha`: 0 opaque, 1 mask, 2 blend).
+bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary, out uint order,
+                   out uint alpha) {
     vec4 v0 = bvh_tri_v(i, 0u);
+    vec4 v1 = bvh_tri_v(i, 1u);
     order = floatBitsToUint(v0.w);
+    alpha = floatBitsToUint(v1.w);
     precise vec3 a = v0.xyz - r.origin;
-    precise vec3 b = bvh_tri_v(i, 1u).xyz - r.origin;
+    precise vec3 b = v1.xyz - r.origin;
     precise vec3 c = bvh_tri_v(i, 2u).xyz - r.origin;
     precise float ax = a[r.kx] - r.shear.x * a[r.kz];
     precise float ay = a[r.ky] - r.shear.y * a[r.kz];
@@ -268,7 +272,8 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
         }                                                                                        \
     }
 
-// Front-to-back traversal with t in (tmin, tmax); any_hit stops at the first hit found. The
+// Front-to-back walk with t in (tmin, tmax); any_hit stops at the first hit found on an opaque
+// triangle (alpha-tested ones are kept as the nearest candidate instead, see bvh_trace). The
 // closest hit is the nearest, and of equally near ones (a ray through a shared edge) the one
 // first in the input, so the answer does not depend on the order of the walk (the BVH's layout,
 // its width, the CPU or the GPU): the brute-force reference keeps the lowest index too.
@@ -279,7 +284,7 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
 // visit's culling does not see the first's triangles yet, which costs a few extra visits and
 // never a wrong answer. Everything per child is written out for constant child indices
 // (registers, not memory).
-bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
+bool bvh_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
     hit = Hit(tmax, 0xffffffffu, vec2(0.0));
     BvhRay r = bvh_ray(origin, dir);
     uint stack[BVH_MAX_DEPTH];
@@ -308,19 +313,15 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
             float t;
             vec2 bary;
             uint order;
+            uint alpha;
             // After a hit, one equally near with a lower input index replaces it.
             float limit = found ? bvh_next_up(tmax) : tmax;
-            if (bvh_intersect(r, i, tmin, limit, t, bary, order) && (t < tmax || order < hit_order)) {
-#ifdef UMBRA_ALPHA_TEST
-                if (HAS_ALPHA && floatBitsToUint(bvh_tri_v(i, 1u).w) != 0u && !bvh_alpha_opaque(i, bary, origin, dir)) {
-                    continue;
-                }
-#endif
+            if (bvh_intersect(r, i, tmin, limit, t, bary, order, alpha) && (t < tmax || order < hit_order)) {
                 found = true;
                 tmax = t;
                 hit_order = order;
                 hit = Hit(t, i, bary);
-                if (any_hit) {
+                if (any_hit && alpha == 0u) {
                     return true;
                 }
             }
@@ -330,6 +331,33 @@ bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out 
         }
     }
     return found;
+}
+
+// The walk, and where the scene has alpha-tested triangles (UMBRA_ALPHA_TEST and HAS_ALPHA),
+// their alpha test: a walk that ends on a hit the test cuts out walks again from just behind it
+// (tmin = its t), until it ends on a surface or finds none. The test (a material read, a
+// texture's bilinear lookup) thus runs once per walk, not inside the walk's triangle loop: a
+// SIMD CPU (llvmpipe) runs every `if` body for all lanes, so there it cost every triangle test
+// the lookup (TransmissionTest's masks made it 3.5x slower; BENCHMARKS.md). An any-hit walk
+// stops at the first opaque triangle and otherwise keeps the nearest alpha-tested candidate, so
+// no opaque occluder before that candidate is skipped. The same hit as one walk testing alpha
+// per triangle, but for triangles exactly as near as a cut-out one, which the next walk (t >
+// tmin strictly) skips.
+bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
+#ifdef UMBRA_ALPHA_TEST
+    if (HAS_ALPHA) {
+        while (true) {
+            if (!bvh_walk(origin, dir, tmin, tmax, any_hit, hit)) {
+                return false;
+            }
+            if (floatBitsToUint(bvh_tri_v(hit.tri, 1u).w) == 0u || bvh_alpha_opaque(hit.tri, hit.bary, origin, dir)) {
+                return true;
+            }
+            tmin = hit.t;
+        }
+    }
+#endif
+    return bvh_walk(origin, dir, tmin, tmax, any_hit, hit);
 }
 
 // Nearest hit with t in (tmin, tmax).

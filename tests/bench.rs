@@ -117,6 +117,7 @@ fn generated_tables_match_their_json() {
         ["shadows", "--table", "docs/bench/shadows-spheres.json"],
         ["mis", "--table", "docs/bench/mis.json"],
         ["probes", "--table", "docs/bench/probes.json"],
+        ["paths", "--table", "docs/bench/paths.json"],
     ] {
         let out =
             Command::new(env!("CARGO_BIN_EXE_umbra-bench")).current_dir(root).args(args).output().unwrap();
@@ -136,4 +137,41 @@ fn generated_tables_match_their_json() {
             block.join("\n")
         );
     }
+}
+
+/// `umbra-bench paths` on two small scenes writes JSON that parses: positive rates, at least one
+/// path segment per sample (the camera ray), at most max_bounces + 1, and the table prints it.
+#[test]
+fn paths_writes_json_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-paths-{}", std::process::id()));
+    run_validated(
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["paths", "scenes/textured.glb", "scenes/cornell-box.glb"])
+            .args(["--size", "16x16", "--spp", "2", "--repeats", "1", "--max-bounces", "4", "--out"])
+            .arg(&dir),
+    );
+    let path = dir.join("paths.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("paths.json written")).expect("parses");
+    let scenes = json["scenes"].as_array().unwrap();
+    assert_eq!(scenes.len(), 2);
+    for s in scenes {
+        assert!(s["msamples_per_s"].as_f64().unwrap() > 0.0, "{s}");
+        let segments = s["segments_per_sample"].as_f64().unwrap();
+        assert!(
+            (1.0..=5.0).contains(&segments),
+            "segments per sample {segments} outside [1, max_bounces + 1]"
+        );
+    }
+    // The closed box keeps paths longer than the open textured plane's.
+    assert!(scenes[1]["segments_per_sample"].as_f64() > scenes[0]["segments_per_sample"].as_f64());
+    let output = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["paths", "--table"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&output.stdout);
+    assert!(table.contains("| textured |") && table.contains("| cornell-box |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
 }

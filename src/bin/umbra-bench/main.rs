@@ -217,10 +217,11 @@ enum Command {
     /// median of timed submissions after a warm-up, and each scene's ratio to the median of the
     /// set (JSON and a Markdown table).
     Paths {
-        /// glTF scenes; when none are given, the embedded Cornell box, scenes/*.glb and one .glb
-        /// of each model under --assets.
+        /// glTF scenes; when none are given, the embedded Cornell box, scenes/*.glb and one glTF
+        /// file of each model under --assets.
         scenes: Vec<PathBuf>,
-        /// Sample models for the default set (each subfolder's first .glb, or its glTF-Binary's).
+        /// Sample models for the default set (of each subfolder its .glb, glTF-Binary/*.glb,
+        /// .gltf or glTF/*.gltf, the first found).
         #[arg(long, default_value = "../shared/assets/gltf")]
         assets: PathBuf,
         /// Image size.
@@ -873,38 +874,47 @@ fn load_gltf(gltf: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
 }
 
 /// `umbra-bench paths`'s default set: the embedded Cornell box, the repository's scenes/*.glb
-/// and one .glb of each model folder under `assets` (skipped with a warning when absent), by name.
+/// and one file of each model folder under `assets` (skipped with a warning when absent): its
+/// first .glb, else its glTF-Binary's, else its first .gltf, else its glTF folder's.
 fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::scene::Scene)>> {
-    let glb_in = |dir: &std::path::Path| -> Vec<PathBuf> {
+    let files_in = |dir: &std::path::Path, ext: &str| -> Vec<PathBuf> {
         let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
             .into_iter()
             .flatten()
             .flatten()
             .map(|e| e.path())
-            .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+            .filter(|p| p.extension().is_some_and(|e| e == ext))
             .collect();
         files.sort();
         files
     };
-    let mut files = glb_in(std::path::Path::new("scenes"));
+    let mut files = files_in(std::path::Path::new("scenes"), "glb");
     match std::fs::read_dir(assets) {
         Ok(entries) => {
             let mut models: Vec<PathBuf> =
                 entries.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect();
             models.sort();
             for model in models {
-                let mut found = glb_in(&model);
-                found.extend(glb_in(&model.join("glTF-Binary")));
+                let mut found = files_in(&model, "glb");
+                found.extend(files_in(&model.join("glTF-Binary"), "glb"));
+                found.extend(files_in(&model, "gltf"));
+                found.extend(files_in(&model.join("glTF"), "gltf"));
                 files.extend(found.into_iter().next());
             }
         }
         Err(e) => log::warn!("{}: {e}; the sample models are left out", assets.display()),
     }
+    // Sample models whose image files are absent render with their factors alone (a warning
+    // each); one that does not load at all is left out with its error.
+    let options = umbra::scene::LoadOptions { missing_textures: umbra::scene::MissingTextures::Warn };
     let mut scenes = vec![("cornell-box (embedded)".to_string(), umbra::scene::Scene::cornell_box())];
     for path in files {
         let name =
             path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-        scenes.push((name, umbra::scene::Scene::load(&path)?));
+        match umbra::scene::Scene::load_with(&path, &options) {
+            Ok(scene) => scenes.push((name, scene)),
+            Err(e) => log::warn!("{e}; left out"),
+        }
     }
     Ok(scenes)
 }

@@ -75,6 +75,21 @@ fn facing_quad() -> Mesh {
     }
 }
 
+/// A point light of intensity 2 one unit above the origin, pointing down.
+fn bulb_above() -> umbra::scene::Light {
+    umbra::scene::Light {
+        name: "bulb".into(),
+        kind: umbra::scene::LightKind::Point,
+        position: [0.0, 1.0, 0.0],
+        direction: [0.0, -1.0, 0.0],
+        color: [1.0; 3],
+        intensity: 2.0,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: std::f32::consts::FRAC_PI_4,
+    }
+}
+
 fn camera(position: Vec3, target: Vec3, yfov_degrees: f32) -> Camera {
     Camera {
         position: position.into(),
@@ -909,17 +924,7 @@ fn alpha_mask_and_blend() {
     let top = camera(Vec3::new(1.9, 0.25, 1.9), Vec3::ZERO, 50.0);
     let white =
         Material { metallic: 0.0, specular_factor: 0.0, base_color_factor: [1.0; 4], ..Default::default() };
-    let light = umbra::scene::Light {
-        name: "bulb".into(),
-        kind: umbra::scene::LightKind::Point,
-        position: [0.0, 1.0, 0.0],
-        direction: [0.0, -1.0, 0.0],
-        color: [1.0; 3],
-        intensity: 2.0,
-        range: None,
-        inner_cone_angle: 0.0,
-        outer_cone_angle: std::f32::consts::FRAC_PI_4,
-    };
+    let light = bulb_above();
     let lit = |parts: &[(&Mesh, Material, bool)]| {
         let mut scene = scene_of(parts, top);
         scene.lights.push(light.clone());
@@ -1015,17 +1020,7 @@ fn alpha_tests_restart_the_walk_behind_cut_out_hits() {
     let (occluder, low) = (plate(0.5, 0.25), plate(0.25, 0.5));
     let top = camera(Vec3::new(1.9, 0.2, 1.9), Vec3::ZERO, 50.0);
     let white = material(1.0, 1.0, AlphaMode::Opaque);
-    let light = umbra::scene::Light {
-        name: "bulb".into(),
-        kind: umbra::scene::LightKind::Point,
-        position: [0.0, 1.0, 0.0],
-        direction: [0.0, -1.0, 0.0],
-        color: [1.0; 3],
-        intensity: 2.0,
-        range: None,
-        inner_cone_angle: 0.0,
-        outer_cone_angle: std::f32::consts::FRAC_PI_4,
-    };
+    let light = bulb_above();
     let lit = |low_alpha: Option<f32>| {
         let mut parts =
             vec![(&floor, white.clone(), false), (&occluder, material(0.5, 1.0, AlphaMode::Opaque), false)];

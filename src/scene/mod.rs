@@ -17,7 +17,11 @@
 //! - rejects a scene with no triangles left, and a node tree with a cycle or a shared node;
 //! - loads every root node when the file defines no scene at all;
 //! - generates per-vertex tangents from UV derivatives (not MikkTSpace) when a material has a
-//!   normal map and the primitive has no `TANGENT`.
+//!   normal map and the primitive has no `TANGENT`;
+//! - renders one static pose of a file that moves: nodes at their default transforms (animations
+//!   are not played), morph targets at their default weights (the node's `weights`, else the
+//!   mesh's), skins at the pose their joints' default transforms give (linear blend skinning,
+//!   the weights as given), with one warning saying so.
 //!
 //! Bad input never panics: it gives [`Error::Scene`] naming the file and the problem. The file is
 //! read with the `gltf` crate's JSON model; umbra resolves buffers (GLB `BIN` chunk, external
@@ -36,6 +40,7 @@ mod hash;
 mod load;
 mod material;
 mod ranges;
+mod skin;
 mod source;
 mod texture;
 
@@ -104,8 +109,10 @@ pub struct Scene {
     pub emissive: EmissiveTable,
     /// Every placed mesh instance, in the order its triangles appear.
     pub instances: Vec<Instance>,
-    /// What loading replaced under [`LoadOptions`] (each missing texture file once) and the
-    /// optional glTF extensions it ignored (one entry naming them all), also logged as warnings.
+    /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
+    /// optional glTF extensions it ignored (one entry naming them all) and, for a file with
+    /// animations, skins or morph targets, that one static pose is rendered (one entry); also
+    /// logged as warnings.
     pub warnings: Vec<String>,
 }
 
@@ -137,7 +144,9 @@ pub struct Instance {
     pub node: u32,
     /// The mesh's index in the file.
     pub mesh: u32,
-    /// Object-to-world matrix, column-major (`transform[column][row]`).
+    /// Object-to-world matrix, column-major (`transform[column][row]`); for a skinned mesh,
+    /// whose joints place its vertices in world space, the identity (or its
+    /// `EXT_mesh_gpu_instancing` transform).
     pub transform: [[f32; 4]; 4],
     /// The first of this instance's triangles in [`Scene::triangles`].
     pub first_triangle: u32,

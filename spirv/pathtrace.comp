@@ -153,6 +153,12 @@ void main() {
             albedo = vec4(s.base, 1.0);
             normal_depth = vec4(n, hit.t);
         }
+        // KHR_materials_unlit, modelled as an emitter of its base colour that scatters nothing:
+        // the path ends here, and no light sampling finds it (BSDF-sampled rays alone, weight 1).
+        if (HAS_UNLIT && (material_uvec(material, 4u).x & MATERIAL_UNLIT) != 0u) {
+            radiance += throughput * s.base;
+            break;
+        }
         if (depth >= max_bounces || wo_local.z <= 0.0) {
             break;
         }

@@ -1,6 +1,8 @@
 //! glTF textures as files ship them: `EXT_texture_webp` (a WebP image replacing the texture's
-//! fallback source, decoded by `image`). The scenes are generated in memory
-//! (`tests/support/generate.rs`: `webp_square`), a square filling the view of a camera 2 m away.
+//! fallback source, decoded by `image`) and emissive textures with
+//! `KHR_materials_emissive_strength`, in the hybrid and the path tracer. The scenes are generated
+//! in memory (`tests/support/generate.rs`: `webp_square`, `emissive_square`), a square filling
+//! the view of a camera 2 m away.
 
 mod common;
 #[path = "support/generate.rs"]
@@ -10,7 +12,8 @@ use common::Gpu;
 use serde_json::json;
 use umbra::color::srgb_decode;
 use umbra::gpu::scene::GpuScene;
-use umbra::render::{hybrid, HybridSettings};
+use umbra::passes::deferred::LightingSettings;
+use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
 use umbra::scene::Scene;
 use umbra::Error;
 
@@ -113,4 +116,42 @@ fn bad_webp_sources_are_clear_errors() {
         text.contains("corrupt.glb") && text.contains("image 0 (embedded): cannot decode the image"),
         "{text}"
     );
+}
+
+/// An emissive texture (2 × 2, four colours) times the emissive factor times
+/// `KHR_materials_emissive_strength` 4 on a black square seen by the camera, no light: every
+/// pixel is its texel (decoded from sRGB) × factor × strength, in the hybrid (half-float
+/// G-buffer) and the path tracer. Fails if the texture, the factor or the strength is left out,
+/// the texture is read as linear, or the texels land in the wrong quadrant.
+#[test]
+fn emissive_textures_times_factor_and_strength() {
+    let gpu = Gpu::new();
+    let texels = [255u8, 128, 0, 0, 64, 255, 200, 200, 200, 10, 250, 90];
+    let (factor, strength) = ([0.5f64, 1.0, 0.25], 4.0f64);
+    let scene =
+        Scene::from_glb_bytes("glow.glb", &generate::emissive_square(&texels, factor, strength)).unwrap();
+    let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
+    let camera = scene.camera(None).unwrap();
+    let lighting = LightingSettings { env: [0.0; 3], ..Default::default() };
+    let h = hybrid(&gpu, &gpu_scene, &camera, &HybridSettings { size: SIZE, lighting, ..Default::default() })
+        .unwrap();
+    let settings = PathSettings { size: SIZE, spp: 4, env: [0.0; 3], ..Default::default() };
+    let p = path_trace(&gpu, &gpu_scene, &camera, &settings, |_, _| {}).unwrap();
+    let (mut checked, mut worst_hybrid, mut worst_path) = (0, 0.0f32, 0.0f32);
+    for i in 0..h.color.len() {
+        let Some(q) = quadrant(i) else { continue };
+        for c in 0..3 {
+            let expected = srgb_decode(f32::from(texels[3 * q + c]) / 255.0) * (factor[c] * strength) as f32;
+            let off = |x: f32| (x - expected).abs() / expected.max(0.05);
+            worst_hybrid = worst_hybrid.max(off(h.color[i][c]));
+            worst_path = worst_path.max(off(p.mean[i][c]));
+        }
+        checked += 1;
+    }
+    eprintln!(
+        "{checked} pixels: hybrid within {worst_hybrid:.2e}, path traced within {worst_path:.2e} (relative)"
+    );
+    assert!(checked > 50);
+    assert!(worst_hybrid < 2e-3, "hybrid off by {worst_hybrid}");
+    assert!(worst_path < 1e-4, "path tracer off by {worst_path}");
 }

@@ -257,6 +257,28 @@ fn square_in_view(g: &mut Gltf, material: usize) -> Vec<usize> {
     ]
 }
 
+/// A black square filling the view (`square_in_view`; tests/gltf_textures.rs) that emits its
+/// 2 × 2 emissive texture (RGB `texels`, rows from the top, nearest filtering) × `factor` ×
+/// `KHR_materials_emissive_strength` `strength`; no light.
+pub fn emissive_square(texels: &[u8], factor: [f64; 3], strength: f64) -> Vec<u8> {
+    let mut g = Gltf::new();
+    let nearest = g.push("samplers", json!({ "magFilter": 9728, "minFilter": 9728 }));
+    let image = g.png_image("emission", 2, 2, texels);
+    let texture = g.push("textures", json!({ "source": image, "sampler": nearest }));
+    let material = g.push(
+        "materials",
+        json!({
+            "name": "glow",
+            "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 },
+            "emissiveTexture": { "index": texture },
+            "emissiveFactor": factor,
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": strength } }
+        }),
+    );
+    let nodes = square_in_view(&mut g, material);
+    g.finish(nodes, &["KHR_materials_emissive_strength"])
+}
+
 /// A square filling the view (`square_in_view`; tests/gltf_textures.rs) whose base colour
 /// texture (2 × 2 RGB, rows from the top, nearest) is the lossless WebP of `webp` through
 /// `EXT_texture_webp`, with the PNG of `fallback` as its plain `source`; without a fallback the

@@ -171,6 +171,11 @@ void main() {
     vec4 base_metal = imageLoad(gb_base, pixel);
     uvec4 mat = imageLoad(gb_material, pixel);
     vec3 radiance = imageLoad(gb_emission, pixel).rgb;
+    // KHR_materials_unlit: the base colour (factor x texture x COLOR_0) as it is, no lighting.
+    if (HAS_UNLIT && (material_uvec(mat.x, 4u).x & MATERIAL_UNLIT) != 0u) {
+        imageStore(out_color, pixel, vec4(base_metal.rgb, 1.0));
+        return;
+    }
 
     vec3 n = normalize(normal_rough.xyz);
     vec3 ng = oct_decode(unpackSnorm2x16(mat.y));

@@ -163,6 +163,12 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
         albedo = vec4(s.base, 1.0);
         normal_depth = vec4(n, hit.t);
     }
+    // KHR_materials_unlit, modelled as an emitter of its base colour that scatters nothing: the
+    // path ends here, and no light sampling finds it (BSDF-sampled rays alone, weight 1).
+    if (HAS_UNLIT && (material_uvec(material, 4u).x & MATERIAL_UNLIT) != 0u) {
+        path.radiance += throughput * s.base;
+        return false;
+    }
     if (depth >= params.max_bounces || wo_local.z <= 0.0) {
         return false;
     }

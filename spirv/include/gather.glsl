@@ -5,8 +5,10 @@
 // shadow rays, plus the probe volume's irradiance at the hit through the diffuse lobe (further
 // bounces; the volume of the previous update, or none: its states all inactive). The hit's own
 // emission is left out: emitters are direct light, which the lighting pass (and the lightmaps'
-// `emitters` layer) samples itself. Transmission is not modelled: a transmissive surface
-// reflects only. A back face of a single-sided material reflects nothing and reports itself.
+// `emitters` layer) samples itself. An unlit surface (KHR_materials_unlit) brings its base
+// colour, as in the path tracer, where it is an emitter no light sampling finds. Transmission is
+// not modelled: a transmissive surface reflects only. A back face of a single-sided material
+// reflects nothing and reports itself.
 //
 // The including kernel includes random.glsl, gbuffer.glsl, environment.glsl, shading.glsl and
 // probes.glsl first.
@@ -54,6 +56,9 @@ vec3 gather_radiance(vec3 origin, vec3 dir, vec3 env, uvec2 env_size, uint light
     vec3 wo_local = vec3(dot(wo, tt), dot(wo, bt), dot(wo, n));
     Surface s = material_surface(material, uv);
     s.base *= tri_color(tri, hit.bary).rgb;
+    if (HAS_UNLIT && (material_uvec(material, 4u).x & MATERIAL_UNLIT) != 0u) {
+        return s.base;
+    }
     vec3 radiance = vec3(0.0);
     if (wo_local.z <= 0.0) {
         return radiance;

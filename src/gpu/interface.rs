@@ -37,8 +37,8 @@
 /// The scene features a kernel can be specialised on (`scene: full [...]` below): `HAS_<NAME>` in
 /// GLSL, its specialization-constant id the index here; a feature a kernel does not list is a
 /// plain `false` there.
-pub const SCENE_FEATURES: [&str; 7] =
-    ["textures", "alpha", "lights", "punctual", "env_map", "transmission", "colors"];
+pub const SCENE_FEATURES: [&str; 8] =
+    ["textures", "alpha", "lights", "punctual", "env_map", "transmission", "colors", "unlit"];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
 /// others follow in order.
@@ -661,6 +661,9 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_volume` with a thickness: transmission refracts
     /// (else it is thin-walled).
     MATERIAL_VOLUME: uint = 2;
+    /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
+    /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
+    MATERIAL_UNLIT: uint = 4;
     /// Texels of one [`GpuMaterial`] in `material_texels` (its 272 bytes).
     MATERIAL_TEXELS: uint = 17;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
@@ -772,7 +775,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -830,7 +833,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1069,7 +1072,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1091,7 +1094,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -147,6 +147,8 @@ pub struct SceneFeatures {
     pub transmission: bool,
     /// Some vertex has a `COLOR_0` other than opaque white.
     pub colors: bool,
+    /// Some material is unlit (`KHR_materials_unlit`).
+    pub unlit: bool,
 }
 
 impl SceneFeatures {
@@ -160,6 +162,7 @@ impl SceneFeatures {
             env_map: scene.env_size.is_some(),
             transmission: scene.has_transmission,
             colors: scene.has_colors,
+            unlit: scene.has_unlit,
         }
     }
 
@@ -173,6 +176,7 @@ impl SceneFeatures {
             "env_map" => self.env_map,
             "transmission" => self.transmission,
             "colors" => self.colors,
+            "unlit" => self.unlit,
             _ => return None,
         })
     }

@@ -426,6 +426,8 @@ impl GpuMaterial {
     pub const DOUBLE_SIDED: u32 = MATERIAL_DOUBLE_SIDED;
     /// [`MATERIAL_VOLUME`]: transmission refracts (`KHR_materials_volume`).
     pub const VOLUME: u32 = MATERIAL_VOLUME;
+    /// [`MATERIAL_UNLIT`]: `KHR_materials_unlit`.
+    pub const UNLIT: u32 = MATERIAL_UNLIT;
 }
 
 impl GpuTexture {

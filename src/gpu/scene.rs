@@ -57,6 +57,9 @@ pub struct GpuScene {
     /// Whether some vertex has a `COLOR_0` other than opaque white: the shading kernels read
     /// vertex colours only then.
     pub has_colors: bool,
+    /// Whether some material is unlit (`KHR_materials_unlit`): the path tracer, the lighting
+    /// pass and the probe and lightmap gathers test for it only then.
+    pub has_unlit: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// Statistics of the BVH built for the scene.
@@ -276,7 +279,10 @@ impl ShadingArrays {
                     m.occlusion_texture.as_ref(),
                 ]),
                 base_color: m.base_color_factor,
-                emissive_rough: [m.emissive[0], m.emissive[1], m.emissive[2], m.roughness],
+                emissive_rough: {
+                    let e = m.emission();
+                    [e[0], e[1], e[2], m.roughness]
+                },
                 specular: [
                     m.specular_color_factor[0],
                     m.specular_color_factor[1],
@@ -286,7 +292,8 @@ impl ShadingArrays {
                 params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
                 flags: [
                     if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
-                        | if m.volume { GpuMaterial::VOLUME } else { 0 },
+                        | if m.volume { GpuMaterial::VOLUME } else { 0 }
+                        | if m.unlit { GpuMaterial::UNLIT } else { 0 },
                     0,
                     0,
                     0,
@@ -388,6 +395,7 @@ impl GpuScene {
             has_transmission: transmits(&arrays.materials),
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
             has_colors: colored(&arrays.vertices),
+            has_unlit: unlit(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -431,6 +439,7 @@ impl GpuScene {
         self.texture_count = arrays.textures.len() as u32;
         self.has_transmission = transmits(&arrays.materials);
         self.has_colors = colored(&arrays.vertices);
+        self.has_unlit = unlit(&arrays.materials);
         Ok(())
     }
 }
@@ -471,6 +480,10 @@ fn alpha_modes(scene: &Scene, prim_order: &[u32]) -> Vec<u32> {
 
 fn transmits(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.params[2] > 0.0)
+}
+
+fn unlit(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.flags[0] & GpuMaterial::UNLIT != 0)
 }
 
 /// The scene's punctual lights with their selection table: by power (KHR_lights_punctual's

@@ -127,7 +127,7 @@ impl DeferredPass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
-    /// an environment map), for shadows by `method`, and for indirect diffuse light from a probe
+    /// an environment map, unlit materials), for shadows by `method`, and for indirect diffuse light from a probe
     /// volume when `probes` and from lightmaps when `lightmaps`.
     pub fn new(
         ctx: &Context,

@@ -232,8 +232,8 @@ impl PathTracePass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// The pipeline for `scene` and `options`: specialised so that what the scene lacks
-    /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha)
-    /// and what the options leave out cost nothing.
+    /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha,
+    /// vertex colours, unlit materials) and what the options leave out cost nothing.
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
         let PathOptions { microfacet, heuristic, strategy } = options;
         let (light_sampling, bsdf_hits) = strategy.spec();

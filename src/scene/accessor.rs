@@ -55,6 +55,64 @@ impl Reader<'_> {
         self.components(accessor, &what, decode)
     }
 
+    /// Reads a `JOINTS_n` accessor: `VEC4` of unsigned bytes or shorts (not normalized), joint
+    /// indices into the skin's `joints`.
+    pub fn joints(&self, accessor: &Accessor, what: &str) -> Result<Vec<[u32; 4]>> {
+        let described = describe(accessor, what);
+        let decode: fn(&[u8]) -> u32 = match (accessor.data_type(), accessor.normalized()) {
+            (DataType::U8, false) => |b| u32::from(b[0]),
+            (DataType::U16, false) => |b| u32::from(u16::from_le_bytes([b[0], b[1]])),
+            (other, normalized) => {
+                return Err(self.origin.error(format!(
+                    "{described} has component type {other:?}{}; joint indices must be unsigned bytes or \
+                     shorts, not normalized",
+                    if normalized { " (normalized)" } else { "" }
+                )))
+            }
+        };
+        if accessor.dimensions() != Dimensions::Vec4 {
+            return Err(self.origin.error(format!(
+                "{described} has type {:?}; joint indices must be VEC4",
+                accessor.dimensions()
+            )));
+        }
+        let flat = self.components(accessor, &described, decode)?;
+        Ok(flat.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect())
+    }
+
+    /// Reads a `WEIGHTS_n` accessor: `VEC4` of floats, or of normalized unsigned bytes or shorts.
+    pub fn weights(&self, accessor: &Accessor, what: &str) -> Result<Vec<[f32; 4]>> {
+        let allowed = match accessor.data_type() {
+            DataType::F32 => true,
+            DataType::U8 | DataType::U16 => accessor.normalized(),
+            _ => false,
+        };
+        if !allowed || accessor.dimensions() != Dimensions::Vec4 {
+            return Err(self.origin.error(format!(
+                "{} has type {:?} of {:?}{}; joint weights must be VEC4 of floats or of normalized \
+                 unsigned bytes or shorts",
+                describe(accessor, what),
+                accessor.dimensions(),
+                accessor.data_type(),
+                if accessor.normalized() { " (normalized)" } else { "" }
+            )));
+        }
+        self.vectors::<4>(accessor, what)
+    }
+
+    /// Reads a `MAT4` accessor of floats (a skin's inverse bind matrices), column-major.
+    pub fn matrices(&self, accessor: &Accessor, what: &str) -> Result<Vec<[f32; 16]>> {
+        if accessor.dimensions() != Dimensions::Mat4 || accessor.data_type() != DataType::F32 {
+            return Err(self.origin.error(format!(
+                "{} has type {:?} of {:?}; it must be MAT4 of floats",
+                describe(accessor, what),
+                accessor.dimensions(),
+                accessor.data_type()
+            )));
+        }
+        self.vectors::<16>(accessor, what)
+    }
+
     /// Every component of every element, in order, each decoded by `decode` from its bytes.
     fn components<T: Copy + Default>(
         &self,

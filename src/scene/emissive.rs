@@ -84,7 +84,7 @@ impl EmissiveTable {
 
 /// A material's emitted luminance, averaged over its emissive texture.
 fn material_luminance(material: &Material, textures: &[Texture]) -> f32 {
-    let l = luminance(material.emissive);
+    let l = luminance(material.emission());
     match material.emissive_texture.and_then(|t| textures.get(t.texture as usize)) {
         Some(texture) if l > 0.0 => l * texture.mean_luminance(),
         _ => l,

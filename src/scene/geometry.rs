@@ -2,8 +2,10 @@
 //! node that uses its mesh.
 //!
 //! Here the glTF geometry rules are applied: strips and fans become triangle lists, points and
-//! lines are skipped, triangles with a NaN or infinite vertex are dropped, missing normals become
-//! flat normals (the vertices are unwelded), and missing tangents are generated from the UVs.
+//! lines are skipped, morph targets are applied at the weights given, triangles with a NaN or
+//! infinite vertex are dropped, missing normals become flat normals (the vertices are unwelded),
+//! and missing tangents are generated from the UVs. A skinned primitive also keeps its joints and
+//! weights, for `skin.rs` to pose it.
 
 use super::accessor::Reader;
 use crate::error::Result;
@@ -13,7 +15,7 @@ use gltf::mesh::Mode;
 use gltf::Semantic;
 
 /// A primitive's vertices and triangles in object space.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(super) struct LocalPrimitive {
     pub positions: Vec<Vec3>,
     /// Unit normals, one per position.
@@ -23,7 +25,14 @@ pub(super) struct LocalPrimitive {
     pub uv0: Option<Vec<[f32; 2]>>,
     pub uv1: Option<Vec<[f32; 2]>>,
     pub colors: Option<Vec<[f32; 4]>>,
+    /// `JOINTS_n` of a skinned primitive, one array per set `n` (empty unless asked for).
+    pub joints: Vec<Vec<[u32; 4]>>,
+    /// `WEIGHTS_n`, as `joints`.
+    pub weights: Vec<Vec<[f32; 4]>>,
     pub triangles: Vec<[u32; 3]>,
+    /// Whether the normals are flat ones umbra made (the file has none): every triangle has its
+    /// own three vertices.
+    pub flat: bool,
     /// The glTF material index (`None`: the default material).
     pub material: Option<usize>,
     /// Triangles dropped for NaN or infinite vertex positions.
@@ -32,9 +41,13 @@ pub(super) struct LocalPrimitive {
 
 /// What the scene needs from a primitive besides its geometry.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Wanted {
+pub(super) struct Wanted<'w> {
     /// Produce tangents, generated from this UV set when the file has none.
     pub tangents_from_uv: Option<u32>,
+    /// The morph targets' weights (the node's, else the mesh's; empty: all 0).
+    pub morph_weights: &'w [f32],
+    /// Read `JOINTS_n` and `WEIGHTS_n`: the node that places the mesh has a skin.
+    pub skinned: bool,
 }
 
 /// Reads one primitive; `None` for points and lines, which umbra does not render.
@@ -69,10 +82,17 @@ pub(super) fn read_primitive(
         uv0: source.vectors::<2>(Semantic::TexCoords(0), "TEXCOORD_0", count)?,
         uv1: source.vectors::<2>(Semantic::TexCoords(1), "TEXCOORD_1", count)?,
         colors: source.colors(count)?,
+        joints: Vec::new(),
+        weights: Vec::new(),
         triangles: source.triangles(count)?,
+        flat: !has_normals,
         material: primitive.material().index(),
         dropped: 0,
     };
+    source.morph(&mut local, wanted.morph_weights)?;
+    if wanted.skinned {
+        (local.joints, local.weights) = source.influences(count)?;
+    }
     local.drop_non_finite(reader.origin.name(), &source.label);
     if !has_normals {
         local.flat_normals();
@@ -108,6 +128,81 @@ impl Source<'_> {
         let values = self.reader.vectors::<N>(&accessor, &format!("{name} of {}", self.label))?;
         self.check_count(name, values.len(), count)?;
         Ok(Some(values))
+    }
+
+    /// Adds the morph targets' displacements at `weights` (glTF: POSITION, NORMAL and TANGENT,
+    /// each where the primitive has the attribute; targets of weight 0 are not read).
+    fn morph(&self, local: &mut LocalPrimitive, weights: &[f32]) -> Result<()> {
+        let targets = self.primitive.morph_targets();
+        if targets.len() == 0 || weights.iter().all(|&w| w == 0.0) {
+            return Ok(());
+        }
+        if weights.len() != targets.len() {
+            return Err(self.reader.origin.error(format!(
+                "{} has {} morph targets but {} weights (the mesh's or its node's `weights`)",
+                self.label,
+                targets.len(),
+                weights.len()
+            )));
+        }
+        let count = local.positions.len();
+        for (k, (target, &w)) in targets.zip(weights).enumerate() {
+            if w == 0.0 {
+                continue;
+            }
+            let read = |accessor: Option<gltf::Accessor>, name: &str| -> Result<Option<Vec<Vec3>>> {
+                let Some(accessor) = accessor else { return Ok(None) };
+                let name = format!("{name} of morph target {k}");
+                let values = self.reader.vectors::<3>(&accessor, &format!("{name} of {}", self.label))?;
+                self.check_count(&name, values.len(), count)?;
+                Ok(Some(values.into_iter().map(Vec3::from).collect()))
+            };
+            if let Some(d) = read(target.positions(), "POSITION")? {
+                local.positions.iter_mut().zip(d).for_each(|(p, d)| *p += w * d);
+            }
+            if !local.normals.is_empty() {
+                if let Some(d) = read(target.normals(), "NORMAL")? {
+                    local.normals.iter_mut().zip(d).for_each(|(n, d)| *n += w * d);
+                }
+            }
+            if !local.tangents.is_empty() {
+                if let Some(d) = read(target.tangents(), "TANGENT")? {
+                    local.tangents.iter_mut().zip(d).for_each(|(t, d)| *t += (w * d).extend(0.0));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every `JOINTS_n` / `WEIGHTS_n` pair of a skinned primitive (at least set 0, and the sets
+    /// in pairs, as glTF requires).
+    #[allow(clippy::type_complexity)]
+    fn influences(&self, count: usize) -> Result<(Vec<Vec<[u32; 4]>>, Vec<Vec<[f32; 4]>>)> {
+        let (mut joints, mut weights) = (Vec::new(), Vec::new());
+        for set in 0.. {
+            let j = self.primitive.get(&Semantic::Joints(set));
+            let w = self.primitive.get(&Semantic::Weights(set));
+            let (j, w) = match (j, w) {
+                (Some(j), Some(w)) => (j, w),
+                (None, None) if set > 0 => break,
+                (j, _) => {
+                    let missing = if j.is_none() { "JOINTS" } else { "WEIGHTS" };
+                    return Err(self.reader.origin.error(format!(
+                        "{} is skinned (its node has a skin) but has no {missing}_{set} attribute",
+                        self.label
+                    )));
+                }
+            };
+            let name = format!("JOINTS_{set}");
+            let values = self.reader.joints(&j, &format!("{name} of {}", self.label))?;
+            self.check_count(&name, values.len(), count)?;
+            joints.push(values);
+            let name = format!("WEIGHTS_{set}");
+            let values = self.reader.weights(&w, &format!("{name} of {}", self.label))?;
+            self.check_count(&name, values.len(), count)?;
+            weights.push(values);
+        }
+        Ok((joints, weights))
     }
 
     /// `COLOR_0` as RGBA (alpha 1 for an RGB attribute).
@@ -147,7 +242,7 @@ impl Source<'_> {
 }
 
 /// "mesh 2 ('Wheel') primitive 0", for messages.
-fn label(mesh: &gltf::Mesh, primitive: &gltf::Primitive) -> String {
+pub(super) fn label(mesh: &gltf::Mesh, primitive: &gltf::Primitive) -> String {
     match mesh.name() {
         Some(name) => format!("mesh {} ('{name}') primitive {}", mesh.index(), primitive.index()),
         None => format!("mesh {} primitive {}", mesh.index(), primitive.index()),
@@ -251,6 +346,12 @@ impl LocalPrimitive {
         }
         if let Some(colors) = &mut self.colors {
             *colors = pick(colors, order);
+        }
+        for joints in &mut self.joints {
+            *joints = pick(joints, order);
+        }
+        for weights in &mut self.weights {
+            *weights = pick(weights, order);
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use super::accessor::Reader;
 use super::geometry::{read_primitive, LocalPrimitive, Wanted};
+use super::skin;
 use super::source::{self, Asset, Origin};
 use super::texture::TextureSet;
 use super::LoadOptions;
@@ -22,6 +23,7 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
         asset.document.materials().map(|m| Material::from_gltf(&m, &mut textures)).collect();
     let mut builder = Builder::new(&origin, &asset, materials);
     builder.walk()?;
+    let posed = builder.static_pose_warning();
     let mut scene = builder.finish()?;
     let (decoded, failed, warnings) = textures.decode(&origin, &asset, options.missing_textures)?;
     scene.textures = decoded;
@@ -35,6 +37,7 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     }
     scene.warnings.extend(warnings);
     scene.warnings.extend(asset.ignored_extensions.clone());
+    scene.warnings.extend(posed);
     scene.emissive = EmissiveTable::build(
         &scene.positions,
         &scene.triangles,
@@ -55,8 +58,15 @@ struct Builder<'a> {
     reader: Reader<'a>,
     /// Whether any material has a normal map, so every vertex needs a tangent.
     tangents: bool,
-    /// Each (mesh, primitive) read once; `None` for primitives that are not triangles.
-    primitives: HashMap<(usize, usize), Option<Rc<LocalPrimitive>>>,
+    /// Each primitive read once per (mesh, primitive, morph weights' bits, skinned); `None` for
+    /// primitives that are not triangles.
+    primitives: HashMap<PrimitiveKey, Option<Rc<LocalPrimitive>>>,
+    /// Every node's world transform, once a skin needs its joints'.
+    node_worlds: Option<Vec<Option<Mat4>>>,
+    /// Nodes placed with a skin, and meshes placed with morph targets, for the warning that a
+    /// static pose is rendered.
+    skinned_nodes: usize,
+    morphed_meshes: Vec<usize>,
     /// Index of the glTF default material once a primitive needed it.
     default_material: Option<u32>,
     /// Triangles dropped for non-finite positions, over all placements.
@@ -72,6 +82,9 @@ impl<'a> Builder<'a> {
             reader: Reader { origin, buffers: &asset.buffers },
             tangents: materials.iter().any(|m| m.normal_texture.is_some()),
             primitives: HashMap::new(),
+            node_worlds: None,
+            skinned_nodes: 0,
+            morphed_meshes: Vec::new(),
             default_material: None,
             dropped: 0,
             scene: Scene { name: origin.name().to_owned(), materials, ..Scene::default() },
@@ -137,11 +150,57 @@ impl<'a> Builder<'a> {
             self.scene.lights.push(Light::from_gltf(&light, world));
         }
         if let Some(mesh) = node.mesh() {
+            // A skinned mesh is placed by its joints alone: glTF ignores its node's transform.
+            let joints = match node.skin() {
+                Some(skin) => Some(self.joint_matrices(node, &skin)?),
+                None => None,
+            };
+            let placement = if joints.is_some() { Mat4::IDENTITY } else { world };
             for instance in self.gpu_instances(node)? {
-                self.place_mesh(node, &mesh, world * instance)?;
+                self.place_mesh(node, &mesh, placement * instance, joints.as_deref())?;
             }
         }
         Ok(())
+    }
+
+    /// Joint matrices of `skin` as `node` uses it (`skin.rs`).
+    fn joint_matrices(&mut self, node: &gltf::Node, skin: &gltf::Skin) -> Result<Vec<Mat4>> {
+        let worlds =
+            self.node_worlds.get_or_insert_with(|| skin::node_worlds(&self.asset.document, local_transform));
+        self.skinned_nodes += 1;
+        skin::joint_matrices(&self.reader, skin, worlds, &node_label(node))
+    }
+
+    /// The one warning that the file moves (animations, skins, morph targets) and umbra renders
+    /// it still: nodes at their default transforms, skins at the pose those give their joints,
+    /// morph targets at their default weights. Logged here; `None` when nothing moves.
+    fn static_pose_warning(&self) -> Option<String> {
+        let plural = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        let mut what = Vec::new();
+        let animations = self.asset.document.animations().len();
+        if animations > 0 {
+            what.push(format!("is animated ({})", plural(animations, "animation", "animations")));
+        }
+        if self.skinned_nodes > 0 {
+            what.push(format!(
+                "is skinned ({})",
+                plural(self.skinned_nodes, "skinned node", "skinned nodes")
+            ));
+        }
+        if !self.morphed_meshes.is_empty() {
+            let n = self.morphed_meshes.len();
+            what.push(format!("has morph targets ({})", plural(n, "mesh", "meshes")));
+        }
+        let (last, rest) = what.split_last()?;
+        let what = if rest.is_empty() { last.clone() } else { format!("{} and {last}", rest.join(", ")) };
+        let warning = format!(
+            "{}: the scene {}; umbra renders one static pose: nodes at their default transforms, skins at \
+             the pose those give their joints, morph targets at their default weights",
+            self.origin.name(),
+            what
+        );
+        log::warn!("{warning}");
+        Some(warning)
     }
 
     /// `EXT_mesh_gpu_instancing`: the per-instance transforms of a node (one identity without it).
@@ -200,8 +259,15 @@ impl<'a> Builder<'a> {
             .collect())
     }
 
-    /// Places every primitive of `mesh` with transform `world` and records the instance.
-    fn place_mesh(&mut self, node: &gltf::Node, mesh: &gltf::Mesh, world: Mat4) -> Result<()> {
+    /// Places every primitive of `mesh` with transform `world` and records the instance; a skinned
+    /// one (`joints`: its skin's joint matrices) is posed first, into world space.
+    fn place_mesh(
+        &mut self,
+        node: &gltf::Node,
+        mesh: &gltf::Mesh,
+        world: Mat4,
+        joints: Option<&[Mat4]>,
+    ) -> Result<()> {
         if !world.is_finite() {
             return Err(self
                 .origin
@@ -209,10 +275,29 @@ impl<'a> Builder<'a> {
         }
         let first_triangle = self.scene.triangles.len();
         let first_vertex = self.scene.positions.len();
+        // The node's morph weights override the mesh's (glTF); absent, every weight is 0.
+        let weights = node.weights().or(mesh.weights()).unwrap_or_default();
+        if mesh.primitives().any(|p| p.morph_targets().len() > 0)
+            && !self.morphed_meshes.contains(&mesh.index())
+        {
+            self.morphed_meshes.push(mesh.index());
+        }
         for primitive in mesh.primitives() {
-            if let Some(local) = self.local_primitive(mesh, &primitive)? {
+            if let Some(local) = self.local_primitive(mesh, &primitive, weights, joints.is_some())? {
                 let material = self.material_index(local.material);
-                self.append(&local, world, material)?;
+                match joints {
+                    Some(joints) => {
+                        let posed = skin::pose(&local, joints).map_err(|e| {
+                            self.origin.error(format!(
+                                "{} (skinned by {}): {e}",
+                                super::geometry::label(mesh, &primitive),
+                                node_label(node)
+                            ))
+                        })?;
+                        self.append(&posed, world, material)?;
+                    }
+                    None => self.append(&local, world, material)?,
+                }
                 self.dropped += local.dropped;
             }
         }
@@ -239,13 +324,19 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    /// A primitive in object space, read on first use.
+    /// A primitive in object space, read on first use, morphed at `morph_weights`, with its
+    /// joints and weights when `skinned`.
     fn local_primitive(
         &mut self,
         mesh: &gltf::Mesh,
         primitive: &gltf::Primitive,
+        morph_weights: &[f32],
+        skinned: bool,
     ) -> Result<Option<Rc<LocalPrimitive>>> {
-        let key = (mesh.index(), primitive.index());
+        let morphed = primitive.morph_targets().len() > 0;
+        let weight_bits =
+            if morphed { morph_weights.iter().map(|w| w.to_bits()).collect() } else { Vec::new() };
+        let key = (mesh.index(), primitive.index(), weight_bits, skinned);
         if let Some(cached) = self.primitives.get(&key) {
             return Ok(cached.clone());
         }
@@ -255,6 +346,8 @@ impl<'a> Builder<'a> {
             tangents_from_uv: self
                 .tangents
                 .then(|| primitive.material().index().and_then(normal_uv_set).unwrap_or(0)),
+            morph_weights,
+            skinned,
         };
         let local = read_primitive(&self.reader, mesh, primitive, wanted)?.map(Rc::new);
         self.primitives.insert(key, local.clone());
@@ -332,6 +425,10 @@ impl<'a> Builder<'a> {
         Ok(self.scene)
     }
 }
+
+/// Which reading of a primitive: mesh, primitive, its morph weights' bits (empty without morph
+/// targets), skinned.
+type PrimitiveKey = (usize, usize, Vec<u32>, bool);
 
 /// A node's local transform: its matrix, or translation · rotation · scale.
 fn local_transform(node: &gltf::Node) -> Mat4 {

@@ -1,5 +1,5 @@
-//! Materials: glTF 2.0 metallic-roughness with the emissive strength, specular, transmission and
-//! IOR extensions, and `KHR_texture_transform` on every texture slot.
+//! Materials: glTF 2.0 metallic-roughness with the emissive strength, specular, transmission, IOR
+//! and unlit extensions, and `KHR_texture_transform` on every texture slot.
 
 use super::texture::TextureSet;
 use gltf::json::Value;
@@ -67,6 +67,7 @@ impl Material {
             alpha_mode,
             alpha_cutoff,
             double_sided,
+            unlit,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -90,6 +91,7 @@ impl Material {
         });
         h.f32s(&[*alpha_cutoff]);
         h.bool(*double_sided);
+        h.bool(*unlit);
         for slot in [
             base_color_texture,
             metallic_roughness_texture,
@@ -109,6 +111,18 @@ impl Material {
                     h.f32s(&[*scale]);
                 }
             }
+        }
+    }
+}
+
+impl Material {
+    /// The radiance the material emits (before its emissive texture): `emissive`, or nothing for
+    /// an unlit material, whose emission glTF says to ignore.
+    pub fn emission(&self) -> [f32; 3] {
+        if self.unlit {
+            [0.0; 3]
+        } else {
+            self.emissive
         }
     }
 }
@@ -164,6 +178,12 @@ pub struct Material {
     pub alpha_cutoff: f32,
     /// Whether back faces are shaded too (with the normal flipped).
     pub double_sided: bool,
+    /// `KHR_materials_unlit`: the surface shows its base colour (factor × texture × `COLOR_0`)
+    /// whatever the light, and every other property but alpha and `double_sided` is ignored,
+    /// emission included ([`Material::emission`]). The path tracer models it as an emitter of
+    /// that radiance which scatters nothing (paths end there; it is not among the sampled
+    /// lights), the hybrid renderer writes the colour as it is.
+    pub unlit: bool,
     /// Base colour (sRGB RGBA).
     pub base_color_texture: Option<TextureRef>,
     /// Roughness in G, metalness in B (linear).
@@ -201,6 +221,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
+            unlit: false,
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -270,6 +291,7 @@ impl Material {
             },
             alpha_cutoff: material.alpha_cutoff().unwrap_or(0.5),
             double_sided: material.double_sided(),
+            unlit: material.unlit(),
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,

@@ -65,8 +65,9 @@ pub(super) struct Asset<'a> {
 pub(super) fn open<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<Asset<'a>> {
     let (json_bytes, bin) =
         if bytes.starts_with(b"glTF") { split_glb(origin, bytes)? } else { (bytes, None) };
-    let root = parse_json(origin, json_bytes)?;
+    let mut root = parse_json(origin, json_bytes)?;
     let ignored_extensions = check_extensions(origin, &root)?;
+    use_webp_sources(origin, &mut root)?;
     super::ranges::check(origin, json_bytes)?;
     let document = validate(origin, root)?;
     let buffers = load_buffers(origin, &document, bin)?;
@@ -165,6 +166,28 @@ fn check_extensions(origin: &Origin, root: &json::Root) -> Result<Option<String>
     );
     log::warn!("{warning}");
     Ok(Some(warning))
+}
+
+/// `EXT_texture_webp`: a texture's WebP image replaces its `source` (which, if present, is the
+/// fallback for readers without the extension, and may be absent when the extension is
+/// required). The extension's `source` must name an image.
+fn use_webp_sources(origin: &Origin, root: &mut json::Root) -> Result<()> {
+    let images = root.images.len();
+    for (i, texture) in root.textures.iter_mut().enumerate() {
+        let extension = texture.extensions.as_ref().and_then(|e| e.others.get("EXT_texture_webp"));
+        let Some(source) = extension.map(|e| e.get("source")) else { continue };
+        match source.and_then(json::Value::as_u64).filter(|&s| (s as usize) < images) {
+            Some(image) => texture.source = json::Index::new(image as u32),
+            None => {
+                return Err(origin.error(format!(
+                    "texture {i}: the source of its EXT_texture_webp ({}) is not an image index (the file \
+                     has {images} images)",
+                    source.map_or("absent".to_owned(), |s| s.to_string())
+                )))
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Runs the `gltf` crate's validation (indices in range, required fields, enum values).

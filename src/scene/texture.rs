@@ -346,7 +346,8 @@ struct Decoded {
     rgba8: Vec<u8>,
 }
 
-/// Reads and decodes image `index` (PNG or JPEG) to RGBA8.
+/// Reads and decodes image `index` (PNG, JPEG or, for `EXT_texture_webp`, WebP: told apart by
+/// content) to RGBA8.
 fn decode_image(origin: &Origin, asset: &Asset, index: usize) -> Result<Decoded> {
     let (bytes, description) = source::image_bytes(origin, asset, index)?;
     let image = image::load_from_memory(&bytes)

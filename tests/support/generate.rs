@@ -230,15 +230,7 @@ pub fn occlusion_square(occlusion: Option<f64>, sun: bool) -> Vec<u8> {
         material["occlusionTexture"] = json!({ "index": halves, "strength": strength });
     }
     let material = g.push("materials", material);
-    let mut square = Mesh::default();
-    square.quad(Vec3::ZERO, Vec3::X, Vec3::Y);
-    let square = vec![g.primitive(&square, material)];
-    let square = g.mesh("square", square);
-    let mut nodes = vec![
-        g.push("nodes", json!({ "name": "square", "mesh": square })),
-        // 2 m away, seeing ±0.8 m.
-        g.camera_node("camera", [0.0, 0.0, 2.0], json!([0.0, 0.0, 0.0, 1.0]), 2.0 * 0.4f64.atan(), 1.0),
-    ];
+    let mut nodes = square_in_view(&mut g, material);
     let mut extensions = Vec::new();
     if sun {
         let light = g.light(json!({ "name": "sun", "type": "directional", "intensity": 2.0 }));
@@ -250,6 +242,68 @@ pub fn occlusion_square(occlusion: Option<f64>, sun: bool) -> Vec<u8> {
         extensions.push("KHR_lights_punctual");
     }
     g.finish(nodes, &extensions)
+}
+
+/// A 2 m square at the origin facing +Z, made of `material`, and a camera 2 m away on +Z that
+/// sees ±0.8 m of it; returns the two nodes.
+fn square_in_view(g: &mut Gltf, material: usize) -> Vec<usize> {
+    let mut square = Mesh::default();
+    square.quad(Vec3::ZERO, Vec3::X, Vec3::Y);
+    let square = vec![g.primitive(&square, material)];
+    let square = g.mesh("square", square);
+    vec![
+        g.push("nodes", json!({ "name": "square", "mesh": square })),
+        g.camera_node("camera", [0.0, 0.0, 2.0], json!([0.0, 0.0, 0.0, 1.0]), 2.0 * 0.4f64.atan(), 1.0),
+    ]
+}
+
+/// A black square filling the view (`square_in_view`; tests/gltf_textures.rs) that emits its
+/// 2 × 2 emissive texture (RGB `texels`, rows from the top, nearest filtering) × `factor` ×
+/// `KHR_materials_emissive_strength` `strength`; no light.
+pub fn emissive_square(texels: &[u8], factor: [f64; 3], strength: f64) -> Vec<u8> {
+    let mut g = Gltf::new();
+    let nearest = g.push("samplers", json!({ "magFilter": 9728, "minFilter": 9728 }));
+    let image = g.png_image("emission", 2, 2, texels);
+    let texture = g.push("textures", json!({ "source": image, "sampler": nearest }));
+    let material = g.push(
+        "materials",
+        json!({
+            "name": "glow",
+            "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 },
+            "emissiveTexture": { "index": texture },
+            "emissiveFactor": factor,
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": strength } }
+        }),
+    );
+    let nodes = square_in_view(&mut g, material);
+    g.finish(nodes, &["KHR_materials_emissive_strength"])
+}
+
+/// A square filling the view (`square_in_view`; tests/gltf_textures.rs) whose base colour
+/// texture (2 × 2 RGB, rows from the top, nearest) is the lossless WebP of `webp` through
+/// `EXT_texture_webp`, with the PNG of `fallback` as its plain `source`; without a fallback the
+/// texture has no `source` and the extension is required.
+pub fn webp_square(webp: &[u8], fallback: Option<&[u8]>) -> Vec<u8> {
+    let mut g = Gltf::new();
+    let nearest = g.push("samplers", json!({ "magFilter": 9728, "minFilter": 9728 }));
+    let webp = g.webp_image("lossless", 2, 2, webp);
+    let mut texture = json!({ "sampler": nearest, "extensions": { "EXT_texture_webp": { "source": webp } } });
+    if let Some(fallback) = fallback {
+        texture["source"] = json!(g.png_image("fallback", 2, 2, fallback));
+    }
+    let texture = g.push("textures", texture);
+    let material = g.push(
+        "materials",
+        json!({ "name": "webp", "pbrMetallicRoughness": { "baseColorTexture": { "index": texture }, "metallicFactor": 0.0 } }),
+    );
+    let nodes = square_in_view(&mut g, material);
+    let mut glb = g.finish(nodes, &["EXT_texture_webp"]);
+    if fallback.is_none() {
+        let (mut json, bin) = split_glb(&glb);
+        json["extensionsRequired"] = json!(["EXT_texture_webp"]);
+        glb = self::glb(&serde_json::to_vec(&json).expect("JSON"), &bin);
+    }
+    glb
 }
 
 /// One wedge mesh placed by twelve nodes: a rotated ring of eight, a nested arm (translation,
@@ -624,6 +678,16 @@ impl Gltf {
             .expect("PNG encoding");
         let view = self.view(&png, None);
         self.push("images", json!({ "name": name, "bufferView": view, "mimeType": "image/png" }))
+    }
+
+    /// Embeds an RGB8 image as lossless WebP; returns the image index.
+    fn webp_image(&mut self, name: &str, width: u32, height: u32, rgb: &[u8]) -> usize {
+        let mut webp = Vec::new();
+        image::codecs::webp::WebPEncoder::new_lossless(&mut webp)
+            .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
+            .expect("WebP encoding");
+        let view = self.view(&webp, None);
+        self.push("images", json!({ "name": name, "bufferView": view, "mimeType": "image/webp" }))
     }
 
     /// One scene (the default) holding `nodes`, then GLB.

@@ -126,6 +126,12 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
     ng = normalize(ng);
     vec3 wo = -dir;
     vec3 p = path.origin + hit.t * dir;
+    uint material = tri_material(tri);
+    if (HAS_TRANSMISSION && dot(ng, wo) < 0.0 && (material_uvec(material, 4u).x & MATERIAL_VOLUME) != 0u) {
+        // A volume's boundary reached from behind: the segment ran inside it (a closed mesh
+        // whose normals face out, as KHR_materials_volume requires), so Beer-Lambert.
+        throughput *= exp(-material_attenuation(material) * hit.t);
+    }
 
     // Emission, weighted against the light-sampling strategy that could have found it.
     vec4 uv = tri_uv(tri, hit.bary);
@@ -146,7 +152,6 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
     if (!front) {
         ng = -ng;
     }
-    uint material = tri_material(tri);
     vec3 n = shading_normal(tri, hit.bary, ng, uv);
     vec3 t;
     vec3 b;

@@ -736,6 +736,52 @@ fn clear_glass(volume: bool) -> Material {
     }
 }
 
+/// KHR_materials_volume's attenuation, Beer–Lambert in the path tracer: a unit cube of smooth
+/// glass (ior 1.5: F = 0.04 at normal incidence) seen straight down through its top and bottom
+/// faces under a constant sky of 1. Light crossing the cube keeps a = exp(−σ) per crossing,
+/// σ = −ln(colour)/distance, and bounces between the faces, so the cube shows
+/// F + (1 − F)² a / (1 − a F) (every exit sees the sky); for colour (0.5, 0.25, 0.8) at distance
+/// 2, a = √colour. The image's mean against it per channel, z-test at significance 1e-4 with the
+/// path tracer's own variance. With ior 1 (no interface: F = 0) the cube shows a itself, with no
+/// NaN (the refraction half vector is 0/0 there). Controls (each a test of the test): an
+/// infinite distance gives 1 (a = 1); thin-walled glass (no volume) ignores the attenuation it
+/// carries and gives 1.
+#[test]
+fn volume_attenuation_is_beer_lambert() {
+    let gpu = Gpu::new();
+    let cube = common::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5));
+    let cam = looking_down(3.0, 2f32.to_radians());
+    let colour = [0.5f64, 0.25, 0.8];
+    let glass = |volume: bool, distance: f32| Material {
+        attenuation_color: colour.map(|c| c as f32),
+        attenuation_distance: distance,
+        ..clear_glass(volume)
+    };
+    let settings = PathSettings { size: (8, 8), spp: 64, env: [1.0; 3], ..Default::default() };
+    let check = |material: Material, expected: [f64; 3], what: &str| {
+        let scene = common::build_with("glass cube", &[(cube.clone(), material)], vec![], cam);
+        let image = render(&gpu, &scene, &settings);
+        let var = image.variance_of_mean();
+        let n = image.mean.len() as f64;
+        for c in 0..3 {
+            let mean = image.mean.iter().map(|p| p[c] as f64).sum::<f64>() / n;
+            let sd = (var.iter().map(|v| v[c] as f64).sum::<f64>()).sqrt() / n;
+            // The model takes every ray as straight down: the corners' obliquity (1/cos θ ≤
+            // 1.0003 more glass) is below 1e-4 of the value, the floor of the deviation's scale.
+            let z = (mean - expected[c]) / sd.max(1e-4 * expected[c]);
+            eprintln!("{what}, channel {c}: mean {mean:.5}, expected {:.5}, z {z:.2}", expected[c]);
+            assert!(z.abs() < 3.89, "{what}, channel {c}: mean {mean} vs {} (z = {z})", expected[c]);
+        }
+    };
+    let f = 0.04f64;
+    let seen = |a: f64| f + (1.0 - f) * (1.0 - f) * a / (1.0 - a * f);
+    check(glass(true, 2.0), colour.map(|c| seen(c.sqrt())), "attenuating volume");
+    check(glass(true, f32::INFINITY), [1.0; 3], "infinite attenuation distance");
+    // ior 1: no interface (F = 0 at normal incidence), one crossing, no NaN (render checks).
+    check(Material { ior: 1.0, ..glass(true, 2.0) }, colour.map(f64::sqrt), "ior 1 volume");
+    check(glass(false, 2.0), [1.0; 3], "thin-walled glass");
+}
+
 /// A clear, smooth glass sphere (KHR_materials_transmission; refracting with
 /// KHR_materials_volume, or thin-walled) under a constant environment of 1 is 1 on average: at
 /// every interface reflection and transmission share the energy (F + (1 − F)), radiance scales

@@ -1359,3 +1359,31 @@ fn the_content_hash_follows_what_light_transport_reads() {
     let hashes: HashSet<u64> = committed_scenes().iter().map(|p| load(p).content_hash()).collect();
     assert_eq!(hashes.len(), committed_scenes().len());
 }
+
+/// KHR_materials_volume's attenuation reaches the material: colour and distance as written, the
+/// coefficient −ln(colour)/distance, and none without a thickness (thin-walled) or a distance.
+#[test]
+fn volume_attenuation_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let load = |volume: Value| {
+        let mut json = base.clone();
+        json["materials"][0]["extensions"] = json!({
+            "KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_volume": volume,
+        });
+        Scene::from_glb_bytes("volume.glb", &to_glb(&json, &bin)).unwrap().materials[0].clone()
+    };
+    let m = load(
+        json!({"thicknessFactor": 1.0, "attenuationColor": [0.5, 0.25, 1.0], "attenuationDistance": 2.0}),
+    );
+    assert!(m.volume);
+    assert_eq!((m.attenuation_color, m.attenuation_distance), ([0.5, 0.25, 1.0], 2.0));
+    let sigma = m.attenuation();
+    for (got, expected) in sigma.iter().zip([0.5f32.ln() / -2.0, 0.25f32.ln() / -2.0, 0.0]) {
+        assert!((got - expected).abs() < 1e-6, "{sigma:?}");
+    }
+    let thin = load(json!({"attenuationColor": [0.5, 0.25, 1.0], "attenuationDistance": 2.0}));
+    assert!(!thin.volume && thin.attenuation() == [0.0; 3], "no thickness: thin-walled, no attenuation");
+    let clear = load(json!({"thicknessFactor": 1.0, "attenuationColor": [0.5, 0.25, 1.0]}));
+    assert!(clear.attenuation_distance.is_infinite() && clear.attenuation() == [0.0; 3]);
+}

@@ -27,6 +27,11 @@ uvec4 material_uvec(uint id, uint k) {
     return imageLoad(material_texels, int(MATERIAL_TEXELS * id + k));
 }
 
+// The volume's attenuation coefficient rgb per unit length (KHR_materials_volume; 0 without one).
+vec3 material_attenuation(uint id) {
+    return uintBitsToFloat(material_uvec(id, 4u).yzw);
+}
+
 // Material `id`'s texture in `slot` (MATERIAL_SLOT_*): its index + 1, 0 when the slot is empty.
 uint material_slot_texture(uint id, uint slot) {
     return material_uvec(id, 5u + slot / 4u)[slot % 4u];
@@ -163,7 +168,11 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.thin = true;
     if (HAS_TRANSMISSION) {
         s.transmission = clamp(material_vec(id, 3u).z, 0.0, 1.0);
-        s.thin = (material_uvec(id, 4u).x & MATERIAL_VOLUME) == 0u;
+        // A boundary between equal indices (ior 1) bends nothing: every microfacet refracts wo
+        // straight on, so Walter et al.'s refraction half vector is 0/0 there (NaN weights). It
+        // transmits as thin-walled glass does (straight through where smooth); the volume's
+        // attenuation still applies (it keys on MATERIAL_VOLUME, not on `thin`).
+        s.thin = (material_uvec(id, 4u).x & MATERIAL_VOLUME) == 0u || ior == 1.0;
     }
     return s;
 }

@@ -210,7 +210,8 @@ gpu_structs! {
         specular: vec4,
         /// metallic, ior, transmission, alpha cutoff.
         params: vec4,
-        /// `x`: `MATERIAL_*` bits.
+        /// `x`: `MATERIAL_*` bits; `yzw`: the volume's attenuation coefficient rgb per unit
+        /// length as `f32` bits ([`crate::scene::Material::attenuation`]; 0 without one).
         flags: uvec4,
         /// The texture of each slot (`MATERIAL_SLOT_*`; slot k is `textures[k / 4][k % 4]`):
         /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, then occlusion;

@@ -294,9 +294,9 @@ impl ShadingArrays {
                     if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                         | if m.volume { GpuMaterial::VOLUME } else { 0 }
                         | if m.unlit { GpuMaterial::UNLIT } else { 0 },
-                    0,
-                    0,
-                    0,
+                    m.attenuation()[0].to_bits(),
+                    m.attenuation()[1].to_bits(),
+                    m.attenuation()[2].to_bits(),
                 ],
             })
             .collect();

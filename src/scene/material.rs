@@ -64,6 +64,8 @@ impl Material {
             specular_color_factor,
             transmission_factor,
             volume,
+            attenuation_color,
+            attenuation_distance,
             alpha_mode,
             alpha_cutoff,
             double_sided,
@@ -84,6 +86,8 @@ impl Material {
         h.f32s(specular_color_factor);
         h.f32s(&[*transmission_factor]);
         h.bool(*volume);
+        h.f32s(attenuation_color);
+        h.f32s(&[*attenuation_distance]);
         h.u32(match alpha_mode {
             AlphaMode::Opaque => 0,
             AlphaMode::Mask => 1,
@@ -124,6 +128,18 @@ impl Material {
         } else {
             self.emissive
         }
+    }
+
+    /// The volume's attenuation coefficient per unit length, −ln(colour) / distance per
+    /// channel (Beer–Lambert: light keeps exp(−σ·d) after d); 0 without a volume, for a white
+    /// colour or an infinite distance; a black channel counts as the smallest normal float
+    /// (σ ≈ 87 / distance, so σ·d stays finite and exp(−σ·0) is 1).
+    pub fn attenuation(&self) -> [f32; 3] {
+        let d = self.attenuation_distance;
+        if !self.volume || d.is_nan() || d <= 0.0 || d.is_infinite() {
+            return [0.0; 3];
+        }
+        self.attenuation_color.map(|c| if c >= 1.0 { 0.0 } else { -c.max(f32::MIN_POSITIVE).ln() / d })
     }
 }
 
@@ -170,8 +186,14 @@ pub struct Material {
     pub transmission_factor: f32,
     /// `KHR_materials_volume` with a thickness above 0: the surface bounds a volume and
     /// transmission refracts (Snell's law, total internal reflection); otherwise it is
-    /// thin-walled, as glTF specifies. Thickness and attenuation are not modelled.
+    /// thin-walled, as glTF specifies. The thickness is not modelled (the path tracer traces the
+    /// real distances; the hybrid does not model transmission).
     pub volume: bool,
+    /// `KHR_materials_volume`'s attenuation colour: the colour white light takes after
+    /// [`Material::attenuation_distance`] inside the volume (Beer–Lambert; default white).
+    pub attenuation_color: [f32; 3],
+    /// `KHR_materials_volume`'s attenuation distance (default +∞: no attenuation).
+    pub attenuation_distance: f32,
     /// How alpha is used.
     pub alpha_mode: AlphaMode,
     /// The `Mask` threshold (default 0.5).
@@ -218,6 +240,8 @@ impl Default for Material {
             specular_color_factor: [1.0; 3],
             transmission_factor: 0.0,
             volume: false,
+            attenuation_color: [1.0; 3],
+            attenuation_distance: f32::INFINITY,
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
@@ -284,6 +308,8 @@ impl Material {
             specular_color_factor: specular.as_ref().map_or([1.0; 3], |s| s.specular_color_factor()),
             transmission_factor: transmission.as_ref().map_or(0.0, |t| t.transmission_factor()),
             volume: material.volume().is_some_and(|v| v.thickness_factor() > 0.0),
+            attenuation_color: material.volume().map_or([1.0; 3], |v| v.attenuation_color()),
+            attenuation_distance: material.volume().map_or(f32::INFINITY, |v| v.attenuation_distance()),
             alpha_mode: match material.alpha_mode() {
                 gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
                 gltf::material::AlphaMode::Mask => AlphaMode::Mask,

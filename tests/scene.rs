@@ -1387,3 +1387,22 @@ fn volume_attenuation_is_read() {
     let clear = load(json!({"thicknessFactor": 1.0, "attenuationColor": [0.5, 0.25, 1.0]}));
     assert!(clear.attenuation_distance.is_infinite() && clear.attenuation() == [0.0; 3]);
 }
+
+/// An orthographic camera, which umbra does not render, is skipped with a warning the scene
+/// keeps (not only a log line): the caller can see why its camera is absent.
+#[test]
+fn orthographic_cameras_are_skipped_with_a_kept_warning() {
+    let (mut json, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    json["cameras"] = json!([{"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}}]);
+    let camera_node = json["nodes"].as_array().unwrap().len();
+    json["nodes"].as_array_mut().unwrap().push(json!({"camera": 0, "translation": [0.0, 0.0, 5.0]}));
+    let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
+    json["scenes"][scene_index]["nodes"].as_array_mut().unwrap().push(json!(camera_node));
+    let scene = Scene::from_glb_bytes("ortho.glb", &to_glb(&json, &bin)).unwrap();
+    assert!(scene.cameras.is_empty(), "the orthographic camera is not rendered");
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("ortho.glb") && w.contains("camera 0 is orthographic")),
+        "{:?}",
+        scene.warnings
+    );
+}

@@ -27,23 +27,24 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// Reads glTF camera `index` as placed by a node with transform `world`; `None` (with a
-    /// warning) for an orthographic camera, which umbra does not render.
+    /// Reads glTF camera `index` as placed by a node with transform `world`; for an orthographic
+    /// camera, which umbra does not render, the warning that says so instead (also logged).
     pub(super) fn from_gltf(
         origin: &Origin,
         document: &gltf::Document,
         index: usize,
         world: Mat4,
-    ) -> Result<Option<Self>> {
+    ) -> Result<std::result::Result<Self, String>> {
         let camera = &document.as_json().cameras[index];
         let perspective = match (&camera.type_, &camera.perspective) {
             (Checked::Valid(json::camera::Type::Perspective), Some(p)) => p,
             (Checked::Valid(json::camera::Type::Orthographic), _) => {
-                log::warn!(
+                let warning = format!(
                     "{}: camera {index} is orthographic; skipping it (umbra renders perspective)",
                     origin.name()
                 );
-                return Ok(None);
+                log::warn!("{warning}");
+                return Ok(Err(warning));
             }
             _ => {
                 return Err(origin
@@ -61,7 +62,7 @@ impl Camera {
             )));
         }
         let (position, forward, up) = frame(world);
-        Ok(Some(Self { position, forward, up, yfov, aspect, znear }))
+        Ok(Ok(Self { position, forward, up, yfov, aspect, znear }))
     }
 
     /// A camera looking down -Z at the centre of the box `lo..hi`, far enough back that the box's

@@ -5,6 +5,8 @@
 #[path = "support/generate.rs"]
 mod generate;
 
+mod common;
+
 use glam::{Mat4, Quat, Vec3};
 use serde_json::{json, Value};
 use std::collections::HashSet;
@@ -886,7 +888,8 @@ fn gltf_files_resolve_external_and_embedded_data() {
     // The same buffer as a base64 data: URI needs no file.
     let bin = std::fs::read(path.with_file_name("scene.bin")).unwrap();
     let mut json: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
-    json["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{}", base64(&bin)));
+    json["buffers"][0]["uri"] =
+        json!(format!("data:application/octet-stream;base64,{}", common::base64(&bin)));
     let embedded = Scene::from_glb_bytes("embedded.gltf", &serde_json::to_vec(&json).unwrap()).unwrap();
     assert_eq!(embedded.positions, reference.positions);
     // An in-memory scene cannot reach files.
@@ -986,23 +989,6 @@ fn undecodable_images_are_named() {
         "bad-image.glb",
         "image 1 (embedded): cannot decode the image",
     );
-}
-
-/// Standard base64 with padding.
-fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let n = chunk.iter().enumerate().fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
-        for i in 0..4 {
-            out.push(if i <= chunk.len() {
-                ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
 }
 
 /// A small deterministic generator for the fuzz test.

@@ -75,27 +75,10 @@ impl Doc {
     }
 
     fn finish(mut self) -> Vec<u8> {
-        let uri = format!("data:application/octet-stream;base64,{}", base64(&self.bin));
+        let uri = format!("data:application/octet-stream;base64,{}", common::base64(&self.bin));
         self.json["buffers"] = json!([{ "byteLength": self.bin.len(), "uri": uri }]);
         serde_json::to_vec(&self.json).unwrap()
     }
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
-        for i in 0..4 {
-            out.push(if i <= chunk.len() {
-                ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
 }
 
 const CORNERS: [[f32; 3]; 4] = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]];

@@ -162,15 +162,89 @@ def node_matrix(node):
     return m
 
 
-def mitsuba_scene(path, size, max_depth, rr_depth, work):
-    """The glTF scene as a Mitsuba 3 scene: meshes in world space, glTF metallic-roughness as
-    Mitsuba's `diffuse` (metallic 0, roughness 1: the glTF BRDF's diffuse lobe; its 4 % specular
-    at roughness 1 is left out) or `principled` otherwise, emission as an area emitter, the first
-    camera, a box filter. Meshes, materials, cameras and TRS/matrix nodes only."""
+def srgb_to_linear(c):
+    """The sRGB transfer function's inverse, per element."""
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def glb_image(doc, blob, texture):
+    """Texture `texture`'s image, decoded to floats in [0, 1] (height × width × 4)."""
+    import io
+    from PIL import Image
+    image = doc["images"][doc["textures"][texture]["source"]]
+    view = doc["bufferViews"][image["bufferView"]]
+    start = view.get("byteOffset", 0)
+    data = Image.open(io.BytesIO(blob[start:start + view["byteLength"]])).convert("RGBA")
+    return np.asarray(data, dtype=np.float32) / 255.0
+
+
+def world_primitives(doc, blob):
+    """Every mesh primitive of the default scene: (node index, primitive index, primitive, world)."""
+    out = []
+
+    def walk(index, parent):
+        node = doc["nodes"][index]
+        world = parent @ node_matrix(node)
+        for p, prim in enumerate(doc["meshes"][node["mesh"]]["primitives"] if "mesh" in node else []):
+            out.append((index, p, prim, world))
+        for child in node.get("children", []):
+            walk(child, world)
+
+    for root in doc["scenes"][doc.get("scene", 0)]["nodes"]:
+        walk(root, np.eye(4))
+    return out
+
+
+def with_camera(path, work):
+    """`path`, or when it has no camera a copy in `work` with one framing the scene from +Z
+    (a vertical field of 45°, the bounds' sphere filling 90 % of it), for both renderers."""
+    import struct
+    doc, blob = read_glb(path)
+    if doc.get("cameras"):
+        return str(path)
+    points = []
+    for _, _, prim, world in world_primitives(doc, blob):
+        positions = accessor(doc, blob, prim["attributes"]["POSITION"]).astype(np.float64)
+        points.append((np.c_[positions, np.ones(len(positions))] @ world.T)[:, :3])
+    points = np.concatenate(points)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
+    yfov = np.radians(45.0)
+    distance = radius / np.sin(0.9 * yfov / 2)
+    doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.01}}]
+    doc["nodes"].append({"camera": 0, "translation": (centre + [0, 0, distance]).tolist()})
+    doc["scenes"][doc.get("scene", 0)]["nodes"].append(len(doc["nodes"]) - 1)
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    padded = blob + b"\0" * (-len(blob) % 4)
+    out = Path(work) / (Path(path).stem + "-camera.glb")
+    out.write_bytes(struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(padded))
+                    + struct.pack("<II", len(text), 0x4E4F534A) + text
+                    + struct.pack("<II", len(padded), 0x004E4942) + padded)
+    return str(out)
+
+
+def mitsuba_scene(path, size, max_depth, rr_depth, work, env=None):
+    """The glTF scene as a Mitsuba 3 scene with Mitsuba's own plugins (the peer's speed, not a
+    literal copy of the glTF BRDF): meshes in world space (with normals and UVs where the
+    material has textures), metallic-roughness as `diffuse` (metallic 0, roughness 1: the glTF
+    BRDF's diffuse lobe; its 4 % specular at roughness 1 is left out) or `principled` otherwise,
+    base colour, metallic-roughness (B, G), emissive and normal textures as bitmaps (decoded to
+    linear here), emission as an area emitter, the first camera, a box filter; `env` =
+    (equirectangular map, strength) as Mitsuba's `envmap` turned by half a turn about +Y, so that
+    directions meet the texels umbra gives them (Mitsuba's u is umbra's − 1/2, as
+    tests/reference/mitsuba_refs.py found). Meshes, materials, cameras and TRS/matrix nodes
+    only."""
     import mitsuba as mi
     doc, blob = read_glb(path)
     scene = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth, "rr_depth": rr_depth}}
     camera = None
+
+    def bitmap(texture, channels, linear_from_srgb, scale=1.0):
+        image = glb_image(doc, blob, texture)[:, :, channels]
+        if linear_from_srgb:
+            image = srgb_to_linear(image)
+        return {"type": "bitmap", "raw": True, "bitmap": mi.Bitmap(np.ascontiguousarray(image * scale))}
 
     def walk(index, parent):
         nonlocal camera
@@ -178,43 +252,65 @@ def mitsuba_scene(path, size, max_depth, rr_depth, work):
         world = parent @ node_matrix(node)
         if "camera" in node and camera is None:
             camera = (world, doc["cameras"][node["camera"]])
-        for p, prim in enumerate(doc["meshes"][node["mesh"]]["primitives"] if "mesh" in node else []):
-            positions = accessor(doc, blob, prim["attributes"]["POSITION"]).astype(np.float64)
-            positions = (np.c_[positions, np.ones(len(positions))] @ world.T)[:, :3]
-            faces = accessor(doc, blob, prim["indices"]).astype(np.uint32).reshape(-1, 3)
-            if np.linalg.det(world[:3, :3]) < 0:
-                faces = faces[:, ::-1]
-            mesh = mi.Mesh(f"node{index}-{p}", len(positions), len(faces), has_vertex_normals=False)
-            params = mi.traverse(mesh)
-            params["vertex_positions"] = mi.Float(positions.astype(np.float32).ravel())
-            params["faces"] = mi.UInt32(np.ascontiguousarray(faces).ravel())
-            params.update()
-            m = doc["materials"][prim.get("material", 0)] if "materials" in doc else {}
-            pbr = m.get("pbrMetallicRoughness", {})
-            base = pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]
-            metallic, roughness = pbr.get("metallicFactor", 1.0), pbr.get("roughnessFactor", 1.0)
-            if metallic == 0 and roughness == 1:
-                bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": base}}
-            else:
-                bsdf = {"type": "principled", "base_color": {"type": "rgb", "value": base},
-                        "metallic": metallic, "roughness": roughness}
-            # In a PLY beside the output: Mitsuba attaches a BSDF and an emitter to a shape it
-            # loads, not to a mesh built in memory.
-            ply = work / f"node{index}-{p}.ply"
-            mesh.write_ply(str(ply))
-            shape = {"type": "ply", "filename": str(ply), "face_normals": True, "bsdf": bsdf}
-            strength = m.get("extensions", {}).get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
-            emissive = [strength * e for e in m.get("emissiveFactor", [0, 0, 0])]
-            if any(emissive):
-                shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": emissive}}
-            scene[f"node{index}-{p}"] = shape
         for child in node.get("children", []):
             walk(child, world)
 
     for root in doc["scenes"][doc.get("scene", 0)]["nodes"]:
         walk(root, np.eye(4))
+    for index, p, prim, world in world_primitives(doc, blob):
+        m = doc["materials"][prim.get("material", 0)] if "materials" in doc else {}
+        pbr = m.get("pbrMetallicRoughness", {})
+        textured = any(k in m for k in ["normalTexture", "emissiveTexture"]) or any(
+            k in pbr for k in ["baseColorTexture", "metallicRoughnessTexture"])
+        positions = accessor(doc, blob, prim["attributes"]["POSITION"]).astype(np.float64)
+        positions = (np.c_[positions, np.ones(len(positions))] @ world.T)[:, :3]
+        faces = accessor(doc, blob, prim["indices"]).astype(np.uint32).reshape(-1, 3)
+        if np.linalg.det(world[:3, :3]) < 0:
+            faces = faces[:, ::-1]
+        mesh = mi.Mesh(f"node{index}-{p}", len(positions), len(faces), has_vertex_normals=textured,
+                       has_vertex_texcoords=textured)
+        params = mi.traverse(mesh)
+        params["vertex_positions"] = mi.Float(positions.astype(np.float32).ravel())
+        params["faces"] = mi.UInt32(np.ascontiguousarray(faces).ravel())
+        if textured:
+            normals = accessor(doc, blob, prim["attributes"]["NORMAL"]).astype(np.float64)
+            normals = normals @ np.linalg.inv(world[:3, :3])
+            normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+            params["vertex_normals"] = mi.Float(normals.astype(np.float32).ravel())
+            params["vertex_texcoords"] = mi.Float(accessor(doc, blob, prim["attributes"]["TEXCOORD_0"]).astype(np.float32).ravel())
+        params.update()
+        base = pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]
+        metallic, roughness = pbr.get("metallicFactor", 1.0), pbr.get("roughnessFactor", 1.0)
+        if metallic == 0 and roughness == 1 and not textured:
+            bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": base}}
+        else:
+            bsdf = {"type": "principled", "base_color": {"type": "rgb", "value": base},
+                    "metallic": metallic, "roughness": roughness}
+            if "baseColorTexture" in pbr:
+                bsdf["base_color"] = bitmap(pbr["baseColorTexture"]["index"], [0, 1, 2], True, np.array(base, np.float32))
+            if "metallicRoughnessTexture" in pbr:
+                bsdf["metallic"] = bitmap(pbr["metallicRoughnessTexture"]["index"], [2], False, metallic)
+                bsdf["roughness"] = bitmap(pbr["metallicRoughnessTexture"]["index"], [1], False, roughness)
+            if "normalTexture" in m:
+                bsdf = {"type": "normalmap", "normalmap": bitmap(m["normalTexture"]["index"], [0, 1, 2], False), "bsdf": bsdf}
+        # In a PLY beside the output: Mitsuba attaches a BSDF and an emitter to a shape it
+        # loads, not to a mesh built in memory.
+        ply = Path(work) / f"node{index}-{p}.ply"
+        mesh.write_ply(str(ply))
+        shape = {"type": "ply", "filename": str(ply), "face_normals": not textured, "bsdf": bsdf}
+        strength = m.get("extensions", {}).get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
+        emissive = [strength * e for e in m.get("emissiveFactor", [0, 0, 0])]
+        if any(emissive):
+            radiance = {"type": "rgb", "value": emissive}
+            if "emissiveTexture" in m:
+                radiance = bitmap(m["emissiveTexture"]["index"], [0, 1, 2], True, np.array(emissive, np.float32))
+            shape["emitter"] = {"type": "area", "radiance": radiance}
+        scene[f"node{index}-{p}"] = shape
     if camera is None:
         raise SystemExit(f"{path}: the scene has no camera")
+    if env is not None:
+        scene["environment"] = {"type": "envmap", "filename": str(env[0]), "scale": env[1],
+                                "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], 180)}
     world, cam = camera
     origin = world[:3, 3]
     forward = -world[:3, 2] / np.linalg.norm(world[:3, 2])
@@ -240,6 +336,8 @@ def umbra_render(args, spp, seed, out):
     command = [args.umbra, "render", args.scene, "--size", args.size, "--spp", str(spp), "--seed", str(seed),
                "--max-bounces", str(args.max_bounces), "--rr-depth", str(args.rr_depth),
                "--exr", str(exr), "-o", str(exr.with_suffix(".png"))]
+    if args.env:
+        command += ["--env", args.env, "--env-strength", str(args.env_strength)]
     run = subprocess.run(command, check=True, capture_output=True, text=True)
     line = next(l for l in run.stdout.splitlines() + run.stderr.splitlines() if l.startswith("pathtrace:"))
     gpu_ms = float(line.split("(GPU ")[1].split(" ms")[0])
@@ -270,7 +368,9 @@ def path(args):
     out.mkdir(parents=True, exist_ok=True)
     size = tuple(int(v) for v in args.size.lower().split("x"))
     spps = [int(v) for v in args.spp.split(",")]
-    scene = mitsuba_scene(args.scene, size, args.max_bounces + 1, args.rr_depth + 1, out)
+    args.scene = with_camera(args.scene, out)
+    env = (args.env, args.env_strength) if args.env else None
+    scene = mitsuba_scene(args.scene, size, args.max_bounces + 1, args.rr_depth + 1, out, env)
     print(f"references: {args.reference_spp} spp each", flush=True)
     references = {"umbra": umbra_render(args, args.reference_spp, 99, out)[0],
                   "mitsuba": mitsuba_render(scene, args.reference_spp, 99)[0]}
@@ -289,7 +389,7 @@ def path(args):
               f"Mitsuba {row['mitsuba']['ms']:8.1f} ms rel MSE {row['mitsuba']['rel_mse']:.2e}; "
               f"umbra needs {row['ratio']:.2f}x Mitsuba's time for equal error", flush=True)
         rows.append(row)
-    doc = {"scene": args.scene, "size": size, "max_bounces": args.max_bounces, "rr_depth": args.rr_depth,
+    doc = {"scene": args.scene, "env": args.env, "size": size, "max_bounces": args.max_bounces, "rr_depth": args.rr_depth,
            "reference_spp": args.reference_spp, "references_rel_mse": between,
            "renderers": {"umbra": "umbra render (GPU timestamps)", "mitsuba": f"Mitsuba {mi.__version__} llvm_ad_rgb path, {dr.thread_count()} threads (wall)"},
            "rows": rows}
@@ -300,7 +400,8 @@ def path(args):
 
 def path_table(doc):
     """The Markdown table of path.json."""
-    lines = [f"| {Path(doc['scene']).name} {doc['size'][0]}×{doc['size'][1]}, {doc['max_bounces']} bounces | umbra ms | umbra rel. MSE "
+    lit = f" under {Path(doc['env']).name}" if doc.get("env") else ""
+    lines = [f"| {Path(doc['scene']).name}{lit} {doc['size'][0]}×{doc['size'][1]}, {doc['max_bounces']} bounces | umbra ms | umbra rel. MSE "
              "| Mitsuba ms | Mitsuba rel. MSE | umbra / Mitsuba time at equal error |", "|---:|---:|---:|---:|---:|---:|"]
     for r in doc["rows"]:
         lines.append(f"| {r['spp']} spp | {r['umbra']['ms']:.1f} | {r['umbra']['rel_mse']:.2e} | {r['mitsuba']['ms']:.1f} "
@@ -326,6 +427,8 @@ def main():
     p.add_argument("--reference-spp", type=int, default=4096, help="each renderer's reference")
     p.add_argument("--max-bounces", type=int, default=8, help="umbra's --max-bounces (Mitsuba max_depth = this + 1)")
     p.add_argument("--rr-depth", type=int, default=5, help="Russian roulette from this many bounces, both")
+    p.add_argument("--env", help="an equirectangular environment map (EXR) lighting the scene in both")
+    p.add_argument("--env-strength", type=float, default=1.0, help="its multiplier")
     p.add_argument("--out", default="out/bench/peers", help="where to write path.json")
     t = commands.add_parser("table", help="print the Markdown table of a peers.json or path.json")
     t.add_argument("json")

@@ -208,6 +208,17 @@ impl Shared {
     }
 }
 
+/// The instances and devices umbra creates for itself are created and destroyed one at a time
+/// in a process. The API allows it concurrently, but drivers and the validation layers have
+/// been seen to race there (reports against NVIDIA's driver and the layers from wgpu, blade and
+/// ggml users; umbra's own parallel tests died twice of SIGSEGV at start-up in CI on lavapipe),
+/// and a context is made rarely, so the lock costs nothing that matters.
+static LIFETIME: Mutex<()> = Mutex::new(());
+
+fn lifetime_lock() -> MutexGuard<'static, ()> {
+    LIFETIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 impl Drop for Shared {
     fn drop(&mut self) {
         // SAFETY: every resource holds an Arc<Shared>, so none is alive any more; wait for the
@@ -227,6 +238,7 @@ impl Drop for Shared {
             self.device.destroy_pipeline_cache(self.pipeline_cache, None);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owned {
+                let _one_at_a_time = lifetime_lock();
                 self.device.destroy_device(None);
                 if let Some((utils, messenger)) = self.debug.take() {
                     utils.destroy_debug_utils_messenger(messenger, None);
@@ -255,6 +267,7 @@ If VK_DRIVER_FILES or VK_ICD_FILENAMES is set, check that it names an existing d
 impl Context {
     /// Creates umbra's own headless instance and device.
     pub fn new(desc: &ContextDesc) -> Result<Self> {
+        let _one_at_a_time = lifetime_lock();
         let validation = desc.validation.unwrap_or_else(|| env_flag("UMBRA_VALIDATION"));
         let filter = desc.device.clone().or_else(|| std::env::var("UMBRA_DEVICE").ok());
         // SAFETY: loading the system's Vulkan loader library.
@@ -480,6 +493,7 @@ impl Context {
 
     /// Lists every Vulkan device's name and type, for `umbra info`.
     pub fn list_devices() -> Result<Vec<(String, vk::PhysicalDeviceType)>> {
+        let _one_at_a_time = lifetime_lock();
         // SAFETY: loading the system's Vulkan loader library.
         let entry = unsafe { ash::Entry::load() }
             .map_err(|e| Error::NoDevice(format!("the Vulkan loader could not be loaded: {e}")))?;

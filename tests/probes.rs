@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{build_with, camera, cuboid, light, quad, Gpu};
+use common::{baked_probes, build_with, camera, cuboid, inside_out_sphere, light, quad, Gpu};
 use glam::Vec3;
 use umbra::gpu::layout::PROBE_ACTIVE;
 use umbra::gpu::scene::GpuScene;
@@ -82,19 +82,12 @@ fn lambert(rho: f32, emit: f32) -> Material {
 fn probes_in_a_glowing_room_hold_the_closed_form() {
     let gpu = Gpu::new();
     let (rho, le) = (0.5f32, 1.0f32);
-    let sphere: Vec<[Vec3; 3]> = umbra::procedural::icosphere(3, Vec3::ZERO, 1.0)
-        .soup()
-        .into_iter()
-        .map(|[a, b, c]| [a, c, b])
-        .collect();
+    let sphere = inside_out_sphere(3);
     let scene =
         build_with("glowing room", &[(sphere, lambert(rho, le))], vec![], camera(Vec3::ZERO, Vec3::NEG_Z));
-    let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let passes = Passes::new(&gpu, &gpu_scene);
     let grid = ProbeGrid { origin: [-0.4; 3], spacing: [0.4; 3], counts: [3, 3, 3] };
     let settings = ProbeSettings { rays: 128, bounces: 12, sweeps: 16, ..Default::default() };
-    let mut volume = ProbeVolume::with_grid(&gpu, grid, &settings).unwrap();
-    passes.bake_probes(&gpu_scene, &mut volume, &LightingSettings::default(), |_, _| {}).unwrap();
+    let volume = baked_probes(&gpu, &scene, grid, &settings);
     let expected = std::f64::consts::PI * (rho * le / (1.0 - rho)) as f64;
     assert!(volume.read_active(&gpu).unwrap().iter().all(|a| *a), "every probe is inside the room");
     let irradiance = volume.read_irradiance(&gpu).unwrap();
@@ -189,12 +182,9 @@ fn a_probe_inside_a_wall_is_switched_off() {
         vec![light(LightKind::Point, Vec3::new(-1.0, 1.0, 0.0), Vec3::NEG_Y, 20.0)],
         camera(Vec3::new(0.25, 1.0, 0.0), Vec3::new(0.25, 0.0, 0.0)),
     );
-    let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let passes = Passes::new(&gpu, &gpu_scene);
     let grid = ProbeGrid { origin: [-1.0, 0.5, -1.0], spacing: [1.0; 3], counts: [3, 2, 3] };
     let settings = ProbeSettings { rays: 64, bounces: 1, sweeps: 1, ..Default::default() };
-    let mut volume = ProbeVolume::with_grid(&gpu, grid, &settings).unwrap();
-    passes.bake_probes(&gpu_scene, &mut volume, &LightingSettings::default(), |_, _| {}).unwrap();
+    let volume = baked_probes(&gpu, &scene, grid, &settings);
     let states = volume.read_states(&gpu).unwrap();
     for (i, state) in states.iter().enumerate() {
         let inside = grid.position(i as u32)[0] == 0.0;

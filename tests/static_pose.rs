@@ -173,6 +173,12 @@ fn morphed_quads_render_where_the_weights_put_them() {
     assert!((depth - 2.5).abs() < 1e-4, "view depth {depth} at the centre, expected 2.5");
 }
 
+/// A `JOINTS_0` accessor of unsigned shorts (VEC4), one entry per vertex.
+fn joints_accessor(doc: &mut Doc, joints: &[[u16; 4]]) -> usize {
+    let bytes: Vec<u8> = joints.iter().flatten().flat_map(|j| j.to_le_bytes()).collect();
+    doc.accessor(&bytes, 5123, 4, "VEC4", json!({}))
+}
+
 /// A skinned quad: vertices 0 and 1 bound to joint 0, vertex 2 to joint 1, vertex 3 half to
 /// each; normals (1, 0, 1)/√2. Joint 0 (node 1) is the root, joint 1 (node 2) its child, bound
 /// at (0, 1, 0) (inverse bind matrices: identity, translation (0, −1, 0)). At rest (the nodes'
@@ -184,12 +190,7 @@ fn skin_file(edit: impl FnOnce(&mut Doc)) -> Vec<u8> {
     let mut doc = Doc::new();
     let mut primitive =
         doc.quad(&CORNERS, [std::f32::consts::FRAC_1_SQRT_2, 0.0, std::f32::consts::FRAC_1_SQRT_2]);
-    let joints: Vec<u8> = [[0u16, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0]]
-        .iter()
-        .flatten()
-        .flat_map(|j| j.to_le_bytes())
-        .collect();
-    let joints = doc.accessor(&joints, 5123, 4, "VEC4", json!({}));
+    let joints = joints_accessor(&mut doc, &[[0, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0]]);
     let weights = doc.floats(
         &[[1.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.5, 0.5, 0.0, 0.0]],
         json!({}),
@@ -286,12 +287,7 @@ fn malformed_skins_and_morphs_are_clear_errors() {
     let load = |edit: fn(&mut Doc)| Scene::from_glb_bytes("bad-skin.gltf", &skin_file(edit));
     assert_error(
         load(|doc| {
-            let bad: Vec<u8> = [[0u16, 0, 0, 0], [5, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0]]
-                .iter()
-                .flatten()
-                .flat_map(|j| j.to_le_bytes())
-                .collect();
-            let bad = doc.accessor(&bad, 5123, 4, "VEC4", json!({}));
+            let bad = joints_accessor(doc, &[[0, 0, 0, 0], [5, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0]]);
             doc.json["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = json!(bad);
         }),
         "mesh 0 ('skinned') primitive 0 (skinned by node 0 ('skinned')): JOINTS_0 of vertex 1 refers to joint 5, but the skin has 2 joints",

@@ -8,14 +8,14 @@ mod common;
 #[path = "support/generate.rs"]
 mod generate;
 
-use common::{build, build_with, camera, cuboid, light, quad, Gpu};
+use common::{baked_probes, build, build_with, camera, cuboid, inside_out_sphere, light, quad, Gpu};
 use glam::Vec3;
 use serde_json::json;
 use umbra::color::{srgb_decode, srgb_encode};
 use umbra::gpu::scene::GpuScene;
 use umbra::gpu::SceneFeatures;
 use umbra::passes::deferred::LightingSettings;
-use umbra::passes::probes::{ProbeGrid, ProbeSettings, ProbeVolume};
+use umbra::passes::probes::{ProbeGrid, ProbeSettings};
 use umbra::render::{hybrid, path_trace, HybridSettings, Passes, PathSettings};
 use umbra::scene::{LightKind, Material, Sampler, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
 
@@ -151,18 +151,11 @@ fn an_unlit_box_lights_like_a_constant_sky() {
 fn probes_see_unlit_walls_as_their_colour() {
     let gpu = Gpu::new();
     let wall = [0.5f32, 0.3, 0.1];
-    let sphere: Vec<[Vec3; 3]> = umbra::procedural::icosphere(2, Vec3::ZERO, 1.0)
-        .soup()
-        .into_iter()
-        .map(|[a, b, c]| [a, c, b])
-        .collect();
+    let sphere = inside_out_sphere(2);
     let scene = build_with("unlit room", &[(sphere, unlit(wall))], vec![], camera(Vec3::ZERO, Vec3::NEG_Z));
-    let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let passes = Passes::new(&gpu, &gpu_scene);
     let grid = ProbeGrid { origin: [-0.3; 3], spacing: [0.6; 3], counts: [2, 2, 2] };
     let settings = ProbeSettings { rays: 64, bounces: 2, sweeps: 4, ..Default::default() };
-    let mut volume = ProbeVolume::with_grid(&gpu, grid, &settings).unwrap();
-    passes.bake_probes(&gpu_scene, &mut volume, &LightingSettings::default(), |_, _| {}).unwrap();
+    let volume = baked_probes(&gpu, &scene, grid, &settings);
     assert!(volume.read_active(&gpu).unwrap().iter().all(|a| *a), "every probe is inside the room");
     let mut worst = 0.0f32;
     for texel in volume.read_irradiance(&gpu).unwrap() {

@@ -226,3 +226,27 @@ pub fn base64(bytes: &[u8]) -> String {
     }
     out
 }
+
+/// A unit icosphere around the origin with `subdivisions`, its triangles wound to face inwards:
+/// a closed room seen from inside.
+pub fn inside_out_sphere(subdivisions: u32) -> Vec<[Vec3; 3]> {
+    umbra::procedural::icosphere(subdivisions, Vec3::ZERO, 1.0)
+        .soup()
+        .into_iter()
+        .map(|[a, b, c]| [a, c, b])
+        .collect()
+}
+
+/// `scene` uploaded and a probe volume over `grid` baked in it (default lighting settings).
+pub fn baked_probes(
+    gpu: &Gpu,
+    scene: &Scene,
+    grid: umbra::passes::probes::ProbeGrid,
+    settings: &umbra::passes::probes::ProbeSettings,
+) -> umbra::passes::probes::ProbeVolume {
+    let gpu_scene = umbra::gpu::scene::GpuScene::upload(gpu, scene).unwrap();
+    let passes = umbra::render::Passes::new(gpu, &gpu_scene);
+    let mut volume = umbra::passes::probes::ProbeVolume::with_grid(gpu, grid, settings).unwrap();
+    passes.bake_probes(&gpu_scene, &mut volume, &Default::default(), |_, _| {}).unwrap();
+    volume
+}

@@ -172,7 +172,7 @@ void main() {
     uvec4 mat = imageLoad(gb_material, pixel);
     vec3 radiance = imageLoad(gb_emission, pixel).rgb;
     // KHR_materials_unlit: the base colour (factor x texture x COLOR_0) as it is, no lighting.
-    if (HAS_UNLIT && (material_uvec(mat.x, 4u).x & MATERIAL_UNLIT) != 0u) {
+    if (material_unlit(mat.x)) {
         imageStore(out_color, pixel, vec4(base_metal.rgb, 1.0));
         return;
     }

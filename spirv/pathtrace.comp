@@ -127,7 +127,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
     vec3 wo = -dir;
     vec3 p = path.origin + hit.t * dir;
     uint material = tri_material(tri);
-    if (HAS_TRANSMISSION && dot(ng, wo) < 0.0 && (material_uvec(material, 4u).x & MATERIAL_VOLUME) != 0u) {
+    if (HAS_TRANSMISSION && dot(ng, wo) < 0.0 && material_flag(material, MATERIAL_VOLUME)) {
         // A volume's boundary reached from behind: the segment ran inside it (a closed mesh
         // whose normals face out, as KHR_materials_volume requires), so Beer-Lambert.
         throughput *= exp(-material_attenuation(material) * hit.t);
@@ -170,7 +170,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
     }
     // KHR_materials_unlit, modelled as an emitter of its base colour that scatters nothing: the
     // path ends here, and no light sampling finds it (BSDF-sampled rays alone, weight 1).
-    if (HAS_UNLIT && (material_uvec(material, 4u).x & MATERIAL_UNLIT) != 0u) {
+    if (material_unlit(material)) {
         path.radiance += throughput * s.base;
         return false;
     }

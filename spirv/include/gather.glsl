@@ -38,7 +38,7 @@ vec3 gather_radiance(vec3 origin, vec3 dir, vec3 env, uvec2 env_size, uint light
     vec3 ng = normalize(tri_normal(tri));
     vec3 wo = -dir;
     uint material = tri_material(tri);
-    bool two_sided = (material_uvec(material, 4u).x & MATERIAL_DOUBLE_SIDED) != 0u;
+    bool two_sided = material_flag(material, MATERIAL_DOUBLE_SIDED);
     bool front = dot(ng, wo) >= 0.0;
     if (!front && !two_sided) {
         back_face = true;
@@ -56,7 +56,7 @@ vec3 gather_radiance(vec3 origin, vec3 dir, vec3 env, uvec2 env_size, uint light
     vec3 wo_local = vec3(dot(wo, tt), dot(wo, bt), dot(wo, n));
     Surface s = material_surface(material, uv);
     s.base *= tri_color(tri, hit.bary).rgb;
-    if (HAS_UNLIT && (material_uvec(material, 4u).x & MATERIAL_UNLIT) != 0u) {
+    if (material_unlit(material)) {
         return s.base;
     }
     vec3 radiance = vec3(0.0);

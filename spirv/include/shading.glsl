@@ -27,6 +27,19 @@ uvec4 material_uvec(uint id, uint k) {
     return imageLoad(material_texels, int(MATERIAL_TEXELS * id + k));
 }
 
+// Whether material `id` has `flag` (MATERIAL_DOUBLE_SIDED, MATERIAL_VOLUME, MATERIAL_UNLIT).
+bool material_flag(uint id, uint flag) {
+    return (material_uvec(id, 4u).x & flag) != 0u;
+}
+
+// Whether material `id` is unlit (KHR_materials_unlit); false in kernels not specialised for it.
+bool material_unlit(uint id) {
+    if (HAS_UNLIT) {
+        return material_flag(id, MATERIAL_UNLIT);
+    }
+    return false;
+}
+
 // The volume's attenuation coefficient rgb per unit length (KHR_materials_volume; 0 without one).
 vec3 material_attenuation(uint id) {
     return uintBitsToFloat(material_uvec(id, 4u).yzw);
@@ -172,7 +185,7 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         // straight on, so Walter et al.'s refraction half vector is 0/0 there (NaN weights). It
         // transmits as thin-walled glass does (straight through where smooth); the volume's
         // attenuation still applies (it keys on MATERIAL_VOLUME, not on `thin`).
-        s.thin = (material_uvec(id, 4u).x & MATERIAL_VOLUME) == 0u || ior == 1.0;
+        s.thin = !material_flag(id, MATERIAL_VOLUME) || ior == 1.0;
     }
     return s;
 }
@@ -287,7 +300,7 @@ vec2 ray_cone_lod(uint tri, float width, vec3 dir, vec3 ng) {
 vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
     uint m = tri_material(tri);
     bool front = dot(n, towards) > 0.0;
-    bool two_sided = (material_uvec(m, 4u).x & MATERIAL_DOUBLE_SIDED) != 0u;
+    bool two_sided = material_flag(m, MATERIAL_DOUBLE_SIDED);
     if (!(front || two_sided)) {
         return vec3(0.0);
     }

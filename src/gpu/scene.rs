@@ -256,48 +256,51 @@ impl ShadingArrays {
         let materials = scene
             .materials
             .iter()
-            .map(|m| GpuMaterial {
-                // In MATERIAL_SLOT_* order.
-                textures: [
-                    [
-                        gpu_textures.slot(scene, m.base_color_texture.as_ref()),
-                        gpu_textures.slot(scene, m.metallic_roughness_texture.as_ref()),
-                        gpu_textures.slot(scene, m.emissive_texture.as_ref()),
-                        if scene.tangents.is_empty() {
-                            0
-                        } else {
-                            gpu_textures.slot(scene, m.normal_texture.as_ref())
-                        },
+            .map(|m| {
+                let sigma = m.attenuation();
+                GpuMaterial {
+                    // In MATERIAL_SLOT_* order.
+                    textures: [
+                        [
+                            gpu_textures.slot(scene, m.base_color_texture.as_ref()),
+                            gpu_textures.slot(scene, m.metallic_roughness_texture.as_ref()),
+                            gpu_textures.slot(scene, m.emissive_texture.as_ref()),
+                            if scene.tangents.is_empty() {
+                                0
+                            } else {
+                                gpu_textures.slot(scene, m.normal_texture.as_ref())
+                            },
+                        ],
+                        [gpu_textures.slot(scene, m.occlusion_texture.as_ref()), 0, 0, 0],
                     ],
-                    [gpu_textures.slot(scene, m.occlusion_texture.as_ref()), 0, 0, 0],
-                ],
-                tex_transform: transforms([
-                    m.base_color_texture.as_ref(),
-                    m.metallic_roughness_texture.as_ref(),
-                    m.emissive_texture.as_ref(),
-                    m.normal_texture.as_ref(),
-                    m.occlusion_texture.as_ref(),
-                ]),
-                base_color: m.base_color_factor,
-                emissive_rough: {
-                    let e = m.emission();
-                    [e[0], e[1], e[2], m.roughness]
-                },
-                specular: [
-                    m.specular_color_factor[0],
-                    m.specular_color_factor[1],
-                    m.specular_color_factor[2],
-                    m.specular_factor,
-                ],
-                params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
-                flags: [
-                    if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
-                        | if m.volume { GpuMaterial::VOLUME } else { 0 }
-                        | if m.unlit { GpuMaterial::UNLIT } else { 0 },
-                    m.attenuation()[0].to_bits(),
-                    m.attenuation()[1].to_bits(),
-                    m.attenuation()[2].to_bits(),
-                ],
+                    tex_transform: transforms([
+                        m.base_color_texture.as_ref(),
+                        m.metallic_roughness_texture.as_ref(),
+                        m.emissive_texture.as_ref(),
+                        m.normal_texture.as_ref(),
+                        m.occlusion_texture.as_ref(),
+                    ]),
+                    base_color: m.base_color_factor,
+                    emissive_rough: {
+                        let e = m.emission();
+                        [e[0], e[1], e[2], m.roughness]
+                    },
+                    specular: [
+                        m.specular_color_factor[0],
+                        m.specular_color_factor[1],
+                        m.specular_color_factor[2],
+                        m.specular_factor,
+                    ],
+                    params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
+                    flags: [
+                        if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
+                            | if m.volume { GpuMaterial::VOLUME } else { 0 }
+                            | if m.unlit { GpuMaterial::UNLIT } else { 0 },
+                        sigma[0].to_bits(),
+                        sigma[1].to_bits(),
+                        sigma[2].to_bits(),
+                    ],
+                }
             })
             .collect();
         let punctual = punctual_lights(scene);

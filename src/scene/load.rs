@@ -7,7 +7,7 @@ use super::skin;
 use super::source::{self, Asset, Origin};
 use super::texture::TextureSet;
 use super::LoadOptions;
-use super::{Camera, EmissiveTable, Instance, Light, Material, Scene};
+use super::{Camera, Instance, Light, Material, Scene};
 use crate::error::Result;
 use glam::{Mat3, Mat4, Quat, Vec3};
 use std::collections::HashMap;
@@ -38,13 +38,7 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     scene.warnings.extend(warnings);
     scene.warnings.extend(asset.ignored_extensions.clone());
     scene.warnings.extend(posed);
-    scene.emissive = EmissiveTable::build(
-        &scene.positions,
-        &scene.triangles,
-        &scene.triangle_material,
-        &scene.materials,
-        &scene.textures,
-    );
+    scene.update_emissive();
     if log::log_enabled!(log::Level::Debug) {
         log::debug!("{name}: {:?}", scene.stats());
     }

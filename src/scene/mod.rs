@@ -255,13 +255,7 @@ impl Scene {
     /// Recomputes the emissive-triangle table from the current triangles and materials (after
     /// building a scene in code, or changing emission).
     pub fn update_emissive(&mut self) {
-        self.emissive = EmissiveTable::build(
-            &self.positions,
-            &self.triangles,
-            &self.triangle_material,
-            &self.materials,
-            &self.textures,
-        );
+        self.emissive = EmissiveTable::build(self);
     }
 
     /// A stable 64-bit hash ([`ContentHasher`]) of everything light transport reads, the same

@@ -138,8 +138,9 @@ impl Texture {
         h.bytes(rgba8);
     }
 
-    /// Mean linear luminance (Rec. 709) of the RGB texels, decoding sRGB first when `srgb`.
-    pub fn mean_luminance(&self) -> f32 {
+    /// Linear luminance (Rec. 709) of each texel's RGB, row by row, decoding sRGB first when
+    /// `srgb`.
+    pub fn luminances(&self) -> Vec<f32> {
         let decode: [f32; 256] = std::array::from_fn(|v| {
             let c = v as f32 / 255.0;
             if self.srgb {
@@ -148,14 +149,10 @@ impl Texture {
                 c
             }
         });
-        let texels = self.rgba8.chunks_exact(4);
-        let count = texels.len().max(1);
-        let sum: f64 = texels
-            .map(|p| {
-                f64::from(luminance([decode[p[0] as usize], decode[p[1] as usize], decode[p[2] as usize]]))
-            })
-            .sum();
-        (sum / count as f64) as f32
+        self.rgba8
+            .chunks_exact(4)
+            .map(|p| luminance([decode[p[0] as usize], decode[p[1] as usize], decode[p[2] as usize]]))
+            .collect()
     }
 }
 

@@ -16,6 +16,26 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// An output path whose extension is `extension` (any case), so that a wrong one is refused
+/// before a long render rather than after it.
+fn parse_output(s: &str, extension: &str, other: &str) -> Result<std::path::PathBuf, String> {
+    let path = std::path::PathBuf::from(s);
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case(extension) => Ok(path),
+        _ => Err(format!("'{s}': the file name must end in .{extension} ({other})")),
+    }
+}
+
+/// A PNG output path (`.png`).
+pub fn parse_png(s: &str) -> Result<std::path::PathBuf, String> {
+    parse_output(s, "png", "--exr writes EXR")
+}
+
+/// An EXR output path (`.exr`).
+pub fn parse_exr(s: &str) -> Result<std::path::PathBuf, String> {
+    parse_output(s, "exr", "-o writes PNG")
+}
+
 /// Three comma-separated numbers, if `s` holds three and `ok` accepts them.
 fn parse_three(s: &str, ok: impl Fn(&[f32; 3]) -> bool) -> Option<Result<[f32; 3], String>> {
     let v: Result<Vec<f32>, _> = s.split(',').map(|c| c.trim().parse::<f32>()).collect();

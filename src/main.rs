@@ -34,10 +34,10 @@ enum Command {
         #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
         size: (u32, u32),
         /// PNG output path.
-        #[arg(short, long, default_value = "pattern.png")]
+        #[arg(short, long, default_value = "pattern.png", value_parser = cli::parse_png)]
         output: PathBuf,
         /// Optional EXR output path (linear values).
-        #[arg(long)]
+        #[arg(long, value_parser = cli::parse_exr)]
         exr: Option<PathBuf>,
     },
 }
@@ -277,10 +277,10 @@ struct RenderArgs {
     #[arg(long)]
     ao_no_blur: bool,
     /// PNG output (tonemapped sRGB).
-    #[arg(short, long, default_value = "umbra.png")]
+    #[arg(short, long, default_value = "umbra.png", value_parser = cli::parse_png)]
     output: PathBuf,
     /// EXR output: linear colour, albedo, normal, depth and variance layers.
-    #[arg(long)]
+    #[arg(long, value_parser = cli::parse_exr)]
     exr: Option<PathBuf>,
 }
 

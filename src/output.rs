@@ -75,6 +75,13 @@ pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<Channel>)> {
 
 /// Writes 8-bit sRGB RGBA as PNG.
 pub fn write_png(path: &Path, width: u32, height: u32, srgb8: &[u8]) -> Result<()> {
-    image::save_buffer(path, srgb8, width, height, image::ExtendedColorType::Rgba8)
-        .map_err(|e| Error::Image { path: path.to_path_buf(), message: e.to_string() })
+    image::save_buffer_with_format(
+        path,
+        srgb8,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| Error::Image { path: path.to_path_buf(), message: e.to_string() })
 }

@@ -56,7 +56,9 @@ fn absurd_size_is_rejected_by_the_parser() {
 }
 
 /// Every number on the command line is checked by the parser: NaN, infinities, negatives and
-/// zeros where they make no sense are refused naming the flag and the value, before any work.
+/// zeros where they make no sense are refused naming the flag and the value, before any work;
+/// so are output names whose extension is not the format written (once found only after the
+/// render, which was then lost).
 #[test]
 fn non_finite_and_negative_numbers_are_rejected_by_the_parser() {
     for (flag, value, says) in [
@@ -68,6 +70,8 @@ fn non_finite_and_negative_numbers_are_rejected_by_the_parser() {
         ("--target-error", "NaN", "not a finite number"),
         ("--env-color", "1,nan,1", "non-negative numbers"),
         ("--spp", "-4", "not in 0..=4294967295"),
+        ("--output", "out.exr", "must end in .png (--exr writes EXR)"),
+        ("--exr", "out.png", "must end in .exr"),
     ] {
         let out = umbra().args(["render", &format!("{flag}={value}")]).output().expect("run umbra");
         let stderr = String::from_utf8_lossy(&out.stderr);

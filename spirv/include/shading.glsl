@@ -157,7 +157,8 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
     }
     vec4 r0 = material_slot_row(id, slot, 0u);
     vec4 r1 = material_slot_row(id, slot, 1u);
-    float texel_area = float(texture_info(tex).y) * float(texture_info(tex).z) * abs(r0.x * r1.y - r0.y * r1.x);
+    uvec4 info = texture_info(tex);
+    float texel_area = float(info.y) * float(info.z) * abs(r0.x * r1.y - r0.y * r1.x);
     float lod = (r0.w != 0.0 ? cone_lod.y : cone_lod.x) + 0.5 * log2(texel_area);
     return texture_sample_lod(tex, t, lod);
 }

@@ -43,9 +43,10 @@ int texture_wrap(int i, int size, bool clamp_mode, bool mirror) {
     return texture_mod(i, size);
 }
 
-// Texel (x, y), wrapped, of the w × h level that starts at texel `offset` of texture `tex`.
-vec4 texture_texel_at(uint tex, uint offset, int w, int h, int x, int y) {
-    uint flags = texture_info(tex).w;
+// Texel (x, y), wrapped, of the w × h level that starts at texel `offset` of a texture with
+// `flags` (texture_info(tex).w: read once per lookup by the callers, as the info of every
+// lookup's texture is; CPU devices load a texel buffer per lane, and nothing merges the loads).
+vec4 texture_texel_at(uint flags, uint offset, int w, int h, int x, int y) {
     x = texture_wrap(x, w, (flags & TEXTURE_WRAP_S_CLAMP) != 0u, (flags & TEXTURE_WRAP_S_MIRROR) != 0u);
     y = texture_wrap(y, h, (flags & TEXTURE_WRAP_T_CLAMP) != 0u, (flags & TEXTURE_WRAP_T_MIRROR) != 0u);
     uint bits = texture_word(offset + uint(y * w + x));
@@ -60,35 +61,40 @@ vec4 texture_texel_at(uint tex, uint offset, int w, int h, int x, int y) {
 }
 
 vec4 texture_texel(uint tex, int x, int y) {
-    return texture_texel_at(tex, texture_info(tex).x, int(texture_info(tex).y), int(texture_info(tex).z), x, y);
+    uvec4 info = texture_info(tex);
+    return texture_texel_at(info.w, info.x, int(info.y), int(info.z), x, y);
 }
 
-// One level (w × h texels from `offset`) at uv: bilinear when `linear`, else the nearest texel.
-vec4 texture_filter(uint tex, uint offset, int w, int h, vec2 uv, bool linear) {
+// One level (w × h texels from `offset`) of a texture with `flags` at uv: bilinear when
+// `linear`, else the nearest texel.
+vec4 texture_filter(uint flags, uint offset, int w, int h, vec2 uv, bool linear) {
     vec2 size = vec2(float(w), float(h));
     if (!linear) {
         ivec2 p = ivec2(floor(uv * size));
-        return texture_texel_at(tex, offset, w, h, p.x, p.y);
+        return texture_texel_at(flags, offset, w, h, p.x, p.y);
     }
     vec2 st = uv * size - 0.5;
     vec2 f = fract(st);
     ivec2 p = ivec2(floor(st));
-    vec4 a = mix(texture_texel_at(tex, offset, w, h, p.x, p.y), texture_texel_at(tex, offset, w, h, p.x + 1, p.y), f.x);
-    vec4 b = mix(texture_texel_at(tex, offset, w, h, p.x, p.y + 1), texture_texel_at(tex, offset, w, h, p.x + 1, p.y + 1), f.x);
+    vec4 a = mix(texture_texel_at(flags, offset, w, h, p.x, p.y), texture_texel_at(flags, offset, w, h, p.x + 1, p.y),
+                 f.x);
+    vec4 b = mix(texture_texel_at(flags, offset, w, h, p.x, p.y + 1),
+                 texture_texel_at(flags, offset, w, h, p.x + 1, p.y + 1), f.x);
     return mix(a, b, f.y);
 }
 
 // Linear RGBA of texture `tex` at uv (v down, as glTF): level 0, magnification filter.
 vec4 texture_sample(uint tex, vec2 uv) {
-    return texture_filter(tex, texture_info(tex).x, int(texture_info(tex).y), int(texture_info(tex).z), uv,
-                          (texture_info(tex).w & TEXTURE_LINEAR) != 0u);
+    uvec4 info = texture_info(tex);
+    return texture_filter(info.w, info.x, int(info.y), int(info.z), uv, (info.w & TEXTURE_LINEAR) != 0u);
 }
 
-// Where mip level `level` of texture `tex` starts in the texel buffer, and its size.
-void texture_level(uint tex, uint level, out uint offset, out int w, out int h) {
-    offset = texture_info(tex).x;
-    w = int(texture_info(tex).y);
-    h = int(texture_info(tex).z);
+// Where mip level `level` of the texture with `info` (texture_info) starts in the texel buffer,
+// and its size.
+void texture_level(uvec4 info, uint level, out uint offset, out int w, out int h) {
+    offset = info.x;
+    w = int(info.y);
+    h = int(info.z);
     for (uint k = 0u; k < level; ++k) {
         offset += uint(w * h);
         w = max(w / 2, 1);
@@ -98,10 +104,11 @@ void texture_level(uint tex, uint level, out uint offset, out int w, out int h) 
 
 // Mip level `level` of texture `tex` at uv, with the minification filter.
 vec4 texture_sample_level(uint tex, uint level, vec2 uv) {
+    uvec4 info = texture_info(tex);
     uint offset;
     int w, h;
-    texture_level(tex, level, offset, w, h);
-    return texture_filter(tex, offset, w, h, uv, (texture_info(tex).w & TEXTURE_MIN_LINEAR) != 0u);
+    texture_level(info, level, offset, w, h);
+    return texture_filter(info.w, offset, w, h, uv, (info.w & TEXTURE_MIN_LINEAR) != 0u);
 }
 
 // Linear RGBA of texture `tex` at uv for level of detail `lod` (log2 of texels per pixel
@@ -112,7 +119,8 @@ vec4 texture_sample_lod(uint tex, vec2 uv, float lod) {
     // One code path for magnified and minified lanes (they share SIMD lanes on CPU devices, where
     // separate paths would both run): level l0 with the filter for its side of lod 0, and for
     // *_MIPMAP_LINEAR a second, coarser level only where the blend needs it.
-    uint flags = texture_info(tex).w;
+    uvec4 info = texture_info(tex);
+    uint flags = info.w;
     bool minified = lod > 0.0;
     uint top = texture_levels(tex) - 1u;
     float l = minified ? min(lod, float(top)) : 0.0;
@@ -121,14 +129,14 @@ vec4 texture_sample_lod(uint tex, vec2 uv, float lod) {
     bool linear = (flags & (minified ? TEXTURE_MIN_LINEAR : TEXTURE_LINEAR)) != 0u;
     uint offset;
     int w, h;
-    texture_level(tex, l0, offset, w, h);
-    vec4 a = texture_filter(tex, offset, w, h, uv, linear);
+    texture_level(info, l0, offset, w, h);
+    vec4 a = texture_filter(flags, offset, w, h, uv, linear);
     float f = l - float(l0);
     if (!mip_linear || l0 == top || !(f > 0.0)) {
         return a;
     }
     // The next level follows this one.
-    vec4 b = texture_filter(tex, offset + uint(w * h), max(w / 2, 1), max(h / 2, 1), uv, linear);
+    vec4 b = texture_filter(flags, offset + uint(w * h), max(w / 2, 1), max(h / 2, 1), uv, linear);
     return mix(a, b, f);
 }
 

@@ -131,7 +131,7 @@ fn texel_bytes(buffer: &str) -> Option<u64> {
         | "scene materials"
         | "scene lights"
         | "scene punctual lights" => Some(16),
-        "scene texels" => Some(4),
+        "scene texels" => Some(8),
         _ => None,
     }
 }
@@ -182,9 +182,9 @@ fn scene_buffer_sizes_are_checked_against_the_device_limit() {
     assert_eq!(vertices, std::mem::size_of_val(arrays.vertices.as_slice()) as u64);
     let texels = sizes.iter().find(|s| s.0 == "scene texels").unwrap().1;
     assert_eq!(texels, std::mem::size_of_val(arrays.texels.as_slice()) as u64);
-    assert!(texels >= 4 * (256 + 5 * 3), "the sRGB table, then a word per texel (and mips)");
+    assert!(texels >= 8 * (256 + 5 * 3), "the sRGB table, then two words per texel (and mips)");
     // A device that binds `bytes` in `buffer`'s kind of buffer: a storage buffer range in bytes,
-    // or as many texels of `buffer`'s size (the other texel format then binds 4× more or less:
+    // or as many texels of `buffer`'s size (the other texel format then binds 2× more or less:
     // one limit counts texels of either).
     let device = |buffer: &str, bytes: u64| {
         let mut info = gpu.info().clone();

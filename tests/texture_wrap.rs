@@ -52,7 +52,7 @@ fn repeat_and_mirror_wrapping_are_exact() {
     let output = Buffer::upload(&gpu, "wrapped", &vec![0i32; 2 * cases.len()], usage).unwrap();
     let textures =
         TexelBuffer::upload(&gpu, "no textures", &[0u32; 8], raw::Format::R32G32B32A32_UINT, 16).unwrap();
-    let texels = TexelBuffer::upload(&gpu, "no texels", &[0u32], raw::Format::R32_UINT, 4).unwrap();
+    let texels = TexelBuffer::upload(&gpu, "no texels", &[[0u32; 2]], raw::Format::R32G32_UINT, 8).unwrap();
     let pipeline = Pipeline::<texture_wrap_test::Kernel>::plain(&gpu).unwrap();
     gpu.submit(|cmd| {
         let resources = texture_wrap_test::Resources {

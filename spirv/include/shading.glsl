@@ -252,8 +252,7 @@ vec4 tri_uv(uint tri, vec2 bary) {
 vec4 vertex_color(uint i) {
     uint bits = floatBitsToUint(vertex_v_uv1(i).w);
     vec4 c = unpackUnorm4x8(bits);
-    c.rgb = vec3(uintBitsToFloat(texture_word(bits & 255u)), uintBitsToFloat(texture_word((bits >> 8) & 255u)),
-                 uintBitsToFloat(texture_word((bits >> 16) & 255u)));
+    c.rgb = vec3(srgb_table(bits & 255u), srgb_table((bits >> 8) & 255u), srgb_table((bits >> 16) & 255u));
     return c;
 }
 

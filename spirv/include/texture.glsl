@@ -1,18 +1,21 @@
-// Textures from one storage texel buffer of RGBA8 texels (no bindless on lavapipe): glTF wrap modes,
-// nearest or bilinear filtering, sRGB decoding before filtering, and mip chains (stored after
+// Textures from one storage texel buffer of linear RGBA16 texels (no bindless on lavapipe; sRGB
+// textures decoded at upload, so filtering is in linear space): glTF wrap modes,
+// nearest or bilinear filtering, and mip chains (stored after
 // level 0 where the sampler asks for them). texture_sample reads level 0: the path tracer's pixel
 // jitter integrates the footprint. texture_sample_lod filters for a level of detail, for kernels
 // that take one sample per pixel (the G-buffer's ray cones).
 //
 // The including kernel declares, before including this file:
 //   layout(rgba32ui) uniform readonly uimageBuffer texture_texels;  // GpuTextures, 2 texels each
-//   layout(r32ui) uniform readonly uimageBuffer scene_texels;  // the sRGB table (256 f32 bits),
-//                                                              // then RGBA8 texels
+//   layout(rg32ui) uniform readonly uimageBuffer scene_texels;  // the sRGB table (256 f32 bits
+//                                                               // in .x), then linear RGBA16
+//                                                               // texels (sRGB decoded at upload)
 // (a storage texel buffer, as the BVH's: see bvh.glsl)
 #ifndef UMBRA_TEXTURE_GLSL
 #define UMBRA_TEXTURE_GLSL
 
-uint texture_word(uint i) { return imageLoad(scene_texels, int(i)).x; }
+// Entry i of the sRGB decoding table at the head of scene_texels (vertex colours).
+float srgb_table(uint i) { return uintBitsToFloat(imageLoad(scene_texels, int(i)).x); }
 
 // GpuTexture `tex`: (offset, width, height, flags), then (levels, ...).
 uvec4 texture_info(uint tex) { return imageLoad(texture_texels, int(2u * tex)); }
@@ -49,15 +52,8 @@ int texture_wrap(int i, int size, bool clamp_mode, bool mirror) {
 vec4 texture_texel_at(uint flags, uint offset, int w, int h, int x, int y) {
     x = texture_wrap(x, w, (flags & TEXTURE_WRAP_S_CLAMP) != 0u, (flags & TEXTURE_WRAP_S_MIRROR) != 0u);
     y = texture_wrap(y, h, (flags & TEXTURE_WRAP_T_CLAMP) != 0u, (flags & TEXTURE_WRAP_T_MIRROR) != 0u);
-    uint bits = texture_word(offset + uint(y * w + x));
-    vec4 c = unpackUnorm4x8(bits);
-    if ((flags & TEXTURE_SRGB) != 0u) {
-        // Words 0..256 are the sRGB decoding table (src/gpu/scene.rs): exact, and far cheaper
-        // than pow on CPU devices.
-        c.rgb = vec3(uintBitsToFloat(texture_word(bits & 255u)), uintBitsToFloat(texture_word((bits >> 8) & 255u)),
-                     uintBitsToFloat(texture_word((bits >> 16) & 255u)));
-    }
-    return c;
+    uvec2 bits = imageLoad(scene_texels, int(offset + uint(y * w + x))).xy;
+    return vec4(unpackUnorm2x16(bits.x), unpackUnorm2x16(bits.y));
 }
 
 vec4 texture_texel(uint tex, int x, int y) {

@@ -692,7 +692,8 @@ gpu_constants! {
     TEXTURE_WRAP_T_MIRROR: uint = 8;
     /// `GpuTexture::flags`: bilinear magnification (otherwise nearest).
     TEXTURE_LINEAR: uint = 16;
-    /// `GpuTexture::flags`: decode sRGB to linear.
+    /// `GpuTexture::flags`: the image is sRGB-encoded colour (its texels are decoded to linear
+    /// when uploaded; no kernel reads this bit).
     TEXTURE_SRGB: uint = 32;
     /// `GpuTexture::flags`: bilinear within a level when minified (otherwise nearest).
     TEXTURE_MIN_LINEAR: uint = 64;
@@ -759,8 +760,9 @@ scene_bindings! {
     material_texels: readonly texels rgba32ui,
     /// [`GpuTexture`]s, two RGBA32UI texels each.
     texture_texels: readonly texels rgba32ui,
-    /// The sRGB decoding table, then every texture's RGBA8 texels, one R32UI texel each.
-    scene_texels: readonly texels r32ui,
+    /// The sRGB decoding table (an `f32`'s bits in each texel's first word), then every
+    /// texture's texels as linear RGBA16 (unorm, sRGB decoded at upload), one RG32UI texel each.
+    scene_texels: readonly texels rg32ui,
     /// The emissive-triangle sampling table ([`GpuLightTri`]), one RGBA32UI texel each.
     light_texels: readonly texels rgba32ui,
     /// Punctual lights ([`GpuLight`]), four RGBA32UI texels each.
@@ -1214,7 +1216,7 @@ kernels! {
             /// The textures, two RGBA32UI texels each.
             texture_texels: readonly texels rgba32ui,
             /// Their texels.
-            scene_texels: readonly texels r32ui,
+            scene_texels: readonly texels rg32ui,
         }
     }
 }

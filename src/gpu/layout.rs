@@ -441,7 +441,7 @@ impl GpuTexture {
     pub const WRAP_T_MIRROR: u32 = TEXTURE_WRAP_T_MIRROR;
     /// [`TEXTURE_LINEAR`] (bilinear magnification; otherwise nearest).
     pub const LINEAR: u32 = TEXTURE_LINEAR;
-    /// [`TEXTURE_SRGB`] (decode sRGB to linear).
+    /// [`TEXTURE_SRGB`] (sRGB-encoded colour, decoded at upload).
     pub const SRGB: u32 = TEXTURE_SRGB;
     /// [`TEXTURE_MIN_LINEAR`] (bilinear within a level when minified; otherwise nearest).
     pub const MIN_LINEAR: u32 = TEXTURE_MIN_LINEAR;

@@ -43,8 +43,9 @@ pub struct GpuScene {
     pub env_conditional: Buffer,
     /// `GpuTexture`s as RGBA32UI texels (two each).
     pub textures: TexelBuffer,
-    /// `scene_texels`, R32UI texels (`texture.glsl` reads them with `imageLoad`): the sRGB
-    /// decoding table (256 `f32` bits), then the RGBA8 texels of every texture.
+    /// `scene_texels`, RG32UI texels (`texture.glsl` reads them with `imageLoad`): the sRGB
+    /// decoding table (256 `f32` bits, for vertex colours), then every texture's texels as
+    /// linear RGBA16.
     pub texels: TexelBuffer,
     /// Textures the materials use.
     pub texture_count: u32,
@@ -86,9 +87,10 @@ pub struct SceneArrays {
     pub punctual: Vec<GpuLight>,
     /// The textures the GPU materials use.
     pub textures: Vec<GpuTexture>,
-    /// The sRGB decoding table (the linear value of each 8-bit code, as `f32` bits; present when
-    /// there is any texture), then their texels, RGBA8 packed little-endian into u32.
-    pub texels: Vec<u32>,
+    /// The sRGB decoding table (the linear value of each 8-bit code, as `f32` bits in the first
+    /// word; present when there is any texture or vertex colour), then the textures' texels as
+    /// linear RGBA16 unorm (sRGB decoded), red and green in the first word, low halves first.
+    pub texels: Vec<[u32; 2]>,
 }
 
 impl SceneArrays {
@@ -119,7 +121,7 @@ impl SceneArrays {
     /// Checks that every buffer of the scene `name` fits `device`'s `maxStorageBufferRange`
     /// (128 MiB on lavapipe), or for the BVH, triangles, vertices, materials and lights
     /// `maxTexelBufferElements` texels of 16 bytes (2 GiB on lavapipe), or for the scene texels
-    /// `maxTexelBufferElements` texels of 4 bytes (512 MiB on lavapipe): one error naming the
+    /// `maxTexelBufferElements` texels of 8 bytes (1 GiB on lavapipe): one error naming the
     /// scene, the buffer, both sizes and what to reduce, before anything is allocated. [`GpuScene::upload`] calls it; a test can pass a
     /// [`DeviceInfo`] with a lowered limit.
     pub fn check_limits(&self, name: &str, device: &DeviceInfo) -> Result<()> {
@@ -150,7 +152,7 @@ fn remedy(buffer: &str) -> &'static str {
 
 /// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers and
 /// the triangles, vertices, materials and lights are storage texel buffers of 16-byte texels,
-/// the scene texels one of 4-byte texels, every other one a storage buffer.
+/// the scene texels one of 8-byte texels, every other one a storage buffer.
 fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str) {
     if buffer.starts_with("bvh ")
         || ["scene triangles", "scene vertices", "scene materials", "scene lights", "scene punctual lights"]
@@ -158,7 +160,7 @@ fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str)
     {
         (device.max_texel_buffer_elements as u64 * 16, "texel", "maxTexelBufferElements × 16 bytes")
     } else if buffer == "scene texels" {
-        (device.max_texel_buffer_elements as u64 * 4, "texel", "maxTexelBufferElements × 4 bytes")
+        (device.max_texel_buffer_elements as u64 * 8, "texel", "maxTexelBufferElements × 8 bytes")
     } else {
         (device.max_storage_buffer_range, "storage", "maxStorageBufferRange")
     }
@@ -193,7 +195,7 @@ struct ShadingArrays {
     lights: Vec<GpuLightTri>,
     punctual: Vec<GpuLight>,
     textures: Vec<GpuTexture>,
-    texels: Vec<u32>,
+    texels: Vec<[u32; 2]>,
 }
 
 impl ShadingArrays {
@@ -465,9 +467,9 @@ fn upload_rgba32ui<T: bytemuck::Pod>(ctx: &Context, name: &str, items: &[T]) -> 
     TexelBuffer::upload(ctx, name, items, raw::Format::R32G32B32A32_UINT, 16)
 }
 
-/// Uploads the scene texels as a storage texel buffer of R32UI words.
-fn upload_texels(ctx: &Context, texels: &[u32]) -> Result<TexelBuffer> {
-    TexelBuffer::upload(ctx, "scene texels", texels, raw::Format::R32_UINT, 4)
+/// Uploads the scene texels as a storage texel buffer of RG32UI texels.
+fn upload_texels(ctx: &Context, texels: &[[u32; 2]]) -> Result<TexelBuffer> {
+    TexelBuffer::upload(ctx, "scene texels", texels, raw::Format::R32G32_UINT, 8)
 }
 
 /// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits (0 opaque,
@@ -555,16 +557,17 @@ fn gpu_light(light: &crate::scene::Light) -> GpuLight {
 struct GpuTextures {
     index: std::collections::HashMap<u32, u32>,
     textures: Vec<GpuTexture>,
-    texels: Vec<u32>,
+    texels: Vec<[u32; 2]>,
 }
 
 impl GpuTextures {
-    /// Starts the texel buffer with the sRGB decoding table if it is not there yet (texture.glsl
-    /// reads it for sRGB textures and vertex colours: a table lookup costs CPU devices far less
-    /// than pow, and is exact for 8-bit codes).
+    /// Starts the texel buffer with the sRGB decoding table if it is not there yet (shading.glsl
+    /// reads it for vertex colours: a table lookup costs CPU devices far less than pow, and is
+    /// exact for 8-bit codes).
     fn srgb_table(&mut self) {
         if self.texels.is_empty() {
-            self.texels.extend((0..256).map(|code| crate::color::srgb_decode(code as f32 / 255.0).to_bits()));
+            self.texels
+                .extend((0..256).map(|code| [crate::color::srgb_decode(code as f32 / 255.0).to_bits(), 0]));
         }
     }
 
@@ -600,8 +603,21 @@ impl GpuTextures {
             levels: 1 + chain.len() as u32,
             ..Default::default()
         });
-        let pack = |rgba8: &[u8]| -> Vec<u32> {
-            rgba8.chunks_exact(4).map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])).collect()
+        // Linear RGBA16 (unorm): an 8-bit code v is v·257 / 65535 = v / 255 exactly, an sRGB
+        // code its decoded value within 2^-17. One texel read per texel on the GPU, where an
+        // sRGB RGBA8 texel took four (the texel and three table entries).
+        let decode: [u32; 256] = std::array::from_fn(|v| {
+            let c = if texture.srgb { crate::color::srgb_decode(v as f32 / 255.0) } else { v as f32 / 255.0 };
+            (c * 65535.0 + 0.5) as u32
+        });
+        let pack = |rgba8: &[u8]| -> Vec<[u32; 2]> {
+            rgba8
+                .chunks_exact(4)
+                .map(|p| {
+                    let [r, g, b] = [0, 1, 2].map(|c| decode[p[c] as usize]);
+                    [r | g << 16, b | u32::from(p[3]) * 257 << 16]
+                })
+                .collect()
         };
         self.texels.extend(pack(&texture.rgba8));
         for level in &chain {

@@ -615,7 +615,7 @@ impl GpuTextures {
                 .chunks_exact(4)
                 .map(|p| {
                     let [r, g, b] = [0, 1, 2].map(|c| decode[p[c] as usize]);
-                    [r | g << 16, b | u32::from(p[3]) * 257 << 16]
+                    [r | g << 16, b | (u32::from(p[3]) * 257) << 16]
                 })
                 .collect()
         };

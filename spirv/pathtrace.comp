@@ -110,7 +110,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
         if (HAS_ENV_MAP) {
             float w = 1.0;
             if (params.env_nee != 0u && path.prev_pdf > 0.0) {
-                w = bsdf_hit_weight(path.prev_pdf, env_pdf(dir, params.env_size));
+                w = bsdf_hit_weight(path.prev_pdf, env_pdf(dir, params.env_size) * params.env_pick);
             }
             vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
             path.radiance += c;
@@ -139,7 +139,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
     if (any(greaterThan(le, vec3(0.0)))) {
         float w = 1.0;
         if (HAS_LIGHTS && path.prev_pdf > 0.0) {
-            float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
+            float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo) * (1.0 - params.env_pick);
             w = bsdf_hit_weight(path.prev_pdf, light_pdf);
         }
         vec3 c = throughput * le * w;
@@ -178,19 +178,52 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
         return false;
     }
 
-    // Next-event estimation: one emissive triangle by power, a uniform point on it.
-    if (HAS_LIGHTS && params.light_count > 0u && LIGHT_SAMPLING) {
-        vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
-        vec3 wi_local;
-        vec3 l_emit;
-        float light_pdf;
-        if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
-                            light_pdf)) {
-            vec3 f = bsdf_eval(s, wo_local, wi_local);
-            float w = light_sample_weight(light_pdf, bsdf_pdf(s, wo_local, wi_local));
-            vec3 c = throughput * f * abs(wi_local.z) * l_emit * (w / light_pdf);
-            path.radiance += c;
-            path.nonfinite |= nonfinite_bit(c, NONFINITE_EMISSIVE_NEE);
+    // Next-event estimation: one light sample and its shadow ray, from the emissive triangles
+    // (one by power, a uniform point on it) or the environment map (importance-sampled by
+    // luminance x sin(theta)), the map picked with probability params.env_pick (1 or 0 where the
+    // scene has one of them; by their power where it has both), weighted by MIS.
+    bool tri_nee = false;
+    if (HAS_LIGHTS) {
+        tri_nee = params.light_count > 0u;
+    }
+    bool env_nee = false;
+    if (HAS_ENV_MAP) {
+        env_nee = params.env_nee != 0u;
+    }
+    if (LIGHT_SAMPLING) {
+        if (tri_nee || env_nee) {
+            vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
+            bool pick_env = u.w < params.env_pick;
+            vec3 wi = vec3(0.0, 0.0, 1.0);
+            vec3 target = vec3(0.0);
+            vec3 le = vec3(0.0);
+            float pdf = 0.0;
+            bool found = false;
+            // Only the kernels of scenes with the light kind compile its sampling: llvmpipe
+            // runs an if-body for every lane whichever lanes take it.
+            if (HAS_ENV_MAP) {
+                if (pick_env) {
+                    vec4 ue = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
+                    wi = env_sample(ue, params.env_size, pdf);
+                    le = env_radiance(wi, params.env_size) * params.env;
+                    pdf *= params.env_pick;
+                    found = pdf > 0.0;
+                }
+            }
+            if (HAS_LIGHTS) {
+                if (!pick_env) {
+                    found = emissive_point(p, u.xyz, params.light_count, wi, target, le, pdf);
+                    pdf *= 1.0 - params.env_pick;
+                }
+            }
+            vec3 wi_local;
+            if (found && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, !pick_env, target, wi_local)) {
+                vec3 f = bsdf_eval(s, wo_local, wi_local);
+                float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
+                vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
+                path.radiance += c;
+                path.nonfinite |= nonfinite_bit(c, pick_env ? NONFINITE_ENV_NEE : NONFINITE_EMISSIVE_NEE);
+            }
         }
     }
 
@@ -200,22 +233,6 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
         vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
         path.radiance += c;
         path.nonfinite |= nonfinite_bit(c, NONFINITE_PUNCTUAL);
-    }
-
-    // The environment map, importance-sampled by luminance x sin(theta), weighted by MIS.
-    if (HAS_ENV_MAP && params.env_nee != 0u && LIGHT_SAMPLING) {
-        vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
-        float pdf;
-        vec3 wi = env_sample(u, params.env_size, pdf);
-        vec3 wi_local;
-        if (pdf > 0.0 && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, false, wi, wi_local)) {
-            vec3 f = bsdf_eval(s, wo_local, wi_local);
-            float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
-            vec3 le = env_radiance(wi, params.env_size) * params.env;
-            vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
-            path.radiance += c;
-            path.nonfinite |= nonfinite_bit(c, NONFINITE_ENV_NEE);
-        }
     }
 
     // Continue the path by sampling the BSDF.

@@ -108,7 +108,8 @@ bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3
         return false;
     }
     vec3 o = offset_ray(p, side * ng);
-    return to_point ? !bvh_any(o, target - o, 0.0, 0.9999) : !bvh_any(o, wi, 0.0, BVH_INF);
+    // One walk whether to_point or not (a CPU device would run both walks of a select).
+    return !bvh_any(o, to_point ? target - o : wi, 0.0, to_point ? 0.9999 : BVH_INF);
 }
 
 // Material `id`'s texture in `slot` (its index + 1, 0 when the slot is empty) and the slot's
@@ -411,24 +412,33 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
     return punctual_vec(k, 2u).rgb * attenuation;
 }
 
-// Next-event estimation on the emissive triangles: one of `count` by power (u.x), a uniform point
-// on it (u.yz). True when it emits towards p and nothing blocks it; then gives the direction in
-// the shading frame, the emitted radiance and the solid-angle pdf of the sample.
-bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 u, uint count,
-                     out vec3 wi_local, out vec3 l_emit, out float light_pdf) {
+// A point on the emissive triangles as seen from p: one of `count` by power (u.x), a uniform
+// point on it (u.yz). True when it emits towards p; then gives the direction wi (unit, world) and
+// the point, the emitted radiance and the solid-angle pdf of the sample. Visibility is the
+// caller's (light_reaches to the point).
+bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out vec3 l_emit, out float light_pdf) {
     uint k = pick_light(u.x, count);
     uint ltri = light_tri(k);
     vec2 lb = sample_triangle(u.yz);
-    vec3 lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u)
-        + lb.y * tri_vertex(ltri, 2u);
+    lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u) + lb.y * tri_vertex(ltri, 2u);
     vec3 ln = normalize(tri_normal(ltri));
     vec3 to_light = lp - p;
     float dist2 = dot(to_light, to_light);
-    vec3 wi = to_light * inversesqrt(dist2);
+    wi = to_light * inversesqrt(dist2);
     l_emit = emitted(ltri, lb, ln, -wi);
     float cos_l = abs(dot(ln, wi));
     light_pdf = light_cdf_pmf_area(k).y / light_cdf_pmf_area(k).z * dist2 / cos_l;
-    return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0
+    return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0;
+}
+
+// Next-event estimation on the emissive triangles (emissive_point) with its shadow ray. True
+// when the point emits towards p and nothing blocks it; then gives the direction in the shading
+// frame, the emitted radiance and the solid-angle pdf of the sample.
+bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 u, uint count,
+                     out vec3 wi_local, out vec3 l_emit, out float light_pdf) {
+    vec3 wi;
+    vec3 lp;
+    return emissive_point(p, u, count, wi, lp, l_emit, light_pdf)
         && light_reaches(p, ng, t, b, n, transmits, wi, true, lp, wi_local);
 }
 

@@ -295,8 +295,10 @@ gpu_structs! {
         env_size: uvec2,
         /// Samples per pixel in this dispatch (`sample_index ..`), at least 1.
         sample_count: uint,
-        /// Padding.
-        pad1: uint,
+        /// The probability that a light sample is drawn from the environment map rather than
+        /// the emissive triangles: 1 or 0 where only one of them is sampled, by their power
+        /// where both are ([`crate::passes::pathtrace::PathTracePass::params`]).
+        env_pick: float,
     }
 
     /// Per-render counters written by `pathtrace.comp`.

@@ -27,6 +27,8 @@ pub struct GpuScene {
     pub lights: TexelBuffer,
     /// Emissive triangles in the sampling table.
     pub light_count: u32,
+    /// Their total power (`EmissiveTable::total_power`: luminance × area × π summed).
+    pub emissive_power: f32,
     /// `GpuLight`s as RGBA32UI texels (four each).
     pub punctual: TexelBuffer,
     /// Punctual lights.
@@ -63,6 +65,8 @@ pub struct GpuScene {
     pub has_unlit: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
+    /// The environment map's mean luminance over the sphere of directions (0 without one).
+    pub env_luminance: f32,
     /// Statistics of the BVH built for the scene.
     pub bvh_stats: BvhStats,
     /// `prim_order[i]`: the scene triangle at BVH position i (kept for [`GpuScene::update`]).
@@ -91,6 +95,8 @@ pub struct SceneArrays {
     /// word; present when there is any texture or vertex colour), then the textures' texels as
     /// linear RGBA16 unorm (sRGB decoded), red and green in the first word, low halves first.
     pub texels: Vec<[u32; 2]>,
+    /// The emissive triangles' total power (`EmissiveTable::total_power`).
+    pub emissive_power: f32,
 }
 
 impl SceneArrays {
@@ -136,8 +142,17 @@ impl SceneArrays {
             tri.v1[3] = f32::from_bits(mode);
         }
         let shading = ShadingArrays::new(scene, &bvh.prim_order);
-        let ShadingArrays { triangles, vertices, materials, lights, punctual, textures, texels } = shading;
-        Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels }
+        let ShadingArrays {
+            triangles,
+            vertices,
+            materials,
+            lights,
+            punctual,
+            textures,
+            texels,
+            emissive_power,
+        } = shading;
+        Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels, emissive_power }
     }
 }
 
@@ -196,6 +211,7 @@ struct ShadingArrays {
     punctual: Vec<GpuLight>,
     textures: Vec<GpuTexture>,
     texels: Vec<[u32; 2]>,
+    emissive_power: f32,
 }
 
 impl ShadingArrays {
@@ -310,7 +326,8 @@ impl ShadingArrays {
             gpu_textures.srgb_table();
         }
         let GpuTextures { textures, texels, .. } = gpu_textures;
-        Self { triangles, vertices, materials, lights, punctual, textures, texels }
+        let emissive_power = table.total_power;
+        Self { triangles, vertices, materials, lights, punctual, textures, texels, emissive_power }
     }
 }
 
@@ -367,6 +384,14 @@ impl GpuScene {
         self.env_conditional =
             Buffer::upload(ctx, "environment conditional cdf", &table.conditional_cdf, usage)?;
         self.env_size = Some((map.width as u32, map.height as u32));
+        // Rows are bands of θ (row 0 at the top): each texel's solid angle ∝ sin θ.
+        let (mut sum, mut weight) = (0.0f64, 0.0f64);
+        for (row, texels) in map.texels.chunks_exact(map.width.max(1)).enumerate() {
+            let sin = ((row as f64 + 0.5) / map.height as f64 * std::f64::consts::PI).sin();
+            sum += sin * texels.iter().map(|t| f64::from(crate::color::luminance(*t))).sum::<f64>();
+            weight += sin * map.width as f64;
+        }
+        self.env_luminance = if weight > 0.0 { (sum / weight) as f32 } else { 0.0 };
         Ok(())
     }
 
@@ -390,6 +415,7 @@ impl GpuScene {
             materials: upload_rgba32ui(ctx, "scene materials", &arrays.materials)?,
             lights: upload_rgba32ui(ctx, "scene lights", &arrays.lights)?,
             light_count: arrays.lights.len() as u32,
+            emissive_power: arrays.emissive_power,
             punctual: upload_rgba32ui(ctx, "scene punctual lights", &arrays.punctual)?,
             punctual_count: arrays.punctual.len() as u32,
             punctual_lights: arrays.punctual.clone(),
@@ -405,6 +431,7 @@ impl GpuScene {
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
             env_size: None,
+            env_luminance: 0.0,
             bvh_stats: arrays.bvh.stats.clone(),
             prim_order: arrays.bvh.prim_order.clone(),
             alpha_modes,
@@ -436,6 +463,7 @@ impl GpuScene {
         self.materials = upload_rgba32ui(ctx, "scene materials", &arrays.materials)?;
         self.lights = upload_rgba32ui(ctx, "scene lights", &arrays.lights)?;
         self.light_count = arrays.lights.len() as u32;
+        self.emissive_power = arrays.emissive_power;
         self.punctual = upload_rgba32ui(ctx, "scene punctual lights", &arrays.punctual)?;
         self.punctual_count = arrays.punctual.len() as u32;
         self.punctual_lights = arrays.punctual.clone();

@@ -274,7 +274,39 @@ impl PathTracePass {
             punctual_count: scene.punctual_count,
             env_size: [env_w, env_h],
             sample_count: 1,
-            ..Default::default()
+            env_pick: Self::env_pick(scene, settings),
+        }
+    }
+
+    /// The probability that a light sample comes from the environment map rather than the
+    /// emissive triangles (one light sample per scattering event serves both): 1 or 0 where the
+    /// path tracer samples only one of them; where it samples both, their shares of the power
+    /// reaching the scene (the map's 4π²R²·L̄ through the scene's bounding sphere of radius R,
+    /// pbrt-v4's estimate for an infinite light, against the triangles' Σ π·L·A), kept within
+    /// [0.1, 0.9] so that neither kind is starved where the estimate misjudges which lights a
+    /// point sees.
+    pub fn env_pick(scene: &GpuScene, settings: &PathSettings) -> f32 {
+        let env = scene.env_size.is_some() && settings.env_nee;
+        match (env, scene.light_count > 0) {
+            (false, _) => 0.0,
+            (true, false) => 1.0,
+            (true, true) => {
+                let [lo, hi] = scene.bounds.map(glam::Vec3::from);
+                let radius = 0.5 * (hi - lo).length();
+                let env_power = 4.0
+                    * std::f32::consts::PI
+                    * std::f32::consts::PI
+                    * radius
+                    * radius
+                    * scene.env_luminance
+                    * crate::color::luminance(settings.env);
+                let total = env_power + scene.emissive_power;
+                if total > 0.0 && total.is_finite() {
+                    (env_power / total).clamp(0.1, 0.9)
+                } else {
+                    0.5
+                }
+            }
         }
     }
 

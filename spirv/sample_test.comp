@@ -1,7 +1,9 @@
 #version 460
 // Test-only: draws directions with the renderer's own sampling routines (sampling.glsl,
 // bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests (modes 0
-// and 1); mode 2 evaluates bsdf_eval for tests/brdf.rs.
+// and 1); mode 2 evaluates bsdf_eval for tests/brdf.rs; mode 3 the dielectric's bsdf_eval and
+// bsdf_pdf at given directions, for tests/sampling.rs's check that it samples wherever it
+// scatters.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/sample_test.glsl"
 
@@ -60,6 +62,12 @@ void main() {
         s.eta = 1.5;
         s.thin = true;
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
+        return;
+    }
+    if (params.mode == 3u) {
+        vec3 wi = directions[i].xyz;
+        Surface s = dielectric(alpha);
+        results[i] = vec4(bsdf_eval(s, wo, wi), bsdf_pdf(s, wo, wi));
         return;
     }
     if (params.mode == 0u) {

@@ -1,7 +1,8 @@
 //! The path tracer against ground truth from outside: references of umbra's test scenes rendered
 //! by Mitsuba 3 from the same glTF files (tests/reference/mitsuba_refs.py; what it maps and how is
-//! in tests/reference/README.md). A bias in umbra's BSDF, lights, environment, textures or
-//! camera shows up here; drift against umbra's own reference (tests/convergence.rs) cannot.
+//! in tests/reference/README.md). A bias in umbra's BSDF (rough glass too), lights, environment,
+//! textures or camera shows up here; drift against umbra's own reference (tests/convergence.rs)
+//! cannot.
 //!
 //! Each reference holds, per pixel, the mean of 32 independent Mitsuba renders of 2,048 samples
 //! and the variance of that mean. umbra renders the same scene, camera and size at `spp`; per
@@ -20,8 +21,8 @@
 //! heuristic, MIS), and the Cornell box and the spheres under the sky with every other estimator
 //! that can be tested at this sample count ([`estimators`]: Walter's GGX sampling, the balance
 //! heuristic, BSDF or light sampling alone). Three statistics per comparison (two for BSDF
-//! sampling alone in the Cornell box), each at α = 1 − (1 − 0.001)^(1/43) (Šidák over the
-//! 3 × 4 statistics of the scenes and the 31 of the other estimators: 0.001 in all; [`alpha`]
+//! sampling alone in the Cornell box), each at α = 1 − (1 − 0.001)^(1/46) (Šidák over the
+//! 3 × 5 statistics of the scenes and the 31 of the other estimators: 0.001 in all; [`alpha`]
 //! counts them):
 //! - pixels: the count of pixel channels with |z| > 3.29 (two-sided 0.001 each) is at most the
 //!   binomial(n, 0.001) quantile at 1 − α: localised errors (orientation, a texture, a light);
@@ -31,7 +32,8 @@
 //!
 //! The deliberately biased variants (a base colour 2 % darker, also under BSDF sampling alone
 //! without the per-pixel statistic; emission found by BSDF sampling counted without its MIS
-//! weight) must be rejected by the same test.
+//! weight; glass of index 1.45 instead of 1.5, or tinted 2 % darker) must be rejected by the same
+//! test.
 //! `UMBRA_MITSUBA_DEBUG=DIR` writes umbra's image, the reference and z for every comparison.
 
 mod common;
@@ -44,7 +46,7 @@ use umbra::render::{path_trace, PathImage, PathSettings};
 use umbra::scene::Scene;
 
 /// The family's significance: 0.001 over every statistic of every comparison (Šidák): the 3 of
-/// each of the 4 scenes with its default estimator, and the 3 (or 2) of every other estimator of
+/// each of the 5 scenes with its default estimator, and the 3 (or 2) of every other estimator of
 /// [`estimators`].
 fn alpha() -> f64 {
     let statistics = 3 * SCENES.len() + estimators().iter().map(|e| 2 + e.pixel_test as usize).sum::<usize>();
@@ -101,7 +103,16 @@ const TEXTURED: Case = Case {
     size: (64, 48),
     spp: 1024,
 };
-const SCENES: [&Case; 4] = [&CORNELL, &SPHERES, &SPHERES_BECKMANN, &TEXTURED];
+/// Rough glass, solid and thin-walled, under the sky (scenes/glass.glb).
+const GLASS: Case = Case {
+    name: "glass",
+    gltf: "glass.glb",
+    environment: true,
+    microfacet: Microfacet::Ggx,
+    size: (64, 48),
+    spp: 1024,
+};
+const SCENES: [&Case; 5] = [&CORNELL, &SPHERES, &SPHERES_BECKMANN, &TEXTURED, &GLASS];
 
 /// One more estimator of a reference's scene than its default (the case's microfacet, the power
 /// heuristic, MIS), with its samples per pixel.
@@ -463,6 +474,11 @@ fn textured_scene_with_point_and_spot_lights_agrees_with_mitsuba() {
     agrees(&TEXTURED);
 }
 
+#[test]
+fn rough_glass_under_the_sky_agrees_with_mitsuba() {
+    agrees(&GLASS);
+}
+
 /// A base colour 2 % darker on every material must be told apart from the reference: with the
 /// default estimator, and with BSDF sampling alone in the Cornell box, which is tested without
 /// the per-pixel statistic ([`estimators`]).
@@ -482,6 +498,28 @@ fn a_two_percent_darker_base_colour_is_rejected() {
             agreement.rejection(pixels).is_some(),
             "{label}: a 2 % darker base colour passed: {agreement:?}"
         );
+    }
+}
+
+/// Every transmissive material of `scene`.
+fn glass(scene: &mut Scene) -> impl Iterator<Item = &mut umbra::scene::Material> {
+    scene.materials.iter_mut().filter(|m| m.transmission_factor > 0.0)
+}
+
+/// Glass whose index of refraction is 1.45 instead of 1.5 (its Fresnel reflectance and its
+/// refraction both change), and glass whose base colour, which tints what it transmits, is 2 %
+/// darker, must each be told apart from the reference.
+#[test]
+fn wrong_glass_is_rejected() {
+    let gpu = Gpu::new();
+    let reference = reference(&GLASS);
+    let ior: fn(&mut Scene) = |scene| glass(scene).for_each(|m| m.ior = 1.45);
+    let tint: fn(&mut Scene) =
+        |scene| glass(scene).for_each(|m| m.base_color_factor[..3].iter_mut().for_each(|c| *c *= 0.98));
+    for (what, edit) in [("ior 1.45", ior), ("transmission tint -2%", tint)] {
+        let image = render(&gpu, &GLASS, default_options(&GLASS), GLASS.spp, 1, edit);
+        let agreement = compare(&GLASS, &image, &reference, &format!("glass {what}"));
+        assert!(agreement.rejection(true).is_some(), "glass, {what}: passed: {agreement:?}");
     }
 }
 

@@ -75,7 +75,8 @@ impl Kernel {
         }))
     }
 
-    /// Runs the kernel: mode 0 samples `count` directions, mode 1 evaluates the pdf at `dirs`.
+    /// Runs the kernel: mode 0 samples `count` directions, mode 1 evaluates the pdf at `dirs`,
+    /// mode 3 the dielectric's BSDF (rgb) and pdf (w) at `dirs`.
     fn run(
         &self,
         gpu: &Gpu,
@@ -313,6 +314,57 @@ fn samplers_match_their_pdfs() {
         }
     }
     assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
+}
+
+/// The dielectric samples every direction it scatters light into: wherever `bsdf_eval` is above
+/// 0, so is `bsdf_pdf` (the share of f |cos| over directions of pdf 0 is below 10⁻⁵ of the
+/// albedo, the grid's rounding at the support's edges). Leaving glass beyond the critical angle,
+/// the Fresnel at the normal is 1, yet microfacets tilted towards wo still refract: a lobe choice
+/// by that Fresnel alone never sampled them (at α 0.1, 37 % of the albedo at 45°, 5 % at 60°), so
+/// paths out through a rough sphere's rim lost that light to everything next-event estimation
+/// does not find. Entering, leaving and thin-walled glass, either GGX sampling, α 0.1 and 0.5, wo at 30°,
+/// 45°, 60° and 80°.
+#[test]
+fn the_dielectric_samples_wherever_it_scatters() {
+    let gpu = Gpu::new();
+    let kernel = Kernel::new(&gpu);
+    // A grid uniform in (cos θ, φ) over the sphere: each point stands for 2 · 2π / n steradians.
+    let (rows, columns) = (512usize, 1024usize);
+    let mut dirs = Vec::with_capacity(rows * columns);
+    for t in 0..rows {
+        let z = -1.0 + 2.0 * (t as f32 + 0.5) / rows as f32;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        for p in 0..columns {
+            let phi = std::f32::consts::TAU * (p as f32 + 0.5) / columns as f32;
+            dirs.push([r * phi.cos(), r * phi.sin(), z, 0.0]);
+        }
+    }
+    let solid_angle = 2.0 * std::f64::consts::TAU / (rows * columns) as f64;
+    let mut failures = Vec::new();
+    for microfacet in [Microfacet::Ggx, Microfacet::GgxWalter] {
+        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin] {
+            for alpha in [0.1, 0.5] {
+                for theta_degrees in [30.0, 45.0, 60.0, 80.0] {
+                    let case = Sampler::Dielectric { microfacet, kind, alpha, theta_degrees };
+                    let values = kernel.run(&gpu, case, 1.0, 3, &dirs, dirs.len() as u32);
+                    let (mut albedo, mut unsampled) = (0.0f64, 0.0f64);
+                    for (d, v) in dirs.iter().zip(&values) {
+                        let f_cos = v[0] as f64 * (d[2] as f64).abs() * solid_angle;
+                        albedo += f_cos;
+                        if v[3] <= 0.0 {
+                            unsampled += f_cos;
+                        }
+                    }
+                    eprintln!("{case:?}: albedo {albedo:.4}, of it never sampled {unsampled:.2e}");
+                    if unsampled > 1e-5 * albedo.max(1e-3) {
+                        failures
+                            .push(format!("{case:?}: {unsampled:.3e} of albedo {albedo:.4} never sampled"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// The test has power: sampling but reporting the pdf of a 10 % larger alpha is rejected, for

@@ -155,9 +155,17 @@ vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
 }
 
 // Probabilities of the specular reflection (x), transmission (y) and diffuse (z) lobes: their
-// shares of the Fresnel-weighted albedo at wo.
+// shares of the Fresnel-weighted albedo at wo. Leaving the denser side of a refracting boundary,
+// F at the normal is 1 beyond the critical angle, yet microfacets tilted towards wo still refract
+// (a rough boundary's transmission fades over degrees past it: at α 0.1, 37 % of the albedo at
+// 45°, 5 % at 60°), so F is taken 9:1 with Schlick's at the unbent angle there: transmission
+// keeps a probability wherever it can happen (tests/sampling.rs), reflection most of it under
+// total internal reflection.
 vec3 lobe_probabilities(Surface s, vec3 wo) {
     float f = max3(dielectric_fresnel(s, wo.z));
+    if (!s.thin && s.eta < 1.0) {
+        f = mix(max3(fresnel_schlick(s.f0, vec3(s.f90), wo.z)), f, 0.9);
+    }
     float specular = mix(f, 1.0, s.metallic);
     float rest = (1.0 - s.metallic) * (1.0 - f) * luminance(s.base);
     float transmission = rest * s.transmission;

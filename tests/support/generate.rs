@@ -19,6 +19,7 @@ pub fn all() -> Vec<(&'static str, Vec<u8>)> {
         ("spheres.glb", spheres()),
         ("textured.glb", textured()),
         ("instanced.glb", instanced()),
+        ("glass.glb", glass()),
     ]
 }
 
@@ -206,6 +207,75 @@ pub fn textured() -> Vec<u8> {
         g.camera_node("camera", [2.5, 2.0, 3.5], look_rotation(Vec3::new(2.5, 2.0, 3.5), Vec3::new(0.0, 0.3, 0.0)), 0.8, 4.0 / 3.0),
     ];
     g.finish(nodes, &["KHR_texture_transform", "KHR_lights_punctual"])
+}
+
+/// Rough glass in a corner of checkered floor and wall: a solid sphere (`KHR_materials_volume`,
+/// `KHR_materials_ior` 1.5, roughness 0.3) and a thin-walled, slightly blue pane (roughness 0.2),
+/// both `KHR_materials_transmission` 1, hovering above the floor; no light of its own. Made for
+/// the sky of tests/reference/sky-128x64.exr: the whole corner is turned so that its sun (56 % of
+/// the sky's power in one texel, 7° high) stands straight behind the 2 m wall, which shades every
+/// surface from it. Neither glass then focuses the sun on anything a camera path can reach, a
+/// caustic that only BSDF sampling could find, rarely (tests/mitsuba_reference.rs); a point light
+/// seen through the glass (next-event estimation through a rough refraction) would be 20 times
+/// as noisy as the sky.
+pub fn glass() -> Vec<u8> {
+    let mut g = Gltf::new();
+    let checker = g.png_image("checker", 128, 128, &checker_texels());
+    let nearest =
+        g.push("samplers", json!({ "magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497 }));
+    let checker = g.push("textures", json!({ "source": checker, "sampler": nearest }));
+    let checkered = |g: &mut Gltf, name: &str, color: [f64; 3], scale: [f64; 2]| {
+        g.push("materials", json!({ "name": name, "pbrMetallicRoughness": {
+            "baseColorFactor": [color[0], color[1], color[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9,
+            "baseColorTexture": { "index": checker, "extensions": { "KHR_texture_transform": { "scale": scale } } } } }))
+    };
+    let floor_material = checkered(&mut g, "floor", [1.0, 1.0, 1.0], [2.0, 2.0]);
+    let wall_material = checkered(&mut g, "wall", [1.0, 0.85, 0.7], [2.0, 1.5]);
+    let solid = g.push("materials", json!({
+        "name": "solid rough glass",
+        "pbrMetallicRoughness": { "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.3 },
+        "extensions": {
+            "KHR_materials_transmission": { "transmissionFactor": 1.0 },
+            "KHR_materials_volume": { "thicknessFactor": 0.7 },
+            "KHR_materials_ior": { "ior": 1.5 }
+        }
+    }));
+    let thin = g.push("materials", json!({
+        "name": "thin rough glass",
+        "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.9, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.2 },
+        "doubleSided": true,
+        "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1.0 } }
+    }));
+    let mut floor = Mesh::default();
+    floor.quad(Vec3::new(0.0, 0.0, 0.1), Vec3::new(1.3, 0.0, 0.0), Vec3::new(0.0, 0.0, -1.1));
+    floor.tangents.clear();
+    let floor = vec![g.primitive(&floor, floor_material)];
+    let floor = g.mesh("floor", floor);
+    let mut wall = Mesh::default();
+    wall.quad(Vec3::new(0.0, 1.0, -1.0), Vec3::new(1.5, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0));
+    wall.tangents.clear();
+    let wall = vec![g.primitive(&wall, wall_material)];
+    let wall = g.mesh("wall", wall);
+    let sphere = vec![g.primitive(&Mesh::uv_sphere(0.35, 48, 24), solid)];
+    let sphere = g.mesh("glass sphere", sphere);
+    let mut pane = Mesh::default();
+    pane.quad(Vec3::ZERO, Vec3::new(0.35, 0.0, 0.0), Vec3::new(0.0, 0.4, 0.0));
+    let pane = vec![g.primitive(&pane.bare(), thin)];
+    let pane = g.mesh("glass pane", pane);
+    let children = vec![
+        g.push("nodes", json!({ "name": "floor", "mesh": floor })),
+        g.push("nodes", json!({ "name": "wall", "mesh": wall })),
+        g.push("nodes", json!({ "name": "glass sphere", "mesh": sphere, "translation": [-0.45, 0.6, -0.15] })),
+        g.push("nodes", json!({ "name": "glass pane", "mesh": pane, "translation": [0.5, 0.6, 0.25], "rotation": y_rotation(25.0) })),
+        g.camera_node("camera", [0.0, 1.25, 2.7], look_rotation(Vec3::new(0.0, 1.25, 2.7), Vec3::new(0.0, 0.5, -0.3)), 0.75, 4.0 / 3.0),
+    ];
+    // The sun of sky-128x64.exr lies along (0.57, 0.12, -0.81): the corner's -Z turned onto it.
+    let corner =
+        g.push("nodes", json!({ "name": "corner", "rotation": y_rotation(-35.0), "children": children }));
+    g.finish(
+        vec![corner],
+        &["KHR_texture_transform", "KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior"],
+    )
 }
 
 /// A rough white 2 m square facing the camera (+Z) and filling its view, for the occlusion-map

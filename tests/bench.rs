@@ -27,6 +27,13 @@ fn rays_quick_validates_and_writes_json() {
     let (binned, sweep) =
         (scene["binned"]["sah_cost"].as_f64().unwrap(), scene["sweep"]["sah_cost"].as_f64().unwrap());
     assert!(binned <= sweep * 1.02, "binned SAH {binned} vs sweep {sweep}");
+    let table = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["rays", "--table"])
+        .arg(dir.join("rays.json"))
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&table.stdout);
+    assert!(table.contains("| terrain | 78018 |"), "{table}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -137,6 +144,56 @@ fn generated_tables_match_their_json() {
             block.join("\n")
         );
     }
+}
+
+/// `umbra-bench build` on a small terrain writes build.json, and its table prints it.
+#[test]
+fn build_writes_json_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-build-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["build", "--terrain", "40", "--builds", "2", "--sweep", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = dir.join("build.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("build.json written")).expect("parses");
+    let scene = &json["scenes"][0];
+    assert_eq!(scene["triangles"].as_u64(), Some(2 * 40 * 40 + 15_360));
+    assert!(scene["median_ms"].as_f64().unwrap() > 0.0 && scene["sweep_sah_cost"].as_f64().unwrap() > 0.0);
+    let table =
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench")).arg("build").arg("--table").arg(&path).output();
+    let table = String::from_utf8(table.unwrap().stdout).unwrap();
+    assert!(table.contains("| terrain | 18560 |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `umbra-bench passes` writes passes.json with every pass, and two runs print as one table.
+#[test]
+fn passes_writes_json_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-passes-{}", std::process::id()));
+    run_validated(
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+            .args(["passes", "--size", "16x16", "--repeats", "1", "--out"])
+            .arg(&dir),
+    );
+    let path = dir.join("passes.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("passes.json written")).expect("parses");
+    let passes: Vec<&str> =
+        json["passes"].as_array().unwrap().iter().map(|p| p["pass"].as_str().unwrap()).collect();
+    assert_eq!(passes, ["gbuffer", "ssao", "ao_blur", "lighting", "pathtrace 1 spp"]);
+    let output = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["passes", "--table"])
+        .arg(&path)
+        .arg("--table")
+        .arg(&path)
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success() && table.contains("| pathtrace 1 spp |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// `umbra-bench paths` on two small scenes writes JSON that parses: positive rates, at least one

@@ -110,7 +110,7 @@ fn suite_quick_writes_json_csv_and_charts() {
 }
 
 /// The tables BENCHMARKS.md shows from the benchmarks' committed JSON (the suite's, the shadow
-/// maps', the estimators') are what the `--table` commands print from it today: every table row
+/// maps', the estimators', the peers') are what the `--table` commands print from it today: every table row
 /// (and the summary line under a shadow table) stands in BENCHMARKS.md, in order. A changed JSON, a hand-edited figure or a
 /// changed formatter fails here; the message names the command that prints the right block.
 #[test]
@@ -125,6 +125,9 @@ fn generated_tables_match_their_json() {
         ["mis", "--table", "docs/bench/mis.json"],
         ["probes", "--table", "docs/bench/probes.json"],
         ["paths", "--table", "docs/bench/paths.json"],
+        ["peers", "--table", "docs/bench/peers.json"],
+        ["peers", "--table", "docs/bench/path.json"],
+        ["peers", "--table", "docs/bench/path-helmet.json"],
     ] {
         let out =
             Command::new(env!("CARGO_BIN_EXE_umbra-bench")).current_dir(root).args(args).output().unwrap();

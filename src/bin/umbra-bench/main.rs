@@ -3,7 +3,7 @@
 //! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass;
 //! `build` times the BVH build alone (CPU only, no Vulkan); `shadows` compares shadow maps with
 //! shadow rays; `mis` the path tracer's estimators against Mitsuba references; `paths` the path
-//! tracer's throughput on a set of scenes.
+//! tracer's throughput on a set of scenes; `peers` prints the tables of `peers.py`'s comparisons.
 //!
 //! Every measuring command writes JSON, and `--table FILE` prints the Markdown table of a written
 //! file without measuring anything: BENCHMARKS.md's current figures are those tables, printed
@@ -18,6 +18,7 @@ mod cli;
 mod mis;
 mod passes;
 mod paths;
+mod peers;
 mod probes;
 mod rays;
 mod shadows;
@@ -289,6 +290,14 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
+    /// Print the Markdown table of a `peers.py` run's JSON: `peers.json` (umbra's rays against
+    /// Embree's) or `path.json` (the path tracer against Mitsuba 3 at equal error). The
+    /// measurements are `src/bin/umbra-bench/peers.py`'s (Python, Embree, Mitsuba).
+    Peers {
+        /// The JSON file.
+        #[arg(long)]
+        table: PathBuf,
+    },
 }
 
 fn main() {
@@ -470,6 +479,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Passes { scene, size, repeats, shadow_rays, out, table: _ } => {
             run_passes(scene, size, repeats, shadow_rays, out)?
         }
+        Command::Peers { table } => print!("{}", peers::table(&read_json(&table)?)),
         Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {
             Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
             None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,

@@ -179,7 +179,7 @@ pub fn table(docs: &[Value]) -> Result<String> {
         first["lp_num_threads"].as_str().unwrap_or("unset"),
     );
     for doc in docs {
-        out += &format!(" {} ({} triangles) |", doc["scene"].as_str().unwrap_or("?"), doc["triangles"]);
+        out += &format!(" {}, {} triangles |", doc["scene"].as_str().unwrap_or("?"), doc["triangles"]);
     }
     out += &format!("\n|---|{}\n", "---:|".repeat(docs.len()));
     let mut passes: Vec<&str> = Vec::new();
@@ -203,8 +203,8 @@ pub fn table(docs: &[Value]) -> Result<String> {
     }
     let loads: Vec<String> = docs
         .iter()
-        .map(|doc| format!("{} {}", doc["scene"].as_str().unwrap_or("?"), super::load_text(doc)))
+        .map(|doc| format!("{}: {}", doc["scene"].as_str().unwrap_or("?"), super::load_text(doc)))
         .collect();
-    out += &format!("\nLoad average (1 minute) when each run started: {}.\n", loads.join(", "));
+    out += &format!("\nConditions of each run: {}.\n", loads.join("; "));
     Ok(out)
 }

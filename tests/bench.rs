@@ -1,5 +1,6 @@
-//! `umbra-bench` never rots: its quick runs finish, validate, and write output that parses.
-//! (Timings are recorded in BENCHMARKS.md, never asserted.)
+//! `umbra-bench` never rots: its quick runs finish, validate, and write output that parses, and
+//! BENCHMARKS.md's current tables are what `--table` prints from the committed JSON. (Timings are
+//! recorded in BENCHMARKS.md, never asserted.)
 
 mod common;
 
@@ -27,6 +28,13 @@ fn rays_quick_validates_and_writes_json() {
     let (binned, sweep) =
         (scene["binned"]["sah_cost"].as_f64().unwrap(), scene["sweep"]["sah_cost"].as_f64().unwrap());
     assert!(binned <= sweep * 1.02, "binned SAH {binned} vs sweep {sweep}");
+    let table = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["rays", "--table"])
+        .arg(dir.join("rays.json"))
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&table.stdout);
+    assert!(table.contains("| terrain | 78018 |"), "{table}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -102,41 +110,110 @@ fn suite_quick_writes_json_csv_and_charts() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The tables BENCHMARKS.md shows from the benchmarks' committed JSON (the suite's, the shadow
-/// maps', the estimators') are what the `--table` commands print from it today: every table row
-/// (and the summary line under a shadow table) stands in BENCHMARKS.md, in order. A changed JSON, a hand-edited figure or a
-/// changed formatter fails here; the message names the command that prints the right block.
+/// The commands that print BENCHMARKS.md's current tables from the JSON committed in docs/bench.
+const GENERATED_TABLES: &[&[&str]] = &[
+    &["rays", "--table", "docs/bench/rays.json"],
+    &["build", "--table", "docs/bench/build.json"],
+    &["passes", "--table", "docs/bench/passes-cornell.json", "--table", "docs/bench/passes-spheres.json"],
+    &["paths", "--table", "docs/bench/paths.json"],
+    &["suite", "--table", "docs/bench/suite.json"],
+    &["shadows", "--table", "docs/bench/shadows-sponza.json"],
+    &["shadows", "--table", "docs/bench/shadows-spheres.json"],
+    &["mis", "--table", "docs/bench/mis.json"],
+    &["probes", "--table", "docs/bench/probes.json"],
+    &["peers", "--table", "docs/bench/peers.json"],
+    &["peers", "--table", "docs/bench/path.json"],
+    &["peers", "--table", "docs/bench/path-helmet.json"],
+];
+
+/// BENCHMARKS.md's figures cannot drift from their JSON: everything each `--table` command prints
+/// from the committed JSON (caption, rows, the lines under a table) stands verbatim in the part
+/// above "# History", and every table row of that part is one of those printed. A changed JSON, a
+/// hand-edited figure, a hand-typed table or a changed formatter fails here; the message names the
+/// command that prints the right block.
 #[test]
 fn generated_tables_match_their_json() {
     let root = env!("CARGO_MANIFEST_DIR");
     let benchmarks = std::fs::read_to_string(format!("{root}/BENCHMARKS.md")).expect("BENCHMARKS.md");
-    let doc: Vec<&str> = benchmarks.lines().collect();
-    for args in [
-        ["suite", "--table", "docs/bench/suite.json"],
-        ["shadows", "--table", "docs/bench/shadows-sponza.json"],
-        ["shadows", "--table", "docs/bench/shadows-spheres.json"],
-        ["mis", "--table", "docs/bench/mis.json"],
-        ["probes", "--table", "docs/bench/probes.json"],
-        ["paths", "--table", "docs/bench/paths.json"],
-    ] {
+    let (current, _history) =
+        benchmarks.split_once("\n# History\n").expect("BENCHMARKS.md has a \"# History\" part");
+    let current = format!("\n{current}\n");
+    let mut printed_rows = std::collections::HashSet::new();
+    for args in GENERATED_TABLES {
         let out =
-            Command::new(env!("CARGO_BIN_EXE_umbra-bench")).current_dir(root).args(args).output().unwrap();
+            Command::new(env!("CARGO_BIN_EXE_umbra-bench")).current_dir(root).args(*args).output().unwrap();
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let printed = String::from_utf8(out.stdout).unwrap();
-        let tabular = |l: &str| l.starts_with('|') || l.starts_with("Shadow rays alone");
-        let block: Vec<&str> = printed.lines().filter(|l| tabular(l)).collect();
-        assert!(block.len() > 4, "umbra-bench {}: no table printed", args.join(" "));
-        let at = doc.iter().position(|l| *l == block[2]);
-        let found = at.is_some_and(|at| {
-            at >= 2 && doc[at - 2..].iter().filter(|l| tabular(l)).take(block.len()).eq(block.iter())
-        });
         assert!(
-            found,
-            "BENCHMARKS.md does not hold the table `umbra-bench {}` prints:\n{}",
-            args.join(" "),
-            block.join("\n")
+            printed.lines().filter(|l| l.starts_with('|')).count() > 2,
+            "umbra-bench {}: no table printed",
+            args.join(" ")
         );
+        assert!(
+            current.contains(&format!("\n{printed}")),
+            "BENCHMARKS.md's current figures do not hold what `umbra-bench {}` prints:\n{printed}",
+            args.join(" ")
+        );
+        printed_rows.extend(printed.lines().filter(|l| l.starts_with('|')).map(str::to_string));
     }
+    let typed: Vec<&str> =
+        current.lines().filter(|l| l.starts_with('|') && !printed_rows.contains(*l)).collect();
+    assert!(
+        typed.is_empty(),
+        "table rows above BENCHMARKS.md's \"# History\" that no --table command prints (generate \
+         them, or move them to the history):\n{}",
+        typed.join("\n")
+    );
+}
+
+/// `umbra-bench build` on a small terrain writes build.json, and its table prints it.
+#[test]
+fn build_writes_json_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-build-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["build", "--terrain", "40", "--builds", "2", "--sweep", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = dir.join("build.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("build.json written")).expect("parses");
+    let scene = &json["scenes"][0];
+    assert_eq!(scene["triangles"].as_u64(), Some(2 * 40 * 40 + 15_360));
+    assert!(scene["median_ms"].as_f64().unwrap() > 0.0 && scene["sweep_sah_cost"].as_f64().unwrap() > 0.0);
+    let table =
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench")).arg("build").arg("--table").arg(&path).output();
+    let table = String::from_utf8(table.unwrap().stdout).unwrap();
+    assert!(table.contains("| terrain | 18560 |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `umbra-bench passes` writes passes.json with every pass, and two runs print as one table.
+#[test]
+fn passes_writes_json_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-passes-{}", std::process::id()));
+    run_validated(
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+            .args(["passes", "--size", "16x16", "--repeats", "1", "--out"])
+            .arg(&dir),
+    );
+    let path = dir.join("passes.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("passes.json written")).expect("parses");
+    let passes: Vec<&str> =
+        json["passes"].as_array().unwrap().iter().map(|p| p["pass"].as_str().unwrap()).collect();
+    assert_eq!(passes, ["gbuffer", "ssao", "ao_blur", "lighting", "pathtrace 1 spp"]);
+    let output = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["passes", "--table"])
+        .arg(&path)
+        .arg("--table")
+        .arg(&path)
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success() && table.contains("| pathtrace 1 spp |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// `umbra-bench paths` on two small scenes writes JSON that parses: positive rates, at least one

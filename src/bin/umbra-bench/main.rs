@@ -3,8 +3,13 @@
 //! for primary, shadow and diffuse rays, validated before timing); `passes` times each pass;
 //! `build` times the BVH build alone (CPU only, no Vulkan); `shadows` compares shadow maps with
 //! shadow rays; `mis` the path tracer's estimators against Mitsuba references; `paths` the path
-//! tracer's throughput on a set of scenes.
+//! tracer's throughput on a set of scenes; `peers` prints the tables of `peers.py`'s comparisons.
+//!
+//! Every measuring command writes JSON, and `--table FILE` prints the Markdown table of a written
+//! file without measuring anything: BENCHMARKS.md's current figures are those tables, printed
+//! from the JSON committed in docs/bench (tests/bench.rs checks that they still match).
 
+mod build;
 mod chart;
 // Shared with `umbra`, which uses parsers this binary does not.
 #[allow(dead_code)]
@@ -13,6 +18,7 @@ mod cli;
 mod mis;
 mod passes;
 mod paths;
+mod peers;
 mod probes;
 mod rays;
 mod shadows;
@@ -23,6 +29,7 @@ use clap::{Parser, Subcommand};
 use glam::Vec3;
 use rays::{RayReport, RayScene, RaySettings};
 use serde_json::json;
+use serde_json::Value;
 use std::path::PathBuf;
 use umbra::procedural::{icosphere, terrain};
 use umbra::vk::{Context, ContextDesc};
@@ -106,6 +113,9 @@ enum Command {
         /// (`src/bin/umbra-bench/peers.py` traces the same rays with Embree).
         #[arg(long)]
         dump: Option<PathBuf>,
+        /// Print the Markdown table of an earlier run's rays.json and exit (nothing is traced).
+        #[arg(long)]
+        table: Option<PathBuf>,
     },
     /// GPU time per pass (G-buffer, deferred lighting, one path-traced sample per pixel) on one
     /// scene, median over repeats after a warm-up.
@@ -124,6 +134,10 @@ enum Command {
         /// Where to write passes.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
+        /// Print the Markdown table of earlier runs' passes.json (repeat it: a column per file,
+        /// all measured with the same settings) and exit (nothing is rendered).
+        #[arg(long)]
+        table: Vec<PathBuf>,
     },
     /// Shadow maps against shadow rays on one scene: the maps' GPU time by step, the lighting
     /// pass with each filter, and each lit image's error against the ray-traced one (JSON and a
@@ -254,7 +268,8 @@ enum Command {
         table: Option<PathBuf>,
     },
     /// BVH build time and SAH cost only (CPU, no Vulkan): the generated terrains of `rays` and
-    /// any glTF files, built repeatedly; prints the median and fastest build.
+    /// any glTF files, built repeatedly; prints the median and fastest build and the CPU time per
+    /// build, and writes build.json.
     Build {
         /// Terrain resolutions n (2·n² + 15,360 triangles each): 351 is 262k, 704 is 1M.
         #[arg(long, value_delimiter = ',', default_value = "351,704")]
@@ -268,59 +283,67 @@ enum Command {
         /// Also build with the full-sweep SAH and compare SAH cost (slow on large scenes).
         #[arg(long)]
         sweep: bool,
+        /// Where to write build.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's build.json and exit (nothing is built).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
+    /// Print the Markdown table of a `peers.py` run's JSON: `peers.json` (umbra's rays against
+    /// Embree's) or `path.json` (the path tracer against Mitsuba 3 at equal error). The
+    /// measurements are `src/bin/umbra-bench/peers.py`'s (Python, Embree, Mitsuba).
+    Peers {
+        /// The JSON file.
+        #[arg(long)]
+        table: PathBuf,
     },
 }
 
 fn main() {
+    START_LOAD.get_or_init(load_average);
     cli::main(|| run(Cli::parse()));
 }
 
-/// `umbra-bench build` for one scene: a warm-up build, then `builds` timed ones.
-fn build_only(scene: &RayScene, builds: usize, sweep: bool) -> Result<()> {
-    use umbra::bvh::{BuildOptions, Bvh};
-    let mut bvh = Bvh::build(&scene.triangles)?;
-    let cpu_before = process_cpu_seconds();
-    let mut ms: Vec<f64> = (0..builds.max(1))
-        .map(|_| {
-            bvh = Bvh::build(&scene.triangles)?;
-            Ok(bvh.stats.build_ms)
-        })
-        .collect::<Result<_>>()?;
-    let cpu_ms = cpu_before.zip(process_cpu_seconds()).map(|(a, b)| (b - a) * 1e3 / ms.len() as f64);
-    bvh.validate().map_err(anyhow::Error::msg)?;
-    ms.sort_by(f64::total_cmp);
-    let s = &bvh.stats;
-    println!(
-        "{}: build median {:.1} ms, fastest {:.1} ms, CPU time {} ms per build; SAH cost {:.2}, {} nodes, depth {}",
-        scene.name,
-        ms[ms.len() / 2],
-        ms[0],
-        cpu_ms.map_or("?".into(), |t| format!("{t:.0}")),
-        s.sah_cost,
-        s.nodes,
-        s.depth
-    );
-    if sweep {
-        let reference =
-            Bvh::build_with(&scene.triangles, &BuildOptions { full_sweep: true, ..Default::default() })?;
-        println!(
-            "  full-sweep SAH cost {:.2}: binned is {:+.2} %",
-            reference.stats.sah_cost,
-            (s.sah_cost / reference.stats.sah_cost - 1.0) * 100.0
-        );
-    }
-    Ok(())
+/// The machine's 1-minute load average when this process started (its other work; a run's own
+/// threads add to it afterwards).
+static START_LOAD: std::sync::OnceLock<Option<f64>> = std::sync::OnceLock::new();
+
+/// The 1-minute load average from `/proc/loadavg`; `None` where there is no procfs.
+fn load_average() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg").ok()?.split_whitespace().next()?.parse().ok()
 }
 
-/// User + system CPU time of this process (all threads) from `/proc/self/stat`, in seconds at
-/// the kernel's 10 ms tick; `None` where there is no procfs. Steadier than wall-clock time on a
-/// shared machine.
-fn process_cpu_seconds() -> Option<f64> {
+/// Adds the conditions of this run to its JSON: lavapipe's thread count (`LP_NUM_THREADS`, unset:
+/// one per core), the load average when the run started and the process's nice value (on a
+/// shared machine a niced run yields to the others, and its wall-clock timings with it).
+fn add_conditions(doc: &mut Value) {
+    doc["lp_num_threads"] = json!(std::env::var("LP_NUM_THREADS").ok());
+    doc["load_average_at_start"] = json!(START_LOAD.get().copied().flatten());
+    doc["nice"] = json!(nice_value());
+}
+
+/// This process's nice value from `/proc/self/stat` (field 19); `None` where there is no procfs.
+fn nice_value() -> Option<i64> {
     let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
-    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
-    let ticks = |i: usize| fields.get(i - 3)?.parse::<f64>().ok();
-    Some((ticks(14)? + ticks(15)?) / 100.0)
+    // Fields after the parenthesised command name start at field 3 (the state).
+    stat.rsplit_once(')')?.1.split_whitespace().nth(19 - 3)?.parse().ok()
+}
+
+/// The conditions [`add_conditions`] recorded, for a table's caption.
+fn conditions_text(doc: &Value) -> String {
+    format!("LP_NUM_THREADS {}, {}", doc["lp_num_threads"].as_str().unwrap_or("unset"), load_text(doc))
+}
+
+/// The load average a run started under and its nice value, in words.
+fn load_text(doc: &Value) -> String {
+    let load = doc["load_average_at_start"]
+        .as_f64()
+        .map_or("load not recorded".into(), |load| format!("load average {load:.2} at the start"));
+    match doc["nice"].as_i64() {
+        Some(nice) if nice != 0 => format!("{load}, nice {nice}"),
+        _ => load,
+    }
 }
 
 /// Generated terrain with a row of spheres on it: `2·n²` + 15,360 triangles.
@@ -386,7 +409,19 @@ fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Rays { quick, size, repeats, sweep, gltf, out, row_order, no_terrain, dump } => {
+        Command::Rays { table: Some(path), .. } => print!("{}", rays::table(&read_json(&path)?)),
+        Command::Rays {
+            quick,
+            size,
+            repeats,
+            sweep,
+            gltf,
+            out,
+            row_order,
+            no_terrain,
+            dump,
+            table: None,
+        } => {
             let ctx = Context::new(&ContextDesc::default())?;
             let device = ctx.info().name.clone();
             let (scenes, settings) = if quick {
@@ -418,32 +453,33 @@ fn run(cli: Cli) -> Result<()> {
                 print_report(&report);
                 reports.push(report);
             }
-            std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-            let path = out.join("rays.json");
-            let doc = json!({
-                "device": device,
-                "threads": rayon::current_num_threads(),
-                "size": [settings.size.0, settings.size.1],
-                "repeats": settings.repeats,
-                "scenes": reports.iter().map(report_json).collect::<Vec<_>>(),
-            });
-            std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
-                .with_context(|| format!("writing {}", path.display()))?;
-            println!("wrote {}", path.display());
+            let doc = rays::to_json(&device, &settings, &reports);
+            print!("\n{}", rays::table(&doc));
+            write_json(&out, "rays.json", &doc)?;
         }
-        Command::Build { terrain, gltf, builds, sweep } => {
+        Command::Build { table: Some(path), .. } => print!("{}", build::table(&read_json(&path)?)),
+        Command::Build { terrain, gltf, builds, sweep, out, table: None } => {
             let mut scenes: Vec<RayScene> = terrain.iter().map(|&n| terrain_scene("terrain", n)).collect();
             for path in &gltf {
                 scenes.push(gltf_scene(path)?);
             }
             println!("{} rayon threads", rayon::current_num_threads());
+            let mut rows = Vec::new();
             for scene in &scenes {
-                build_only(scene, builds, sweep)?;
+                let row = build::run(scene, builds, sweep)?;
+                build::print(&row);
+                rows.push(row);
             }
+            write_json(&out, "build.json", &build::to_json(builds, &rows))?;
         }
-        Command::Passes { scene, size, repeats, shadow_rays, out } => {
+        Command::Passes { table, .. } if !table.is_empty() => {
+            let docs = table.iter().map(|path| read_json(path)).collect::<Result<Vec<_>>>()?;
+            print!("{}", passes::table(&docs)?);
+        }
+        Command::Passes { scene, size, repeats, shadow_rays, out, table: _ } => {
             run_passes(scene, size, repeats, shadow_rays, out)?
         }
+        Command::Peers { table } => print!("{}", peers::table(&read_json(&table)?)),
         Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {
             Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
             None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
@@ -736,21 +772,16 @@ fn run_passes(
             pixels / (t.median_ms * 1e3)
         );
     }
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let path = out.join("passes.json");
-    let doc = json!({
-        "device": ctx.info().name,
-        "scene": loaded.name,
-        "triangles": gpu_scene.bvh_stats.triangles,
-        "size": [size.0, size.1],
-        "repeats": repeats,
-        "shadow_rays": shadow_rays,
-        "passes": timings.iter().map(|t| json!({"pass": t.name, "median_ms": t.median_ms, "min_ms": t.min_ms})).collect::<Vec<_>>(),
-    });
-    std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
-        .with_context(|| format!("writing {}", path.display()))?;
-    println!("wrote {}", path.display());
-    Ok(())
+    let doc = passes::to_json(
+        &ctx.info().name,
+        &loaded.name,
+        gpu_scene.bvh_stats.triangles,
+        size,
+        repeats,
+        shadow_rays,
+        &timings,
+    );
+    write_json(&out, "passes.json", &doc)
 }
 
 fn run_shadows(
@@ -802,7 +833,6 @@ fn run_shadows(
     write_json(&out, "shadows.json", &doc)
 }
 
-/// An earlier run's JSON (for `--table`).
 /// The sun the benchmarks add to scenes without punctual lights.
 const DEFAULT_SUN: [f32; 3] = [0.25, -1.0, 0.15];
 
@@ -919,6 +949,7 @@ fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::s
     Ok(scenes)
 }
 
+/// An earlier run's JSON (for `--table`).
 fn read_json(path: &std::path::Path) -> Result<serde_json::Value> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
@@ -932,26 +963,6 @@ fn write_json(out: &std::path::Path, name: &str, doc: &serde_json::Value) -> Res
         .with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());
     Ok(())
-}
-
-fn stats_json(s: &umbra::bvh::BvhStats) -> serde_json::Value {
-    json!({
-        "references": s.references, "nodes": s.nodes, "leaves": s.leaves, "depth": s.depth, "max_leaf_size": s.max_leaf_size,
-        "mean_leaf_size": s.mean_leaf_size, "sah_cost": s.sah_cost, "build_ms": s.build_ms,
-    })
-}
-
-fn report_json(r: &RayReport) -> serde_json::Value {
-    json!({
-        "scene": r.scene,
-        "triangles": r.triangles,
-        "binned": stats_json(&r.binned),
-        "binned_build_ms_median": r.binned_build_ms_median,
-        "sweep": r.sweep.as_ref().map(stats_json),
-        "rays": r.kinds.iter().map(|(kind, n, ms, mrays)| json!({
-            "kind": kind, "rays": n, "median_ms": ms, "mrays_per_s": mrays,
-        })).collect::<Vec<_>>(),
-    })
 }
 
 fn print_report(r: &RayReport) {

@@ -4,7 +4,8 @@
 //! ([`super::rays::warm_up`]),
 //! from GPU timestamps.
 
-use anyhow::Result;
+use anyhow::{bail, Result};
+use serde_json::{json, Value};
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
@@ -122,4 +123,88 @@ pub fn run(
             median_ms: super::rays::median(&mut ms),
         })
         .collect())
+}
+
+/// The run as JSON (`passes.json`): the scene, the settings, the conditions
+/// ([`super::add_conditions`]) and each pass's median and fastest GPU time.
+pub fn to_json(
+    device: &str,
+    scene: &str,
+    triangles: usize,
+    size: (u32, u32),
+    repeats: usize,
+    shadow_rays: u32,
+    timings: &[PassTiming],
+) -> Value {
+    let mut doc = json!({
+        "device": device,
+        "scene": scene,
+        "triangles": triangles,
+        "size": [size.0, size.1],
+        "repeats": repeats,
+        "shadow_rays": shadow_rays,
+        "passes": timings.iter().map(|t| json!({"pass": t.name, "median_ms": t.median_ms, "min_ms": t.min_ms})).collect::<Vec<_>>(),
+    });
+    super::add_conditions(&mut doc);
+    doc
+}
+
+/// The Markdown table of one or more runs' JSON (what BENCHMARKS.md shows): a row per pass, a
+/// column per run (scene), median GPU milliseconds with the fastest repeat in brackets. The runs
+/// must share their settings (size, repeats, shadow rays, device, lavapipe threads); the load
+/// each started under is listed under the table.
+pub fn table(docs: &[Value]) -> Result<String> {
+    let Some(first) = docs.first() else { bail!("no passes.json given") };
+    for doc in docs {
+        for key in ["size", "repeats", "shadow_rays", "device", "lp_num_threads"] {
+            if doc[key] != first[key] {
+                bail!("the runs differ in {key} ({} and {}): print their tables apart", first[key], doc[key]);
+            }
+        }
+    }
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    // Three significant digits (0.0790, 4.12, 15.6, 135).
+    let sig3 = |x: f64| {
+        let digits = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+        format!("{x:.digits$}")
+    };
+    let mut out = format!(
+        "{}×{}, GPU ms per pass, median of {} timed submissions after a warm-up (the fastest in brackets); \
+         lighting with {} shadow rays per pixel for emissive triangles; {}, LP_NUM_THREADS {}:\n\n| pass |",
+        first["size"][0],
+        first["size"][1],
+        first["repeats"],
+        first["shadow_rays"],
+        first["device"].as_str().unwrap_or("?"),
+        first["lp_num_threads"].as_str().unwrap_or("unset"),
+    );
+    for doc in docs {
+        out += &format!(" {}, {} triangles |", doc["scene"].as_str().unwrap_or("?"), doc["triangles"]);
+    }
+    out += &format!("\n|---|{}\n", "---:|".repeat(docs.len()));
+    let mut passes: Vec<&str> = Vec::new();
+    for doc in docs {
+        for p in doc["passes"].as_array().into_iter().flatten() {
+            let name = p["pass"].as_str().unwrap_or("?");
+            if !passes.contains(&name) {
+                passes.push(name);
+            }
+        }
+    }
+    for pass in passes {
+        out += &format!("| {pass} |");
+        for doc in docs {
+            let timing = doc["passes"].as_array().and_then(|ps| ps.iter().find(|p| p["pass"] == pass));
+            out += &timing.map_or(" — |".to_string(), |t| {
+                format!(" {} ({}) |", sig3(num(&t["median_ms"])), sig3(num(&t["min_ms"])))
+            });
+        }
+        out += "\n";
+    }
+    let loads: Vec<String> = docs
+        .iter()
+        .map(|doc| format!("{}: {}", doc["scene"].as_str().unwrap_or("?"), super::load_text(doc)))
+        .collect();
+    out += &format!("\nConditions of each run: {}.\n", loads.join("; "));
+    Ok(out)
 }

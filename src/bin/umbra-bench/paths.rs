@@ -98,12 +98,12 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
     Ok(rows)
 }
 
-/// The run as JSON: settings, then per scene its time, samples and segments per second.
+/// The run as JSON: settings, the conditions ([`super::add_conditions`]), then per scene its
+/// time, samples and segments per second.
 pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Value {
     let samples = settings.size.0 as f64 * settings.size.1 as f64 * settings.spp as f64;
-    json!({
+    let mut doc = json!({
         "device": device,
-        "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
         "size": [settings.size.0, settings.size.1],
         "spp": settings.spp,
         "repeats": settings.repeats,
@@ -119,7 +119,9 @@ pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Valu
             "segments_per_sample": r.segments_per_sample,
             "msegments_per_s": samples * r.segments_per_sample / (r.median_ms * 1e3),
         })).collect::<Vec<_>>(),
-    })
+    });
+    super::add_conditions(&mut doc);
+    doc
 }
 
 /// The Markdown table of a run's JSON (what BENCHMARKS.md shows): each scene's throughput and

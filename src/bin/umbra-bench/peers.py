@@ -12,6 +12,9 @@ scene, camera, size, bounces and box filter: each renderer's relative MSE agains
 converged reference at several sample counts, and its time per sample (umbra: GPU timestamps;
 Mitsuba: a warmed-up render), give the time each needs for equal error. Writes path.json.
 
+Both print their table with `umbra-bench peers --table FILE` (also `peers.py table FILE`), the one
+printer of these tables, which tests/bench.rs checks against BENCHMARKS.md without Python.
+
     pip install embreex mitsuba numpy    # Mitsuba's llvm variant also needs apt's libllvm19
     python3 src/bin/umbra-bench/peers.py rays --bench target/release/umbra-bench \
         --gltf ../shared/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb --size 512x512
@@ -111,19 +114,14 @@ def rays(args):
            "embree_threads": 1, "size": umbra["size"], "repeats": args.repeats, "scenes": results}
     (out / "peers.json").write_text(json.dumps(doc, indent=2))
     print(f"wrote {out / 'peers.json'}")
-    print(table(doc))
+    print_table(args.bench, out / "peers.json")
 
 
-def table(doc):
-    """The Markdown table of peers.json (BENCHMARKS.md carries its output)."""
-    lines = [f"| scene ({doc['size'][0]}×{doc['size'][1]}, umbra LP_NUM_THREADS={doc['umbra_threads']}, Embree 1 thread) "
-             "| kind | umbra Mrays/s | Embree Mrays/s | umbra / Embree | same answer |",
-             "|---|---|---:|---:|---:|---:|"]
-    for s in doc["scenes"]:
-        for k in s["kinds"]:
-            lines.append(f"| {s['scene']} | {k['kind']} | {k['umbra_mrays_per_s']:.2f} | {k['embree_mrays_per_s']:.2f} "
-                         f"| {k['ratio']:.2f}× | {100 * k['same_answer']:.2f} % |")
-    return "\n".join(lines)
+def print_table(bench, path):
+    """Prints the Markdown table of a peers.json or path.json. `umbra-bench peers --table` is the
+    one printer of both (BENCHMARKS.md carries its output, and tests/bench.rs, which runs without
+    Python, checks it)."""
+    subprocess.run([bench, "peers", "--table", str(path)], check=True)
 
 
 def read_glb(path):
@@ -395,18 +393,7 @@ def path(args):
            "rows": rows}
     (out / "path.json").write_text(json.dumps(doc, indent=2))
     print(f"wrote {out / 'path.json'}")
-    print(path_table(doc))
-
-
-def path_table(doc):
-    """The Markdown table of path.json."""
-    lit = f" under {Path(doc['env']).name}" if doc.get("env") else ""
-    lines = [f"| {Path(doc['scene']).name}{lit} {doc['size'][0]}×{doc['size'][1]}, {doc['max_bounces']} bounces | umbra ms | umbra rel. MSE "
-             "| Mitsuba ms | Mitsuba rel. MSE | umbra / Mitsuba time at equal error |", "|---:|---:|---:|---:|---:|---:|"]
-    for r in doc["rows"]:
-        lines.append(f"| {r['spp']} spp | {r['umbra']['ms']:.1f} | {r['umbra']['rel_mse']:.2e} | {r['mitsuba']['ms']:.1f} "
-                     f"| {r['mitsuba']['rel_mse']:.2e} | {r['ratio']:.2f}× |")
-    return "\n".join(lines)
+    print_table(args.bench, out / "path.json")
 
 
 def main():
@@ -422,6 +409,7 @@ def main():
     p = commands.add_parser("path", help="path tracing at equal error against Mitsuba 3")
     p.add_argument("scene", nargs="?", default="scenes/cornell-box.glb", help="a .glb file")
     p.add_argument("--umbra", default="target/release/umbra", help="the umbra binary")
+    p.add_argument("--bench", default="target/release/umbra-bench", help="the umbra-bench binary (prints the table)")
     p.add_argument("--size", default="128x128", help="image size WxH")
     p.add_argument("--spp", default="16,64,256", help="sample counts compared")
     p.add_argument("--reference-spp", type=int, default=4096, help="each renderer's reference")
@@ -430,16 +418,16 @@ def main():
     p.add_argument("--env", help="an equirectangular environment map (EXR) lighting the scene in both")
     p.add_argument("--env-strength", type=float, default=1.0, help="its multiplier")
     p.add_argument("--out", default="out/bench/peers", help="where to write path.json")
-    t = commands.add_parser("table", help="print the Markdown table of a peers.json or path.json")
+    t = commands.add_parser("table", help="print the Markdown table of a peers.json or path.json (umbra-bench peers --table)")
     t.add_argument("json")
+    t.add_argument("--bench", default="target/release/umbra-bench", help="the umbra-bench binary")
     args = parser.parse_args()
     if args.command == "rays":
         rays(args)
     elif args.command == "path":
         path(args)
     else:
-        doc = json.loads(Path(args.json).read_text())
-        print(path_table(doc) if "renderers" in doc else table(doc))
+        print_table(args.bench, args.json)
 
 
 if __name__ == "__main__":

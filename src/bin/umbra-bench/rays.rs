@@ -6,6 +6,7 @@
 use anyhow::{bail, Result};
 use glam::Vec3;
 use rayon::prelude::*;
+use serde_json::{json, Value};
 use std::time::Instant;
 use umbra::bvh::gpu::{GpuBvh, Query, RayBatch, RayTracer};
 use umbra::bvh::reference::{same_hit, Reference};
@@ -108,6 +109,98 @@ pub fn run(ctx: &Context, scene: &RayScene, settings: &RaySettings) -> Result<Ra
         sweep,
         kinds,
     })
+}
+
+/// The run as JSON (`rays.json`): the settings, the conditions ([`super::add_conditions`]), then per
+/// scene its BVH's statistics and each ray kind's median time and throughput.
+pub fn to_json(device: &str, settings: &RaySettings, reports: &[RayReport]) -> Value {
+    let stats = |s: &BvhStats| {
+        json!({
+            "references": s.references, "nodes": s.nodes, "leaves": s.leaves, "depth": s.depth,
+            "max_leaf_size": s.max_leaf_size, "mean_leaf_size": s.mean_leaf_size, "sah_cost": s.sah_cost,
+            "build_ms": s.build_ms,
+        })
+    };
+    let mut doc = json!({
+        "device": device,
+        "threads": rayon::current_num_threads(),
+        "size": [settings.size.0, settings.size.1],
+        "repeats": settings.repeats,
+        "builds": settings.builds,
+        "row_order": settings.row_order,
+        "scenes": reports.iter().map(|r| json!({
+            "scene": r.scene,
+            "triangles": r.triangles,
+            "binned": stats(&r.binned),
+            "binned_build_ms_median": r.binned_build_ms_median,
+            "sweep": r.sweep.as_ref().map(stats),
+            "rays": r.kinds.iter().map(|(kind, n, ms, mrays)| json!({
+                "kind": kind, "rays": n, "median_ms": ms, "mrays_per_s": mrays,
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    });
+    super::add_conditions(&mut doc);
+    doc
+}
+
+/// The Markdown table of a run's JSON (what BENCHMARKS.md shows): per scene its BVH (references
+/// after early split clipping, nodes, depth, SAH cost, and against the full-sweep build when
+/// measured) and each ray kind's throughput.
+pub fn table(doc: &Value) -> String {
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    let scenes = doc["scenes"].as_array().cloned().unwrap_or_default();
+    let kinds: Vec<String> = scenes
+        .first()
+        .and_then(|s| s["rays"].as_array())
+        .map(|rays| rays.iter().map(|r| r["kind"].as_str().unwrap_or("?").to_string()).collect())
+        .unwrap_or_default();
+    let sweep = scenes.iter().any(|s| s["sweep"].is_object());
+    let order = if doc["row_order"] == true { "in rows" } else { "in 8×8 tiles" };
+    let mut out = format!(
+        "{}×{} rays per kind (primary rays {order}), median of {} after a warm-up; {}, {}; BVH built on {} \
+         threads:\n\n| scene | triangles | BVH references | nodes | depth | SAH cost |",
+        doc["size"][0],
+        doc["size"][1],
+        doc["repeats"],
+        doc["device"].as_str().unwrap_or("?"),
+        super::conditions_text(doc),
+        doc["threads"],
+    );
+    if sweep {
+        out += " binned vs full sweep |";
+    }
+    for kind in &kinds {
+        out += &format!(" {kind} Mrays/s |");
+    }
+    out += &format!("\n|---|{}\n", "---:|".repeat(5 + sweep as usize + kinds.len()));
+    for s in &scenes {
+        let b = &s["binned"];
+        let name = s["scene"].as_str().unwrap_or("?");
+        // The scene's name ends with its triangle count, which has a column of its own.
+        let name = name.rsplit_once(" (").map_or(name, |(n, _)| n);
+        out += &format!(
+            "| {name} | {} | {} | {} | {} | {:.2} |",
+            s["triangles"],
+            b["references"],
+            b["nodes"],
+            b["depth"],
+            num(&b["sah_cost"])
+        );
+        if sweep {
+            let full = num(&s["sweep"]["sah_cost"]);
+            out += &if full.is_nan() {
+                " — |".to_string()
+            } else {
+                format!(" {:+.2} % |", 100.0 * (num(&b["sah_cost"]) / full - 1.0))
+            };
+        }
+        for kind in &kinds {
+            let rays = s["rays"].as_array().and_then(|r| r.iter().find(|r| r["kind"] == kind.as_str()));
+            out += &rays.map_or(" — |".to_string(), |r| format!(" {:.2} |", num(&r["mrays_per_s"])));
+        }
+        out += "\n";
+    }
+    out
 }
 
 /// A file-name stem for `name`: letters and digits, the rest `-`.

@@ -223,7 +223,8 @@ gpu_structs! {
         tex_transform: [vec4; 10],
     }
 
-    /// A texture in the shared texel buffer (RGBA8, one `uint` per texel, row-major).
+    /// A texture in the shared texel buffer (linear RGBA16, one RG32UI texel per texel,
+    /// row-major).
     struct GpuTexture {
         /// First texel in the texel buffer.
         offset: uint,

@@ -16,24 +16,40 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// An output path whose extension is `extension` (any case), so that a wrong one is refused
-/// before a long render rather than after it.
-fn parse_output(s: &str, extension: &str, other: &str) -> Result<std::path::PathBuf, String> {
+/// An output path whose extension is one of `extensions` (any case), so that a wrong one is
+/// refused before a long render rather than after it.
+fn parse_output(s: &str, extensions: &[&str], what: &str) -> Result<std::path::PathBuf, String> {
     let path = std::path::PathBuf::from(s);
     match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case(extension) => Ok(path),
-        _ => Err(format!("'{s}': the file name must end in .{extension} ({other})")),
+        Some(e) if extensions.iter().any(|x| e.eq_ignore_ascii_case(x)) => Ok(path),
+        _ => Err(format!("'{s}': the file name must end in {what}")),
     }
 }
 
 /// A PNG output path (`.png`).
 pub fn parse_png(s: &str) -> Result<std::path::PathBuf, String> {
-    parse_output(s, "png", "--exr writes EXR")
+    parse_output(s, &["png"], ".png")
+}
+
+/// A PNG or EXR output path (`.png`, or `.exr` for the EXR alone).
+pub fn parse_png_or_exr(s: &str) -> Result<std::path::PathBuf, String> {
+    parse_output(s, &["png", "exr"], ".png or .exr")
 }
 
 /// An EXR output path (`.exr`).
 pub fn parse_exr(s: &str) -> Result<std::path::PathBuf, String> {
-    parse_output(s, "exr", "-o writes PNG")
+    parse_output(s, &["exr"], ".exr")
+}
+
+/// What a render writes: the PNG `output` names, or none when it names an EXR; the EXR of
+/// `exr`, or else of `output` when that names one.
+pub fn outputs(
+    output: &std::path::Path,
+    exr: Option<&std::path::PathBuf>,
+) -> (Option<std::path::PathBuf>, Option<std::path::PathBuf>) {
+    let is_exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let png = (!is_exr).then(|| output.to_path_buf());
+    (png, exr.cloned().or_else(|| is_exr.then(|| output.to_path_buf())))
 }
 
 /// Three comma-separated numbers, if `s` holds three and `ok` accepts them.

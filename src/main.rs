@@ -276,8 +276,8 @@ struct RenderArgs {
     /// AO modes: skip the depth-aware blur (ao blurs by default, rtao never does).
     #[arg(long)]
     ao_no_blur: bool,
-    /// PNG output (tonemapped sRGB).
-    #[arg(short, long, default_value = "umbra.png", value_parser = cli::parse_png)]
+    /// PNG output (tonemapped sRGB); a name ending in .exr writes only the EXR (as --exr).
+    #[arg(short, long, default_value = "umbra.png", value_parser = cli::parse_png_or_exr)]
     output: PathBuf,
     /// EXR output: linear colour, albedo, normal, depth and variance layers.
     #[arg(long, value_parser = cli::parse_exr)]
@@ -440,10 +440,13 @@ fn render(args: RenderArgs) -> Result<()> {
     let (w, h) = settings.size;
     let rgba: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
     let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
-    umbra::output::write_png(&args.output, w, h, &display)
-        .with_context(|| format!("writing {}", args.output.display()))?;
-    println!("wrote {}", args.output.display());
-    if let Some(path) = &args.exr {
+    let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
+    if let Some(png) = png {
+        umbra::output::write_png(&png, w, h, &display)
+            .with_context(|| format!("writing {}", png.display()))?;
+        println!("wrote {}", png.display());
+    }
+    if let Some(path) = &exr {
         let colour: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let albedo: Vec<f32> = image.albedo.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let normal: Vec<f32> = image.normal_depth.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
@@ -741,10 +744,12 @@ fn render_hybrid(
     println!("hybrid: {}x{}; GPU {}", args.size.0, args.size.1, times.join(", "));
     let (w, h) = args.size;
     let bytes: Vec<u8> = image.display.iter().flatten().copied().collect();
-    umbra::output::write_png(&args.output, w, h, &bytes)
-        .with_context(|| format!("writing {}", args.output.display()))?;
-    println!("wrote {}", args.output.display());
-    if let Some(path) = &args.exr {
+    let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
+    if let Some(png) = png {
+        umbra::output::write_png(&png, w, h, &bytes).with_context(|| format!("writing {}", png.display()))?;
+        println!("wrote {}", png.display());
+    }
+    if let Some(path) = &exr {
         let g = &image.gbuffer;
         let rgb = |v: &[[f32; 4]]| -> Vec<f32> { v.iter().flat_map(|p| [p[0], p[1], p[2]]).collect() };
         let colour = rgb(&image.color);
@@ -817,14 +822,12 @@ fn render_ao(
             [g, g, g, 255]
         })
         .collect();
-    let is_exr = |p: &std::path::Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let exr_path = args.exr.clone().or_else(|| is_exr(&args.output).then(|| args.output.clone()));
-    if !is_exr(&args.output) {
-        umbra::output::write_png(&args.output, w, h, &bytes)
-            .with_context(|| format!("writing {}", args.output.display()))?;
-        println!("wrote {}", args.output.display());
+    let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
+    if let Some(png) = png {
+        umbra::output::write_png(&png, w, h, &bytes).with_context(|| format!("writing {}", png.display()))?;
+        println!("wrote {}", png.display());
     }
-    if let Some(path) = exr_path {
+    if let Some(path) = exr {
         use umbra::output::Layer;
         umbra::output::write_exr(
             &path,

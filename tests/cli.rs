@@ -57,7 +57,7 @@ fn absurd_size_is_rejected_by_the_parser() {
 
 /// Every number on the command line is checked by the parser: NaN, infinities, negatives and
 /// zeros where they make no sense are refused naming the flag and the value, before any work;
-/// so are output names whose extension is not the format written (once found only after the
+/// so are output names whose extension is not a format written (once found only after the
 /// render, which was then lost).
 #[test]
 fn non_finite_and_negative_numbers_are_rejected_by_the_parser() {
@@ -70,7 +70,7 @@ fn non_finite_and_negative_numbers_are_rejected_by_the_parser() {
         ("--target-error", "NaN", "not a finite number"),
         ("--env-color", "1,nan,1", "non-negative numbers"),
         ("--spp", "-4", "not in 0..=4294967295"),
-        ("--output", "out.exr", "must end in .png (--exr writes EXR)"),
+        ("--output", "out.jpg", "must end in .png or .exr"),
         ("--exr", "out.png", "must end in .exr"),
     ] {
         let out = umbra().args(["render", &format!("{flag}={value}")]).output().expect("run umbra");
@@ -164,6 +164,12 @@ fn render_cornell_box_writes_png_and_exr_layers() {
     // The Cornell box is lit: the colour layer is not black.
     let red = &channels.iter().find(|c| c.0 == "R").unwrap().1;
     assert!(red.iter().sum::<f32>() > 0.0);
+    // `-o` naming an EXR writes that EXR, with the same layers, and no PNG.
+    let only = dir.join("only.exr");
+    run_validated(umbra().args(["render", "--size", "32x24", "--spp", "2", "-o"]).arg(&only));
+    let (_, _, alone) = umbra::output::read_exr_channels(&only).unwrap();
+    assert_eq!(alone.len(), expected.len());
+    assert!(!dir.join("only.png").exists() && !dir.join("umbra.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -76,9 +76,11 @@ fn unlit_surfaces_show_their_base_colour_in_both_modes() {
     scene.colors = vec![[vertex[0], vertex[1], vertex[2], 1.0]; scene.positions.len()];
     scene.update_emissive();
     assert_eq!(scene.emissive.triangles, vec![2, 3], "only the emitter, not the unlit square, is a light");
-    let expected: [f32; 3] = std::array::from_fn(|c| {
-        factor[c] * srgb_decode(f32::from(texel[c]) / 255.0) * as_vertex_color(vertex[c])
-    });
+    // The texel as the GPU stores it: sRGB-decoded to 16-bit linear (within 2^-17 of
+    // srgb_decode, which a dark texel's relative error of up to 10^-4 would show at 10^-5).
+    let stored = |code: u8| umbra::gpu::scene::texel_unorm16(code, true) as f32 / 65535.0;
+    let expected: [f32; 3] =
+        std::array::from_fn(|c| factor[c] * stored(texel[c]) * as_vertex_color(vertex[c]));
 
     let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
     let camera = scene.camera(None).unwrap();

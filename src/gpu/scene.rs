@@ -495,6 +495,15 @@ fn upload_rgba32ui<T: bytemuck::Pod>(ctx: &Context, name: &str, items: &[T]) -> 
     TexelBuffer::upload(ctx, name, items, raw::Format::R32G32B32A32_UINT, 16)
 }
 
+/// The 16-bit unorm a texture channel's 8-bit `code` is stored as on the GPU: its linear value
+/// (sRGB-decoded when `srgb`), rounded to the nearest 65535th (`texture.glsl` reads it back as
+/// `value / 65535`). A linear code v is stored as v·257, which reads back as v/255 exactly.
+pub fn texel_unorm16(code: u8, srgb: bool) -> u32 {
+    let c = f32::from(code) / 255.0;
+    let linear = if srgb { crate::color::srgb_decode(c) } else { c };
+    (linear * 65535.0 + 0.5) as u32
+}
+
 /// Uploads the scene texels as a storage texel buffer of RG32UI texels.
 fn upload_texels(ctx: &Context, texels: &[[u32; 2]]) -> Result<TexelBuffer> {
     TexelBuffer::upload(ctx, "scene texels", texels, raw::Format::R32G32_UINT, 8)
@@ -634,10 +643,7 @@ impl GpuTextures {
         // Linear RGBA16 (unorm): an 8-bit code v is v·257 / 65535 = v / 255 exactly, an sRGB
         // code its decoded value within 2^-17. One texel read per texel on the GPU, where an
         // sRGB RGBA8 texel took four (the texel and three table entries).
-        let decode: [u32; 256] = std::array::from_fn(|v| {
-            let c = if texture.srgb { crate::color::srgb_decode(v as f32 / 255.0) } else { v as f32 / 255.0 };
-            (c * 65535.0 + 0.5) as u32
-        });
+        let decode: [u32; 256] = std::array::from_fn(|v| texel_unorm16(v as u8, texture.srgb));
         let pack = |rgba8: &[u8]| -> Vec<[u32; 2]> {
             rgba8
                 .chunks_exact(4)

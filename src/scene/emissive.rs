@@ -45,7 +45,8 @@ impl EmissiveTable {
                 if let (Some(texture), Some(Some(sums))) =
                     (textures.get(slot.texture as usize), tables.get(slot.texture as usize))
                 {
-                    let uvs = if slot.tex_coord == 1 { &scene.uv1 } else { &scene.uv0 };
+                    // As the GPU reads it: any set but 0 is TEXCOORD_1 (the only other one loaded).
+                    let uvs = if slot.tex_coord != 0 { &scene.uv1 } else { &scene.uv0 };
                     let uv = tri.map(|v| uvs.get(v as usize).map(|&uv| slot.transform_uv(uv)));
                     l *= match uv {
                         [Some(a), Some(b), Some(c)] => texture_footprint_mean(texture, sums, [a, b, c]),

@@ -196,7 +196,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
             bool pick_env = u.w < params.env_pick;
             vec3 wi = vec3(0.0, 0.0, 1.0);
             vec3 target = vec3(0.0);
-            vec3 le = vec3(0.0);
+            vec3 l_in = vec3(0.0);  // the sampled light's radiance towards p
             float pdf = 0.0;
             bool found = false;
             // Only the kernels of scenes with the light kind compile its sampling: llvmpipe
@@ -205,14 +205,14 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
                 if (pick_env) {
                     vec4 ue = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
                     wi = env_sample(ue, params.env_size, pdf);
-                    le = env_radiance(wi, params.env_size) * params.env;
+                    l_in = env_radiance(wi, params.env_size) * params.env;
                     pdf *= params.env_pick;
                     found = pdf > 0.0;
                 }
             }
             if (HAS_LIGHTS) {
                 if (!pick_env) {
-                    found = emissive_point(p, u.xyz, params.light_count, wi, target, le, pdf);
+                    found = emissive_point(p, u.xyz, params.light_count, wi, target, l_in, pdf);
                     pdf *= 1.0 - params.env_pick;
                 }
             }
@@ -220,7 +220,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
             if (found && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, !pick_env, target, wi_local)) {
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
-                vec3 c = throughput * f * abs(wi_local.z) * le * (w / pdf);
+                vec3 c = throughput * f * abs(wi_local.z) * l_in * (w / pdf);
                 path.radiance += c;
                 path.nonfinite |= nonfinite_bit(c, pick_env ? NONFINITE_ENV_NEE : NONFINITE_EMISSIVE_NEE);
             }

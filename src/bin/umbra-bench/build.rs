@@ -2,6 +2,7 @@
 //! warm-up build, the median and fastest wall time and the process's CPU time per build (steadier
 //! than wall time on a shared machine), the SAH cost and, on request, the full-sweep build's.
 
+use super::num;
 use super::rays::RayScene;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -99,7 +100,6 @@ pub fn to_json(builds: usize, rows: &[BuildRow]) -> Value {
 
 /// The Markdown table of a run's JSON (what BENCHMARKS.md shows).
 pub fn table(doc: &Value) -> String {
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let mut out = format!(
         "{} timed builds per scene after a warm-up, {} rayon threads, {}:\n\n\
          | scene | triangles | references | build ms (median) | fastest ms | CPU ms per build | SAH cost | binned vs full sweep | nodes | depth |\n\

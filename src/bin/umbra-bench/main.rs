@@ -314,6 +314,11 @@ fn load_average() -> Option<f64> {
     std::fs::read_to_string("/proc/loadavg").ok()?.split_whitespace().next()?.parse().ok()
 }
 
+/// A JSON number as f64 (NaN where absent), for the `--table` printers.
+fn num(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
 /// Adds the conditions of this run to its JSON: lavapipe's thread count (`LP_NUM_THREADS`, unset:
 /// one per core), the load average when the run started and the process's nice value (on a
 /// shared machine a niced run yields to the others, and its wall-clock timings with it).

@@ -4,6 +4,7 @@
 //! ([`super::rays::warm_up`]),
 //! from GPU timestamps.
 
+use super::num;
 use anyhow::{bail, Result};
 use serde_json::{json, Value};
 use umbra::gpu::scene::GpuScene;
@@ -162,7 +163,6 @@ pub fn table(docs: &[Value]) -> Result<String> {
             }
         }
     }
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     // Three significant digits (0.0790, 4.12, 15.6, 135).
     let sig3 = |x: f64| {
         let digits = (2 - x.abs().log10().floor() as i32).max(0) as usize;

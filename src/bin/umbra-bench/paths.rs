@@ -3,6 +3,7 @@
 //! and each scene's ratio to the set's median (issue 25 asks that no scene fall more than 4×
 //! below it).
 
+use super::num;
 use anyhow::Result;
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -127,7 +128,6 @@ pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Valu
 /// The Markdown table of a run's JSON (what BENCHMARKS.md shows): each scene's throughput and
 /// its ratio to the median of the set.
 pub fn table(doc: &Value) -> String {
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let scenes = doc["scenes"].as_array().cloned().unwrap_or_default();
     let mut rates: Vec<f64> = scenes.iter().map(|s| num(&s["msamples_per_s"])).collect();
     let median = super::rays::median(&mut rates);

@@ -4,6 +4,7 @@
 //! printed here, so that CI (no Python) checks the ones BENCHMARKS.md carries. The output is
 //! what `peers.py`'s own printers wrote before they delegated here, character for character.
 
+use super::num;
 use serde_json::Value;
 
 /// The table of either kind of file: a path comparison names its renderers, a rays one does not.
@@ -38,7 +39,6 @@ fn python_exp(x: f64, digits: usize) -> String {
 /// `peers.py rays`'s table: per scene and ray kind, both renderers' throughput, their ratio and
 /// the share of rays where both found the same answer.
 fn rays_table(doc: &Value) -> String {
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let mut out = format!(
         "| scene ({}×{}, umbra LP_NUM_THREADS={}, Embree 1 thread) | kind | umbra Mrays/s | Embree Mrays/s \
          | umbra / Embree | same answer |\n|---|---|---:|---:|---:|---:|\n",
@@ -65,7 +65,6 @@ fn rays_table(doc: &Value) -> String {
 /// `peers.py path`'s table: per sample count, each renderer's time and relative MSE against its
 /// own reference, and umbra's time over Mitsuba's at equal error.
 fn path_table(doc: &Value) -> String {
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let lit = match &doc["env"] {
         Value::Null | Value::Bool(false) => String::new(),
         Value::String(s) if s.is_empty() => String::new(),

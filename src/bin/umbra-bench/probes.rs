@@ -10,6 +10,7 @@
 //! of map sizes, the bounces beyond the first from the 1/8 probe volume, which lights the
 //! unmapped rest).
 
+use super::num;
 use super::suite::{self, Point, SuiteSettings};
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -277,7 +278,6 @@ pub fn to_json(device: &str, s: &SuiteSettings, scenes: &[SceneProbes]) -> Value
 
 /// The Markdown table of a run's JSON (what BENCHMARKS.md shows).
 pub fn table(doc: &Value) -> String {
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let mut out = format!(
         "{}×{}, {}-spp references, {}; hybrid = 4 shadow rays, IBL (SSAO 16 where said; the probes' \
          irradiance replaces the IBL's diffuse part); ratios against the hybrid with SSAO:\n\n\

@@ -3,6 +3,7 @@
 //! answers against the CPU traversal and a brute-force reference, then time each ray kind with
 //! GPU timestamps (warm-up, median of repeats).
 
+use super::num;
 use anyhow::{bail, Result};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -147,7 +148,6 @@ pub fn to_json(device: &str, settings: &RaySettings, reports: &[RayReport]) -> V
 /// after early split clipping, nodes, depth, SAH cost, and against the full-sweep build when
 /// measured) and each ray kind's throughput.
 pub fn table(doc: &Value) -> String {
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let scenes = doc["scenes"].as_array().cloned().unwrap_or_default();
     let kinds: Vec<String> = scenes
         .first()

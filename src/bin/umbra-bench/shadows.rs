@@ -5,6 +5,7 @@
 //! after a warm-up. The ray-traced shadows' own cost is the lighting pass's time with rays less
 //! its time with a hard map (the same shading, one map read instead of a ray per light).
 
+use super::num;
 use anyhow::Result;
 use serde_json::{json, Value};
 use umbra::gpu::scene::GpuScene;
@@ -157,7 +158,6 @@ pub fn to_json(
 
 /// The Markdown table of a run's JSON (what BENCHMARKS.md shows).
 pub fn table(doc: &Value) -> String {
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let methods = doc["methods"].as_array().cloned().unwrap_or_default();
     let lighting = |name: &str| {
         methods.iter().find(|m| m["method"] == name).map_or(f64::NAN, |m| num(&m["lighting_ms"]))

@@ -26,6 +26,7 @@
 //! about the path tracer's relative MSE at `R` spp (reported as `reference_rel_mse_floor`).
 
 use super::chart::{self, Chart, ChartPoint};
+use super::num;
 use super::rays::{median, warm_up};
 use anyhow::{bail, Context as _, Result};
 use std::path::{Path, PathBuf};
@@ -479,8 +480,6 @@ pub fn csv(results: &[SceneResult]) -> String {
 /// 1024² PCF shadow maps where the scene has punctual lights), each as GPU time, relative MSE (r)
 /// and mean LDR-FLIP (F); then ambient occlusion's MSE.
 pub fn table(doc: &serde_json::Value) -> String {
-    use serde_json::Value;
-    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let time = |ms: f64| match ms {
         ms if ms >= 1000.0 => format!("{:.1} s", ms / 1000.0),
         ms if ms >= 10.0 => format!("{ms:.0} ms"),

@@ -12,7 +12,7 @@ pub struct EmissiveTable {
     pub triangles: Vec<u32>,
     /// Each entry's power: `luminance(emissive) · area · π` (a Lambertian emitter's flux), times
     /// the mean linear luminance of the emissive texture's texels that the triangle can read
-    /// (its footprint, [`texture_footprint_mean`]) when the material has one.
+    /// (its footprint) when the material has one.
     pub power: Vec<f32>,
     /// Running sum of `power / total_power`; increasing, the last entry exactly 1.
     pub cdf: Vec<f32>,

@@ -29,6 +29,9 @@ pub struct EnvironmentDistribution {
     pub marginal_cdf: Vec<f32>,
     /// Inclusive CDF over each row's texels (row-major, each row ending at 1).
     pub conditional_cdf: Vec<f32>,
+    /// The map's mean luminance over the sphere of directions (each texel weighted by its solid
+    /// angle, ∝ sin θ).
+    pub mean_luminance: f32,
 }
 
 /// The largest map umbra loads (texels); larger ones are refused with a clear error.
@@ -115,6 +118,10 @@ impl EnvironmentMap {
             })
             .collect();
         let total: f64 = weight.iter().sum();
+        let solid_angle: f64 =
+            (0..h).map(|y| (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin()).sum::<f64>()
+                * w as f64;
+        let mean_luminance = if solid_angle > 0.0 { (total / solid_angle) as f32 } else { 0.0 };
         let weight = if total > 0.0 { weight } else { vec![1.0; w * h] };
         let total: f64 = if total > 0.0 { total } else { (w * h) as f64 };
         let mut conditional_cdf = vec![0.0f32; w * h];
@@ -135,6 +142,6 @@ impl EnvironmentMap {
         }
         marginal_cdf[h - 1] = 1.0;
         let pdf_uv = weight.iter().map(|&v| (v / total * (w * h) as f64) as f32).collect();
-        EnvironmentDistribution { pdf_uv, marginal_cdf, conditional_cdf }
+        EnvironmentDistribution { pdf_uv, marginal_cdf, conditional_cdf, mean_luminance }
     }
 }

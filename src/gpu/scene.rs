@@ -384,14 +384,7 @@ impl GpuScene {
         self.env_conditional =
             Buffer::upload(ctx, "environment conditional cdf", &table.conditional_cdf, usage)?;
         self.env_size = Some((map.width as u32, map.height as u32));
-        // Rows are bands of θ (row 0 at the top): each texel's solid angle ∝ sin θ.
-        let (mut sum, mut weight) = (0.0f64, 0.0f64);
-        for (row, texels) in map.texels.chunks_exact(map.width.max(1)).enumerate() {
-            let sin = ((row as f64 + 0.5) / map.height as f64 * std::f64::consts::PI).sin();
-            sum += sin * texels.iter().map(|t| f64::from(crate::color::luminance(*t))).sum::<f64>();
-            weight += sin * map.width as f64;
-        }
-        self.env_luminance = if weight > 0.0 { (sum / weight) as f32 } else { 0.0 };
+        self.env_luminance = table.mean_luminance;
         Ok(())
     }
 

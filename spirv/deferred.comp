@@ -145,7 +145,24 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     vec3 below = mix(irradiance_over_pi, transmitted_light, s.transmission);
     vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * below;
     vec3 metal = (s.base * table.x + table.y) * specular_light;
-    return mix(dielectric, metal, s.metallic);
+    vec3 result = mix(dielectric, metal, s.metallic);
+    if (s.coat > 0.0) {
+        // KHR_materials_clearcoat: the coat's lobe (its own roughness, no Fresnel inside: the
+        // table's albedo at F0 = F90 = 1) over the base, weighted as bsdf_eval weighs them.
+        float coat_roughness = sqrt(s.coat_alpha);
+        vec4 coat_table = ibl_table(nv, coat_roughness);
+        vec3 coat_light = env;
+        if (HAS_ENV_MAP && params.ibl != 0u) {
+            vec3 rc = reflect(-wo, n);
+            float lod = clamp(coat_roughness, 0.0, 1.0) * float(IBL_LEVELS - 1u);
+            uint k0 = min(uint(lod), IBL_LEVELS - 1u);
+            uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
+            coat_light *= mix(ibl_level(k0, rc), ibl_level(k1, rc), lod - float(k0));
+        }
+        float w = coat_weight_at(s.coat, nv);
+        result = (1.0 - w) * result + w * (coat_table.x + coat_table.y) * coat_light;
+    }
+    return result;
 }
 
 void main() {

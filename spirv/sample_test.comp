@@ -14,8 +14,23 @@ layout(local_size_x = 64) in;
 
 // Samplers 2-4: the whole BSDF of a white transmissive dielectric (reflection + transmission,
 // through bsdf_sample / bsdf_pdf): 2 entering glass (eta 1.5), 3 leaving it (eta 1/1.5),
-// 4 thin-walled.
+// 4 thin-walled. Sampler 5: an opaque grey dielectric (alpha 0.5) under a clear coat of weight 1
+// and `alpha` (KHR_materials_clearcoat).
 Surface dielectric(float alpha) {
+    if (params.kind == 5u) {
+        Surface s;
+        s.base = vec3(0.8);
+        s.metallic = 0.0;
+        s.f0 = vec3(0.04);
+        s.f90 = 1.0;
+        s.alpha = 0.25;
+        s.transmission = 0.0;
+        s.eta = 1.5;
+        s.thin = true;
+        s.coat = 1.0;
+        s.coat_alpha = alpha;
+        return s;
+    }
     Surface s;
     s.base = vec3(1.0);
     s.metallic = 0.0;
@@ -25,6 +40,8 @@ Surface dielectric(float alpha) {
     s.transmission = 1.0;
     s.eta = params.kind == 3u ? 1.0 / 1.5 : 1.5;
     s.thin = params.kind == 4u;
+    s.coat = 0.0;
+    s.coat_alpha = 1.0;
     return s;
 }
 
@@ -61,6 +78,8 @@ void main() {
         s.transmission = 0.0;
         s.eta = 1.5;
         s.thin = true;
+        s.coat = 0.0;
+        s.coat_alpha = 1.0;
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
         return;
     }

@@ -41,10 +41,11 @@ impl Region {
 
 /// A path-traced render (or part of one) as its EXR holds it: the main RGB layer the mean, the
 /// layers `moment` (mean of the squared samples), `variance` (of the mean), `albedo`, `normal`
-/// and `depth` (the first hit of the first sample), and the header attributes
-/// `umbra.samples` (the sample ranges, e.g. `0..64` or `0..16,32..48`), `umbra.image` (the whole
-/// image, `WxH`), `umbra.region` (`X,Y,WxH`) and `umbra.render` (what must agree between parts:
-/// scene, lighting, camera and every setting but the samples and the region).
+/// and `depth` (the first hit of the first sample), and one header attribute, `umbra.part`, of
+/// four lines: `samples A..B[,C..D…]` (the sample ranges), `image WxH` (the whole image),
+/// `region X,Y,WxH` and `render …` (what must agree between parts: scene, lighting, camera and
+/// every setting but the samples and the region). One attribute, so that the header's bytes do
+/// not depend on the order a hash map lists several in.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathExr {
     /// Width and height of the whole image.
@@ -68,6 +69,8 @@ pub struct PathExr {
 }
 
 const MAIN: [&str; 3] = ["R", "G", "B"];
+/// The header attribute that describes a part ([`PathExr`]).
+const PART_ATTRIBUTE: &str = "umbra.part";
 const XYZ: [&str; 3] = ["X", "Y", "Z"];
 
 impl PathExr {
@@ -127,12 +130,20 @@ impl PathExr {
                 Layer { name: "variance", channels: &MAIN, data: &variance },
                 Layer { name: "moment", channels: &MAIN, data: &moment },
             ],
-            &[
-                ("umbra.samples", samples.join(",")),
-                ("umbra.image", format!("{}x{}", self.image.0, self.image.1)),
-                ("umbra.region", format!("{},{},{}x{}", r.origin.0, r.origin.1, r.size.0, r.size.1)),
-                ("umbra.render", self.render.clone()),
-            ],
+            &[(
+                PART_ATTRIBUTE,
+                format!(
+                    "samples {}\nimage {}x{}\nregion {},{},{}x{}\nrender {}",
+                    samples.join(","),
+                    self.image.0,
+                    self.image.1,
+                    r.origin.0,
+                    r.origin.1,
+                    r.size.0,
+                    r.size.1,
+                    self.render
+                ),
+            )],
         )
     }
 
@@ -141,10 +152,18 @@ impl PathExr {
     pub fn read(path: &Path) -> Result<Self> {
         let exr = read_exr(path)?;
         let bad = |message: String| Error::Image { path: path.to_path_buf(), message };
+        let part =
+            exr.attributes.iter().find(|(k, _)| k == PART_ATTRIBUTE).map(|(_, v)| v.as_str()).ok_or_else(
+                || {
+                    bad(format!(
+                        "no '{PART_ATTRIBUTE}' attribute: not a path-traced render written by umbra render"
+                    ))
+                },
+            )?;
         let attribute = |name: &str| {
-            exr.attributes.iter().find(|(k, _)| k == name).map(|(_, v)| v.as_str()).ok_or_else(|| {
-                bad(format!("no '{name}' attribute: not a path-traced render written by umbra render"))
-            })
+            part.lines()
+                .find_map(|line| line.strip_prefix(name).and_then(|rest| rest.strip_prefix(' ')))
+                .ok_or_else(|| bad(format!("its '{PART_ATTRIBUTE}' attribute has no '{name}' line")))
         };
         let channel = |name: &str| {
             exr.channels
@@ -158,12 +177,10 @@ impl PathExr {
             let [a, b, c] = [channel(&full(names[0]))?, channel(&full(names[1]))?, channel(&full(names[2]))?];
             Ok((0..a.len()).map(|i| [a[i], b[i], c[i]]).collect())
         };
-        let image =
-            parse_size(attribute("umbra.image")?).ok_or_else(|| bad("malformed 'umbra.image'".into()))?;
-        let region =
-            parse_region(attribute("umbra.region")?).ok_or_else(|| bad("malformed 'umbra.region'".into()))?;
-        let samples = parse_samples(attribute("umbra.samples")?)
-            .ok_or_else(|| bad("malformed 'umbra.samples'".into()))?;
+        let image = parse_size(attribute("image")?).ok_or_else(|| bad("malformed image size".into()))?;
+        let region = parse_region(attribute("region")?).ok_or_else(|| bad("malformed region".into()))?;
+        let samples =
+            parse_samples(attribute("samples")?).ok_or_else(|| bad("malformed sample ranges".into()))?;
         if (exr.width, exr.height) != (region.size.0 as usize, region.size.1 as usize) {
             return Err(bad(format!(
                 "{}x{} pixels but its region is {}x{}",
@@ -177,7 +194,7 @@ impl PathExr {
             image,
             region,
             samples,
-            render: attribute("umbra.render")?.to_string(),
+            render: attribute("render")?.to_string(),
             mean: rgb("", MAIN)?,
             moment: rgb("moment", MAIN)?,
             albedo: rgb("albedo", MAIN)?,

@@ -74,6 +74,11 @@ fn sample_ranges_merge_into_the_whole_render() {
         assert_eq!((m.albedo.clone(), m.normal.clone()), (full.albedo.clone(), full.normal.clone()));
         assert_eq!(m.region, full.region);
     }
+    // The same part writes the same bytes (the header too).
+    let (x, y) = (dir.join("x.exr"), dir.join("y.exr"));
+    full.write(&x).unwrap();
+    full.write(&y).unwrap();
+    assert!(std::fs::read(&x).unwrap() == std::fs::read(&y).unwrap(), "one image, two different files");
     // A part is not the whole: samples 3..8 alone differ from 0..8 by far more than rounding.
     let late = PathExr::read(&b).unwrap();
     let diff = late
@@ -143,7 +148,7 @@ fn merge_refuses_parts_of_different_renders() {
         ("another seed", &["a.exr", "seed.exr"], "are not parts of one render"),
         ("overlapping tiles", &["t1.exr", "t2.exr"], "overlap"),
         ("a hole", &["t1.exr", "t3.exr"], "leave holes"),
-        ("not umbra's", &["a.exr", "plain.exr"], "no 'umbra.image' attribute"),
+        ("not umbra's", &["a.exr", "plain.exr"], "no 'umbra.part' attribute"),
     ];
     for (what, files, message) in cases {
         let paths: Vec<PathBuf> = files.iter().map(|f| p(f)).collect();

@@ -59,6 +59,9 @@ enum Dielectric {
     Leaving = 3,
     /// Thin-walled: transmission without bending.
     Thin = 4,
+    /// Not a dielectric boundary: an opaque grey dielectric (α 0.25) under a clear coat
+    /// (`KHR_materials_clearcoat`, weight 1) of the case's α.
+    Coated = 5,
 }
 
 /// The kernel specialised for each [`Microfacet`], in [`Microfacet::ALL`] order.
@@ -284,7 +287,7 @@ fn cases() -> Vec<Sampler> {
         }
     }
     for microfacet in [Microfacet::Ggx, Microfacet::GgxWalter] {
-        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin] {
+        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin, Dielectric::Coated] {
             for alpha in [0.1, 0.5] {
                 for theta_degrees in [30.0, 60.0] {
                     cases.push(Sampler::Dielectric { microfacet, kind, alpha, theta_degrees });
@@ -342,7 +345,7 @@ fn the_dielectric_samples_wherever_it_scatters() {
     let solid_angle = 2.0 * std::f64::consts::TAU / (rows * columns) as f64;
     let mut failures = Vec::new();
     for microfacet in [Microfacet::Ggx, Microfacet::GgxWalter] {
-        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin] {
+        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin, Dielectric::Coated] {
             for alpha in [0.1, 0.5] {
                 for theta_degrees in [30.0, 45.0, 60.0, 80.0] {
                     let case = Sampler::Dielectric { microfacet, kind, alpha, theta_degrees };

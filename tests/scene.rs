@@ -1346,6 +1346,30 @@ fn the_content_hash_follows_what_light_transport_reads() {
     assert_eq!(hashes.len(), committed_scenes().len());
 }
 
+/// KHR_materials_clearcoat's factors reach the material (0 without the extension), its textures
+/// are named in one warning per material, and a factor outside [0, 1] is refused naming it.
+#[test]
+fn clearcoat_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let load = |coat: Value| {
+        let mut json = base.clone();
+        json["materials"][0]["extensions"] = json!({ "KHR_materials_clearcoat": coat });
+        Scene::from_glb_bytes("coat.glb", &to_glb(&json, &bin))
+    };
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    assert_eq!((plain.materials[0].clearcoat, plain.materials[0].clearcoat_roughness), (0.0, 0.0));
+    let scene = load(json!({"clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.25})).unwrap();
+    assert_eq!((scene.materials[0].clearcoat, scene.materials[0].clearcoat_roughness), (0.75, 0.25));
+    assert!(scene.warnings.iter().all(|w| !w.contains("clearcoat")), "{:?}", scene.warnings);
+    let scene = load(json!({"clearcoatFactor": 1.0, "clearcoatNormalTexture": {"index": 0}})).unwrap();
+    assert_eq!(scene.materials[0].clearcoat, 1.0);
+    let warned: Vec<&String> =
+        scene.warnings.iter().filter(|w| w.contains("clearcoatNormalTexture")).collect();
+    assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
+    let error = load(json!({"clearcoatRoughnessFactor": 1.5})).unwrap_err().to_string();
+    assert!(error.contains("coat.glb") && error.contains("clearcoatRoughnessFactor is 1.5"), "{error}");
+}
+
 /// KHR_materials_volume's attenuation reaches the material: colour and distance as written, the
 /// coefficient −ln(colour)/distance, and none without a thickness (thin-walled) or a distance.
 #[test]

@@ -13,6 +13,16 @@
 // through the microfacet, eq. 21, with the glTF Fresnel; leaving the denser side, Schlick takes
 // the transmitted angle and total internal reflection gives F = 1).
 //
+// KHR_materials_clearcoat layers a clear GGX coat (ior 1.5, its own alpha, no Fresnel inside
+// the lobe) over all of it, weighted as the extension's fresnel_coat says:
+//
+//   coated = mix(material, D G1(V) G1(L) / (4 |N.V| |N.L|), clearcoat * F_schlick(0.04, 1, N.V))
+//
+// with N.V (not V.H) in the weight, so for each wo the coated BSDF is a convex mix of two lobes of
+// albedo at most 1 (energy conserving). The coat shares the shading normal (the extension gives it
+// the unmapped normal; umbra reads no clearcoat normal texture yet). A surface without a coat
+// (`coat` 0: a kernel not specialised for it sets the constant 0) costs nothing: the branches fold.
+//
 // The microfacet distribution is GGX (the specification) or, for comparison, Beckmann: the
 // including kernel declares `const bool BECKMANN` (a specialization constant). Half vectors are
 // sampled from GGX's visible normals (Heitz 2018) or, with `const bool GGX_WALTER` (also the
@@ -35,6 +45,8 @@ struct Surface {
     float transmission;  // share of the dielectric's diffuse lobe that transmits instead
     float eta;           // refracting boundary: index below the surface (-z) / index above (+z, wo's side)
     bool thin;           // thin-walled transmission (no refraction); also every opaque surface
+    float coat;          // KHR_materials_clearcoat's weight (0: no coat)
+    float coat_alpha;    // the coat's GGX alpha
 };
 
 float max3(vec3 v) {
@@ -138,7 +150,8 @@ vec3 bsdf_eval_transmission(Surface s, vec3 wo, vec3 wi) {
     return weight * (1.0 - max3(f)) * s.base * btdf;
 }
 
-vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
+// The material under the coat.
+vec3 bsdf_eval_base(Surface s, vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z == 0.0) {
         return vec3(0.0);
     }
@@ -161,19 +174,56 @@ vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
 // 45°, 5 % at 60°), so F is taken 9:1 with Schlick's at the unbent angle there: transmission
 // keeps a probability wherever it can happen (tests/sampling.rs), reflection most of it under
 // total internal reflection.
-vec3 lobe_probabilities(Surface s, vec3 wo) {
+// The lobes' estimated albedos at wo: specular reflection (x), transmission (y), diffuse (z).
+vec3 lobe_albedos(Surface s, vec3 wo) {
     float f = max3(dielectric_fresnel(s, wo.z));
     if (!s.thin && s.eta < 1.0) {
         f = mix(max3(fresnel_schlick(s.f0, vec3(s.f90), wo.z)), f, 0.9);
     }
     float specular = mix(f, 1.0, s.metallic);
     float rest = (1.0 - s.metallic) * (1.0 - f) * luminance(s.base);
-    float transmission = rest * s.transmission;
-    float diffuse = rest * (1.0 - s.transmission);
-    float total = specular + transmission + diffuse;
-    float p_spec = total > 0.0 ? specular / total : 0.5;
-    float p_trans = total > 0.0 ? transmission / total : 0.0;
+    return vec3(specular, rest * s.transmission, rest * (1.0 - s.transmission));
+}
+
+vec3 lobe_probabilities(Surface s, vec3 wo) {
+    vec3 a = lobe_albedos(s, wo);
+    float total = a.x + a.y + a.z;
+    float p_spec = total > 0.0 ? a.x / total : 0.5;
+    float p_trans = total > 0.0 ? a.y / total : 0.0;
     return vec3(p_spec, p_trans, 1.0 - p_spec - p_trans);
+}
+
+// A coat's weight seen at cosine `nv` from its normal: clearcoat * F_schlick(0.04, 1, N.V).
+float coat_weight_at(float coat, float nv) {
+    float m = 1.0 - clamp(nv, 0.0, 1.0);
+    float m2 = m * m;
+    return coat * (0.04 + 0.96 * m2 * m2 * m);
+}
+
+// The coat's weight at wo.
+float coat_weight(Surface s, vec3 wo) {
+    return coat_weight_at(s.coat, wo.z);
+}
+
+// The probability of sampling the coat's lobe: its share of the estimated albedo.
+float coat_probability(Surface s, vec3 wo) {
+    float w = coat_weight(s, wo);
+    vec3 a = lobe_albedos(s, wo);
+    float base = (1.0 - w) * (a.x + a.y + a.z);
+    return w + base > 0.0 ? w / (w + base) : 0.0;
+}
+
+vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
+    vec3 f = bsdf_eval_base(s, wo, wi);
+    if (s.coat > 0.0) {
+        float w = coat_weight(s, wo);
+        f *= 1.0 - w;
+        if (wo.z > 0.0 && wi.z > 0.0) {
+            vec3 h = normalize(wo + wi);
+            f += vec3(w * micro_d(h, s.coat_alpha) * micro_visibility(wo, wi, s.coat_alpha));
+        }
+    }
+    return f;
 }
 
 // Solid-angle density of wi (below the surface) under the transmission lobe's sampling.
@@ -193,7 +243,7 @@ float transmission_pdf(Surface s, vec3 wo, vec3 wi) {
     return micro_pdf_h(wo, h, s.alpha) * s.eta * s.eta * -ih / (denom * denom);
 }
 
-float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
+float bsdf_pdf_base(Surface s, vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z == 0.0) {
         return 0.0;
     }
@@ -205,11 +255,21 @@ float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
     return p.x * micro_pdf(wo, h, s.alpha) + p.z * pdf_cosine_hemisphere(wi);
 }
 
-// Samples wi; weight = f |cos| / pdf. False when the sample leaves its lobe's side of the surface
-// (or cannot refract) or has no density.
-bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out float pdf) {
-    weight = vec3(0.0);
-    pdf = 0.0;
+float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
+    float p = bsdf_pdf_base(s, wo, wi);
+    if (s.coat > 0.0) {
+        float coat = 0.0;
+        if (wo.z > 0.0 && wi.z > 0.0) {
+            coat = micro_pdf(wo, normalize(wo + wi), s.coat_alpha);
+        }
+        p = mix(p, coat, coat_probability(s, wo));
+    }
+    return p;
+}
+
+// A direction from the base's lobes, picked by u.x; false when it leaves its lobe's side of the
+// surface (or cannot refract).
+bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
     vec3 p = lobe_probabilities(s, wo);
     if (u.x < p.x) {
         vec3 h = micro_sample(wo, s.alpha, u.yz);
@@ -228,7 +288,32 @@ bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out f
     } else {
         wi = sample_cosine_hemisphere(u.yz);
     }
-    if (wi.z == 0.0 || (wi.z < 0.0 && !(u.x >= p.x && u.x < p.x + p.y))) {
+    return !(wi.z == 0.0 || (wi.z < 0.0 && !(u.x >= p.x && u.x < p.x + p.y)));
+}
+
+// Samples wi; weight = f |cos| / pdf. False when the sample leaves its lobe's side of the surface
+// (or cannot refract) or has no density.
+bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out float pdf) {
+    weight = vec3(0.0);
+    pdf = 0.0;
+    bool sampled;
+    float q = 0.0;
+    bool coat_lobe = false;
+    if (s.coat > 0.0) {
+        q = coat_probability(s, wo);
+        coat_lobe = u.x < q;
+    }
+    if (coat_lobe) {
+        wi = reflect(-wo, micro_sample(wo, s.coat_alpha, u.yz));
+        sampled = wi.z > 0.0;
+    } else {
+        if (s.coat > 0.0) {
+            // The rest of u.x, stretched back over [0, 1).
+            u.x = min((u.x - q) / (1.0 - q), 0.99999994);
+        }
+        sampled = bsdf_sample_base(s, wo, u, wi);
+    }
+    if (!sampled) {
         return false;
     }
     pdf = bsdf_pdf(s, wo, wi);

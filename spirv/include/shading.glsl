@@ -204,6 +204,14 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.transmission = 0.0;
     s.eta = 1.0;
     s.thin = true;
+    // The clear coat only where the kernel is specialised for it (HAS_CLEARCOAT).
+    s.coat = 0.0;
+    s.coat_alpha = 1.0;
+    if (HAS_CLEARCOAT) {
+        vec4 coat = material_vec(id, MATERIAL_CLEARCOAT_TEXEL);
+        s.coat = clamp(coat.x, 0.0, 1.0);
+        s.coat_alpha = max(coat.y * coat.y, ALPHA_MIN);
+    }
     if (HAS_TRANSMISSION) {
         s.transmission = clamp(material_vec(id, 3u).z, 0.0, 1.0);
         // A boundary between equal indices (ior 1) bends nothing: every microfacet refracts wo
@@ -331,6 +339,11 @@ vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
     vec3 e = material_vec(m, 1u).rgb;
     if (HAS_EMISSIVE_MAP && any(greaterThan(e, vec3(0.0)))) {
         e *= material_texture_lod(m, MATERIAL_SLOT_EMISSIVE, tri_uv(tri, bary), cone_lod).rgb;
+    }
+    if (HAS_CLEARCOAT) {
+        // The coat lies over the emission (KHR_materials_clearcoat): dimmed by its weight.
+        float coat = clamp(material_vec(m, MATERIAL_CLEARCOAT_TEXEL).x, 0.0, 1.0);
+        e *= 1.0 - coat_weight_at(coat, abs(dot(n, normalize(towards))));
     }
     return e;
 }

@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 13] = [
+pub const SCENE_FEATURES: [&str; 14] = [
     "textures",
     "alpha",
     "lights",
@@ -53,6 +53,7 @@ pub const SCENE_FEATURES: [&str; 13] = [
     "emissive_map",
     "normal_map",
     "occlusion_map",
+    "clearcoat",
 ];
 
 /// The scene features of the texture slots, in `MATERIAL_SLOT_*` order: some material has a
@@ -245,6 +246,10 @@ gpu_structs! {
         /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; row1.w is the normal slot's
         /// normal scale and the occlusion slot's strength (1 for the other slots).
         tex_transform: [vec4; 10],
+        /// `KHR_materials_clearcoat`: the coat's weight (`clearcoatFactor`), its roughness
+        /// (`clearcoatRoughnessFactor`), unused, unused. Read only by kernels specialised for
+        /// it (`HAS_CLEARCOAT`).
+        clearcoat: vec4,
     }
 
     /// A texture in the shared texel buffer (linear RGBA16, one RG32UI texel per texel,
@@ -695,8 +700,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 272 bytes).
-    MATERIAL_TEXELS: uint = 17;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 288 bytes).
+    MATERIAL_TEXELS: uint = 18;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -710,6 +715,8 @@ gpu_constants! {
     /// and the lighting pass scales the image-based (ambient) light by it, never direct light. The
     /// path tracer ignores it: it traces the occlusion itself.
     MATERIAL_SLOT_OCCLUSION: uint = 4;
+    /// The texel of [`GpuMaterial::clearcoat`] in a material's texels.
+    MATERIAL_CLEARCOAT_TEXEL: uint = 17;
     /// Texture slots a material has (each with two `tex_transform` rows).
     MATERIAL_TEXTURE_SLOTS: uint = 5;
     /// `GpuTexture::flags`: clamp s.
@@ -808,7 +815,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -866,7 +873,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1105,7 +1112,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1127,7 +1134,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -149,6 +149,8 @@ pub struct SceneFeatures {
     pub colors: bool,
     /// Some material is unlit (`KHR_materials_unlit`).
     pub unlit: bool,
+    /// Some material has a clear coat (`KHR_materials_clearcoat`).
+    pub clearcoat: bool,
     /// Bit k: some material has a texture in slot k (`MATERIAL_SLOT_*`, the features of
     /// [`TEXTURE_SLOT_FEATURES`]).
     pub texture_slots: u32,
@@ -167,6 +169,7 @@ impl SceneFeatures {
             colors: scene.has_colors,
             unlit: scene.has_unlit,
             texture_slots: scene.texture_slots,
+            clearcoat: scene.has_clearcoat,
         }
     }
 
@@ -181,6 +184,7 @@ impl SceneFeatures {
             "transmission" => self.transmission,
             "colors" => self.colors,
             "unlit" => self.unlit,
+            "clearcoat" => self.clearcoat,
             _ => {
                 let slot = TEXTURE_SLOT_FEATURES.iter().position(|f| *f == name)?;
                 self.texture_slots & (1 << slot) != 0

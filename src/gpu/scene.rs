@@ -66,6 +66,9 @@ pub struct GpuScene {
     /// Whether some material is unlit (`KHR_materials_unlit`): the path tracer, the lighting
     /// pass and the probe and lightmap gathers test for it only then.
     pub has_unlit: bool,
+    /// Whether some material has a clear coat (`KHR_materials_clearcoat`): the shading kernels
+    /// evaluate and sample the coat only then.
+    pub has_clearcoat: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// The environment map's mean luminance over the sphere of directions (0 without one).
@@ -313,6 +316,7 @@ impl ShadingArrays {
                         m.specular_factor,
                     ],
                     params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
+                    clearcoat: [m.clearcoat, m.clearcoat_roughness, 0.0, 0.0],
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                             | if m.volume { GpuMaterial::VOLUME } else { 0 }
@@ -424,6 +428,7 @@ impl GpuScene {
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
             has_colors: colored(&arrays.vertices),
             has_unlit: unlit(&arrays.materials),
+            has_clearcoat: arrays.materials.iter().any(|m| m.clearcoat[0] > 0.0),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -471,6 +476,7 @@ impl GpuScene {
         self.has_transmission = transmits(&arrays.materials);
         self.has_colors = colored(&arrays.vertices);
         self.has_unlit = unlit(&arrays.materials);
+        self.has_clearcoat = arrays.materials.iter().any(|m| m.clearcoat[0] > 0.0);
         Ok(())
     }
 }

@@ -19,8 +19,12 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     let origin = Origin::new(name, base.map(Path::to_path_buf));
     let asset = source::open(&origin, bytes)?;
     let mut textures = TextureSet::default();
-    let materials: Vec<Material> =
-        asset.document.materials().map(|m| Material::from_gltf(&m, &mut textures)).collect();
+    let mut material_warnings = Vec::new();
+    let materials: Vec<Material> = asset
+        .document
+        .materials()
+        .map(|m| Material::from_gltf(&m, &mut textures, &mut material_warnings))
+        .collect();
     let mut builder = Builder::new(&origin, &asset, materials);
     builder.walk()?;
     let posed = builder.static_pose_warning();
@@ -36,6 +40,7 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
         }
     }
     scene.warnings.extend(warnings);
+    scene.warnings.extend(material_warnings);
     scene.warnings.extend(asset.ignored_extensions.clone());
     scene.warnings.extend(posed);
     scene.update_emissive();

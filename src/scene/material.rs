@@ -70,6 +70,8 @@ impl Material {
             alpha_cutoff,
             double_sided,
             unlit,
+            clearcoat,
+            clearcoat_roughness,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -96,6 +98,7 @@ impl Material {
         h.f32s(&[*alpha_cutoff]);
         h.bool(*double_sided);
         h.bool(*unlit);
+        h.f32s(&[*clearcoat, *clearcoat_roughness]);
         for slot in [
             base_color_texture,
             metallic_roughness_texture,
@@ -206,6 +209,12 @@ pub struct Material {
     /// that radiance which scatters nothing (paths end there; it is not among the sampled
     /// lights), the hybrid renderer writes the colour as it is.
     pub unlit: bool,
+    /// `KHR_materials_clearcoat`'s `clearcoatFactor` (default 0: no coat): the weight of a
+    /// clear dielectric coat (ior 1.5, GGX) over the material, after the specification's
+    /// layering (the base scaled by 1 − clearcoat · F(N·V)).
+    pub clearcoat: f32,
+    /// `clearcoatRoughnessFactor` (default 0).
+    pub clearcoat_roughness: f32,
     /// Base colour (sRGB RGBA).
     pub base_color_texture: Option<TextureRef>,
     /// Roughness in G, metalness in B (linear).
@@ -246,6 +255,8 @@ impl Default for Material {
             alpha_cutoff: 0.5,
             double_sided: false,
             unlit: false,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.0,
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -259,8 +270,13 @@ impl Default for Material {
 }
 
 impl Material {
-    /// Converts a glTF material, registering the textures it uses in `textures`.
-    pub(super) fn from_gltf(material: &gltf::Material, textures: &mut TextureSet) -> Self {
+    /// Converts a glTF material, registering the textures it uses in `textures`; what it reads
+    /// only in part is said in `warnings`.
+    pub(super) fn from_gltf(
+        material: &gltf::Material,
+        textures: &mut TextureSet,
+        warnings: &mut Vec<String>,
+    ) -> Self {
         let pbr = material.pbr_metallic_roughness();
         let mut info = |info: Option<gltf::texture::Info>, srgb: bool| {
             info.map(|info| {
@@ -297,6 +313,24 @@ impl Material {
             raw_ref(t.texture(), t.tex_coord(), t.extension_value("KHR_texture_transform"), t.strength())
         });
         let strength = material.emissive_strength().unwrap_or(1.0);
+        let clearcoat = material.extension_value("KHR_materials_clearcoat");
+        // In [0, 1]: ranges.rs refuses a file with other values.
+        let coat_number =
+            |key: &str| clearcoat.and_then(|c| c.get(key)).and_then(Value::as_f64).map_or(0.0, |x| x as f32);
+        let coat_textures: Vec<&str> =
+            ["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"]
+                .into_iter()
+                .filter(|k| clearcoat.is_some_and(|c| c.get(*k).is_some()))
+                .collect();
+        if !coat_textures.is_empty() {
+            let warning = format!(
+                "material '{}': KHR_materials_clearcoat's {} not read (the factors alone are used)",
+                material.name().unwrap_or_default(),
+                coat_textures.join(", ")
+            );
+            log::warn!("{warning}");
+            warnings.push(warning);
+        }
         Self {
             name: material.name().unwrap_or_default().to_owned(),
             base_color_factor: pbr.base_color_factor(),
@@ -318,6 +352,8 @@ impl Material {
             alpha_cutoff: material.alpha_cutoff().unwrap_or(0.5),
             double_sided: material.double_sided(),
             unlit: material.unlit(),
+            clearcoat: coat_number("clearcoatFactor"),
+            clearcoat_roughness: coat_number("clearcoatRoughnessFactor"),
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,

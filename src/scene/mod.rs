@@ -57,6 +57,7 @@ pub use texture::{mip_level_count, Filter, MipLevel, Sampler, Texture, Wrap};
 /// glTF extensions umbra reads; a file that *requires* any other one is rejected.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
@@ -112,7 +113,8 @@ pub struct Scene {
     /// Every placed mesh instance, in the order its triangles appear.
     pub instances: Vec<Instance>,
     /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
-    /// optional glTF extensions it ignored (one entry naming them all) and, for a file with
+    /// optional glTF extensions it ignored (one entry naming them all), the parts of a material
+    /// it does not read (clearcoat textures: one entry per material) and, for a file with
     /// animations, skins or morph targets, that one static pose is rendered (one entry); also
     /// logged as warnings.
     pub warnings: Vec<String>,

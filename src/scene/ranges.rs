@@ -129,6 +129,11 @@ impl Checker {
         extension("KHR_materials_emissive_strength", &[("emissiveStrength", Range::AtLeast(0.0))], &[]);
         extension("KHR_materials_transmission", &[("transmissionFactor", unit)], &["transmissionTexture"]);
         extension(
+            "KHR_materials_clearcoat",
+            &[("clearcoatFactor", unit), ("clearcoatRoughnessFactor", unit)],
+            &["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"],
+        );
+        extension(
             "KHR_materials_volume",
             &[
                 ("thicknessFactor", Range::AtLeast(0.0)),

@@ -149,6 +149,8 @@ pub struct SceneFeatures {
     pub colors: bool,
     /// Some material is unlit (`KHR_materials_unlit`).
     pub unlit: bool,
+    /// The BVH holds implicit shapes (`UMBRA_implicit`): the traversal ray-marches them.
+    pub implicit: bool,
 }
 
 impl SceneFeatures {
@@ -163,6 +165,7 @@ impl SceneFeatures {
             transmission: scene.has_transmission,
             colors: scene.has_colors,
             unlit: scene.has_unlit,
+            implicit: scene.has_implicit,
         }
     }
 
@@ -177,6 +180,7 @@ impl SceneFeatures {
             "transmission" => self.transmission,
             "colors" => self.colors,
             "unlit" => self.unlit,
+            "implicit" => self.implicit,
             _ => return None,
         })
     }

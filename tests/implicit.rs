@@ -66,7 +66,7 @@ fn the_extension_is_parsed_and_bad_input_named() {
     let cases = [
         (r#"{"sphere": {}}"#, "sphere.radius is missing"),
         (r#"{"sphere": {"radius": -1}}"#, "radius must be positive"),
-        (r#"{"sphere": {"radius": 1}, "material": 3}"#, "'material' is 3"),
+        (r#"{"sphere": {"radius": 1}, "material": 1}"#, "'material' is 1, but the file has 1 material"),
         (r#"{"sphere": {"radius": 1}, "box": {"halfExtents": [1, 1, 1]}}"#, "give exactly one"),
         (r#"{"sphre": {"radius": 1}}"#, "unknown property 'sphre'"),
         (

@@ -36,13 +36,34 @@
 
 /// The scene features a kernel can be specialised on (`scene: full [...]` below): `HAS_<NAME>` in
 /// GLSL, its specialization-constant id the index here; a feature a kernel does not list is a
-/// plain `false` there.
-pub const SCENE_FEATURES: [&str; 9] =
-    ["textures", "alpha", "lights", "punctual", "env_map", "transmission", "colors", "unlit", "implicit"];
+/// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
+/// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
+/// no lookup.
+pub const SCENE_FEATURES: [&str; 14] = [
+    "textures",
+    "alpha",
+    "lights",
+    "punctual",
+    "env_map",
+    "transmission",
+    "colors",
+    "unlit",
+    "base_color_map",
+    "metal_rough_map",
+    "emissive_map",
+    "normal_map",
+    "occlusion_map",
+    "implicit",
+];
+
+/// The scene features of the texture slots, in `MATERIAL_SLOT_*` order: some material has a
+/// texture in that slot.
+pub const TEXTURE_SLOT_FEATURES: [&str; 5] =
+    ["base_color_map", "metal_rough_map", "emissive_map", "normal_map", "occlusion_map"];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
-/// others follow in order.
-pub const FIRST_KERNEL_SPEC_ID: u32 = 9;
+/// others follow in order (room left for scene features to come).
+pub const FIRST_KERNEL_SPEC_ID: u32 = 32;
 
 gpu_structs! {
     /// A pinhole camera as every kernel that casts rays from it reads it (`camera.glsl`).
@@ -829,7 +850,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, implicit],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -868,7 +889,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, implicit],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -887,7 +908,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, implicit],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -955,7 +976,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, implicit],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1051,7 +1072,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1090,7 +1111,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1126,7 +1147,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, implicit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1148,7 +1169,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, implicit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

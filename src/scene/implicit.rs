@@ -486,7 +486,7 @@ fn parse_node(value: &Value, at: &str, top: bool) -> std::result::Result<SdfNode
         _ => {
             let n = vec3(params.get("normal"), &format!("{here}.normal"))?;
             let len = Vec3::from(n).length();
-            if !(len > 0.0) {
+            if len <= 0.0 {
                 return Err(format!("{here}.normal must not be zero"));
             }
             let offset = optional_number(params.get("offset"), &format!("{here}.offset"), 0.0)?;
@@ -501,7 +501,7 @@ fn parse_node(value: &Value, at: &str, top: bool) -> std::result::Result<SdfNode
         Some(v) => {
             let q = numbers::<4>(Some(v), &format!("{at}.rotation"))?;
             let q = Quat::from_array(q);
-            if !(q.length() > 0.0) {
+            if q.length() <= 0.0 {
                 return Err(format!("{at}.rotation must be a non-zero quaternion"));
             }
             q.normalize().to_array()
@@ -509,7 +509,7 @@ fn parse_node(value: &Value, at: &str, top: bool) -> std::result::Result<SdfNode
         None => [0.0, 0.0, 0.0, 1.0],
     };
     let scale = optional_number(object.get("scale"), &format!("{at}.scale"), 1.0)?;
-    if !(scale > 0.0) {
+    if scale <= 0.0 {
         return Err(format!("{at}.scale must be a positive number (uniform scale), not {scale}"));
     }
     Ok(SdfNode::Primitive { primitive, translation, rotation, scale })

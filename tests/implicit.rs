@@ -615,3 +615,78 @@ fn every_primitive_and_smooth_operation_is_marched() {
         assert!(out_of_steps <= 20, "shape {k}: {out_of_steps} out of steps");
     }
 }
+
+/// Fraction of `a`'s surface pixels whose 3×3 neighbourhood is all surface in both G-buffers (away
+/// from silhouettes, where one ray per pixel may hit one sphere and miss the other).
+fn interior(a: &umbra::passes::gbuffer::GBufferData, b: &umbra::passes::gbuffer::GBufferData) -> Vec<bool> {
+    use umbra::passes::gbuffer::GBUFFER_NO_SURFACE;
+    let (w, h) = a.size;
+    let surface = |g: &umbra::passes::gbuffer::GBufferData, x: i64, y: i64| {
+        x >= 0
+            && y >= 0
+            && x < w as i64
+            && y < h as i64
+            && g.material[(y * w as i64 + x) as usize][0] != GBUFFER_NO_SURFACE
+    };
+    (0..(w * h) as i64)
+        .map(|i| {
+            let (x, y) = (i % w as i64, i / w as i64);
+            (-1..=1).all(|dy| (-1..=1).all(|dx| surface(a, x + dx, y + dy) && surface(b, x + dx, y + dy)))
+        })
+        .collect()
+}
+
+/// The hybrid renderer sees the implicit sphere as it sees the tessellated one: the G-buffer's
+/// depth, normal and material, the deferred lighting with its shadow ray, and ray-traced AO agree
+/// pixel by pixel away from the silhouettes (one ray per pixel through the pixel centre, so no
+/// noise: the tolerances are those of the 327,680-triangle tessellation and of half floats).
+#[test]
+fn hybrid_and_rtao_see_the_implicit_sphere() {
+    use umbra::render::{ambient_occlusion, hybrid, AoMethod, HybridSettings};
+    let gpu = Gpu::new();
+    let size = (48, 48);
+    let scenes = [sphere_on_floor(true, 0), sphere_on_floor(false, 7)];
+    let mut images = Vec::new();
+    let mut aos = Vec::new();
+    for scene in &scenes {
+        let gpu_scene = GpuScene::upload(&gpu, scene).unwrap();
+        let camera = scene.camera(None).unwrap();
+        images
+            .push(hybrid(&gpu, &gpu_scene, &camera, &HybridSettings { size, ..Default::default() }).unwrap());
+        let settings = umbra::passes::ao::AoSettings { samples: 64, ..Default::default() };
+        aos.push(ambient_occlusion(&gpu, &gpu_scene, &camera, size, AoMethod::Rtao, &settings).unwrap());
+    }
+    let (a, b) = (&images[0], &images[1]);
+    let keep = interior(&a.gbuffer, &b.gbuffer);
+    let (mut compared, mut depth_bad, mut normal_bad, mut material_bad, mut color_bad, mut ao_bad) =
+        (0, 0, 0, 0, 0, 0);
+    let mut on_sphere = 0;
+    for i in 0..keep.len() {
+        if !keep[i] {
+            continue;
+        }
+        compared += 1;
+        let (ga, gb) = (&a.gbuffer, &b.gbuffer);
+        on_sphere += (ga.material[i][0] == 1) as usize;
+        depth_bad += ((ga.depth[i] - gb.depth[i]).abs() > 1e-3 * gb.depth[i]) as usize;
+        let dot: f32 = (0..3).map(|c| ga.normal[i][c] * gb.normal[i][c]).sum();
+        // Half floats: each stored normal is unit only to about 1e-3.
+        let len = |n: &[f32; 4]| (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        normal_bad += (dot / (len(&ga.normal[i]) * len(&gb.normal[i])) < 0.9999) as usize;
+        material_bad += (ga.material[i][0] != gb.material[i][0]) as usize;
+        color_bad += (0..3).any(|c| (a.color[i][c] - b.color[i][c]).abs() > 0.02 * b.color[i][c].abs() + 1e-3)
+            as usize;
+        // RTAO: 64 rays per pixel from (nearly) the same point; its hash of the pixel and ray
+        // index draws the same directions, so only rays skimming the sphere can differ.
+        ao_bad += ((aos[0].unblurred[i] - aos[1].unblurred[i]).abs() > 0.05) as usize;
+    }
+    println!(
+        "hybrid: {compared} interior pixels ({on_sphere} on the sphere): depth {depth_bad}, normal {normal_bad}, \
+         material {material_bad}, colour {color_bad}, RTAO {ao_bad} differ"
+    );
+    assert!(on_sphere > 300, "{on_sphere} sphere pixels");
+    assert_eq!(material_bad, 0);
+    assert!(depth_bad + normal_bad <= compared / 100, "depth {depth_bad}, normal {normal_bad} of {compared}");
+    assert!(color_bad <= compared / 100, "colour {color_bad} of {compared}");
+    assert!(ao_bad <= compared / 50, "RTAO {ao_bad} of {compared}");
+}

@@ -661,10 +661,7 @@ fn hybrid_and_rtao_see_the_implicit_sphere() {
     let (mut compared, mut depth_bad, mut normal_bad, mut material_bad, mut color_bad, mut ao_bad) =
         (0, 0, 0, 0, 0, 0);
     let mut on_sphere = 0;
-    for i in 0..keep.len() {
-        if !keep[i] {
-            continue;
-        }
+    for i in (0..keep.len()).filter(|&i| keep[i]) {
         compared += 1;
         let (ga, gb) = (&a.gbuffer, &b.gbuffer);
         on_sphere += (ga.material[i][0] == 1) as usize;

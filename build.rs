@@ -322,7 +322,9 @@ fn binding_glsl(kernel: &str, number: usize, b: &GlslBinding) -> Result<String, 
 /// `kernel/<name>.glsl`: a kernel's specialization constants, bindings and push constants.
 fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> {
     let mut out = format!("{HEADER}// The interface of {}.comp.\n#include \"layout.glsl\"\n\n", k.name);
-    if k.scene == "full" {
+    // Kernels that trace (`full` or `bvh`) see every feature: those they list as specialization
+    // constants, the others as `false`.
+    if k.scene != "none" {
         for (id, feature) in SCENE_FEATURES.iter().enumerate() {
             let name = format!("HAS_{}", feature.to_uppercase());
             if k.features.contains(feature) {

@@ -37,7 +37,7 @@ void main() {
         return;
     }
     uint tri = hit.tri;
-    vec3 ng = normalize(tri_normal(tri));
+    vec3 ng = normalize(hit_normal(hit));
     vec3 wo = -dir;
     vec4 uv = tri_uv(tri, hit.bary);
     // One sample per pixel: textures are filtered over the pixel's footprint, a ray cone whose

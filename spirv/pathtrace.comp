@@ -121,7 +121,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
         return false;
     }
     uint tri = hit.tri;
-    vec3 ng = tri_normal(tri);
+    vec3 ng = hit_normal(hit);
     float area = 0.5 * length(ng);
     ng = normalize(ng);
     vec3 wo = -dir;
@@ -335,6 +335,11 @@ void main() {
     uvec2 pixel = tile_pixel();
     if (all(lessThan(pixel, params.size))) {
         atomicAdd(group_segments, trace_pixel(pixel));
+        if (HAS_IMPLICIT) {
+            if (implicit_marches_exhausted > 0u) {
+                atomicAdd(stats.marches_exhausted, implicit_marches_exhausted);
+            }
+        }
     }
     // One global atomic per workgroup: the segment count, 64 bits as two words (an add that
     // wraps the low word carries one into the high word).

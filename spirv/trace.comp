@@ -25,6 +25,9 @@ void main() {
         Hit hit;
         if (bvh_closest(origin_tmin.xyz, dir_tmax.xyz, origin_tmin.w, dir_tmax.w, hit)) {
             result = vec4(hit.t, uintBitsToFloat(hit.tri), hit.bary);
+        } else {
+            // A miss: how many implicit-shape marches ran out of steps (0 without shapes).
+            result.z = float(implicit_marches_exhausted);
         }
     }
     hits[i].t = result.x;

@@ -501,6 +501,13 @@ fn render(args: RenderArgs) -> Result<()> {
         image.segments as f64 / pixels,
         image.relative_error()
     );
+    if image.marches_exhausted > 0 {
+        println!(
+            "pathtrace: {} implicit-shape marches ran out of steps ({} each) and were taken as misses",
+            image.marches_exhausted,
+            umbra::gpu::layout::IMPLICIT_MAX_STEPS
+        );
+    }
     if image.nonfinite_samples > 0 {
         log::warn!(
             "{} samples were NaN or infinite and were dropped (arising in: {})",

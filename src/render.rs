@@ -54,6 +54,9 @@ pub struct PathImage {
     /// Path segments traced (closest-hit rays: camera rays and their continuations), over all
     /// samples.
     pub segments: u64,
+    /// Implicit-shape marches that ran out of steps and were taken as misses
+    /// ([`crate::gpu::layout::PathStats::marches_exhausted`]); 0 without implicit shapes.
+    pub marches_exhausted: u32,
 }
 
 impl PathImage {
@@ -706,6 +709,7 @@ impl Passes {
             nonfinite_sources: stats[0].nonfinite_sources,
             gpu_ms,
             segments: stats[0].segments(),
+            marches_exhausted: stats[0].marches_exhausted,
         })
     }
 

@@ -124,6 +124,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["peers", "--table", "docs/bench/peers.json"],
     &["peers", "--table", "docs/bench/path.json"],
     &["peers", "--table", "docs/bench/path-helmet.json"],
+    &["implicit", "--table", "docs/bench/implicit.json"],
 ];
 
 /// BENCHMARKS.md's figures cannot drift from their JSON: everything each `--table` command prints

@@ -37,8 +37,17 @@ vec4 bvh_tri_v(uint i, uint k) { return uintBitsToFloat(imageLoad(bvh_tri_texels
 struct Hit {
     float t;
     uint tri;   // index in BVH order
-    vec2 bary;  // weights of the second and third vertices
+    vec2 bary;  // weights of the second and third vertices; an implicit shape's octahedral normal
 };
+
+// Whether BVH slot `tri` is an implicit shape's procedural primitive (v2.w: its program's first
+// texel, 0 for a triangle); always false in kernels not specialised for implicit shapes.
+bool bvh_is_implicit(uint tri) {
+    if (HAS_IMPLICIT) {
+        return floatBitsToUint(bvh_tri_v(tri, 2u).w) != 0u;
+    }
+    return false;
+}
 
 struct BvhRay {
     vec3 origin;
@@ -177,6 +186,8 @@ float bvh_slab(BvhGrid g, uint c, uint count, float tmin, float tmax) {
     float far = bvh_min(bvh_min(bvh_min(far3.x, far3.y), far3.z), tmax * BVH_SLAB_ROBUST);
     return near <= far && count != BVH_NO_CHILD ? near : BVH_INF;
 }
+
+#include "implicit.glsl"
 
 #ifdef UMBRA_ALPHA_TEST
 // Whether a hit at barycentrics `bary` of triangle `tri` (in BVH order), whose material is
@@ -323,6 +334,23 @@ bool bvh_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out H
                 hit = Hit(t, i, bary);
                 if (any_hit && alpha == 0u) {
                     return true;
+                }
+            }
+            // A procedural primitive (an implicit shape's box; v2.w its program, 0 for a
+            // triangle, whose test above never hits it): marched within the box. Compiled out of
+            // kernels not specialised for implicit shapes (HAS_IMPLICIT).
+            if (HAS_IMPLICIT) {
+                uint program = floatBitsToUint(bvh_tri_v(i, 2u).w);
+                float ts;
+                vec2 n_oct;
+                if (program != 0u && implicit_intersect(i, program, origin, dir, r.inv_dir, tmin, tmax, ts, n_oct)) {
+                    found = true;
+                    tmax = ts;
+                    hit_order = floatBitsToUint(bvh_tri_v(i, 0u).w);
+                    hit = Hit(ts, i, n_oct);
+                    if (any_hit) {
+                        return true;
+                    }
                 }
             }
         }

@@ -35,7 +35,7 @@ vec3 gather_radiance(vec3 origin, vec3 dir, vec3 env, uvec2 env_size, uint light
     }
     t = hit.t;
     uint tri = hit.tri;
-    vec3 ng = normalize(tri_normal(tri));
+    vec3 ng = normalize(hit_normal(hit));
     vec3 wo = -dir;
     uint material = tri_material(tri);
     bool two_sided = material_flag(material, MATERIAL_DOUBLE_SIDED);

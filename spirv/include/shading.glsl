@@ -262,10 +262,23 @@ vec3 tri_normal(uint tri) {
     return cross(bvh_tri_v(tri, 1u).xyz - a, bvh_tri_v(tri, 2u).xyz - a);
 }
 
-// Both UV sets at barycentrics (b1, b2) of triangle `tri`: uv0 in xy, uv1 in zw.
+// A hit's geometric normal: a triangle's unnormalised one (length = 2 * area, tri_normal), an
+// implicit shape's unit gradient (its Hit carries it, octahedrally encoded in `bary`).
+vec3 hit_normal(Hit hit) {
+    if (bvh_is_implicit(hit.tri)) {
+        return implicit_oct_decode(hit.bary);
+    }
+    return tri_normal(hit.tri);
+}
+
+// Both UV sets at barycentrics (b1, b2) of triangle `tri`: uv0 in xy, uv1 in zw (0 on an implicit
+// shape, which has no UVs).
 vec4 tri_uv(uint tri, vec2 bary) {
     vec4 uv = vec4(0.0);
     if (HAS_TEXTURES) {
+        if (bvh_is_implicit(tri)) {
+            return uv;
+        }
         uvec3 idx = tri_indices(tri);
         uint i0 = idx.x;
         uint i1 = idx.y;
@@ -291,6 +304,9 @@ vec4 vertex_color(uint i) {
 vec4 tri_color(uint tri, vec2 bary) {
     vec4 c = vec4(1.0);
     if (HAS_COLORS) {
+        if (bvh_is_implicit(tri)) {
+            return c;
+        }
         uvec3 idx = tri_indices(tri);
         c = (1.0 - bary.x - bary.y) * vertex_color(idx.x) + bary.x * vertex_color(idx.y) + bary.y * vertex_color(idx.z);
     }
@@ -300,6 +316,9 @@ vec4 tri_color(uint tri, vec2 bary) {
 // UV set 1 at barycentrics (b1, b2) of triangle `tri`, whether or not the kernel reads textures
 // (the lightmaps' set).
 vec2 tri_uv1(uint tri, vec2 bary) {
+    if (bvh_is_implicit(tri)) {
+        return vec2(0.0);
+    }
     uvec3 idx = tri_indices(tri);
     vec2 a = vertex_v_uv1(idx.x).yz;
     vec2 b = vertex_v_uv1(idx.y).yz;
@@ -314,6 +333,9 @@ vec2 tri_uv1(uint tri, vec2 bary) {
 // 0.5 log2(UV area / world area) of the triangle. material_texture_lod adds each texture's
 // 0.5 log2(texel count) and its transform's scale. A triangle without UV area gives -inf: level 0.
 vec2 ray_cone_lod(uint tri, float width, vec3 dir, vec3 ng) {
+    if (bvh_is_implicit(tri)) {
+        return LOD_LEVEL0;
+    }
     uvec3 idx = tri_indices(tri);
     uint i0 = idx.x;
     uint i1 = idx.y;
@@ -376,6 +398,10 @@ uint pick_light(float u, uint count) {
 // where it keeps the normal above the geometry; the normal map filtered for a ray cone's `cone_lod`
 // (see material_texture_lod; LOD_LEVEL0 for level 0).
 vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
+    // An implicit shape: the gradient is the normal (no vertex normals, no normal map).
+    if (bvh_is_implicit(tri)) {
+        return ng;
+    }
     uvec3 idx = tri_indices(tri);
     uint i0 = idx.x;
     uint i1 = idx.y;

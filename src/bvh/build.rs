@@ -183,12 +183,17 @@ struct Builder<'a> {
     options: &'a BuildOptions,
 }
 
-pub(super) fn build(triangles: &[[Vec3; 3]], options: &BuildOptions) -> Bvh {
+pub(super) fn build(triangles: &[[Vec3; 3]], boxes: &[[Vec3; 2]], options: &BuildOptions) -> Bvh {
     let start = Instant::now();
-    if triangles.is_empty() {
+    if triangles.is_empty() && boxes.is_empty() {
         return Bvh::empty();
     }
-    let (mut refs, mut order) = references(triangles, options.presplit);
+    let (mut refs, mut order) =
+        if triangles.is_empty() { (Vec::new(), Vec::new()) } else { references(triangles, options.presplit) };
+    // Procedural primitives (boxes) follow the triangles' input indices; never split.
+    let first_box = triangles.len() as u32;
+    refs.extend(boxes.iter().map(|b| PrimRef { min: b[0].into(), max: b[1].into() }));
+    order.extend((0..boxes.len() as u32).map(|k| first_box + k));
     let builder =
         Builder { options: &BuildOptions { bins: options.bins.clamp(2, MAX_BINS), ..options.clone() } };
     let (bounds, centroids) = bounds_of(&refs);
@@ -201,8 +206,21 @@ pub(super) fn build(triangles: &[[Vec3; 3]], options: &BuildOptions) -> Bvh {
     let nodes = compact(&slots);
     drop(slots);
     let flattened = start.elapsed();
-    let tris = order.par_iter().map(|&i| BvhTri::new(&triangles[i as usize], i)).collect();
-    let mut bvh = Bvh { nodes, tris, prim_order: order, stats: BvhStats::default() };
+    let tris = order
+        .par_iter()
+        .map(|&i| match boxes.get((i as usize).wrapping_sub(triangles.len())) {
+            Some(b) if i >= first_box => BvhTri::procedural(b, i),
+            _ => BvhTri::new(&triangles[i as usize], i),
+        })
+        .collect();
+    let mut bvh = Bvh {
+        nodes,
+        tris,
+        prim_order: order,
+        stats: BvhStats::default(),
+        procedurals: boxes.len(),
+        implicit_texels: Vec::new(),
+    };
     let reordered = start.elapsed();
     bvh.stats = stats(&bvh, options, triangles.len());
     bvh.stats.build_ms = reordered.as_secs_f64() * 1e3;

@@ -2,7 +2,7 @@
 //! buffer of rays (closest or any hit) for the traversal tests and the ray-throughput benchmark.
 
 use super::traverse::next_up;
-use super::{Bvh, BvhNode};
+use super::{Bvh, BvhNode, BvhTri};
 use crate::error::{Error, Result};
 use crate::gpu::kernels::trace;
 pub use crate::gpu::layout::GpuBvhNode;
@@ -16,8 +16,11 @@ use rayon::prelude::*;
 pub struct GpuBvh {
     /// `bvh_node_texels`: each [`GpuBvhNode`] as four texels.
     pub nodes: TexelBuffer,
-    /// `bvh_tri_texels`: each triangle as three texels.
+    /// `bvh_tri_texels`: each triangle as three texels, then the implicit shapes' programs.
     pub tris: TexelBuffer,
+    /// Whether the BVH holds implicit shapes (procedural primitives): the trace kernel must then
+    /// be specialised for them ([`RayTracer::with_implicit`]).
+    pub implicit: bool,
 }
 
 impl GpuBvh {
@@ -34,9 +37,17 @@ impl GpuBvh {
                 GpuBvhNode::MAX_NODES
             )));
         }
+        // Implicit shapes' programs follow the triangles in the same texel buffer (the walk finds
+        // a procedural primitive's program through its v2.w, `bvh.glsl`).
+        let tris: Vec<[u32; 4]> = bytemuck::cast_slice::<BvhTri, [u32; 4]>(&bvh.tris)
+            .iter()
+            .chain(&bvh.implicit_texels)
+            .copied()
+            .collect();
         Ok(Self {
             nodes: TexelBuffer::upload(ctx, "bvh nodes", &nodes, RGBA32UI, 16)?,
-            tris: TexelBuffer::upload(ctx, "bvh triangles", &bvh.tris, RGBA32UI, 16)?,
+            tris: TexelBuffer::upload(ctx, "bvh triangles", &tris, RGBA32UI, 16)?,
+            implicit: bvh.procedurals > 0,
         })
     }
 
@@ -433,9 +444,16 @@ pub struct RayTracer {
 const LOCAL: u32 = 64;
 
 impl RayTracer {
-    /// Builds both pipelines.
+    /// Builds both pipelines, for BVHs of triangles only (implicit shapes compiled out: they are
+    /// never hit).
     pub fn new(ctx: &Context) -> Result<Self> {
-        let make = |trace_any| Pipeline::new(ctx, &trace::Spec { trace_any }, None);
+        Self::with_implicit(ctx, false)
+    }
+
+    /// Builds both pipelines; `implicit`: ray-march the BVH's implicit shapes.
+    pub fn with_implicit(ctx: &Context, implicit: bool) -> Result<Self> {
+        let features = crate::gpu::kernel::SceneFeatures { implicit, ..Default::default() };
+        let make = |trace_any| Pipeline::new(ctx, &trace::Spec { trace_any }, Some(&features));
         Ok(Self { closest: make(false)?, any: make(true)? })
     }
 

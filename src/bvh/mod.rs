@@ -64,6 +64,19 @@ impl BvhTri {
         Self { v0: v[0].extend(w).into(), v1: v[1].extend(0.0).into(), v2: v[2].extend(0.0).into() }
     }
 
+    /// A procedural primitive's slot: its box as the first two "vertices" (the third repeats the
+    /// first, so the triangle test never hits it) and, in `v2[3]`, the bits of the first texel of
+    /// its program in `bvh_tri_texels` (0 for a triangle; set by [`Bvh::attach_implicit`]).
+    fn procedural(b: &[Vec3; 2], input_index: u32) -> Self {
+        let w = f32::from_bits(input_index);
+        Self { v0: b[0].extend(w).into(), v1: b[1].extend(0.0).into(), v2: b[0].extend(0.0).into() }
+    }
+
+    /// The first texel of this slot's implicit-shape program, `None` for a triangle.
+    pub fn program(&self) -> Option<u32> {
+        Some(self.v2[3].to_bits()).filter(|&p| p != 0)
+    }
+
     /// The three vertices.
     pub fn vertices(&self) -> [Vec3; 3] {
         [Vec3::from_slice(&self.v0), Vec3::from_slice(&self.v1), Vec3::from_slice(&self.v2)]
@@ -111,6 +124,12 @@ pub struct Bvh {
     pub prim_order: Vec<u32>,
     /// Build statistics.
     pub stats: BvhStats,
+    /// Procedural primitives (implicit shapes' boxes): input indices
+    /// `stats.triangles .. stats.triangles + procedurals`.
+    pub procedurals: usize,
+    /// The implicit shapes' programs ([`crate::gpu::implicit::program`]), uploaded after
+    /// `tris` in the same texel buffer.
+    pub implicit_texels: Vec<[u32; 4]>,
 }
 
 impl Bvh {
@@ -122,25 +141,70 @@ impl Bvh {
 
     /// Builds with the given options.
     pub fn build_with(triangles: &[[Vec3; 3]], options: &BuildOptions) -> crate::Result<Self> {
+        Self::build_mixed(triangles, &[], options)
+    }
+
+    /// Builds over triangles and procedural primitives given by their boxes (`[min, max]`),
+    /// which take the input indices after the triangles'.
+    pub fn build_mixed(
+        triangles: &[[Vec3; 3]],
+        boxes: &[[Vec3; 2]],
+        options: &BuildOptions,
+    ) -> crate::Result<Self> {
+        if let Some(i) =
+            boxes.iter().position(|b| !(b[0].is_finite() && b[1].is_finite() && b[0].cmple(b[1]).all()))
+        {
+            return Err(crate::Error::Invalid(format!(
+                "BVH input box {i} is not finite or inverted: {:?}",
+                boxes[i]
+            )));
+        }
         if let Some(i) = triangles.iter().position(|t| !t.iter().all(|v| v.is_finite())) {
             return Err(crate::Error::Invalid(format!(
                 "BVH input triangle {i} has a non-finite vertex: {:?}",
                 triangles[i]
             )));
         }
-        if triangles.len() >= (1 << 31) {
+        if triangles.len() + boxes.len() >= (1 << 31) {
             return Err(crate::Error::Invalid(format!(
                 "{} triangles are more than a BVH can index",
                 triangles.len()
             )));
         }
-        Ok(build::build(triangles, options))
+        Ok(build::build(triangles, boxes, options))
+    }
+
+    /// Attaches the implicit shapes' programs, one per procedural primitive in input order: each
+    /// slot's `v2[3]` then points at its program's first texel (after the triangles' texels).
+    pub fn attach_implicit(&mut self, programs: &[Vec<[u32; 4]>]) {
+        assert_eq!(programs.len(), self.procedurals, "one program per procedural primitive");
+        let mut first = Vec::with_capacity(programs.len());
+        self.implicit_texels.clear();
+        let base = 3 * self.tris.len() as u32;
+        for p in programs {
+            first.push(base + self.implicit_texels.len() as u32);
+            self.implicit_texels.extend_from_slice(p);
+        }
+        let n = self.stats.triangles as u32;
+        for t in &mut self.tris {
+            let input = t.input_index();
+            if input >= n {
+                t.v2[3] = f32::from_bits(first[(input - n) as usize]);
+            }
+        }
     }
 
     /// The BVH of no triangles: every ray misses.
     pub fn empty() -> Self {
         let root = BvhNode { aabb_min: [f32::MAX; 3], left_first: 0, aabb_max: [-f32::MAX; 3], tri_count: 0 };
-        Self { nodes: vec![root], tris: Vec::new(), prim_order: Vec::new(), stats: BvhStats::default() }
+        Self {
+            nodes: vec![root],
+            tris: Vec::new(),
+            prim_order: Vec::new(),
+            stats: BvhStats::default(),
+            procedurals: 0,
+            implicit_texels: Vec::new(),
+        }
     }
 
     /// Whether there are no triangles.
@@ -167,7 +231,7 @@ impl Bvh {
         let mut seen = vec![false; self.tris.len()];
         // How many references each input triangle has: one must lie inside its leaf's box, the
         // pieces of a split one only meet theirs.
-        let mut pieces = vec![0u32; self.stats.triangles];
+        let mut pieces = vec![0u32; self.stats.triangles + self.procedurals];
         for &p in &self.prim_order {
             *pieces.get_mut(p as usize).ok_or(format!("input index {p} out of range"))? += 1;
         }

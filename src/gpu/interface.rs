@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 14] = [
+pub const SCENE_FEATURES: [&str; 15] = [
     "textures",
     "alpha",
     "lights",
@@ -54,6 +54,7 @@ pub const SCENE_FEATURES: [&str; 14] = [
     "normal_map",
     "occlusion_map",
     "clearcoat",
+    "implicit",
 ];
 
 /// The scene features of the texture slots, in `MATERIAL_SLOT_*` order: some material has a
@@ -176,7 +177,10 @@ gpu_structs! {
         t: float,
         /// Triangle index in BVH order, [`TraceHit::MISS`] for none.
         tri: uint,
-        /// Barycentric weight of the triangle's second vertex.
+        /// Barycentric weight of the triangle's second vertex; of an implicit shape's hit, the
+        /// octahedral encoding of its unit normal (with `v`). On a miss (closest-hit mode, and
+        /// only where the trace kernel is specialised for implicit shapes), the number of
+        /// marches that ran out of steps.
         u: float,
         /// Barycentric weight of the triangle's third vertex.
         v: float,
@@ -345,6 +349,16 @@ gpu_structs! {
         segments_lo: uint,
         /// The count's high word (the carries out of `segments_lo`).
         segments_hi: uint,
+        /// Implicit-shape marches that ran out of steps ([`IMPLICIT_MAX_STEPS`]) before they
+        /// reached the surface or left the shape's box: each was taken as a miss (grazing rays
+        /// along a silhouette, mostly). 0 in scenes without implicit shapes.
+        marches_exhausted: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+        /// Padding.
+        pad2: uint,
     }
 
     /// Push constants of `gbuffer.comp`.
@@ -780,6 +794,41 @@ gpu_constants! {
     PROBE_VISIBILITY: uint = 1;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
+    /// Implicit shapes (`implicit.glsl`): a sphere (params: radius).
+    IMPLICIT_SPHERE: uint = 0;
+    /// A box (params: half extents).
+    IMPLICIT_BOX: uint = 1;
+    /// A rounded box (params: half extents less the radius, radius).
+    IMPLICIT_ROUNDED_BOX: uint = 2;
+    /// A torus around Y (params: major, minor radius).
+    IMPLICIT_TORUS: uint = 3;
+    /// A capsule along Y (params: half height, radius).
+    IMPLICIT_CAPSULE: uint = 4;
+    /// A capped cylinder along Y (params: half height, radius).
+    IMPLICIT_CYLINDER: uint = 5;
+    /// A half-space (params: unit normal, offset).
+    IMPLICIT_PLANE: uint = 6;
+    /// The two distances on top of the stack combined by min (smooth with the instruction's
+    /// smoothness > 0); this and the next two are operations, every lower kind a primitive.
+    IMPLICIT_UNION: uint = 16;
+    /// ... by max.
+    IMPLICIT_INTERSECTION: uint = 17;
+    /// ... by max(a, -b).
+    IMPLICIT_SUBTRACTION: uint = 18;
+    /// Texels of a shape's header in `bvh_tri_texels`: counts, step scale and hit threshold, then
+    /// the world-to-node rows.
+    IMPLICIT_HEADER_TEXELS: uint = 4;
+    /// Texels per instruction: kind and scale (or smoothness), parameters, the node-to-primitive
+    /// rows.
+    IMPLICIT_INSTRUCTION_TEXELS: uint = 5;
+    /// The distance stack's depth.
+    IMPLICIT_MAX_STACK: uint = 8;
+    /// Sphere-tracing steps per shape and ray; a march that runs out is taken as a miss and
+    /// counted ([`PathStats::marches_exhausted`]).
+    IMPLICIT_MAX_STEPS: uint = 128;
+    /// Over-relaxation factor of the sphere tracer (Keinert et al. 2014), dropped to 1 at the
+    /// first step whose bounding spheres do not overlap.
+    IMPLICIT_RELAXATION: float = 1.2;
 }
 
 scene_bindings! {
@@ -815,7 +864,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -854,7 +903,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -873,7 +922,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -941,7 +990,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1112,7 +1161,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1134,7 +1183,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {
@@ -1167,7 +1216,7 @@ kernels! {
     }
     /// Rays through the BVH (tests and the ray-throughput benchmark).
     kernel trace {
-        scene: bvh,
+        scene: bvh [implicit],
         push: TraceParams,
         spec: { trace_any: bool = false },
         bindings: {

@@ -154,6 +154,8 @@ pub struct SceneFeatures {
     /// Bit k: some material has a texture in slot k (`MATERIAL_SLOT_*`, the features of
     /// [`TEXTURE_SLOT_FEATURES`]).
     pub texture_slots: u32,
+    /// The BVH holds implicit shapes (`UMBRA_implicit`): the traversal ray-marches them.
+    pub implicit: bool,
 }
 
 impl SceneFeatures {
@@ -168,6 +170,7 @@ impl SceneFeatures {
             transmission: scene.has_transmission,
             colors: scene.has_colors,
             unlit: scene.has_unlit,
+            implicit: scene.has_implicit,
             texture_slots: scene.texture_slots,
             clearcoat: scene.has_clearcoat,
         }
@@ -185,6 +188,7 @@ impl SceneFeatures {
             "colors" => self.colors,
             "unlit" => self.unlit,
             "clearcoat" => self.clearcoat,
+            "implicit" => self.implicit,
             _ => {
                 let slot = TEXTURE_SLOT_FEATURES.iter().position(|f| *f == name)?;
                 self.texture_slots & (1 << slot) != 0

@@ -69,6 +69,9 @@ pub struct GpuScene {
     /// Whether some material has a clear coat (`KHR_materials_clearcoat`): the shading kernels
     /// evaluate and sample the coat only then.
     pub has_clearcoat: bool,
+    /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
+    /// only then.
+    pub has_implicit: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// The environment map's mean luminance over the sphere of directions (0 without one).
@@ -108,7 +111,9 @@ pub struct SceneArrays {
 impl SceneArrays {
     /// Builds the BVH and lays the scene out for the GPU.
     pub fn new(scene: &Scene) -> Result<Self> {
-        Ok(Self::with_bvh(scene, Bvh::build(&scene.triangle_soup())?))
+        let boxes = scene_boxes(scene)?;
+        let bvh = Bvh::build_mixed(&scene.triangle_soup(), &boxes, &crate::bvh::BuildOptions::default())?;
+        Ok(Self::with_bvh(scene, bvh))
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
@@ -120,7 +125,7 @@ impl SceneArrays {
         }
         [
             ("bvh nodes", bytes(&self.bvh.nodes)),
-            ("bvh triangles", bytes(&self.bvh.tris)),
+            ("bvh triangles", bytes(&self.bvh.tris) + bytes(&self.bvh.implicit_texels)),
             ("scene triangles", bytes(&self.triangles)),
             ("scene vertices", bytes(&self.vertices)),
             ("scene materials", bytes(&self.materials)),
@@ -140,8 +145,13 @@ impl SceneArrays {
         fits(name, &self.buffer_sizes(), device)
     }
 
-    /// Lays the scene out for the GPU around a BVH already built for its triangles.
+    /// Lays the scene out for the GPU around a BVH already built for its triangles (and its
+    /// implicit shapes' boxes, [`scene_boxes`], after them).
     pub fn with_bvh(scene: &Scene, mut bvh: Bvh) -> Self {
+        if bvh.procedurals > 0 {
+            let programs: Vec<Vec<[u32; 4]>> = scene.implicits.iter().map(super::implicit::program).collect();
+            bvh.attach_implicit(&programs);
+        }
         // The traversal's alpha test reads each triangle's alpha mode from v1.w (bits: 0 opaque,
         // 1 mask, 2 blend), so opaque triangles never pay for it.
         for (tri, mode) in bvh.tris.iter_mut().zip(alpha_modes(scene, &bvh.prim_order)) {
@@ -160,6 +170,20 @@ impl SceneArrays {
         } = shading;
         Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels, emissive_power }
     }
+}
+
+/// The world box of each of `scene`'s implicit shapes, the BVH's procedural primitives.
+pub fn scene_boxes(scene: &Scene) -> Result<Vec<[Vec3; 2]>> {
+    scene
+        .implicits
+        .iter()
+        .map(|s| {
+            s.world_bounds().map(|(lo, hi)| [lo, hi]).ok_or_else(|| Error::Scene {
+                path: scene.name.clone().into(),
+                message: format!("{}: UMBRA_implicit: the shape is unbounded", s.label),
+            })
+        })
+        .collect()
 }
 
 /// What each buffer holds, for the error of [`fits`].
@@ -223,9 +247,12 @@ struct ShadingArrays {
 impl ShadingArrays {
     /// `prim_order[i]`: the scene triangle at BVH position i.
     fn new(scene: &Scene, prim_order: &[u32]) -> Self {
-        let mut bvh_index = vec![0u32; scene.triangles.len()];
+        let n = scene.triangles.len();
+        let mut bvh_index = vec![0u32; n];
         for (i, &input) in prim_order.iter().enumerate() {
-            bvh_index[input as usize] = i as u32;
+            if let Some(slot) = bvh_index.get_mut(input as usize) {
+                *slot = i as u32;
+            }
         }
         let area = |t: [u32; 3]| {
             let p = t.map(|i| Vec3::from(scene.positions[i as usize]));
@@ -234,7 +261,11 @@ impl ShadingArrays {
         let mut triangles: Vec<GpuTriangle> = prim_order
             .iter()
             .map(|&input| {
-                let t = scene.triangles[input as usize];
+                // An implicit shape's slot: its material; no vertices, no area (never a light).
+                let Some(&t) = scene.triangles.get(input as usize) else {
+                    let shape = &scene.implicits[input as usize - n];
+                    return GpuTriangle { material: shape.material, ..Default::default() };
+                };
                 GpuTriangle {
                     v0: t[0],
                     v1: t[1],
@@ -261,7 +292,7 @@ impl ShadingArrays {
             })
             .collect();
         for (t, &input) in triangles.iter_mut().zip(prim_order) {
-            t.light_pmf = light_pmf[input as usize];
+            t.light_pmf = light_pmf.get(input as usize).copied().unwrap_or(0.0);
         }
         let vertices: Vec<GpuVertex> = (0..scene.positions.len())
             .map(|i| {
@@ -429,6 +460,7 @@ impl GpuScene {
             has_colors: colored(&arrays.vertices),
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: arrays.materials.iter().any(|m| m.clearcoat[0] > 0.0),
+            has_implicit: arrays.bvh.procedurals > 0,
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,

@@ -324,6 +324,11 @@ impl PathTracePass {
     /// samples per dispatch took 100, 88, 83, 80, 79 % of the time; BENCHMARKS.md).
     pub const SAMPLES_PER_DISPATCH: u32 = 16;
 
+    /// [`PathTracePass::SAMPLES_PER_DISPATCH`] in scenes with implicit shapes: each march takes
+    /// up to [`crate::gpu::layout::IMPLICIT_MAX_STEPS`] loop iterations (and each distance one
+    /// per instruction), and llvmpipe cuts an invocation's loops short past 65,535 iterations.
+    pub const SAMPLES_PER_DISPATCH_IMPLICIT: u32 = 2;
+
     /// The push constants for sample 0 of `settings` seen from `camera` (`sample_index` and
     /// `sample_count`: set them per dispatch).
     pub fn params(scene: &GpuScene, camera: &Camera, settings: &PathSettings) -> PathParams {
@@ -399,7 +404,12 @@ impl PathTracePass {
         let end = params.sample_index + params.sample_count;
         let mut dispatch = *params;
         while dispatch.sample_index < end {
-            dispatch.sample_count = Self::SAMPLES_PER_DISPATCH.min(end - dispatch.sample_index);
+            let most = if scene.has_implicit {
+                Self::SAMPLES_PER_DISPATCH_IMPLICIT
+            } else {
+                Self::SAMPLES_PER_DISPATCH
+            };
+            dispatch.sample_count = most.min(end - dispatch.sample_index);
             self.pipeline.record(
                 cmd,
                 &resources,

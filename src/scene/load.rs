@@ -150,6 +150,9 @@ impl<'a> Builder<'a> {
         if let Some(light) = node.light() {
             self.scene.lights.push(Light::from_gltf(&light, world));
         }
+        if let Some(value) = node.extension_value("UMBRA_implicit") {
+            self.place_implicit(node, value, world)?;
+        }
         if let Some(mesh) = node.mesh() {
             // A skinned mesh is placed by its joints alone: glTF ignores its node's transform.
             let joints = match node.skin() {
@@ -161,6 +164,33 @@ impl<'a> Builder<'a> {
                 self.place_mesh(node, &mesh, placement * instance, joints.as_deref())?;
             }
         }
+        Ok(())
+    }
+
+    /// `UMBRA_implicit` on `node`: its shape, validated, placed with the node's world transform.
+    fn place_implicit(&mut self, node: &gltf::Node, value: &gltf::json::Value, world: Mat4) -> Result<()> {
+        let label = node_label(node);
+        let materials = self.asset.document.materials().len();
+        let (root, material) = super::implicit::parse(value, materials)
+            .map_err(|e| self.origin.error(format!("{label}: UMBRA_implicit: {e}")))?;
+        if Mat3::from_mat4(world).determinant().abs() <= 1e-18 {
+            return Err(self.origin.error(format!(
+                "{label}: UMBRA_implicit: the node's world transform is degenerate (a zero scale here or in a \
+                 parent)"
+            )));
+        }
+        let material = self.material_index(material);
+        let shape = super::ImplicitShape::new(label.clone(), node.index() as u32, material, root, world);
+        match shape.world_bounds() {
+            Some((lo, hi)) if lo.abs().max(hi.abs()).max_element() <= super::MAX_COORDINATE => {}
+            _ => {
+                return Err(self.origin.error(format!(
+                    "{label}: UMBRA_implicit: the shape's world box is not within ±{:e}",
+                    super::MAX_COORDINATE
+                )))
+            }
+        }
+        self.scene.implicits.push(shape);
         Ok(())
     }
 
@@ -417,7 +447,7 @@ impl<'a> Builder<'a> {
         if !scene.colors.is_empty() {
             scene.colors.resize(vertices, [1.0; 4]);
         }
-        if scene.triangles.is_empty() {
+        if scene.triangles.is_empty() && scene.implicits.is_empty() {
             return Err(self.origin.error(match self.dropped {
                 0 => "the scene has no triangles to render".to_owned(),
                 n => format!("all {n} triangles were dropped for NaN or infinite vertex positions"),

@@ -15,6 +15,7 @@ mod chart;
 #[allow(dead_code)]
 #[path = "../../cli.rs"]
 mod cli;
+mod implicit;
 mod mis;
 mod passes;
 mod paths;
@@ -290,6 +291,33 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
+    /// An implicit sphere (ray-marched) against tessellated spheres of rising triangle count: BVH
+    /// memory and build time, path-tracing GPU time, and the geometric error (camera rays whose
+    /// verdict differs from the analytic sphere's; the largest distance of a hit from it);
+    /// writes implicit.json and a chart (implicit.svg, .png).
+    Implicit {
+        /// Image size of the timed path trace.
+        #[arg(long, default_value = "64x64", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of the timed path trace.
+        #[arg(long, default_value_t = 16)]
+        spp: u32,
+        /// Timed path traces per sphere (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Camera rays a side for the geometric errors.
+        #[arg(long, default_value_t = 512)]
+        rays: u32,
+        /// Icosphere subdivisions (20·4^s triangles).
+        #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5,6,7")]
+        subdivisions: Vec<u32>,
+        /// Where to write implicit.json and the chart.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
     /// Print the Markdown table of a `peers.py` run's JSON: `peers.json` (umbra's rays against
     /// Embree's) or `path.json` (the path tracer against Mitsuba 3 at equal error). The
     /// measurements are `src/bin/umbra-bench/peers.py`'s (Python, Embree, Mitsuba).
@@ -483,6 +511,16 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Passes { scene, size, repeats, shadow_rays, out, table: _ } => {
             run_passes(scene, size, repeats, shadow_rays, out)?
+        }
+        Command::Implicit { table: Some(path), .. } => print!("{}", implicit::table(&read_json(&path)?)),
+        Command::Implicit { size, spp, repeats, rays, subdivisions, out, table: None } => {
+            let ctx = Context::new(&ContextDesc::default())?;
+            let settings = implicit::ImplicitSettings { size, spp, repeats, rays, subdivisions };
+            let rows = implicit::run(&ctx, &settings)?;
+            let doc = implicit::to_json(&ctx.info().name, &settings, &rows);
+            print!("{}", implicit::table(&doc));
+            write_json(&out, "implicit.json", &doc)?;
+            implicit::write_chart(&out, &rows)?;
         }
         Command::Peers { table } => print!("{}", peers::table(&read_json(&table)?)),
         Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {

@@ -9,7 +9,7 @@ use umbra::gpu::scene::GpuScene;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
-use umbra::render::Passes;
+use umbra::render::{DenoiseSettings, Passes};
 use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
 
 #[derive(Parser)]
@@ -208,6 +208,14 @@ struct RenderArgs {
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
     #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
+    /// Path tracing: denoise the image (edge-avoiding à-trous filter guided by albedo, normal,
+    /// depth and per-pixel variance). The PNG and the EXR's main layer are denoised; the EXR keeps
+    /// the raw estimate as layer `noisy`.
+    #[arg(long)]
+    denoise: bool,
+    /// Path tracing with --denoise: à-trous iterations (1 to 8; taps 1, 2, 4, ... pixels apart).
+    #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
+    denoise_iterations: u32,
     /// Exposure in stops for the PNG.
     #[arg(long, default_value_t = 0.0, value_parser = cli::parse_finite)]
     exposure: f32,
@@ -279,7 +287,8 @@ struct RenderArgs {
     /// PNG output (tonemapped sRGB); a name ending in .exr writes only the EXR (as --exr).
     #[arg(short, long, default_value = "umbra.png", value_parser = cli::parse_png_or_exr)]
     output: PathBuf,
-    /// EXR output: linear colour, albedo, normal, depth and variance layers.
+    /// EXR output: linear colour, albedo, normal, depth, emission (at the first hit) and variance
+    /// layers (and `noisy` with --denoise).
     #[arg(long, value_parser = cli::parse_exr)]
     exr: Option<PathBuf>,
 }
@@ -362,6 +371,16 @@ fn render(args: RenderArgs) -> Result<()> {
             "--probes and --lightmaps apply to --mode hybrid (the path tracer traces its indirect light)"
         );
     }
+    if (args.denoise || args.denoise_iterations != DenoiseSettings::default().iterations)
+        && args.mode != Mode::Pathtrace
+    {
+        anyhow::bail!(
+            "--denoise applies to --mode pathtrace (it filters the path tracer's noise, guided by its \
+             albedo, normal and variance)"
+        );
+    }
+    let denoise = DenoiseSettings { iterations: args.denoise_iterations, ..Default::default() };
+    denoise.validate()?;
     let given = args.probe.given();
     if !given.is_empty() && !matches!(args.probes, Some(ProbesArg::Bake)) {
         anyhow::bail!(
@@ -438,7 +457,20 @@ fn render(args: RenderArgs) -> Result<()> {
         );
     }
     let (w, h) = settings.size;
-    let rgba: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+    // The image shown: the denoised one with --denoise, else the estimate itself.
+    let shown = if args.denoise {
+        let denoised = umbra::render::denoise(&ctx, &image, &denoise)?;
+        println!(
+            "denoise: {} iterations in {:.2} ms GPU ({:.2} ms per sample of path tracing)",
+            denoise.iterations,
+            denoised.gpu_ms,
+            image.gpu_ms / image.spp as f64
+        );
+        denoised.color
+    } else {
+        image.mean.clone()
+    };
+    let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
     let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
     let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
     if let Some(png) = png {
@@ -447,24 +479,26 @@ fn render(args: RenderArgs) -> Result<()> {
         println!("wrote {}", png.display());
     }
     if let Some(path) = &exr {
-        let colour: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let colour: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let noisy: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let albedo: Vec<f32> = image.albedo.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let normal: Vec<f32> = image.normal_depth.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let depth: Vec<f32> = image.normal_depth.iter().map(|p| p[3]).collect();
+        let emission: Vec<f32> = image.emission.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         let variance: Vec<f32> = image.variance_of_mean().into_iter().flatten().collect();
         use umbra::output::Layer;
-        umbra::output::write_exr(
-            path,
-            w as usize,
-            h as usize,
-            &[
-                Layer { name: "", channels: &["R", "G", "B"], data: &colour },
-                Layer { name: "albedo", channels: &["R", "G", "B"], data: &albedo },
-                Layer { name: "normal", channels: &["X", "Y", "Z"], data: &normal },
-                Layer { name: "depth", channels: &["Z"], data: &depth },
-                Layer { name: "variance", channels: &["R", "G", "B"], data: &variance },
-            ],
-        )?;
+        let mut layers = vec![
+            Layer { name: "", channels: &["R", "G", "B"], data: &colour },
+            Layer { name: "albedo", channels: &["R", "G", "B"], data: &albedo },
+            Layer { name: "normal", channels: &["X", "Y", "Z"], data: &normal },
+            Layer { name: "depth", channels: &["Z"], data: &depth },
+            Layer { name: "emission", channels: &["R", "G", "B"], data: &emission },
+            Layer { name: "variance", channels: &["R", "G", "B"], data: &variance },
+        ];
+        if args.denoise {
+            layers.push(Layer { name: "noisy", channels: &["R", "G", "B"], data: &noisy });
+        }
+        umbra::output::write_exr(path, w as usize, h as usize, &layers)?;
         println!("wrote {}", path.display());
     }
     Ok(())

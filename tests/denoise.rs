@@ -270,6 +270,7 @@ fn settings_are_validated() {
         (DenoiseSettings { sigma_luminance: f32::NAN, ..Default::default() }, "sigma_luminance"),
         (DenoiseSettings { sigma_normal: 0.0, ..Default::default() }, "sigma_normal"),
         (DenoiseSettings { sigma_depth: -1.0, ..Default::default() }, "sigma_depth"),
+        (DenoiseSettings { albedo_offset: 2.0, ..Default::default() }, "albedo_offset"),
     ] {
         let e = denoise(&gpu, &image, &settings).unwrap_err().to_string();
         assert!(e.contains(words), "{e}");

@@ -12,13 +12,13 @@ const vec3 DENOISE_LUMA = vec3(0.2126, 0.7152, 0.0722);
 // luminance weight keeps its amplified radiance apart from its neighbours'.
 const float DENOISE_MIN_ALBEDO = 0.01;
 
-// The divisor of a pixel's radiance: its first hit's base colour, or 1 for a miss (alpha 0) and
-// when demodulation is off.
+// The divisor of a pixel's radiance: its first hit's base colour plus `params.albedo_offset`, or 1
+// for a miss (alpha 0) and when demodulation is off.
 vec3 denoise_albedo(vec4 albedo) {
     if ((params.flags & DENOISE_DEMODULATE) == 0u || !(albedo.a > 0.0)) {
         return vec3(1.0);
     }
-    return max(albedo.rgb, vec3(DENOISE_MIN_ALBEDO));
+    return max(albedo.rgb + params.albedo_offset, vec3(DENOISE_MIN_ALBEDO));
 }
 
 #endif

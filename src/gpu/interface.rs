@@ -557,8 +557,8 @@ gpu_structs! {
         sigma_normal: float,
         /// Depth edge-stopping: |Δz| over this × (|∇z · offset| + 0.1 % of z).
         sigma_depth: float,
-        /// Padding.
-        pad0: uint,
+        /// Added to the albedo the radiance is divided by.
+        albedo_offset: float,
     }
 
     /// Push constants of `resolve.comp`.

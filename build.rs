@@ -335,6 +335,14 @@ fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> 
     if let Some(f) = k.features.iter().find(|f| !SCENE_FEATURES.contains(f)) {
         return Err(format!("kernel {}: unknown scene feature '{f}'", k.name));
     }
+    if k.features.contains(&"textures") {
+        if let Some(f) = TEXTURE_SLOT_FEATURES.iter().find(|f| !k.features.contains(f)) {
+            return Err(format!(
+                "kernel {}: specialised on textures but not on slot feature '{f}' (it would read no texture there)",
+                k.name
+            ));
+        }
+    }
     for (i, (name, ty, default)) in k.spec.iter().enumerate() {
         let suffix = if *ty == "uint" { "u" } else { "" };
         out.push_str(&format!(

@@ -58,7 +58,7 @@ void main() {
     s.base *= tri_color(tri, hit.bary).rgb;
     // The occlusion map, for the lighting pass's image-based (ambient) light.
     float occlusion = 1.0;
-    if (HAS_TEXTURES) {
+    if (HAS_OCCLUSION_MAP) {
         occlusion = material_occlusion_lod(material, uv, cone_lod);
     }
 

@@ -791,6 +791,95 @@ fn normal_maps_tilt_the_shading_normal() {
     }
 }
 
+/// Each texture slot is read on its own: a quad whose material has a constant texture in one
+/// slot only (base colour, metallic-roughness or emissive) renders as the same material with the
+/// texel folded into the slot's factor. The kernels are specialised per slot (a slot no material
+/// fills is compiled out), so a slot left out of the specialisation would render the factor alone.
+#[test]
+fn each_texture_slot_is_read_alone() {
+    use umbra::scene::{Filter, Light, LightKind, Sampler, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM};
+    let gpu = Gpu::new();
+    let quad = facing_quad();
+    let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0);
+    // Linear texels: n/255 is exact as the stored unorm16 (257 n / 65535).
+    let texel = [128u8, 64, 200, 255];
+    let t = texel.map(|c| c as f32 / 255.0);
+    let slot = || Some(TextureRef { texture: 0, tex_coord: 0, transform: IDENTITY_TRANSFORM, scale: 1.0 });
+    let base = Material {
+        base_color_factor: [0.9, 0.8, 0.7, 1.0],
+        metallic: 0.5,
+        roughness: 0.6,
+        emissive: [0.0; 3],
+        ..Default::default()
+    };
+    let cases = [
+        (
+            "base colour",
+            Material { base_color_texture: slot(), ..base.clone() },
+            Material { base_color_factor: [0.9 * t[0], 0.8 * t[1], 0.7 * t[2], 1.0], ..base.clone() },
+        ),
+        (
+            "metallic-roughness",
+            Material { metallic: 1.0, roughness: 1.0, metallic_roughness_texture: slot(), ..base.clone() },
+            Material { metallic: t[2], roughness: t[1], ..base.clone() },
+        ),
+        (
+            "emissive",
+            Material { emissive: [2.0, 1.0, 0.5], emissive_texture: slot(), ..base.clone() },
+            Material { emissive: [2.0 * t[0], t[1], 0.5 * t[2]], ..base.clone() },
+        ),
+    ];
+    for (name, textured, folded) in cases {
+        let images: Vec<PathImage> = [textured, folded]
+            .into_iter()
+            .map(|material| {
+                let mut scene = scene_of(&[(&quad, material, false)], cam);
+                scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
+                scene.textures.push(Texture {
+                    name: "constant".into(),
+                    width: 1,
+                    height: 1,
+                    rgba8: texel.to_vec(),
+                    srgb: false,
+                    sampler: Sampler {
+                        wrap_s: Wrap::Repeat,
+                        wrap_t: Wrap::Repeat,
+                        mag_filter: Filter::Nearest,
+                        min_filter: Filter::Nearest,
+                        mipmaps: false,
+                        mipmap_filter: Filter::Nearest,
+                    },
+                });
+                scene.lights.push(Light {
+                    name: String::new(),
+                    kind: LightKind::Directional,
+                    position: [0.0; 3],
+                    direction: [-0.5, -0.3, -1.0],
+                    color: [1.0; 3],
+                    intensity: 3.0,
+                    range: None,
+                    inner_cone_angle: 0.0,
+                    outer_cone_angle: std::f32::consts::PI,
+                });
+                let settings = PathSettings { size: (16, 16), spp: 4, max_bounces: 1, ..Default::default() };
+                render(&gpu, &scene, &settings)
+            })
+            .collect();
+        let centre = images[1].mean[8 * 16 + 8];
+        assert!(centre[0] > 0.01, "{name}: the quad is lit ({centre:?})");
+        for (i, (a, b)) in images[0].mean.iter().zip(&images[1].mean).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-4 * b[c].abs().max(1e-3),
+                    "{name}: pixel {i} channel {c}: textured {} vs factor {}",
+                    a[c],
+                    b[c]
+                );
+            }
+        }
+    }
+}
+
 /// Clear, smooth, white glass of ior 1.5: refracting (`volume`) or thin-walled.
 fn clear_glass(volume: bool) -> Material {
     Material {

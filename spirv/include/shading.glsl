@@ -112,13 +112,36 @@ bool light_reaches(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3
     return !bvh_any(o, to_point ? target - o : wi, 0.0, to_point ? 0.9999 : BVH_INF);
 }
 
+// Whether the kernel is specialised for textures in `slot` (some material of the scene has one
+// there): with `slot` a constant, the driver folds this and drops an unused slot's lookup, which a
+// CPU device would otherwise run for every lane whatever the material.
+bool slot_textured(uint slot) {
+    // Spec constants only as plain `if` conditions: `!HAS_TEXTURES`, `&&` or `?:` on one would be
+    // an OpSpecConstantOp, which naga rejects.
+    bool textured = false;
+    if (HAS_BASE_COLOR_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_BASE_COLOR;
+    }
+    if (HAS_METAL_ROUGH_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_METALLIC_ROUGHNESS;
+    }
+    if (HAS_EMISSIVE_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_EMISSIVE;
+    }
+    if (HAS_NORMAL_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_NORMAL;
+    }
+    if (HAS_OCCLUSION_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_OCCLUSION;
+    }
+    return textured;
+}
+
 // Material `id`'s texture in `slot` (its index + 1, 0 when the slot is empty) and the slot's
 // transformed UV from the hit's UV sets (uv.xy = uv0, uv.zw = uv1).
 uint material_texture_uv(uint id, uint slot, vec4 uv, out vec2 t) {
-    // Spec constants only as plain `if` conditions: `!HAS_TEXTURES` or `?:` on one would be an
-    // OpSpecConstantOp, which naga rejects.
     uint tex = 0u;
-    if (HAS_TEXTURES) {
+    if (slot_textured(slot)) {
         tex = material_slot_texture(id, slot);
     }
     t = vec2(0.0);
@@ -306,7 +329,7 @@ vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
         return vec3(0.0);
     }
     vec3 e = material_vec(m, 1u).rgb;
-    if (HAS_TEXTURES && any(greaterThan(e, vec3(0.0)))) {
+    if (HAS_EMISSIVE_MAP && any(greaterThan(e, vec3(0.0)))) {
         e *= material_texture_lod(m, MATERIAL_SLOT_EMISSIVE, tri_uv(tri, bary), cone_lod).rgb;
     }
     return e;
@@ -352,7 +375,7 @@ vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
     if (dot(n, ng) < 0.0) {
         n = -n;
     }
-    if (HAS_TEXTURES) {
+    if (HAS_NORMAL_MAP) {
         uint material = tri_material(tri);
         if (material_slot_texture(material, MATERIAL_SLOT_NORMAL) != 0u) {
             vec4 ta = vertex_tangent(i0);

@@ -36,13 +36,33 @@
 
 /// The scene features a kernel can be specialised on (`scene: full [...]` below): `HAS_<NAME>` in
 /// GLSL, its specialization-constant id the index here; a feature a kernel does not list is a
-/// plain `false` there.
-pub const SCENE_FEATURES: [&str; 8] =
-    ["textures", "alpha", "lights", "punctual", "env_map", "transmission", "colors", "unlit"];
+/// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
+/// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
+/// no lookup.
+pub const SCENE_FEATURES: [&str; 13] = [
+    "textures",
+    "alpha",
+    "lights",
+    "punctual",
+    "env_map",
+    "transmission",
+    "colors",
+    "unlit",
+    "base_color_map",
+    "metal_rough_map",
+    "emissive_map",
+    "normal_map",
+    "occlusion_map",
+];
+
+/// The scene features of the texture slots, in `MATERIAL_SLOT_*` order: some material has a
+/// texture in that slot.
+pub const TEXTURE_SLOT_FEATURES: [&str; 5] =
+    ["base_color_map", "metal_rough_map", "emissive_map", "normal_map", "occlusion_map"];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
-/// others follow in order.
-pub const FIRST_KERNEL_SPEC_ID: u32 = 8;
+/// others follow in order (room left for scene features to come).
+pub const FIRST_KERNEL_SPEC_ID: u32 = 32;
 
 gpu_structs! {
     /// A pinhole camera as every kernel that casts rays from it reads it (`camera.glsl`).
@@ -813,7 +833,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -913,7 +933,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -932,7 +952,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1000,7 +1020,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1096,7 +1116,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1135,7 +1155,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1171,7 +1191,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1193,7 +1213,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc};
 use std::marker::PhantomData;
 
-pub use super::layout::{FIRST_KERNEL_SPEC_ID, SCENE_FEATURES};
+pub use super::layout::{FIRST_KERNEL_SPEC_ID, SCENE_FEATURES, TEXTURE_SLOT_FEATURES};
 
 /// How a binding is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -149,6 +149,9 @@ pub struct SceneFeatures {
     pub colors: bool,
     /// Some material is unlit (`KHR_materials_unlit`).
     pub unlit: bool,
+    /// Bit k: some material has a texture in slot k (`MATERIAL_SLOT_*`, the features of
+    /// [`TEXTURE_SLOT_FEATURES`]).
+    pub texture_slots: u32,
 }
 
 impl SceneFeatures {
@@ -163,6 +166,7 @@ impl SceneFeatures {
             transmission: scene.has_transmission,
             colors: scene.has_colors,
             unlit: scene.has_unlit,
+            texture_slots: scene.texture_slots,
         }
     }
 
@@ -177,7 +181,10 @@ impl SceneFeatures {
             "transmission" => self.transmission,
             "colors" => self.colors,
             "unlit" => self.unlit,
-            _ => return None,
+            _ => {
+                let slot = TEXTURE_SLOT_FEATURES.iter().position(|f| *f == name)?;
+                self.texture_slots & (1 << slot) != 0
+            }
         })
     }
 }

@@ -51,6 +51,9 @@ pub struct GpuScene {
     pub texels: TexelBuffer,
     /// Textures the materials use.
     pub texture_count: u32,
+    /// Bit k: some material has a texture in slot k (`MATERIAL_SLOT_*`): the shading kernels
+    /// look up only these slots.
+    pub texture_slots: u32,
     /// Whether some material transmits (`KHR_materials_transmission`): the path tracer is
     /// specialised for it only then.
     pub has_transmission: bool,
@@ -416,6 +419,7 @@ impl GpuScene {
             textures: upload_rgba32ui(ctx, "scene textures", &arrays.textures)?,
             texels: upload_texels(ctx, &arrays.texels)?,
             texture_count: arrays.textures.len() as u32,
+            texture_slots: texture_slots(&arrays.materials),
             has_transmission: transmits(&arrays.materials),
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
             has_colors: colored(&arrays.vertices),
@@ -463,6 +467,7 @@ impl GpuScene {
         self.textures = upload_rgba32ui(ctx, "scene textures", &arrays.textures)?;
         self.texels = upload_texels(ctx, &arrays.texels)?;
         self.texture_count = arrays.textures.len() as u32;
+        self.texture_slots = texture_slots(&arrays.materials);
         self.has_transmission = transmits(&arrays.materials);
         self.has_colors = colored(&arrays.vertices);
         self.has_unlit = unlit(&arrays.materials);
@@ -515,6 +520,14 @@ fn alpha_modes(scene: &Scene, prim_order: &[u32]) -> Vec<u32> {
 
 fn transmits(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.params[2] > 0.0)
+}
+
+/// The texture slots some material fills, bit k for `MATERIAL_SLOT_*` k.
+fn texture_slots(materials: &[GpuMaterial]) -> u32 {
+    let slots = MATERIAL_TEXTURE_SLOTS as usize;
+    materials.iter().fold(0, |bits, m| {
+        (0..slots).filter(|&k| m.textures[k / 4][k % 4] != 0).fold(bits, |b, k| b | 1 << k)
+    })
 }
 
 fn unlit(materials: &[GpuMaterial]) -> bool {

@@ -73,12 +73,12 @@ void main() {
     if (spatial) {
         // The first iteration: a few samples' variance can be 0 where every sample happened to
         // agree (a penumbra whose samples all missed the light). The spread of the neighbours'
-        // luminance on the same surface (normal and depth weights, 5×5) bounds it from below.
+        // luminance on the same surface (normal and depth weights, 3×3) bounds it from below.
         float w_sum = 0.0;
         float l_sum = 0.0;
         float l2_sum = 0.0;
-        for (int j = -2; j <= 2; ++j) {
-            for (int i = -2; i <= 2; ++i) {
+        for (int j = -1; j <= 1; ++j) {
+            for (int i = -1; i <= 1; ++i) {
                 ivec2 q = pixel + ivec2(i, j);
                 if (!inside(q)) {
                     continue;

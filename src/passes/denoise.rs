@@ -56,7 +56,7 @@ pub struct DenoiseSettings {
     /// 2.5× the filter's time.
     pub wide: bool,
     /// In the first iteration, take the variance to be at least the spread of the neighbours'
-    /// luminance on the same surface (5×5): a few samples that happened to agree say 0.
+    /// luminance on the same surface (3×3): a few samples that happened to agree say 0.
     pub spatial_variance: bool,
     /// Weigh taps by normal, depth and luminance. Off is a plain B3-spline blur: for tests that
     /// must catch it.

@@ -315,7 +315,7 @@ fn relative_mse(image: &[[f32; 4]], reference: &[[f32; 3]]) -> f64 {
 /// The embedded Cornell box at 4 spp (48×48, the stored reference's size) against its
 /// 16,384-spp reference, three seeds. The goal is a relative MSE 8× lower; at 128×128
 /// (`umbra-bench denoise`, BENCHMARKS.md) the Cornell box reaches it, but at 48×48 a pixel spans
-/// so much of the box that the filter's bias is larger: 4.0–4.7× was measured here (lavapipe),
+/// so much of the box that the filter's bias is larger: 4.1–4.8× was measured here (lavapipe),
 /// and 3× is asserted.
 #[test]
 fn cornell_box_at_4_spp_comes_much_closer_to_the_reference() {

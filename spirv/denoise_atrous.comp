@@ -73,7 +73,10 @@ void main() {
     if (spatial) {
         // The first iteration: a few samples' variance can be 0 where every sample happened to
         // agree (a penumbra whose samples all missed the light). The spread of the neighbours'
-        // luminance on the same surface (normal and depth weights, 3×3) bounds it from below.
+        // luminance on the same surface (normal and depth weights, 3×3) bounds it from below,
+        // fully up to 4 samples, then fading as 4 / samples: the spread holds the signal's own
+        // variation too, which more samples do not shrink, while the pixel's own estimate
+        // becomes reliable (SVGF likewise estimates spatially for its first 4 frames only).
         float w_sum = 0.0;
         float l_sum = 0.0;
         float l2_sum = 0.0;
@@ -103,7 +106,8 @@ void main() {
         }
         if (w_sum > 0.0) {
             float mean_l = l_sum / w_sum;
-            var = max(var, l2_sum / w_sum - mean_l * mean_l);
+            float samples = max(imageLoad(dn_samples, pixel).x, 1.0);
+            var = max(var, (l2_sum / w_sum - mean_l * mean_l) * min(1.0, 4.0 / samples));
         }
     }
     float inv_l = 1.0 / (params.sigma_luminance * sqrt(max(var, 0.0)) + 1e-6);

@@ -29,6 +29,7 @@ void main() {
     vec3 sigma = sqrt(max(square - mean.rgb * mean.rgb, vec3(0.0)) / (n - 1.0)) / albedo;
     float sigma_l = dot(DENOISE_LUMA, sigma);
     imageStore(dn_color, ivec2(pixel), vec4((mean.rgb - emitted) / albedo, sigma_l * sigma_l));
+    imageStore(dn_samples, ivec2(pixel), vec4(mean.a));
     vec4 normal_depth = aov_normal_depth[index];
     bool hit = normal_depth.w < 1e30 && dot(normal_depth.xyz, normal_depth.xyz) > 0.0;
     imageStore(dn_guide, ivec2(pixel), hit ? vec4(normalize(normal_depth.xyz), normal_depth.w) : vec4(0.0, 0.0, 0.0, -1.0));

@@ -789,7 +789,7 @@ gpu_constants! {
     /// [`DenoiseParams::flags`]: the luminance weight reads a 3×3 Gaussian of the variance.
     DENOISE_PREFILTER: uint = 2;
     /// [`DenoiseParams::flags`]: in the first iteration, the luminance weight's variance is at
-    /// least the spread of the neighbours' luminance on the same surface.
+    /// least the spread of the neighbours' luminance on the same surface, × min(1, 4 / samples).
     DENOISE_SPATIAL_VARIANCE: uint = 8;
     /// [`DenoiseParams::flags`]: 5×5 taps (the B3 spline) per iteration instead of 3×3.
     DENOISE_WIDE: uint = 16;
@@ -896,6 +896,8 @@ kernels! {
             dn_color: writeonly image rgba32f,
             /// Unit normal xyz and distance (−1 for a miss).
             dn_guide: writeonly image rgba32f,
+            /// The pixel's sample count.
+            dn_samples: writeonly image r32f,
         }
     }
 
@@ -909,6 +911,8 @@ kernels! {
             dn_in: readonly image rgba32f,
             /// Unit normal xyz and distance (−1 for a miss).
             dn_guide: readonly image rgba32f,
+            /// The pixel's sample count (read by the first iteration).
+            dn_samples: readonly image r32f,
             /// Filtered radiance rgb and its variance.
             dn_out: writeonly image rgba32f,
         }

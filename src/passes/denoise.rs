@@ -56,7 +56,9 @@ pub struct DenoiseSettings {
     /// 2.5× the filter's time.
     pub wide: bool,
     /// In the first iteration, take the variance to be at least the spread of the neighbours'
-    /// luminance on the same surface (3×3): a few samples that happened to agree say 0.
+    /// luminance on the same surface (3×3) × min(1, 4 / samples): a few samples that happened
+    /// to agree say 0, and the spread, which holds the signal's own variation, fades as the
+    /// pixel's own estimate becomes reliable.
     pub spatial_variance: bool,
     /// Weigh taps by normal, depth and luminance. Off is a plain B3-spline blur: for tests that
     /// must catch it.
@@ -163,8 +165,8 @@ impl<'a> From<&'a PathTarget> for DenoiseInputs<'a> {
     }
 }
 
-/// The denoiser's working images (`R32G32B32A32_SFLOAT`): two the iterations ping-pong between,
-/// and the guide (normal, distance).
+/// The denoiser's working images (`R32G32B32A32_SFLOAT` but for `samples`): two the iterations
+/// ping-pong between, the guide (normal, distance) and the sample counts.
 pub struct DenoiseImages {
     /// Width and height.
     pub size: (u32, u32),
@@ -174,6 +176,8 @@ pub struct DenoiseImages {
     pub pong: Image,
     /// Unit normal xyz and distance (−1 for a miss).
     pub guide: Image,
+    /// `R32_SFLOAT`: each pixel's sample count.
+    pub samples: Image,
 }
 
 impl DenoiseImages {
@@ -186,12 +190,13 @@ impl DenoiseImages {
             ping: make("denoise ping")?,
             pong: make("denoise pong")?,
             guide: make("denoise guide")?,
+            samples: Image::storage_2d(ctx, "denoise samples", w, h, raw::Format::R32_SFLOAT)?,
         })
     }
 
     /// Records the move of every image from `UNDEFINED` to `GENERAL`.
     pub fn init_general(&self, ctx: &Context, cmd: raw::CommandBuffer) {
-        for image in [&self.ping, &self.pong, &self.guide] {
+        for image in [&self.ping, &self.pong, &self.guide, &self.samples] {
             image.init_general(ctx, cmd);
         }
     }
@@ -248,6 +253,7 @@ impl DenoisePass {
                 aov_emission: inputs.emission,
                 dn_color: &images.ping.view,
                 dn_guide: &images.guide.view,
+                dn_samples: &images.samples.view,
             },
             &settings.params(size, 0),
             grid,
@@ -261,6 +267,7 @@ impl DenoisePass {
                 &denoise_atrous::Resources {
                     dn_in: &src.view,
                     dn_guide: &images.guide.view,
+                    dn_samples: &images.samples.view,
                     dn_out: &dst.view,
                 },
                 &settings.params(size, 1 << i),

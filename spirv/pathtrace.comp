@@ -81,13 +81,13 @@ struct Path {
     uint nonfinite;  // NONFINITE_* bits of the stages that produced a non-finite value
 };
 
-// Sample `sample_index` of `pixel`: its camera ray.
+// Sample `sample_index` of `pixel` (of the whole image): its camera ray.
 Path camera_path(uvec2 pixel, uint sample_index) {
     vec4 jitter = rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), params.seed);
     Path path;
     path.origin = params.camera.origin;
     path.dir = camera_ray(params.camera.forward, params.camera.right, params.camera.up, vec2(pixel) + jitter.xy,
-                          params.size);
+                          uvec2(params.camera.image_width, params.camera.image_height));
     path.radiance = vec3(0.0);
     path.throughput = vec3(1.0);
     path.prev_pdf = 0.0;
@@ -281,7 +281,8 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albed
     return true;
 }
 
-// Samples params.sample_index .. + params.sample_count of one pixel. A SIMD machine runs a group
+// Samples params.sample_index .. + params.sample_count of one pixel of the region (its random
+// numbers and camera ray those of the whole image's pixel). A SIMD machine runs a group
 // of lanes until its last lane is done, and path lengths differ (escapes, Russian roulette), so
 // a lane whose path ends starts its pixel's next sample in the same iteration (path
 // regeneration, Novák, Havran and Dachsbacher 2010) instead of idling until the longest path of
@@ -289,14 +290,18 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albed
 // numbers of sample k whichever dispatch and lane trace it, so the paths are those of one sample
 // per dispatch.
 // Returns the path segments it traced.
-uint trace_pixel(uvec2 pixel) {
-    uint index = pixel.y * params.size.x + pixel.x;
+uint trace_pixel(uvec2 region_pixel) {
+    uint index = region_pixel.y * params.size.x + region_pixel.x;
+    uvec2 pixel = region_pixel + uvec2(params.camera.region_x, params.camera.region_y);
     uint first = params.sample_index;
     uint count = params.sample_count;
+    // The samples accumulated so far (0: the host cleared the buffers to start a render).
+    vec4 mean = accum[index];
+    bool fresh = mean.a == 0.0;
 
     // Per sample: the first hit's base colour (the environment's colour, alpha 0, for a miss),
     // normal and distance, and what it emits; summed over the samples but for the normal and
-    // distance, kept from the pixel's sample 0.
+    // distance, kept from the first sample of the render.
     vec4 albedo = vec4(params.env, 0.0);
     vec4 normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
     vec3 emitted_first = vec3(0.0);
@@ -338,16 +343,15 @@ uint trace_pixel(uvec2 pixel) {
     }
 
     // The running mean and mean square over all samples so far.
-    float n_samples = float(first + count);
-    vec4 mean = first == 0u ? vec4(0.0) : accum[index];
-    vec4 m2 = first == 0u ? vec4(0.0) : moment[index];
+    float n_samples = mean.a + float(count);
+    vec4 m2 = moment[index];
     accum[index] = vec4(mean.rgb + (sum - float(count) * mean.rgb) / n_samples, n_samples);
     moment[index] = vec4(m2.rgb + (sum2 - float(count) * m2.rgb) / n_samples, 0.0);
-    vec4 mean_albedo = first == 0u ? vec4(0.0) : aov_albedo[index];
+    vec4 mean_albedo = fresh ? vec4(0.0) : aov_albedo[index];
     aov_albedo[index] = mean_albedo + (sum_albedo - float(count) * mean_albedo) / n_samples;
-    vec3 mean_emitted = first == 0u ? vec3(0.0) : aov_emission[index].rgb;
+    vec3 mean_emitted = fresh ? vec3(0.0) : aov_emission[index].rgb;
     aov_emission[index] = vec4(mean_emitted + (sum_emitted - float(count) * mean_emitted) / n_samples, 0.0);
-    if (first == 0u) {
+    if (fresh) {
         aov_normal_depth[index] = first_normal_depth;
     }
     return segments;

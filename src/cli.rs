@@ -93,6 +93,33 @@ pub fn parse_non_negative(s: &str) -> Result<f32, String> {
     }
 }
 
+/// Parses `A..B`: samples A (inclusive) to B (exclusive) of the sequence, A < B.
+#[allow(dead_code)] // one binary uses it
+pub fn parse_sample_range(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s.split_once("..").ok_or_else(|| format!("'{s}' is not a sample range A..B"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{s}': {e}"));
+    let (a, b) = (parse(a)?, parse(b)?);
+    if a >= b {
+        return Err(format!("'{s}': the range is empty (A..B needs A < B)"));
+    }
+    Ok((a, b))
+}
+
+/// Parses `X,Y,W,H`: a tile's left column, top row, width and height in pixels (W, H > 0).
+#[allow(dead_code)] // one binary uses it
+pub fn parse_tile(s: &str) -> Result<[u32; 4], String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|v| v.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("'{s}' is not a tile X,Y,W,H: {e}"))?;
+    match v[..] {
+        [x, y, w, h] if w > 0 && h > 0 => Ok([x, y, w, h]),
+        [_, _, _, _] => Err(format!("'{s}': a tile's width and height must be positive")),
+        _ => Err(format!("'{s}' is not a tile X,Y,W,H (four numbers)")),
+    }
+}
+
 /// Parses a finite number greater than 0.
 pub fn parse_positive(s: &str) -> Result<f32, String> {
     match parse_finite(s)? {

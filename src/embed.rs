@@ -144,9 +144,10 @@ impl Renderer {
         PathTarget::new(&self.ctx, size)
     }
 
-    /// Records path-traced samples `first .. first + count` into `target` (sample 0 restarts
-    /// the running mean; a moved camera or changed scene restarts at 0). `settings.size` must be
-    /// the target's.
+    /// Records path-traced samples `first .. first + count` of the render into `target` (its
+    /// samples `settings.first_sample + first ..` of the sequence; `first` 0 clears the target
+    /// and restarts the running mean: a moved camera or changed scene restarts at 0).
+    /// `settings.size` must be the target's.
     pub fn record_path_samples(
         &self,
         cmd: raw::CommandBuffer,

@@ -12,6 +12,7 @@ pub mod environment;
 pub mod error;
 pub mod gpu;
 pub mod kernels;
+pub mod merge;
 pub mod output;
 pub mod passes;
 pub mod procedural;

@@ -26,6 +26,9 @@ enum Command {
     /// Bake the irradiance probes of a scene (or the embedded Cornell box) to a file, for
     /// `render --mode hybrid --probes FILE`.
     Bake(BakeArgs),
+    /// Join path-traced parts of one render (EXRs of `render --sample-range` and/or `--tile`,
+    /// e.g. from an array job) into the render one process would have made.
+    Merge(MergeArgs),
     /// List the Vulkan devices and the one umbra would use.
     Info,
     /// Render the foundation test pattern (a known function of the pixel) to PNG and/or EXR.
@@ -216,6 +219,15 @@ struct RenderArgs {
     /// Path tracing with --denoise: à-trous iterations (1 to 8; taps 1, 2, 4, ... pixels apart).
     #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
     denoise_iterations: u32,
+    /// Path tracer: trace only samples A..B of the sequence (instead of --spp), exactly those a
+    /// whole render traces there: one part of a render split across processes or machines,
+    /// joined by `umbra merge`.
+    #[arg(long, value_parser = cli::parse_sample_range, value_name = "A..B", conflicts_with_all = ["spp", "target_error"])]
+    sample_range: Option<(u32, u32)>,
+    /// Path tracer: render only the W×H pixels from column X, row Y of the --size image, each as
+    /// the whole image has it (one part for `umbra merge`).
+    #[arg(long, value_parser = cli::parse_tile, value_name = "X,Y,W,H")]
+    tile: Option<[u32; 4]>,
     /// Exposure in stops for the PNG.
     #[arg(long, default_value_t = 0.0, value_parser = cli::parse_finite)]
     exposure: f32,
@@ -291,6 +303,57 @@ struct RenderArgs {
     /// layers (and `noisy` with --denoise).
     #[arg(long, value_parser = cli::parse_exr)]
     exr: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The parts: EXRs written by `umbra render` (path tracer) of one scene and settings.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// The merged EXR (the same layers and attributes as a render's, so it merges further).
+    #[arg(short, long, value_parser = cli::parse_exr)]
+    output: PathBuf,
+    /// Also a tonemapped PNG of the merged image.
+    #[arg(long, value_parser = cli::parse_png)]
+    png: Option<PathBuf>,
+    /// Exposure in stops for the PNG.
+    #[arg(long, default_value_t = 0.0, value_parser = cli::parse_finite)]
+    exposure: f32,
+    /// Tone curve for the PNG.
+    #[arg(long, value_enum, default_value = "neutral")]
+    tonemap: ToneArg,
+}
+
+fn merge(args: MergeArgs) -> Result<()> {
+    use umbra::merge::PathExr;
+    let parts = args
+        .inputs
+        .iter()
+        .map(|path| Ok((path.clone(), PathExr::read(path)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let merged = umbra::merge::merge(&parts)?;
+    merged.write(&args.output)?;
+    let r = merged.region;
+    println!(
+        "merged {} parts: {}x{} pixels from ({}, {}) of {}x{}, {} spp; wrote {}",
+        parts.len(),
+        r.size.0,
+        r.size.1,
+        r.origin.0,
+        r.origin.1,
+        merged.image.0,
+        merged.image.1,
+        merged.spp(),
+        args.output.display()
+    );
+    if let Some(png) = &args.png {
+        let rgba: Vec<f32> = merged.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
+        umbra::output::write_png(png, r.size.0, r.size.1, &display)
+            .with_context(|| format!("writing {}", png.display()))?;
+        println!("wrote {}", png.display());
+    }
+    Ok(())
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -389,6 +452,11 @@ fn render(args: RenderArgs) -> Result<()> {
             if given.len() == 1 { "s" } else { "" }
         );
     }
+    if (args.sample_range.is_some() || args.tile.is_some()) && args.mode != Mode::Pathtrace {
+        anyhow::bail!(
+            "--sample-range and --tile apply to --mode pathtrace (its parts merge with umbra merge)"
+        );
+    }
     shadow_settings(&args).validate()?;
     let mut loaded = args.scene.load()?;
     if args.lightmap.unwrap {
@@ -397,9 +465,12 @@ fn render(args: RenderArgs) -> Result<()> {
     let camera = loaded.scene.camera(args.camera)?;
     let ctx = Context::new(&ContextDesc::default())?;
     let gpu_scene = loaded.upload(&ctx)?;
+    let (first_sample, spp) = args.sample_range.map_or((0, args.spp), |(a, b)| (a, b - a));
     let settings = umbra::render::PathSettings {
-        size: args.size,
-        spp: args.spp,
+        size: args.tile.map_or(args.size, |t| (t[2], t[3])),
+        spp,
+        first_sample,
+        tile: args.tile.map(|t| umbra::passes::pathtrace::Tile { image: args.size, origin: (t[0], t[1]) }),
         max_bounces: args.max_bounces,
         rr_depth: args.rr_depth,
         seed: args.seed,
@@ -479,29 +550,36 @@ fn render(args: RenderArgs) -> Result<()> {
         println!("wrote {}", png.display());
     }
     if let Some(path) = &exr {
-        let colour: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
-        let noisy: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
-        let albedo: Vec<f32> = image.albedo.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
-        let normal: Vec<f32> = image.normal_depth.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
-        let depth: Vec<f32> = image.normal_depth.iter().map(|p| p[3]).collect();
-        let emission: Vec<f32> = image.emission.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
-        let variance: Vec<f32> = image.variance_of_mean().into_iter().flatten().collect();
-        use umbra::output::Layer;
-        let mut layers = vec![
-            Layer { name: "", channels: &["R", "G", "B"], data: &colour },
-            Layer { name: "albedo", channels: &["R", "G", "B"], data: &albedo },
-            Layer { name: "normal", channels: &["X", "Y", "Z"], data: &normal },
-            Layer { name: "depth", channels: &["Z"], data: &depth },
-            Layer { name: "emission", channels: &["R", "G", "B"], data: &emission },
-            Layer { name: "variance", channels: &["R", "G", "B"], data: &variance },
-        ];
+        let mut exr = umbra::merge::PathExr::new(&image, &settings, render_identity(&args, &loaded));
         if args.denoise {
-            layers.push(Layer { name: "noisy", channels: &["R", "G", "B"], data: &noisy });
+            exr.denoised = Some(shown.iter().map(|p| [p[0], p[1], p[2]]).collect());
         }
-        umbra::output::write_exr(path, w as usize, h as usize, &layers)?;
+        exr.write(path)?;
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// What must agree between the parts of one path-traced render (`umbra merge` checks it): the
+/// scene and environment (by content), the camera and every setting but the samples and tile.
+fn render_identity(args: &RenderArgs, loaded: &LoadedScene) -> String {
+    fn name<T: clap::ValueEnum>(v: &T) -> String {
+        v.to_possible_value().map_or(String::new(), |p| p.get_name().to_string())
+    }
+    format!(
+        "scene {:016x} env {:?} camera {:?} size {}x{} max-bounces {} rr-depth {} seed {} microfacet {} heuristic {} strategy {}",
+        loaded.hash(),
+        args.scene.env_radiance(),
+        args.camera,
+        args.size.0,
+        args.size.1,
+        args.max_bounces,
+        args.rr_depth,
+        args.seed,
+        name(&args.microfacet),
+        name(&args.heuristic),
+        name(&args.strategy)
+    )
 }
 
 /// A scene and its environment map, loaded, not yet on the GPU.
@@ -886,6 +964,7 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render(args)?,
         Command::Bake(args) => bake(args)?,
+        Command::Merge(args) => merge(args)?,
         Command::Info => {
             for (name, ty) in Context::list_devices()? {
                 println!("{name} ({ty:?})");

@@ -17,8 +17,27 @@ pub struct Layer<'a> {
 
 /// Writes a single-part EXR with every layer's channels (zip-compressed, f32).
 pub fn write_exr(path: &Path, width: usize, height: usize, layers: &[Layer<'_>]) -> Result<()> {
+    write_exr_with(path, width, height, layers, &[])
+}
+
+/// [`write_exr`] with text attributes in the header (`(name, value)`, Latin-1 text).
+pub fn write_exr_with(
+    path: &Path,
+    width: usize,
+    height: usize,
+    layers: &[Layer<'_>],
+    attributes: &[(&str, String)],
+) -> Result<()> {
     use exr::prelude::*;
     let image_error = |message: String| crate::Error::Image { path: path.to_path_buf(), message };
+    let mut layer_attributes = LayerAttributes::default();
+    for (name, value) in attributes {
+        let text = |s: &str| {
+            Text::new_or_none(s)
+                .ok_or_else(|| image_error(format!("attribute {name}: '{s}' is not Latin-1 text")))
+        };
+        layer_attributes.other.insert(text(name)?, exr::meta::attribute::AttributeValue::Text(text(value)?));
+    }
     let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
     for layer in layers {
         let n = layer.channels.len();
@@ -41,7 +60,7 @@ pub fn write_exr(path: &Path, width: usize, height: usize, layers: &[Layer<'_>])
     }
     let layer = exr::image::Layer::new(
         (width, height),
-        LayerAttributes::default(),
+        layer_attributes,
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels),
     );
@@ -53,6 +72,26 @@ pub type Channel = (String, Vec<f32>);
 
 /// Reads every channel of a single-part EXR as `(width, height, channels)`, for tests and tools.
 pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<Channel>)> {
+    let image = read_exr(path)?;
+    Ok((image.width, image.height, image.channels))
+}
+
+/// A single-part EXR as read: its size, every channel, its text attributes.
+#[derive(Debug, Clone)]
+pub struct ExrImage {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Every channel, by full name.
+    pub channels: Vec<Channel>,
+    /// The header's text attributes other than the standard ones, `(name, value)`.
+    pub attributes: Vec<(String, String)>,
+}
+
+/// Reads a single-part EXR: every channel as `f32`, and its text attributes.
+pub fn read_exr(path: &Path) -> Result<ExrImage> {
+    use exr::meta::attribute::AttributeValue;
     use exr::prelude::*;
     let image = read()
         .no_deep_data()
@@ -70,7 +109,18 @@ pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<Channel>)> {
         .iter()
         .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
         .collect();
-    Ok((size.0, size.1, channels))
+    let attributes = image
+        .layer_data
+        .attributes
+        .other
+        .iter()
+        .chain(&image.attributes.other)
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    Ok(ExrImage { width: size.0, height: size.1, channels, attributes })
 }
 
 /// Writes 8-bit sRGB RGBA as PNG.

@@ -630,8 +630,10 @@ impl Passes {
         Ok(())
     }
 
-    /// Records path-traced samples `first .. first + count` of `settings` into `target`
-    /// (sample 0 restarts the running mean). `settings.size` must be the target's.
+    /// Records path-traced samples `first .. first + count` of `settings`' render into `target`
+    /// (its samples `settings.first_sample + first ..` of the sequence; `first` 0 records the
+    /// target's clearing first and restarts the running mean). `settings.size` must be the
+    /// target's.
     #[allow(clippy::too_many_arguments)]
     pub fn record_path_samples(
         &self,
@@ -651,8 +653,19 @@ impl Passes {
         }
         let pass = self.path_pass(scene, settings.options())?;
         let mut params = PathTracePass::params(scene, camera, settings);
-        params.sample_index = first;
+        params.sample_index =
+            settings.first_sample.checked_add(first).filter(|s| s.checked_add(count).is_some()).ok_or_else(
+                || {
+                    Error::Invalid(format!(
+                        "samples {first}..+{count} from {} run past the sequence's last index",
+                        settings.first_sample
+                    ))
+                },
+            )?;
         params.sample_count = count;
+        if first == 0 {
+            target.record_clear(&self.ctx, cmd);
+        }
         pass.record(&self.ctx, cmd, scene, target, &params)
     }
 
@@ -742,9 +755,7 @@ impl Passes {
         mut progress: impl FnMut(u32, u32),
     ) -> Result<PathImage> {
         let ctx = &self.ctx;
-        if settings.spp == 0 {
-            return Err(Error::Invalid("samples per pixel must be at least 1".into()));
-        }
+        settings.validate()?;
         self.path_pass(scene, settings.options())?;
         let target = PathTarget::new(ctx, settings.size)?;
         // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).

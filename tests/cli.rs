@@ -156,6 +156,9 @@ fn render_cornell_box_writes_png_and_exr_layers() {
         "emission.B",
         "emission.G",
         "emission.R",
+        "moment.B",
+        "moment.G",
+        "moment.R",
         "normal.X",
         "normal.Y",
         "normal.Z",
@@ -177,8 +180,9 @@ fn render_cornell_box_writes_png_and_exr_layers() {
 }
 
 /// `--denoise`: the EXR's main layer is the denoised image and layer `noisy` the raw estimate,
-/// which is the main layer of the same render without `--denoise`; the PNG is the denoised
-/// image's; a mode other than the path tracer is refused, as are iterations out of range.
+/// which is the main layer of the same render without `--denoise` (and what `umbra merge` reads);
+/// the PNG is the denoised image's; a mode other than the path tracer is refused, as are
+/// iterations out of range.
 #[test]
 fn render_denoise_writes_denoised_and_noisy_layers() {
     let dir = std::env::temp_dir().join(format!("umbra-denoise-cli-{}", std::process::id()));
@@ -210,6 +214,9 @@ fn render_denoise_writes_denoised_and_noisy_layers() {
         assert_ne!(channel(&denoised, c), channel(&plain, c), "{c} was not denoised");
     }
     assert!(!plain.iter().any(|c| c.0.starts_with("noisy")), "a noisy layer without --denoise");
+    // What `umbra merge` reads of a denoised render is its raw estimate.
+    let read = |name: &str| umbra::merge::PathExr::read(&dir.join(format!("{name}.exr"))).unwrap();
+    assert_eq!(read("denoised").mean, read("plain").mean, "a merge would join the denoised image");
     let rgba: Vec<f32> = (0..32 * 24)
         .flat_map(|i| {
             [channel(&denoised, "R")[i], channel(&denoised, "G")[i], channel(&denoised, "B")[i], 1.0]

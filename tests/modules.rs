@@ -24,6 +24,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("render", 3),
     ("bake", 3),
     ("embed", 4),
+    ("merge", 4),
 ];
 
 /// The `crate::<module>` paths in the code of `text` (comments removed).

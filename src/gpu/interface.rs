@@ -65,24 +65,28 @@ pub const TEXTURE_SLOT_FEATURES: [&str; 5] =
 pub const FIRST_KERNEL_SPEC_ID: u32 = 32;
 
 gpu_structs! {
-    /// A pinhole camera as every kernel that casts rays from it reads it (`camera.glsl`).
+    /// A pinhole camera as every kernel that casts rays from it reads it (`camera.glsl`), and
+    /// the raster its rays cover: an `image_width` × `image_height` image of which a kernel
+    /// renders the region from pixel (`region_x`, `region_y`) on. The path tracer honours the
+    /// region (`--tile`: a tile's pixels and random numbers are those of the whole image's); the
+    /// other kernels render whole images (region 0, the image their size).
     struct GpuCamera {
         /// Position.
         origin: vec3,
-        /// Padding.
-        pad0: float,
+        /// Width of the whole image, pixels.
+        image_width: uint,
         /// Unit forward.
         forward: vec3,
-        /// Padding.
-        pad1: float,
+        /// Height of the whole image, pixels.
+        image_height: uint,
         /// Right × tan(yfov/2) × aspect.
         right: vec3,
-        /// Padding.
-        pad2: float,
+        /// Left column of the region rendered.
+        region_x: uint,
         /// Up × tan(yfov/2).
         up: vec3,
-        /// Padding.
-        pad3: float,
+        /// Top row of the region rendered.
+        region_y: uint,
     }
 
     /// Push constants of `test_pattern.comp`.
@@ -298,9 +302,12 @@ gpu_structs! {
         env: vec3,
         /// Sample the environment map for next-event estimation (0/1).
         env_nee: uint,
-        /// Image width and height.
+        /// Width and height of the region rendered (the whole image unless the camera says
+        /// otherwise) and of the accumulation buffers.
         size: uvec2,
-        /// The first sample of this dispatch.
+        /// The first sample of this dispatch: the index in the counter-based sequence its random
+        /// numbers are drawn for. The samples already accumulated are counted in the accumulation
+        /// buffer's alpha (cleared to start a render).
         sample_index: uint,
         /// Seed of the random numbers.
         seed: uint,

@@ -469,8 +469,14 @@ pub fn nonfinite_source_names(mask: u32) -> Vec<&'static str> {
 }
 
 impl GpuCamera {
-    /// The pinhole `camera` for an image of `size` (`camera.glsl`).
-    pub fn new(camera: &crate::scene::Camera, (w, h): (u32, u32)) -> Self {
+    /// The pinhole `camera` for an image of `size` (`camera.glsl`), rendered whole.
+    pub fn new(camera: &crate::scene::Camera, size: (u32, u32)) -> Self {
+        Self::region(camera, size, (0, 0))
+    }
+
+    /// The pinhole `camera` for an image of `size` of which a kernel renders the region from
+    /// pixel `origin` on.
+    pub fn region(camera: &crate::scene::Camera, (w, h): (u32, u32), origin: (u32, u32)) -> Self {
         use glam::Vec3;
         let forward = Vec3::from(camera.forward).normalize();
         let right = forward.cross(Vec3::from(camera.up)).normalize();
@@ -482,7 +488,10 @@ impl GpuCamera {
             forward: forward.into(),
             right: (right * tan * aspect).into(),
             up: (up * tan).into(),
-            ..Default::default()
+            image_width: w,
+            image_height: h,
+            region_x: origin.0,
+            region_y: origin.1,
         }
     }
 }

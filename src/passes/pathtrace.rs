@@ -1,7 +1,7 @@
 //! The progressive path-tracing pass (`spirv/pathtrace.comp`): one sample per pixel per
 //! dispatch into a running mean and second moment.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::kernels::{pathtrace, resolve};
 use crate::gpu::layout::{GpuCamera, PathParams, PathStats, ResolveParams};
 use crate::gpu::scene::GpuScene;
@@ -160,6 +160,23 @@ pub struct PathSettings {
     /// Stop before `spp` once [`crate::render::PathImage::relative_error`] is at most this (checked after each
     /// batch, from 16 samples per pixel on).
     pub target_error: Option<f32>,
+    /// The render's first sample in the counter-based sequence: it traces samples
+    /// `first_sample .. first_sample + spp`, exactly those a render from 0 traces there, so
+    /// renders of disjoint ranges merge into the render of their union (`umbra merge`).
+    pub first_sample: u32,
+    /// Render only a region of a larger image: `size` pixels from [`Tile::origin`] of a
+    /// [`Tile::image`]-sized image, each pixel (ray and random numbers) as the whole image has it.
+    pub tile: Option<Tile>,
+}
+
+/// A region of a larger image (`umbra render --tile`): the render's `size` pixels from `origin`
+/// of an image of `image` pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tile {
+    /// Width and height of the whole image.
+    pub image: (u32, u32),
+    /// Its pixel where the region starts (left column, top row).
+    pub origin: (u32, u32),
 }
 
 impl Default for PathSettings {
@@ -176,6 +193,8 @@ impl Default for PathSettings {
             env: [0.0; 3],
             env_nee: true,
             target_error: None,
+            first_sample: 0,
+            tile: None,
         }
     }
 }
@@ -184,6 +203,41 @@ impl PathSettings {
     /// The options the pipeline is specialised on.
     pub fn options(&self) -> PathOptions {
         PathOptions { microfacet: self.microfacet, heuristic: self.heuristic, strategy: self.strategy }
+    }
+
+    /// The camera's raster: the whole image and the region rendered (`size` from the tile's
+    /// origin, or the whole image).
+    pub fn camera(&self, camera: &Camera) -> GpuCamera {
+        match self.tile {
+            Some(tile) => GpuCamera::region(camera, tile.image, tile.origin),
+            None => GpuCamera::new(camera, self.size),
+        }
+    }
+
+    /// An error unless the settings describe a render: at least one sample, a sample range
+    /// within the sequence's 2^32 indices, a tile inside its image.
+    pub fn validate(&self) -> Result<()> {
+        if self.spp == 0 {
+            return Err(Error::Invalid("samples per pixel must be at least 1".into()));
+        }
+        if self.first_sample.checked_add(self.spp).is_none() {
+            return Err(Error::Invalid(format!(
+                "samples {}..{} run past the sequence's last index ({})",
+                self.first_sample,
+                self.first_sample as u64 + self.spp as u64,
+                u32::MAX
+            )));
+        }
+        if let Some(Tile { image, origin }) = self.tile {
+            let fits = |o: u32, s: u32, i: u32| o.checked_add(s).is_some_and(|end| end <= i);
+            if !fits(origin.0, self.size.0, image.0) || !fits(origin.1, self.size.1, image.1) {
+                return Err(Error::Invalid(format!(
+                    "tile {}x{} at ({}, {}) does not fit in the {}x{} image",
+                    self.size.0, self.size.1, origin.0, origin.1, image.0, image.1
+                )));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -224,6 +278,19 @@ impl PathTarget {
             emission: make("path emission")?,
             stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], usage)?,
         })
+    }
+
+    /// Records the clearing of the running mean and second moment (a new render starts: the
+    /// kernel counts the samples accumulated so far in the mean's alpha) and a barrier before
+    /// the kernel.
+    pub fn record_clear(&self, ctx: &Context, cmd: raw::CommandBuffer) {
+        let device = ctx.device();
+        // SAFETY: `cmd` is recording; both buffers are this target's, made with TRANSFER_DST.
+        unsafe {
+            device.cmd_fill_buffer(cmd, self.accum.raw, 0, raw::WHOLE_SIZE, 0);
+            device.cmd_fill_buffer(cmd, self.moment.raw, 0, raw::WHOLE_SIZE, 0);
+        }
+        barrier::transfer_to_compute(ctx, cmd);
     }
 }
 
@@ -267,7 +334,7 @@ impl PathTracePass {
     pub fn params(scene: &GpuScene, camera: &Camera, settings: &PathSettings) -> PathParams {
         let (env_w, env_h) = scene.env_size.unwrap_or((1, 1));
         PathParams {
-            camera: GpuCamera::new(camera, settings.size),
+            camera: settings.camera(camera),
             env: settings.env,
             env_nee: settings.env_nee as u32,
             size: [settings.size.0, settings.size.1],

@@ -1,0 +1,392 @@
+//! One path-traced render split across processes or machines, and joined again.
+//!
+//! `umbra render --sample-range A..B` traces exactly samples `A..B` of the counter-based
+//! sequence (a render from 0 draws the same numbers for them) and `--tile X,Y,W,H` exactly the
+//! pixels of one region of the image (their rays and random numbers those of the whole image).
+//! Each part's EXR ([`PathExr`]) keeps the running mean and second moment with the sample ranges,
+//! the region and an identity of the render in its header; [`merge`] weighs the parts' means
+//! and moments by their sample counts and places the regions, which gives the render one process
+//! would have made (equal to float rounding: the parts' sums round in another order).
+
+use crate::error::{Error, Result};
+use crate::output::{read_exr, write_exr_with, Layer};
+use crate::passes::pathtrace::PathSettings;
+use crate::render::PathImage;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// A rectangle of pixels: its top-left pixel and its width and height.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Region {
+    /// Left column, top row.
+    pub origin: (u32, u32),
+    /// Width and height.
+    pub size: (u32, u32),
+}
+
+impl Region {
+    fn area(&self) -> u64 {
+        self.size.0 as u64 * self.size.1 as u64
+    }
+
+    fn end(&self) -> (u32, u32) {
+        (self.origin.0 + self.size.0, self.origin.1 + self.size.1)
+    }
+
+    fn overlaps(&self, other: &Region) -> bool {
+        let (a, b) = (self.end(), other.end());
+        self.origin.0 < b.0 && other.origin.0 < a.0 && self.origin.1 < b.1 && other.origin.1 < a.1
+    }
+}
+
+/// A path-traced render (or part of one) as its EXR holds it: the main RGB layer the mean, the
+/// layers `moment` (mean of the squared samples), `variance` (of the mean), `albedo` and
+/// `emission` (the first hit's, means over the samples), `normal` and `depth` (the first hit of
+/// the first sample), with `--denoise` the main layer denoised and the mean as `noisy`, and the
+/// header attributes
+/// `umbra.samples` (the sample ranges, e.g. `0..64` or `0..16,32..48`), `umbra.image` (the whole
+/// image, `WxH`), `umbra.region` (`X,Y,WxH`) and `umbra.render` (what must agree between parts:
+/// scene, lighting, camera and every setting but the samples and the region).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathExr {
+    /// Width and height of the whole image.
+    pub image: (u32, u32),
+    /// The pixels this part holds.
+    pub region: Region,
+    /// Its samples of the sequence, sorted, disjoint and not touching.
+    pub samples: Vec<Range<u32>>,
+    /// The render's identity (equal in every part of one render).
+    pub render: String,
+    /// Mean radiance per pixel of the region, row-major.
+    pub mean: Vec<[f32; 3]>,
+    /// Mean of the squared samples.
+    pub moment: Vec<[f32; 3]>,
+    /// Base colour at the first hit, mean over the samples.
+    pub albedo: Vec<[f32; 3]>,
+    /// Shading normal at the first hit.
+    pub normal: Vec<[f32; 3]>,
+    /// Distance to the first hit (infinite for a miss).
+    pub depth: Vec<f32>,
+    /// Radiance emitted at the first hit, mean over the samples.
+    pub emission: Vec<[f32; 3]>,
+    /// The denoised image (`umbra render --denoise`): written as the main layer, `mean` then as
+    /// layer `noisy`. Never read back: [`PathExr::read`] takes the mean from `noisy`, so a merge
+    /// joins raw estimates.
+    pub denoised: Option<Vec<[f32; 3]>>,
+}
+
+const MAIN: [&str; 3] = ["R", "G", "B"];
+const XYZ: [&str; 3] = ["X", "Y", "Z"];
+
+impl PathExr {
+    /// The EXR of `image`, rendered with `settings`; `render` names what else identifies the
+    /// render (scene, lighting, camera).
+    pub fn new(image: &PathImage, settings: &PathSettings, render: String) -> Self {
+        let rgb = |v: &Vec<[f32; 4]>| v.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        let (image_size, origin) = match settings.tile {
+            Some(t) => (t.image, t.origin),
+            None => (image.size, (0, 0)),
+        };
+        Self {
+            image: image_size,
+            region: Region { origin, size: image.size },
+            samples: std::iter::once(settings.first_sample..settings.first_sample + image.spp).collect(),
+            render,
+            mean: rgb(&image.mean),
+            moment: rgb(&image.moment),
+            albedo: rgb(&image.albedo),
+            normal: rgb(&image.normal_depth),
+            depth: image.normal_depth.iter().map(|p| p[3]).collect(),
+            emission: rgb(&image.emission),
+            denoised: None,
+        }
+    }
+
+    /// Samples per pixel.
+    pub fn spp(&self) -> u32 {
+        self.samples.iter().map(|r| r.end - r.start).sum()
+    }
+
+    /// Per pixel, the estimated variance of the mean (sample variance / n).
+    pub fn variance_of_mean(&self) -> Vec<[f32; 3]> {
+        let n = self.spp().max(2) as f32;
+        self.mean
+            .iter()
+            .zip(&self.moment)
+            .map(|(m, s)| [0, 1, 2].map(|c| (s[c] - m[c] * m[c]).max(0.0) / (n - 1.0)))
+            .collect()
+    }
+
+    /// Writes the EXR.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let flat = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
+        let (mean, moment, albedo, normal) =
+            (flat(&self.mean), flat(&self.moment), flat(&self.albedo), flat(&self.normal));
+        let emission = flat(&self.emission);
+        let variance = flat(&self.variance_of_mean());
+        let denoised = self.denoised.as_deref().map(flat);
+        let samples: Vec<String> = self.samples.iter().map(|r| format!("{}..{}", r.start, r.end)).collect();
+        let r = self.region;
+        write_exr_with(
+            path,
+            r.size.0 as usize,
+            r.size.1 as usize,
+            &[
+                match &denoised {
+                    Some(denoised) => Layer { name: "", channels: &MAIN, data: denoised },
+                    None => Layer { name: "", channels: &MAIN, data: &mean },
+                },
+                Layer { name: "albedo", channels: &MAIN, data: &albedo },
+                Layer { name: "normal", channels: &XYZ, data: &normal },
+                Layer { name: "depth", channels: &["Z"], data: &self.depth },
+                Layer { name: "emission", channels: &MAIN, data: &emission },
+                Layer { name: "variance", channels: &MAIN, data: &variance },
+                Layer { name: "moment", channels: &MAIN, data: &moment },
+            ]
+            .into_iter()
+            .chain(denoised.is_some().then_some(Layer { name: "noisy", channels: &MAIN, data: &mean }))
+            .collect::<Vec<_>>(),
+            &[
+                ("umbra.samples", samples.join(",")),
+                ("umbra.image", format!("{}x{}", self.image.0, self.image.1)),
+                ("umbra.region", format!("{},{},{}x{}", r.origin.0, r.origin.1, r.size.0, r.size.1)),
+                ("umbra.render", self.render.clone()),
+            ],
+        )
+    }
+
+    /// Reads an EXR that [`PathExr::write`] wrote; an error naming the file and what is missing
+    /// or malformed otherwise.
+    pub fn read(path: &Path) -> Result<Self> {
+        let exr = read_exr(path)?;
+        let bad = |message: String| Error::Image { path: path.to_path_buf(), message };
+        let attribute = |name: &str| {
+            exr.attributes.iter().find(|(k, _)| k == name).map(|(_, v)| v.as_str()).ok_or_else(|| {
+                bad(format!("no '{name}' attribute: not a path-traced render written by umbra render"))
+            })
+        };
+        let channel = |name: &str| {
+            exr.channels
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, v)| v.as_slice())
+                .ok_or_else(|| bad(format!("no channel '{name}'")))
+        };
+        let rgb = |layer: &str, names: [&str; 3]| -> Result<Vec<[f32; 3]>> {
+            let full = |c: &str| if layer.is_empty() { c.to_string() } else { format!("{layer}.{c}") };
+            let [a, b, c] = [channel(&full(names[0]))?, channel(&full(names[1]))?, channel(&full(names[2]))?];
+            Ok((0..a.len()).map(|i| [a[i], b[i], c[i]]).collect())
+        };
+        let image =
+            parse_size(attribute("umbra.image")?).ok_or_else(|| bad("malformed 'umbra.image'".into()))?;
+        let region =
+            parse_region(attribute("umbra.region")?).ok_or_else(|| bad("malformed 'umbra.region'".into()))?;
+        let samples = parse_samples(attribute("umbra.samples")?)
+            .ok_or_else(|| bad("malformed 'umbra.samples'".into()))?;
+        if (exr.width, exr.height) != (region.size.0 as usize, region.size.1 as usize) {
+            return Err(bad(format!(
+                "{}x{} pixels but its region is {}x{}",
+                exr.width, exr.height, region.size.0, region.size.1
+            )));
+        }
+        if region.end().0 > image.0 || region.end().1 > image.1 {
+            return Err(bad("its region lies outside its image".into()));
+        }
+        Ok(Self {
+            image,
+            region,
+            samples,
+            render: attribute("umbra.render")?.to_string(),
+            // A denoised render keeps its raw estimate in `noisy`: that is what merges.
+            mean: if exr.channels.iter().any(|(n, _)| n == "noisy.R") {
+                rgb("noisy", MAIN)?
+            } else {
+                rgb("", MAIN)?
+            },
+            moment: rgb("moment", MAIN)?,
+            albedo: rgb("albedo", MAIN)?,
+            normal: rgb("normal", XYZ)?,
+            depth: channel("depth.Z")?.to_vec(),
+            emission: rgb("emission", MAIN)?,
+            denoised: None,
+        })
+    }
+}
+
+fn parse_size(s: &str) -> Option<(u32, u32)> {
+    let (w, h) = s.split_once('x')?;
+    Some((w.parse().ok()?, h.parse().ok()?))
+}
+
+fn parse_region(s: &str) -> Option<Region> {
+    let mut parts = s.splitn(3, ',');
+    let x = parts.next()?.parse().ok()?;
+    let y = parts.next()?.parse().ok()?;
+    let size = parse_size(parts.next()?)?;
+    Some(Region { origin: (x, y), size })
+}
+
+/// `A..B[,C..D…]`: ranges, each non-empty.
+fn parse_samples(s: &str) -> Option<Vec<Range<u32>>> {
+    s.split(',')
+        .map(|r| {
+            let (a, b) = r.split_once("..")?;
+            let (a, b): (u32, u32) = (a.parse().ok()?, b.parse().ok()?);
+            (a < b).then_some(a..b)
+        })
+        .collect()
+}
+
+/// The union of disjoint ranges, sorted, touching ones joined; `None` where two overlap.
+fn union(ranges: impl IntoIterator<Item = Range<u32>>) -> Option<Vec<Range<u32>>> {
+    let mut all: Vec<Range<u32>> = ranges.into_iter().collect();
+    all.sort_by_key(|r| r.start);
+    let mut out: Vec<Range<u32>> = Vec::new();
+    for r in all {
+        match out.last_mut() {
+            Some(last) if r.start < last.end => return None,
+            Some(last) if r.start == last.end => last.end = r.end,
+            _ => out.push(r),
+        }
+    }
+    Some(out)
+}
+
+fn describe(samples: &[Range<u32>]) -> String {
+    samples.iter().map(|r| format!("{}..{}", r.start, r.end)).collect::<Vec<_>>().join(",")
+}
+
+/// Joins parts of one render (each with the file it came from, for the errors): parts of the
+/// same region and disjoint sample ranges into one of all their samples (means and second
+/// moments weighted by sample counts; the first-hit layers of the part with the earliest
+/// samples), then regions into the rectangle they tile. Refused, naming the files: parts of
+/// different renders or images, overlapping samples of one region, overlapping regions, regions
+/// with different samples, regions that leave a hole in their bounding rectangle.
+pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
+    let (first_path, first) = parts.first().ok_or_else(|| Error::Invalid("nothing to merge".into()))?;
+    let invalid = |message: String| Err(Error::Invalid(message));
+    for (path, part) in &parts[1..] {
+        if part.render != first.render || part.image != first.image {
+            return invalid(format!(
+                "{} and {} are not parts of one render:\n  {} ({}x{})\n  {} ({}x{})",
+                first_path.display(),
+                path.display(),
+                first.render,
+                first.image.0,
+                first.image.1,
+                part.render,
+                part.image.0,
+                part.image.1
+            ));
+        }
+    }
+    // Samples first: one part per region.
+    let mut regions: Vec<Region> = parts.iter().map(|(_, p)| p.region).collect();
+    regions.sort();
+    regions.dedup();
+    let mut tiles: Vec<(PathBuf, PathExr)> = Vec::new();
+    for region in regions {
+        let mut group: Vec<&(PathBuf, PathExr)> = parts.iter().filter(|(_, p)| p.region == region).collect();
+        group.sort_by_key(|(_, p)| p.samples[0].start);
+        let Some(samples) = union(group.iter().flat_map(|(_, p)| p.samples.iter().cloned())) else {
+            let names: Vec<String> =
+                group.iter().map(|(f, p)| format!("{} ({})", f.display(), describe(&p.samples))).collect();
+            return invalid(format!("overlapping sample ranges in one region: {}", names.join(", ")));
+        };
+        let total: f64 = group.iter().map(|(_, p)| p.spp() as f64).sum();
+        let weighted = |field: fn(&PathExr) -> &Vec<[f32; 3]>| -> Vec<[f32; 3]> {
+            let pixels = field(&group[0].1).len();
+            (0..pixels)
+                .map(|i| {
+                    [0, 1, 2].map(|c| {
+                        let sum: f64 =
+                            group.iter().map(|(_, p)| p.spp() as f64 * field(p)[i][c] as f64).sum();
+                        (sum / total) as f32
+                    })
+                })
+                .collect()
+        };
+        let (path, earliest) = group[0];
+        tiles.push((
+            path.clone(),
+            PathExr {
+                samples,
+                mean: weighted(|p| &p.mean),
+                moment: weighted(|p| &p.moment),
+                albedo: weighted(|p| &p.albedo),
+                emission: weighted(|p| &p.emission),
+                ..earliest.clone()
+            },
+        ));
+    }
+    if tiles.len() == 1 {
+        return Ok(tiles.pop().expect("one tile").1);
+    }
+    // Then regions: disjoint, with the same samples, tiling their bounding rectangle.
+    for (i, (a_path, a)) in tiles.iter().enumerate() {
+        for (b_path, b) in &tiles[i + 1..] {
+            if a.region.overlaps(&b.region) {
+                return invalid(format!(
+                    "regions of {} and {} overlap ({:?} and {:?})",
+                    a_path.display(),
+                    b_path.display(),
+                    a.region,
+                    b.region
+                ));
+            }
+            if a.samples != b.samples {
+                return invalid(format!(
+                    "regions of {} and {} have different samples ({} and {}): merge each region's samples first",
+                    a_path.display(),
+                    b_path.display(),
+                    describe(&a.samples),
+                    describe(&b.samples)
+                ));
+            }
+        }
+    }
+    let x0 = tiles.iter().map(|(_, t)| t.region.origin.0).min().expect("tiles");
+    let y0 = tiles.iter().map(|(_, t)| t.region.origin.1).min().expect("tiles");
+    let x1 = tiles.iter().map(|(_, t)| t.region.end().0).max().expect("tiles");
+    let y1 = tiles.iter().map(|(_, t)| t.region.end().1).max().expect("tiles");
+    let bounds = Region { origin: (x0, y0), size: (x1 - x0, y1 - y0) };
+    if tiles.iter().map(|(_, t)| t.region.area()).sum::<u64>() != bounds.area() {
+        let names: Vec<String> = tiles.iter().map(|(f, _)| f.display().to_string()).collect();
+        return invalid(format!(
+            "the regions of {} leave holes in the rectangle they span ({},{} {}x{}): give every tile",
+            names.join(", "),
+            x0,
+            y0,
+            bounds.size.0,
+            bounds.size.1
+        ));
+    }
+    let pixels = bounds.area() as usize;
+    let mut out = PathExr {
+        region: bounds,
+        mean: vec![[0.0; 3]; pixels],
+        moment: vec![[0.0; 3]; pixels],
+        albedo: vec![[0.0; 3]; pixels],
+        normal: vec![[0.0; 3]; pixels],
+        depth: vec![0.0; pixels],
+        emission: vec![[0.0; 3]; pixels],
+        ..tiles[0].1.clone()
+    };
+    for (_, t) in &tiles {
+        let (w, h) = t.region.size;
+        for y in 0..h as usize {
+            let src = y * w as usize;
+            let dst = (t.region.origin.1 - y0) as usize * bounds.size.0 as usize
+                + y * bounds.size.0 as usize
+                + (t.region.origin.0 - x0) as usize;
+            let n = w as usize;
+            out.mean[dst..dst + n].copy_from_slice(&t.mean[src..src + n]);
+            out.moment[dst..dst + n].copy_from_slice(&t.moment[src..src + n]);
+            out.albedo[dst..dst + n].copy_from_slice(&t.albedo[src..src + n]);
+            out.normal[dst..dst + n].copy_from_slice(&t.normal[src..src + n]);
+            out.depth[dst..dst + n].copy_from_slice(&t.depth[src..src + n]);
+            out.emission[dst..dst + n].copy_from_slice(&t.emission[src..src + n]);
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,169 @@
+//! One render split across processes (`render --sample-range`, `--tile`) and joined again
+//! (`umbra merge`): the parts merge into the render one process makes, and parts that do not
+//! belong together are refused with the files named.
+
+// Sample ranges are lists of ranges here, one long or several.
+#![allow(clippy::single_range_in_vec_init)]
+
+mod common;
+
+use common::run_validated;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use umbra::merge::PathExr;
+
+fn umbra() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_umbra"))
+}
+
+/// A fresh folder for one test's files.
+fn folder(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("umbra-merge-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `umbra render` of the Cornell box at 40×30 with `extra` arguments, into `out`.
+fn render(out: &Path, extra: &[&str]) -> PathExr {
+    run_validated(
+        umbra().args(["render", "--size", "40x30", "--max-bounces", "4"]).args(extra).arg("-o").arg(out),
+    );
+    PathExr::read(out).unwrap()
+}
+
+fn merge(out: &Path, parts: &[&Path]) -> std::process::Output {
+    umbra().arg("merge").args(parts).arg("-o").arg(out).output().unwrap()
+}
+
+fn merged(out: &Path, parts: &[&Path]) -> PathExr {
+    let result = merge(out, parts);
+    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+    PathExr::read(out).unwrap()
+}
+
+/// Every channel of `a` within `ulps` units in the last place of the largest value of `b`'s.
+fn assert_close(what: &str, a: &[[f32; 3]], b: &[[f32; 3]], ulps: f32) {
+    assert_eq!(a.len(), b.len(), "{what}: pixel counts");
+    let largest = b.iter().flatten().fold(0.0f32, |m, v| m.max(v.abs()));
+    let bound = ulps * largest * f32::EPSILON;
+    let worst = a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+    eprintln!(
+        "{what}: largest difference {worst:e} ({:.2} ulps of the largest value {largest})",
+        worst / (largest * f32::EPSILON)
+    );
+    assert!(worst <= bound, "{what}: differs by {worst:e}, more than {ulps} ulps of {largest}");
+}
+
+/// Samples 0..3 and 3..8, merged, are the 8-sample render (to float rounding: the parts' sums
+/// round in another order; measured ≤ 1.1 ulps of the largest value; the albedo and emission,
+/// means over the samples, likewise), with its first sample's normal exactly; the merged file says
+/// it holds 0..8.
+#[test]
+fn sample_ranges_merge_into_the_whole_render() {
+    let dir = folder("samples");
+    let full = render(&dir.join("full.exr"), &["--spp", "8"]);
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let part = render(&a, &["--sample-range", "0..3"]);
+    render(&b, &["--sample-range", "3..8"]);
+    assert_eq!(part.samples, [0..3]);
+    // Parts in either order.
+    for order in [[&b, &a], [&a, &b]] {
+        let m = merged(&dir.join("m.exr"), &order.map(|p| p.as_path()));
+        assert_eq!(m.samples, [0..8]);
+        assert_close("mean", &m.mean, &full.mean, 8.0);
+        assert_close("second moment", &m.moment, &full.moment, 8.0);
+        assert_close("albedo", &m.albedo, &full.albedo, 8.0);
+        assert_close("emission", &m.emission, &full.emission, 8.0);
+        assert_eq!(m.normal, full.normal);
+        assert_eq!(m.region, full.region);
+    }
+    // A part is not the whole: samples 3..8 alone differ from 0..8 by far more than rounding.
+    let late = PathExr::read(&b).unwrap();
+    let diff = late
+        .mean
+        .iter()
+        .flatten()
+        .zip(full.mean.iter().flatten())
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max);
+    assert!(diff > 1e-3, "samples 3..8 alone equal the whole render ({diff})");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Tiles render each pixel as the whole image does (same ray, same random numbers: bit for bit),
+/// and tiles whose samples were split too merge into the whole render.
+#[test]
+fn tiles_merge_into_the_whole_render() {
+    let dir = folder("tiles");
+    let full = render(&dir.join("full.exr"), &["--spp", "6"]);
+    let left = dir.join("left.exr");
+    let tile = render(&left, &["--spp", "6", "--tile", "0,0,25,30"]);
+    let width = 25;
+    for y in 0..30 {
+        for x in 0..width {
+            assert_eq!(tile.mean[y * width + x], full.mean[y * 40 + x], "pixel ({x}, {y}) of the left tile");
+        }
+    }
+    let (right_a, right_b) = (dir.join("right-a.exr"), dir.join("right-b.exr"));
+    render(&right_a, &["--sample-range", "0..2", "--tile", "25,0,15,30"]);
+    render(&right_b, &["--sample-range", "2..6", "--tile", "25,0,15,30"]);
+    let m = merged(&dir.join("m.exr"), &[&right_a, &left, &right_b]);
+    assert_eq!((m.region, m.samples.clone()), (full.region, vec![0..6]));
+    assert_close("mean", &m.mean, &full.mean, 8.0);
+    assert_close("albedo", &m.albedo, &full.albedo, 8.0);
+    assert_eq!(m.normal, full.normal);
+    // A tile outside the image is refused before rendering.
+    let out = umbra()
+        .args(["render", "--size", "40x30", "--tile", "30,0,15,30", "-o"])
+        .arg(dir.join("x.exr"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && stderr.contains("does not fit in the 40x30 image"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Parts that do not make one render are refused, naming the files: overlapping samples, another
+/// seed, overlapping tiles, tiles with a hole between them, a file umbra did not write.
+#[test]
+fn merge_refuses_parts_of_different_renders() {
+    let dir = folder("refused");
+    let p = |name: &str| dir.join(name);
+    render(&p("a.exr"), &["--sample-range", "0..2"]);
+    render(&p("overlap.exr"), &["--sample-range", "1..3"]);
+    render(&p("seed.exr"), &["--sample-range", "2..4", "--seed", "7"]);
+    render(&p("t1.exr"), &["--spp", "2", "--tile", "0,0,20,30"]);
+    render(&p("t2.exr"), &["--spp", "2", "--tile", "10,0,20,30"]);
+    render(&p("t3.exr"), &["--spp", "2", "--tile", "30,0,10,30"]);
+    umbra::output::write_exr(
+        &p("plain.exr"),
+        1,
+        1,
+        &[umbra::output::Layer { name: "", channels: &["R", "G", "B"], data: &[0.0; 3] }],
+    )
+    .unwrap();
+    let cases: [(&str, &[&str], &str); 5] = [
+        ("overlapping samples", &["a.exr", "overlap.exr"], "overlapping sample ranges"),
+        ("another seed", &["a.exr", "seed.exr"], "are not parts of one render"),
+        ("overlapping tiles", &["t1.exr", "t2.exr"], "overlap"),
+        ("a hole", &["t1.exr", "t3.exr"], "leave holes"),
+        ("not umbra's", &["a.exr", "plain.exr"], "no 'umbra.image' attribute"),
+    ];
+    for (what, files, message) in cases {
+        let paths: Vec<PathBuf> = files.iter().map(|f| p(f)).collect();
+        let out = merge(&p("m.exr"), &paths.iter().map(|p| p.as_path()).collect::<Vec<_>>());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{what}: merged");
+        assert!(stderr.contains(message), "{what}: {stderr}");
+        assert!(files.iter().any(|f| stderr.contains(f)), "{what}: no file named: {stderr}");
+    }
+    // --sample-range replaces --spp and is the path tracer's.
+    for args in
+        [&["--spp", "4", "--sample-range", "0..2"][..], &["--mode", "hybrid", "--sample-range", "0..2"]]
+    {
+        let out =
+            umbra().args(["render", "--size", "8x8"]).args(args).arg("-o").arg(p("x.exr")).output().unwrap();
+        assert!(!out.status.success(), "{args:?} accepted");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -97,10 +97,11 @@ Path camera_path(uvec2 pixel, uint sample_index) {
 }
 
 // Traces `path`'s ray and adds what it finds at the end: emission, direct light; then samples
-// the next ray. False when the path ends there. `aov`: record the first hit's base colour and
-// normal into `albedo` and `normal_depth`.
-bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout vec4 albedo,
-               inout vec4 normal_depth) {
+// the next ray. False when the path ends there. At the first hit (or miss) it records the base
+// colour and normal into `albedo` and `normal_depth`, and the radiance emitted there (or the
+// environment's) into `emitted_first`: the part of the sample that the denoiser must not filter.
+bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albedo, inout vec4 normal_depth,
+               inout vec3 emitted_first) {
     uint seed = params.seed;
     uint depth = path.depth;
     vec3 dir = path.dir;
@@ -115,8 +116,14 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
             vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
             path.radiance += c;
             path.nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
+            if (depth == 0u) {
+                emitted_first = c;
+            }
         } else {
             path.radiance += throughput * params.env;
+            if (depth == 0u) {
+                emitted_first = params.env;
+            }
         }
         return false;
     }
@@ -145,6 +152,9 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
         vec3 c = throughput * le * w;
         path.radiance += c;
         path.nonfinite |= nonfinite_bit(c, NONFINITE_EMISSION);
+        if (depth == 0u) {
+            emitted_first = c;
+        }
     }
 
     // Shading frame: interpolated, normal-mapped normal, on the same side as the viewer.
@@ -164,7 +174,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
         float ior = material_vec(material, 3u).y;
         s.eta = front ? ior : 1.0 / ior;
     }
-    if (aov && depth == 0u) {
+    if (depth == 0u) {
         albedo = vec4(s.base, 1.0);
         normal_depth = vec4(n, hit.t);
     }
@@ -172,6 +182,9 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, bool aov, inout 
     // path ends here, and no light sampling finds it (BSDF-sampled rays alone, weight 1).
     if (material_unlit(material)) {
         path.radiance += throughput * s.base;
+        if (depth == 0u) {
+            emitted_first += s.base;
+        }
         return false;
     }
     if (depth >= params.max_bounces || wo_local.z <= 0.0) {
@@ -286,8 +299,15 @@ uint trace_pixel(uvec2 region_pixel) {
     vec4 mean = accum[index];
     bool fresh = mean.a == 0.0;
 
+    // Per sample: the first hit's base colour (the environment's colour, alpha 0, for a miss),
+    // normal and distance, and what it emits; summed over the samples but for the normal and
+    // distance, kept from the first sample of the render.
     vec4 albedo = vec4(params.env, 0.0);
     vec4 normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
+    vec3 emitted_first = vec3(0.0);
+    vec4 first_normal_depth = normal_depth;
+    vec4 sum_albedo = vec4(0.0);
+    vec3 sum_emitted = vec3(0.0);
     vec3 sum = vec3(0.0);   // of the finite samples
     vec3 sum2 = vec3(0.0);  // of their squares
     uint j = 0u;
@@ -295,7 +315,7 @@ uint trace_pixel(uvec2 region_pixel) {
     Path path = camera_path(pixel, first);
     while (true) {
         ++segments;
-        if (path_step(path, pixel, first + j, fresh && j == 0u, albedo, normal_depth)) {
+        if (path_step(path, pixel, first + j, albedo, normal_depth, emitted_first)) {
             continue;
         }
         vec3 radiance = path.radiance;
@@ -303,14 +323,23 @@ uint trace_pixel(uvec2 region_pixel) {
             atomicAdd(stats.nonfinite_samples, 1u);
             atomicOr(stats.nonfinite_sources, path.nonfinite);
             radiance = vec3(0.0);
+            emitted_first = vec3(0.0);
         }
         sum += radiance;
         sum2 += radiance * radiance;
+        sum_albedo += albedo;
+        sum_emitted += emitted_first;
+        if (j == 0u) {
+            first_normal_depth = normal_depth;
+        }
         ++j;
         if (j >= count) {
             break;
         }
         path = camera_path(pixel, first + j);
+        albedo = vec4(params.env, 0.0);
+        normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
+        emitted_first = vec3(0.0);
     }
 
     // The running mean and mean square over all samples so far.
@@ -318,9 +347,12 @@ uint trace_pixel(uvec2 region_pixel) {
     vec4 m2 = moment[index];
     accum[index] = vec4(mean.rgb + (sum - float(count) * mean.rgb) / n_samples, n_samples);
     moment[index] = vec4(m2.rgb + (sum2 - float(count) * m2.rgb) / n_samples, 0.0);
+    vec4 mean_albedo = fresh ? vec4(0.0) : aov_albedo[index];
+    aov_albedo[index] = mean_albedo + (sum_albedo - float(count) * mean_albedo) / n_samples;
+    vec3 mean_emitted = fresh ? vec3(0.0) : aov_emission[index].rgb;
+    aov_emission[index] = vec4(mean_emitted + (sum_emitted - float(count) * mean_emitted) / n_samples, 0.0);
     if (fresh) {
-        aov_albedo[index] = albedo;
-        aov_normal_depth[index] = normal_depth;
+        aov_normal_depth[index] = first_normal_depth;
     }
     return segments;
 }

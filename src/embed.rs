@@ -16,6 +16,8 @@
 //! // or progressive path tracing, a few samples per frame, resolved into the host's image:
 //! renderer.record_path_samples(cmd, &camera, &target, &path_settings, first_sample, count)?;
 //! renderer.record_path_resolve(cmd, &target, hdr_view)?;
+//! // or denoised into it (working images allocated once, moved to GENERAL once):
+//! renderer.record_path_denoise(cmd, &target, &denoise_images, hdr_view, &DenoiseSettings::default())?;
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
 //!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
@@ -60,6 +62,7 @@ use crate::error::Result;
 use crate::gpu::scene::GpuScene;
 use crate::passes::ao::AoSettings;
 use crate::passes::deferred::{LightingInputs, LightingSettings};
+use crate::passes::denoise::{DenoiseImages, DenoiseSettings};
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
@@ -167,6 +170,28 @@ impl Renderer {
         output: raw::ImageView,
     ) -> Result<()> {
         self.passes.record_path_resolve(cmd, target, output)
+    }
+
+    /// Working images for [`Renderer::record_path_denoise`] at `size` (owned by umbra, freed on
+    /// drop); move them to `GENERAL` once with [`DenoiseImages::init_general`] in a command buffer
+    /// of the host's.
+    pub fn denoise_images(&self, size: (u32, u32)) -> Result<DenoiseImages> {
+        DenoiseImages::new(&self.ctx, size)
+    }
+
+    /// Records the denoiser ([`crate::passes::denoise`]) of `target`'s samples so far into
+    /// `output`: the host's `R32G32B32A32_SFLOAT` storage image of the target's size, in `GENERAL`
+    /// layout, through `images` (of the same size, in `GENERAL` layout): instead of
+    /// [`Renderer::record_path_resolve`].
+    pub fn record_path_denoise(
+        &self,
+        cmd: raw::CommandBuffer,
+        target: &PathTarget,
+        images: &DenoiseImages,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+    ) -> Result<()> {
+        self.passes.record_denoise(cmd, target, images, output, settings)
     }
 
     /// Records umbra's ray-cast G-buffer for `camera` into `target`.

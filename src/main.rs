@@ -9,7 +9,7 @@ use umbra::gpu::scene::GpuScene;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
-use umbra::render::Passes;
+use umbra::render::{DenoiseSettings, Passes};
 use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
 
 #[derive(Parser)]
@@ -211,6 +211,14 @@ struct RenderArgs {
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
     #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
+    /// Path tracing: denoise the image (edge-avoiding à-trous filter guided by albedo, normal,
+    /// depth and per-pixel variance). The PNG and the EXR's main layer are denoised; the EXR keeps
+    /// the raw estimate as layer `noisy`.
+    #[arg(long)]
+    denoise: bool,
+    /// Path tracing with --denoise: à-trous iterations (1 to 8; taps 1, 2, 4, ... pixels apart).
+    #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
+    denoise_iterations: u32,
     /// Path tracer: trace only samples A..B of the sequence (instead of --spp), exactly those a
     /// whole render traces there: one part of a render split across processes or machines,
     /// joined by `umbra merge`.
@@ -291,7 +299,8 @@ struct RenderArgs {
     /// PNG output (tonemapped sRGB); a name ending in .exr writes only the EXR (as --exr).
     #[arg(short, long, default_value = "umbra.png", value_parser = cli::parse_png_or_exr)]
     output: PathBuf,
-    /// EXR output: linear colour, albedo, normal, depth and variance layers.
+    /// EXR output: linear colour, albedo, normal, depth, emission (at the first hit) and variance
+    /// layers (and `noisy` with --denoise).
     #[arg(long, value_parser = cli::parse_exr)]
     exr: Option<PathBuf>,
 }
@@ -425,6 +434,16 @@ fn render(args: RenderArgs) -> Result<()> {
             "--probes and --lightmaps apply to --mode hybrid (the path tracer traces its indirect light)"
         );
     }
+    if (args.denoise || args.denoise_iterations != DenoiseSettings::default().iterations)
+        && args.mode != Mode::Pathtrace
+    {
+        anyhow::bail!(
+            "--denoise applies to --mode pathtrace (it filters the path tracer's noise, guided by its \
+             albedo, normal and variance)"
+        );
+    }
+    let denoise = DenoiseSettings { iterations: args.denoise_iterations, ..Default::default() };
+    denoise.validate()?;
     let given = args.probe.given();
     if !given.is_empty() && !matches!(args.probes, Some(ProbesArg::Bake)) {
         anyhow::bail!(
@@ -516,7 +535,20 @@ fn render(args: RenderArgs) -> Result<()> {
         );
     }
     let (w, h) = settings.size;
-    let rgba: Vec<f32> = image.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+    // The image shown: the denoised one with --denoise, else the estimate itself.
+    let shown = if args.denoise {
+        let denoised = umbra::render::denoise(&ctx, &image, &denoise)?;
+        println!(
+            "denoise: {} iterations in {:.2} ms GPU ({:.2} ms per sample of path tracing)",
+            denoise.iterations,
+            denoised.gpu_ms,
+            image.gpu_ms / image.spp as f64
+        );
+        denoised.color
+    } else {
+        image.mean.clone()
+    };
+    let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
     let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
     let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
     if let Some(png) = png {
@@ -525,7 +557,11 @@ fn render(args: RenderArgs) -> Result<()> {
         println!("wrote {}", png.display());
     }
     if let Some(path) = &exr {
-        umbra::merge::PathExr::new(&image, &settings, render_identity(&args, &loaded)).write(path)?;
+        let mut exr = umbra::merge::PathExr::new(&image, &settings, render_identity(&args, &loaded));
+        if args.denoise {
+            exr.denoised = Some(shown.iter().map(|p| [p[0], p[1], p[2]]).collect());
+        }
+        exr.write(path)?;
         println!("wrote {}", path.display());
     }
     Ok(())

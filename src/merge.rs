@@ -40,12 +40,13 @@ impl Region {
 }
 
 /// A path-traced render (or part of one) as its EXR holds it: the main RGB layer the mean, the
-/// layers `moment` (mean of the squared samples), `variance` (of the mean), `albedo`, `normal`
-/// and `depth` (the first hit of the first sample), and one header attribute, `umbra.part`, of
-/// four lines: `samples A..B[,C..D…]` (the sample ranges), `image WxH` (the whole image),
-/// `region X,Y,WxH` and `render …` (what must agree between parts: scene, lighting, camera and
-/// every setting but the samples and the region). One attribute, so that the header's bytes do
-/// not depend on the order a hash map lists several in.
+/// layers `moment` (mean of the squared samples), `variance` (of the mean), `albedo` and
+/// `emission` (the first hit's, means over the samples), `normal` and `depth` (the first hit of
+/// the first sample), with `--denoise` the main layer denoised and the mean as `noisy`, and one
+/// header attribute, `umbra.part`, of four lines: `samples A..B[,C..D…]` (the sample ranges),
+/// `image WxH` (the whole image), `region X,Y,WxH` and `render …` (what must agree between parts:
+/// scene, lighting, camera and every setting but the samples and the region). One attribute, so
+/// that the header's bytes do not depend on the order a hash map lists several in.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathExr {
     /// Width and height of the whole image.
@@ -60,12 +61,18 @@ pub struct PathExr {
     pub mean: Vec<[f32; 3]>,
     /// Mean of the squared samples.
     pub moment: Vec<[f32; 3]>,
-    /// Base colour at the first hit.
+    /// Base colour at the first hit, mean over the samples.
     pub albedo: Vec<[f32; 3]>,
     /// Shading normal at the first hit.
     pub normal: Vec<[f32; 3]>,
     /// Distance to the first hit (infinite for a miss).
     pub depth: Vec<f32>,
+    /// Radiance emitted at the first hit, mean over the samples.
+    pub emission: Vec<[f32; 3]>,
+    /// The denoised image (`umbra render --denoise`): written as the main layer, `mean` then as
+    /// layer `noisy`. Never read back: [`PathExr::read`] takes the mean from `noisy`, so a merge
+    /// joins raw estimates.
+    pub denoised: Option<Vec<[f32; 3]>>,
 }
 
 const MAIN: [&str; 3] = ["R", "G", "B"];
@@ -92,6 +99,8 @@ impl PathExr {
             albedo: rgb(&image.albedo),
             normal: rgb(&image.normal_depth),
             depth: image.normal_depth.iter().map(|p| p[3]).collect(),
+            emission: rgb(&image.emission),
+            denoised: None,
         }
     }
 
@@ -115,7 +124,9 @@ impl PathExr {
         let flat = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
         let (mean, moment, albedo, normal) =
             (flat(&self.mean), flat(&self.moment), flat(&self.albedo), flat(&self.normal));
+        let emission = flat(&self.emission);
         let variance = flat(&self.variance_of_mean());
+        let denoised = self.denoised.as_deref().map(flat);
         let samples: Vec<String> = self.samples.iter().map(|r| format!("{}..{}", r.start, r.end)).collect();
         let r = self.region;
         write_exr_with(
@@ -123,13 +134,20 @@ impl PathExr {
             r.size.0 as usize,
             r.size.1 as usize,
             &[
-                Layer { name: "", channels: &MAIN, data: &mean },
+                match &denoised {
+                    Some(denoised) => Layer { name: "", channels: &MAIN, data: denoised },
+                    None => Layer { name: "", channels: &MAIN, data: &mean },
+                },
                 Layer { name: "albedo", channels: &MAIN, data: &albedo },
                 Layer { name: "normal", channels: &XYZ, data: &normal },
                 Layer { name: "depth", channels: &["Z"], data: &self.depth },
+                Layer { name: "emission", channels: &MAIN, data: &emission },
                 Layer { name: "variance", channels: &MAIN, data: &variance },
                 Layer { name: "moment", channels: &MAIN, data: &moment },
-            ],
+            ]
+            .into_iter()
+            .chain(denoised.is_some().then_some(Layer { name: "noisy", channels: &MAIN, data: &mean }))
+            .collect::<Vec<_>>(),
             &[(
                 PART_ATTRIBUTE,
                 format!(
@@ -195,11 +213,18 @@ impl PathExr {
             region,
             samples,
             render: attribute("render")?.to_string(),
-            mean: rgb("", MAIN)?,
+            // A denoised render keeps its raw estimate in `noisy`: that is what merges.
+            mean: if exr.channels.iter().any(|(n, _)| n == "noisy.R") {
+                rgb("noisy", MAIN)?
+            } else {
+                rgb("", MAIN)?
+            },
             moment: rgb("moment", MAIN)?,
             albedo: rgb("albedo", MAIN)?,
             normal: rgb("normal", XYZ)?,
             depth: channel("depth.Z")?.to_vec(),
+            emission: rgb("emission", MAIN)?,
+            denoised: None,
         })
     }
 }
@@ -304,6 +329,8 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
                 samples,
                 mean: weighted(|p| &p.mean),
                 moment: weighted(|p| &p.moment),
+                albedo: weighted(|p| &p.albedo),
+                emission: weighted(|p| &p.emission),
                 ..earliest.clone()
             },
         ));
@@ -358,6 +385,7 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
         albedo: vec![[0.0; 3]; pixels],
         normal: vec![[0.0; 3]; pixels],
         depth: vec![0.0; pixels],
+        emission: vec![[0.0; 3]; pixels],
         ..tiles[0].1.clone()
     };
     for (_, t) in &tiles {
@@ -373,6 +401,7 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
             out.albedo[dst..dst + n].copy_from_slice(&t.albedo[src..src + n]);
             out.normal[dst..dst + n].copy_from_slice(&t.normal[src..src + n]);
             out.depth[dst..dst + n].copy_from_slice(&t.depth[src..src + n]);
+            out.emission[dst..dst + n].copy_from_slice(&t.emission[src..src + n]);
         }
     }
     Ok(out)

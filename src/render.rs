@@ -16,6 +16,8 @@ use crate::gpu::scene::GpuScene;
 use crate::gpu::SceneFeatures;
 use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingInputs, LightingSettings};
+pub use crate::passes::denoise::DenoiseSettings;
+use crate::passes::denoise::{DenoiseImages, DenoiseInputs, DenoisePass};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::lightmap::{
@@ -27,7 +29,7 @@ use crate::passes::probes::{ProbePass, ProbeVolume};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
-use crate::vk::{raw, Context, GpuTimer, Image};
+use crate::vk::{raw, Buffer, Context, GpuTimer, Image};
 use std::sync::OnceLock;
 
 /// A path-traced image, linear, row-major from the top left.
@@ -41,10 +43,12 @@ pub struct PathImage {
     pub mean: Vec<[f32; 4]>,
     /// Mean of the squared samples rgb.
     pub moment: Vec<[f32; 4]>,
-    /// Base colour at the first hit.
+    /// Base colour at the first hit, mean over the samples (alpha: the fraction that hit).
     pub albedo: Vec<[f32; 4]>,
-    /// Shading normal and distance at the first hit.
+    /// Shading normal and distance at the first hit of sample 0.
     pub normal_depth: Vec<[f32; 4]>,
+    /// Radiance emitted at the first hit (or the environment seen), mean over the samples.
+    pub emission: Vec<[f32; 4]>,
     /// Samples that came out non-finite (replaced by zero); 0 unless something is wrong.
     pub nonfinite_samples: u32,
     /// Where they arose (see [`crate::gpu::layout::nonfinite_source_names`]).
@@ -92,6 +96,17 @@ fn relative_error(mean: &[[f32; 4]], moment: &[[f32; 4]], spp: u32) -> f32 {
 
 /// The ε of the relative MSE, var / (mean² + ε): keeps dark pixels from dominating.
 const RELATIVE_EPSILON: f64 = 0.01;
+
+/// A denoised path-traced image ([`Passes::denoise`]).
+#[derive(Debug, Clone)]
+pub struct DenoisedImage {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// Denoised radiance rgb, alpha 1, row-major from the top left.
+    pub color: Vec<[f32; 4]>,
+    /// GPU time of the filter, in milliseconds.
+    pub gpu_ms: f64,
+}
 
 /// Settings of a hybrid (deferred) render.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -201,14 +216,19 @@ pub struct Passes {
     /// One per [`PathOptions`], index [`PathOptions::index`].
     path: [OnceLock<PathTracePass>; PathOptions::COUNT],
     resolve: OnceLock<ResolvePass>,
+    denoise: OnceLock<DenoisePass>,
 }
 
 impl Passes {
     /// The passes for `scene`'s features (no pipeline is built yet).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Self {
+        Self::with_features(ctx, scene.features())
+    }
+
+    fn with_features(ctx: &Context, features: SceneFeatures) -> Self {
         Self {
             ctx: ctx.clone(),
-            features: scene.features(),
+            features,
             gbuffer: OnceLock::new(),
             deferred: Default::default(),
             shadow: OnceLock::new(),
@@ -220,6 +240,7 @@ impl Passes {
             tonemap: OnceLock::new(),
             path: Default::default(),
             resolve: OnceLock::new(),
+            denoise: OnceLock::new(),
         }
     }
 
@@ -285,6 +306,10 @@ impl Passes {
         built(&self.resolve, || ResolvePass::new(&self.ctx))
     }
 
+    fn denoise_pass(&self) -> Result<&DenoisePass> {
+        built(&self.denoise, || DenoisePass::new(&self.ctx))
+    }
+
     /// Builds every pipeline now (the path tracer's for `options`), not at first use: for a host
     /// that records frames against a deadline.
     pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
@@ -296,6 +321,7 @@ impl Passes {
         self.blur_pass()?;
         self.tonemap_pass()?;
         self.resolve_pass()?;
+        self.denoise_pass()?;
         self.path_pass(scene, options).map(|_| ())
     }
 
@@ -657,6 +683,71 @@ impl Passes {
         self.resolve_pass()?.record(&self.ctx, cmd, target, output)
     }
 
+    /// Records the denoiser ([`crate::passes::denoise`]) of `target`'s samples so far into
+    /// `output` (`R32G32B32A32_SFLOAT`, the target's size, `GENERAL` layout) through `images`
+    /// (the target's size, already in `GENERAL` layout).
+    pub fn record_denoise(
+        &self,
+        cmd: raw::CommandBuffer,
+        target: &PathTarget,
+        images: &DenoiseImages,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+    ) -> Result<()> {
+        self.denoise_pass()?.record(&self.ctx, cmd, &DenoiseInputs::from(target), images, output, settings)
+    }
+
+    /// Denoises a path-traced `image` (uploaded, filtered, read back): the denoised radiance and
+    /// the filter's GPU time. The image's AOVs must be there (as [`Passes::path_trace`] returns
+    /// them); a test may make them up.
+    pub fn denoise(&self, image: &PathImage, settings: &DenoiseSettings) -> Result<DenoisedImage> {
+        let ctx = &self.ctx;
+        settings.validate()?;
+        let (w, h) = image.size;
+        let pixels = w as usize * h as usize;
+        for (name, len) in [
+            ("mean", image.mean.len()),
+            ("moment", image.moment.len()),
+            ("albedo", image.albedo.len()),
+            ("normal_depth", image.normal_depth.len()),
+            ("emission", image.emission.len()),
+        ] {
+            if len != pixels {
+                return Err(Error::Invalid(format!(
+                    "the image to denoise is {w}x{h} but its {name} has {len} pixels"
+                )));
+            }
+        }
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let accum = Buffer::upload(ctx, "denoise mean", &image.mean, usage)?;
+        let moment = Buffer::upload(ctx, "denoise moment", &image.moment, usage)?;
+        let albedo = Buffer::upload(ctx, "denoise albedo", &image.albedo, usage)?;
+        let normal_depth = Buffer::upload(ctx, "denoise normal depth", &image.normal_depth, usage)?;
+        let emission = Buffer::upload(ctx, "denoise emission", &image.emission, usage)?;
+        let inputs = DenoiseInputs {
+            size: image.size,
+            accum: &accum,
+            moment: &moment,
+            albedo: &albedo,
+            normal_depth: &normal_depth,
+            emission: &emission,
+        };
+        let images = DenoiseImages::new(ctx, image.size)?;
+        let output = Image::storage_2d(ctx, "denoised", w, h, raw::Format::R32G32B32A32_SFLOAT)?;
+        let pass = self.denoise_pass()?;
+        let mut timer = GpuTimer::new(ctx, 1)?;
+        ctx.submit(|cmd| {
+            images.init_general(ctx, cmd);
+            output.init_general(ctx, cmd);
+            timer.reset(cmd);
+            timer.begin(cmd, "denoise")?;
+            pass.record(ctx, cmd, &inputs, &images, output.view, settings)?;
+            timer.end(cmd)
+        })?;
+        let gpu_ms = timer.read()?.iter().map(|t| t.ms).sum();
+        Ok(DenoisedImage { size: image.size, color: output.read(ctx)?, gpu_ms })
+    }
+
     /// Path traces `settings.spp` samples per pixel, calling `progress(done, total)` after each
     /// submitted batch.
     pub fn path_trace(
@@ -705,6 +796,7 @@ impl Passes {
             moment: target.moment.read(ctx)?,
             albedo: target.albedo.read(ctx)?,
             normal_depth: target.normal_depth.read(ctx)?,
+            emission: target.emission.read(ctx)?,
             nonfinite_samples: stats[0].nonfinite_samples,
             nonfinite_sources: stats[0].nonfinite_sources,
             gpu_ms,
@@ -915,4 +1007,10 @@ pub fn ambient_occlusion(
     settings: &AoSettings,
 ) -> Result<AoImage> {
     Passes::new(ctx, scene).ambient_occlusion(scene, camera, size, method, settings)
+}
+
+/// Denoises a path-traced image once ([`Passes::denoise`] with passes built for this filter).
+pub fn denoise(ctx: &Context, image: &PathImage, settings: &DenoiseSettings) -> Result<DenoisedImage> {
+    // The denoiser reads no scene: passes for a scene without features.
+    Passes::with_features(ctx, SceneFeatures::default()).denoise(image, settings)
 }

@@ -153,6 +153,9 @@ fn render_cornell_box_writes_png_and_exr_layers() {
         "albedo.G",
         "albedo.R",
         "depth.Z",
+        "emission.B",
+        "emission.G",
+        "emission.R",
         "moment.B",
         "moment.G",
         "moment.R",
@@ -173,6 +176,66 @@ fn render_cornell_box_writes_png_and_exr_layers() {
     let (_, _, alone) = umbra::output::read_exr_channels(&only).unwrap();
     assert_eq!(alone.len(), expected.len());
     assert!(!dir.join("only.png").exists() && !dir.join("umbra.png").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `--denoise`: the EXR's main layer is the denoised image and layer `noisy` the raw estimate,
+/// which is the main layer of the same render without `--denoise` (and what `umbra merge` reads);
+/// the PNG is the denoised image's; a mode other than the path tracer is refused, as are
+/// iterations out of range.
+#[test]
+fn render_denoise_writes_denoised_and_noisy_layers() {
+    let dir = std::env::temp_dir().join(format!("umbra-denoise-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let render = |name: &str, options: &[&str]| {
+        let exr = dir.join(format!("{name}.exr"));
+        let stdout_of = run_validated(
+            umbra()
+                .args(["render", "--size", "32x24", "--spp", "4", "-o"])
+                .arg(dir.join(format!("{name}.png")))
+                .arg("--exr")
+                .arg(&exr)
+                .args(options),
+        );
+        let (_, _, channels) = umbra::output::read_exr_channels(&exr).unwrap();
+        (channels, stdout_of)
+    };
+    let (plain, _) = render("plain", &[]);
+    let (denoised, _) = render("denoised", &["--denoise"]);
+    let channel = |channels: &[(String, Vec<f32>)], n: &str| {
+        channels.iter().find(|c| c.0 == n).unwrap_or_else(|| panic!("no {n}")).1.clone()
+    };
+    for c in ["R", "G", "B"] {
+        assert_eq!(
+            channel(&denoised, &format!("noisy.{c}")),
+            channel(&plain, c),
+            "noisy.{c} is not the estimate"
+        );
+        assert_ne!(channel(&denoised, c), channel(&plain, c), "{c} was not denoised");
+    }
+    assert!(!plain.iter().any(|c| c.0.starts_with("noisy")), "a noisy layer without --denoise");
+    // What `umbra merge` reads of a denoised render is its raw estimate.
+    let read = |name: &str| umbra::merge::PathExr::read(&dir.join(format!("{name}.exr"))).unwrap();
+    assert_eq!(read("denoised").mean, read("plain").mean, "a merge would join the denoised image");
+    let rgba: Vec<f32> = (0..32 * 24)
+        .flat_map(|i| {
+            [channel(&denoised, "R")[i], channel(&denoised, "G")[i], channel(&denoised, "B")[i], 1.0]
+        })
+        .collect();
+    let expected_png = umbra::color::to_display8(&rgba, 1.0, umbra::color::ToneCurve::default());
+    let decoded = image::open(dir.join("denoised.png")).expect("PNG decodes").to_rgba8();
+    let worst = decoded.as_raw().iter().zip(&expected_png).map(|(&a, &b)| (a as i32 - b as i32).abs()).max();
+    assert!(worst <= Some(1), "the PNG is not the denoised image: {worst:?} steps off");
+    for (args, says) in [
+        (&["render", "--mode", "hybrid", "--denoise"][..], "--mode pathtrace"),
+        (&["render", "--mode", "ao", "--denoise"][..], "--mode pathtrace"),
+        (&["render", "--denoise", "--denoise-iterations", "9"][..], "iterations"),
+    ] {
+        let out = umbra().args(args).arg("-o").arg(dir.join("refused.png")).output().expect("run umbra");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?} accepted: {stderr}");
+        assert!(stderr.contains(says) && !stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

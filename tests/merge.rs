@@ -55,8 +55,9 @@ fn assert_close(what: &str, a: &[[f32; 3]], b: &[[f32; 3]], ulps: f32) {
 }
 
 /// Samples 0..3 and 3..8, merged, are the 8-sample render (to float rounding: the parts' sums
-/// round in another order; measured ≤ 1.1 ulps of the largest value), with its first-hit layers
-/// exactly; the merged file says it holds 0..8.
+/// round in another order; measured ≤ 1.1 ulps of the largest value; the albedo and emission,
+/// means over the samples, likewise), with its first sample's normal exactly; the merged file says
+/// it holds 0..8.
 #[test]
 fn sample_ranges_merge_into_the_whole_render() {
     let dir = folder("samples");
@@ -71,7 +72,9 @@ fn sample_ranges_merge_into_the_whole_render() {
         assert_eq!(m.samples, [0..8]);
         assert_close("mean", &m.mean, &full.mean, 8.0);
         assert_close("second moment", &m.moment, &full.moment, 8.0);
-        assert_eq!((m.albedo.clone(), m.normal.clone()), (full.albedo.clone(), full.normal.clone()));
+        assert_close("albedo", &m.albedo, &full.albedo, 8.0);
+        assert_close("emission", &m.emission, &full.emission, 8.0);
+        assert_eq!(m.normal, full.normal);
         assert_eq!(m.region, full.region);
     }
     // The same part writes the same bytes (the header too).
@@ -112,7 +115,8 @@ fn tiles_merge_into_the_whole_render() {
     let m = merged(&dir.join("m.exr"), &[&right_a, &left, &right_b]);
     assert_eq!((m.region, m.samples.clone()), (full.region, vec![0..6]));
     assert_close("mean", &m.mean, &full.mean, 8.0);
-    assert_eq!(m.albedo, full.albedo);
+    assert_close("albedo", &m.albedo, &full.albedo, 8.0);
+    assert_eq!(m.normal, full.normal);
     // A tile outside the image is refused before rendering.
     let out = umbra()
         .args(["render", "--size", "40x30", "--tile", "30,0,15,30", "-o"])

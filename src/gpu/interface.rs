@@ -588,6 +588,25 @@ gpu_structs! {
         curve: uint,
     }
 
+    /// Push constants of the denoiser's kernels (`denoise_*.comp`).
+    struct DenoiseParams {
+        /// Width, height.
+        size: uvec2,
+        /// The à-trous iteration's tap spacing in pixels (1, 2, 4, ...).
+        step: uint,
+        /// [`DENOISE_DEMODULATE`] | [`DENOISE_PREFILTER`] | [`DENOISE_SPATIAL_VARIANCE`] |
+        /// [`DENOISE_WIDE`] | [`DENOISE_EDGE_STOPPING`].
+        flags: uint,
+        /// Luminance edge-stopping: |Δl| over this × the standard deviation of l.
+        sigma_luminance: float,
+        /// Normal edge-stopping: max(0, n·n')^this.
+        sigma_normal: float,
+        /// Depth edge-stopping: |Δz| over this × (|∇z · offset| + 0.1 % of z).
+        sigma_depth: float,
+        /// Added to the albedo the radiance is divided by.
+        albedo_offset: float,
+    }
+
     /// Push constants of `resolve.comp`.
     struct ResolveParams {
         /// Width, height.
@@ -792,6 +811,19 @@ gpu_constants! {
     PROBE_ACTIVE: uint = 1;
     /// [`GpuProbeGrid::flags`]: weigh probes by Chebyshev visibility.
     PROBE_VISIBILITY: uint = 1;
+    /// [`DenoiseParams::flags`]: divide the radiance by the albedo before filtering and
+    /// multiply it back after (the texture detail is not blurred).
+    DENOISE_DEMODULATE: uint = 1;
+    /// [`DenoiseParams::flags`]: the luminance weight reads a 3×3 Gaussian of the variance.
+    DENOISE_PREFILTER: uint = 2;
+    /// [`DenoiseParams::flags`]: in the first iteration, the luminance weight's variance is at
+    /// least the spread of the neighbours' luminance on the same surface, × min(1, 4 / samples).
+    DENOISE_SPATIAL_VARIANCE: uint = 8;
+    /// [`DenoiseParams::flags`]: 5×5 taps (the B3 spline) per iteration instead of 3×3.
+    DENOISE_WIDE: uint = 16;
+    /// [`DenoiseParams::flags`]: weigh taps by normal, depth and luminance (else the plain
+    /// B3-spline: a blur, for tests that must catch it).
+    DENOISE_EDGE_STOPPING: uint = 4;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
     /// Implicit shapes (`implicit.glsl`): a sphere (params: radius).
@@ -879,10 +911,14 @@ kernels! {
             accum: readwrite buffer [vec4],
             /// Running mean of the squared samples rgb.
             moment: readwrite buffer [vec4],
-            /// Base colour at the first hit.
+            /// Base colour at the first hit, mean over the samples (a miss counts the
+            /// environment's colour, alpha 0: alpha is the fraction of samples that hit).
             aov_albedo: readwrite buffer [vec4],
-            /// Shading normal and distance at the first hit.
+            /// Shading normal and distance at the first hit of the pixel's sample 0.
             aov_normal_depth: readwrite buffer [vec4],
+            /// Radiance emitted at the first hit (or the environment a camera ray sees), mean
+            /// over the samples: the part of the image the denoiser leaves unfiltered.
+            aov_emission: readwrite buffer [vec4],
             /// Counters ([`PathStats`]).
             stats: readwrite buffer PathStats,
         }
@@ -897,6 +933,67 @@ kernels! {
             /// The running mean.
             accum: readonly buffer [vec4],
             /// The image written.
+            out_color: writeonly image rgba32f,
+        }
+    }
+
+    /// Denoiser, step 1: a path target's running mean less the first hit's emission, divided by
+    /// its albedo, and the variance of its luminance, into an image; the normal and depth into
+    /// another.
+    kernel denoise_prepare {
+        scene: none,
+        push: DenoiseParams,
+        spec: {},
+        bindings: {
+            /// The running mean rgb, sample count.
+            accum: readonly buffer [vec4],
+            /// The running mean of the squared samples rgb.
+            moment: readonly buffer [vec4],
+            /// Base colour at the first hit (alpha 0 for a miss).
+            aov_albedo: readonly buffer [vec4],
+            /// Shading normal and distance at the first hit.
+            aov_normal_depth: readonly buffer [vec4],
+            /// Radiance emitted at the first hit.
+            aov_emission: readonly buffer [vec4],
+            /// Demodulated radiance rgb, the variance of its luminance's mean.
+            dn_color: writeonly image rgba32f,
+            /// Unit normal xyz and distance (−1 for a miss).
+            dn_guide: writeonly image rgba32f,
+            /// The pixel's sample count.
+            dn_samples: writeonly image r32f,
+        }
+    }
+
+    /// Denoiser, step 2: one edge-avoiding à-trous iteration.
+    kernel denoise_atrous {
+        scene: none,
+        push: DenoiseParams,
+        spec: {},
+        bindings: {
+            /// Radiance rgb and its variance, from the previous step.
+            dn_in: readonly image rgba32f,
+            /// Unit normal xyz and distance (−1 for a miss).
+            dn_guide: readonly image rgba32f,
+            /// The pixel's sample count (read by the first iteration).
+            dn_samples: readonly image r32f,
+            /// Filtered radiance rgb and its variance.
+            dn_out: writeonly image rgba32f,
+        }
+    }
+
+    /// Denoiser, step 3: the filtered radiance multiplied back by the albedo, the emission added.
+    kernel denoise_remodulate {
+        scene: none,
+        push: DenoiseParams,
+        spec: {},
+        bindings: {
+            /// The filtered, demodulated radiance.
+            dn_in: readonly image rgba32f,
+            /// Base colour at the first hit (alpha 0 for a miss).
+            aov_albedo: readonly buffer [vec4],
+            /// Radiance emitted at the first hit (added back).
+            aov_emission: readonly buffer [vec4],
+            /// The denoised image: radiance rgb, alpha 1.
             out_color: writeonly image rgba32f,
         }
     }

@@ -2,6 +2,7 @@
 
 pub mod ao;
 pub mod deferred;
+pub mod denoise;
 pub mod gbuffer;
 pub mod ibl;
 pub mod lightmap;

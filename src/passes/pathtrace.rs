@@ -249,10 +249,14 @@ pub struct PathTarget {
     pub accum: Buffer,
     /// vec4 per pixel: running mean of the squared samples rgb.
     pub moment: Buffer,
-    /// vec4 per pixel: base colour at the first hit (alpha 1 where something was hit).
+    /// vec4 per pixel: base colour at the first hit, mean over the samples (alpha: the fraction
+    /// of samples that hit something).
     pub albedo: Buffer,
     /// vec4 per pixel: shading normal xyz at the first hit, distance in w (inf for a miss).
     pub normal_depth: Buffer,
+    /// vec4 per pixel: radiance emitted at the first hit (or the environment seen), mean over
+    /// the samples.
+    pub emission: Buffer,
     /// [`PathStats`].
     pub stats: Buffer,
 }
@@ -271,6 +275,7 @@ impl PathTarget {
             moment: make("path moment")?,
             albedo: make("path albedo")?,
             normal_depth: make("path normal depth")?,
+            emission: make("path emission")?,
             stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], usage)?,
         })
     }
@@ -399,6 +404,7 @@ impl PathTracePass {
             moment: &target.moment,
             aov_albedo: &target.albedo,
             aov_normal_depth: &target.normal_depth,
+            aov_emission: &target.emission,
             stats: &target.stats,
         };
         let end = params.sample_index + params.sample_count;

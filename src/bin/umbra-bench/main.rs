@@ -11,6 +11,7 @@
 
 mod build;
 mod chart;
+mod denoise;
 // Shared with `umbra`, which uses parsers this binary does not.
 #[allow(dead_code)]
 #[path = "../../cli.rs"]
@@ -198,6 +199,57 @@ enum Command {
         #[arg(long, value_parser = cli::parse_rgb, default_value = "0.5,0.5,0.5")]
         env_color: [f32; 3],
         /// Where to write probes.json and the cached references.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
+    /// The denoiser's error against time: the path tracer's series (1, 2, 4, … spp of one
+    /// accumulation) raw and denoised, relative MSE against the suite's references, the filter's
+    /// GPU time against one sample's; JSON, one chart per scene.
+    Denoise {
+        /// A small run (Cornell box at 64×64, 256-spp reference, up to 32 spp).
+        #[arg(long)]
+        quick: bool,
+        /// Image size.
+        #[arg(long, default_value = "128x128", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of each reference (cached in the output folder, shared with the
+        /// suite's).
+        #[arg(long, default_value_t = 2048)]
+        reference_spp: u32,
+        /// Largest path-traced sample count measured (1, 2, 4, … up to it).
+        #[arg(long, default_value_t = 256)]
+        max_spp: u32,
+        /// Timed repeats of the filter at each reading (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Constant environment (sky) radiance r,g,b (as the suite's).
+        #[arg(long, value_parser = cli::parse_rgb, default_value = "0.5,0.5,0.5")]
+        env_color: [f32; 3],
+        /// The filter's à-trous iterations.
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
+        iterations: u32,
+        /// The filter's luminance edge-stopping σ.
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().sigma_luminance, value_parser = cli::parse_positive)]
+        sigma_luminance: f32,
+        /// The filter's 3×3 prefilter of the variance (true or false).
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().prefilter_variance, action = clap::ArgAction::Set)]
+        prefilter: bool,
+        /// Added to the albedo the filter divides by (0: texture edges exact).
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().albedo_offset, value_parser = cli::parse_non_negative)]
+        albedo_offset: f32,
+        /// The filter's 5×5 taps (true) or 3×3 (false).
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().wide, action = clap::ArgAction::Set)]
+        wide: bool,
+        /// The filter's spatial variance floor in its first iteration (true or false).
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().spatial_variance, action = clap::ArgAction::Set)]
+        spatial_variance: bool,
+        /// glTF scenes to run as well (their first camera, or one framing them).
+        #[arg(long = "gltf")]
+        gltf: Vec<PathBuf>,
+        /// Where to write denoise.json, the charts and the cached references.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
         /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
@@ -526,6 +578,55 @@ fn run(cli: Cli) -> Result<()> {
         Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {
             Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
             None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
+        },
+        Command::Denoise {
+            quick,
+            size,
+            reference_spp,
+            max_spp,
+            repeats,
+            env_color,
+            iterations,
+            sigma_luminance,
+            prefilter,
+            albedo_offset,
+            wide,
+            spatial_variance,
+            gltf,
+            out,
+            table,
+        } => match table {
+            Some(path) => print!("{}", denoise::table(&read_json(&path)?)),
+            None => {
+                let (size, reference_spp, max_spp) =
+                    if quick { ((64, 64), 256, 32) } else { (size, reference_spp, max_spp) };
+                let settings = suite::SuiteSettings {
+                    size,
+                    reference_spp,
+                    max_spp,
+                    shadow_rays: vec![],
+                    shadow_map_sizes: vec![],
+                    probes_per_side: vec![],
+                    ssao_samples: vec![],
+                    rtao_rays: vec![],
+                    ao_reference_rays: 0,
+                    ao_radius: 0.5,
+                    repeats,
+                    env: env_color,
+                    out,
+                };
+                let filter = umbra::render::DenoiseSettings {
+                    iterations,
+                    sigma_luminance,
+                    prefilter_variance: prefilter,
+                    albedo_offset,
+                    wide,
+                    spatial_variance,
+                    ..Default::default()
+                };
+                filter.validate()?;
+                run_denoise(&settings, &filter, quick, &gltf)?
+            }
         },
         Command::Probes {
             sponza,
@@ -934,6 +1035,39 @@ fn run_probes(
     let doc = probes::to_json(&ctx.info().name, settings, &results);
     print!("{}", probes::table(&doc));
     write_json(&settings.out, "probes.json", &doc)
+}
+
+fn run_denoise(
+    settings: &suite::SuiteSettings,
+    filter: &umbra::render::DenoiseSettings,
+    quick: bool,
+    gltf: &[PathBuf],
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
+    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
+    if !quick {
+        for name in ["spheres", "textured"] {
+            let path = PathBuf::from("scenes").join(format!("{name}.glb"));
+            match umbra::scene::Scene::load(&path) {
+                Ok(scene) => scenes.push((name.to_string(), scene)),
+                Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
+            }
+        }
+    }
+    scenes.extend(load_gltf(gltf)?);
+    let mut results = Vec::new();
+    for (key, scene) in &scenes {
+        let camera = bench_camera(scene);
+        results.push(
+            denoise::run_scene(&ctx, key, scene, &camera, settings, filter)
+                .with_context(|| scene.name.clone())?,
+        );
+    }
+    let mut doc = denoise::to_json(&ctx.info().name, settings, filter, &results);
+    add_conditions(&mut doc);
+    print!("{}", denoise::table(&doc));
+    write_json(&settings.out, "denoise.json", &doc)
 }
 
 /// The `--gltf` scenes, each keyed by its file stem.

@@ -1,0 +1,164 @@
+#version 460
+// Denoiser step 2 (src/passes/denoise.rs): one iteration of the edge-avoiding à-trous wavelet
+// filter of SVGF (Schied et al. 2017, its spatial part; Dammertz et al. 2010). Taps on a 3×3 grid
+// `params.step` pixels apart weighted by (1/4, 1/2, 1/4) in x and y, or with DENOISE_WIDE on a
+// 5×5 grid by the B3 spline (1/16, 1/4, 3/8, 1/4, 1/16), times, with DENOISE_EDGE_STOPPING:
+// - normal: max(0, n·n')^sigma_normal;
+// - depth: exp(−|z − z'| / (sigma_depth (|∇z · offset| + 1e-3 z))), ∇z the smaller one-sided
+//   difference along each axis (so a silhouette next to the pixel does not widen it);
+// - luminance: exp(−|l − l'| / (sigma_luminance √var + 1e-6)), var the variance of the centre's
+//   luminance, through a 3×3 Gaussian with DENOISE_PREFILTER (a few samples' variance is noisy);
+// - a pixel that saw no surface mixes only with such pixels, by luminance.
+// The variance is carried along with the squared weights: var' = Σ w² var / (Σ w)².
+#extension GL_GOOGLE_include_directive : require
+#include "kernel/denoise_atrous.glsl"
+#include "denoise.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+ivec2 size;
+
+bool inside(ivec2 q) {
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, size));
+}
+
+// The smaller one-sided difference of the distance along `axis` (0 where neither neighbour is a
+// surface inside the image).
+float depth_slope(ivec2 pixel, float z, ivec2 axis) {
+    float slope = 1e30;
+    for (int side = -1; side <= 1; side += 2) {
+        ivec2 q = pixel + side * axis;
+        if (inside(q)) {
+            float zq = imageLoad(dn_guide, q).w;
+            if (zq >= 0.0) {
+                slope = min(slope, abs(zq - z));
+            }
+        }
+    }
+    return slope < 1e30 ? slope : 0.0;
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    size = ivec2(params.size);
+    if (!inside(pixel)) {
+        return;
+    }
+    vec4 c0 = imageLoad(dn_in, pixel);
+    vec4 g0 = imageLoad(dn_guide, pixel);
+    bool edges = (params.flags & DENOISE_EDGE_STOPPING) != 0u;
+    bool hit0 = g0.w >= 0.0;
+    float l0 = dot(DENOISE_LUMA, c0.rgb);
+
+    float var = c0.a;
+    if ((params.flags & DENOISE_PREFILTER) != 0u) {
+        float sum = 0.0;
+        float weight = 0.0;
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                ivec2 q = pixel + ivec2(dx, dy);
+                if (inside(q)) {
+                    float w = (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25);
+                    sum += w * imageLoad(dn_in, q).a;
+                    weight += w;
+                }
+            }
+        }
+        var = sum / weight;
+    }
+    vec2 slope = hit0 ? vec2(depth_slope(pixel, g0.w, ivec2(1, 0)), depth_slope(pixel, g0.w, ivec2(0, 1)))
+                      : vec2(0.0);
+    float z_eps = 1e-3 * g0.w;
+    bool spatial = edges && (params.flags & DENOISE_SPATIAL_VARIANCE) != 0u && params.step == 1u;
+    if (spatial) {
+        // The first iteration: a few samples' variance can be 0 where every sample happened to
+        // agree (a penumbra whose samples all missed the light). The spread of the neighbours'
+        // luminance on the same surface (normal and depth weights, 3×3) bounds it from below,
+        // fully up to 4 samples, then fading as 4 / samples: the spread holds the signal's own
+        // variation too, which more samples do not shrink, while the pixel's own estimate
+        // becomes reliable (SVGF likewise estimates spatially for its first 4 frames only).
+        float w_sum = 0.0;
+        float l_sum = 0.0;
+        float l2_sum = 0.0;
+        for (int j = -1; j <= 1; ++j) {
+            for (int i = -1; i <= 1; ++i) {
+                ivec2 q = pixel + ivec2(i, j);
+                if (!inside(q)) {
+                    continue;
+                }
+                vec4 g = imageLoad(dn_guide, q);
+                if ((g.w >= 0.0) != hit0) {
+                    continue;
+                }
+                float w = 1.0;
+                if (hit0) {
+                    w = pow(max(dot(g0.xyz, g.xyz), 0.0), params.sigma_normal);
+                    float along = abs(slope.x * float(i)) + abs(slope.y * float(j));
+                    w *= exp(-abs(g.w - g0.w) / (params.sigma_depth * (along + z_eps)));
+                }
+                float l = dot(DENOISE_LUMA, imageLoad(dn_in, q).rgb);
+                if (w > 0.0 && !isnan(l) && !isinf(l)) {
+                    w_sum += w;
+                    l_sum += w * l;
+                    l2_sum += w * l * l;
+                }
+            }
+        }
+        if (w_sum > 0.0) {
+            float mean_l = l_sum / w_sum;
+            float samples = max(imageLoad(dn_samples, pixel).x, 1.0);
+            var = max(var, (l2_sum / w_sum - mean_l * mean_l) * min(1.0, 4.0 / samples));
+        }
+    }
+    float inv_l = 1.0 / (params.sigma_luminance * sqrt(max(var, 0.0)) + 1e-6);
+
+    const float spline[5] = float[5](1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
+    const float tent[3] = float[3](1.0 / 4.0, 1.0 / 2.0, 1.0 / 4.0);
+    bool wide = (params.flags & DENOISE_WIDE) != 0u;
+    int r = wide ? 2 : 1;
+    int step = int(params.step);
+    vec3 sum = vec3(0.0);
+    float var_sum = 0.0;
+    float w2_sum = 0.0;
+    float weight = 0.0;
+    for (int j = -r; j <= r; ++j) {
+        for (int i = -r; i <= r; ++i) {
+            ivec2 offset = ivec2(i, j) * step;
+            ivec2 q = pixel + offset;
+            if (!inside(q)) {
+                continue;
+            }
+            vec4 c = imageLoad(dn_in, q);
+            float w = wide ? spline[i + 2] * spline[j + 2] : tent[i + 1] * tent[j + 1];
+            if (edges) {
+                vec4 g = imageLoad(dn_guide, q);
+                bool hit = g.w >= 0.0;
+                if (hit != hit0) {
+                    continue;
+                }
+                float e = abs(dot(DENOISE_LUMA, c.rgb) - l0) * inv_l;
+                if (hit0) {
+                    w *= pow(max(dot(g0.xyz, g.xyz), 0.0), params.sigma_normal);
+                    float along = abs(slope.x * float(offset.x)) + abs(slope.y * float(offset.y));
+                    e += abs(g.w - g0.w) / (params.sigma_depth * (along + z_eps));
+                }
+                w *= exp(-e);
+            }
+            if (!(w > 0.0) || any(isnan(c)) || any(isinf(c))) {
+                continue;
+            }
+            sum += w * c.rgb;
+            var_sum += w * w * c.a;
+            w2_sum += w * w;
+            weight += w;
+        }
+    }
+    // The centre always counts (weight 9/64 or 1/4): `weight` is never 0 for a finite centre.
+    vec4 result = weight > 0.0 ? vec4(sum / weight, var_sum / (weight * weight)) : c0;
+    if (spatial && weight > 0.0) {
+        // What the taps' own variances left out (1 spp: they are 0): the variance the weights
+        // used, as if every tap had it.
+        result.a = max(result.a, var * w2_sum / (weight * weight));
+    }
+    imageStore(dn_out, pixel, result);
+}

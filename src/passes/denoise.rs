@@ -1,0 +1,295 @@
+//! The denoiser: an edge-avoiding à-trous wavelet filter of a path-traced image, the spatial
+//! part of SVGF (Schied et al. 2017), guided by the first hit's normal and distance and by the
+//! per-pixel variance the path tracer accumulates, on radiance divided by the first hit's albedo
+//! (so texture and colour detail is not blurred: it is multiplied back at the end). What the
+//! first hit emits (an emitter seen directly, the environment where camera rays miss) is left out
+//! of the filter and added back: it has no noise to speak of, and an emitter's bright edge would
+//! otherwise spread over the surfaces around it.
+//!
+//! Three kernels: `denoise_prepare.comp` (the path target's buffers into images: demodulated
+//! radiance and the variance of its luminance; normal and distance; sample count),
+//! `denoise_atrous.comp` ([`DenoiseSettings::iterations`] iterations, taps 1, 2, 4, ... pixels
+//! apart, ping-ponging between two images) and `denoise_remodulate.comp` (× albedo, + emission,
+//! into the output image). Every image is in `GENERAL` layout; a compute-to-compute barrier
+//! follows each dispatch; [`DenoisePass::record`] never submits. No temporal accumulation: one
+//! frame's samples are filtered on their own.
+
+use crate::error::{Error, Result};
+use crate::gpu::kernels::{denoise_atrous, denoise_prepare, denoise_remodulate};
+use crate::gpu::layout::{
+    DenoiseParams, DENOISE_DEMODULATE, DENOISE_EDGE_STOPPING, DENOISE_PREFILTER, DENOISE_SPATIAL_VARIANCE,
+    DENOISE_WIDE,
+};
+use crate::gpu::Pipeline;
+use crate::passes::pathtrace::PathTarget;
+use crate::vk::{barrier, raw, Buffer, Context, Image};
+
+/// The filter's settings. The σ's are SVGF's (σ_l 4, σ_n 128, σ_z 1); the rest were chosen on
+/// `umbra-bench denoise` (BENCHMARKS.md): four iterations of 3×3 taps, the variance not
+/// prefiltered, a spatial variance floor in the first iteration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseSettings {
+    /// À-trous iterations, 1 to [`DenoiseSettings::MAX_ITERATIONS`]: iteration i spaces its
+    /// taps 2^i pixels apart, so four of 3×3 taps reach 15 pixels from the centre (of 5×5: 30).
+    pub iterations: u32,
+    /// Luminance edge-stopping: a tap whose luminance differs by this many standard deviations
+    /// of the centre's weighs e^−1.
+    pub sigma_luminance: f32,
+    /// Normal edge-stopping exponent: a tap weighs max(0, n·n')^this.
+    pub sigma_normal: f32,
+    /// Depth edge-stopping: a tap whose distance differs from the centre's by this × what the
+    /// local depth slope predicts (plus 0.1 % of the distance) weighs e^−1.
+    pub sigma_depth: f32,
+    /// Filter radiance divided by the albedo (multiplied back after). Off filters radiance
+    /// itself, blurring texture detail: for comparison.
+    pub demodulate: bool,
+    /// Added to the albedo before dividing by it, 0 to 1. 0 keeps texture edges exact (a noisy
+    /// 0.8 | 0.2 edge bleeds 0.2 %); glTF's dielectric specular reflectance, 0.04, keeps a
+    /// glossy highlight on a dark texel from being divided into a huge value that the filter
+    /// then spreads onto bright texels (scenes/textured.glb at 4 spp, 128², 1024-spp reference:
+    /// 0.8× the raw relative MSE with 0, 1.1× with 0.04), at the price of texture edges (that
+    /// edge bleeds 5 %).
+    pub albedo_offset: f32,
+    /// Read the centre's variance through a 3×3 Gaussian (a few samples' variance is noisy).
+    pub prefilter_variance: bool,
+    /// 5×5 taps per iteration (the B3 spline, as SVGF) instead of 3×3 ((1/4, 1/2, 1/4)²): 25
+    /// taps against 9 (1.7× the filter's time, measured at 3 iterations).
+    pub wide: bool,
+    /// In the first iteration, take the variance to be at least the spread of the neighbours'
+    /// luminance on the same surface (3×3) × min(1, 4 / samples): a few samples that happened
+    /// to agree say 0, and the spread, which holds the signal's own variation, fades as the
+    /// pixel's own estimate becomes reliable.
+    pub spatial_variance: bool,
+    /// Weigh taps by normal, depth and luminance. Off is a plain blur: for tests that must catch
+    /// it.
+    #[doc(hidden)]
+    pub edge_stopping: bool,
+}
+
+impl Default for DenoiseSettings {
+    fn default() -> Self {
+        Self {
+            iterations: 4,
+            sigma_luminance: 4.0,
+            sigma_normal: 128.0,
+            sigma_depth: 1.0,
+            demodulate: true,
+            albedo_offset: 0.0,
+            prefilter_variance: false,
+            wide: false,
+            spatial_variance: true,
+            edge_stopping: true,
+        }
+    }
+}
+
+impl DenoiseSettings {
+    /// Most iterations (taps 128 pixels apart in the last).
+    pub const MAX_ITERATIONS: u32 = 8;
+
+    /// Checks the settings: 1 to [`DenoiseSettings::MAX_ITERATIONS`] iterations, finite
+    /// positive σ's.
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=Self::MAX_ITERATIONS).contains(&self.iterations) {
+            return Err(Error::Invalid(format!(
+                "the denoiser runs 1 to {} iterations (got {})",
+                Self::MAX_ITERATIONS,
+                self.iterations
+            )));
+        }
+        if !(0.0..=1.0).contains(&self.albedo_offset) {
+            return Err(Error::Invalid(format!(
+                "denoiser albedo_offset {} must be between 0 and 1",
+                self.albedo_offset
+            )));
+        }
+        for (name, value) in [
+            ("sigma_luminance", self.sigma_luminance),
+            ("sigma_normal", self.sigma_normal),
+            ("sigma_depth", self.sigma_depth),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(Error::Invalid(format!("denoiser {name} {value} must be finite and positive")));
+            }
+        }
+        Ok(())
+    }
+
+    fn params(&self, size: (u32, u32), step: u32) -> DenoiseParams {
+        let flags = if self.demodulate { DENOISE_DEMODULATE } else { 0 }
+            | if self.prefilter_variance { DENOISE_PREFILTER } else { 0 }
+            | if self.spatial_variance { DENOISE_SPATIAL_VARIANCE } else { 0 }
+            | if self.wide { DENOISE_WIDE } else { 0 }
+            | if self.edge_stopping { DENOISE_EDGE_STOPPING } else { 0 };
+        DenoiseParams {
+            size: [size.0, size.1],
+            step,
+            flags,
+            sigma_luminance: self.sigma_luminance,
+            sigma_normal: self.sigma_normal,
+            sigma_depth: self.sigma_depth,
+            albedo_offset: self.albedo_offset,
+        }
+    }
+}
+
+/// What the denoiser reads: a path target's five per-pixel buffers (row-major `vec4`s: the
+/// running mean with the sample count in alpha, the mean of the squared samples, the first hit's
+/// base colour, its normal and distance, the radiance it emits).
+#[derive(Clone, Copy)]
+pub struct DenoiseInputs<'a> {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// Running mean rgb, sample count.
+    pub accum: &'a Buffer,
+    /// Running mean of the squared samples rgb.
+    pub moment: &'a Buffer,
+    /// Base colour at the first hit (alpha 0 for a miss).
+    pub albedo: &'a Buffer,
+    /// Shading normal xyz and distance at the first hit (infinite for a miss).
+    pub normal_depth: &'a Buffer,
+    /// Radiance emitted at the first hit (left out of the filter, added back).
+    pub emission: &'a Buffer,
+}
+
+impl<'a> From<&'a PathTarget> for DenoiseInputs<'a> {
+    fn from(target: &'a PathTarget) -> Self {
+        Self {
+            size: target.size,
+            accum: &target.accum,
+            moment: &target.moment,
+            albedo: &target.albedo,
+            normal_depth: &target.normal_depth,
+            emission: &target.emission,
+        }
+    }
+}
+
+/// The denoiser's working images (`R32G32B32A32_SFLOAT` but for `samples`): two the iterations
+/// ping-pong between, the guide (normal, distance) and the sample counts.
+pub struct DenoiseImages {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// Radiance and variance, even steps.
+    pub ping: Image,
+    /// Radiance and variance, odd steps.
+    pub pong: Image,
+    /// Unit normal xyz and distance (−1 for a miss).
+    pub guide: Image,
+    /// `R32_SFLOAT`: each pixel's sample count.
+    pub samples: Image,
+}
+
+impl DenoiseImages {
+    /// Allocates the images (contents undefined until recorded; move them to `GENERAL` with
+    /// [`DenoiseImages::init_general`] once).
+    pub fn new(ctx: &Context, (w, h): (u32, u32)) -> Result<Self> {
+        let make = |name| Image::storage_2d(ctx, name, w, h, raw::Format::R32G32B32A32_SFLOAT);
+        Ok(Self {
+            size: (w, h),
+            ping: make("denoise ping")?,
+            pong: make("denoise pong")?,
+            guide: make("denoise guide")?,
+            samples: Image::storage_2d(ctx, "denoise samples", w, h, raw::Format::R32_SFLOAT)?,
+        })
+    }
+
+    /// Records the move of every image from `UNDEFINED` to `GENERAL`.
+    pub fn init_general(&self, ctx: &Context, cmd: raw::CommandBuffer) {
+        for image in [&self.ping, &self.pong, &self.guide, &self.samples] {
+            image.init_general(ctx, cmd);
+        }
+    }
+}
+
+/// The denoiser's three pipelines.
+pub struct DenoisePass {
+    prepare: Pipeline<denoise_prepare::Kernel>,
+    atrous: Pipeline<denoise_atrous::Kernel>,
+    remodulate: Pipeline<denoise_remodulate::Kernel>,
+}
+
+impl DenoisePass {
+    /// Workgroup size of the kernels.
+    pub const LOCAL: [u32; 3] = [8, 8, 1];
+
+    /// Builds the pipelines.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(Self {
+            prepare: Pipeline::plain(ctx)?,
+            atrous: Pipeline::plain(ctx)?,
+            remodulate: Pipeline::plain(ctx)?,
+        })
+    }
+
+    /// Records the filter of `inputs` into `output` (an `R32G32B32A32_SFLOAT` storage image of
+    /// the same size in `GENERAL` layout: denoised radiance, alpha 1), through `images`, with a
+    /// compute-to-compute barrier after each of its `iterations + 2` dispatches. Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        inputs: &DenoiseInputs<'_>,
+        images: &DenoiseImages,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+    ) -> Result<()> {
+        settings.validate()?;
+        let size = inputs.size;
+        if images.size != size {
+            return Err(Error::Invalid(format!(
+                "denoiser images are {:?} but the image to filter is {size:?}",
+                images.size
+            )));
+        }
+        let grid = [size.0, size.1, 1];
+        self.prepare.record(
+            cmd,
+            &denoise_prepare::Resources {
+                accum: inputs.accum,
+                moment: inputs.moment,
+                aov_albedo: inputs.albedo,
+                aov_normal_depth: inputs.normal_depth,
+                aov_emission: inputs.emission,
+                dn_color: &images.ping.view,
+                dn_guide: &images.guide.view,
+                dn_samples: &images.samples.view,
+            },
+            &settings.params(size, 0),
+            grid,
+            Self::LOCAL,
+        )?;
+        barrier::compute_to_compute(ctx, cmd);
+        let (mut src, mut dst) = (&images.ping, &images.pong);
+        for i in 0..settings.iterations {
+            self.atrous.record(
+                cmd,
+                &denoise_atrous::Resources {
+                    dn_in: &src.view,
+                    dn_guide: &images.guide.view,
+                    dn_samples: &images.samples.view,
+                    dn_out: &dst.view,
+                },
+                &settings.params(size, 1 << i),
+                grid,
+                Self::LOCAL,
+            )?;
+            barrier::compute_to_compute(ctx, cmd);
+            std::mem::swap(&mut src, &mut dst);
+        }
+        self.remodulate.record(
+            cmd,
+            &denoise_remodulate::Resources {
+                dn_in: &src.view,
+                aov_albedo: inputs.albedo,
+                aov_emission: inputs.emission,
+                out_color: &output,
+            },
+            &settings.params(size, 0),
+            grid,
+            Self::LOCAL,
+        )?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}

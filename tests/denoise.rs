@@ -68,6 +68,7 @@ fn synthetic(
         nonfinite_sources: 0,
         gpu_ms: 0.0,
         segments: 0,
+        marches_exhausted: 0,
     };
     let mut expected = Vec::new();
     for y in 0..h {

@@ -544,6 +544,17 @@ fn furnace_albedo(e: [f64; 4], metallic: f64, f0: f64, f90: f64) -> f64 {
     dielectric + (metal - dielectric) * metallic
 }
 
+/// `f(n·v)` tabulated at 257 n·v in [10⁻⁴, 1] (each value a quadrature) and interpolated
+/// linearly.
+fn tabulated(f: impl Fn(f64) -> f64) -> impl Fn(f64) -> f64 {
+    let grid: Vec<f64> = (0..=256).map(|k| f((k as f64 / 256.0).max(1e-4))).collect();
+    move |nv| {
+        let p = nv.clamp(0.0, 1.0) * 256.0;
+        let k = (p as usize).min(255);
+        grid[k] + (grid[k + 1] - grid[k]) * (p - k as f64)
+    }
+}
+
 /// `f(n·v)` box-filtered over pixel `i` of the unit sphere at the origin as the path tracer's
 /// pixels are (8×8 rays against the exact sphere): Fresnel's curvature in n·v makes the centre
 /// value alone ~5e-4 low.
@@ -599,11 +610,10 @@ fn white_furnace_clearcoat_is_the_extensions_layering() {
         };
         let (hyb, pt, view) = render_pair(&gpu, &scene, None, [1.0; 3], size, spp, false);
         let var = pt.variance_of_mean();
-        let exact = |nv: f64| {
-            let nv = nv.max(1e-4);
+        let exact = tabulated(|nv| {
             layered(nv, lut_entry(nv, roughness, nodes), lut_entry(nv, coat_roughness, nodes))
-        };
-        let base_only = |nv: f64| base_albedo(lut_entry(nv.max(1e-4), roughness, nodes));
+        });
+        let base_only = tabulated(|nv| base_albedo(lut_entry(nv, roughness, nodes)));
         let pixels = interior_pixels(&hyb.gbuffer, &view);
         for &(lo, hi) in &bins {
             let (mut n, mut sp, mut se2, mut s_e, mut s_b, mut worst) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64);
@@ -686,21 +696,8 @@ fn white_furnace_split_sum_matches_path_tracer() {
         let (hyb, pt, view) = render_pair(&gpu, &scene, None, [1.0; 3], size, spp, false);
         let var = pt.variance_of_mean();
         // E on a fine n·v grid (linear interpolation error below 1e-6 here).
-        let grid: Vec<f64> = (0..=256)
-            .map(|k| {
-                furnace_albedo(
-                    lut_entry((k as f64 / 256.0).max(1e-4), roughness as f64, nodes),
-                    metallic as f64,
-                    f0,
-                    f90,
-                )
-            })
-            .collect();
-        let exact = |nv: f64| {
-            let p = nv.clamp(0.0, 1.0) * 256.0;
-            let k = (p as usize).min(255);
-            grid[k] + (grid[k + 1] - grid[k]) * (p - k as f64)
-        };
+        let exact =
+            tabulated(|nv| furnace_albedo(lut_entry(nv, roughness as f64, nodes), metallic as f64, f0, f90));
         let exact_box = |i: usize| box_filtered(&scene, size, i, &exact);
         let pixels = interior_pixels(&hyb.gbuffer, &view);
         assert!(pixels.len() > 2000, "the sphere should fill the image ({} interior pixels)", pixels.len());

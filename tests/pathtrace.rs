@@ -717,13 +717,48 @@ fn textures_wrap_decode_and_transform() {
     }
 }
 
+/// A linear 1×1 texture of `texel`, nearest and repeating.
+fn one_texel(name: &str, texel: [u8; 4]) -> umbra::scene::Texture {
+    use umbra::scene::{Filter, Sampler, Texture, Wrap};
+    Texture {
+        name: name.into(),
+        width: 1,
+        height: 1,
+        rgba8: texel.to_vec(),
+        srgb: false,
+        sampler: Sampler {
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            mag_filter: Filter::Nearest,
+            min_filter: Filter::Nearest,
+            mipmaps: false,
+            mipmap_filter: Filter::Nearest,
+        },
+    }
+}
+
+/// A white directional light shining along `direction` with `intensity`.
+fn sun(direction: [f32; 3], intensity: f32) -> umbra::scene::Light {
+    umbra::scene::Light {
+        name: String::new(),
+        kind: umbra::scene::LightKind::Directional,
+        position: [0.0; 3],
+        direction,
+        color: [1.0; 3],
+        intensity,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: std::f32::consts::PI,
+    }
+}
+
 /// A normal map on a quad facing the camera, lit by a directional light from the +x side: the
 /// shading normal is the map's tangent-space normal through (tangent, bitangent, normal), so the
 /// Lambert radiance follows the closed form for the tilted normal, scaled as `normalTexture.scale`
 /// says; tilting towards the tangent's +x brightens, towards −x darkens.
 #[test]
 fn normal_maps_tilt_the_shading_normal() {
-    use umbra::scene::{Filter, Light, LightKind, Sampler, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM};
+    use umbra::scene::{TextureRef, IDENTITY_TRANSFORM};
     let gpu = Gpu::new();
     let quad = facing_quad();
     let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0);
@@ -751,32 +786,8 @@ fn normal_maps_tilt_the_shading_normal() {
         let mut scene = scene_of(&[(&quad, material, false)], cam);
         scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
         scene.tangents = vec![[1.0, 0.0, 0.0, 1.0]; scene.positions.len()];
-        scene.textures.push(Texture {
-            name: "tilt".into(),
-            width: 1,
-            height: 1,
-            rgba8: texel.to_vec(),
-            srgb: false,
-            sampler: Sampler {
-                wrap_s: Wrap::Repeat,
-                wrap_t: Wrap::Repeat,
-                mag_filter: Filter::Nearest,
-                min_filter: Filter::Nearest,
-                mipmaps: false,
-                mipmap_filter: Filter::Nearest,
-            },
-        });
-        scene.lights.push(Light {
-            name: String::new(),
-            kind: LightKind::Directional,
-            position: [0.0; 3],
-            direction: (-light_dir).into(),
-            color: [1.0; 3],
-            intensity: 2.0,
-            range: None,
-            inner_cone_angle: 0.0,
-            outer_cone_angle: std::f32::consts::PI,
-        });
+        scene.textures.push(one_texel("tilt", texel));
+        scene.lights.push(sun((-light_dir).into(), 2.0));
         let settings = PathSettings { size: (16, 16), spp: 2, max_bounces: 1, ..Default::default() };
         let image = render(&gpu, &scene, &settings);
         let decoded = Vec3::new(texel[0] as f32, texel[1] as f32, texel[2] as f32) / 255.0 * 2.0 - Vec3::ONE;
@@ -797,7 +808,7 @@ fn normal_maps_tilt_the_shading_normal() {
 /// fills is compiled out), so a slot left out of the specialisation would render the factor alone.
 #[test]
 fn each_texture_slot_is_read_alone() {
-    use umbra::scene::{Filter, Light, LightKind, Sampler, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM};
+    use umbra::scene::{TextureRef, IDENTITY_TRANSFORM};
     let gpu = Gpu::new();
     let quad = facing_quad();
     let cam = camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 45.0);
@@ -835,32 +846,8 @@ fn each_texture_slot_is_read_alone() {
             .map(|material| {
                 let mut scene = scene_of(&[(&quad, material, false)], cam);
                 scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
-                scene.textures.push(Texture {
-                    name: "constant".into(),
-                    width: 1,
-                    height: 1,
-                    rgba8: texel.to_vec(),
-                    srgb: false,
-                    sampler: Sampler {
-                        wrap_s: Wrap::Repeat,
-                        wrap_t: Wrap::Repeat,
-                        mag_filter: Filter::Nearest,
-                        min_filter: Filter::Nearest,
-                        mipmaps: false,
-                        mipmap_filter: Filter::Nearest,
-                    },
-                });
-                scene.lights.push(Light {
-                    name: String::new(),
-                    kind: LightKind::Directional,
-                    position: [0.0; 3],
-                    direction: [-0.5, -0.3, -1.0],
-                    color: [1.0; 3],
-                    intensity: 3.0,
-                    range: None,
-                    inner_cone_angle: 0.0,
-                    outer_cone_angle: std::f32::consts::PI,
-                });
+                scene.textures.push(one_texel("constant", texel));
+                scene.lights.push(sun([-0.5, -0.3, -1.0], 3.0));
                 let settings = PathSettings { size: (16, 16), spp: 4, max_bounces: 1, ..Default::default() };
                 render(&gpu, &scene, &settings)
             })

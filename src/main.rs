@@ -299,8 +299,8 @@ struct RenderArgs {
     /// PNG output (tonemapped sRGB); a name ending in .exr writes only the EXR (as --exr).
     #[arg(short, long, default_value = "umbra.png", value_parser = cli::parse_png_or_exr)]
     output: PathBuf,
-    /// EXR output: linear colour, albedo, normal, depth, emission (at the first hit) and variance
-    /// layers (and `noisy` with --denoise).
+    /// EXR output: linear colour, albedo, normal, depth, emission (at the first hit), variance
+    /// and moment layers (and `noisy` with --denoise).
     #[arg(long, value_parser = cli::parse_exr)]
     exr: Option<PathBuf>,
 }

@@ -87,6 +87,15 @@ vec3 ibl_level(uint k, vec3 r) {
            w.z * ibl_prefiltered[o + idx.z].rgb + w.w * ibl_prefiltered[o + idx.w].rgb;
 }
 
+// The prefiltered environment along r for a lobe of `roughness`: the two chain levels around
+// it, blended.
+vec3 prefiltered_light(vec3 r, float roughness) {
+    float lod = clamp(roughness, 0.0, 1.0) * float(IBL_LEVELS - 1u);
+    uint k0 = min(uint(lod), IBL_LEVELS - 1u);
+    uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
+    return mix(ibl_level(k0, r), ibl_level(k1, r), lod - float(k0));
+}
+
 // Split-sum image-based lighting of surface s at shading normal n seen along wo (world), nv =
 // n.wo > 0: the prefiltered environment times the table's specular albedo, plus the diffuse
 // colour times irradiance / pi times the table's diffuse Fresnel weighting, blended by metallic
@@ -115,12 +124,9 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     // (total internal reflection cannot happen entering the denser medium from outside).
     vec3 through = s.thin ? -wo : refract(-wo, n, 1.0 / s.eta);
     if (HAS_ENV_MAP && params.ibl != 0u) {
-        float lod = clamp(roughness, 0.0, 1.0) * float(IBL_LEVELS - 1u);
-        uint k0 = min(uint(lod), IBL_LEVELS - 1u);
-        uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
-        specular_light *= mix(ibl_level(k0, r), ibl_level(k1, r), lod - float(k0));
+        specular_light *= prefiltered_light(r, roughness);
         if (surface_transmits(s) && dot(through, through) > 0.0) {
-            transmitted_light *= mix(ibl_level(k0, through), ibl_level(k1, through), lod - float(k0));
+            transmitted_light *= prefiltered_light(through, roughness);
         }
         float y[9];
         sh9_basis(n, y);
@@ -153,11 +159,7 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         vec4 coat_table = ibl_table(nv, coat_roughness);
         vec3 coat_light = env;
         if (HAS_ENV_MAP && params.ibl != 0u) {
-            vec3 rc = reflect(-wo, n);
-            float lod = clamp(coat_roughness, 0.0, 1.0) * float(IBL_LEVELS - 1u);
-            uint k0 = min(uint(lod), IBL_LEVELS - 1u);
-            uint k1 = min(k0 + 1u, IBL_LEVELS - 1u);
-            coat_light *= mix(ibl_level(k0, rc), ibl_level(k1, rc), lod - float(k0));
+            coat_light *= prefiltered_light(reflect(-wo, n), coat_roughness);
         }
         float w = coat_weight_at(s.coat, nv);
         result = (1.0 - w) * result + w * (coat_table.x + coat_table.y) * coat_light;

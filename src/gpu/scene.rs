@@ -459,7 +459,7 @@ impl GpuScene {
             has_alpha: alpha_modes.iter().any(|&m| m != 0),
             has_colors: colored(&arrays.vertices),
             has_unlit: unlit(&arrays.materials),
-            has_clearcoat: arrays.materials.iter().any(|m| m.clearcoat[0] > 0.0),
+            has_clearcoat: coated(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
@@ -508,7 +508,7 @@ impl GpuScene {
         self.has_transmission = transmits(&arrays.materials);
         self.has_colors = colored(&arrays.vertices);
         self.has_unlit = unlit(&arrays.materials);
-        self.has_clearcoat = arrays.materials.iter().any(|m| m.clearcoat[0] > 0.0);
+        self.has_clearcoat = coated(&arrays.materials);
         Ok(())
     }
 }
@@ -570,6 +570,10 @@ fn texture_slots(materials: &[GpuMaterial]) -> u32 {
 
 fn unlit(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.flags[0] & GpuMaterial::UNLIT != 0)
+}
+
+fn coated(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.clearcoat[0] > 0.0)
 }
 
 /// The scene's punctual lights with their selection table: by power (KHR_lights_punctual's

@@ -77,18 +77,9 @@ pub fn run_scene(
     let bar = super::progress_bar(s.max_spp as u64, &format!("{key}: path tracing"));
     let mut level = 1;
     while level <= s.max_spp {
-        while done < level {
-            let count = (level - done).min(16);
-            ctx.submit(|cmd| {
-                timer.reset(cmd);
-                timer.begin(cmd, "pathtrace")?;
-                renderer.record_path_samples(cmd, camera, &target, &measured, done, count)?;
-                timer.end(cmd)
-            })?;
-            elapsed_ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
-            done += count;
-            bar.set_position(done as u64);
-        }
+        elapsed_ms += suite::trace_until(
+            ctx, &renderer, camera, &target, &measured, &mut timer, &mut done, level, &bar,
+        )?;
         ctx.submit(|cmd| renderer.record_path_resolve(cmd, &target, resolved.view))?;
         let (_, raw_rel_mse) = suite::errors(&resolved.read(ctx)?, &reference);
         let mut times = Vec::new();

@@ -33,6 +33,7 @@ use std::path::{Path, PathBuf};
 use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
+use umbra::passes::pathtrace::PathTarget;
 use umbra::render::{AoMethod, HybridSettings, PathSettings};
 use umbra::scene::{Camera, Scene};
 use umbra::vk::{raw, Context, GpuTimer, Image};
@@ -206,18 +207,8 @@ pub fn run_scene(
     let bar = super::progress_bar(s.max_spp as u64, &format!("{key}: path tracing"));
     let mut level = 1;
     while level <= s.max_spp {
-        while done < level {
-            let count = (level - done).min(16);
-            ctx.submit(|cmd| {
-                timer.reset(cmd);
-                timer.begin(cmd, "pathtrace")?;
-                renderer.record_path_samples(cmd, camera, &target, &measured, done, count)?;
-                timer.end(cmd)
-            })?;
-            elapsed_ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
-            done += count;
-            bar.set_position(done as u64);
-        }
+        elapsed_ms +=
+            trace_until(ctx, &renderer, camera, &target, &measured, &mut timer, &mut done, level, &bar)?;
         ctx.submit(|cmd| renderer.record_path_resolve(cmd, &target, output.view))?;
         let image = output.read(ctx)?;
         let (rmse, rel_mse) = errors(&image, &reference);
@@ -337,6 +328,36 @@ pub fn run_scene(
 }
 
 /// The IBL tables and prefiltered maps are computed once per scene, not per frame.
+/// Accumulates `target`'s samples from `*done` up to `level` in submissions of at most 16,
+/// advancing `*done` and `bar`; the GPU milliseconds they took.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_until(
+    ctx: &Context,
+    renderer: &Renderer,
+    camera: &Camera,
+    target: &PathTarget,
+    settings: &PathSettings,
+    timer: &mut GpuTimer,
+    done: &mut u32,
+    level: u32,
+    bar: &indicatif::ProgressBar,
+) -> Result<f64> {
+    let mut ms = 0.0;
+    while *done < level {
+        let (first, count) = (*done, (level - *done).min(16));
+        ctx.submit(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "pathtrace")?;
+            renderer.record_path_samples(cmd, camera, target, settings, first, count)?;
+            timer.end(cmd)
+        })?;
+        ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+        *done += count;
+        bar.set_position(*done as u64);
+    }
+    Ok(ms)
+}
+
 fn is_once(pass: &str) -> bool {
     pass.starts_with("ibl")
 }

@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 15] = [
+pub const SCENE_FEATURES: [&str; 16] = [
     "textures",
     "alpha",
     "lights",
@@ -55,6 +55,7 @@ pub const SCENE_FEATURES: [&str; 15] = [
     "occlusion_map",
     "clearcoat",
     "implicit",
+    "sheen",
 ];
 
 /// The scene features of the texture slots, in `MATERIAL_SLOT_*` order: some material has a
@@ -254,6 +255,9 @@ gpu_structs! {
         /// (`clearcoatRoughnessFactor`), unused, unused. Read only by kernels specialised for
         /// it (`HAS_CLEARCOAT`).
         clearcoat: vec4,
+        /// `KHR_materials_sheen`: `sheenColorFactor` rgb, `sheenRoughnessFactor`. Read only by
+        /// kernels specialised for it (`HAS_SHEEN`).
+        sheen: vec4,
     }
 
     /// A texture in the shared texel buffer (linear RGBA16, one RG32UI texel per texel,
@@ -733,8 +737,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 288 bytes).
-    MATERIAL_TEXELS: uint = 18;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 304 bytes).
+    MATERIAL_TEXELS: uint = 19;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -750,6 +754,8 @@ gpu_constants! {
     MATERIAL_SLOT_OCCLUSION: uint = 4;
     /// The texel of [`GpuMaterial::clearcoat`] in a material's texels.
     MATERIAL_CLEARCOAT_TEXEL: uint = 17;
+    /// The texel of [`GpuMaterial::sheen`] in a material's texels.
+    MATERIAL_SHEEN_TEXEL: uint = 18;
     /// Texture slots a material has (each with two `tex_transform` rows).
     MATERIAL_TEXTURE_SLOTS: uint = 5;
     /// `GpuTexture::flags`: clamp s.
@@ -896,7 +902,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1019,7 +1025,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1258,7 +1264,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1280,7 +1286,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -156,6 +156,8 @@ pub struct SceneFeatures {
     pub texture_slots: u32,
     /// The BVH holds implicit shapes (`UMBRA_implicit`): the traversal ray-marches them.
     pub implicit: bool,
+    /// Some material has a sheen (`KHR_materials_sheen`).
+    pub sheen: bool,
 }
 
 impl SceneFeatures {
@@ -173,6 +175,7 @@ impl SceneFeatures {
             implicit: scene.has_implicit,
             texture_slots: scene.texture_slots,
             clearcoat: scene.has_clearcoat,
+            sheen: scene.has_sheen,
         }
     }
 
@@ -189,6 +192,7 @@ impl SceneFeatures {
             "unlit" => self.unlit,
             "clearcoat" => self.clearcoat,
             "implicit" => self.implicit,
+            "sheen" => self.sheen,
             _ => {
                 let slot = TEXTURE_SLOT_FEATURES.iter().position(|f| *f == name)?;
                 self.texture_slots & (1 << slot) != 0

@@ -69,6 +69,9 @@ pub struct GpuScene {
     /// Whether some material has a clear coat (`KHR_materials_clearcoat`): the shading kernels
     /// evaluate and sample the coat only then.
     pub has_clearcoat: bool,
+    /// Whether some material has a sheen (`KHR_materials_sheen`): the shading kernels evaluate
+    /// and sample the sheen only then.
+    pub has_sheen: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -348,6 +351,7 @@ impl ShadingArrays {
                     ],
                     params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
                     clearcoat: [m.clearcoat, m.clearcoat_roughness, 0.0, 0.0],
+                    sheen: [m.sheen_color[0], m.sheen_color[1], m.sheen_color[2], m.sheen_roughness],
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                             | if m.volume { GpuMaterial::VOLUME } else { 0 }
@@ -443,7 +447,7 @@ impl GpuScene {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
             triangles: upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?,
             vertices: upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?,
-            materials: upload_rgba32ui(ctx, "scene materials", &arrays.materials)?,
+            materials: upload_rgba32ui(ctx, "scene materials", &material_texels(&arrays.materials))?,
             lights: upload_rgba32ui(ctx, "scene lights", &arrays.lights)?,
             light_count: arrays.lights.len() as u32,
             emissive_power: arrays.emissive_power,
@@ -460,6 +464,7 @@ impl GpuScene {
             has_colors: colored(&arrays.vertices),
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: coated(&arrays.materials),
+            has_sheen: sheened(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
@@ -494,7 +499,7 @@ impl GpuScene {
         let arrays = ShadingArrays::new(scene, &self.prim_order);
         self.triangles = upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?;
         self.vertices = upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?;
-        self.materials = upload_rgba32ui(ctx, "scene materials", &arrays.materials)?;
+        self.materials = upload_rgba32ui(ctx, "scene materials", &material_texels(&arrays.materials))?;
         self.lights = upload_rgba32ui(ctx, "scene lights", &arrays.lights)?;
         self.light_count = arrays.lights.len() as u32;
         self.emissive_power = arrays.emissive_power;
@@ -509,6 +514,7 @@ impl GpuScene {
         self.has_colors = colored(&arrays.vertices);
         self.has_unlit = unlit(&arrays.materials);
         self.has_clearcoat = coated(&arrays.materials);
+        self.has_sheen = sheened(&arrays.materials);
         Ok(())
     }
 }
@@ -574,6 +580,23 @@ fn unlit(materials: &[GpuMaterial]) -> bool {
 
 fn coated(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.clearcoat[0] > 0.0)
+}
+
+/// `KHR_materials_sheen`'s albedo table (src/sheen.rs), computed by build.rs.
+const SHEEN_TABLE: [f32; crate::sheen::TABLE_SIZE * crate::sheen::TABLE_SIZE] =
+    include!(concat!(env!("OUT_DIR"), "/include/sheen_table.rs"));
+
+/// The material texels: the materials, then the sheen's albedo table (`sheen_table_texel` in
+/// shading.glsl reads it from the end).
+fn material_texels(materials: &[GpuMaterial]) -> Vec<[u32; 4]> {
+    let mut texels: Vec<[u32; 4]> = bytemuck::cast_slice(materials).to_vec();
+    texels.extend(SHEEN_TABLE.chunks(4).map(|c| [0, 1, 2, 3].map(|k| c[k].to_bits())));
+    texels
+}
+
+/// Whether some material has a sheen (a sheen colour above 0).
+fn sheened(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.sheen[..3].iter().any(|&c| c > 0.0))
 }
 
 /// The scene's punctual lights with their selection table: by power (KHR_lights_punctual's

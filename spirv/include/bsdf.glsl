@@ -50,7 +50,8 @@
 #include "sheen_albedo.glsl"
 
 // Texel t (entries 4t..4t+3) of the sheen's albedo table: the including kernel defines it
-// (shading.glsl from the scene's material texels, where src/gpu/scene.rs appends the table).
+// (shading.glsl from the scene's material texels, where src/gpu/scene.rs appends the table for
+// a scene with a sheen).
 vec4 sheen_table_texel(uint t);
 
 // Smallest alpha: below it (roughness < 0.01) the lobe is treated as this sharp, so D stays finite.

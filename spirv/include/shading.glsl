@@ -28,7 +28,8 @@ uvec4 material_uvec(uint id, uint k) {
 }
 
 // Whether material `id` has `flag` (MATERIAL_DOUBLE_SIDED, MATERIAL_VOLUME, MATERIAL_UNLIT).
-// The sheen's albedo table: SHEEN_TABLE_TEXELS texels after the last material.
+// The sheen's albedo table: SHEEN_TABLE_TEXELS texels after the last material (uploaded only for
+// a scene with a sheen, so read only under HAS_SHEEN).
 vec4 sheen_table_texel(uint t) {
     int first = imageSize(material_texels) - int(SHEEN_TABLE_TEXELS);
     return uintBitsToFloat(imageLoad(material_texels, first + int(t)));

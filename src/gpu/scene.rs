@@ -131,7 +131,7 @@ impl SceneArrays {
             ("bvh triangles", bytes(&self.bvh.tris) + bytes(&self.bvh.implicit_texels)),
             ("scene triangles", bytes(&self.triangles)),
             ("scene vertices", bytes(&self.vertices)),
-            ("scene materials", bytes(&self.materials)),
+            ("scene materials", bytes(&material_texels(&self.materials))),
             ("scene lights", bytes(&self.lights)),
             ("scene punctual lights", bytes(&self.punctual)),
             ("scene texels", bytes(&self.texels)),
@@ -586,11 +586,14 @@ fn coated(materials: &[GpuMaterial]) -> bool {
 const SHEEN_TABLE: [f32; crate::sheen::TABLE_SIZE * crate::sheen::TABLE_SIZE] =
     include!(concat!(env!("OUT_DIR"), "/include/sheen_table.rs"));
 
-/// The material texels: the materials, then the sheen's albedo table (`sheen_table_texel` in
-/// shading.glsl reads it from the end).
+/// The material texels: the materials, then, when some material has a sheen, the sheen's albedo
+/// table (`sheen_table_texel` in shading.glsl reads it from the end; only kernels specialised for
+/// the sheen do).
 fn material_texels(materials: &[GpuMaterial]) -> Vec<[u32; 4]> {
     let mut texels: Vec<[u32; 4]> = bytemuck::cast_slice(materials).to_vec();
-    texels.extend(SHEEN_TABLE.chunks(4).map(|c| [0, 1, 2, 3].map(|k| c[k].to_bits())));
+    if sheened(materials) {
+        texels.extend(SHEEN_TABLE.chunks(4).map(|c| [0, 1, 2, 3].map(|k| c[k].to_bits())));
+    }
     texels
 }
 

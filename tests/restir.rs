@@ -14,7 +14,7 @@ use umbra::passes::deferred::{DirectLight, LightingSettings};
 use umbra::passes::gbuffer::GBuffer;
 use umbra::passes::restir::{Reservoirs, RestirSettings};
 use umbra::render::{HybridSettings, Passes};
-use umbra::scene::{Camera, LightKind, Material, Scene};
+use umbra::scene::{LightKind, Material, Scene};
 
 const SIZE: (u32, u32) = (64, 64);
 

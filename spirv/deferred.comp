@@ -196,6 +196,16 @@ void main() {
         return;
     }
 
+    // Parallax occlusion mapping: the G-buffer's primary ray again, marched into the height field
+    // by the same function, for the self-shadowing of the light samples below (light_side).
+    if (HAS_PARALLAX) {
+        if (material_slot_texture(mat.x, MATERIAL_SLOT_HEIGHT) != 0u) {
+            Hit hit;
+            if (bvh_closest(params.camera.origin, dir, 0.0, BVH_INF, hit)) {
+                parallax_occlusion(hit.tri, hit.bary, -dir);
+            }
+        }
+    }
     vec3 n = normalize(normal_rough.xyz);
     vec3 ng = oct_decode(unpackSnorm2x16(mat.y));
     vec3 wo = -dir;

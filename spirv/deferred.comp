@@ -23,6 +23,7 @@ const bool GGX_WALTER = false;  // the BSDF is evaluated here, never sampled
 #include "shadow.glsl"
 #include "ibl.glsl"
 #include "probes.glsl"
+#include "restir.glsl"
 
 // Shadow maps instead of shadow rays for the punctual lights (src/passes/shadow.rs).
 float punctual_shadow(uint k, vec3 p, vec3 ng, vec3 wi) {
@@ -167,17 +168,46 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     return result;
 }
 
+// Direct light by power sampling: every punctual light (up to PUNCTUAL_ALL) with its shadow ray,
+// and `shadow_rays` samples of the emissive triangles.
+vec3 power_sampled_light(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo_local, ivec2 pixel) {
+    vec3 radiance = vec3(0.0);
+    // Punctual lights: one shadow ray each.
+    if (HAS_PUNCTUAL) {
+        float u = rand4(uvec2(pixel), params.frame, RNG_DEFERRED_PUNCTUAL, params.seed).x;
+        radiance += punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
+    }
+
+    // Emissive triangles: `shadow_rays` light samples (triangle by power, uniform point on it),
+    // each with its shadow ray; light sampling alone, which is unbiased for direct light.
+    if (HAS_LIGHTS && params.light_count > 0u) {
+        uint rays = max(params.shadow_rays, 1u);
+        vec3 sum = vec3(0.0);
+        for (uint r = 0u; r < rays; ++r) {
+            vec4 u = rand4(uvec2(pixel), params.frame * rays + r, RNG_EMISSIVE_NEE, params.seed);
+            vec3 wi_local;
+            vec3 l_emit;
+            float light_pdf;
+            if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
+                                light_pdf)) {
+                sum += bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * l_emit / light_pdf;
+            }
+        }
+        radiance += sum / float(rays);
+    }
+    return radiance;
+}
+
 void main() {
     ivec2 pixel = ivec2(tile_pixel());
     uvec2 size = params.size;
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;
     }
-    vec3 forward = params.camera.forward;
-    vec3 dir = camera_ray(forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, size);
-    float depth = imageLoad(gb_depth, pixel).x;
-    if (depth <= 0.0) {
+    ShadePoint sp;
+    if (!gbuffer_point(pixel, sp)) {
         // No surface: the environment seen directly.
+        vec3 dir = camera_ray(params.camera.forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, size);
         vec3 background = params.env;
         if (HAS_ENV_MAP) {
             background *= env_radiance(dir, params.env_size);
@@ -185,41 +215,24 @@ void main() {
         imageStore(out_color, pixel, vec4(background, 1.0));
         return;
     }
-    vec3 p = params.camera.origin + dir * (depth / dot(dir, forward));
-    vec4 normal_rough = imageLoad(gb_normal, pixel);
-    vec4 base_metal = imageLoad(gb_base, pixel);
-    uvec4 mat = imageLoad(gb_material, pixel);
     vec3 radiance = imageLoad(gb_emission, pixel).rgb;
     // KHR_materials_unlit: the base colour (factor x texture x COLOR_0) as it is, no lighting.
-    if (material_unlit(mat.x)) {
-        imageStore(out_color, pixel, vec4(base_metal.rgb, 1.0));
+    if (material_unlit(sp.material)) {
+        imageStore(out_color, pixel, vec4(sp.s.base, 1.0));
         return;
     }
-
     // Parallax occlusion mapping: the G-buffer's primary ray again, marched into the height field
     // by the same function, for the self-shadowing of the light samples below (light_side).
     if (HAS_PARALLAX) {
-        if (material_slot_texture(mat.x, MATERIAL_SLOT_HEIGHT) != 0u) {
+        if (material_slot_texture(sp.material, MATERIAL_SLOT_HEIGHT) != 0u) {
             Hit hit;
-            if (bvh_closest(params.camera.origin, dir, 0.0, BVH_INF, hit)) {
-                parallax_occlusion(hit.tri, hit.bary, -dir);
+            if (bvh_closest(params.camera.origin, -sp.wo, 0.0, BVH_INF, hit)) {
+                parallax_occlusion(hit.tri, hit.bary, sp.wo);
             }
         }
     }
-    vec3 n = normalize(normal_rough.xyz);
-    vec3 ng = oct_decode(unpackSnorm2x16(mat.y));
-    vec3 wo = -dir;
-    vec3 t;
-    vec3 b;
-    basis(n, t, b);
-    vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
-    if (wo_local.z > 0.0) {
-        Surface s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w);
-        if (HAS_TRANSMISSION) {
-            // Seen from outside (wo on the front): glass (ior) behind the surface.
-            s.eta = material_vec(mat.x, 3u).y;
-        }
-
+    if (sp.wo_local.z > 0.0) {
+        Surface s = sp.s;
         // Image-based lighting (split sum) and the probes' irradiance, times ambient occlusion.
         bool ambient = params.ibl != 0u;
         if (PROBES) {
@@ -234,31 +247,51 @@ void main() {
             // probes' indirect light too, as glTF says of indirect light).
             float occlusion = imageLoad(gb_emission, pixel).a;
             radiance += ao * occlusion
-                * ibl_lighting(s, normal_rough.w, p, n, wo, wo_local.z, mat.x, uintBitsToFloat(mat.zw));
+                * ibl_lighting(s, sp.roughness, sp.p, sp.n, sp.wo, sp.wo_local.z, sp.material, sp.uv1);
         }
 
-        // Punctual lights: one shadow ray each.
-        if (HAS_PUNCTUAL) {
-            float u = rand4(uvec2(pixel), params.frame, RNG_DEFERRED_PUNCTUAL, params.seed).x;
-            radiance += punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
-        }
-
-        // Emissive triangles: `shadow_rays` light samples (triangle by power, uniform point on it),
-        // each with its shadow ray; light sampling alone, which is unbiased for direct light.
-        if (HAS_LIGHTS && params.light_count > 0u) {
-            uint rays = max(params.shadow_rays, 1u);
-            vec3 sum = vec3(0.0);
-            for (uint r = 0u; r < rays; ++r) {
-                vec4 u = rand4(uvec2(pixel), params.frame * rays + r, RNG_EMISSIVE_NEE, params.seed);
-                vec3 wi_local;
-                vec3 l_emit;
-                float light_pdf;
-                if (sample_emissive(p, ng, t, b, n, surface_transmits(s), u.xyz, params.light_count, wi_local, l_emit,
-                                    light_pdf)) {
-                    sum += bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * l_emit / light_pdf;
+        // ReSTIR DI (restir.glsl): the pixel's reservoir's one light sample, its shadow ray, its
+        // unbiased contribution weight, for the punctual lights and the emissive triangles.
+        if (RESTIR) {
+            uint index = uint(pixel.y) * size.x + uint(pixel.x);
+            uint id = reservoirs[index].light;
+            vec2 bary = reservoirs[index].bary;
+            float w = reservoirs[index].weight;
+            bool tested = (reservoirs[index].flags & RESTIR_VISIBLE) != 0u;
+            vec3 wi;
+            bool to_point;
+            vec3 target;
+            vec3 c = restir_contribution(sp, id, bary, wi, to_point, target);
+            if (w > 0.0 && any(greaterThan(c, vec3(0.0)))) {
+                // The reservoir's weight includes a ray-traced visibility (the biased combination),
+                // or this pass finds it; shadow maps, when the pass reads them, shadow the
+                // punctual lights either way.
+                float visible = tested ? 1.0 : 0.0;
+                bool punctual = (id & RESTIR_PUNCTUAL) != 0u;
+                bool mapped = false;
+                if (SHADOW_MAPS) {
+                    mapped = punctual;
                 }
+                if (mapped || !tested) {
+                    if (punctual) {
+                        vec3 wi_local;
+                        visible = punctual_visibility(id & ~RESTIR_PUNCTUAL, sp.p, sp.ng, sp.t, sp.b, sp.n,
+                                                      surface_transmits(s), wi, to_point, target, wi_local);
+                    } else {
+                        visible = restir_visible(sp, wi, to_point, target) ? 1.0 : 0.0;
+                    }
+                }
+                if (HAS_PARALLAX) {
+                    // The height field's self-shadowing (the reservoirs' visibility does not see it:
+                    // the ReSTIR kernels are not specialised for parallax).
+                    if (!parallax_lit(wi)) {
+                        visible = 0.0;
+                    }
+                }
+                radiance += c * (visible * w);
             }
-            radiance += sum / float(rays);
+        } else {
+            radiance += power_sampled_light(sp.p, sp.ng, sp.t, sp.b, sp.n, s, sp.wo_local, pixel);
         }
     }
     imageStore(out_color, pixel, vec4(radiance, 1.0));

@@ -21,7 +21,7 @@
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
 //!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
-//!     probes: None, lightmaps: None },
+//!     probes: None, lightmaps: None, reservoirs: None },
 //!     &settings, None)?;
 //! // shadow maps instead of shadow rays: placed once, re-recorded when a light, the geometry
 //! // or (for a directional light's cascades) the camera changes:

@@ -6,8 +6,9 @@ use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::deferred::LightingSettings;
+use umbra::passes::deferred::{DirectLight, LightingSettings};
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
+use umbra::passes::restir::RestirSettings;
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
 use umbra::render::{DenoiseSettings, Passes};
 use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
@@ -237,6 +238,28 @@ struct RenderArgs {
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles.
     #[arg(long, default_value_t = 4)]
     shadow_rays: u32,
+    /// Hybrid: how direct light (punctual lights, emissive triangles) is sampled: every punctual
+    /// light and --shadow-rays emissive samples by power (power), or ReSTIR DI's one resampled
+    /// sample per pixel, reused over --restir-frames frames and neighbouring pixels (restir).
+    #[arg(long, value_enum, default_value = "power")]
+    direct: DirectArg,
+    /// Hybrid, ReSTIR: candidates resampled per pixel and frame.
+    #[arg(long, default_value_t = RestirSettings::default().candidates)]
+    restir_candidates: u32,
+    /// Hybrid, ReSTIR: spatial neighbours merged per pixel (0 to 8).
+    #[arg(long, default_value_t = RestirSettings::default().neighbours)]
+    restir_neighbours: u32,
+    /// Hybrid, ReSTIR: frames rendered with the camera still, the last one kept (temporal reuse
+    /// builds on the earlier ones).
+    #[arg(long, default_value_t = RestirSettings::default().frames)]
+    restir_frames: u32,
+    /// Hybrid, ReSTIR: no temporal reuse.
+    #[arg(long)]
+    restir_no_temporal: bool,
+    /// Hybrid, ReSTIR: the unbiased combination (no visibility reuse; normalised by the
+    /// reservoirs that could have produced the sample) instead of the biased one.
+    #[arg(long)]
+    restir_unbiased: bool,
     /// Hybrid: how punctual lights are shadowed: shadow rays (rt) or a shadow map read with the
     /// nearest texel (hard), percentage-closer filtering (pcf), percentage-closer soft shadows
     /// (pcss) or moment shadow maps (moments).
@@ -357,6 +380,12 @@ fn merge(args: MergeArgs) -> Result<()> {
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+enum DirectArg {
+    Power,
+    Restir,
+}
+
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 enum ShadowsArg {
     Rt,
     Hard,
@@ -426,6 +455,9 @@ enum HeuristicArg {
 
 fn render(args: RenderArgs) -> Result<()> {
     use umbra::passes::pathtrace::{Heuristic, Microfacet, Strategy};
+    if args.direct != DirectArg::Power && args.mode != Mode::Hybrid {
+        anyhow::bail!("--direct applies to --mode hybrid (the path tracer samples its lights itself)");
+    }
     if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
         anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
     }
@@ -810,6 +842,17 @@ fn render_hybrid(
             seed: args.seed,
             env: args.scene.env_radiance(),
             ibl: !args.no_ibl,
+            direct: match args.direct {
+                DirectArg::Power => DirectLight::Power,
+                DirectArg::Restir => DirectLight::Restir(RestirSettings {
+                    candidates: args.restir_candidates,
+                    neighbours: args.restir_neighbours,
+                    frames: args.restir_frames,
+                    temporal: !args.restir_no_temporal,
+                    unbiased: args.restir_unbiased,
+                    ..Default::default()
+                }),
+            },
             ..Default::default()
         },
         exposure: args.exposure,

@@ -26,6 +26,7 @@ use crate::passes::lightmap::{
 pub use crate::passes::pathtrace::PathSettings;
 use crate::passes::pathtrace::{PathOptions, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::probes::{ProbePass, ProbeVolume};
+use crate::passes::restir::{Reservoirs, RestirPass, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::scene::Camera;
@@ -185,6 +186,9 @@ pub struct HybridTargets<'a> {
     pub probes: Option<&'a ProbeVolume>,
     /// Baked lightmaps lighting the diffuse lobe of the materials that have one.
     pub lightmaps: Option<&'a GpuLightmaps>,
+    /// ReSTIR's reservoirs (and history) for this view, when the settings sample direct light
+    /// by ReSTIR ([`crate::passes::deferred::DirectLight::Restir`]).
+    pub reservoirs: Option<&'a Reservoirs>,
 }
 
 /// A lazily built pipeline.
@@ -203,9 +207,11 @@ pub struct Passes {
     ctx: Context,
     features: SceneFeatures,
     gbuffer: OnceLock<GBufferPass>,
-    /// One per shadow method, with or without probes, with or without lightmaps: index
-    /// 4 [`ShadowMethod::index`] + 2 lightmaps + probes.
-    deferred: [OnceLock<DeferredPass>; 20],
+    /// One per shadow method, with or without probes, lightmaps, ReSTIR: index
+    /// 8 [`ShadowMethod::index`] + 4 restir + 2 lightmaps + probes.
+    deferred: [OnceLock<DeferredPass>; 40],
+    /// ReSTIR's kernels: index 2 unbiased + temporal.
+    restir: [OnceLock<RestirPass>; 4],
     shadow: OnceLock<ShadowPass>,
     probe: OnceLock<ProbePass>,
     lightmap: OnceLock<LightmapPass>,
@@ -230,7 +236,8 @@ impl Passes {
             ctx: ctx.clone(),
             features,
             gbuffer: OnceLock::new(),
-            deferred: Default::default(),
+            deferred: std::array::from_fn(|_| OnceLock::new()),
+            restir: Default::default(),
             shadow: OnceLock::new(),
             probe: OnceLock::new(),
             lightmap: OnceLock::new(),
@@ -272,9 +279,18 @@ impl Passes {
         method: ShadowMethod,
         probes: bool,
         lightmaps: bool,
+        restir: bool,
     ) -> Result<&DeferredPass> {
-        built(&self.deferred[4 * method.index() + 2 * lightmaps as usize + probes as usize], || {
-            DeferredPass::new(&self.ctx, scene, method, probes, lightmaps)
+        let index = 8 * method.index() + 4 * restir as usize + 2 * lightmaps as usize + probes as usize;
+        built(&self.deferred[index], || {
+            DeferredPass::new(&self.ctx, scene, method, probes, lightmaps, restir)
+        })
+    }
+
+    fn restir_pass(&self, scene: &GpuScene, settings: &RestirSettings) -> Result<&RestirPass> {
+        let (unbiased, temporal) = (settings.unbiased, settings.temporal);
+        built(&self.restir[2 * unbiased as usize + temporal as usize], || {
+            RestirPass::new(&self.ctx, scene, unbiased, temporal)
         })
     }
 
@@ -315,7 +331,7 @@ impl Passes {
     pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
         self.check(scene)?;
         self.gbuffer_pass(scene)?;
-        self.deferred_pass(scene, ShadowMethod::RayTraced, false, false)?;
+        self.deferred_pass(scene, ShadowMethod::RayTraced, false, false, false)?;
         self.rtao_pass(scene)?;
         self.ssao_pass()?;
         self.blur_pass()?;
@@ -426,8 +442,38 @@ impl Passes {
         settings.validate()?;
         let params = DeferredPass::params(scene, camera, gbuffer.size, settings);
         let method = inputs.shadows.map_or(ShadowMethod::RayTraced, |m| m.settings.method);
-        self.deferred_pass(scene, method, inputs.probes.is_some(), inputs.lightmaps.is_some())?
+        let (probes, lightmaps, restir) =
+            (inputs.probes.is_some(), inputs.lightmaps.is_some(), inputs.restir.is_some());
+        self.deferred_pass(scene, method, probes, lightmaps, restir)?
             .record(&self.ctx, cmd, scene, gbuffer, output, ibl, inputs, &params)
+    }
+
+    /// Records ReSTIR's candidates, temporal and spatial reuse for `gbuffer` (seen by `camera`)
+    /// into `reservoirs`, with the random numbers of `lighting`'s frame and seed; the lighting
+    /// pass then shades them ([`LightingInputs::restir`]). Never submits.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_restir(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        reservoirs: &Reservoirs,
+        settings: &RestirSettings,
+        lighting: &LightingSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        self.restir_pass(scene, settings)?.record(
+            &self.ctx,
+            cmd,
+            scene,
+            camera,
+            gbuffer,
+            reservoirs,
+            settings,
+            lighting.frame,
+            lighting.seed,
+        )
     }
 
     /// Records one update of `count` probes of `volume` (from where the last update stopped,
@@ -621,8 +667,21 @@ impl Passes {
             }
             (None, _) => None,
         };
+        let restir = match (settings.lighting.direct.restir(), targets.reservoirs) {
+            (None, _) => None,
+            (Some(restir), Some(reservoirs)) => {
+                timed(&mut timer, cmd, "restir", || {
+                    self.record_restir(cmd, scene, camera, gbuffer, reservoirs, restir, &settings.lighting)
+                })?;
+                Some(reservoirs)
+            }
+            (Some(_), None) => {
+                return Err(Error::Invalid("the settings ask for ReSTIR but no reservoirs were given".into()))
+            }
+        };
         timed(&mut timer, cmd, "lighting", || {
-            let inputs = LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps };
+            let inputs =
+                LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
             self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &settings.lighting)
         })?;
         if let Some(ldr) = targets.ldr {
@@ -865,6 +924,10 @@ impl Passes {
             None
         };
         let views = gbuffer.views();
+        let reservoirs = match settings.lighting.direct.restir() {
+            Some(_) => Some(Reservoirs::new(ctx, size)?),
+            None => None,
+        };
         let targets = HybridTargets {
             gbuffer: &views,
             ao: ao_images.as_ref().map(|(a, b)| (a.view, b.view)),
@@ -873,7 +936,11 @@ impl Passes {
             shadows: shadows.as_ref(),
             probes,
             lightmaps,
+            reservoirs: reservoirs.as_ref(),
         };
+        // ReSTIR's one-shot render runs its frames with the camera still (its history), timing
+        // the last.
+        let frames = settings.lighting.direct.restir().map_or(1, |r| r.frames);
         let mut timer = GpuTimer::new(ctx, 8)?;
         ctx.submit(|cmd| {
             output.init_general(ctx, cmd);
@@ -884,7 +951,13 @@ impl Passes {
             }
             timer.reset(cmd);
             ibl.record(ctx, cmd, scene, Some(&mut timer))?;
-            self.record_hybrid(cmd, scene, &ibl, camera, &targets, settings, Some(&mut timer))
+            for f in 0..frames {
+                let mut frame = settings.clone();
+                frame.lighting.frame = settings.lighting.frame.wrapping_mul(frames).wrapping_add(f);
+                let timer = if f + 1 == frames { Some(&mut timer) } else { None };
+                self.record_hybrid(cmd, scene, &ibl, camera, &targets, &frame, timer)?;
+            }
+            Ok(())
         })?;
         let mut pass_ms = shadow_ms;
         pass_ms.extend(timer.read()?.into_iter().map(|t| (t.name, t.ms)));

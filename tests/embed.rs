@@ -195,6 +195,7 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
         shadows: None,
         probes: None,
         lightmaps: None,
+        reservoirs: None,
     };
     let mut timer = GpuTimer::new(&gpu, 8).unwrap();
     gpu.submit(|cmd| {

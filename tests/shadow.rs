@@ -500,6 +500,7 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
         shadows: None,
         probes: None,
         lightmaps: None,
+        reservoirs: None,
     };
     let refused = gpu.submit(|cmd| renderer.record_hybrid(cmd, &stage.camera, &targets, &settings, None));
     let message = refused.err().map(|e| e.to_string()).unwrap_or_default();

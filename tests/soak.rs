@@ -85,6 +85,7 @@ fn record_frames(
         shadows: None,
         probes: None,
         lightmaps: None,
+        reservoirs: None,
     };
     let path_settings = PathSettings { size: SIZE, max_bounces: 2, ..PathSettings::default() };
     ctx.submit(|cmd| {

@@ -410,6 +410,55 @@ gpu_structs! {
         pad1: uint,
     }
 
+    /// Push constants of the ReSTIR DI kernels (`restir_initial.comp`, `restir_spatial.comp`;
+    /// [`crate::passes::restir`]).
+    struct RestirParams {
+        /// The camera.
+        camera: GpuCamera,
+        /// Image width and height.
+        size: uvec2,
+        /// Frame index (decorrelates successive frames' candidates).
+        frame: uint,
+        /// Seed of the random numbers.
+        seed: uint,
+        /// Emissive triangles in the sampling table.
+        light_count: uint,
+        /// Punctual lights.
+        punctual_count: uint,
+        /// Candidates resampled per pixel (M).
+        candidates: uint,
+        /// Spatial neighbours merged per pixel.
+        neighbours: uint,
+        /// Radius of the spatial neighbourhood, pixels.
+        radius: float,
+        /// A reused reservoir counts at most this many times `candidates`.
+        history_cap: float,
+        /// Whether the history (the previous frame's reservoirs and camera) is valid (0/1).
+        history: uint,
+        /// Padding.
+        pad0: uint,
+    }
+
+    /// A ReSTIR DI reservoir, one per pixel ([`crate::passes::restir`]).
+    struct GpuReservoir {
+        /// The light sample kept: an emissive-table entry, or `RESTIR_PUNCTUAL` | a punctual
+        /// light; `RESTIR_NONE` (all bits) for none.
+        light: uint,
+        /// Its unbiased contribution weight W.
+        weight: float,
+        /// Its barycentrics on the emissive triangle.
+        bary: vec2,
+        /// The candidates it stands for (M).
+        count: float,
+        /// View depth of the surface it was built for (0: none).
+        depth: float,
+        /// That surface's shading normal, octahedral, `packSnorm2x16`.
+        normal: uint,
+        /// `RESTIR_VISIBLE`: `weight` includes the sample's visibility (0 when occluded), so the
+        /// lighting pass traces no shadow ray.
+        flags: uint,
+    }
+
     /// One shadow-map layer (a spot light's map, a cube face, a cascade) as the rasterizer and
     /// the lighting pass read it: six RGBA32UI texels in `shadow_texels` (float bits but for
     /// `offset`, `size`, `kind`).
@@ -838,6 +887,13 @@ gpu_constants! {
     DENOISE_EDGE_STOPPING: uint = 4;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
+    /// [`GpuReservoir::light`]: the reservoir holds no sample.
+    RESTIR_NONE: uint = 0xffffffff;
+    /// [`GpuReservoir::light`]: the sample is punctual light `light & !RESTIR_PUNCTUAL` (else a
+    /// point on emissive-table entry `light`).
+    RESTIR_PUNCTUAL: uint = 0x80000000;
+    /// [`GpuReservoir::flags`]: the weight includes the sample's visibility.
+    RESTIR_VISIBLE: uint = 1;
     /// Implicit shapes (`implicit.glsl`): a sphere (params: radius).
     IMPLICIT_SPHERE: uint = 0;
     /// A box (params: half extents).
@@ -1040,7 +1096,8 @@ kernels! {
             shadow_pcss: bool = false,
             shadow_moments: bool = false,
             probes: bool = false,
-            lightmaps: bool = false
+            lightmaps: bool = false,
+            restir: bool = false
         },
         bindings: {
             /// View-space depth.
@@ -1079,6 +1136,59 @@ kernels! {
             /// Lightmaps: the header (texels a side, materials), per material its map's index + 1
             /// (0: none), then every map's ambient irradiance (rgb); one texel without lightmaps.
             lightmap_texels: readonly texels rgba32f,
+            /// ReSTIR DI: the frame's reservoirs (`restir` only; one element otherwise).
+            reservoirs: readonly buffer [GpuReservoir],
+        }
+    }
+
+    /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
+    kernel restir_initial {
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        push: RestirParams,
+        spec: {
+            beckmann: bool = false,
+            unbiased: bool = false,
+            temporal: bool = true
+        },
+        bindings: {
+            /// View-space depth.
+            gb_depth: readonly image r32f,
+            /// Shading normal xyz, perceptual roughness.
+            gb_normal: readonly image rgba16f,
+            /// Base colour, metallic.
+            gb_base: readonly image rgba16f,
+            /// Material index, octahedral geometric normal, UV1 (float bits).
+            gb_material: readonly image rgba32ui,
+            /// The previous frame's camera.
+            prev_camera: readonly buffer GpuCamera,
+            /// The previous frame's reservoirs.
+            history: readonly buffer [GpuReservoir],
+            /// This frame's reservoirs before spatial reuse.
+            reservoirs: readwrite buffer [GpuReservoir],
+        }
+    }
+
+    /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
+    kernel restir_spatial {
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        push: RestirParams,
+        spec: {
+            beckmann: bool = false,
+            unbiased: bool = false
+        },
+        bindings: {
+            /// View-space depth.
+            gb_depth: readonly image r32f,
+            /// Shading normal xyz, perceptual roughness.
+            gb_normal: readonly image rgba16f,
+            /// Base colour, metallic.
+            gb_base: readonly image rgba16f,
+            /// Material index, octahedral geometric normal, UV1 (float bits).
+            gb_material: readonly image rgba32ui,
+            /// The reservoirs before spatial reuse.
+            reservoirs_in: readonly buffer [GpuReservoir],
+            /// The frame's reservoirs.
+            reservoirs_out: readwrite buffer [GpuReservoir],
         }
     }
 

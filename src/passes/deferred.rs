@@ -18,14 +18,15 @@ use super::gbuffer::GBufferViews;
 use super::ibl::IblResources;
 use super::lightmap::GpuLightmaps;
 use super::probes::ProbeVolume;
+use super::restir::{Reservoirs, RestirSettings};
 use super::shadow::{ShadowMaps, ShadowMethod};
 use crate::error::{Error, Result};
 use crate::gpu::kernels::deferred;
-use crate::gpu::layout::{DeferredParams, GpuCamera};
+use crate::gpu::layout::{DeferredParams, GpuCamera, GpuReservoir};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Context, Image, TexelBuffer};
+use crate::vk::{barrier, raw, Buffer, Context, Image, TexelBuffer};
 
 /// What the lighting pass computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,11 +44,43 @@ pub struct LightingSettings {
     pub ibl: bool,
     /// Which direction the prefiltered environment is read along.
     pub ibl_lookup: IblLookup,
+    /// How the direct light of the punctual lights and emissive triangles is sampled.
+    pub direct: DirectLight,
+}
+
+/// How the lighting pass samples direct light (punctual lights and emissive triangles).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum DirectLight {
+    /// Every punctual light (up to 16; beyond, 16 picked by power) with its shadow ray, and
+    /// [`LightingSettings::shadow_rays`] samples of the emissive triangles by power.
+    #[default]
+    Power,
+    /// ReSTIR DI ([`crate::passes::restir`]): one resampled light sample per pixel, one shadow
+    /// ray (and one more for the biased combination's visibility reuse).
+    Restir(RestirSettings),
+}
+
+impl DirectLight {
+    /// ReSTIR's settings, if it is ReSTIR.
+    pub fn restir(&self) -> Option<&RestirSettings> {
+        match self {
+            DirectLight::Power => None,
+            DirectLight::Restir(r) => Some(r),
+        }
+    }
 }
 
 impl Default for LightingSettings {
     fn default() -> Self {
-        Self { shadow_rays: 4, frame: 0, seed: 0, env: [0.0; 3], ibl: true, ibl_lookup: IblLookup::Dominant }
+        Self {
+            shadow_rays: 4,
+            frame: 0,
+            seed: 0,
+            env: [0.0; 3],
+            ibl: true,
+            ibl_lookup: IblLookup::Dominant,
+            direct: DirectLight::Power,
+        }
     }
 }
 
@@ -74,6 +107,9 @@ impl LightingSettings {
                 self.env
             )));
         }
+        if let Some(restir) = self.direct.restir() {
+            restir.validate()?;
+        }
         Ok(())
     }
 }
@@ -93,6 +129,9 @@ pub struct LightingInputs<'a> {
     /// Baked lightmaps lighting the diffuse lobe of the materials that have one (over the
     /// probes), at the G-buffer's UV1.
     pub lightmaps: Option<&'a GpuLightmaps>,
+    /// ReSTIR's reservoirs for this frame, recorded before ([`crate::passes::restir`]); the pass
+    /// must have been built for them.
+    pub restir: Option<&'a Reservoirs>,
 }
 
 /// The direction along which the split sum reads its prefiltered environment.
@@ -120,6 +159,10 @@ pub struct DeferredPass {
     lightmaps: bool,
     /// One-texel stand-ins for the probe volume's bindings when there is none.
     no_probes: [TexelBuffer; 2],
+    /// Whether the pass shades ReSTIR's reservoirs.
+    restir: bool,
+    /// One reservoir standing in for them otherwise.
+    no_reservoirs: Buffer,
 }
 
 impl DeferredPass {
@@ -127,14 +170,16 @@ impl DeferredPass {
     pub const LOCAL: [u32; 3] = [8, 8, 1];
 
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
-    /// an environment map, unlit materials), for shadows by `method`, and for indirect diffuse light from a probe
-    /// volume when `probes` and from lightmaps when `lightmaps`.
+    /// an environment map, unlit materials), for shadows by `method`, for indirect diffuse light from a probe
+    /// volume when `probes` and from lightmaps when `lightmaps`, and for direct light from ReSTIR's
+    /// reservoirs when `restir` (else by power sampling).
     pub fn new(
         ctx: &Context,
         scene: &GpuScene,
         method: ShadowMethod,
         probes: bool,
         lightmaps: bool,
+        restir: bool,
     ) -> Result<Self> {
         let spec = deferred::Spec {
             beckmann: false,
@@ -144,6 +189,7 @@ impl DeferredPass {
             shadow_moments: method == ShadowMethod::Moments,
             probes,
             lightmaps,
+            restir,
         };
         let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
@@ -160,7 +206,13 @@ impl DeferredPass {
             )?,
         ];
         let no_probes = super::probes::no_probe_bindings(ctx)?;
-        Ok(Self { pipeline, method, no_ao, no_shadow, probes, lightmaps, no_probes })
+        let no_reservoirs = Buffer::upload(
+            ctx,
+            "no reservoirs",
+            &[GpuReservoir::default()],
+            raw::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        Ok(Self { pipeline, method, no_ao, no_shadow, probes, lightmaps, no_probes, restir, no_reservoirs })
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -204,7 +256,24 @@ impl DeferredPass {
         inputs: &LightingInputs<'_>,
         params: &DeferredParams,
     ) -> Result<()> {
-        let LightingInputs { ao, shadows, probes, lightmaps } = *inputs;
+        let LightingInputs { ao, shadows, probes, lightmaps, restir } = *inputs;
+        let reservoirs = match (self.restir, restir) {
+            (false, None) => &self.no_reservoirs,
+            (true, Some(r)) if r.size == gbuffer.size => r.frame(),
+            (true, Some(r)) => {
+                return Err(Error::Invalid(format!(
+                    "ReSTIR reservoirs of {}x{} for a {}x{} G-buffer",
+                    r.size.0, r.size.1, gbuffer.size.0, gbuffer.size.1
+                )))
+            }
+            (built, _) => {
+                return Err(Error::Invalid(format!(
+                    "the lighting pass was built {} ReSTIR but was given {}",
+                    if built { "for" } else { "without" },
+                    if built { "no reservoirs" } else { "reservoirs" }
+                )))
+            }
+        };
         let [no_states, no_maps] = &self.no_probes;
         let lightmap_texels = match (self.lightmaps, lightmaps) {
             (false, None) => no_maps,
@@ -264,6 +333,7 @@ impl DeferredPass {
             probe_irradiance,
             probe_distance,
             lightmap_texels,
+            reservoirs,
         };
         self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);

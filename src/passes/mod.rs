@@ -8,5 +8,6 @@ pub mod ibl;
 pub mod lightmap;
 pub mod pathtrace;
 pub mod probes;
+pub mod restir;
 pub mod shadow;
 pub mod tonemap;

@@ -20,6 +20,7 @@ pub fn all() -> Vec<(&'static str, Vec<u8>)> {
         ("textured.glb", textured()),
         ("instanced.glb", instanced()),
         ("glass.glb", glass()),
+        ("many-lights.glb", many_lights()),
     ]
 }
 
@@ -207,6 +208,94 @@ pub fn textured() -> Vec<u8> {
         g.camera_node("camera", [2.5, 2.0, 3.5], look_rotation(Vec3::new(2.5, 2.0, 3.5), Vec3::new(0.0, 0.3, 0.0)), 0.8, 4.0 / 3.0),
     ];
     g.finish(nodes, &["KHR_texture_transform", "KHR_lights_punctual"])
+}
+
+/// Many lights over a hall of pillars, for light selection (ReSTIR DI against power sampling,
+/// issue 22): a 16 m square floor and a back wall, a 4×4 grid of pillars, 240 small emissive
+/// tiles (480 triangles, facing down, 0.2 m a side, 12 materials whose radiance spans 0.2 to 40)
+/// scattered between 0.4 and 3 m up, and 128 point and 8 spot lights (intensity 0.04 to 4 cd,
+/// coloured) among them; a camera looking down the hall. Positions, colours and strengths come
+/// from a fixed linear congruential sequence, so the file is the same on every machine.
+pub fn many_lights() -> Vec<u8> {
+    let mut g = Gltf::new();
+    // Numerical Recipes' LCG, top 24 bits as a float in [0, 1).
+    let mut state = 0x2545_f491u32;
+    let mut rand = move || {
+        state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (state >> 8) as f32 / 16_777_216.0
+    };
+    let palette = [[1.0, 0.55, 0.25], [0.35, 0.6, 1.0], [1.0, 0.9, 0.8], [0.5, 1.0, 0.45]];
+    let floor_material = g.material("floor", [0.6, 0.6, 0.6], 0.0, 0.7);
+    let pillar_material = g.material("pillar", [0.8, 0.78, 0.75], 0.0, 0.5);
+    let c = Vec3::new;
+    let mut hall = Mesh::default();
+    hall.quad(c(0.0, 0.0, 0.0), c(8.0, 0.0, 0.0), c(0.0, 0.0, -8.0)); // floor, +Y
+    hall.quad(c(0.0, 2.0, -8.0), c(8.0, 0.0, 0.0), c(0.0, 2.0, 0.0)); // back wall, +Z
+    let hall = vec![g.primitive(&hall.bare(), floor_material)];
+    let hall = g.mesh("hall", hall);
+    let pillar = vec![g.primitive(&Mesh::cuboid().bare(), pillar_material)];
+    let pillar = g.mesh("pillar", pillar);
+    let mut nodes = vec![g.push("nodes", json!({ "name": "hall", "mesh": hall }))];
+    for i in 0..16 {
+        let (x, z) = ((i % 4) as f64 * 4.0 - 6.0, (i / 4) as f64 * 4.0 - 6.0);
+        nodes.push(g.push(
+            "nodes",
+            json!({ "name": format!("pillar {i}"), "mesh": pillar,
+            "translation": [x, 1.5, z], "scale": [0.3, 1.5, 0.3] }),
+        ));
+    }
+    // 12 emissive materials: four colours, three strengths each; 20 tiles per material.
+    let mut tiles = Vec::new();
+    for m in 0..12 {
+        let colour = palette[m % 4];
+        let strength = [0.2, 3.0, 40.0][m / 4];
+        let material = g.push("materials", json!({
+            "name": format!("lamp {m}"),
+            "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0 },
+            "emissiveFactor": colour,
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": strength } }
+        }));
+        let mut mesh = Mesh::default();
+        for _ in 0..20 {
+            let p = c(rand() * 15.0 - 7.5, 0.4 + rand() * 2.6, rand() * 15.0 - 7.5);
+            mesh.quad(p, c(0.1, 0.0, 0.0), c(0.0, 0.0, 0.1)); // facing -Y
+        }
+        tiles.push(g.primitive(&mesh.bare(), material));
+    }
+    let tiles = g.mesh("lamps", tiles);
+    nodes.push(g.push("nodes", json!({ "name": "lamps", "mesh": tiles })));
+    for i in 0..136 {
+        let colour = palette[i % 4];
+        let intensity = 0.04 * 100f32.powf(rand());
+        let position = [rand() * 15.0 - 7.5, 0.2 + rand() * 2.8, rand() * 15.0 - 7.5];
+        let (light, rotation) = if i < 128 {
+            (
+                json!({ "name": format!("bulb {i}"), "type": "point", "color": colour, "intensity": intensity }),
+                None,
+            )
+        } else {
+            let light = json!({ "name": format!("spot {i}"), "type": "spot", "color": colour,
+                "intensity": intensity * 10.0, "spot": { "innerConeAngle": 0.3, "outerConeAngle": 0.6 } });
+            let down = c(rand() - 0.5, -1.0, rand() - 0.5).normalize();
+            (light, Some(quat(Quat::from_rotation_arc(-Vec3::Z, down))))
+        };
+        let light = g.light(light);
+        let mut node = json!({ "name": format!("light {i}"), "translation": position,
+            "extensions": { "KHR_lights_punctual": { "light": light } } });
+        if let Some(rotation) = rotation {
+            node["rotation"] = rotation;
+        }
+        nodes.push(g.push("nodes", node));
+    }
+    let eye = Vec3::new(0.0, 4.5, 9.5);
+    nodes.push(g.camera_node(
+        "camera",
+        [0.0, 4.5, 9.5],
+        look_rotation(eye, Vec3::new(0.0, 0.5, 0.0)),
+        0.9,
+        1.0,
+    ));
+    g.finish(nodes, &["KHR_materials_emissive_strength", "KHR_lights_punctual"])
 }
 
 /// Rough glass in a corner of checkered floor and wall: a solid sphere (`KHR_materials_volume`,

@@ -82,6 +82,7 @@ pub fn run(
         shadows: None,
         probes: None,
         lightmaps: None,
+        reservoirs: None,
     };
     let settings = HybridSettings {
         size,

@@ -74,6 +74,7 @@ pub fn run(
             shadows: maps.as_ref(),
             probes: None,
             lightmaps: None,
+            reservoirs: None,
         };
         let hybrid = HybridSettings {
             size,

@@ -18,7 +18,8 @@ use glam::{DVec3, Vec3};
 use serde_json::{json, Value};
 use umbra::gpu::layout::GpuCamera;
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::deferred::LightingSettings;
+use umbra::passes::deferred::{DirectLight, LightingSettings};
+use umbra::passes::restir::RestirSettings;
 use umbra::render::{hybrid, path_trace, HybridImage, HybridSettings, PathSettings};
 use umbra::scene::{Camera, LightKind, Scene};
 
@@ -44,11 +45,16 @@ fn camera(position: Vec3, target: Vec3, yfov: f32) -> Camera {
 
 /// The hybrid render (direct light only: no environment, no IBL, no SSAO).
 fn render_hybrid(gpu: &Gpu, scene: &Scene) -> HybridImage {
+    render_hybrid_with(gpu, scene, DirectLight::Power)
+}
+
+/// The hybrid render with the lighting pass's `direct` light.
+fn render_hybrid_with(gpu: &Gpu, scene: &Scene, direct: DirectLight) -> HybridImage {
     let gpu_scene = GpuScene::upload(gpu, scene).unwrap();
     assert_eq!(gpu_scene.has_parallax, scene.materials.iter().any(|m| m.parallax.is_some()));
     let settings = HybridSettings {
         size: SIZE,
-        lighting: LightingSettings { env: [0.0; 3], ibl: false, ..Default::default() },
+        lighting: LightingSettings { env: [0.0; 3], ibl: false, direct, ..Default::default() },
         ao: None,
         ..Default::default()
     };
@@ -258,9 +264,21 @@ const GRAZING_EXACT_ERROR: f64 = 1e-4;
 
 /// (4) Self-shadowing: a sun low over the raised half shines across the step; the floor within
 /// scale × tan(60°) of the wall lies in the step's shadow. The hybrid renders it dark with
-/// parallax (and the floor further out lit), lit without.
+/// parallax (and the floor further out lit), lit without; with every direct-light method of the
+/// lighting pass (power-sampled lights, ReSTIR biased and unbiased).
 #[test]
 fn the_height_field_shadows_itself_in_the_hybrid() {
+    let methods = [
+        DirectLight::Power,
+        DirectLight::Restir(RestirSettings::default()),
+        DirectLight::Restir(RestirSettings { unbiased: true, ..Default::default() }),
+    ];
+    for direct in methods {
+        self_shadow(direct);
+    }
+}
+
+fn self_shadow(direct: DirectLight) {
     let gpu = Gpu::new();
     let s = 0.25;
     let sun = Vec3::new(60f32.to_radians().sin(), 0.0, -60f32.to_radians().cos());
@@ -272,22 +290,28 @@ fn the_height_field_shadows_itself_in_the_hybrid() {
     );
     let without =
         scene(&generate::parallax_square(1.0, 16, 16, &step_heights(), false, None), cam, Some(sun));
-    let (a, b) = (render_hybrid(&gpu, &with), render_hybrid(&gpu, &without));
+    let (a, b) = (render_hybrid_with(&gpu, &with, direct), render_hybrid_with(&gpu, &without, direct));
     let shadow_end = s * 60f64.to_radians().tan();
     let (mut shadowed, mut lit) = (0, 0);
     for i in 0..(SIZE.0 * SIZE.1) as usize {
         let Some((x, _)) = shown(&a, i, 1.0) else { continue };
         let (ra, rb) = (a.color[i][0], b.color[i][0]);
         if x > 0.02 && x < shadow_end - 0.02 {
-            assert!(ra < 1e-4, "pixel {i} (floor at x = {x:.3}, in the step's shadow) is lit: {ra}");
-            assert!(rb > 0.05, "pixel {i} is dark without parallax: {rb}");
+            assert!(
+                ra < 1e-4,
+                "{direct:?}: pixel {i} (floor at x = {x:.3}, in the step's shadow) is lit: {ra}"
+            );
+            assert!(rb > 0.05, "{direct:?}: pixel {i} is dark without parallax: {rb}");
             shadowed += 1;
         } else if x > shadow_end + 0.02 && x < 0.9 {
-            assert!(ra > 0.05 && rb > 0.05, "pixel {i} (floor at x = {x:.3}, in the sun): {ra}, {rb}");
+            assert!(
+                ra > 0.05 && rb > 0.05,
+                "{direct:?}: pixel {i} (floor at x = {x:.3}, in the sun): {ra}, {rb}"
+            );
             lit += 1;
         }
     }
-    eprintln!("{shadowed} pixels in the step's shadow, {lit} in the sun beyond it");
+    eprintln!("{direct:?}: {shadowed} pixels in the step's shadow, {lit} in the sun beyond it");
     assert!(shadowed >= 200 && lit >= 200, "{shadowed} shadowed, {lit} lit pixels");
 }
 

@@ -222,7 +222,9 @@ void main() {
         return;
     }
     // Parallax occlusion mapping: the G-buffer's primary ray again, marched into the height field
-    // by the same function, for the self-shadowing of the light samples below (light_side).
+    // by the same function, for the self-shadowing of the light samples below (light_side; under
+    // ReSTIR through restir_contribution's light_side: the ReSTIR kernels themselves are not
+    // specialised for parallax, as they read their neighbours' G-buffer points).
     if (HAS_PARALLAX) {
         if (material_slot_texture(sp.material, MATERIAL_SLOT_HEIGHT) != 0u) {
             Hit hit;
@@ -279,13 +281,6 @@ void main() {
                                                       surface_transmits(s), wi, to_point, target, wi_local);
                     } else {
                         visible = restir_visible(sp, wi, to_point, target) ? 1.0 : 0.0;
-                    }
-                }
-                if (HAS_PARALLAX) {
-                    // The height field's self-shadowing (the reservoirs' visibility does not see it:
-                    // the ReSTIR kernels are not specialised for parallax).
-                    if (!parallax_lit(wi)) {
-                        visible = 0.0;
                     }
                 }
                 radiance += c * (visible * w);

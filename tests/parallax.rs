@@ -438,4 +438,24 @@ fn the_extension_is_read_and_bad_input_named() {
         assert!(err.contains("material 0 ('pom')"), "{err}");
         assert!(err.contains(expected), "{p}: {err}");
     }
+
+    // A height map that cannot be decoded: an error, or with MissingTextures::Warn a warning and
+    // no parallax (the flat surface).
+    use umbra::scene::{LoadOptions, MissingTextures};
+    let (json, mut bin) =
+        generate::split_glb(&generate::parallax_square(1.0, 1, 1, &[255], false, Some(parallax(0.1, 8, 2))));
+    let view = &json["bufferViews"][json["images"][0]["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap() as usize;
+    bin[at..at + 8].copy_from_slice(b"garbage!");
+    let dir = std::env::temp_dir().join(format!("umbra-parallax-garbage-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("garbage.glb");
+    std::fs::write(&file, generate::glb(&serde_json::to_vec(&json).unwrap(), &bin)).unwrap();
+    let err = Scene::load_with(&file, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(err.contains("garbage.glb"), "{err}");
+    let warn = LoadOptions { missing_textures: MissingTextures::Warn };
+    let scene = Scene::load_with(&file, &warn).expect("an undecodable height map is a warning");
+    assert!(scene.materials[0].parallax.is_none(), "parallax kept without its height map");
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    std::fs::remove_dir_all(&dir).ok();
 }

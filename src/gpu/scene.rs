@@ -3,7 +3,7 @@
 
 use super::layout::{
     GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources,
-    MATERIAL_TEXTURE_SLOTS,
+    MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
 };
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
@@ -72,6 +72,10 @@ pub struct GpuScene {
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
+    /// Whether some material has parallax occlusion mapping (`UMBRA_implicit`'s `parallax`, its
+    /// height map in `MATERIAL_SLOT_HEIGHT`): the shading kernels look up the height slot and
+    /// march height fields only then.
+    pub has_parallax: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// The environment map's mean luminance over the sphere of directions (0 without one).
@@ -326,7 +330,12 @@ impl ShadingArrays {
                                 gpu_textures.slot(scene, m.normal_texture.as_ref())
                             },
                         ],
-                        [gpu_textures.slot(scene, m.occlusion_texture.as_ref()), 0, 0, 0],
+                        [
+                            gpu_textures.slot(scene, m.occlusion_texture.as_ref()),
+                            gpu_textures.slot(scene, m.parallax.as_ref().map(|p| &p.height)),
+                            0,
+                            0,
+                        ],
                     ],
                     tex_transform: transforms([
                         m.base_color_texture.as_ref(),
@@ -334,6 +343,7 @@ impl ShadingArrays {
                         m.emissive_texture.as_ref(),
                         m.normal_texture.as_ref(),
                         m.occlusion_texture.as_ref(),
+                        m.parallax.as_ref().map(|p| &p.height),
                     ]),
                     base_color: m.base_color_factor,
                     emissive_rough: {
@@ -348,6 +358,9 @@ impl ShadingArrays {
                     ],
                     params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
                     clearcoat: [m.clearcoat, m.clearcoat_roughness, 0.0, 0.0],
+                    parallax: m
+                        .parallax
+                        .map_or([0.0; 4], |p| [p.scale, p.layers as f32, p.refinement as f32, 0.0]),
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                             | if m.volume { GpuMaterial::VOLUME } else { 0 }
@@ -461,6 +474,7 @@ impl GpuScene {
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: coated(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
+            has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -509,6 +523,7 @@ impl GpuScene {
         self.has_colors = colored(&arrays.vertices);
         self.has_unlit = unlit(&arrays.materials);
         self.has_clearcoat = coated(&arrays.materials);
+        self.has_parallax = parallax(&arrays.materials);
         Ok(())
     }
 }
@@ -574,6 +589,11 @@ fn unlit(materials: &[GpuMaterial]) -> bool {
 
 fn coated(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.clearcoat[0] > 0.0)
+}
+
+fn parallax(materials: &[GpuMaterial]) -> bool {
+    let slot = MATERIAL_SLOT_HEIGHT as usize;
+    materials.iter().any(|m| m.textures[slot / 4][slot % 4] != 0)
 }
 
 /// The scene's punctual lights with their selection table: by power (KHR_lights_punctual's

@@ -163,6 +163,17 @@ impl Reservoirs {
         self.history.set(None);
     }
 
+    /// An error unless they are for images of `size` (the G-buffer's).
+    pub fn check_size(&self, size: (u32, u32)) -> Result<()> {
+        if self.size != size {
+            return Err(Error::Invalid(format!(
+                "ReSTIR reservoirs of {}x{} for a {}x{} G-buffer",
+                self.size.0, self.size.1, size.0, size.1
+            )));
+        }
+        Ok(())
+    }
+
     /// The frame's reservoirs (read by the lighting pass).
     pub fn frame(&self) -> &Buffer {
         &self.frame
@@ -221,12 +232,7 @@ impl RestirPass {
         if settings.unbiased != self.unbiased || settings.temporal != self.temporal {
             return Err(Error::Invalid("the ReSTIR pass was built for other settings".into()));
         }
-        if reservoirs.size != gbuffer.size {
-            return Err(Error::Invalid(format!(
-                "ReSTIR reservoirs of {}x{} for a {}x{} G-buffer",
-                reservoirs.size.0, reservoirs.size.1, gbuffer.size.0, gbuffer.size.1
-            )));
-        }
+        reservoirs.check_size(gbuffer.size)?;
         let size = gbuffer.size;
         let history = reservoirs.history.get();
         if let Some(prev) = history {

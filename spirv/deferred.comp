@@ -228,6 +228,18 @@ void main() {
         imageStore(out_color, pixel, vec4(sp.s.base, 1.0));
         return;
     }
+    // Parallax occlusion mapping: the G-buffer's primary ray again, marched into the height field
+    // by the same function, for the self-shadowing of the light samples below (light_side; under
+    // ReSTIR through restir_contribution's light_side: the ReSTIR kernels themselves are not
+    // specialised for parallax, as they read their neighbours' G-buffer points).
+    if (HAS_PARALLAX) {
+        if (material_slot_texture(sp.material, MATERIAL_SLOT_HEIGHT) != 0u) {
+            Hit hit;
+            if (bvh_closest(params.camera.origin, -sp.wo, 0.0, BVH_INF, hit)) {
+                parallax_occlusion(hit.tri, hit.bary, sp.wo);
+            }
+        }
+    }
     if (sp.wo_local.z > 0.0) {
         Surface s = sp.s;
         // Image-based lighting (split sum) and the probes' irradiance, times ambient occlusion.

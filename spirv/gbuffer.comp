@@ -39,6 +39,10 @@ void main() {
     uint tri = hit.tri;
     vec3 ng = normalize(hit_normal(hit));
     vec3 wo = -dir;
+    // Parallax occlusion mapping: the hit's attributes are read where the view ray meets the
+    // material's height field (the same function as the path tracer's; deferred.comp marches it
+    // again for the self-shadowing).
+    hit.bary = parallax_occlusion(tri, hit.bary, wo);
     vec4 uv = tri_uv(tri, hit.bary);
     // One sample per pixel: textures are filtered over the pixel's footprint, a ray cone whose
     // spread is the angle of a pixel (Ray Tracing Gems ch. 20) and whose width at the hit is t

@@ -134,6 +134,9 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albed
     vec3 wo = -dir;
     vec3 p = path.origin + hit.t * dir;
     uint material = tri_material(tri);
+    // Parallax occlusion mapping: the hit's attributes are read where the ray meets the material's
+    // height field, whose self-shadowing then applies to every light sample (light_side).
+    hit.bary = parallax_occlusion(tri, hit.bary, wo);
     if (HAS_TRANSMISSION && dot(ng, wo) < 0.0 && material_flag(material, MATERIAL_VOLUME)) {
         // A volume's boundary reached from behind: the segment ran inside it (a closed mesh
         // whose normals face out, as KHR_materials_volume requires), so Beer-Lambert.
@@ -261,6 +264,14 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albed
     float side = dot(wi, ng);
     if (transmitted ? side >= 0.0 : side <= 0.0) {
         return false;  // the shading normal and the geometry disagree about the side
+    }
+    if (HAS_PARALLAX) {
+        // A sampled direction into the height field: the path ends (the field's interreflection
+        // is not traced), so BSDF sampling sees the self-shadowing light sampling sees and MIS
+        // weighs like with like.
+        if (!parallax_lit(wi)) {
+            return false;
+        }
     }
     path.nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
     throughput *= weight;

@@ -27,6 +27,10 @@
 //! // or (for a directional light's cascades) the camera changes:
 //! let maps = renderer.shadow_maps(&camera, size, &shadow_settings)?;
 //! renderer.record_shadow_maps(cmd, &maps)?;  // then `shadows: Some(&maps)` in the inputs
+//! // many lights: ReSTIR DI, its reservoirs kept from frame to frame (their history):
+//! let reservoirs = renderer.reservoirs(size)?;                       // once per view
+//! renderer.record_restir(cmd, &camera, &gbuffer_views, &reservoirs, &restir, &lighting)?;
+//! // then `restir: Some(&reservoirs)` in the inputs, `DirectLight::Restir(restir)` in `lighting`
 //! // indirect diffuse light from irradiance probes: baked once, or a budget updated per frame:
 //! let mut probes = renderer.probe_volume(&ProbeSettings::default())?;
 //! renderer.record_probe_update(cmd, &mut probes, 64, &lighting)?;  // `probes: Some(&probes)`
@@ -67,6 +71,7 @@ use crate::passes::gbuffer::GBufferViews;
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
 use crate::passes::probes::{ProbeSettings, ProbeVolume};
+use crate::passes::restir::{Reservoirs, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
@@ -248,6 +253,29 @@ impl Renderer {
         settings: &LightingSettings,
     ) -> Result<()> {
         self.passes.record_lighting(cmd, &self.scene, &self.ibl, camera, gbuffer, output, inputs, settings)
+    }
+
+    /// ReSTIR's reservoirs for a view of `size` (keep them from frame to frame: they hold the
+    /// history temporal reuse builds on; [`Reservoirs::reset`] at a cut).
+    pub fn reservoirs(&self, size: (u32, u32)) -> Result<Reservoirs> {
+        Reservoirs::new(&self.ctx, size)
+    }
+
+    /// Records ReSTIR DI's candidates and reuse for `gbuffer` into `reservoirs` with the random
+    /// numbers of `lighting`'s frame and seed; then [`Self::record_lighting`] with
+    /// `restir: Some(&reservoirs)` in its inputs and
+    /// [`crate::passes::deferred::DirectLight::Restir`] in its settings
+    /// shades them. Never submits.
+    pub fn record_restir(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        reservoirs: &Reservoirs,
+        settings: &RestirSettings,
+        lighting: &LightingSettings,
+    ) -> Result<()> {
+        self.passes.record_restir(cmd, &self.scene, camera, gbuffer, reservoirs, settings, lighting)
     }
 
     /// A probe volume over the scene by `settings`, its probes inactive until updated

@@ -249,6 +249,9 @@ struct RenderArgs {
     /// Hybrid, ReSTIR: spatial neighbours merged per pixel (0 to 8).
     #[arg(long, default_value_t = RestirSettings::default().neighbours)]
     restir_neighbours: u32,
+    /// Hybrid, ReSTIR: radius of the spatial neighbourhood, pixels.
+    #[arg(long, default_value_t = RestirSettings::default().radius, value_parser = cli::parse_positive)]
+    restir_radius: f32,
     /// Hybrid, ReSTIR: frames rendered with the camera still, the last one kept (temporal reuse
     /// builds on the earlier ones).
     #[arg(long, default_value_t = RestirSettings::default().frames)]
@@ -847,6 +850,7 @@ fn render_hybrid(
                 DirectArg::Restir => DirectLight::Restir(RestirSettings {
                     candidates: args.restir_candidates,
                     neighbours: args.restir_neighbours,
+                    radius: args.restir_radius,
                     frames: args.restir_frames,
                     temporal: !args.restir_no_temporal,
                     unbiased: args.restir_unbiased,

@@ -146,6 +146,45 @@ fn denoise_quick_writes_json_and_a_chart() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `umbra-bench restir` on a tiny image writes JSON with every method's points and a chart, and
+/// its table prints them.
+#[test]
+fn restir_writes_json_a_chart_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-restir-bench-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args([
+            "restir",
+            "--size",
+            "16x16",
+            "--reference-frames",
+            "2",
+            "--repeats",
+            "1",
+            "--frames",
+            "2",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = dir.join("restir.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("restir.json written")).expect("parses");
+    let points = json["points"].as_array().expect("points");
+    for method in ["power", "RIS alone", "ReSTIR unbiased", "ReSTIR biased"] {
+        assert!(points.iter().any(|p| p["method"] == method), "{method} measured");
+    }
+    assert!(points.iter().all(|p| p["ms"].as_f64().unwrap() > 0.0 && p["rel_mse"].as_f64().unwrap() >= 0.0));
+    let svg = std::fs::read_to_string(dir.join("restir.svg")).expect("SVG chart");
+    assert!(svg.contains("ReSTIR biased"), "the biased series is charted");
+    let table =
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench")).arg("restir").arg("--table").arg(&path).output();
+    let table = String::from_utf8(table.unwrap().stdout).unwrap();
+    assert!(table.contains("| ReSTIR unbiased | 16 candidates |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The commands that print BENCHMARKS.md's current tables from the JSON committed in docs/bench.
 const GENERATED_TABLES: &[&[&str]] = &[
     &["rays", "--table", "docs/bench/rays.json"],
@@ -162,6 +201,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["peers", "--table", "docs/bench/path.json"],
     &["peers", "--table", "docs/bench/path-helmet.json"],
     &["implicit", "--table", "docs/bench/implicit.json"],
+    &["restir", "--table", "docs/bench/restir.json"],
 ];
 
 /// BENCHMARKS.md's figures cannot drift from their JSON: everything each `--table` command prints

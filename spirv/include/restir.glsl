@@ -123,13 +123,14 @@ vec3 restir_contribution(ShadePoint sp, uint id, vec2 bary, out vec3 wi, out boo
     if (id == RESTIR_NONE) {
         return vec3(0.0);
     }
+    // (A reused sample of a light the scene no longer has, after an update, lights nothing.)
     if (HAS_PUNCTUAL) {
-        if ((id & RESTIR_PUNCTUAL) != 0u) {
+        if ((id & RESTIR_PUNCTUAL) != 0u && (id & ~RESTIR_PUNCTUAL) < params.punctual_count) {
             li = punctual_incident(id & ~RESTIR_PUNCTUAL, sp.p, wi, to_point, target);
         }
     }
     if (HAS_LIGHTS) {
-        if ((id & RESTIR_PUNCTUAL) == 0u) {
+        if ((id & RESTIR_PUNCTUAL) == 0u && id < params.light_count) {
             uint ltri = light_tri(id);
             target = (1.0 - bary.x - bary.y) * tri_vertex(ltri, 0u) + bary.x * tri_vertex(ltri, 1u)
                    + bary.y * tri_vertex(ltri, 2u);

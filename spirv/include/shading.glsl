@@ -17,8 +17,8 @@
 #include "texture.glsl"
 
 // Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
-// specular, params, flags, textures[0..2], tex_transform[0..10]), as floats or as unsigned
-// integers.
+// specular, params, flags, textures[0..2], tex_transform[0..12], clearcoat, parallax), as floats
+// or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
 }
@@ -95,12 +95,21 @@ vec4 vertex_tangent(uint i) {
     return uintBitsToFloat(imageLoad(vertex_texels, int(3u * i + 2u)));
 }
 
+// Whether the height field of the hit parallax_occlusion last marched lets light arriving along
+// wi reach the point it found (true where there was none); defined below.
+bool parallax_lit(vec3 wi);
+
 // Which side of the surface light arriving along wi (unit, towards the light) comes from: 1 above
 // both the shading frame (t, b, n) and the geometric surface ng, -1 below both on a surface that
-// `transmits`, 0 otherwise (it cannot light the surface). Also gives wi in the frame.
+// `transmits`, 0 otherwise (it cannot light the surface). Also gives wi in the frame. In kernels
+// specialised for parallax (HAS_PARALLAX), light from above that the hit's height field occludes
+// (parallax_lit) cannot light it either: the self-shadowing of every light sample and shadow ray.
 float light_side(vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 wi, out vec3 wi_local) {
     wi_local = vec3(dot(wi, t), dot(wi, b), dot(wi, n));
     bool above = wi_local.z > 0.0 && dot(wi, ng) > 0.0;
+    if (HAS_PARALLAX) {
+        above = above && parallax_lit(wi);
+    }
     bool below = transmits && wi_local.z < 0.0 && dot(wi, ng) < 0.0;
     return above ? 1.0 : (below ? -1.0 : 0.0);
 }
@@ -140,6 +149,9 @@ bool slot_textured(uint slot) {
     }
     if (HAS_OCCLUSION_MAP) {
         textured = textured || slot == MATERIAL_SLOT_OCCLUSION;
+    }
+    if (HAS_PARALLAX) {
+        textured = textured || slot == MATERIAL_SLOT_HEIGHT;
     }
     return textured;
 }
@@ -407,9 +419,189 @@ uint pick_light(float u, uint count) {
 }
 
 
+// Parallax occlusion mapping (a material's UMBRA_implicit `parallax`, README "Parallax occlusion
+// mapping"; kernels specialised for it, HAS_PARALLAX). The height map (MATERIAL_SLOT_HEIGHT, R,
+// level 0 with the texture's sampler) places a height field under each triangle: where it reads h
+// the surface lies (1 - h) * scale world units below the triangle's plane, along its geometric
+// normal on the viewer's side. parallax_occlusion marches the view ray into that field in the
+// triangle's plane (`layers` equal depth steps, then `refinement` bisection steps) and moves the
+// hit's barycentrics (their affine extension) to the point found, so every attribute of the hit
+// (both UV sets, so every texture; vertex colours, normals) is read there. The hit's position and
+// its geometric normal stay the triangle's: shadow rays and bounces leave from the triangle, and
+// the silhouette stays flat. It records the point for parallax_tilt (the shading normal from the
+// field's gradient) and parallax_lit (self-shadowing: light that the field occludes).
+
+// The point parallax_occlusion found, while `parallax_active`.
+bool parallax_active = false;
+uint parallax_material = 0u;
+vec4 parallax_uv = vec4(0.0);     // both UV sets at the point found
+float parallax_depth = 0.0;       // its depth below the triangle, in units of `scale`
+vec3 parallax_ng = vec3(0.0);     // the triangle's unit normal on the viewer's side
+vec3 parallax_a = vec3(0.0);      // world in-plane offset d -> barycentric offset (d.a, d.b)
+vec3 parallax_b = vec3(0.0);
+vec4 parallax_duv1 = vec4(0.0);   // both UV sets' change per unit of barycentric b1, b2
+vec4 parallax_duv2 = vec4(0.0);
+
+// The height field at UV sets `uv`: R of the height map (1: the triangle's surface).
+float parallax_height(uint material, vec4 uv) {
+    return material_texture(material, MATERIAL_SLOT_HEIGHT, uv).r;
+}
+
+// Both UV sets' change for an in-plane world offset d.
+vec4 parallax_uv_offset(vec3 d) {
+    return dot(d, parallax_a) * parallax_duv1 + dot(d, parallax_b) * parallax_duv2;
+}
+
+// Marches the height field of triangle `tri`'s material, if it has one, from the hit at
+// barycentrics `bary` seen along wo (unit, towards the viewer); returns the barycentrics of the
+// point found (`bary` itself without a height map, and in kernels not specialised for parallax).
+// Sets the state parallax_tilt and parallax_lit read; call it at every hit before either.
+vec2 parallax_occlusion(uint tri, vec2 bary, vec3 wo) {
+    parallax_active = false;
+    if (HAS_PARALLAX) {
+        if (bvh_is_implicit(tri)) {
+            return bary;
+        }
+        uint material = tri_material(tri);
+        if (material_slot_texture(material, MATERIAL_SLOT_HEIGHT) == 0u) {
+            return bary;
+        }
+        vec3 a = tri_vertex(tri, 0u);
+        vec3 e1 = tri_vertex(tri, 1u) - a;
+        vec3 e2 = tri_vertex(tri, 2u) - a;
+        vec3 ng = cross(e1, e2);
+        float g11 = dot(e1, e1);
+        float g12 = dot(e1, e2);
+        float g22 = dot(e2, e2);
+        float det = g11 * g22 - g12 * g12;
+        if (!(det > 0.0)) {
+            return bary;
+        }
+        ng = normalize(ng);
+        float cos_o = dot(wo, ng);
+        if (cos_o < 0.0) {
+            ng = -ng;
+            cos_o = -cos_o;
+        }
+        parallax_a = (g22 * e1 - g12 * e2) / det;
+        parallax_b = (g11 * e2 - g12 * e1) / det;
+        uvec3 idx = tri_indices(tri);
+        vec4 u0 = vec4(vertex_normal_u(idx.x).w, vertex_v_uv1(idx.x).xyz);
+        parallax_duv1 = vec4(vertex_normal_u(idx.y).w, vertex_v_uv1(idx.y).xyz) - u0;
+        parallax_duv2 = vec4(vertex_normal_u(idx.z).w, vertex_v_uv1(idx.z).xyz) - u0;
+        vec4 uv = u0 + bary.x * parallax_duv1 + bary.y * parallax_duv2;
+
+        vec4 prm = material_vec(material, MATERIAL_PARALLAX_TEXEL);
+        float scale = prm.x;
+        uint layers = uint(prm.y);
+        uint refinement = uint(prm.z);
+        // The view ray's in-plane world offset per unit of depth below the plane (long towards
+        // grazing: cos_o is kept from 0, where the ray never descends).
+        vec3 lateral = -(wo - cos_o * ng) / max(cos_o, 1e-6);
+        vec3 step_world = scale * lateral;  // per unit of depth fraction s (depth s * scale)
+        vec4 step_uv = parallax_uv_offset(step_world);
+        // Linear search: the first layer s_i = i / layers at or below the field (1 - h <= s_i);
+        // s = 1 always is (h >= 0).
+        float above = 0.0;
+        float below = 0.0;
+        for (uint i = 0u; i <= layers; ++i) {
+            below = float(i) / float(layers);
+            if (below >= 1.0 - parallax_height(material, uv + below * step_uv)) {
+                break;
+            }
+            above = below;
+        }
+        // Bisection between the last layer above the field and the first at or below it.
+        if (below > 0.0) {
+            for (uint k = 0u; k < refinement; ++k) {
+                float mid = 0.5 * (above + below);
+                if (mid >= 1.0 - parallax_height(material, uv + mid * step_uv)) {
+                    below = mid;
+                } else {
+                    above = mid;
+                }
+            }
+        }
+        parallax_active = true;
+        parallax_material = material;
+        parallax_uv = uv + below * step_uv;
+        parallax_depth = below;
+        parallax_ng = ng;
+        return bary + below * vec2(dot(step_world, parallax_a), dot(step_world, parallax_b));
+    }
+    return bary;
+}
+
+// The height field's normal at the point parallax_occlusion found, around the smooth normal n:
+// n - scale * grad h (the gradient in world units along the triangle's plane, central differences
+// one height-map texel apart in the direction it is densest), normalised. n itself where no point
+// was found.
+vec3 parallax_tilt(vec3 n) {
+    if (!parallax_active) {
+        return n;
+    }
+    uint material = parallax_material;
+    uint tex = material_slot_texture(material, MATERIAL_SLOT_HEIGHT) - 1u;
+    uvec4 info = texture_info(tex);
+    vec4 r0 = material_slot_row(material, MATERIAL_SLOT_HEIGHT, 0u);
+    vec4 r1 = material_slot_row(material, MATERIAL_SLOT_HEIGHT, 1u);
+    vec3 t1;
+    vec3 t2;
+    basis(parallax_ng, t1, t2);
+    vec4 d1 = parallax_uv_offset(t1);
+    vec4 d2 = parallax_uv_offset(t2);
+    // Texels per world unit along t1 and t2 in the height map.
+    vec2 st1 = r0.w != 0.0 ? d1.zw : d1.xy;
+    vec2 st2 = r0.w != 0.0 ? d2.zw : d2.xy;
+    vec2 size = vec2(float(info.y), float(info.z));
+    float density1 = length(vec2(dot(r0.xy, st1), dot(r1.xy, st1)) * size);
+    float density2 = length(vec2(dot(r0.xy, st2), dot(r1.xy, st2)) * size);
+    float eps = 1.0 / max(max(density1, density2), 1e-6);
+    float g1 = parallax_height(material, parallax_uv + eps * d1) - parallax_height(material, parallax_uv - eps * d1);
+    float g2 = parallax_height(material, parallax_uv + eps * d2) - parallax_height(material, parallax_uv - eps * d2);
+    float scale = material_vec(material, MATERIAL_PARALLAX_TEXEL).x;
+    vec3 tilted = normalize(n - (scale / (2.0 * eps)) * (g1 * t1 + g2 * t2));
+    return any(isnan(tilted)) ? n : tilted;
+}
+
+// Whether light arriving along wi (unit, towards the light) reaches the point parallax_occlusion
+// found through its height field: the ray from the point towards the light, stepped up in the
+// layers' depth steps, stays above the field (a hard shadow; a step less than 1e-3 of `scale`
+// into the field does not count). True where no point was found and for light from below the
+// triangle (light_side decides there).
+bool parallax_lit(vec3 wi) {
+    if (!parallax_active) {
+        return true;
+    }
+    float cos_i = dot(wi, parallax_ng);
+    if (cos_i <= 0.0) {
+        return true;
+    }
+    uint material = parallax_material;
+    vec4 prm = material_vec(material, MATERIAL_PARALLAX_TEXEL);
+    float scale = prm.x;
+    uint layers = uint(prm.y);
+    vec4 rise_uv = parallax_uv_offset(scale * (wi - cos_i * parallax_ng) / cos_i);  // per unit of rise
+    float step_ = 1.0 / float(layers);
+    bool lit = true;
+    for (uint j = 1u; j <= layers; ++j) {
+        float rise = float(j) * step_;
+        float s = parallax_depth - rise;
+        if (s <= 0.0) {
+            break;
+        }
+        if (1.0 - parallax_height(material, parallax_uv + rise * rise_uv) < s - 1e-3) {
+            lit = false;
+            break;
+        }
+    }
+    return lit;
+}
+
 // The shading normal at barycentrics `bary` of triangle `tri` whose geometric normal `ng` faces
-// the viewer: the interpolated vertex normal (ng where it degenerates), flipped to ng's side, then
-// the material's normal map (tangent-space normal scaled in xy, through the interpolated TBN)
+// the viewer: the interpolated vertex normal (ng where it degenerates), flipped to ng's side, tilted
+// by the height field where parallax_occlusion found a point (parallax_tilt), then the material's
+// normal map (tangent-space normal scaled in xy, through the interpolated TBN)
 // where it keeps the normal above the geometry; the normal map filtered for a ray cone's `cone_lod`
 // (see material_texture_lod; LOD_LEVEL0 for level 0).
 vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
@@ -428,6 +620,10 @@ vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
     n = (n_len > 0.0 && !isnan(n_len) && !isinf(n_len)) ? n / n_len : ng;
     if (dot(n, ng) < 0.0) {
         n = -n;
+    }
+    if (HAS_PARALLAX) {
+        // The height field's normal (parallax_occlusion's point); a normal map tilts it further.
+        n = parallax_tilt(n);
     }
     if (HAS_NORMAL_MAP) {
         uint material = tri_material(tri);

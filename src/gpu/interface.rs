@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 16] = [
+pub const SCENE_FEATURES: [&str; 17] = [
     "textures",
     "alpha",
     "lights",
@@ -55,6 +55,7 @@ pub const SCENE_FEATURES: [&str; 16] = [
     "occlusion_map",
     "clearcoat",
     "implicit",
+    "parallax",
     "sheen",
 ];
 
@@ -244,17 +245,22 @@ gpu_structs! {
         /// length as `f32` bits ([`crate::scene::Material::attenuation`]; 0 without one).
         flags: uvec4,
         /// The texture of each slot (`MATERIAL_SLOT_*`; slot k is `textures[k / 4][k % 4]`):
-        /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, then occlusion;
-        /// the last three entries are unused (0).
+        /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, occlusion, then
+        /// height (parallax occlusion mapping); the last two entries are unused (0).
         textures: [uvec4; 2],
         /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
         /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; row1.w is the normal slot's
         /// normal scale and the occlusion slot's strength (1 for the other slots).
-        tex_transform: [vec4; 10],
+        tex_transform: [vec4; 12],
         /// `KHR_materials_clearcoat`: the coat's weight (`clearcoatFactor`), its roughness
         /// (`clearcoatRoughnessFactor`), unused, unused. Read only by kernels specialised for
         /// it (`HAS_CLEARCOAT`).
         clearcoat: vec4,
+        /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax` on the material; its height
+        /// map in slot `MATERIAL_SLOT_HEIGHT`): the height scale in world units, the linear
+        /// search's layer count, the binary refinement's step count, unused. Read only by
+        /// kernels specialised for it (`HAS_PARALLAX`), and only where the height slot is filled.
+        parallax: vec4,
         /// `KHR_materials_sheen`: `sheenColorFactor` rgb, `sheenRoughnessFactor`. Read only by
         /// kernels specialised for it (`HAS_SHEEN`).
         sheen: vec4,
@@ -786,8 +792,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 304 bytes).
-    MATERIAL_TEXELS: uint = 19;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 352 bytes).
+    MATERIAL_TEXELS: uint = 22;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -801,12 +807,18 @@ gpu_constants! {
     /// and the lighting pass scales the image-based (ambient) light by it, never direct light. The
     /// path tracer ignores it: it traces the occlusion itself.
     MATERIAL_SLOT_OCCLUSION: uint = 4;
+    /// Slot of the height map of parallax occlusion mapping (`UMBRA_implicit`'s
+    /// `parallax.heightTexture`, R: 1 on the triangle, 0 at `scale` below it). Looked up only by
+    /// kernels specialised for parallax (`HAS_PARALLAX`).
+    MATERIAL_SLOT_HEIGHT: uint = 5;
     /// The texel of [`GpuMaterial::clearcoat`] in a material's texels.
-    MATERIAL_CLEARCOAT_TEXEL: uint = 17;
+    MATERIAL_CLEARCOAT_TEXEL: uint = 19;
+    /// The texel of [`GpuMaterial::parallax`] in a material's texels.
+    MATERIAL_PARALLAX_TEXEL: uint = 20;
     /// The texel of [`GpuMaterial::sheen`] in a material's texels.
-    MATERIAL_SHEEN_TEXEL: uint = 18;
+    MATERIAL_SHEEN_TEXEL: uint = 21;
     /// Texture slots a material has (each with two `tex_transform` rows).
-    MATERIAL_TEXTURE_SLOTS: uint = 5;
+    MATERIAL_TEXTURE_SLOTS: uint = 6;
     /// `GpuTexture::flags`: clamp s.
     TEXTURE_WRAP_S_CLAMP: uint = 1;
     /// `GpuTexture::flags`: mirror s.
@@ -958,7 +970,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax, sheen],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1062,7 +1074,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit, parallax],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -1081,7 +1093,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax, sheen],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1137,7 +1149,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1164,7 +1176,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,

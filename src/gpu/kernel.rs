@@ -156,6 +156,9 @@ pub struct SceneFeatures {
     pub texture_slots: u32,
     /// The BVH holds implicit shapes (`UMBRA_implicit`): the traversal ray-marches them.
     pub implicit: bool,
+    /// Some material has parallax occlusion mapping (`UMBRA_implicit`'s `parallax`): shading
+    /// marches its height field.
+    pub parallax: bool,
     /// Some material has a sheen (`KHR_materials_sheen`).
     pub sheen: bool,
 }
@@ -175,6 +178,7 @@ impl SceneFeatures {
             implicit: scene.has_implicit,
             texture_slots: scene.texture_slots,
             clearcoat: scene.has_clearcoat,
+            parallax: scene.has_parallax,
             sheen: scene.has_sheen,
         }
     }
@@ -192,6 +196,7 @@ impl SceneFeatures {
             "unlit" => self.unlit,
             "clearcoat" => self.clearcoat,
             "implicit" => self.implicit,
+            "parallax" => self.parallax,
             "sheen" => self.sheen,
             _ => {
                 let slot = TEXTURE_SLOT_FEATURES.iter().position(|f| *f == name)?;

@@ -3,7 +3,7 @@
 
 use super::layout::{
     GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources,
-    MATERIAL_TEXTURE_SLOTS,
+    MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
 };
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
@@ -75,6 +75,10 @@ pub struct GpuScene {
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
+    /// Whether some material has parallax occlusion mapping (`UMBRA_implicit`'s `parallax`, its
+    /// height map in `MATERIAL_SLOT_HEIGHT`): the shading kernels look up the height slot and
+    /// march height fields only then.
+    pub has_parallax: bool,
     /// Width and height of the environment map, if the scene has one.
     pub env_size: Option<(u32, u32)>,
     /// The environment map's mean luminance over the sphere of directions (0 without one).
@@ -329,7 +333,12 @@ impl ShadingArrays {
                                 gpu_textures.slot(scene, m.normal_texture.as_ref())
                             },
                         ],
-                        [gpu_textures.slot(scene, m.occlusion_texture.as_ref()), 0, 0, 0],
+                        [
+                            gpu_textures.slot(scene, m.occlusion_texture.as_ref()),
+                            gpu_textures.slot(scene, m.parallax.as_ref().map(|p| &p.height)),
+                            0,
+                            0,
+                        ],
                     ],
                     tex_transform: transforms([
                         m.base_color_texture.as_ref(),
@@ -337,6 +346,7 @@ impl ShadingArrays {
                         m.emissive_texture.as_ref(),
                         m.normal_texture.as_ref(),
                         m.occlusion_texture.as_ref(),
+                        m.parallax.as_ref().map(|p| &p.height),
                     ]),
                     base_color: m.base_color_factor,
                     emissive_rough: {
@@ -351,6 +361,9 @@ impl ShadingArrays {
                     ],
                     params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
                     clearcoat: [m.clearcoat, m.clearcoat_roughness, 0.0, 0.0],
+                    parallax: m
+                        .parallax
+                        .map_or([0.0; 4], |p| [p.scale, p.layers as f32, p.refinement as f32, 0.0]),
                     sheen: [m.sheen_color[0], m.sheen_color[1], m.sheen_color[2], m.sheen_roughness],
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
@@ -466,6 +479,7 @@ impl GpuScene {
             has_clearcoat: coated(&arrays.materials),
             has_sheen: sheened(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
+            has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
             env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
             env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
@@ -514,6 +528,7 @@ impl GpuScene {
         self.has_colors = colored(&arrays.vertices);
         self.has_unlit = unlit(&arrays.materials);
         self.has_clearcoat = coated(&arrays.materials);
+        self.has_parallax = parallax(&arrays.materials);
         self.has_sheen = sheened(&arrays.materials);
         Ok(())
     }
@@ -600,6 +615,11 @@ fn material_texels(materials: &[GpuMaterial]) -> Vec<[u32; 4]> {
 /// Whether some material has a sheen (a sheen colour above 0).
 fn sheened(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.sheen[..3].iter().any(|&c| c > 0.0))
+}
+
+fn parallax(materials: &[GpuMaterial]) -> bool {
+    let slot = MATERIAL_SLOT_HEIGHT as usize;
+    materials.iter().any(|m| m.textures[slot / 4][slot % 4] != 0)
 }
 
 /// The scene's punctual lights with their selection table: by power (KHR_lights_punctual's

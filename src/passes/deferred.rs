@@ -259,12 +259,9 @@ impl DeferredPass {
         let LightingInputs { ao, shadows, probes, lightmaps, restir } = *inputs;
         let reservoirs = match (self.restir, restir) {
             (false, None) => &self.no_reservoirs,
-            (true, Some(r)) if r.size == gbuffer.size => r.frame(),
             (true, Some(r)) => {
-                return Err(Error::Invalid(format!(
-                    "ReSTIR reservoirs of {}x{} for a {}x{} G-buffer",
-                    r.size.0, r.size.1, gbuffer.size.0, gbuffer.size.1
-                )))
+                r.check_size(gbuffer.size)?;
+                r.frame()
             }
             (built, _) => {
                 return Err(Error::Invalid(format!(

@@ -20,11 +20,21 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     let asset = source::open(&origin, bytes)?;
     let mut textures = TextureSet::default();
     let mut material_warnings = Vec::new();
-    let materials: Vec<Material> = asset
-        .document
-        .materials()
-        .map(|m| Material::from_gltf(&m, &mut textures, &mut material_warnings))
-        .collect();
+    let mut materials = Vec::new();
+    for m in asset.document.materials() {
+        let mut material = Material::from_gltf(&m, &mut textures, &mut material_warnings);
+        if let Some(value) = m.extension_value("UMBRA_implicit") {
+            material.parallax = super::material::parse_parallax(value, &asset.document, &mut textures)
+                .map_err(|e| {
+                    let index = m.index().map_or("default".to_owned(), |i| i.to_string());
+                    origin.error(format!(
+                        "material {index} ('{}'): UMBRA_implicit: {e}",
+                        m.name().unwrap_or_default()
+                    ))
+                })?;
+        }
+        materials.push(material);
+    }
     let mut builder = Builder::new(&origin, &asset, materials);
     builder.walk()?;
     let posed = builder.static_pose_warning();
@@ -37,6 +47,10 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
             if slot.is_some_and(|t| failed.contains(&t.texture)) {
                 *slot = None;
             }
+        }
+        // Without its height map, no parallax: the flat surface.
+        if m.parallax.is_some_and(|p| failed.contains(&p.height.texture)) {
+            m.parallax = None;
         }
     }
     scene.warnings.extend(warnings);

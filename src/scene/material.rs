@@ -34,6 +34,35 @@ pub struct TextureRef {
     pub scale: f32,
 }
 
+/// Parallax occlusion mapping of a material (`UMBRA_implicit`'s `parallax` on a glTF material;
+/// README "Parallax occlusion mapping"): a height field under the triangles, ray-marched in their
+/// plane at every hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Parallax {
+    /// The height map: R = 1 on the triangle's surface, R = 0 at [`Parallax::scale`] below it
+    /// along the geometric normal (the side the viewer is on), linearly between.
+    pub height: TextureRef,
+    /// Depth of height 0 below the surface, in world units (metres; the node's scale does not
+    /// apply: the triangles are marched in world space).
+    pub scale: f32,
+    /// Layers of the linear search (the depth range cut into that many equal steps).
+    pub layers: u32,
+    /// Steps of binary-search refinement after the linear search.
+    pub refinement: u32,
+}
+
+impl Parallax {
+    /// The most layers accepted: each is a texture lookup per hit (and per light for the
+    /// self-shadow march).
+    pub const MAX_LAYERS: u32 = 256;
+    /// The most refinement steps accepted (2⁻¹⁶ of a layer is below `f32`'s resolution of depth).
+    pub const MAX_REFINEMENT: u32 = 16;
+    /// Layers when the file gives none.
+    pub const DEFAULT_LAYERS: u32 = 32;
+    /// Refinement steps when the file gives none.
+    pub const DEFAULT_REFINEMENT: u32 = 8;
+}
+
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
     pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 8] {
@@ -82,6 +111,7 @@ impl Material {
             specular_texture,
             specular_color_texture,
             transmission_texture,
+            parallax,
         } = self;
         h.f32s(base_color_factor);
         h.f32s(&[*metallic, *roughness]);
@@ -101,8 +131,17 @@ impl Material {
         h.bool(*double_sided);
         h.bool(*unlit);
         h.f32s(&[*clearcoat, *clearcoat_roughness]);
-        h.f32s(sheen_color);
-        h.f32s(&[*sheen_roughness]);
+        // Nothing without parallax: the hashes of scenes without it stay what they were.
+        if let Some(Parallax { height, scale, layers, refinement }) = parallax {
+            h.u32s(&[height.texture, height.tex_coord, *layers, *refinement]);
+            h.f32s(height.transform.as_flattened());
+            h.f32s(&[*scale]);
+        }
+        // Nothing without a sheen: the hashes of scenes without it stay what they were.
+        if *sheen_color != [0.0; 3] || *sheen_roughness != 0.0 {
+            h.f32s(sheen_color);
+            h.f32s(&[*sheen_roughness]);
+        }
         for slot in [
             base_color_texture,
             metallic_roughness_texture,
@@ -243,6 +282,8 @@ pub struct Material {
     pub specular_color_texture: Option<TextureRef>,
     /// Transmission in R (linear).
     pub transmission_texture: Option<TextureRef>,
+    /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
+    pub parallax: Option<Parallax>,
 }
 
 impl Default for Material {
@@ -277,6 +318,7 @@ impl Default for Material {
             specular_texture: None,
             specular_color_texture: None,
             transmission_texture: None,
+            parallax: None,
         }
     }
 }
@@ -401,6 +443,7 @@ impl Material {
             specular_texture,
             specular_color_texture,
             transmission_texture,
+            parallax: None,
         }
     }
 }
@@ -417,4 +460,64 @@ fn raw_transform(value: Option<&Value>, tex_coord: u32) -> (u32, [[f32; 3]; 2]) 
     let rotation = value.get("rotation").and_then(Value::as_f64).unwrap_or(0.0) as f32;
     let tex_coord = value.get("texCoord").and_then(Value::as_u64).map_or(tex_coord, |t| t as u32);
     (tex_coord, texture_transform(pair("offset", [0.0, 0.0]), rotation, pair("scale", [1.0, 1.0])))
+}
+
+/// Reads `UMBRA_implicit` on a glTF material (its `parallax` object; README "Parallax occlusion
+/// mapping", docs/UMBRA_implicit.schema.json), registering the height map in `textures`. Errors
+/// say what is wrong and where in the object; the caller names the file and the material.
+pub(super) fn parse_parallax(
+    value: &Value,
+    document: &gltf::Document,
+    textures: &mut TextureSet,
+) -> std::result::Result<Option<Parallax>, String> {
+    let object = value.as_object().ok_or("must be an object")?;
+    if let Some(key) = object.keys().find(|k| k.as_str() != "parallax") {
+        return Err(format!("unknown property '{key}' (a material's UMBRA_implicit has only 'parallax')"));
+    }
+    let Some(parallax) = object.get("parallax") else { return Ok(None) };
+    let parallax = parallax.as_object().ok_or("parallax must be an object")?;
+    const KEYS: [&str; 4] = ["heightTexture", "scale", "layers", "refinement"];
+    if let Some(key) = parallax.keys().find(|k| !KEYS.contains(&k.as_str())) {
+        return Err(format!("unknown property 'parallax.{key}' (expected one of {})", KEYS.join(", ")));
+    }
+    let info = parallax.get("heightTexture").ok_or("parallax.heightTexture is missing")?;
+    let info = info.as_object().ok_or("parallax.heightTexture must be an object")?;
+    let count = document.textures().len();
+    let index = info
+        .get("index")
+        .ok_or("parallax.heightTexture.index is missing")?
+        .as_u64()
+        .ok_or("parallax.heightTexture.index must be a non-negative integer")?;
+    let texture = document
+        .textures()
+        .nth(index as usize)
+        .ok_or(format!("parallax.heightTexture.index is {index}, but the file has {count} texture(s)"))?;
+    let tex_coord = match info.get("texCoord") {
+        None => 0,
+        Some(t) => match t.as_u64() {
+            Some(t @ (0 | 1)) => t as u32,
+            _ => {
+                return Err(format!(
+                    "parallax.heightTexture.texCoord must be 0 or 1 (umbra reads two UV sets), not {t}"
+                ))
+            }
+        },
+    };
+    let transform = info.get("extensions").and_then(|e| e.get("KHR_texture_transform"));
+    let (tex_coord, transform) = raw_transform(transform, tex_coord);
+    let scale = match parallax.get("scale").ok_or("parallax.scale is missing")?.as_f64() {
+        Some(s) if s.is_finite() && s > 0.0 && (s as f32).is_finite() => s as f32,
+        _ => return Err("parallax.scale must be a finite number above 0 (world units)".into()),
+    };
+    let count = |key: &str, default: u32, lo: u32, hi: u32| -> std::result::Result<u32, String> {
+        let Some(v) = parallax.get(key) else { return Ok(default) };
+        match v.as_u64() {
+            Some(n) if n >= u64::from(lo) && n <= u64::from(hi) => Ok(n as u32),
+            _ => Err(format!("parallax.{key} must be an integer from {lo} to {hi}, not {v}")),
+        }
+    };
+    let layers = count("layers", Parallax::DEFAULT_LAYERS, 1, Parallax::MAX_LAYERS)?;
+    let refinement = count("refinement", Parallax::DEFAULT_REFINEMENT, 0, Parallax::MAX_REFINEMENT)?;
+    let height = TextureRef { texture: textures.index_of(&texture, false), tex_coord, transform, scale: 1.0 };
+    Ok(Some(Parallax { height, scale, layers, refinement }))
 }

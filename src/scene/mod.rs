@@ -53,7 +53,7 @@ pub use camera::{Camera, Light, LightKind};
 pub use emissive::EmissiveTable;
 pub use hash::ContentHasher;
 pub use implicit::ImplicitShape;
-pub use material::{texture_transform, AlphaMode, Material, TextureRef, IDENTITY_TRANSFORM};
+pub use material::{texture_transform, AlphaMode, Material, Parallax, TextureRef, IDENTITY_TRANSFORM};
 pub use texture::{mip_level_count, Filter, MipLevel, Sampler, Texture, Wrap};
 
 /// glTF extensions umbra reads; a file that *requires* any other one is rejected.

@@ -416,6 +416,48 @@ fn square_in_view(g: &mut Gltf, material: usize) -> Vec<usize> {
     ]
 }
 
+/// A square of side `2 half` at the origin facing +Z for the parallax tests (tests/parallax.rs; not
+/// in `scenes/`): white, rough, dielectric, UV (0, 0) at its corner (-half, +half), u along +X and
+/// v along -Y, with TEXCOORD_1 equal to TEXCOORD_0 (the G-buffer stores UV set 1 at the point
+/// parallax occlusion mapping found). Its material has the `width` × `height` height map
+/// `heights` (one byte per texel, rows from the top; nearest filtering unless `linear`) and, with
+/// `parallax: Some(p)`, `"extensions": {"UMBRA_implicit": {"parallax": p}}`, where `p` refers to
+/// the height map as texture 0. No camera and no light: the tests set their own.
+pub fn parallax_square(
+    half: f32,
+    width: u32,
+    height: u32,
+    heights: &[u8],
+    linear: bool,
+    parallax: Option<Value>,
+) -> Vec<u8> {
+    let mut g = Gltf::new();
+    let filter = if linear { 9729 } else { 9728 };
+    let sampler = g.push("samplers", json!({ "magFilter": filter, "minFilter": filter }));
+    let rgb: Vec<u8> = heights.iter().flat_map(|&h| [h, h, h]).collect();
+    let image = g.png_image("height", width, height, &rgb);
+    let texture = g.push("textures", json!({ "source": image, "sampler": sampler }));
+    assert_eq!(texture, 0);
+    let mut material = json!({
+        "name": "pom",
+        "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0 }
+    });
+    let mut extensions = Vec::new();
+    if let Some(p) = parallax {
+        material["extensions"] = json!({ "UMBRA_implicit": { "parallax": p } });
+        extensions.push("UMBRA_implicit");
+    }
+    let material = g.push("materials", material);
+    let mut square = Mesh::default();
+    square.quad(Vec3::ZERO, Vec3::X * half, Vec3::Y * half);
+    let geometry = g.geometry(&square);
+    let mut primitive = geometry.with_material(material);
+    primitive["attributes"]["TEXCOORD_1"] = primitive["attributes"]["TEXCOORD_0"].clone();
+    let mesh = g.mesh("square", vec![primitive]);
+    let node = g.push("nodes", json!({ "name": "square", "mesh": mesh }));
+    g.finish(vec![node], &extensions)
+}
+
 /// A black square filling the view (`square_in_view`; tests/gltf_textures.rs) that emits its
 /// 2 × 2 emissive texture (RGB `texels`, rows from the top, nearest filtering) × `factor` ×
 /// `KHR_materials_emissive_strength` `strength`; no light.

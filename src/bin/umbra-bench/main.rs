@@ -23,6 +23,7 @@ mod paths;
 mod peers;
 mod probes;
 mod rays;
+mod restir;
 mod shadows;
 mod suite;
 
@@ -370,6 +371,31 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
+    /// ReSTIR DI against power-sampled light sampling in the hybrid's lighting pass on a
+    /// many-light scene: error against time of the direct light, and the equal-error speed-up.
+    Restir {
+        /// The scene (default: scenes/many-lights.glb).
+        #[arg(long, default_value = "scenes/many-lights.glb")]
+        scene: PathBuf,
+        /// Image size.
+        #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Frames of 64 shadow rays averaged into the reference.
+        #[arg(long, default_value_t = 32)]
+        reference_frames: u32,
+        /// Timed renders per point (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// ReSTIR's frames with a still camera, the last measured (its temporal history).
+        #[arg(long, default_value_t = 8)]
+        frames: u32,
+        /// Where to write restir.json and the chart.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
     /// Print the Markdown table of a `peers.py` run's JSON: `peers.json` (umbra's rays against
     /// Embree's) or `path.json` (the path tracer against Mitsuba 3 at equal error). The
     /// measurements are `src/bin/umbra-bench/peers.py`'s (Python, Embree, Mitsuba).
@@ -573,6 +599,19 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", implicit::table(&doc));
             write_json(&out, "implicit.json", &doc)?;
             implicit::write_chart(&out, &rows)?;
+        }
+        Command::Restir { table: Some(path), .. } => print!("{}", restir::table(&read_json(&path)?)),
+        Command::Restir { scene, size, reference_frames, repeats, frames, out, table: None } => {
+            let ctx = Context::new(&ContextDesc::default())?;
+            let loaded = umbra::scene::Scene::load(&scene)?;
+            let camera = loaded.camera(None)?;
+            let settings = restir::RestirBench { size, reference_frames, repeats, frames };
+            let (points, floor) = restir::run(&ctx, &loaded, &camera, &settings)?;
+            let mut doc = restir::to_json(&ctx.info().name, &loaded.name, &settings, &points, floor);
+            add_conditions(&mut doc);
+            print!("{}", restir::table(&doc));
+            write_json(&out, "restir.json", &doc)?;
+            restir::write_chart(&out, &doc)?;
         }
         Command::Peers { table } => print!("{}", peers::table(&read_json(&table)?)),
         Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {

@@ -108,7 +108,7 @@ pub struct SceneResult {
 }
 
 /// Relative MSE's ε: keeps dark pixels from dominating (as in the denoising literature).
-const REL_EPSILON: f64 = 0.01;
+pub const REL_EPSILON: f64 = 0.01;
 
 /// Mean LDR-FLIP of `image` against `reference` (both linear RGBA of `size`), each tone-mapped
 /// with Khronos PBR Neutral and sRGB-encoded first; 67 pixels per degree (a 0.7 m wide monitor of

@@ -32,7 +32,8 @@
 //   sheened = sheenColor D V + material * max(0, min(1 - max3(sheenColor) E(N.V),
 //                                                    1 - max3(sheenColor) E(N.L)))
 //
-// with E the lobe's directional albedo, tabulated by src/sheen.rs (sheen_albedo.glsl, generated).
+// with E the lobe's directional albedo, tabulated by src/sheen.rs at build time (its size in the
+// generated sheen_albedo.glsl, its texels after the scene's materials: sheen_table_texel).
 // Transmitted light (N.L < 0) takes E(|N.L|). The fitted Lambda lets E exceed 1 at n.v < 0.01 for
 // sheen roughness below 0.26 (src/sheen.rs): the scaling is clamped at 0 there. The path tracer
 // samples the sheen as its own lobe, from the cosine-weighted hemisphere. A surface without a

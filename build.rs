@@ -8,6 +8,11 @@ use glslang::{
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// `KHR_materials_sheen`'s albedo table, as the library computes it.
+#[allow(dead_code)]
+#[path = "src/sheen.rs"]
+mod sheen;
+
 /// Resolves `#include "x.glsl"` against the includer's folder, then `spirv/include/`, then the
 /// declarations generated from `src/gpu/interface.rs` (`layout.glsl`, `kernel/<name>.glsl`).
 struct Includes {
@@ -393,6 +398,27 @@ fn layout_check_glsl() -> String {
     out
 }
 
+/// `sheen_albedo.glsl`: the sheen lobe's directional albedo table (src/sheen.rs).
+fn sheen_glsl() -> String {
+    let n = sheen::TABLE_SIZE;
+    let mut out = format!(
+        "{HEADER}// KHR_materials_sheen's directional albedo E, by src/sheen.rs (see there): entry\n"
+    );
+    out.push_str("// j * SHEEN_TABLE_SIZE + i at sqrt(n.v) = i / (SHEEN_TABLE_SIZE - 1), sheen roughness\n");
+    out.push_str("// j / (SHEEN_TABLE_SIZE - 1). A kernel including bsdf.glsl defines sheen_table_texel.\n");
+    let _ = writeln!(out, "const uint SHEEN_TABLE_SIZE = {n}u;");
+    let _ = writeln!(out, "const float SHEEN_ROUGHNESS_MIN = {:?};", sheen::ROUGHNESS_MIN as f32);
+    out.push_str("// The table's texels (four entries each) at the end of the scene's material texels.\n");
+    let _ = writeln!(out, "const uint SHEEN_TABLE_TEXELS = {}u;", n * n / 4);
+    out
+}
+
+/// `sheen_table.rs`: the same table as a Rust array the library uploads (src/gpu/scene.rs).
+fn sheen_rust() -> String {
+    let values: Vec<String> = sheen::table().iter().map(|v| format!("{v:?}")).collect();
+    format!("[{}]\n", values.join(", "))
+}
+
 /// Writes the generated GLSL into `dir`; checks that every kernel of `spirv/` has an interface
 /// and includes it, and every interface a kernel.
 fn generate(dir: &Path, spirv: &Path, kernels: &[String]) -> Result<(), String> {
@@ -405,6 +431,8 @@ fn generate(dir: &Path, spirv: &Path, kernels: &[String]) -> Result<(), String> 
     };
     std::fs::create_dir_all(dir.join("kernel")).map_err(|e| e.to_string())?;
     write(dir.join("layout.glsl"), layout_glsl())?;
+    write(dir.join("sheen_albedo.glsl"), sheen_glsl())?;
+    write(dir.join("sheen_table.rs"), sheen_rust())?;
     let scene = glsl_scene_bindings();
     let defs = glsl_kernels();
     for k in &defs {
@@ -446,6 +474,7 @@ fn main() {
     }
 
     println!("cargo:rerun-if-changed=src/gpu/interface.rs");
+    println!("cargo:rerun-if-changed=src/sheen.rs");
     let generated = out.join("include");
     if let Err(e) = generate(&generated, &dir, &kernels) {
         eprintln!("error: {e}");

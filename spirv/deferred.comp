@@ -153,6 +153,13 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * below;
     vec3 metal = (s.base * table.x + table.y) * specular_light;
     vec3 result = mix(dielectric, metal, s.metallic);
+    if (max3(s.sheen) > 0.0) {
+        // KHR_materials_sheen: the material scaled by the sheen's albedo scaling at n.v alone
+        // (the extension's simplified form), and the sheen's albedo E(n.v) lit by the diffuse
+        // irradiance (its lobe is broad; tests/ibl.rs measures the approximation).
+        float e = sheen_albedo(nv, s.sheen_roughness);
+        result = max(0.0, 1.0 - max3(s.sheen) * e) * result + s.sheen * e * irradiance_over_pi;
+    }
     if (s.coat > 0.0) {
         // KHR_materials_clearcoat: the coat's lobe (its own roughness, no Fresnel inside: the
         // table's albedo at F0 = F90 = 1) over the base, weighted as bsdf_eval weighs them.

@@ -12,10 +12,16 @@ layout(local_size_x = 64) in;
 #include "random.glsl"
 #include "bsdf.glsl"
 
+// The sheen's albedo table: tests/sampling.rs appends its texels to the directions.
+vec4 sheen_table_texel(uint t) {
+    return directions[uint(directions.length()) - SHEEN_TABLE_TEXELS + t];
+}
+
 // Samplers 2-4: the whole BSDF of a white transmissive dielectric (reflection + transmission,
 // through bsdf_sample / bsdf_pdf): 2 entering glass (eta 1.5), 3 leaving it (eta 1/1.5),
 // 4 thin-walled. Sampler 5: an opaque grey dielectric (alpha 0.5) under a clear coat of weight 1
-// and `alpha` (KHR_materials_clearcoat).
+// and `alpha` (KHR_materials_clearcoat). Sampler 6: the grey dielectric under a sheen of
+// roughness sqrt(`alpha`) (KHR_materials_sheen) under a clear coat.
 Surface dielectric(float alpha) {
     if (params.kind == 5u) {
         Surface s;
@@ -29,6 +35,26 @@ Surface dielectric(float alpha) {
         s.thin = true;
         s.coat = 1.0;
         s.coat_alpha = alpha;
+        s.sheen = vec3(0.0);
+        s.sheen_roughness = 1.0;
+        return s;
+    }
+    if (params.kind == 6u) {
+        // KHR_materials_sheen: a coloured sheen of roughness sqrt(alpha) over the grey
+        // dielectric, under a clear coat of weight 0.5 and alpha 0.1.
+        Surface s;
+        s.base = vec3(0.8);
+        s.metallic = 0.0;
+        s.f0 = vec3(0.04);
+        s.f90 = 1.0;
+        s.alpha = 0.25;
+        s.transmission = 0.0;
+        s.eta = 1.5;
+        s.thin = true;
+        s.coat = 0.5;
+        s.coat_alpha = 0.1;
+        s.sheen = vec3(0.9, 0.6, 0.3);
+        s.sheen_roughness = max(sqrt(alpha), SHEEN_ROUGHNESS_MIN);
         return s;
     }
     Surface s;
@@ -42,6 +68,8 @@ Surface dielectric(float alpha) {
     s.thin = params.kind == 4u;
     s.coat = 0.0;
     s.coat_alpha = 1.0;
+    s.sheen = vec3(0.0);
+    s.sheen_roughness = 1.0;
     return s;
 }
 
@@ -80,6 +108,8 @@ void main() {
         s.thin = true;
         s.coat = 0.0;
         s.coat_alpha = 1.0;
+        s.sheen = vec3(0.0);
+        s.sheen_roughness = 1.0;
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
         return;
     }

@@ -18,6 +18,7 @@ pub mod passes;
 pub mod procedural;
 pub mod render;
 pub mod scene;
+pub mod sheen;
 pub mod split_sum;
 pub mod vk;
 

@@ -62,20 +62,28 @@ enum Dielectric {
     /// Not a dielectric boundary: an opaque grey dielectric (α 0.25) under a clear coat
     /// (`KHR_materials_clearcoat`, weight 1) of the case's α.
     Coated = 5,
+    /// The grey dielectric under a coloured sheen (`KHR_materials_sheen`, colour (0.9, 0.6, 0.3),
+    /// roughness √α of the case's α) under a clear coat of weight ½ and α 0.1: the three-level
+    /// lobe choice (coat, sheen, material) and the sheen's cosine-hemisphere sampling.
+    Sheened = 6,
 }
 
-/// The kernel specialised for each [`Microfacet`], in [`Microfacet::ALL`] order.
-struct Kernel([Pipeline<sample_test::Kernel>; 3]);
+/// The kernel specialised for each [`Microfacet`], in [`Microfacet::ALL`] order, and the sheen's
+/// albedo table.
+struct Kernel([Pipeline<sample_test::Kernel>; 3], Vec<f32>);
 
 impl Kernel {
     fn new(gpu: &Gpu) -> Self {
-        Self(Microfacet::ALL.map(|m| {
-            let spec = sample_test::Spec {
-                beckmann: m == Microfacet::Beckmann,
-                ggx_walter: m == Microfacet::GgxWalter,
-            };
-            Pipeline::new(gpu, &spec, None).unwrap()
-        }))
+        Self(
+            Microfacet::ALL.map(|m| {
+                let spec = sample_test::Spec {
+                    beckmann: m == Microfacet::Beckmann,
+                    ggx_walter: m == Microfacet::GgxWalter,
+                };
+                Pipeline::new(gpu, &spec, None).unwrap()
+            }),
+            umbra::sheen::table(),
+        )
     }
 
     /// Runs the kernel: mode 0 samples `count` directions, mode 1 evaluates the pdf at `dirs`,
@@ -104,13 +112,10 @@ impl Kernel {
         // A deliberately wrong pdf evaluates with a scaled alpha (sampling keeps the true one).
         let alpha = if mode == 1 { alpha * pdf_alpha_scale } else { alpha };
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
-        let input = Buffer::upload(
-            gpu,
-            "sample test directions",
-            if dirs.is_empty() { &[[0.0f32; 4]] } else { dirs },
-            usage,
-        )
-        .unwrap();
+        // The sheen's albedo table after the directions, as the kernel reads it.
+        let mut input: Vec<[f32; 4]> = dirs.to_vec();
+        input.extend(self.1.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
+        let input = Buffer::upload(gpu, "sample test directions", &input, usage).unwrap();
         let output =
             Buffer::new(gpu, "sample test results", count as u64 * 16, usage, MemoryLocation::GpuOnly)
                 .unwrap();
@@ -287,7 +292,13 @@ fn cases() -> Vec<Sampler> {
         }
     }
     for microfacet in [Microfacet::Ggx, Microfacet::GgxWalter] {
-        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin, Dielectric::Coated] {
+        for kind in [
+            Dielectric::Entering,
+            Dielectric::Leaving,
+            Dielectric::Thin,
+            Dielectric::Coated,
+            Dielectric::Sheened,
+        ] {
             for alpha in [0.1, 0.5] {
                 for theta_degrees in [30.0, 60.0] {
                     cases.push(Sampler::Dielectric { microfacet, kind, alpha, theta_degrees });
@@ -345,7 +356,13 @@ fn the_dielectric_samples_wherever_it_scatters() {
     let solid_angle = 2.0 * std::f64::consts::TAU / (rows * columns) as f64;
     let mut failures = Vec::new();
     for microfacet in [Microfacet::Ggx, Microfacet::GgxWalter] {
-        for kind in [Dielectric::Entering, Dielectric::Leaving, Dielectric::Thin, Dielectric::Coated] {
+        for kind in [
+            Dielectric::Entering,
+            Dielectric::Leaving,
+            Dielectric::Thin,
+            Dielectric::Coated,
+            Dielectric::Sheened,
+        ] {
             for alpha in [0.1, 0.5] {
                 for theta_degrees in [30.0, 45.0, 60.0, 80.0] {
                     let case = Sampler::Dielectric { microfacet, kind, alpha, theta_degrees };

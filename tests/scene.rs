@@ -1370,6 +1370,43 @@ fn clearcoat_is_read() {
     assert!(error.contains("coat.glb") && error.contains("clearcoatRoughnessFactor is 1.5"), "{error}");
 }
 
+/// KHR_materials_sheen's factors reach the material (0 without the extension), its two textures
+/// are named in one warning per material, and a factor outside [0, 1] is refused naming it.
+#[test]
+fn sheen_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let load = |sheen: Value| {
+        let mut json = base.clone();
+        json["materials"][0]["extensions"] = json!({ "KHR_materials_sheen": sheen });
+        Scene::from_glb_bytes("sheen.glb", &to_glb(&json, &bin))
+    };
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    assert_eq!((plain.materials[0].sheen_color, plain.materials[0].sheen_roughness), ([0.0; 3], 0.0));
+    let scene = load(json!({"sheenColorFactor": [0.75, 0.5, 0.25], "sheenRoughnessFactor": 0.125})).unwrap();
+    assert_eq!(
+        (scene.materials[0].sheen_color, scene.materials[0].sheen_roughness),
+        ([0.75, 0.5, 0.25], 0.125)
+    );
+    assert!(scene.warnings.iter().all(|w| !w.contains("sheen")), "{:?}", scene.warnings);
+    let scene = load(json!({
+        "sheenColorFactor": [1.0, 1.0, 1.0],
+        "sheenColorTexture": {"index": 0},
+        "sheenRoughnessTexture": {"index": 0}
+    }))
+    .unwrap();
+    assert_eq!(scene.materials[0].sheen_color, [1.0; 3]);
+    let warned: Vec<&String> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("sheenColorTexture") && w.contains("sheenRoughnessTexture"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
+    let error = load(json!({"sheenRoughnessFactor": 1.5})).unwrap_err().to_string();
+    assert!(error.contains("sheen.glb") && error.contains("sheenRoughnessFactor is 1.5"), "{error}");
+    let error = load(json!({"sheenColorFactor": [0.5, -0.25, 0.5]})).unwrap_err().to_string();
+    assert!(error.contains("sheen.glb") && error.contains("sheenColorFactor[1] is -0.25"), "{error}");
+}
+
 /// KHR_materials_volume's attenuation reaches the material: colour and distance as written, the
 /// coefficient −ln(colour)/distance, and none without a thickness (thin-walled) or a distance.
 #[test]

@@ -23,6 +23,22 @@
 // the unmapped normal; umbra reads no clearcoat normal texture yet). A surface without a coat
 // (`coat` 0: a kernel not specialised for it sets the constant 0) costs nothing: the branches fold.
 //
+// KHR_materials_sheen lies between the two (the coat over the sheen over the material): the
+// sheen lobe is the extension's "Charlie" one (Conty Estevez and Kulla 2017: D = (2 + 1/a)
+// sin(theta_h)^(1/a) / 2pi with a = sheenRoughness^2, and their fitted Lambda in the visibility
+// 1 / ((1 + Lambda(N.V) + Lambda(N.L)) 4 |N.V| |N.L|), no Fresnel), and the material under it is
+// scaled as the extension's albedo scaling says:
+//
+//   sheened = sheenColor D V + material * max(0, min(1 - max3(sheenColor) E(N.V),
+//                                                    1 - max3(sheenColor) E(N.L)))
+//
+// with E the lobe's directional albedo, tabulated by src/sheen.rs at build time (its size in the
+// generated sheen_albedo.glsl, its texels after the scene's materials: sheen_table_texel).
+// Transmitted light (N.L < 0) takes E(|N.L|). The fitted Lambda lets E exceed 1 at n.v < 0.01 for
+// sheen roughness below 0.26 (src/sheen.rs): the scaling is clamped at 0 there. The path tracer
+// samples the sheen as its own lobe, from the cosine-weighted hemisphere. A surface without a
+// sheen (`sheen` 0: a kernel not specialised for it sets the constant) costs nothing.
+//
 // The microfacet distribution is GGX (the specification) or, for comparison, Beckmann: the
 // including kernel declares `const bool BECKMANN` (a specialization constant). Half vectors are
 // sampled from GGX's visible normals (Heitz 2018) or, with `const bool GGX_WALTER` (also the
@@ -32,6 +48,12 @@
 #define UMBRA_BSDF_GLSL
 
 #include "sampling.glsl"
+#include "sheen_albedo.glsl"
+
+// Texel t (entries 4t..4t+3) of the sheen's albedo table: the including kernel defines it
+// (shading.glsl from the scene's material texels, where src/gpu/scene.rs appends the table for
+// a scene with a sheen).
+vec4 sheen_table_texel(uint t);
 
 // Smallest alpha: below it (roughness < 0.01) the lobe is treated as this sharp, so D stays finite.
 const float ALPHA_MIN = 1e-4;
@@ -47,6 +69,8 @@ struct Surface {
     bool thin;           // thin-walled transmission (no refraction); also every opaque surface
     float coat;          // KHR_materials_clearcoat's weight (0: no coat)
     float coat_alpha;    // the coat's GGX alpha
+    vec3 sheen;              // KHR_materials_sheen's colour (0: no sheen)
+    float sheen_roughness;   // its roughness, at least SHEEN_ROUGHNESS_MIN
 };
 
 float max3(vec3 v) {
@@ -205,16 +229,87 @@ float coat_weight(Surface s, vec3 wo) {
     return coat_weight_at(s.coat, wo.z);
 }
 
+// The sheen lobe's directional albedo E(mu, roughness): the table bilinearly interpolated
+// (src/sheen.rs's table_lookup).
+float sheen_albedo(float mu, float roughness) {
+    const float last = float(SHEEN_TABLE_SIZE - 1u);
+    float x = sqrt(clamp(mu, 0.0, 1.0)) * last;
+    float y = clamp(roughness, 0.0, 1.0) * last;
+    uint i = min(uint(x), SHEEN_TABLE_SIZE - 2u);
+    uint j = min(uint(y), SHEEN_TABLE_SIZE - 2u);
+    float fx = x - float(i);
+    float fy = y - float(j);
+    // Entries k and k + 1 lie in one texel (i even) or in two.
+    uint k = j * SHEEN_TABLE_SIZE + i;
+    uint l = k + SHEEN_TABLE_SIZE;
+    vec4 t0 = sheen_table_texel(k >> 2u);
+    vec4 t1 = sheen_table_texel((k + 1u) >> 2u);
+    vec4 t2 = sheen_table_texel(l >> 2u);
+    vec4 t3 = sheen_table_texel((l + 1u) >> 2u);
+    float a = mix(t0[k & 3u], t1[(k + 1u) & 3u], fx);
+    float b = mix(t2[l & 3u], t3[(l + 1u) & 3u], fx);
+    return mix(a, b, fy);
+}
+
+// The albedo scaling of the material under a sheen seen at cosine `nv` (one direction's term).
+float sheen_scaling_at(Surface s, float nv) {
+    return 1.0 - max3(s.sheen) * sheen_albedo(abs(nv), s.sheen_roughness);
+}
+
+float charlie_l(float x, float a) {
+    float t = (1.0 - a) * (1.0 - a);
+    return mix(21.5473, 25.3245, t) / (1.0 + mix(3.82987, 3.32435, t) * pow(x, mix(0.19823, 0.16801, t)))
+           + mix(-1.97760, -1.27393, t) * x + mix(-4.32054, -4.85967, t);
+}
+
+float charlie_lambda(float c, float a) {
+    return c < 0.5 ? exp(charlie_l(c, a)) : exp(2.0 * charlie_l(0.5, a) - charlie_l(1.0 - c, a));
+}
+
+// The sheen lobe (sheenColor 1) for wo and wi above the surface.
+float sheen_lobe(Surface s, vec3 wo, vec3 wi) {
+    float a = s.sheen_roughness * s.sheen_roughness;
+    vec3 h = normalize(wo + wi);
+    float d = (2.0 + 1.0 / a) * pow(max(1.0 - h.z * h.z, 0.0), 0.5 / a) * (0.5 * INV_PI);
+    float denom = (1.0 + charlie_lambda(wo.z, a) + charlie_lambda(wi.z, a)) * 4.0 * wo.z * wi.z;
+    return denom > 0.0 ? d / denom : 0.0;
+}
+
+// The material under the sheen, with the sheen (bsdf_eval_base when there is none).
+vec3 bsdf_eval_sheened(Surface s, vec3 wo, vec3 wi) {
+    vec3 f = bsdf_eval_base(s, wo, wi);
+    if (max3(s.sheen) > 0.0) {
+        f *= max(0.0, min(sheen_scaling_at(s, wo.z), sheen_scaling_at(s, wi.z)));
+        if (wo.z > 0.0 && wi.z > 0.0) {
+            f += s.sheen * sheen_lobe(s, wo, wi);
+        }
+    }
+    return f;
+}
+
+// The probability of sampling the sheen's lobe among the material's: its share of the estimated
+// albedo (the material's scaled by the scaling at wo).
+float sheen_probability(Surface s, vec3 wo) {
+    float e = max3(s.sheen) * sheen_albedo(wo.z, s.sheen_roughness);
+    vec3 a = lobe_albedos(s, wo);
+    float base = max(0.0, 1.0 - e) * (a.x + a.y + a.z);
+    return e + base > 0.0 ? e / (e + base) : 0.0;
+}
+
 // The probability of sampling the coat's lobe: its share of the estimated albedo.
 float coat_probability(Surface s, vec3 wo) {
     float w = coat_weight(s, wo);
     vec3 a = lobe_albedos(s, wo);
     float base = (1.0 - w) * (a.x + a.y + a.z);
+    if (max3(s.sheen) > 0.0) {
+        float e = max3(s.sheen) * sheen_albedo(wo.z, s.sheen_roughness);
+        base = (1.0 - w) * (e + max(0.0, 1.0 - e) * (a.x + a.y + a.z));
+    }
     return w + base > 0.0 ? w / (w + base) : 0.0;
 }
 
 vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
-    vec3 f = bsdf_eval_base(s, wo, wi);
+    vec3 f = bsdf_eval_sheened(s, wo, wi);
     if (s.coat > 0.0) {
         float w = coat_weight(s, wo);
         f *= 1.0 - w;
@@ -255,8 +350,18 @@ float bsdf_pdf_base(Surface s, vec3 wo, vec3 wi) {
     return p.x * micro_pdf(wo, h, s.alpha) + p.z * pdf_cosine_hemisphere(wi);
 }
 
-float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
+// The density of the material's and the sheen's sampling (bsdf_pdf_base when there is no sheen).
+float bsdf_pdf_sheened(Surface s, vec3 wo, vec3 wi) {
     float p = bsdf_pdf_base(s, wo, wi);
+    if (max3(s.sheen) > 0.0) {
+        float sheen = wo.z > 0.0 && wi.z > 0.0 ? pdf_cosine_hemisphere(wi) : 0.0;
+        p = mix(p, sheen, sheen_probability(s, wo));
+    }
+    return p;
+}
+
+float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
+    float p = bsdf_pdf_sheened(s, wo, wi);
     if (s.coat > 0.0) {
         float coat = 0.0;
         if (wo.z > 0.0 && wi.z > 0.0) {
@@ -311,7 +416,20 @@ bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out f
             // The rest of u.x, stretched back over [0, 1).
             u.x = min((u.x - q) / (1.0 - q), 0.99999994);
         }
-        sampled = bsdf_sample_base(s, wo, u, wi);
+        bool sheen_lobe = false;
+        if (max3(s.sheen) > 0.0) {
+            float qs = sheen_probability(s, wo);
+            sheen_lobe = u.x < qs;
+            if (!sheen_lobe) {
+                u.x = min((u.x - qs) / (1.0 - qs), 0.99999994);
+            }
+        }
+        if (sheen_lobe) {
+            wi = sample_cosine_hemisphere(u.yz);
+            sampled = wi.z > 0.0;
+        } else {
+            sampled = bsdf_sample_base(s, wo, u, wi);
+        }
     }
     if (!sampled) {
         return false;

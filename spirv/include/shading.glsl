@@ -28,6 +28,13 @@ uvec4 material_uvec(uint id, uint k) {
 }
 
 // Whether material `id` has `flag` (MATERIAL_DOUBLE_SIDED, MATERIAL_VOLUME, MATERIAL_UNLIT).
+// The sheen's albedo table: SHEEN_TABLE_TEXELS texels after the last material (uploaded only for
+// a scene with a sheen, so read only under HAS_SHEEN).
+vec4 sheen_table_texel(uint t) {
+    int first = imageSize(material_texels) - int(SHEEN_TABLE_TEXELS);
+    return uintBitsToFloat(imageLoad(material_texels, first + int(t)));
+}
+
 bool material_flag(uint id, uint flag) {
     return (material_uvec(id, 4u).x & flag) != 0u;
 }
@@ -223,6 +230,14 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         vec4 coat = material_vec(id, MATERIAL_CLEARCOAT_TEXEL);
         s.coat = clamp(coat.x, 0.0, 1.0);
         s.coat_alpha = max(coat.y * coat.y, ALPHA_MIN);
+    }
+    // The sheen only where the kernel is specialised for it (HAS_SHEEN).
+    s.sheen = vec3(0.0);
+    s.sheen_roughness = 1.0;
+    if (HAS_SHEEN) {
+        vec4 sheen = material_vec(id, MATERIAL_SHEEN_TEXEL);
+        s.sheen = clamp(sheen.rgb, 0.0, 1.0);
+        s.sheen_roughness = clamp(sheen.w, SHEEN_ROUGHNESS_MIN, 1.0);
     }
     if (HAS_TRANSMISSION) {
         s.transmission = clamp(material_vec(id, 3u).z, 0.0, 1.0);

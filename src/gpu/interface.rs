@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 16] = [
+pub const SCENE_FEATURES: [&str; 17] = [
     "textures",
     "alpha",
     "lights",
@@ -56,6 +56,7 @@ pub const SCENE_FEATURES: [&str; 16] = [
     "clearcoat",
     "implicit",
     "parallax",
+    "sheen",
 ];
 
 /// The scene features of the texture slots, in `MATERIAL_SLOT_*` order: some material has a
@@ -260,6 +261,9 @@ gpu_structs! {
         /// search's layer count, the binary refinement's step count, unused. Read only by
         /// kernels specialised for it (`HAS_PARALLAX`), and only where the height slot is filled.
         parallax: vec4,
+        /// `KHR_materials_sheen`: `sheenColorFactor` rgb, `sheenRoughnessFactor`. Read only by
+        /// kernels specialised for it (`HAS_SHEEN`).
+        sheen: vec4,
     }
 
     /// A texture in the shared texel buffer (linear RGBA16, one RG32UI texel per texel,
@@ -788,8 +792,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 336 bytes).
-    MATERIAL_TEXELS: uint = 21;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 352 bytes).
+    MATERIAL_TEXELS: uint = 22;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -811,6 +815,8 @@ gpu_constants! {
     MATERIAL_CLEARCOAT_TEXEL: uint = 19;
     /// The texel of [`GpuMaterial::parallax`] in a material's texels.
     MATERIAL_PARALLAX_TEXEL: uint = 20;
+    /// The texel of [`GpuMaterial::sheen`] in a material's texels.
+    MATERIAL_SHEEN_TEXEL: uint = 21;
     /// Texture slots a material has (each with two `tex_transform` rows).
     MATERIAL_TEXTURE_SLOTS: uint = 6;
     /// `GpuTexture::flags`: clamp s.
@@ -964,7 +970,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax, sheen],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1087,7 +1093,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax, sheen],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1143,7 +1149,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1170,7 +1176,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1380,7 +1386,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1402,7 +1408,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

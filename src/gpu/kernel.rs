@@ -159,6 +159,8 @@ pub struct SceneFeatures {
     /// Some material has parallax occlusion mapping (`UMBRA_implicit`'s `parallax`): shading
     /// marches its height field.
     pub parallax: bool,
+    /// Some material has a sheen (`KHR_materials_sheen`).
+    pub sheen: bool,
 }
 
 impl SceneFeatures {
@@ -177,6 +179,7 @@ impl SceneFeatures {
             texture_slots: scene.texture_slots,
             clearcoat: scene.has_clearcoat,
             parallax: scene.has_parallax,
+            sheen: scene.has_sheen,
         }
     }
 
@@ -194,6 +197,7 @@ impl SceneFeatures {
             "clearcoat" => self.clearcoat,
             "implicit" => self.implicit,
             "parallax" => self.parallax,
+            "sheen" => self.sheen,
             _ => {
                 let slot = TEXTURE_SLOT_FEATURES.iter().position(|f| *f == name)?;
                 self.texture_slots & (1 << slot) != 0

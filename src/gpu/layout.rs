@@ -403,6 +403,7 @@ const _: () = assert!(offset_of!(GpuMaterial, tex_transform) == 16 * 7);
 const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * (7 + 2 * MATERIAL_TEXTURE_SLOTS as usize));
 const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * MATERIAL_CLEARCOAT_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, parallax) == 16 * MATERIAL_PARALLAX_TEXEL as usize);
+const _: () = assert!(offset_of!(GpuMaterial, sheen) == 16 * MATERIAL_SHEEN_TEXEL as usize);
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);

@@ -69,6 +69,9 @@ pub struct GpuScene {
     /// Whether some material has a clear coat (`KHR_materials_clearcoat`): the shading kernels
     /// evaluate and sample the coat only then.
     pub has_clearcoat: bool,
+    /// Whether some material has a sheen (`KHR_materials_sheen`): the shading kernels evaluate
+    /// and sample the sheen only then.
+    pub has_sheen: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -132,7 +135,7 @@ impl SceneArrays {
             ("bvh triangles", bytes(&self.bvh.tris) + bytes(&self.bvh.implicit_texels)),
             ("scene triangles", bytes(&self.triangles)),
             ("scene vertices", bytes(&self.vertices)),
-            ("scene materials", bytes(&self.materials)),
+            ("scene materials", bytes(&material_texels(&self.materials))),
             ("scene lights", bytes(&self.lights)),
             ("scene punctual lights", bytes(&self.punctual)),
             ("scene texels", bytes(&self.texels)),
@@ -361,6 +364,7 @@ impl ShadingArrays {
                     parallax: m
                         .parallax
                         .map_or([0.0; 4], |p| [p.scale, p.layers as f32, p.refinement as f32, 0.0]),
+                    sheen: [m.sheen_color[0], m.sheen_color[1], m.sheen_color[2], m.sheen_roughness],
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                             | if m.volume { GpuMaterial::VOLUME } else { 0 }
@@ -456,7 +460,7 @@ impl GpuScene {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
             triangles: upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?,
             vertices: upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?,
-            materials: upload_rgba32ui(ctx, "scene materials", &arrays.materials)?,
+            materials: upload_rgba32ui(ctx, "scene materials", &material_texels(&arrays.materials))?,
             lights: upload_rgba32ui(ctx, "scene lights", &arrays.lights)?,
             light_count: arrays.lights.len() as u32,
             emissive_power: arrays.emissive_power,
@@ -473,6 +477,7 @@ impl GpuScene {
             has_colors: colored(&arrays.vertices),
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: coated(&arrays.materials),
+            has_sheen: sheened(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
@@ -508,7 +513,7 @@ impl GpuScene {
         let arrays = ShadingArrays::new(scene, &self.prim_order);
         self.triangles = upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?;
         self.vertices = upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?;
-        self.materials = upload_rgba32ui(ctx, "scene materials", &arrays.materials)?;
+        self.materials = upload_rgba32ui(ctx, "scene materials", &material_texels(&arrays.materials))?;
         self.lights = upload_rgba32ui(ctx, "scene lights", &arrays.lights)?;
         self.light_count = arrays.lights.len() as u32;
         self.emissive_power = arrays.emissive_power;
@@ -524,6 +529,7 @@ impl GpuScene {
         self.has_unlit = unlit(&arrays.materials);
         self.has_clearcoat = coated(&arrays.materials);
         self.has_parallax = parallax(&arrays.materials);
+        self.has_sheen = sheened(&arrays.materials);
         Ok(())
     }
 }
@@ -589,6 +595,26 @@ fn unlit(materials: &[GpuMaterial]) -> bool {
 
 fn coated(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.clearcoat[0] > 0.0)
+}
+
+/// `KHR_materials_sheen`'s albedo table (src/sheen.rs), computed by build.rs.
+const SHEEN_TABLE: [f32; crate::sheen::TABLE_SIZE * crate::sheen::TABLE_SIZE] =
+    include!(concat!(env!("OUT_DIR"), "/include/sheen_table.rs"));
+
+/// The material texels: the materials, then, when some material has a sheen, the sheen's albedo
+/// table (`sheen_table_texel` in shading.glsl reads it from the end; only kernels specialised for
+/// the sheen do).
+fn material_texels(materials: &[GpuMaterial]) -> Vec<[u32; 4]> {
+    let mut texels: Vec<[u32; 4]> = bytemuck::cast_slice(materials).to_vec();
+    if sheened(materials) {
+        texels.extend(SHEEN_TABLE.chunks(4).map(|c| [0, 1, 2, 3].map(|k| c[k].to_bits())));
+    }
+    texels
+}
+
+/// Whether some material has a sheen (a sheen colour above 0).
+fn sheened(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.sheen[..3].iter().any(|&c| c > 0.0))
 }
 
 fn parallax(materials: &[GpuMaterial]) -> bool {

@@ -101,6 +101,8 @@ impl Material {
             unlit,
             clearcoat,
             clearcoat_roughness,
+            sheen_color,
+            sheen_roughness,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -134,6 +136,11 @@ impl Material {
             h.u32s(&[height.texture, height.tex_coord, *layers, *refinement]);
             h.f32s(height.transform.as_flattened());
             h.f32s(&[*scale]);
+        }
+        // Nothing without a sheen: the hashes of scenes without it stay what they were.
+        if *sheen_color != [0.0; 3] || *sheen_roughness != 0.0 {
+            h.f32s(sheen_color);
+            h.f32s(&[*sheen_roughness]);
         }
         for slot in [
             base_color_texture,
@@ -251,6 +258,12 @@ pub struct Material {
     pub clearcoat: f32,
     /// `clearcoatRoughnessFactor` (default 0).
     pub clearcoat_roughness: f32,
+    /// `KHR_materials_sheen`'s `sheenColorFactor` (linear RGB, default 0: no sheen): the colour
+    /// of a "Charlie" sheen lobe over the material (under a clear coat), after the
+    /// specification's albedo scaling (the material scaled by 1 − max3(sheenColor) · E).
+    pub sheen_color: [f32; 3],
+    /// `sheenRoughnessFactor` (default 0; the kernels use at least 0.05).
+    pub sheen_roughness: f32,
     /// Base colour (sRGB RGBA).
     pub base_color_texture: Option<TextureRef>,
     /// Roughness in G, metalness in B (linear).
@@ -295,6 +308,8 @@ impl Default for Material {
             unlit: false,
             clearcoat: 0.0,
             clearcoat_roughness: 0.0,
+            sheen_color: [0.0; 3],
+            sheen_roughness: 0.0,
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -370,6 +385,31 @@ impl Material {
             log::warn!("{warning}");
             warnings.push(warning);
         }
+        let sheen = material.extension_value("KHR_materials_sheen");
+        // In [0, 1]: ranges.rs refuses a file with other values.
+        let sheen_roughness = sheen
+            .and_then(|c| c.get("sheenRoughnessFactor"))
+            .and_then(Value::as_f64)
+            .map_or(0.0, |x| x as f32);
+        let mut sheen_color = [0.0f32; 3];
+        if let Some(Value::Array(c)) = sheen.and_then(|c| c.get("sheenColorFactor")) {
+            for (out, v) in sheen_color.iter_mut().zip(c) {
+                *out = v.as_f64().unwrap_or(0.0) as f32;
+            }
+        }
+        let sheen_textures: Vec<&str> = ["sheenColorTexture", "sheenRoughnessTexture"]
+            .into_iter()
+            .filter(|k| sheen.is_some_and(|c| c.get(*k).is_some()))
+            .collect();
+        if !sheen_textures.is_empty() {
+            let warning = format!(
+                "material '{}': KHR_materials_sheen's {} not read (the factors alone are used)",
+                material.name().unwrap_or_default(),
+                sheen_textures.join(", ")
+            );
+            log::warn!("{warning}");
+            warnings.push(warning);
+        }
         Self {
             name: material.name().unwrap_or_default().to_owned(),
             base_color_factor: pbr.base_color_factor(),
@@ -393,6 +433,8 @@ impl Material {
             unlit: material.unlit(),
             clearcoat: coat_number("clearcoatFactor"),
             clearcoat_roughness: coat_number("clearcoatRoughnessFactor"),
+            sheen_color,
+            sheen_roughness,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,

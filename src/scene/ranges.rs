@@ -134,6 +134,11 @@ impl Checker {
             &["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"],
         );
         extension(
+            "KHR_materials_sheen",
+            &[("sheenColorFactor", unit), ("sheenRoughnessFactor", unit)],
+            &["sheenColorTexture", "sheenRoughnessTexture"],
+        );
+        extension(
             "KHR_materials_volume",
             &[
                 ("thicknessFactor", Range::AtLeast(0.0)),

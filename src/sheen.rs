@@ -78,7 +78,8 @@ pub fn brdf_cos(v: [f64; 3], l: [f64; 3], roughness: f64) -> f64 {
     d / ((1.0 + charlie_lambda(v[2], a) + charlie_lambda(l[2], a)) * 4.0 * v[2])
 }
 
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+/// Gauss–Legendre nodes and weights on [0, 1]: `n` pairs (x, w).
+pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
     (0..n)
         .map(|i| {
             let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();

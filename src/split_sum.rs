@@ -31,30 +31,9 @@ pub fn chain_level_sizes((w, h): (u32, u32)) -> Vec<(u32, u32)> {
     (0..levels).map(|k| ((w >> k).max(1), (h >> k).max(1))).collect()
 }
 
-/// Gauss–Legendre nodes and weights on [0, 1].
-pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 1.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-15 {
-                    break;
-                }
-            }
-            ((1.0 - x) * 0.5, 1.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect()
-}
+/// Gauss–Legendre nodes and weights on [0, 1] (one implementation, in [`crate::sheen`], which
+/// build.rs compiles on its own).
+pub use crate::sheen::gauss_legendre;
 
 fn ggx_g1(cos: f64, a: f64) -> f64 {
     let c = cos.abs();

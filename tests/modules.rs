@@ -17,6 +17,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("color", 0),
     ("environment", 0),
     ("split_sum", 0),
+    ("sheen", 0),
     ("scene", 0),
     ("bvh", 1),
     ("gpu", 1),

@@ -97,7 +97,7 @@ void main() {
                             // at its pixel (exact for a static scene and camera).
                             ShadePoint sq;
                             bool q_lit = gbuffer_lit(q, sq);
-                            z = (restir_target(sp, c.id, c.bary) > 0.0 ? r.m : 0.0)
+                            z = (c_hat > 0.0 ? r.m : 0.0)
                               + ((q_lit && restir_target(sq, c.id, c.bary) > 0.0) ? h.m : 0.0);
                         }
                         reservoir_finish(c, c_hat, z);

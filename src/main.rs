@@ -558,7 +558,7 @@ fn render(args: RenderArgs) -> Result<()> {
     bar.finish_and_clear();
     let pixels = (settings.size.0 * settings.size.1) as f64 * image.spp as f64;
     println!(
-        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s, {:.2} segments per sample), \
+        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s, {:.2} segments per sample, {}), \
          estimated relative error {:.4}",
         image.spp,
         settings.size.0,
@@ -567,6 +567,7 @@ fn render(args: RenderArgs) -> Result<()> {
         image.gpu_ms,
         pixels / (image.gpu_ms * 1e3),
         image.segments as f64 / pixels,
+        settings.integrator.name(),
         image.relative_error()
     );
     if image.marches_exhausted > 0 {

@@ -161,3 +161,32 @@ fn waves_of_rows_and_progressive_batches_trace_the_same_samples() {
     // The running mean's arithmetic differs by batch (6 samples at once against 1 + 2 + 3).
     assert!(worst <= 1e-5, "waves of rows differ from whole-image waves by up to {worst}");
 }
+
+/// `umbra render --integrator wavefront` renders the embedded Cornell box as the default
+/// megakernel does (under the validation layer, as `common::run_validated`): the same PNG, to
+/// within one 8-bit step.
+#[test]
+fn the_command_line_renders_with_either_integrator() {
+    let dir = std::env::temp_dir().join(format!("umbra-wavefront-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let render = |integrator: &str| {
+        let png = dir.join(format!("{integrator}.png"));
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_umbra"))
+            .args(["render", "--size", "24x20", "--spp", "3", "--integrator", integrator, "-o"])
+            .arg(&png)
+            .env("UMBRA_VALIDATION", "1")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success() && !stderr.contains("ERROR"), "{stderr}");
+        // The summary names the integrator that traced the samples.
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains(&format!("segments per sample, {integrator})")), "{stdout}");
+        image::open(&png).unwrap().to_rgb8()
+    };
+    let (mega, wave) = (render("megakernel"), render("wavefront"));
+    assert_eq!(mega.dimensions(), (24, 20));
+    let worst = mega.as_raw().iter().zip(wave.as_raw()).map(|(a, b)| a.abs_diff(*b)).max().unwrap();
+    assert!(worst <= 1, "the integrators' PNGs differ by up to {worst} steps");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -4,14 +4,17 @@
 //! waves of whole images or of rows, and progressively.
 
 mod common;
+#[path = "support/generate.rs"]
+mod generate;
 
 use common::Gpu;
+use glam::{Mat4, Vec3};
 use std::path::Path;
 use umbra::environment::EnvironmentMap;
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::pathtrace::{Integrator, PathTarget};
 use umbra::render::{Passes, PathImage, PathSettings};
-use umbra::scene::Scene;
+use umbra::scene::{implicit, LightKind, Scene};
 
 fn load(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
@@ -189,4 +192,43 @@ fn the_command_line_renders_with_either_integrator() {
     let worst = mega.as_raw().iter().zip(wave.as_raw()).map(|(a, b)| a.abs_diff(*b)).max().unwrap();
     assert!(worst <= 1, "the integrators' PNGs differ by up to {worst} steps");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Kernels specialised for implicit shapes (marched in the traversal, the marches cut short
+/// counted) and for parallax occlusion mapping (whose module-level state path_shade sets at a
+/// hit and reads for every light sample and the next ray: within one shade invocation in the
+/// wavefront) trace the same samples through both integrators.
+#[test]
+fn implicit_shapes_and_parallax_materials_trace_the_same_samples() {
+    let ctx = Gpu::new();
+    let settings =
+        PathSettings { size: (32, 24), spp: 3, seed: 11, env: [0.6; 3], ..PathSettings::default() };
+
+    // A square with ridges of a height map 0.15 m deep, seen at a slant under a low sun.
+    let heights: Vec<u8> = (0..16 * 16).map(|i| if (i % 16) / 4 % 2 == 0 { 255 } else { 0 }).collect();
+    let parallax =
+        serde_json::json!({ "heightTexture": { "index": 0 }, "scale": 0.15, "layers": 16, "refinement": 4 });
+    let glb = generate::parallax_square(1.0, 16, 16, &heights, true, Some(parallax));
+    let mut square = Scene::from_glb_bytes("parallax.glb", &glb).unwrap();
+    square.cameras = vec![common::camera(Vec3::new(0.0, -1.6, 1.4), Vec3::ZERO)];
+    square.lights.push(common::light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.3, 0.6, -0.5), 3.0));
+
+    // An implicit sphere minus a box over a floor, lit by a point light.
+    let floor = common::quad(Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0), Vec3::new(2.0, 0.0, 0.0));
+    let bulb = common::light(LightKind::Point, Vec3::new(1.0, 2.0, 1.0), Vec3::NEG_Y, 8.0);
+    let mut shape =
+        common::build("cut ball", &[floor], vec![bulb], common::camera(Vec3::new(0.0, 1.2, 2.2), Vec3::ZERO));
+    let text = r#"{"subtraction": [{"sphere": {"radius": 0.5}}, {"box": {"halfExtents": [0.6, 0.2, 0.6]}}], "material": 0}"#;
+    let value: serde_json::Value = serde_json::from_str(text).unwrap();
+    let centre = Mat4::from_translation(Vec3::new(0.0, 0.5, 0.0));
+    shape.implicits.push(implicit::from_json("cut ball", &value, centre, shape.materials.len()).unwrap());
+
+    for (name, scene) in [("parallax square", square), ("implicit shape over a floor", shape)] {
+        let gpu_scene = GpuScene::upload(&ctx, &scene).unwrap();
+        assert!(gpu_scene.has_parallax || gpu_scene.has_implicit, "{name}: the feature under test");
+        let camera = scene.camera(None).unwrap();
+        let images = both(&ctx, &gpu_scene, &camera, &settings);
+        check_same(name, &images);
+        assert_eq!(images[0].marches_exhausted, images[1].marches_exhausted, "{name}");
+    }
 }

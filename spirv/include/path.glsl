@@ -253,10 +253,9 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (HAS_PUNCTUAL) {
         float u = rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
         uint count = params.punctual_count;
-        bool every = count <= PUNCTUAL_ALL;
         for (uint j = 0u; j < min(count, PUNCTUAL_ALL); ++j) {
-            uint k = every ? j : pick_punctual((float(j) + u) * (1.0 / float(PUNCTUAL_ALL)), count);
-            float weight = every ? 1.0 : 1.0 / (float(PUNCTUAL_ALL) * punctual_vec(k, 3u).z);
+            float weight;
+            uint k = punctual_evaluated(j, count, u, weight);
             vec3 wi;
             bool to_point;
             vec3 position;

@@ -769,15 +769,24 @@ float punctual_visibility(uint k, vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool 
     return light_reaches(p, ng, t, b, n, transmits, wi, to_point, position, wi_local) ? 1.0 : 0.0;
 }
 
+// The j-th of the punctual lights a shading point evaluates (j < min(count, PUNCTUAL_ALL)): light
+// j itself when there are at most PUNCTUAL_ALL, else stratum j of the table by power (u places
+// the strata); its weight 1 or 1 / (PUNCTUAL_ALL pmf).
+uint punctual_evaluated(uint j, uint count, float u, out float weight) {
+    bool every = count <= PUNCTUAL_ALL;
+    uint k = every ? j : pick_punctual((float(j) + u) * (1.0 / float(PUNCTUAL_ALL)), count);
+    weight = every ? 1.0 : 1.0 / (float(PUNCTUAL_ALL) * punctual_vec(k, 3u).z);
+    return k;
+}
+
 // Direct light from the `count` punctual lights at p (one shadow ray per light evaluated, u
 // places the strata when they are sampled): delta distributions, so light sampling is the only
 // strategy; through a transmitting surface too.
 vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo_local, uint count, float u) {
-    bool every = count <= PUNCTUAL_ALL;
     vec3 sum = vec3(0.0);
     for (uint j = 0u; j < min(count, PUNCTUAL_ALL); ++j) {
-        uint k = every ? j : pick_punctual((float(j) + u) * (1.0 / float(PUNCTUAL_ALL)), count);
-        float weight = every ? 1.0 : 1.0 / (float(PUNCTUAL_ALL) * punctual_vec(k, 3u).z);
+        float weight;
+        uint k = punctual_evaluated(j, count, u, weight);
         vec3 wi;
         bool to_point;
         vec3 position;

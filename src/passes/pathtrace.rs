@@ -102,7 +102,7 @@ impl Strategy {
     }
 
     /// The kernel's (`light_sampling`, `bsdf_hits`): which strategies run.
-    pub(super) fn spec(self) -> (bool, bool) {
+    fn spec(self) -> (bool, bool) {
         (self != Strategy::Bsdf, self != Strategy::Light)
     }
 }
@@ -131,6 +131,36 @@ impl PathOptions {
             Heuristic::UnweightedBsdfHits => 2,
         };
         (self.microfacet as usize * 3 + heuristic) * 3 + self.strategy as usize
+    }
+}
+
+/// The specialization constants of [`PathOptions`] that both integrators' kernels (`pathtrace`,
+/// `wavefront`) are specialised on.
+pub(super) struct SamplingSpec {
+    pub beckmann: bool,
+    pub ggx_walter: bool,
+    pub power_heuristic: bool,
+    pub unweighted_bsdf_hits: bool,
+    pub light_sampling: bool,
+    pub bsdf_hits: bool,
+}
+
+impl PathOptions {
+    /// The kernels' sampling constants for these options.
+    pub(super) fn sampling_spec(self) -> SamplingSpec {
+        let PathOptions { microfacet, heuristic, strategy } = self;
+        let (light_sampling, bsdf_hits) = strategy.spec();
+        SamplingSpec {
+            beckmann: microfacet == Microfacet::Beckmann,
+            ggx_walter: microfacet == Microfacet::GgxWalter,
+            power_heuristic: heuristic != Heuristic::Balance,
+            #[cfg(feature = "testing")]
+            unweighted_bsdf_hits: heuristic == Heuristic::UnweightedBsdfHits,
+            #[cfg(not(feature = "testing"))]
+            unweighted_bsdf_hits: false,
+            light_sampling,
+            bsdf_hits,
+        }
     }
 }
 
@@ -328,16 +358,19 @@ impl PathTracePass {
     /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha,
     /// vertex colours, unlit materials) and what the options leave out cost nothing.
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
-        let PathOptions { microfacet, heuristic, strategy } = options;
-        let (light_sampling, bsdf_hits) = strategy.spec();
+        let SamplingSpec {
+            beckmann,
+            ggx_walter,
+            power_heuristic,
+            unweighted_bsdf_hits,
+            light_sampling,
+            bsdf_hits,
+        } = options.sampling_spec();
         let spec = pathtrace::Spec {
-            beckmann: microfacet == Microfacet::Beckmann,
-            ggx_walter: microfacet == Microfacet::GgxWalter,
-            power_heuristic: heuristic != Heuristic::Balance,
-            #[cfg(feature = "testing")]
-            unweighted_bsdf_hits: heuristic == Heuristic::UnweightedBsdfHits,
-            #[cfg(not(feature = "testing"))]
-            unweighted_bsdf_hits: false,
+            beckmann,
+            ggx_walter,
+            power_heuristic,
+            unweighted_bsdf_hits,
             light_sampling,
             bsdf_hits,
         };

@@ -4,7 +4,7 @@
 //! dispatched indirectly from the queue's count. [`crate::render::PathSettings::integrator`]
 //! picks it.
 
-use super::pathtrace::{Heuristic, Microfacet, PathOptions, PathSettings, PathTarget};
+use super::pathtrace::{PathOptions, PathSettings, PathTarget, SamplingSpec};
 use crate::error::{Error, Result};
 use crate::gpu::kernels::wavefront;
 use crate::gpu::layout::{GpuCamera, PathParams, WaveParams, WAVE_FIELDS, WAVE_SHADOW_TEXELS};
@@ -155,16 +155,19 @@ impl WavefrontPass {
     /// The stages for `scene` and `options` (the specialisations of
     /// [`super::pathtrace::PathTracePass::for_scene`]).
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
-        let PathOptions { microfacet, heuristic, strategy } = options;
-        let (light_sampling, bsdf_hits) = strategy.spec();
+        let SamplingSpec {
+            beckmann,
+            ggx_walter,
+            power_heuristic,
+            unweighted_bsdf_hits,
+            light_sampling,
+            bsdf_hits,
+        } = options.sampling_spec();
         let base = wavefront::Spec {
-            beckmann: microfacet == Microfacet::Beckmann,
-            ggx_walter: microfacet == Microfacet::GgxWalter,
-            power_heuristic: heuristic != Heuristic::Balance,
-            #[cfg(feature = "testing")]
-            unweighted_bsdf_hits: heuristic == Heuristic::UnweightedBsdfHits,
-            #[cfg(not(feature = "testing"))]
-            unweighted_bsdf_hits: false,
+            beckmann,
+            ggx_walter,
+            power_heuristic,
+            unweighted_bsdf_hits,
             light_sampling,
             bsdf_hits,
             ..Default::default()

@@ -102,7 +102,7 @@ impl Strategy {
     }
 
     /// The kernel's (`light_sampling`, `bsdf_hits`): which strategies run.
-    fn spec(self) -> (bool, bool) {
+    pub(super) fn spec(self) -> (bool, bool) {
         (self != Strategy::Bsdf, self != Strategy::Light)
     }
 }
@@ -134,23 +134,13 @@ impl PathOptions {
     }
 }
 
-/// The specialization constants of [`PathOptions`] that both integrators' kernels (`pathtrace`,
-/// `wavefront`) are specialised on.
-pub(super) struct SamplingSpec {
-    pub beckmann: bool,
-    pub ggx_walter: bool,
-    pub power_heuristic: bool,
-    pub unweighted_bsdf_hits: bool,
-    pub light_sampling: bool,
-    pub bsdf_hits: bool,
-}
-
-impl PathOptions {
-    /// The kernels' sampling constants for these options.
-    pub(super) fn sampling_spec(self) -> SamplingSpec {
-        let PathOptions { microfacet, heuristic, strategy } = self;
+/// A kernel's `Spec` with the sampling constants of `options` (a [`PathOptions`]), which both
+/// integrators' kernels (`pathtrace`, `wavefront`) declare; the rest from `$rest` (`..rest`).
+macro_rules! sampling_spec {
+    ($spec:path, $options:expr $(, $rest:expr)?) => {{
+        let PathOptions { microfacet, heuristic, strategy } = $options;
         let (light_sampling, bsdf_hits) = strategy.spec();
-        SamplingSpec {
+        $spec {
             beckmann: microfacet == Microfacet::Beckmann,
             ggx_walter: microfacet == Microfacet::GgxWalter,
             power_heuristic: heuristic != Heuristic::Balance,
@@ -160,9 +150,11 @@ impl PathOptions {
             unweighted_bsdf_hits: false,
             light_sampling,
             bsdf_hits,
+            $(..$rest)?
         }
-    }
+    }};
 }
+pub(super) use sampling_spec;
 
 /// Settings of a path-traced render.
 #[derive(Debug, Clone, PartialEq)]
@@ -358,22 +350,7 @@ impl PathTracePass {
     /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha,
     /// vertex colours, unlit materials) and what the options leave out cost nothing.
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
-        let SamplingSpec {
-            beckmann,
-            ggx_walter,
-            power_heuristic,
-            unweighted_bsdf_hits,
-            light_sampling,
-            bsdf_hits,
-        } = options.sampling_spec();
-        let spec = pathtrace::Spec {
-            beckmann,
-            ggx_walter,
-            power_heuristic,
-            unweighted_bsdf_hits,
-            light_sampling,
-            bsdf_hits,
-        };
+        let spec = sampling_spec!(pathtrace::Spec, options);
         Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)? })
     }
 

@@ -4,7 +4,7 @@
 //! dispatched indirectly from the queue's count. [`crate::render::PathSettings::integrator`]
 //! picks it.
 
-use super::pathtrace::{PathOptions, PathSettings, PathTarget, SamplingSpec};
+use super::pathtrace::{sampling_spec, Heuristic, Microfacet, PathOptions, PathSettings, PathTarget};
 use crate::error::{Error, Result};
 use crate::gpu::kernels::wavefront;
 use crate::gpu::layout::{GpuCamera, PathParams, WaveParams, WAVE_FIELDS, WAVE_SHADOW_TEXELS};
@@ -155,23 +155,7 @@ impl WavefrontPass {
     /// The stages for `scene` and `options` (the specialisations of
     /// [`super::pathtrace::PathTracePass::for_scene`]).
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
-        let SamplingSpec {
-            beckmann,
-            ggx_walter,
-            power_heuristic,
-            unweighted_bsdf_hits,
-            light_sampling,
-            bsdf_hits,
-        } = options.sampling_spec();
-        let base = wavefront::Spec {
-            beckmann,
-            ggx_walter,
-            power_heuristic,
-            unweighted_bsdf_hits,
-            light_sampling,
-            bsdf_hits,
-            ..Default::default()
-        };
+        let base = sampling_spec!(wavefront::Spec, options, Default::default());
         let stage = |spec: wavefront::Spec| Pipeline::for_scene(ctx, scene, &spec);
         Ok(Self {
             camera_rays: stage(wavefront::Spec { wf_camera_rays: true, ..base })?,

@@ -145,6 +145,10 @@ fn waves_of_rows_and_progressive_batches_trace_the_same_samples() {
     let target = PathTarget::new(&ctx, settings.size).unwrap();
     target.init_wave(&ctx, &gpu_scene, settings.max_bounces, 7 * 24).unwrap();
     assert!(target.init_wave(&ctx, &gpu_scene, settings.max_bounces, 7 * 24).is_err(), "a second state");
+    let too_deep = PathSettings { max_bounces: 1001, ..settings.clone() };
+    let error = too_deep.validate().expect_err("1001 bounces through the wavefront").to_string();
+    assert!(error.contains("at most 1000 bounces"), "{error}");
+    assert!(PathSettings { integrator: Integrator::Megakernel, ..too_deep }.validate().is_ok());
     let mut first = 0;
     for count in [1, 2, 3] {
         ctx.submit(|cmd| {

@@ -243,7 +243,8 @@ impl PathSettings {
     }
 
     /// An error unless the settings describe a render: at least one sample, a sample range
-    /// within the sequence's 2^32 indices, a tile inside its image.
+    /// within the sequence's 2^32 indices, a tile inside its image, at most
+    /// [`super::wavefront::MAX_BOUNCES`] bounces for the wavefront integrator.
     pub fn validate(&self) -> Result<()> {
         if self.spp == 0 {
             return Err(Error::Invalid("samples per pixel must be at least 1".into()));
@@ -254,6 +255,13 @@ impl PathSettings {
                 self.first_sample,
                 self.first_sample as u64 + self.spp as u64,
                 u32::MAX
+            )));
+        }
+        if self.integrator == Integrator::Wavefront && self.max_bounces > super::wavefront::MAX_BOUNCES {
+            return Err(Error::Invalid(format!(
+                "the wavefront integrator traces at most {} bounces (three dispatches a bounce), not {}",
+                super::wavefront::MAX_BOUNCES,
+                self.max_bounces
             )));
         }
         if let Some(Tile { image, origin }) = self.tile {

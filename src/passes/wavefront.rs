@@ -45,6 +45,11 @@ const MAX_STATE_TEXELS: u64 = 1 << 24;
 /// The most paths a wave holds, however small their state.
 pub const MAX_PATHS: u64 = 1 << 20;
 
+/// Scattering events a wavefront path may have at most: each is a round of three dispatches,
+/// and the queues' headers (32 bytes a round) are written by one `vkCmdUpdateBuffer` (64 KiB at
+/// most).
+pub const MAX_BOUNCES: u32 = 1000;
+
 /// Samples per pixel a wave traces at most.
 const MAX_WAVE_SAMPLES: u32 = 16;
 
@@ -129,6 +134,11 @@ impl WaveState {
 
     /// An error unless the state serves waves of `scene` with `max_bounces`.
     fn check(&self, scene: &GpuScene, max_bounces: u32) -> Result<()> {
+        if max_bounces > MAX_BOUNCES {
+            return Err(Error::Invalid(format!(
+                "the wavefront integrator traces at most {MAX_BOUNCES} bounces, not {max_bounces}"
+            )));
+        }
         let headers = 2 * (max_bounces as u64 + 2);
         if Self::shadows_per_path(scene) > self.shadows_per_path || headers * 16 > self.counts.size {
             return Err(Error::Invalid(format!(

@@ -503,13 +503,17 @@ fn render(args: RenderArgs) -> Result<()> {
         );
     }
     shadow_settings(&args).validate()?;
+    let mut stages = Stages::start();
     let mut loaded = args.scene.load()?;
+    stages.lap("load");
     if args.lightmap.unwrap {
         umbra::passes::lightmap::unwrap_triangles(&mut loaded.scene, args.lightmap.lightmap_size);
     }
     let camera = loaded.scene.camera(args.camera)?;
     let ctx = Context::new(&ContextDesc::default())?;
+    stages.lap("device");
     let gpu_scene = loaded.upload(&ctx)?;
+    stages.lap("BVH and upload");
     let (first_sample, spp) = args.sample_range.map_or((0, args.spp), |(a, b)| (a, b - a));
     let settings = umbra::render::PathSettings {
         size: args.tile.map_or(args.size, |t| (t[2], t[3])),
@@ -556,6 +560,7 @@ fn render(args: RenderArgs) -> Result<()> {
         bar.set_position(done as u64)
     })?;
     bar.finish_and_clear();
+    stages.lap("path tracing");
     let pixels = (settings.size.0 * settings.size.1) as f64 * image.spp as f64;
     println!(
         "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s, {:.2} segments per sample, {}), \
@@ -594,6 +599,7 @@ fn render(args: RenderArgs) -> Result<()> {
             denoised.gpu_ms,
             image.gpu_ms / image.spp as f64
         );
+        stages.lap("denoise");
         denoised.color
     } else {
         image.mean.clone()
@@ -606,6 +612,7 @@ fn render(args: RenderArgs) -> Result<()> {
             .with_context(|| format!("writing {}", png.display()))?;
         println!("wrote {}", png.display());
     }
+    stages.lap("PNG");
     if let Some(path) = &exr {
         let mut exr = umbra::merge::PathExr::new(&image, &settings, render_identity(&args, &loaded));
         if args.denoise {
@@ -613,8 +620,35 @@ fn render(args: RenderArgs) -> Result<()> {
         }
         exr.write(path)?;
         println!("wrote {}", path.display());
+        stages.lap("EXR");
     }
+    stages.log();
     Ok(())
+}
+
+/// Wall-clock time of a render's stages, logged at the info level (the default; `RUST_LOG=warn`
+/// hides it) to show where a render's time goes besides the GPU's. `RUST_LOG=umbra=debug` adds
+/// the path tracer's own split (pipeline creation, each batch's wall and GPU time, readback).
+struct Stages {
+    clock: std::time::Instant,
+    laps: Vec<(&'static str, f64)>,
+}
+
+impl Stages {
+    fn start() -> Self {
+        Self { clock: std::time::Instant::now(), laps: Vec::new() }
+    }
+
+    /// Ends the stage `name` now (the next one starts).
+    fn lap(&mut self, name: &'static str) {
+        self.laps.push((name, self.clock.elapsed().as_secs_f64() * 1e3));
+        self.clock = std::time::Instant::now();
+    }
+
+    fn log(&self) {
+        let laps: Vec<String> = self.laps.iter().map(|(name, ms)| format!("{name} {ms:.1}")).collect();
+        log::info!("stages (wall ms): {}", laps.join(", "));
+    }
 }
 
 /// What must agree between the parts of one path-traced render (`umbra merge` checks it): the

@@ -834,10 +834,12 @@ impl Passes {
     ) -> Result<PathImage> {
         let ctx = &self.ctx;
         settings.validate()?;
+        let clock = std::time::Instant::now();
         match settings.integrator {
             Integrator::Megakernel => self.path_pass(scene, settings.options()).map(|_| ())?,
             Integrator::Wavefront => self.wavefront_pass(scene, settings.options()).map(|_| ())?,
         }
+        let pipeline_ms = clock.elapsed().as_secs_f64() * 1e3;
         let target = PathTarget::new(ctx, settings.size)?;
         // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
         let pixels = settings.size.0 as u64 * settings.size.1 as u64;
@@ -845,15 +847,23 @@ impl Passes {
         let mut timer = GpuTimer::new(ctx, 1)?;
         let mut gpu_ms = 0.0;
         let mut done = 0;
+        let clock = std::time::Instant::now();
         while done < settings.spp {
             let count = batch.min(settings.spp - done);
+            let submitted = std::time::Instant::now();
             ctx.submit(|cmd| {
                 timer.reset(cmd);
                 timer.begin(cmd, "pathtrace")?;
                 self.record_path_samples(cmd, scene, camera, &target, settings, done, count)?;
                 timer.end(cmd)
             })?;
-            gpu_ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+            let batch_ms = timer.read()?.iter().map(|t| t.ms).sum::<f64>();
+            log::debug!(
+                "path tracing samples {done}..{}: {:.1} ms wall, {batch_ms:.1} ms GPU",
+                done + count,
+                submitted.elapsed().as_secs_f64() * 1e3
+            );
+            gpu_ms += batch_ms;
             done += count;
             progress(done, settings.spp);
             if let Some(goal) = settings.target_error {
@@ -866,8 +876,10 @@ impl Passes {
                 }
             }
         }
+        let trace_ms = clock.elapsed().as_secs_f64() * 1e3;
+        let clock = std::time::Instant::now();
         let stats: Vec<PathStats> = target.stats.read(ctx)?;
-        Ok(PathImage {
+        let image = PathImage {
             size: settings.size,
             spp: done,
             mean: target.accum.read(ctx)?,
@@ -880,7 +892,13 @@ impl Passes {
             gpu_ms,
             segments: stats[0].segments(),
             marches_exhausted: stats[0].marches_exhausted,
-        })
+        };
+        log::debug!(
+            "path tracing: pipeline {pipeline_ms:.1} ms, batches {trace_ms:.1} ms wall ({gpu_ms:.1} ms GPU), \
+             readback {:.1} ms",
+            clock.elapsed().as_secs_f64() * 1e3
+        );
+        Ok(image)
     }
 
     /// Renders `scene` with the hybrid pipeline: the IBL precomputation (BRDF table, prefiltered

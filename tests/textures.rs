@@ -50,6 +50,19 @@ fn mip_chain_of_a_checker_is_its_linear_mean() {
 }
 
 #[test]
+fn mip_chain_decodes_srgb_mid_tones_before_averaging() {
+    // sRGB 188 is linear 0.5029; its average with 0 (0.2514) encodes as 137, where averaging the
+    // codes as if linear gives 163. Codes 0 and 255 decode to themselves: the checker above cannot
+    // tell.
+    let rgba8 = [0, 0, 0, 255, 188, 188, 188, 255, 188, 188, 188, 255, 0, 0, 0, 255].to_vec();
+    let texture =
+        Texture { name: "grey".into(), width: 2, height: 2, rgba8, srgb: true, sampler: Sampler::default() };
+    let chain = texture.mip_chain();
+    assert_eq!(chain.len(), 1);
+    assert_eq!(chain[0].rgba8, [137, 137, 137, 255]);
+}
+
+#[test]
 fn mip_chain_of_odd_sizes_keeps_the_mean() {
     assert_eq!(mip_level_count(1, 1), 1);
     assert_eq!(mip_level_count(5, 3), 3);

@@ -193,13 +193,15 @@ impl Texture {
                 c
             }
         });
-        let mut level: Vec<[f32; 4]> = self
-            .rgba8
-            .chunks_exact(4)
-            .map(|p| {
-                [decode[p[0] as usize], decode[p[1] as usize], decode[p[2] as usize], p[3] as f32 / 255.0]
-            })
-            .collect();
+        // Level 0 is read through the decoding table where it is needed, not decoded into a
+        // float copy first: that copy is 16 bytes a texel (64 MB for a 2048² texture), and fresh
+        // memory costs a page fault per 4 KiB. `level` holds the unquantised level above from
+        // level 1 on.
+        let texel0 = |i: usize| {
+            let p = &self.rgba8[4 * i..4 * i + 4];
+            [decode[p[0] as usize], decode[p[1] as usize], decode[p[2] as usize], p[3] as f32 / 255.0]
+        };
+        let mut level: Vec<[f32; 4]> = Vec::new();
         let (mut w, mut h) = (self.width.max(1), self.height.max(1));
         let mut chain = Vec::new();
         for _ in 1..mip_level_count(w, h) {
@@ -211,7 +213,8 @@ impl Texture {
                     let mut sum = [0.0f32; 4];
                     for &(sy, ky) in row_weights {
                         for &(sx, kx) in col_weights {
-                            let t = level[(sy * w + sx) as usize];
+                            let i = (sy * w + sx) as usize;
+                            let t = if chain.is_empty() { texel0(i) } else { level[i] };
                             for c in 0..4 {
                                 sum[c] += ky * kx * t[c];
                             }
@@ -316,19 +319,27 @@ impl TextureSet {
             .filter(|&i| !decoded.contains_key(&self.uses[i as usize].image))
             .collect();
         let white = Decoded { name: "missing".into(), width: 1, height: 1, rgba8: vec![255; 4] };
+        // An image's last use takes its texels; earlier uses (other samplers or colour spaces)
+        // copy them.
+        let mut uses_left: HashMap<usize, usize> = HashMap::new();
+        for u in &self.uses {
+            *uses_left.entry(u.image).or_default() += 1;
+        }
         let textures = self
             .uses
             .iter()
             .map(|u| {
-                let image = decoded.get(&u.image).unwrap_or(&white);
-                Texture {
-                    name: image.name.clone(),
-                    width: image.width,
-                    height: image.height,
-                    rgba8: image.rgba8.clone(),
-                    srgb: u.srgb,
-                    sampler: u.sampler,
-                }
+                let left = uses_left.get_mut(&u.image).expect("counted above");
+                *left -= 1;
+                let (name, width, height, rgba8) = match (*left, decoded.get(&u.image)) {
+                    (_, None) => (white.name.clone(), white.width, white.height, white.rgba8.clone()),
+                    (0, Some(_)) => {
+                        let image = decoded.remove(&u.image).expect("present");
+                        (image.name, image.width, image.height, image.rgba8)
+                    }
+                    (_, Some(image)) => (image.name.clone(), image.width, image.height, image.rgba8.clone()),
+                };
+                Texture { name, width, height, rgba8, srgb: u.srgb, sampler: u.sampler }
             })
             .collect();
         Ok((textures, failed, warnings))

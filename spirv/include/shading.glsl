@@ -17,8 +17,8 @@
 #include "texture.glsl"
 
 // Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
-// specular, params, flags, textures[0..2], tex_transform[0..12], clearcoat, parallax), as floats
-// or as unsigned integers.
+// specular, params, flags, textures[0..3], tex_transform[0..18], clearcoat, parallax, sheen), as
+// floats or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
 }
@@ -59,7 +59,7 @@ uint material_slot_texture(uint id, uint slot) {
 
 // Row `row` (0 or 1) of the texture transform of `slot` (GpuMaterial::tex_transform).
 vec4 material_slot_row(uint id, uint slot, uint row) {
-    return material_vec(id, 7u + 2u * slot + row);
+    return material_vec(id, 8u + 2u * slot + row);
 }
 
 // An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
@@ -153,6 +153,12 @@ bool slot_textured(uint slot) {
     if (HAS_PARALLAX) {
         textured = textured || slot == MATERIAL_SLOT_HEIGHT;
     }
+    if (HAS_SPECULAR_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_SPECULAR || slot == MATERIAL_SLOT_SPECULAR_COLOR;
+    }
+    if (HAS_TRANSMISSION_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_TRANSMISSION;
+    }
     return textured;
 }
 
@@ -206,9 +212,56 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
     return texture_sample_lod(tex, t, lod);
 }
 
-// Material `id` as a BSDF surface, given its (textured) base colour, metallic and roughness:
-// the dielectric specular terms come from the material's ior and KHR_materials_specular factors.
-Surface material_surface_from(uint id, vec3 base, float metallic, float roughness) {
+// The texels of a hit's layer textures, which multiply the extensions' factors: specular.rgb
+// KHR_materials_specular's colour (specularColorTexture, RGB), specular.a its strength
+// (specularTexture, A), layers.x KHR_materials_transmission's (transmissionTexture, R); layers.yzw
+// unused (1). 1 where a material has no texture in the slot, and in kernels not specialised for
+// the slot's group (HAS_SPECULAR_MAP, HAS_TRANSMISSION_MAP). The hybrid's G-buffer stores them
+// (gb_layers) for the lighting passes.
+struct LayerTexels {
+    vec4 specular;
+    vec4 layers;
+};
+
+// No layer textures: every texel 1.
+LayerTexels layer_texels_none() {
+    LayerTexels t;
+    t.specular = vec4(1.0);
+    t.layers = vec4(1.0);
+    return t;
+}
+
+// Material `id`'s layer textures at the hit's UV sets, filtered for a ray cone's `cone_lod` (see
+// material_texture_lod; LOD_LEVEL0 for level 0).
+LayerTexels material_layer_texels_lod(uint id, vec4 uv, vec2 cone_lod) {
+    LayerTexels t = layer_texels_none();
+    if (HAS_SPECULAR_MAP) {
+        t.specular.rgb = material_texture_lod(id, MATERIAL_SLOT_SPECULAR_COLOR, uv, cone_lod).rgb;
+        t.specular.a = material_texture_lod(id, MATERIAL_SLOT_SPECULAR, uv, cone_lod).a;
+    }
+    if (HAS_TRANSMISSION_MAP) {
+        t.layers.x = material_texture_lod(id, MATERIAL_SLOT_TRANSMISSION, uv, cone_lod).r;
+    }
+    return t;
+}
+
+// Whether the kernel is specialised for some layer texture (the G-buffer's gb_layers is written
+// and read only then).
+bool layer_textured() {
+    bool textured = false;
+    if (HAS_SPECULAR_MAP) {
+        textured = true;
+    }
+    if (HAS_TRANSMISSION_MAP) {
+        textured = true;
+    }
+    return textured;
+}
+
+// Material `id` as a BSDF surface, given its (textured) base colour, metallic and roughness and
+// the texels of its layer textures (material_layer_texels_lod): the dielectric specular terms
+// come from the material's ior and KHR_materials_specular factors times their texels.
+Surface material_surface_from(uint id, vec3 base, float metallic, float roughness, LayerTexels tex) {
     // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
     Surface s;
     s.base = base;
@@ -216,8 +269,12 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.alpha = max(roughness * roughness, ALPHA_MIN);
     float ior = material_vec(id, 3u).y;
     float f0 = (ior - 1.0) / (ior + 1.0);
-    s.f0 = min(vec3(f0 * f0) * material_vec(id, 2u).rgb, vec3(1.0)) * material_vec(id, 2u).w;
-    s.f90 = material_vec(id, 2u).w;
+    vec4 specular = material_vec(id, 2u);
+    if (HAS_SPECULAR_MAP) {
+        specular *= tex.specular;
+    }
+    s.f0 = min(vec3(f0 * f0) * specular.rgb, vec3(1.0)) * specular.w;
+    s.f90 = specular.w;
     // Transmission only where the kernel is specialised for it (HAS_TRANSMISSION); a refracting
     // boundary's eta depends on the side the ray arrives from, so the caller sets it.
     s.transmission = 0.0;
@@ -240,7 +297,11 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         s.sheen_roughness = clamp(sheen.w, SHEEN_ROUGHNESS_MIN, 1.0);
     }
     if (HAS_TRANSMISSION) {
-        s.transmission = clamp(material_vec(id, 3u).z, 0.0, 1.0);
+        float transmission = material_vec(id, 3u).z;
+        if (HAS_TRANSMISSION_MAP) {
+            transmission *= tex.layers.x;
+        }
+        s.transmission = clamp(transmission, 0.0, 1.0);
         // A boundary between equal indices (ior 1) bends nothing: every microfacet refracts wo
         // straight on, so Walter et al.'s refraction half vector is 0/0 there (NaN weights). It
         // transmits as thin-walled glass does (straight through where smooth); the volume's
@@ -257,7 +318,7 @@ Surface material_surface_lod(uint id, vec4 uv, vec2 cone_lod) {
     vec4 mr = material_texture_lod(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv, cone_lod);
     float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
     float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
-    return material_surface_from(id, base, metallic, roughness);
+    return material_surface_from(id, base, metallic, roughness, material_layer_texels_lod(id, uv, cone_lod));
 }
 
 // Material `id`'s ambient occlusion at the hit's UV sets (glTF occlusionTexture: 1 + strength
@@ -276,7 +337,7 @@ Surface material_surface(uint id, vec4 uv) {
     vec4 mr = material_texture(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv);
     float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
     float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
-    return material_surface_from(id, base, metallic, roughness);
+    return material_surface_from(id, base, metallic, roughness, material_layer_texels_lod(id, uv, LOD_LEVEL0));
 }
 
 vec3 tri_vertex(uint tri, uint k) {

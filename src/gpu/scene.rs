@@ -320,6 +320,9 @@ impl ShadingArrays {
             .iter()
             .map(|m| {
                 let sigma = m.attenuation();
+                // A transmission texture scales a factor of 0 to nothing: no slot, no lookup.
+                let transmission_texture =
+                    m.transmission_texture.as_ref().filter(|_| m.transmission_factor > 0.0);
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -336,9 +339,10 @@ impl ShadingArrays {
                         [
                             gpu_textures.slot(scene, m.occlusion_texture.as_ref()),
                             gpu_textures.slot(scene, m.parallax.as_ref().map(|p| &p.height)),
-                            0,
-                            0,
+                            gpu_textures.slot(scene, m.specular_texture.as_ref()),
+                            gpu_textures.slot(scene, m.specular_color_texture.as_ref()),
                         ],
+                        [gpu_textures.slot(scene, transmission_texture), 0, 0, 0],
                     ],
                     tex_transform: transforms([
                         m.base_color_texture.as_ref(),
@@ -347,6 +351,9 @@ impl ShadingArrays {
                         m.normal_texture.as_ref(),
                         m.occlusion_texture.as_ref(),
                         m.parallax.as_ref().map(|p| &p.height),
+                        m.specular_texture.as_ref(),
+                        m.specular_color_texture.as_ref(),
+                        transmission_texture,
                     ]),
                     base_color: m.base_color_factor,
                     emissive_rough: {

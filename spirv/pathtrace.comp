@@ -172,6 +172,9 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albed
     vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
     Surface s = material_surface(material, uv);
     s.base *= tri_color(tri, hit.bary).rgb;
+    if (coat_normal_differs()) {
+        surface_coat_normal(s, coat_normal_lod(tri, hit.bary, ng, uv, LOD_LEVEL0), t, b, n);
+    }
     if (HAS_TRANSMISSION) {
         // A refracting boundary: glass (ior) behind the front face, air behind the back.
         float ior = material_vec(material, 3u).y;

@@ -1,8 +1,10 @@
 //! The extensions' layer textures: `KHR_materials_specular`'s `specularTexture` (A) and
-//! `specularColorTexture` (RGB), `KHR_materials_transmission`'s `transmissionTexture` (R), in the
-//! path tracer and the hybrid renderer (which carries their texels in the G-buffer's `layers`
-//! image). A quad facing the camera fills the view; each render is compared with the same scene
-//! whose texture is folded into the material's factor, pixel by pixel.
+//! `specularColorTexture` (RGB), `KHR_materials_transmission`'s `transmissionTexture` (R),
+//! `KHR_materials_clearcoat`'s `clearcoatTexture` (R), `clearcoatRoughnessTexture` (G) and
+//! `clearcoatNormalTexture` (and the coat's own, unmapped normal), in the path tracer and the
+//! hybrid renderer (which carries their texels in the G-buffer's `layers` image). A quad facing
+//! the camera fills the view; each render is compared with the same scene whose texture is folded
+//! into the material's factor, pixel by pixel.
 
 mod common;
 
@@ -82,9 +84,10 @@ const MODES: [&str; 2] = ["path tracer", "hybrid"];
 /// A constant texture in each layer slot renders as the same material with its texel folded into
 /// the slot's factor, in both modes. The texel's channels all differ (R 128, G 64, B 200, A 160),
 /// so a slot that read another channel than the specification's (A for `specularTexture`, RGB
-/// for `specularColorTexture`, R for `transmissionTexture`) would not match; the kernels are
-/// specialised per texture group (`specular_map`, `transmission_map`), so a slot left out of its
-/// group would render the factor alone. Every case is also checked to differ from the factor
+/// for `specularColorTexture`, R for `transmissionTexture` and `clearcoatTexture`, G for
+/// `clearcoatRoughnessTexture`) would not match; the kernels are specialised per texture group
+/// (`specular_map`, `transmission_map`, `clearcoat_map`), so a slot left out of its group would
+/// render the factor alone. Every case is also checked to differ from the factor
 /// alone, so the texture has something to change.
 #[test]
 fn each_layer_texture_is_read_alone() {
@@ -122,20 +125,42 @@ fn each_layer_texture_is_read_alone() {
             Material { transmission_factor: 0.9 * t[0], ..base.clone() },
             Material { transmission_factor: 0.9, ..base.clone() },
         ),
+        (
+            "clear coat",
+            Material { clearcoat: 0.9, clearcoat_roughness: 0.2, clearcoat_texture: slot(), ..base.clone() },
+            Material { clearcoat: 0.9 * t[0], clearcoat_roughness: 0.2, ..base.clone() },
+            Material { clearcoat: 0.9, clearcoat_roughness: 0.2, ..base.clone() },
+        ),
+        (
+            "clear coat roughness",
+            Material {
+                clearcoat: 1.0,
+                clearcoat_roughness: 0.8,
+                clearcoat_roughness_texture: slot(),
+                ..base.clone()
+            },
+            Material { clearcoat: 1.0, clearcoat_roughness: 0.8 * t[1], ..base.clone() },
+            Material { clearcoat: 1.0, clearcoat_roughness: 0.8, ..base.clone() },
+        ),
     ];
+    // Every case and mode is checked before the test fails, naming each that does.
+    let mut failures = Vec::new();
     for (name, textured, folded, factor) in cases {
         let [a, b, f] = [(textured, true), (folded, false), (factor, false)]
             .map(|(m, tex)| renders(&gpu, &scene(m, tex.then(|| row_texture(&[texel])), 2.0), 0.5));
         for (mode, ((a, b), f)) in MODES.iter().zip(a.iter().zip(&b).zip(&f)) {
             let centre = b[(SIZE.1 / 2 * SIZE.0 + SIZE.0 / 2) as usize];
             assert!(centre[0] > 0.01, "{name}, {mode}: the quad is lit ({centre:?})");
-            for (i, (p, q)) in a.iter().zip(b).enumerate() {
-                assert!(same(p, q), "{name}, {mode}: pixel {i}: textured {p:?} vs factor × texel {q:?}");
+            if let Some((i, (p, q))) = a.iter().zip(b).enumerate().find(|(_, (p, q))| !same(p, q)) {
+                failures.push(format!("{name}, {mode}: pixel {i}: textured {p:?} vs factor × texel {q:?}"));
             }
             let differ = b.iter().zip(f).filter(|(p, q)| !same(p, q)).count();
-            assert!(differ > a.len() / 2, "{name}, {mode}: the texel changes only {differ} pixels");
+            if differ <= a.len() / 2 {
+                failures.push(format!("{name}, {mode}: the texel changes only {differ} pixels"));
+            }
         }
     }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// A texture that is not constant is read where the UVs say: `specularTexture` of A = 0 over the
@@ -186,5 +211,57 @@ fn a_half_specular_texture_darkens_its_half() {
                 }
             }
         }
+    }
+}
+
+/// A tangent-space normal map of one texel tilting the normal by 45° towards the tangent (+x).
+fn tilt_map() -> Texture {
+    // (sin 45°, 0, cos 45°) encoded as (n + 1) / 2: 218 = round(255 × 0.8536).
+    row_texture(&[[218, 128, 218, 255]])
+}
+
+/// KHR_materials_clearcoat's normal: the coat lies on the unmapped (interpolated) normal, and
+/// only its own `clearcoatNormalTexture` tilts it. A black dielectric with no specular of its own
+/// (`specularFactor` 0: the base reflects nothing) under a smooth coat, lit by a sun from the
+/// camera's side: the image is the coat's highlight alone. A strong base normal map (45°) must
+/// leave it as it is without the map (within 1e-3 per pixel, both modes); the same map as the
+/// coat's normal must move it (the image's sum changes by more than half).
+#[test]
+fn the_coat_keeps_the_unmapped_normal() {
+    let gpu = Gpu::new();
+    let coated = Material {
+        base_color_factor: [0.0, 0.0, 0.0, 1.0],
+        metallic: 0.0,
+        roughness: 0.5,
+        specular_factor: 0.0,
+        clearcoat: 1.0,
+        clearcoat_roughness: 0.3,
+        double_sided: true,
+        ..Default::default()
+    };
+    let tangents = |mut s: Scene| {
+        s.tangents = vec![[1.0, 0.0, 0.0, 1.0]; s.positions.len()];
+        s
+    };
+    let render = |m: Material, map: bool| {
+        let mut s = tangents(scene(m, map.then(tilt_map), 0.0));
+        s.lights = vec![common::light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 3.0)];
+        renders(&gpu, &s, 0.0)
+    };
+    let plain = render(coated.clone(), false);
+    let base_mapped = render(Material { normal_texture: slot(), ..coated.clone() }, true);
+    let coat_mapped = render(Material { clearcoat_normal_texture: slot(), ..coated.clone() }, true);
+    for (mode, ((plain, base), coat)) in MODES.iter().zip(plain.iter().zip(&base_mapped).zip(&coat_mapped)) {
+        let sum = |image: &[[f32; 4]]| image.iter().map(|p| p[0] as f64).sum::<f64>();
+        assert!(sum(plain) > 1.0, "{mode}: the coat's highlight is seen ({})", sum(plain));
+        for (i, (p, q)) in base.iter().zip(plain).enumerate() {
+            assert!(
+                (0..3).all(|c| (p[c] - q[c]).abs() <= 1e-3 * q[c].abs().max(1e-2)),
+                "{mode}: pixel {i}: with the base's normal map {p:?}, without {q:?}"
+            );
+        }
+        let (moved, kept) = (sum(coat), sum(plain));
+        eprintln!("{mode}: coat highlight {kept:.3}, with the coat's own normal map {moved:.3}");
+        assert!((moved - kept).abs() > 0.5 * kept, "{mode}: the coat's normal map moves its highlight");
     }
 }

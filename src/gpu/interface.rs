@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 19] = [
+pub const SCENE_FEATURES: [&str; 20] = [
     "textures",
     "alpha",
     "lights",
@@ -59,6 +59,7 @@ pub const SCENE_FEATURES: [&str; 19] = [
     "sheen",
     "specular_map",
     "transmission_map",
+    "clearcoat_map",
 ];
 
 /// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
@@ -66,7 +67,7 @@ pub const SCENE_FEATURES: [&str; 19] = [
 /// material; one per extension's texture group (`KHR_materials_specular`'s two textures share
 /// `specular_map`), whose textures come together in the files seen (BENCHMARKS.md History: a
 /// scene with one of them pays for the others' lookups). The height slot is `parallax`'s.
-pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 7] = [
+pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 8] = [
     ("base_color_map", 1 << 0),
     ("metal_rough_map", 1 << 1),
     ("emissive_map", 1 << 2),
@@ -74,6 +75,7 @@ pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 7] = [
     ("occlusion_map", 1 << 4),
     ("specular_map", 1 << 6 | 1 << 7),
     ("transmission_map", 1 << 8),
+    ("clearcoat_map", 1 << 9 | 1 << 10 | 1 << 11),
 ];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
@@ -258,13 +260,14 @@ gpu_structs! {
         flags: uvec4,
         /// The texture of each slot (`MATERIAL_SLOT_*`; slot k is `textures[k / 4][k % 4]`):
         /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, occlusion,
-        /// height (parallax occlusion mapping), specular, specular colour, transmission; the last
-        /// three entries are unused (0).
+        /// height (parallax occlusion mapping), specular, specular colour, transmission, clear
+        /// coat, clear coat roughness, clear coat normal.
         textures: [uvec4; 3],
         /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
         /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; row1.w is the normal slot's
-        /// normal scale and the occlusion slot's strength (1 for the other slots).
-        tex_transform: [vec4; 18],
+        /// normal scale (and the clear coat normal slot's) and the occlusion slot's strength (1 for
+        /// the other slots).
+        tex_transform: [vec4; 24],
         /// `KHR_materials_clearcoat`: the coat's weight (`clearcoatFactor`), its roughness
         /// (`clearcoatRoughnessFactor`), unused, unused. Read only by kernels specialised for
         /// it (`HAS_CLEARCOAT`).
@@ -805,8 +808,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 464 bytes).
-    MATERIAL_TEXELS: uint = 29;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 560 bytes).
+    MATERIAL_TEXELS: uint = 35;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -834,14 +837,24 @@ gpu_constants! {
     /// left empty where the factor is 0). Looked up only by kernels specialised for it
     /// (`HAS_TRANSMISSION_MAP`).
     MATERIAL_SLOT_TRANSMISSION: uint = 8;
+    /// Slot of `KHR_materials_clearcoat`'s `clearcoatTexture` (R: × `clearcoatFactor`; this and
+    /// the next two left empty where the factor is 0). Looked up only by kernels specialised for
+    /// the group (`HAS_CLEARCOAT_MAP`).
+    MATERIAL_SLOT_CLEARCOAT: uint = 9;
+    /// Slot of `clearcoatRoughnessTexture` (G: × `clearcoatRoughnessFactor`).
+    MATERIAL_SLOT_CLEARCOAT_ROUGHNESS: uint = 10;
+    /// Slot of `clearcoatNormalTexture`, the coat's own normal map (its scale in `tex_transform`'s
+    /// second row, w). Without it the coat lies on the interpolated normal, not the base's mapped
+    /// one.
+    MATERIAL_SLOT_CLEARCOAT_NORMAL: uint = 11;
     /// The texel of [`GpuMaterial::clearcoat`] in a material's texels.
-    MATERIAL_CLEARCOAT_TEXEL: uint = 26;
+    MATERIAL_CLEARCOAT_TEXEL: uint = 32;
     /// The texel of [`GpuMaterial::parallax`] in a material's texels.
-    MATERIAL_PARALLAX_TEXEL: uint = 27;
+    MATERIAL_PARALLAX_TEXEL: uint = 33;
     /// The texel of [`GpuMaterial::sheen`] in a material's texels.
-    MATERIAL_SHEEN_TEXEL: uint = 28;
+    MATERIAL_SHEEN_TEXEL: uint = 34;
     /// Texture slots a material has (each with two `tex_transform` rows).
-    MATERIAL_TEXTURE_SLOTS: uint = 9;
+    MATERIAL_TEXTURE_SLOTS: uint = 12;
     /// `GpuTexture::flags`: clamp s.
     TEXTURE_WRAP_S_CLAMP: uint = 1;
     /// `GpuTexture::flags`: mirror s.
@@ -993,7 +1006,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat, implicit, parallax, sheen],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax, sheen],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1097,7 +1110,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, implicit, parallax],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -1118,7 +1131,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat, implicit, parallax, sheen],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax, sheen],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1176,7 +1189,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat, implicit, sheen],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1205,7 +1218,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat, implicit, sheen],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1246,7 +1259,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, implicit],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, implicit],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1342,7 +1355,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1381,7 +1394,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1417,7 +1430,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat, implicit, sheen],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1439,7 +1452,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat, implicit, sheen],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -16,283 +16,28 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "environment.glsl"
 #include "shading.glsl"
 
-// Which strategies find the emitters (LIGHT_SAMPLING and BSDF_HITS, never both false: `Strategy`
-// in src/passes/pathtrace.rs): light sampling (next-event estimation of the emissive triangles
-// and the environment map) and BSDF sampling (emission that a BSDF-sampled ray hits); MIS weighs
-// them where both run. Under every strategy, punctual lights (delta lights: no ray hits them) are
-// found by light sampling only, and emission that light sampling cannot find (a constant
-// environment, the map with env_nee off, any light-sampling density of 0) by BSDF sampling only.
-// Camera rays see emitters always. (Specialization constants are only ever tested here, never
-// negated or combined with one another: naga's SPIR-V reader rejects the constant such an
-// expression makes, OpSpecConstantOp.)
+#include "path.glsl"
 
-float mis_weight(float a, float b) {
-    if (POWER_HEURISTIC) {
-        a *= a;
-        b *= b;
+// A light sample's shadow ray, traced at once.
+void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, uint bit) {
+    if (!bvh_any(origin, d, 0.0, tmax)) {
+        path.radiance += c;
+        path.nonfinite |= nonfinite_bit(c, bit);
     }
-    return a / (a + b);
 }
 
-// The weight of emission that BSDF sampling found (density a) against light sampling (density
-// b): MIS, 1 without light sampling, and with light sampling alone 0 wherever it could have found
-// it. UNWEIGHTED_BSDF_HITS (the `testing` feature's deliberately biased variant) leaves MIS out:
-// such emission counts fully, on top of light sampling's weighted share.
-float bsdf_hit_weight(float a, float b) {
-    if (LIGHT_SAMPLING) {
-        if (BSDF_HITS) {
-            if (UNWEIGHTED_BSDF_HITS) {
-                return 1.0;
-            }
-            return mis_weight(a, b);
-        }
-        return b > 0.0 ? 0.0 : 1.0;
-    }
-    return 1.0;
-}
-
-// The weight of a light sample (density a) against BSDF sampling (density b): MIS, or 1 with
-// light sampling alone.
-float light_sample_weight(float a, float b) {
-    return BSDF_HITS ? mis_weight(a, b) : 1.0;
-}
-
-// Non-finite sources (PathStats.nonfinite_sources bits): the stages whose contribution (or, for
-// BSDF sampling, weight and pdf) was NaN or Inf.
-const uint NONFINITE_ENVIRONMENT = 1u;
-const uint NONFINITE_EMISSION = 2u;
-const uint NONFINITE_EMISSIVE_NEE = 4u;
-const uint NONFINITE_PUNCTUAL = 8u;
-const uint NONFINITE_ENV_NEE = 16u;
-const uint NONFINITE_BSDF_SAMPLE = 32u;
-
-uint nonfinite_bit(vec3 v, uint bit) {
-    return (any(isnan(v)) || any(isinf(v))) ? bit : 0u;
-}
-
-// One path: its ray, what it has gathered so far and what it carries.
-struct Path {
-    vec3 origin;
-    vec3 dir;
-    vec3 radiance;
-    vec3 throughput;
-    float prev_pdf;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
-    uint depth;      // scattering events so far
-    uint nonfinite;  // NONFINITE_* bits of the stages that produced a non-finite value
-};
-
-// Sample `sample_index` of `pixel` (of the whole image): its camera ray.
-Path camera_path(uvec2 pixel, uint sample_index) {
-    vec4 jitter = rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), params.seed);
-    Path path;
-    path.origin = params.camera.origin;
-    path.dir = camera_ray(params.camera.forward, params.camera.right, params.camera.up, vec2(pixel) + jitter.xy,
-                          uvec2(params.camera.image_width, params.camera.image_height));
-    path.radiance = vec3(0.0);
-    path.throughput = vec3(1.0);
-    path.prev_pdf = 0.0;
-    path.depth = 0u;
-    path.nonfinite = 0u;
-    return path;
-}
-
-// Traces `path`'s ray and adds what it finds at the end: emission, direct light; then samples
-// the next ray. False when the path ends there. At the first hit (or miss) it records the base
-// colour and normal into `albedo` and `normal_depth`, and the radiance emitted there (or the
-// environment's) into `emitted_first`: the part of the sample that the denoiser must not filter.
+// Traces `path`'s ray and shades what it finds (path_shade). False when the path ends there.
 bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albedo, inout vec4 normal_depth,
                inout vec3 emitted_first) {
-    uint seed = params.seed;
-    uint depth = path.depth;
-    vec3 dir = path.dir;
-    vec3 throughput = path.throughput;
     Hit hit;
-    if (!bvh_closest(path.origin, dir, 0.0, BVH_INF, hit)) {
-        if (HAS_ENV_MAP) {
-            float w = 1.0;
-            if (params.env_nee != 0u && path.prev_pdf > 0.0) {
-                w = bsdf_hit_weight(path.prev_pdf, env_pdf(dir, params.env_size) * params.env_pick);
-            }
-            vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
-            path.radiance += c;
-            path.nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
-            if (depth == 0u) {
-                emitted_first = c;
-            }
-        } else {
-            path.radiance += throughput * params.env;
-            if (depth == 0u) {
-                emitted_first = params.env;
-            }
-        }
-        return false;
-    }
-    uint tri = hit.tri;
-    vec3 ng = hit_normal(hit);
-    float area = 0.5 * length(ng);
-    ng = normalize(ng);
-    vec3 wo = -dir;
-    vec3 p = path.origin + hit.t * dir;
-    uint material = tri_material(tri);
-    // Parallax occlusion mapping: the hit's attributes are read where the ray meets the material's
-    // height field, whose self-shadowing then applies to every light sample (light_side).
-    hit.bary = parallax_occlusion(tri, hit.bary, wo);
-    if (HAS_TRANSMISSION && dot(ng, wo) < 0.0 && material_flag(material, MATERIAL_VOLUME)) {
-        // A volume's boundary reached from behind: the segment ran inside it (a closed mesh
-        // whose normals face out, as KHR_materials_volume requires), so Beer-Lambert.
-        throughput *= exp(-material_attenuation(material) * hit.t);
-    }
+    bool found = bvh_closest(path.origin, path.dir, 0.0, BVH_INF, hit);
+    return path_shade(path, found, hit, pixel, sample_index, albedo, normal_depth, emitted_first);
+}
 
-    // Emission, weighted against the light-sampling strategy that could have found it.
-    vec4 uv = tri_uv(tri, hit.bary);
-    vec3 le = emitted(tri, hit.bary, ng, wo);
-    if (any(greaterThan(le, vec3(0.0)))) {
-        float w = 1.0;
-        if (HAS_LIGHTS && path.prev_pdf > 0.0) {
-            float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo) * (1.0 - params.env_pick);
-            w = bsdf_hit_weight(path.prev_pdf, light_pdf);
-        }
-        vec3 c = throughput * le * w;
-        path.radiance += c;
-        path.nonfinite |= nonfinite_bit(c, NONFINITE_EMISSION);
-        if (depth == 0u) {
-            emitted_first = c;
-        }
-    }
-
-    // Shading frame: interpolated, normal-mapped normal, on the same side as the viewer.
-    bool front = dot(ng, wo) >= 0.0;
-    if (!front) {
-        ng = -ng;
-    }
-    vec3 n = shading_normal(tri, hit.bary, ng, uv);
-    vec3 t;
-    vec3 b;
-    basis(n, t, b);
-    vec3 wo_local = vec3(dot(wo, t), dot(wo, b), dot(wo, n));
-    Surface s = material_surface(material, uv);
-    s.base *= tri_color(tri, hit.bary).rgb;
-    if (coat_normal_differs()) {
-        surface_coat_normal(s, coat_normal_lod(tri, hit.bary, ng, uv, LOD_LEVEL0), t, b, n);
-    }
-    if (HAS_TRANSMISSION) {
-        // A refracting boundary: glass (ior) behind the front face, air behind the back.
-        float ior = material_vec(material, 3u).y;
-        s.eta = front ? ior : 1.0 / ior;
-    }
-    if (depth == 0u) {
-        albedo = vec4(s.base, 1.0);
-        normal_depth = vec4(n, hit.t);
-    }
-    // KHR_materials_unlit, modelled as an emitter of its base colour that scatters nothing: the
-    // path ends here, and no light sampling finds it (BSDF-sampled rays alone, weight 1).
-    if (material_unlit(material)) {
-        path.radiance += throughput * s.base;
-        if (depth == 0u) {
-            emitted_first += s.base;
-        }
-        return false;
-    }
-    if (depth >= params.max_bounces || wo_local.z <= 0.0) {
-        return false;
-    }
-
-    // Next-event estimation: one light sample and its shadow ray, from the emissive triangles
-    // (one by power, a uniform point on it) or the environment map (importance-sampled by
-    // luminance x sin(theta)), the map picked with probability params.env_pick (1 or 0 where the
-    // scene has one of them; by their power where it has both), weighted by MIS.
-    bool tri_nee = false;
-    if (HAS_LIGHTS) {
-        tri_nee = params.light_count > 0u;
-    }
-    bool env_nee = false;
-    if (HAS_ENV_MAP) {
-        env_nee = params.env_nee != 0u;
-    }
-    if (LIGHT_SAMPLING) {
-        if (tri_nee || env_nee) {
-            vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
-            bool pick_env = u.w < params.env_pick;
-            vec3 wi = vec3(0.0, 0.0, 1.0);
-            vec3 target = vec3(0.0);
-            vec3 l_in = vec3(0.0);  // the sampled light's radiance towards p
-            float pdf = 0.0;
-            bool found = false;
-            // Only the kernels of scenes with the light kind compile its sampling: llvmpipe
-            // runs an if-body for every lane whichever lanes take it.
-            if (HAS_ENV_MAP) {
-                if (pick_env) {
-                    vec4 ue = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
-                    wi = env_sample(ue, params.env_size, pdf);
-                    l_in = env_radiance(wi, params.env_size) * params.env;
-                    pdf *= params.env_pick;
-                    found = pdf > 0.0;
-                }
-            }
-            if (HAS_LIGHTS) {
-                if (!pick_env) {
-                    found = emissive_point(p, u.xyz, params.light_count, wi, target, l_in, pdf);
-                    pdf *= 1.0 - params.env_pick;
-                }
-            }
-            vec3 wi_local;
-            if (found && light_reaches(p, ng, t, b, n, surface_transmits(s), wi, !pick_env, target, wi_local)) {
-                vec3 f = bsdf_eval(s, wo_local, wi_local);
-                float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
-                vec3 c = throughput * f * abs(wi_local.z) * l_in * (w / pdf);
-                path.radiance += c;
-                path.nonfinite |= nonfinite_bit(c, pick_env ? NONFINITE_ENV_NEE : NONFINITE_EMISSIVE_NEE);
-            }
-        }
-    }
-
-    // Punctual lights: delta distributions, so light sampling is the only strategy (no MIS).
-    if (HAS_PUNCTUAL) {
-        float u = rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
-        vec3 c = throughput * punctual_direct(p, ng, t, b, n, s, wo_local, params.punctual_count, u);
-        path.radiance += c;
-        path.nonfinite |= nonfinite_bit(c, NONFINITE_PUNCTUAL);
-    }
-
-    // Continue the path by sampling the BSDF.
-    vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_BSDF), seed);
-    vec3 wi_local;
-    vec3 weight;
-    float pdf;
-    if (!bsdf_sample(s, wo_local, u.xyz, wi_local, weight, pdf)) {
-        return false;
-    }
-    vec3 wi = wi_local.x * t + wi_local.y * b + wi_local.z * n;
-    bool transmitted = wi_local.z < 0.0;
-    float side = dot(wi, ng);
-    if (transmitted ? side >= 0.0 : side <= 0.0) {
-        return false;  // the shading normal and the geometry disagree about the side
-    }
-    if (HAS_PARALLAX) {
-        // A sampled direction into the height field: the path ends (the field's interreflection
-        // is not traced), so BSDF sampling sees the self-shadowing light sampling sees and MIS
-        // weighs like with like.
-        if (!parallax_lit(wi)) {
-            return false;
-        }
-    }
-    path.nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
-    throughput *= weight;
-    // Light sampling covers both sides of a transmitting surface, so an emitter or the
-    // environment reached either way is weighed by MIS against it.
-    path.prev_pdf = pdf;
-    if (depth + 1u >= params.rr_depth) {
-        float q = clamp(max3(throughput), 0.05, 1.0);
-        if (u.w >= q) {
-            return false;
-        }
-        throughput /= q;
-    }
-    path.throughput = throughput;
-    path.origin = offset_ray(p, transmitted ? -ng : ng);
-    path.dir = wi;
-    path.depth = depth + 1u;
-    return true;
+// Sample `sample_index` of `pixel` (of the whole image): its camera ray.
+Path camera_path_of(uvec2 pixel, uint sample_index) {
+    return camera_path(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
+                       uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
 }
 
 // Samples params.sample_index .. + params.sample_count of one pixel of the region (its random
@@ -326,7 +71,7 @@ uint trace_pixel(uvec2 region_pixel) {
     vec3 sum2 = vec3(0.0);  // of their squares
     uint j = 0u;
     uint segments = 0u;
-    Path path = camera_path(pixel, first);
+    Path path = camera_path_of(pixel, first);
     while (true) {
         ++segments;
         if (path_step(path, pixel, first + j, albedo, normal_depth, emitted_first)) {
@@ -350,7 +95,7 @@ uint trace_pixel(uvec2 region_pixel) {
         if (j >= count) {
             break;
         }
-        path = camera_path(pixel, first + j);
+        path = camera_path_of(pixel, first + j);
         albedo = vec4(params.env, 0.0);
         normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
         emitted_first = vec3(0.0);

@@ -209,6 +209,10 @@ struct RenderArgs {
     /// alone, or light sampling alone (punctual lights are always light-sampled).
     #[arg(long, value_enum, default_value = "mis")]
     strategy: StrategyArg,
+    /// How the path tracer lays out its work: one kernel per path (megakernel) or a kernel per
+    /// step over queues of paths (wavefront); the same samples either way.
+    #[arg(long, value_enum, default_value = "megakernel")]
+    integrator: IntegratorArg,
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
     #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
@@ -451,6 +455,12 @@ enum StrategyArg {
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
+enum IntegratorArg {
+    Megakernel,
+    Wavefront,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
 enum HeuristicArg {
     Power,
     Balance,
@@ -526,6 +536,10 @@ fn render(args: RenderArgs) -> Result<()> {
         env: args.scene.env_radiance(),
         env_nee: true,
         target_error: args.target_error,
+        integrator: match args.integrator {
+            IntegratorArg::Megakernel => umbra::passes::pathtrace::Integrator::Megakernel,
+            IntegratorArg::Wavefront => umbra::passes::pathtrace::Integrator::Wavefront,
+        },
     };
     if args.mode == Mode::Hybrid {
         return render_hybrid(&ctx, &loaded, &gpu_scene, &camera, &args);
@@ -544,7 +558,7 @@ fn render(args: RenderArgs) -> Result<()> {
     bar.finish_and_clear();
     let pixels = (settings.size.0 * settings.size.1) as f64 * image.spp as f64;
     println!(
-        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s, {:.2} segments per sample), \
+        "pathtrace: {} spp at {}x{} in {:.2} s (GPU {:.1} ms, {:.2} Msamples/s, {:.2} segments per sample, {}), \
          estimated relative error {:.4}",
         image.spp,
         settings.size.0,
@@ -553,6 +567,7 @@ fn render(args: RenderArgs) -> Result<()> {
         image.gpu_ms,
         pixels / (image.gpu_ms * 1e3),
         image.segments as f64 / pixels,
+        settings.integrator.name(),
         image.relative_error()
     );
     if image.marches_exhausted > 0 {

@@ -24,11 +24,12 @@ use crate::passes::lightmap::{
     GpuLightmaps, LightmapLayout, LightmapPass, LightmapSettings, Lightmaps, OcclusionMaps,
 };
 pub use crate::passes::pathtrace::PathSettings;
-use crate::passes::pathtrace::{PathOptions, PathTarget, PathTracePass, ResolvePass};
+use crate::passes::pathtrace::{Integrator, PathOptions, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::probes::{ProbePass, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirPass, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
+use crate::passes::wavefront::WavefrontPass;
 use crate::scene::Camera;
 use crate::vk::{raw, Buffer, Context, GpuTimer, Image};
 use std::sync::OnceLock;
@@ -221,6 +222,8 @@ pub struct Passes {
     tonemap: OnceLock<TonemapPass>,
     /// One per [`PathOptions`], index [`PathOptions::index`].
     path: [OnceLock<PathTracePass>; PathOptions::COUNT],
+    /// The wavefront path tracer's stages, one set per [`PathOptions`].
+    wavefront: [OnceLock<WavefrontPass>; PathOptions::COUNT],
     resolve: OnceLock<ResolvePass>,
     denoise: OnceLock<DenoisePass>,
 }
@@ -246,6 +249,7 @@ impl Passes {
             rtao: OnceLock::new(),
             tonemap: OnceLock::new(),
             path: Default::default(),
+            wavefront: Default::default(),
             resolve: OnceLock::new(),
             denoise: OnceLock::new(),
         }
@@ -346,6 +350,12 @@ impl Passes {
     pub fn path_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&PathTracePass> {
         self.check(scene)?;
         built(&self.path[options.index()], || PathTracePass::for_scene(&self.ctx, scene, options))
+    }
+
+    /// The wavefront path tracer's stages for `options` (built now if they were not).
+    pub fn wavefront_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&WavefrontPass> {
+        self.check(scene)?;
+        built(&self.wavefront[options.index()], || WavefrontPass::for_scene(&self.ctx, scene, options))
     }
 
     /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.
@@ -713,7 +723,6 @@ impl Passes {
                 settings.size, target.size
             )));
         }
-        let pass = self.path_pass(scene, settings.options())?;
         let mut params = PathTracePass::params(scene, camera, settings);
         params.sample_index =
             settings.first_sample.checked_add(first).filter(|s| s.checked_add(count).is_some()).ok_or_else(
@@ -728,7 +737,14 @@ impl Passes {
         if first == 0 {
             target.record_clear(&self.ctx, cmd);
         }
-        pass.record(&self.ctx, cmd, scene, target, &params)
+        match settings.integrator {
+            Integrator::Megakernel => {
+                self.path_pass(scene, settings.options())?.record(&self.ctx, cmd, scene, target, &params)
+            }
+            Integrator::Wavefront => self
+                .wavefront_pass(scene, settings.options())?
+                .record(&self.ctx, cmd, scene, target, settings, &params),
+        }
     }
 
     /// Records the copy of `target`'s running mean into `output` (`R32G32B32A32_SFLOAT`, the
@@ -818,7 +834,10 @@ impl Passes {
     ) -> Result<PathImage> {
         let ctx = &self.ctx;
         settings.validate()?;
-        self.path_pass(scene, settings.options())?;
+        match settings.integrator {
+            Integrator::Megakernel => self.path_pass(scene, settings.options()).map(|_| ())?,
+            Integrator::Wavefront => self.wavefront_pass(scene, settings.options()).map(|_| ())?,
+        }
         let target = PathTarget::new(ctx, settings.size)?;
         // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
         let pixels = settings.size.0 as u64 * settings.size.1 as u64;

@@ -878,8 +878,8 @@ bool surface_transmits(Surface s) {
 // PUNCTUAL_ALL of them picked by power (GpuLight's selection table), stratified over the table,
 // each weighted by 1 / (PUNCTUAL_ALL pmf): unbiased, and the work stays bounded. (llvmpipe ends
 // every loop of an invocation after 65,535 iterations in all, which one shadow ray per light cut
-// short from about 13,000 lights over a plane, or a few hundred in Sponza.)
-const uint PUNCTUAL_ALL = 16u;
+// short from about 13,000 lights over a plane, or a few hundred in Sponza.) PUNCTUAL_ALL: 16
+// (src/gpu/interface.rs).
 
 // The light whose selection interval holds u (binary search of the inclusive prefix).
 uint pick_punctual(float u, uint count) {

@@ -364,6 +364,43 @@ gpu_structs! {
         env_pick: float,
     }
 
+    /// Push constants of `wavefront.comp`: [`PathParams`] but for the camera (in its own
+    /// buffer, `wf_camera`), and the wave's place.
+    struct WaveParams {
+        /// Constant environment radiance rgb (or the environment map's multiplier).
+        env: vec3,
+        /// Sample the environment map for next-event estimation (0/1).
+        env_nee: uint,
+        /// Width and height of the region rendered and of the accumulation buffers.
+        size: uvec2,
+        /// The wave's first sample: the index in the counter-based sequence.
+        sample_index: uint,
+        /// Seed of the random numbers.
+        seed: uint,
+        /// Scattering events per path.
+        max_bounces: uint,
+        /// Russian roulette starts once a path has scattered this many times.
+        rr_depth: uint,
+        /// Emissive triangles in the sampling table.
+        light_count: uint,
+        /// Punctual lights.
+        punctual_count: uint,
+        /// Environment map width and height.
+        env_size: uvec2,
+        /// Samples per pixel in this wave (`sample_index ..`), at least 1.
+        sample_count: uint,
+        /// The probability that a light sample comes from the environment map.
+        env_pick: float,
+        /// The wave's round: the path segment each path of the ray queue traces (0: camera rays).
+        round: uint,
+        /// Paths the state holds (`wf_paths`' texels per field).
+        capacity: uint,
+        /// Shadow rays one path may queue in a round.
+        shadows_per_path: uint,
+        /// The region's row where the wave's rows start (a wave covers whole rows).
+        first_row: uint,
+    }
+
     /// Per-render counters written by `pathtrace.comp`.
     struct PathStats {
         /// Samples that came out NaN or infinite (replaced by 0; must stay 0).
@@ -936,6 +973,19 @@ gpu_constants! {
     RESTIR_PUNCTUAL: uint = 0x80000000;
     /// [`GpuReservoir::flags`]: the weight includes the sample's visibility.
     RESTIR_VISIBLE: uint = 1;
+    /// Punctual lights a shading point evaluates at most (`punctual_direct`, `path_shade`): all of
+    /// them up to this many, beyond it this many picked by power.
+    PUNCTUAL_ALL: uint = 16;
+    /// `wavefront.comp`: fields of a path's state in `wf_paths` (each `capacity` texels): origin
+    /// and the pdf of the sample that made the ray; direction and depth; throughput and the
+    /// shadow rays queued this round; radiance so far and its non-finite sources; the first hit's
+    /// albedo, normal and distance, emission; the closest hit of this round's ray.
+    WAVE_FIELDS: uint = 8;
+    /// `wavefront.comp`: texels of one queued shadow ray (origin and tmax, direction, the
+    /// contribution if unblocked and its non-finite source bit).
+    WAVE_SHADOW_TEXELS: uint = 3;
+    /// `wavefront.comp`: the closest hit's triangle where the ray left the scene.
+    WAVE_MISS: uint = 0xffffffff;
     /// Implicit shapes (`implicit.glsl`): a sphere (params: radius).
     IMPLICIT_SPHERE: uint = 0;
     /// A box (params: half extents).
@@ -1028,6 +1078,52 @@ kernels! {
             aov_normal_depth: readwrite buffer [vec4],
             /// Radiance emitted at the first hit (or the environment a camera ray sees), mean
             /// over the samples: the part of the image the denoiser leaves unfiltered.
+            aov_emission: readwrite buffer [vec4],
+            /// Counters ([`PathStats`]).
+            stats: readwrite buffer PathStats,
+        }
+    }
+
+    /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
+    /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
+    kernel wavefront {
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax, sheen],
+        push: WaveParams,
+        spec: {
+            beckmann: bool = false,
+            ggx_walter: bool = false,
+            power_heuristic: bool = true,
+            unweighted_bsdf_hits: bool = false,
+            light_sampling: bool = true,
+            bsdf_hits: bool = true,
+            wf_camera_rays: bool = false,
+            wf_extend: bool = false,
+            wf_shade: bool = false,
+            wf_connect: bool = false,
+            wf_accumulate: bool = false
+        },
+        bindings: {
+            /// The camera.
+            wf_camera: readonly buffer GpuCamera,
+            /// The paths' state: [`WAVE_FIELDS`] fields of `capacity` RGBA32UI texels each, then
+            /// the shadow rays, [`WAVE_SHADOW_TEXELS`] texels each, `shadows_per_path` per path.
+            wf_paths: readwrite texels rgba32ui,
+            /// The queues: two of paths to extend (by round parity), then one of paths with
+            /// shadow rays; `capacity` entries each.
+            wf_queue: readwrite texels r32ui,
+            /// Per queue and round, a `VkDispatchIndirectCommand` (workgroups x, 1, 1) and the
+            /// entries: the ray queue of round r at 4 r, the shadow queue of round r at
+            /// 4 (max_bounces + 2 + r).
+            wf_counts: readwrite buffer [uint],
+            /// Running mean rgb, sample count (vec4 per pixel).
+            accum: readwrite buffer [vec4],
+            /// Running mean of the squared samples rgb.
+            moment: readwrite buffer [vec4],
+            /// Base colour at the first hit, mean over the samples.
+            aov_albedo: readwrite buffer [vec4],
+            /// Shading normal and distance at the first hit of the pixel's sample 0.
+            aov_normal_depth: readwrite buffer [vec4],
+            /// Radiance emitted at the first hit, mean over the samples.
             aov_emission: readwrite buffer [vec4],
             /// Counters ([`PathStats`]).
             stats: readwrite buffer PathStats,

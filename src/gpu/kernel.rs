@@ -327,6 +327,12 @@ impl<K: Kernel> Pipeline<K> {
         self.pipeline.push_constants(cmd, push)
     }
 
+    /// Dispatches the workgroup counts in `buffer` at `offset` (a `VkDispatchIndirectCommand`
+    /// that an earlier kernel wrote; `buffer` made with `INDIRECT_BUFFER` usage).
+    pub fn dispatch_indirect(&self, cmd: raw::CommandBuffer, buffer: &crate::vk::Buffer, offset: u64) {
+        self.pipeline.dispatch_indirect(cmd, buffer.raw, offset)
+    }
+
     /// Dispatches enough `local`-sized workgroups to cover `size` invocations.
     pub fn dispatch(&self, cmd: raw::CommandBuffer, size: [u32; 3], local: [u32; 3]) -> Result<()> {
         self.pipeline.dispatch(cmd, size, local)

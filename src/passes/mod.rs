@@ -11,3 +11,4 @@ pub mod probes;
 pub mod restir;
 pub mod shadow;
 pub mod tonemap;
+pub mod wavefront;

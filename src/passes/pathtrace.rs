@@ -1,6 +1,8 @@
 //! The progressive path-tracing pass (`spirv/pathtrace.comp`): one sample per pixel per
 //! dispatch into a running mean and second moment.
 
+pub use super::wavefront::Integrator;
+use super::wavefront::WaveState;
 use crate::error::{Error, Result};
 use crate::gpu::kernels::{pathtrace, resolve};
 use crate::gpu::layout::{GpuCamera, PathParams, PathStats, ResolveParams};
@@ -100,7 +102,7 @@ impl Strategy {
     }
 
     /// The kernel's (`light_sampling`, `bsdf_hits`): which strategies run.
-    fn spec(self) -> (bool, bool) {
+    pub(super) fn spec(self) -> (bool, bool) {
         (self != Strategy::Bsdf, self != Strategy::Light)
     }
 }
@@ -167,6 +169,9 @@ pub struct PathSettings {
     /// Render only a region of a larger image: `size` pixels from [`Tile::origin`] of a
     /// [`Tile::image`]-sized image, each pixel (ray and random numbers) as the whole image has it.
     pub tile: Option<Tile>,
+    /// The megakernel or the wavefront path tracer: the same samples, laid out differently on
+    /// the device.
+    pub integrator: Integrator,
 }
 
 /// A region of a larger image (`umbra render --tile`): the render's `size` pixels from `origin`
@@ -195,6 +200,7 @@ impl Default for PathSettings {
             target_error: None,
             first_sample: 0,
             tile: None,
+            integrator: Integrator::Megakernel,
         }
     }
 }
@@ -259,6 +265,9 @@ pub struct PathTarget {
     pub emission: Buffer,
     /// [`PathStats`].
     pub stats: Buffer,
+    /// The wavefront path tracer's queues and path states, made at its first render into this
+    /// target.
+    pub wave: std::sync::OnceLock<WaveState>,
 }
 
 impl PathTarget {
@@ -277,7 +286,19 @@ impl PathTarget {
             normal_depth: make("path normal depth")?,
             emission: make("path emission")?,
             stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], usage)?,
+            wave: std::sync::OnceLock::new(),
         })
+    }
+
+    /// Makes the wavefront path tracer's state now (else its first render does, holding up to
+    /// [`super::wavefront::MAX_PATHS`] paths): for `scene`'s renders of at most `max_bounces`,
+    /// holding at most `max_paths` paths (a host bounding its memory; fewer paths, more waves).
+    /// An error if the target has one already.
+    pub fn init_wave(&self, ctx: &Context, scene: &GpuScene, max_bounces: u32, max_paths: u64) -> Result<()> {
+        let state = WaveState::new(ctx, scene, self.size, max_bounces, max_paths)?;
+        self.wave
+            .set(state)
+            .map_err(|_| Error::Invalid("the path target has a wavefront state already".into()))
     }
 
     /// Records the clearing of the running mean and second moment (a new render starts: the

@@ -29,6 +29,13 @@ const COMPUTE_RW: (vk::PipelineStageFlags2, vk::AccessFlags2) = (
             | vk::AccessFlags2::SHADER_SAMPLED_READ.as_raw(),
     ),
 );
+/// A kernel's reads and writes and an indirect dispatch's read of its workgroup counts.
+const COMPUTE_INDIRECT: (vk::PipelineStageFlags2, vk::AccessFlags2) = (
+    vk::PipelineStageFlags2::from_raw(
+        vk::PipelineStageFlags2::COMPUTE_SHADER.as_raw() | vk::PipelineStageFlags2::DRAW_INDIRECT.as_raw(),
+    ),
+    vk::AccessFlags2::from_raw(COMPUTE_RW.1.as_raw() | vk::AccessFlags2::INDIRECT_COMMAND_READ.as_raw()),
+);
 const TRANSFER_WRITE: (vk::PipelineStageFlags2, vk::AccessFlags2) =
     (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
 const TRANSFER_READ: (vk::PipelineStageFlags2, vk::AccessFlags2) =
@@ -37,6 +44,18 @@ const TRANSFER_READ: (vk::PipelineStageFlags2, vk::AccessFlags2) =
 /// Kernel writes visible to the next kernel's reads and writes.
 pub fn compute_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
     memory(ctx, cmd, COMPUTE_RW, COMPUTE_RW);
+}
+
+/// Kernel writes visible to the next kernel's reads and writes and to an indirect dispatch's
+/// read of its workgroup counts.
+pub fn compute_to_indirect(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory(ctx, cmd, COMPUTE_RW, COMPUTE_INDIRECT);
+}
+
+/// Copies (uploads, clears) visible to kernels and to an indirect dispatch's read of its
+/// workgroup counts.
+pub fn transfer_to_indirect(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory(ctx, cmd, TRANSFER_WRITE, COMPUTE_INDIRECT);
 }
 
 /// Copies (uploads, clears) visible to kernels.

@@ -251,6 +251,16 @@ impl ComputePipeline {
         self.shared.breadcrumb(cmd, self.name);
         Ok(())
     }
+    /// Dispatches the workgroup counts a kernel wrote into `buffer` at `offset` (a
+    /// `VkDispatchIndirectCommand`; `buffer` made with `INDIRECT_BUFFER` usage, the writes made
+    /// visible by [`super::barrier::compute_to_indirect`]). Marks and breadcrumbs as
+    /// [`ComputePipeline::dispatch`].
+    pub fn dispatch_indirect(&self, cmd: vk::CommandBuffer, buffer: vk::Buffer, offset: u64) {
+        self.shared.mark_pass(cmd, self.name);
+        // SAFETY: recording into a command buffer in the recording state; the caller's buffer.
+        unsafe { self.shared.device.cmd_dispatch_indirect(cmd, buffer, offset) };
+        self.shared.breadcrumb(cmd, self.name);
+    }
 }
 
 impl Drop for ComputePipeline {

@@ -44,6 +44,22 @@ struct Cli {
     command: Command,
 }
 
+/// `--integrator`'s values.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum IntegratorArg {
+    Megakernel,
+    Wavefront,
+}
+
+impl IntegratorArg {
+    fn integrator(self) -> umbra::passes::pathtrace::Integrator {
+        match self {
+            IntegratorArg::Megakernel => umbra::passes::pathtrace::Integrator::Megakernel,
+            IntegratorArg::Wavefront => umbra::passes::pathtrace::Integrator::Wavefront,
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Speed against accuracy: every method on each scene, GPU time against error to a converged
@@ -314,6 +330,10 @@ enum Command {
         /// An environment map (EXR or Radiance HDR) lighting every scene, importance-sampled.
         #[arg(long)]
         env: Option<PathBuf>,
+        /// Integrators to time, each scene with each in turn (the table's main part is the
+        /// first's; the others are compared with it).
+        #[arg(long, value_enum, value_delimiter = ',', default_value = "megakernel")]
+        integrator: Vec<IntegratorArg>,
         /// Where to write paths.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
@@ -709,6 +729,7 @@ fn run(cli: Cli) -> Result<()> {
             rr_depth,
             env_color,
             env,
+            integrator,
             out,
             table,
         } => match table {
@@ -723,6 +744,7 @@ fn run(cli: Cli) -> Result<()> {
                     rr_depth,
                     env: env_color,
                     env_map: env,
+                    integrators: integrator.iter().map(|i| i.integrator()).collect(),
                 };
                 let scenes =
                     if scenes.is_empty() { default_path_scenes(&assets)? } else { load_gltf(&scenes)? };

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use umbra::environment::EnvironmentMap;
 use umbra::gpu::layout::PathStats;
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::pathtrace::PathTarget;
+use umbra::passes::pathtrace::{Integrator, PathTarget};
 use umbra::render::{Passes, PathSettings};
 use umbra::scene::Scene;
 use umbra::vk::{Context, GpuTimer};
@@ -31,12 +31,16 @@ pub struct PathsSettings {
     pub env: [f32; 3],
     /// An environment map lighting every scene.
     pub env_map: Option<PathBuf>,
+    /// The integrators timed, each scene with each in turn (A/B in the same minutes).
+    pub integrators: Vec<Integrator>,
 }
 
 /// One scene's throughput.
 pub struct PathRow {
     /// The scene's file name.
     pub scene: String,
+    /// The integrator.
+    pub integrator: Integrator,
     /// Triangles in its BVH.
     pub triangles: usize,
     /// Median GPU milliseconds of one timed submission.
@@ -58,43 +62,47 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
         }
         let camera = super::bench_camera(scene);
         let passes = Passes::new(ctx, &gpu_scene);
-        let target = PathTarget::new(ctx, settings.size)?;
-        let path = PathSettings {
-            size: settings.size,
-            spp: settings.spp,
-            max_bounces: settings.max_bounces,
-            rr_depth: settings.rr_depth,
-            env: settings.env,
-            ..PathSettings::default()
-        };
-        let spp = settings.spp;
-        let mut submitted = 0u32;
-        super::rays::warm_up(|| {
-            submitted += spp;
-            ctx.submit(|cmd| {
-                passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted - spp, spp)
-            })
-        })?;
-        let mut timer = GpuTimer::new(ctx, 1)?;
-        let mut ms = Vec::new();
-        for _ in 0..settings.repeats.max(1) {
-            ctx.submit(|cmd| {
-                timer.reset(cmd);
-                timer.begin(cmd, "pathtrace")?;
-                passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted, spp)?;
-                timer.end(cmd)
+        for &integrator in &settings.integrators {
+            let target = PathTarget::new(ctx, settings.size)?;
+            let path = PathSettings {
+                size: settings.size,
+                spp: settings.spp,
+                max_bounces: settings.max_bounces,
+                rr_depth: settings.rr_depth,
+                env: settings.env,
+                integrator,
+                ..PathSettings::default()
+            };
+            let spp = settings.spp;
+            let mut submitted = 0u32;
+            super::rays::warm_up(|| {
+                submitted += spp;
+                ctx.submit(|cmd| {
+                    passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted - spp, spp)
+                })
             })?;
-            submitted += spp;
-            ms.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
+            let mut timer = GpuTimer::new(ctx, 1)?;
+            let mut ms = Vec::new();
+            for _ in 0..settings.repeats.max(1) {
+                ctx.submit(|cmd| {
+                    timer.reset(cmd);
+                    timer.begin(cmd, "pathtrace")?;
+                    passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted, spp)?;
+                    timer.end(cmd)
+                })?;
+                submitted += spp;
+                ms.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
+            }
+            let stats: Vec<PathStats> = target.stats.read(ctx)?;
+            let samples = settings.size.0 as f64 * settings.size.1 as f64 * submitted as f64;
+            rows.push(PathRow {
+                scene: name.clone(),
+                integrator,
+                triangles: gpu_scene.bvh_stats.triangles,
+                median_ms: super::rays::median(&mut ms),
+                segments_per_sample: stats[0].segments() as f64 / samples,
+            });
         }
-        let stats: Vec<PathStats> = target.stats.read(ctx)?;
-        let samples = settings.size.0 as f64 * settings.size.1 as f64 * submitted as f64;
-        rows.push(PathRow {
-            scene: name.clone(),
-            triangles: gpu_scene.bvh_stats.triangles,
-            median_ms: super::rays::median(&mut ms),
-            segments_per_sample: stats[0].segments() as f64 / samples,
-        });
     }
     Ok(rows)
 }
@@ -114,6 +122,7 @@ pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Valu
         "env_map": settings.env_map.as_ref().map(|p| p.display().to_string()),
         "scenes": rows.iter().map(|r| json!({
             "scene": r.scene,
+            "integrator": r.integrator.name(),
             "triangles": r.triangles,
             "median_ms": r.median_ms,
             "msamples_per_s": samples / (r.median_ms * 1e3),
@@ -128,7 +137,11 @@ pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Valu
 /// The Markdown table of a run's JSON (what BENCHMARKS.md shows): each scene's throughput and
 /// its ratio to the median of the set.
 pub fn table(doc: &Value) -> String {
-    let scenes = doc["scenes"].as_array().cloned().unwrap_or_default();
+    // Runs before the wavefront integrator have no "integrator": the megakernel's.
+    let integrator = |s: &Value| s["integrator"].as_str().unwrap_or("megakernel").to_string();
+    let all = doc["scenes"].as_array().cloned().unwrap_or_default();
+    let first = all.first().map(integrator).unwrap_or_default();
+    let scenes: Vec<Value> = all.iter().filter(|s| integrator(s) == first).cloned().collect();
     let mut rates: Vec<f64> = scenes.iter().map(|s| num(&s["msamples_per_s"])).collect();
     let median = super::rays::median(&mut rates);
     let env = match doc["env_map"].as_str() {
@@ -162,5 +175,24 @@ pub fn table(doc: &Value) -> String {
         );
     }
     out += &format!("\nMedian of the set: {median:.3} Msamples/s.\n");
+    let others: Vec<&Value> = all.iter().filter(|s| integrator(s) != first).collect();
+    if !others.is_empty() {
+        out += &format!(
+            "\nThe same samples through the other integrator, each scene's two runs in turn:\n\n\
+             | scene | integrator | ms | {first} ms | speed-up over the {first} |\n|---|---|---:|---:|---:|\n"
+        );
+        for o in others {
+            if let Some(s) = scenes.iter().find(|s| s["scene"] == o["scene"]) {
+                out += &format!(
+                    "| {} | {} | {:.1} | {:.1} | {:.2}× |\n",
+                    o["scene"].as_str().unwrap_or("?"),
+                    integrator(o),
+                    num(&o["median_ms"]),
+                    num(&s["median_ms"]),
+                    num(&s["median_ms"]) / num(&o["median_ms"]),
+                );
+            }
+        }
+    }
     out
 }

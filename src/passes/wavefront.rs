@@ -1,0 +1,297 @@
+//! The wavefront path tracer (`spirv/wavefront.comp`; Laine, Karras and Aila 2013): the
+//! megakernel's samples ([`super::pathtrace`], the same estimator and random numbers) traced in
+//! waves, each step of a path a kernel of its own over a queue of the paths that take it,
+//! dispatched indirectly from the queue's count. [`crate::render::PathSettings::integrator`]
+//! picks it.
+
+use super::pathtrace::{Heuristic, Microfacet, PathOptions, PathSettings, PathTarget};
+use crate::error::{Error, Result};
+use crate::gpu::kernels::wavefront;
+use crate::gpu::layout::{GpuCamera, PathParams, WaveParams, WAVE_FIELDS, WAVE_SHADOW_TEXELS};
+use crate::gpu::scene::GpuScene;
+use crate::gpu::Pipeline;
+use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation, TexelBuffer};
+
+/// Which integrator traces the path tracer's samples. Both trace the same samples (the same
+/// paths, random numbers and estimator); they differ in how the work is laid out on the device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Integrator {
+    /// One kernel: each lane traces its pixel's paths from the camera to their end, a run of
+    /// samples per dispatch (`pathtrace.comp`).
+    #[default]
+    Megakernel,
+    /// Paths in queues, one kernel per step (camera rays, closest hits, shading, shadow rays,
+    /// accumulation), each dispatched over the paths that take it (`wavefront.comp`).
+    Wavefront,
+}
+
+impl Integrator {
+    /// Every value.
+    pub const ALL: [Integrator; 2] = [Integrator::Megakernel, Integrator::Wavefront];
+
+    /// The command line's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Megakernel => "megakernel",
+            Integrator::Wavefront => "wavefront",
+        }
+    }
+}
+
+/// The paths a wave holds at most: the state's texels stay within 2^24 (256 MiB) and within
+/// every device's `maxTexelBufferElements` (2^27 on the GPUs umbra has met, 2^27 on lavapipe).
+const MAX_STATE_TEXELS: u64 = 1 << 24;
+
+/// The most paths a wave holds, however small their state.
+pub const MAX_PATHS: u64 = 1 << 20;
+
+/// Samples per pixel a wave traces at most.
+const MAX_WAVE_SAMPLES: u32 = 16;
+
+/// The workgroup of every stage (8×8: the queue stages take 64 entries a group).
+const LOCAL: [u32; 3] = [8, 8, 1];
+
+/// The queues and path states of one [`PathTarget`]'s wavefront renders (made at its first).
+pub struct WaveState {
+    /// Paths the state holds.
+    capacity: u32,
+    /// Shadow rays a path may queue in one round.
+    shadows_per_path: u32,
+    /// The region's rows a wave covers, and samples per pixel.
+    rows: u32,
+    samples: u32,
+    paths: TexelBuffer,
+    queue: TexelBuffer,
+    counts: Buffer,
+    camera: Buffer,
+}
+
+impl WaveState {
+    /// Shadow rays one path queues in a round at most in `scene`: one light sample and one per
+    /// punctual light evaluated.
+    pub fn shadows_per_path(scene: &GpuScene) -> u32 {
+        1 + scene.punctual_count.min(crate::gpu::layout::PUNCTUAL_ALL)
+    }
+
+    /// The state for waves over a `size` region of `scene`'s paths of at most `max_bounces`
+    /// scattering events, holding at most `max_paths` paths (and at most 2^24 texels): a wave
+    /// traces up to 16 samples of every pixel where they fit, else one sample of as many whole
+    /// rows as fit.
+    pub fn new(
+        ctx: &Context,
+        scene: &GpuScene,
+        (w, h): (u32, u32),
+        max_bounces: u32,
+        max_paths: u64,
+    ) -> Result<Self> {
+        let shadows_per_path = Self::shadows_per_path(scene);
+        let per_path = (WAVE_FIELDS + shadows_per_path * WAVE_SHADOW_TEXELS) as u64;
+        let most = (MAX_STATE_TEXELS / per_path).min(max_paths).max(w as u64);
+        let pixels = w as u64 * h as u64;
+        let (rows, samples) = if pixels <= most {
+            (h, (most / pixels.max(1)).min(MAX_WAVE_SAMPLES as u64) as u32)
+        } else {
+            ((most / w as u64).max(1) as u32, 1)
+        };
+        let capacity = (w as u64 * rows as u64 * samples as u64) as u32;
+        let u32x4 = raw::Format::R32G32B32A32_UINT;
+        let paths = TexelBuffer::new(
+            ctx,
+            "wavefront paths",
+            capacity as u64 * per_path,
+            u32x4,
+            16,
+            raw::BufferUsageFlags::empty(),
+        )?;
+        let queue = TexelBuffer::new(
+            ctx,
+            "wavefront queues",
+            3 * capacity as u64,
+            raw::Format::R32_UINT,
+            4,
+            raw::BufferUsageFlags::empty(),
+        )?;
+        let headers = 2 * (max_bounces as u64 + 2);
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER
+            | raw::BufferUsageFlags::INDIRECT_BUFFER
+            | raw::BufferUsageFlags::TRANSFER_DST;
+        let counts = Buffer::new(ctx, "wavefront counts", headers * 16, usage, MemoryLocation::GpuOnly)?;
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        let camera = Buffer::new(
+            ctx,
+            "wavefront camera",
+            std::mem::size_of::<GpuCamera>() as u64,
+            usage,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(Self { capacity, shadows_per_path, rows, samples, paths, queue, counts, camera })
+    }
+
+    /// An error unless the state serves waves of `scene` with `max_bounces`.
+    fn check(&self, scene: &GpuScene, max_bounces: u32) -> Result<()> {
+        let headers = 2 * (max_bounces as u64 + 2);
+        if Self::shadows_per_path(scene) > self.shadows_per_path || headers * 16 > self.counts.size {
+            return Err(Error::Invalid(format!(
+                "the path target's wavefront state was made for {} shadow rays per path and fewer bounces; \
+                 this render needs {} shadow rays and {max_bounces} bounces: use a new target",
+                self.shadows_per_path,
+                Self::shadows_per_path(scene)
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// `wavefront.comp`'s five stages, specialised for one scene's features and the sampling options.
+pub struct WavefrontPass {
+    camera_rays: Pipeline<wavefront::Kernel>,
+    extend: Pipeline<wavefront::Kernel>,
+    shade: Pipeline<wavefront::Kernel>,
+    connect: Pipeline<wavefront::Kernel>,
+    accumulate: Pipeline<wavefront::Kernel>,
+}
+
+impl WavefrontPass {
+    /// The stages for `scene` and `options` (the specialisations of
+    /// [`super::pathtrace::PathTracePass::for_scene`]).
+    pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
+        let PathOptions { microfacet, heuristic, strategy } = options;
+        let (light_sampling, bsdf_hits) = strategy.spec();
+        let base = wavefront::Spec {
+            beckmann: microfacet == Microfacet::Beckmann,
+            ggx_walter: microfacet == Microfacet::GgxWalter,
+            power_heuristic: heuristic != Heuristic::Balance,
+            #[cfg(feature = "testing")]
+            unweighted_bsdf_hits: heuristic == Heuristic::UnweightedBsdfHits,
+            #[cfg(not(feature = "testing"))]
+            unweighted_bsdf_hits: false,
+            light_sampling,
+            bsdf_hits,
+            ..Default::default()
+        };
+        let stage = |spec: wavefront::Spec| Pipeline::for_scene(ctx, scene, &spec);
+        Ok(Self {
+            camera_rays: stage(wavefront::Spec { wf_camera_rays: true, ..base })?,
+            extend: stage(wavefront::Spec { wf_extend: true, ..base })?,
+            shade: stage(wavefront::Spec { wf_shade: true, ..base })?,
+            connect: stage(wavefront::Spec { wf_connect: true, ..base })?,
+            accumulate: stage(wavefront::Spec { wf_accumulate: true, ..base })?,
+        })
+    }
+
+    /// Records samples `params.sample_index .. + params.sample_count` per pixel into `target`,
+    /// in waves (each followed by a barrier), through `target`'s wavefront state (made now if
+    /// the target has none). Never submits.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        target: &PathTarget,
+        settings: &PathSettings,
+        params: &PathParams,
+    ) -> Result<()> {
+        let state = match target.wave.get() {
+            Some(state) => state,
+            None => {
+                let state = WaveState::new(ctx, scene, target.size, settings.max_bounces, MAX_PATHS)?;
+                target.wave.get_or_init(|| state)
+            }
+        };
+        state.check(scene, params.max_bounces)?;
+        let resources = wavefront::Resources {
+            scene,
+            wf_camera: &state.camera,
+            wf_paths: &state.paths,
+            wf_queue: &state.queue,
+            wf_counts: &state.counts,
+            accum: &target.accum,
+            moment: &target.moment,
+            aov_albedo: &target.albedo,
+            aov_normal_depth: &target.normal_depth,
+            aov_emission: &target.emission,
+            stats: &target.stats,
+        };
+        let mut wave = WaveParams {
+            env: params.env,
+            env_nee: params.env_nee,
+            size: params.size,
+            sample_index: params.sample_index,
+            seed: params.seed,
+            max_bounces: params.max_bounces,
+            rr_depth: params.rr_depth,
+            light_count: params.light_count,
+            punctual_count: params.punctual_count,
+            env_size: params.env_size,
+            sample_count: 1,
+            env_pick: params.env_pick,
+            round: 0,
+            capacity: state.capacity,
+            shadows_per_path: state.shadows_per_path,
+            first_row: 0,
+        };
+        // Every header a wave uses: x workgroups, 1, 1, no entries.
+        let headers: Vec<[u32; 4]> = vec![[0, 1, 1, 0]; 2 * (params.max_bounces as usize + 2)];
+        let device = ctx.device();
+        let (w, h) = target.size;
+        let end = params.sample_index + params.sample_count;
+        let mut camera = params.camera;
+        let first_row = camera.region_y;
+        while wave.sample_index < end {
+            wave.sample_count = state.samples.min(end - wave.sample_index);
+            for row in (0..h).step_by(state.rows as usize) {
+                let rows = state.rows.min(h - row);
+                // A wave over rows `row ..` of the region: a region of the region.
+                wave.size = [w, rows];
+                camera.region_y = first_row + row;
+                // SAFETY: `cmd` is recording; both buffers are the state's, made with
+                // TRANSFER_DST, and no earlier command of this wave reads them any more (the
+                // barrier after the previous wave).
+                unsafe {
+                    device.cmd_update_buffer(cmd, state.camera.raw, 0, bytemuck::bytes_of(&camera));
+                    device.cmd_update_buffer(cmd, state.counts.raw, 0, bytemuck::cast_slice(&headers));
+                }
+                barrier::transfer_to_indirect(ctx, cmd);
+                self.wave(ctx, cmd, state, &resources, &mut wave, row)?;
+            }
+            wave.sample_index += wave.sample_count;
+        }
+        Ok(())
+    }
+
+    /// Records one wave: `wave.sample_count` samples of the `wave.size` pixels from region row
+    /// `row` (the accumulation buffers' rows).
+    fn wave(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        state: &WaveState,
+        resources: &wavefront::Resources<'_>,
+        wave: &mut WaveParams,
+        row: u32,
+    ) -> Result<()> {
+        wave.round = 0;
+        wave.first_row = row;
+        let [w, rows] = wave.size;
+        self.camera_rays.record(cmd, resources, wave, [w, rows, wave.sample_count], LOCAL)?;
+        barrier::compute_to_indirect(ctx, cmd);
+        for round in 0..=wave.max_bounces {
+            wave.round = round;
+            let rays = 16 * round as u64;
+            let shadows = 16 * (wave.max_bounces as u64 + 2 + round as u64);
+            for (stage, header) in [(&self.extend, rays), (&self.shade, rays), (&self.connect, shadows)] {
+                if std::ptr::eq(stage, &self.connect) && round == wave.max_bounces {
+                    // No light samples at the last round's hits.
+                    continue;
+                }
+                stage.bind(cmd, resources)?;
+                stage.push_constants(cmd, wave)?;
+                stage.dispatch_indirect(cmd, &state.counts, header);
+                barrier::compute_to_indirect(ctx, cmd);
+            }
+        }
+        self.accumulate.record(cmd, resources, wave, [w, rows, 1], LOCAL)?;
+        barrier::compute_to_compute(ctx, cmd);
+        Ok(())
+    }
+}

@@ -343,7 +343,7 @@ fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> 
         return Err(format!("kernel {}: unknown scene feature '{f}'", k.name));
     }
     if k.features.contains(&"textures") {
-        if let Some(f) = TEXTURE_SLOT_FEATURES.iter().find(|f| !k.features.contains(f)) {
+        if let Some((f, _)) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| !k.features.contains(f)) {
             return Err(format!(
                 "kernel {}: specialised on textures but not on slot feature '{f}' (it would read no texture there)",
                 k.name

@@ -383,6 +383,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         ("base", vk::Format::R16G16B16A16_SFLOAT),
         ("emission", vk::Format::R16G16B16A16_SFLOAT),
         ("material", vk::Format::R32G32B32A32_UINT),
+        ("layers", vk::Format::R32G32B32A32_UINT),
     ];
     let mut images = Vec::new();
     for set in ["host", "umbra"] {
@@ -394,10 +395,18 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         images.push(host.image(&format!("{set} ssao"), size, vk::Format::R32_SFLOAT)?);
         images.push(host.image(&format!("{set} ssao blurred"), size, vk::Format::R32_SFLOAT)?);
     }
-    const SET: usize = 9; // images per set: 5 G-buffer, hdr, ldr, ssao, ssao blurred
+    const SET: usize = 10; // images per set: 6 G-buffer, hdr, ldr, ssao, ssao blurred
     let views = |set: usize| {
         let v = |i: usize| images[set * SET + i].view;
-        GBufferViews { size, depth: v(0), normal: v(1), base: v(2), emission: v(3), material: v(4) }
+        GBufferViews {
+            size,
+            depth: v(0),
+            normal: v(1),
+            base: v(2),
+            emission: v(3),
+            material: v(4),
+            layers: v(5),
+        }
     };
     let (host_views, umbra_views) = (views(0), views(1));
     let (tris, materials) = host_world(&scene);
@@ -497,7 +506,9 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
                     .buffer_info(info),
             );
         }
-        for (i, info) in image_infos.iter().enumerate() {
+        // The host's scene has no layer textures: its shader writes the first five images, and
+        // umbra never reads the sixth (`layers`) for such a scene.
+        for (i, info) in image_infos.iter().take(5).enumerate() {
             writes.push(
                 vk::WriteDescriptorSet::default()
                     .dst_set(set)
@@ -573,21 +584,21 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
                 renderer.record_gbuffer(cmd, &camera, gbuffer)?;
             }
             let ao =
-                renderer.record_ssao(cmd, &camera, gbuffer, image(7).view, image(8).view, &ao_settings)?;
+                renderer.record_ssao(cmd, &camera, gbuffer, image(8).view, image(9).view, &ao_settings)?;
             renderer.record_lighting(
                 cmd,
                 &camera,
                 gbuffer,
-                image(5).view,
+                image(6).view,
                 &umbra::passes::deferred::LightingInputs { ao: Some(ao), ..Default::default() },
                 &lighting,
             )?;
-            renderer.record_tonemap(cmd, image(5).view, image(6).view, size, 0.0, curve)?;
+            renderer.record_tonemap(cmd, image(6).view, image(7).view, size, 0.0, curve)?;
         }
 
         // The host copies its LDR images out: its own barrier from umbra's compute writes, and
         // its own layout change (umbra leaves every image in GENERAL).
-        let to_copy: Vec<_> = [&images[6], &images[SET + 6]]
+        let to_copy: Vec<_> = [&images[7], &images[SET + 7]]
             .iter()
             .map(|i| {
                 vk::ImageMemoryBarrier2::default()
@@ -602,7 +613,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             })
             .collect();
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_copy));
-        for (image, buffer) in [&images[6], &images[SET + 6]].into_iter().zip(&readback) {
+        for (image, buffer) in [&images[7], &images[SET + 7]].into_iter().zip(&readback) {
             let region = vk::BufferImageCopy::default()
                 .image_subresource(vk::ImageSubresourceLayers {
                     aspect_mask: vk::ImageAspectFlags::COLOR,

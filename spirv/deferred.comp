@@ -106,8 +106,10 @@ vec3 prefiltered_light(vec3 r, float roughness) {
 // diffuse lobe's light: it carries the environment with its occlusion and the light that
 // surfaces reflect (src/passes/probes.rs); the specular and transmitted parts stay the split
 // sum's, and without `ibl` only the probes' diffuse light remains. A material with a lightmap
-// (LIGHTMAPS) takes its ambient irradiance at UV1 `uv1` instead of both.
-vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv, uint material, vec2 uv1) {
+// (LIGHTMAPS) takes its ambient irradiance at UV1 `uv1` instead of both. A clear coat reflects
+// about its own normal `coat_n` (world).
+vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv, uint material, vec2 uv1,
+                  vec3 coat_n) {
     // The prefiltered map assumed n = v = r; a rough lobe actually leans from the mirror direction
     // towards the normal: look up along the dominant direction (Lagarde and de Rousiers 2014,
     // "Moving Frostbite to PBR", eq. 56, with alpha as their linear roughness).
@@ -164,12 +166,18 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         // KHR_materials_clearcoat: the coat's lobe (its own roughness, no Fresnel inside: the
         // table's albedo at F0 = F90 = 1) over the base, weighted as bsdf_eval weighs them.
         float coat_roughness = sqrt(s.coat_alpha);
-        vec4 coat_table = ibl_table(nv, coat_roughness);
+        vec3 cn = n;
+        float cnv = nv;
+        if (coat_normal_differs()) {
+            cn = coat_n;
+            cnv = max(dot(coat_n, wo), 0.0);
+        }
+        vec4 coat_table = ibl_table(cnv, coat_roughness);
         vec3 coat_light = env;
         if (HAS_ENV_MAP && params.ibl != 0u) {
-            coat_light *= prefiltered_light(reflect(-wo, n), coat_roughness);
+            coat_light *= prefiltered_light(reflect(-wo, cn), coat_roughness);
         }
-        float w = coat_weight_at(s.coat, nv);
+        float w = coat_weight_at(s.coat, cnv);
         result = (1.0 - w) * result + w * (coat_table.x + coat_table.y) * coat_light;
     }
     return result;
@@ -256,7 +264,8 @@ void main() {
             // probes' indirect light too, as glTF says of indirect light).
             float occlusion = imageLoad(gb_emission, pixel).a;
             radiance += ao * occlusion
-                * ibl_lighting(s, sp.roughness, sp.p, sp.n, sp.wo, sp.wo_local.z, sp.material, sp.uv1);
+                * ibl_lighting(s, sp.roughness, sp.p, sp.n, sp.wo, sp.wo_local.z, sp.material, sp.uv1,
+                               sp.t * s.coat_n.x + sp.b * s.coat_n.y + sp.n * s.coat_n.z);
         }
 
         // ReSTIR DI (restir.glsl): the pixel's reservoir's one light sample, its shadow ray, its

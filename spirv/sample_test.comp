@@ -20,10 +20,11 @@ vec4 sheen_table_texel(uint t) {
 // Samplers 2-4: the whole BSDF of a white transmissive dielectric (reflection + transmission,
 // through bsdf_sample / bsdf_pdf): 2 entering glass (eta 1.5), 3 leaving it (eta 1/1.5),
 // 4 thin-walled. Sampler 5: an opaque grey dielectric (alpha 0.5) under a clear coat of weight 1
-// and `alpha` (KHR_materials_clearcoat). Sampler 6: the grey dielectric under a sheen of
-// roughness sqrt(`alpha`) (KHR_materials_sheen) under a clear coat.
+// and `alpha` (KHR_materials_clearcoat); sampler 7 the same with the coat's normal tilted.
+// Sampler 6: the grey dielectric under a sheen of roughness sqrt(`alpha`) (KHR_materials_sheen)
+// under a clear coat.
 Surface dielectric(float alpha) {
-    if (params.kind == 5u) {
+    if (params.kind == 5u || params.kind == 7u) {
         Surface s;
         s.base = vec3(0.8);
         s.metallic = 0.0;
@@ -35,6 +36,9 @@ Surface dielectric(float alpha) {
         s.thin = true;
         s.coat = 1.0;
         s.coat_alpha = alpha;
+        // Sampler 7: the coat's own normal tilted 28 degrees from the shading normal (a base normal
+        // map, or the coat's normal map).
+        s.coat_n = params.kind == 7u ? normalize(vec3(0.5, 0.2, 1.0)) : vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.0);
         s.sheen_roughness = 1.0;
         return s;
@@ -53,6 +57,7 @@ Surface dielectric(float alpha) {
         s.thin = true;
         s.coat = 0.5;
         s.coat_alpha = 0.1;
+        s.coat_n = vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.9, 0.6, 0.3);
         s.sheen_roughness = max(sqrt(alpha), SHEEN_ROUGHNESS_MIN);
         return s;
@@ -68,6 +73,7 @@ Surface dielectric(float alpha) {
     s.thin = params.kind == 4u;
     s.coat = 0.0;
     s.coat_alpha = 1.0;
+    s.coat_n = vec3(0.0, 0.0, 1.0);
     s.sheen = vec3(0.0);
     s.sheen_roughness = 1.0;
     return s;
@@ -108,6 +114,7 @@ void main() {
         s.thin = true;
         s.coat = 0.0;
         s.coat_alpha = 1.0;
+    s.coat_n = vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.0);
         s.sheen_roughness = 1.0;
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);

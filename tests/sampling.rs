@@ -66,6 +66,9 @@ enum Dielectric {
     /// roughness √α of the case's α) under a clear coat of weight ½ and α 0.1: the three-level
     /// lobe choice (coat, sheen, material) and the sheen's cosine-hemisphere sampling.
     Sheened = 6,
+    /// The coated dielectric with the coat's own normal tilted 28° from the shading normal
+    /// (towards +x and +y): the coat's lobe evaluated and sampled in its own frame.
+    CoatTilted = 7,
 }
 
 /// The kernel specialised for each [`Microfacet`], in [`Microfacet::ALL`] order, and the sheen's
@@ -298,6 +301,7 @@ fn cases() -> Vec<Sampler> {
             Dielectric::Thin,
             Dielectric::Coated,
             Dielectric::Sheened,
+            Dielectric::CoatTilted,
         ] {
             for alpha in [0.1, 0.5] {
                 for theta_degrees in [30.0, 60.0] {
@@ -362,6 +366,7 @@ fn the_dielectric_samples_wherever_it_scatters() {
             Dielectric::Thin,
             Dielectric::Coated,
             Dielectric::Sheened,
+            Dielectric::CoatTilted,
         ] {
             for alpha in [0.1, 0.5] {
                 for theta_degrees in [30.0, 45.0, 60.0, 80.0] {

@@ -1346,8 +1346,9 @@ fn the_content_hash_follows_what_light_transport_reads() {
     assert_eq!(hashes.len(), committed_scenes().len());
 }
 
-/// KHR_materials_clearcoat's factors reach the material (0 without the extension), its textures
-/// are named in one warning per material, and a factor outside [0, 1] is refused naming it.
+/// KHR_materials_clearcoat's factors and three textures reach the material (0 and none without
+/// the extension; the normal texture with its scale, UV set and transform), with no warning; a
+/// factor outside [0, 1] or a texture index beyond the file's textures is refused naming it.
 #[test]
 fn clearcoat_is_read() {
     let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
@@ -1361,13 +1362,38 @@ fn clearcoat_is_read() {
     let scene = load(json!({"clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.25})).unwrap();
     assert_eq!((scene.materials[0].clearcoat, scene.materials[0].clearcoat_roughness), (0.75, 0.25));
     assert!(scene.warnings.iter().all(|w| !w.contains("clearcoat")), "{:?}", scene.warnings);
-    let scene = load(json!({"clearcoatFactor": 1.0, "clearcoatNormalTexture": {"index": 0}})).unwrap();
-    assert_eq!(scene.materials[0].clearcoat, 1.0);
-    let warned: Vec<&String> =
-        scene.warnings.iter().filter(|w| w.contains("clearcoatNormalTexture")).collect();
-    assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
+    assert!(plain.materials[0].clearcoat_normal_texture.is_none());
+    let scene = load(json!({
+        "clearcoatFactor": 1.0,
+        "clearcoatTexture": {"index": 0},
+        "clearcoatRoughnessTexture": {"index": 0, "texCoord": 1},
+        "clearcoatNormalTexture": {
+            "index": 0,
+            "scale": 0.5,
+            "extensions": {"KHR_texture_transform": {"offset": [0.25, 0.0]}}
+        }
+    }))
+    .unwrap();
+    let m = &scene.materials[0];
+    assert_eq!(m.clearcoat, 1.0);
+    assert!(scene.warnings.iter().all(|w| !w.contains("clearcoat")), "{:?}", scene.warnings);
+    let (coat, rough, normal) = (
+        m.clearcoat_texture.expect("clearcoatTexture"),
+        m.clearcoat_roughness_texture.expect("clearcoatRoughnessTexture"),
+        m.clearcoat_normal_texture.expect("clearcoatNormalTexture"),
+    );
+    assert_eq!((coat.tex_coord, rough.tex_coord, normal.tex_coord), (0, 1, 0));
+    assert_eq!((coat.scale, normal.scale), (1.0, 0.5));
+    assert_eq!(normal.transform[0][2], 0.25, "the normal texture's KHR_texture_transform");
+    assert!(!scene.textures[coat.texture as usize].srgb, "the coat's textures are linear");
     let error = load(json!({"clearcoatRoughnessFactor": 1.5})).unwrap_err().to_string();
     assert!(error.contains("coat.glb") && error.contains("clearcoatRoughnessFactor is 1.5"), "{error}");
+    let error =
+        load(json!({"clearcoatFactor": 1.0, "clearcoatTexture": {"index": 7}})).unwrap_err().to_string();
+    assert!(
+        error.contains("coat.glb") && error.contains("KHR_materials_clearcoat.clearcoatTexture.index is 7"),
+        "{error}"
+    );
 }
 
 /// KHR_materials_sheen's factors reach the material (0 without the extension), its two textures

@@ -19,9 +19,12 @@
 //   coated = mix(material, D G1(V) G1(L) / (4 |N.V| |N.L|), clearcoat * F_schlick(0.04, 1, N.V))
 //
 // with N.V (not V.H) in the weight, so for each wo the coated BSDF is a convex mix of two lobes of
-// albedo at most 1 (energy conserving). The coat shares the shading normal (the extension gives it
-// the unmapped normal; umbra reads no clearcoat normal texture yet). A surface without a coat
-// (`coat` 0: a kernel not specialised for it sets the constant 0) costs nothing: the branches fold.
+// albedo at most 1 (energy conserving). N is the coat's own normal (`coat_n`, in the shading
+// frame): the extension gives the coat the unmapped normal, tilted only by its own normal map,
+// while the material under it takes the shading frame's (normal-mapped) z; the coat's lobe is
+// evaluated and sampled in a frame around coat_n, and light must arrive and leave above both. A
+// surface without a coat (`coat` 0: a kernel not specialised for it sets the constant 0) costs
+// nothing: the branches fold; with coat_n the constant (0, 0, 1) the coat's frame folds too.
 //
 // KHR_materials_sheen lies between the two (the coat over the sheen over the material): the
 // sheen lobe is the extension's "Charlie" one (Conty Estevez and Kulla 2017: D = (2 + 1/a)
@@ -69,6 +72,7 @@ struct Surface {
     bool thin;           // thin-walled transmission (no refraction); also every opaque surface
     float coat;          // KHR_materials_clearcoat's weight (0: no coat)
     float coat_alpha;    // the coat's GGX alpha
+    vec3 coat_n;         // the coat's unit normal in the shading frame ((0, 0, 1): the shading normal)
     vec3 sheen;              // KHR_materials_sheen's colour (0: no sheen)
     float sheen_roughness;   // its roughness, at least SHEEN_ROUGHNESS_MIN
 };
@@ -224,9 +228,48 @@ float coat_weight_at(float coat, float nv) {
     return coat * (0.04 + 0.96 * m2 * m2 * m);
 }
 
+// Direction v (shading frame) in a frame around the coat's normal (z = coat_n).
+vec3 to_coat(Surface s, vec3 v) {
+    vec3 t;
+    vec3 b;
+    basis(s.coat_n, t, b);
+    return vec3(dot(v, t), dot(v, b), dot(v, s.coat_n));
+}
+
+// Direction v of the coat's frame back in the shading frame.
+vec3 from_coat(Surface s, vec3 v) {
+    vec3 t;
+    vec3 b;
+    basis(s.coat_n, t, b);
+    return v.x * t + v.y * b + v.z * s.coat_n;
+}
+
 // The coat's weight at wo.
 float coat_weight(Surface s, vec3 wo) {
-    return coat_weight_at(s.coat, wo.z);
+    return coat_weight_at(s.coat, dot(wo, s.coat_n));
+}
+
+// The coat's lobe (weight 1) for wo and wi: its GGX reflection about coat_n, where both lie
+// above the coat and the shading frame. Its cosine is the coat's: the lobe is scaled by
+// (coat_n.wi) / wi.z, as every caller multiplies f by the shading frame's |wi.z|.
+float coat_reflection(Surface s, vec3 wo, vec3 wi) {
+    vec3 o = to_coat(s, wo);
+    vec3 i = to_coat(s, wi);
+    if (!(wo.z > 0.0 && wi.z > 0.0 && o.z > 0.0 && i.z > 0.0)) {
+        return 0.0;
+    }
+    vec3 h = normalize(o + i);
+    return micro_d(h, s.coat_alpha) * micro_visibility(o, i, s.coat_alpha) * (i.z / wi.z);
+}
+
+// The density of the coat's sampling (micro_sample in its frame) of wi.
+float coat_pdf(Surface s, vec3 wo, vec3 wi) {
+    vec3 o = to_coat(s, wo);
+    vec3 i = to_coat(s, wi);
+    if (!(wo.z > 0.0 && wi.z > 0.0 && o.z > 0.0 && i.z > 0.0)) {
+        return 0.0;
+    }
+    return micro_pdf(o, normalize(o + i), s.coat_alpha);
 }
 
 // The sheen lobe's directional albedo E(mu, roughness): the table bilinearly interpolated
@@ -313,10 +356,7 @@ vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
     if (s.coat > 0.0) {
         float w = coat_weight(s, wo);
         f *= 1.0 - w;
-        if (wo.z > 0.0 && wi.z > 0.0) {
-            vec3 h = normalize(wo + wi);
-            f += vec3(w * micro_d(h, s.coat_alpha) * micro_visibility(wo, wi, s.coat_alpha));
-        }
+        f += vec3(w * coat_reflection(s, wo, wi));
     }
     return f;
 }
@@ -363,11 +403,7 @@ float bsdf_pdf_sheened(Surface s, vec3 wo, vec3 wi) {
 float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
     float p = bsdf_pdf_sheened(s, wo, wi);
     if (s.coat > 0.0) {
-        float coat = 0.0;
-        if (wo.z > 0.0 && wi.z > 0.0) {
-            coat = micro_pdf(wo, normalize(wo + wi), s.coat_alpha);
-        }
-        p = mix(p, coat, coat_probability(s, wo));
+        p = mix(p, coat_pdf(s, wo, wi), coat_probability(s, wo));
     }
     return p;
 }
@@ -409,8 +445,9 @@ bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out f
         coat_lobe = u.x < q;
     }
     if (coat_lobe) {
-        wi = reflect(-wo, micro_sample(wo, s.coat_alpha, u.yz));
-        sampled = wi.z > 0.0;
+        vec3 o = to_coat(s, wo);
+        wi = from_coat(s, reflect(-o, micro_sample(o, s.coat_alpha, u.yz)));
+        sampled = o.z > 0.0 && wi.z > 0.0;
     } else {
         if (s.coat > 0.0) {
             // The rest of u.x, stretched back over [0, 1).

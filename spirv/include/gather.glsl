@@ -56,6 +56,9 @@ vec3 gather_radiance(vec3 origin, vec3 dir, vec3 env, uvec2 env_size, uint light
     vec3 wo_local = vec3(dot(wo, tt), dot(wo, bt), dot(wo, n));
     Surface s = material_surface(material, uv);
     s.base *= tri_color(tri, hit.bary).rgb;
+    if (coat_normal_differs()) {
+        surface_coat_normal(s, coat_normal_lod(tri, hit.bary, ng, uv, LOD_LEVEL0), tt, bt, n);
+    }
     if (material_unlit(material)) {
         return s.base;
     }

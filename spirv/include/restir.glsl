@@ -12,7 +12,7 @@
 // power, the two pools picked with probability restir_emissive_share().
 //
 // The including kernel includes random.glsl, gbuffer.glsl and shading.glsl first and has the
-// G-buffer bound as gb_depth, gb_normal, gb_base and gb_material, and `params` with `camera`,
+// G-buffer bound as gb_depth, gb_normal, gb_base, gb_material and gb_layers, and `params` with `camera`,
 // `size`, `light_count` and `punctual_count`.
 #ifndef UMBRA_RESTIR_GLSL
 #define UMBRA_RESTIR_GLSL
@@ -59,7 +59,15 @@ bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
     sp.wo = -dir;
     basis(sp.n, sp.t, sp.b);
     sp.wo_local = vec3(dot(sp.wo, sp.t), dot(sp.wo, sp.b), dot(sp.wo, sp.n));
-    sp.s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w);
+    // The layer textures' texels and the coat's normal, where the scene has some (the G-buffer
+    // leaves them unwritten otherwise).
+    LayerTexels layers = layer_texels_none();
+    vec3 coat_n = sp.n;
+    if (gbuffer_has_layers()) {
+        gbuffer_unpack_layers(imageLoad(gb_layers, pixel), layers.specular, layers.layers, coat_n);
+    }
+    sp.s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w, layers);
+    surface_coat_normal(sp.s, coat_n, sp.t, sp.b, sp.n);
     if (HAS_TRANSMISSION) {
         // Seen from outside (wo on the front): glass (ior) behind the surface.
         sp.s.eta = material_vec(mat.x, 3u).y;

@@ -17,8 +17,8 @@
 #include "texture.glsl"
 
 // Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
-// specular, params, flags, textures[0..2], tex_transform[0..12], clearcoat, parallax), as floats
-// or as unsigned integers.
+// specular, params, flags, textures[0..3], tex_transform[0..18], clearcoat, parallax, sheen), as
+// floats or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
 }
@@ -59,7 +59,7 @@ uint material_slot_texture(uint id, uint slot) {
 
 // Row `row` (0 or 1) of the texture transform of `slot` (GpuMaterial::tex_transform).
 vec4 material_slot_row(uint id, uint slot, uint row) {
-    return material_vec(id, 7u + 2u * slot + row);
+    return material_vec(id, 8u + 2u * slot + row);
 }
 
 // An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
@@ -153,6 +153,16 @@ bool slot_textured(uint slot) {
     if (HAS_PARALLAX) {
         textured = textured || slot == MATERIAL_SLOT_HEIGHT;
     }
+    if (HAS_SPECULAR_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_SPECULAR || slot == MATERIAL_SLOT_SPECULAR_COLOR;
+    }
+    if (HAS_TRANSMISSION_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_TRANSMISSION;
+    }
+    if (HAS_CLEARCOAT_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_CLEARCOAT || slot == MATERIAL_SLOT_CLEARCOAT_ROUGHNESS
+            || slot == MATERIAL_SLOT_CLEARCOAT_NORMAL;
+    }
     return textured;
 }
 
@@ -206,9 +216,87 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
     return texture_sample_lod(tex, t, lod);
 }
 
-// Material `id` as a BSDF surface, given its (textured) base colour, metallic and roughness:
-// the dielectric specular terms come from the material's ior and KHR_materials_specular factors.
-Surface material_surface_from(uint id, vec3 base, float metallic, float roughness) {
+// The texels of a hit's layer textures, which multiply the extensions' factors: specular.rgb
+// KHR_materials_specular's colour (specularColorTexture, RGB), specular.a its strength
+// (specularTexture, A), layers.x KHR_materials_transmission's (transmissionTexture, R), layers.y
+// KHR_materials_clearcoat's weight (clearcoatTexture, R), layers.z its roughness
+// (clearcoatRoughnessTexture, G); layers.w unused (1). 1 where a material has no texture in the
+// slot, and in kernels not specialised for the slot's group (HAS_SPECULAR_MAP,
+// HAS_TRANSMISSION_MAP, HAS_CLEARCOAT_MAP). The hybrid's G-buffer stores them (gb_layers) for the
+// lighting passes.
+struct LayerTexels {
+    vec4 specular;
+    vec4 layers;
+};
+
+// No layer textures: every texel 1.
+LayerTexels layer_texels_none() {
+    LayerTexels t;
+    t.specular = vec4(1.0);
+    t.layers = vec4(1.0);
+    return t;
+}
+
+// Material `id`'s layer textures at the hit's UV sets, filtered for a ray cone's `cone_lod` (see
+// material_texture_lod; LOD_LEVEL0 for level 0).
+LayerTexels material_layer_texels_lod(uint id, vec4 uv, vec2 cone_lod) {
+    LayerTexels t = layer_texels_none();
+    if (HAS_SPECULAR_MAP) {
+        t.specular.rgb = material_texture_lod(id, MATERIAL_SLOT_SPECULAR_COLOR, uv, cone_lod).rgb;
+        t.specular.a = material_texture_lod(id, MATERIAL_SLOT_SPECULAR, uv, cone_lod).a;
+    }
+    if (HAS_TRANSMISSION_MAP) {
+        t.layers.x = material_texture_lod(id, MATERIAL_SLOT_TRANSMISSION, uv, cone_lod).r;
+    }
+    if (HAS_CLEARCOAT_MAP) {
+        t.layers.y = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT, uv, cone_lod).r;
+        t.layers.z = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT_ROUGHNESS, uv, cone_lod).g;
+    }
+    return t;
+}
+
+// Whether the kernel is specialised for some layer texture (the G-buffer's gb_layers is written
+// and read only then).
+bool layer_textured() {
+    bool textured = false;
+    if (HAS_SPECULAR_MAP) {
+        textured = true;
+    }
+    if (HAS_TRANSMISSION_MAP) {
+        textured = true;
+    }
+    if (HAS_CLEARCOAT_MAP) {
+        textured = true;
+    }
+    return textured;
+}
+
+// Whether a clear coat's normal can differ from the shading normal (KHR_materials_clearcoat: the
+// coat lies on the interpolated normal, tilted only by its own normal map): in kernels specialised
+// for coats and for normal maps or the coat's textures. Elsewhere Surface::coat_n is the constant
+// (0, 0, 1) and the coat's frame folds away.
+bool coat_normal_differs() {
+    bool differs = false;
+    if (HAS_CLEARCOAT) {
+        if (HAS_NORMAL_MAP) {
+            differs = true;
+        }
+        if (HAS_CLEARCOAT_MAP) {
+            differs = true;
+        }
+    }
+    return differs;
+}
+
+// Whether the G-buffer's gb_layers image is written (and read): layer textures or a coat normal.
+bool gbuffer_has_layers() {
+    return layer_textured() || coat_normal_differs();
+}
+
+// Material `id` as a BSDF surface, given its (textured) base colour, metallic and roughness and
+// the texels of its layer textures (material_layer_texels_lod): the dielectric specular terms
+// come from the material's ior and KHR_materials_specular factors times their texels.
+Surface material_surface_from(uint id, vec3 base, float metallic, float roughness, LayerTexels tex) {
     // Member by member: a whole-struct copy from a buffer is OpCopyLogical, which naga rejects.
     Surface s;
     s.base = base;
@@ -216,8 +304,12 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.alpha = max(roughness * roughness, ALPHA_MIN);
     float ior = material_vec(id, 3u).y;
     float f0 = (ior - 1.0) / (ior + 1.0);
-    s.f0 = min(vec3(f0 * f0) * material_vec(id, 2u).rgb, vec3(1.0)) * material_vec(id, 2u).w;
-    s.f90 = material_vec(id, 2u).w;
+    vec4 specular = material_vec(id, 2u);
+    if (HAS_SPECULAR_MAP) {
+        specular *= tex.specular;
+    }
+    s.f0 = min(vec3(f0 * f0) * specular.rgb, vec3(1.0)) * specular.w;
+    s.f90 = specular.w;
     // Transmission only where the kernel is specialised for it (HAS_TRANSMISSION); a refracting
     // boundary's eta depends on the side the ray arrives from, so the caller sets it.
     s.transmission = 0.0;
@@ -226,8 +318,14 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     // The clear coat only where the kernel is specialised for it (HAS_CLEARCOAT).
     s.coat = 0.0;
     s.coat_alpha = 1.0;
+    // The coat's normal in the shading frame: the shading normal until the caller sets it
+    // (surface_coat_normal).
+    s.coat_n = vec3(0.0, 0.0, 1.0);
     if (HAS_CLEARCOAT) {
         vec4 coat = material_vec(id, MATERIAL_CLEARCOAT_TEXEL);
+        if (HAS_CLEARCOAT_MAP) {
+            coat.xy *= tex.layers.yz;
+        }
         s.coat = clamp(coat.x, 0.0, 1.0);
         s.coat_alpha = max(coat.y * coat.y, ALPHA_MIN);
     }
@@ -240,7 +338,11 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         s.sheen_roughness = clamp(sheen.w, SHEEN_ROUGHNESS_MIN, 1.0);
     }
     if (HAS_TRANSMISSION) {
-        s.transmission = clamp(material_vec(id, 3u).z, 0.0, 1.0);
+        float transmission = material_vec(id, 3u).z;
+        if (HAS_TRANSMISSION_MAP) {
+            transmission *= tex.layers.x;
+        }
+        s.transmission = clamp(transmission, 0.0, 1.0);
         // A boundary between equal indices (ior 1) bends nothing: every microfacet refracts wo
         // straight on, so Walter et al.'s refraction half vector is 0/0 there (NaN weights). It
         // transmits as thin-walled glass does (straight through where smooth); the volume's
@@ -257,7 +359,7 @@ Surface material_surface_lod(uint id, vec4 uv, vec2 cone_lod) {
     vec4 mr = material_texture_lod(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv, cone_lod);
     float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
     float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
-    return material_surface_from(id, base, metallic, roughness);
+    return material_surface_from(id, base, metallic, roughness, material_layer_texels_lod(id, uv, cone_lod));
 }
 
 // Material `id`'s ambient occlusion at the hit's UV sets (glTF occlusionTexture: 1 + strength
@@ -276,7 +378,7 @@ Surface material_surface(uint id, vec4 uv) {
     vec4 mr = material_texture(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv);
     float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
     float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
-    return material_surface_from(id, base, metallic, roughness);
+    return material_surface_from(id, base, metallic, roughness, material_layer_texels_lod(id, uv, LOD_LEVEL0));
 }
 
 vec3 tri_vertex(uint tri, uint k) {
@@ -390,8 +492,13 @@ vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
         e *= material_texture_lod(m, MATERIAL_SLOT_EMISSIVE, tri_uv(tri, bary), cone_lod).rgb;
     }
     if (HAS_CLEARCOAT) {
-        // The coat lies over the emission (KHR_materials_clearcoat): dimmed by its weight.
-        float coat = clamp(material_vec(m, MATERIAL_CLEARCOAT_TEXEL).x, 0.0, 1.0);
+        // The coat lies over the emission (KHR_materials_clearcoat): dimmed by its weight (its
+        // texture's too; at `n`, not the coat's own normal).
+        float coat = material_vec(m, MATERIAL_CLEARCOAT_TEXEL).x;
+        if (HAS_CLEARCOAT_MAP && coat > 0.0) {
+            coat *= material_texture_lod(m, MATERIAL_SLOT_CLEARCOAT, tri_uv(tri, bary), cone_lod).r;
+        }
+        coat = clamp(coat, 0.0, 1.0);
         e *= 1.0 - coat_weight_at(coat, abs(dot(n, normalize(towards))));
     }
     return e;
@@ -598,6 +705,56 @@ bool parallax_lit(vec3 wi) {
     return lit;
 }
 
+// The interpolated vertex normal at barycentrics `bary` of triangle `tri` (ng where it
+// degenerates), flipped to ng's side, tilted by the height field where parallax_occlusion found a
+// point (parallax_tilt): the shading normal before any normal map.
+vec3 interpolated_normal(uint tri, vec2 bary, vec3 ng) {
+    uvec3 idx = tri_indices(tri);
+    float b0 = 1.0 - bary.x - bary.y;
+    vec3 n = b0 * vertex_normal_u(idx.x).xyz + bary.x * vertex_normal_u(idx.y).xyz
+        + bary.y * vertex_normal_u(idx.z).xyz;
+    float n_len = length(n);
+    n = (n_len > 0.0 && !isnan(n_len) && !isinf(n_len)) ? n / n_len : ng;
+    if (dot(n, ng) < 0.0) {
+        n = -n;
+    }
+    if (HAS_PARALLAX) {
+        // The height field's normal (parallax_occlusion's point); a normal map tilts it further.
+        n = parallax_tilt(n);
+    }
+    return n;
+}
+
+// Normal n tilted by the tangent-space normal map in texture `slot` (MATERIAL_SLOT_NORMAL or
+// MATERIAL_SLOT_CLEARCOAT_NORMAL; its scale in the slot's second transform row, w) through the
+// interpolated TBN, where the material has one and the result stays above the geometry; n
+// otherwise.
+vec3 normal_mapped(uint tri, vec2 bary, vec3 ng, vec3 n, vec4 uv, vec2 cone_lod, uint slot) {
+    uint material = tri_material(tri);
+    if (material_slot_texture(material, slot) != 0u) {
+        uvec3 idx = tri_indices(tri);
+        float b0 = 1.0 - bary.x - bary.y;
+        vec4 ta = vertex_tangent(idx.x);
+        vec4 tb = vertex_tangent(idx.y);
+        vec4 tc = vertex_tangent(idx.z);
+        vec4 tg = b0 * ta + bary.x * tb + bary.y * tc;
+        vec3 tt = tg.xyz - n * dot(n, tg.xyz);
+        float tl = length(tt);
+        if (tl > 1e-8) {
+            tt /= tl;
+            vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
+            vec3 nm = material_texture_lod(material, slot, uv, cone_lod).rgb * 2.0 - 1.0;
+            nm.xy *= material_slot_row(material, slot, 1u).w;
+            vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
+            if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
+                n = mapped;
+            }
+        }
+    }
+    return n;
+}
+
+
 // The shading normal at barycentrics `bary` of triangle `tri` whose geometric normal `ng` faces
 // the viewer: the interpolated vertex normal (ng where it degenerates), flipped to ng's side, tilted
 // by the height field where parallax_occlusion found a point (parallax_tilt), then the material's
@@ -609,44 +766,33 @@ vec3 shading_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
     if (bvh_is_implicit(tri)) {
         return ng;
     }
-    uvec3 idx = tri_indices(tri);
-    uint i0 = idx.x;
-    uint i1 = idx.y;
-    uint i2 = idx.z;
-    float b0 = 1.0 - bary.x - bary.y;
-    vec3 n = b0 * vertex_normal_u(i0).xyz + bary.x * vertex_normal_u(i1).xyz
-        + bary.y * vertex_normal_u(i2).xyz;
-    float n_len = length(n);
-    n = (n_len > 0.0 && !isnan(n_len) && !isinf(n_len)) ? n / n_len : ng;
-    if (dot(n, ng) < 0.0) {
-        n = -n;
-    }
-    if (HAS_PARALLAX) {
-        // The height field's normal (parallax_occlusion's point); a normal map tilts it further.
-        n = parallax_tilt(n);
-    }
+    vec3 n = interpolated_normal(tri, bary, ng);
     if (HAS_NORMAL_MAP) {
-        uint material = tri_material(tri);
-        if (material_slot_texture(material, MATERIAL_SLOT_NORMAL) != 0u) {
-            vec4 ta = vertex_tangent(i0);
-            vec4 tb = vertex_tangent(i1);
-            vec4 tc = vertex_tangent(i2);
-            vec4 tg = b0 * ta + bary.x * tb + bary.y * tc;
-            vec3 tt = tg.xyz - n * dot(n, tg.xyz);
-            float tl = length(tt);
-            if (tl > 1e-8) {
-                tt /= tl;
-                vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
-                vec3 nm = material_texture_lod(material, MATERIAL_SLOT_NORMAL, uv, cone_lod).rgb * 2.0 - 1.0;
-                nm.xy *= material_slot_row(material, MATERIAL_SLOT_NORMAL, 1u).w;
-                vec3 mapped = normalize(nm.x * tt + nm.y * bt + nm.z * n);
-                if (!any(isnan(mapped)) && dot(mapped, ng) > 0.0) {
-                    n = mapped;
-                }
-            }
-        }
+        n = normal_mapped(tri, bary, ng, n, uv, cone_lod, MATERIAL_SLOT_NORMAL);
     }
     return n;
+}
+
+// The clear coat's normal at a hit (world, on ng's side): the interpolated normal (parallax
+// included) tilted by the coat's own normal map alone (KHR_materials_clearcoat: the base's normal
+// map does not reach the coat); ng on an implicit shape.
+vec3 coat_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
+    if (bvh_is_implicit(tri)) {
+        return ng;
+    }
+    vec3 n = interpolated_normal(tri, bary, ng);
+    if (HAS_CLEARCOAT_MAP) {
+        n = normal_mapped(tri, bary, ng, n, uv, cone_lod, MATERIAL_SLOT_CLEARCOAT_NORMAL);
+    }
+    return n;
+}
+
+// Gives surface s the coat's normal `coat_n` (world) in the shading frame (t, b, n), in kernels
+// where it can differ from n (coat_normal_differs).
+void surface_coat_normal(inout Surface s, vec3 coat_n, vec3 t, vec3 b, vec3 n) {
+    if (coat_normal_differs()) {
+        s.coat_n = vec3(dot(coat_n, t), dot(coat_n, b), dot(coat_n, n));
+    }
 }
 
 // shading_normal_lod with the normal map at level 0.

@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 17] = [
+pub const SCENE_FEATURES: [&str; 20] = [
     "textures",
     "alpha",
     "lights",
@@ -57,12 +57,26 @@ pub const SCENE_FEATURES: [&str; 17] = [
     "implicit",
     "parallax",
     "sheen",
+    "specular_map",
+    "transmission_map",
+    "clearcoat_map",
 ];
 
-/// The scene features of the texture slots, in `MATERIAL_SLOT_*` order: some material has a
-/// texture in that slot.
-pub const TEXTURE_SLOT_FEATURES: [&str; 5] =
-    ["base_color_map", "metal_rough_map", "emissive_map", "normal_map", "occlusion_map"];
+/// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
+/// k for slot k): some material has a texture in one of them. One feature per slot of the core
+/// material; one per extension's texture group (`KHR_materials_specular`'s two textures share
+/// `specular_map`), whose textures come together in the files seen (BENCHMARKS.md History: a
+/// scene with one of them pays for the others' lookups). The height slot is `parallax`'s.
+pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 8] = [
+    ("base_color_map", 1 << 0),
+    ("metal_rough_map", 1 << 1),
+    ("emissive_map", 1 << 2),
+    ("normal_map", 1 << 3),
+    ("occlusion_map", 1 << 4),
+    ("specular_map", 1 << 6 | 1 << 7),
+    ("transmission_map", 1 << 8),
+    ("clearcoat_map", 1 << 9 | 1 << 10 | 1 << 11),
+];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
 /// others follow in order (room left for scene features to come).
@@ -245,13 +259,15 @@ gpu_structs! {
         /// length as `f32` bits ([`crate::scene::Material::attenuation`]; 0 without one).
         flags: uvec4,
         /// The texture of each slot (`MATERIAL_SLOT_*`; slot k is `textures[k / 4][k % 4]`):
-        /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, occlusion, then
-        /// height (parallax occlusion mapping); the last two entries are unused (0).
-        textures: [uvec4; 2],
+        /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, occlusion,
+        /// height (parallax occlusion mapping), specular, specular colour, transmission, clear
+        /// coat, clear coat roughness, clear coat normal.
+        textures: [uvec4; 3],
         /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
         /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; row1.w is the normal slot's
-        /// normal scale and the occlusion slot's strength (1 for the other slots).
-        tex_transform: [vec4; 12],
+        /// normal scale (and the clear coat normal slot's) and the occlusion slot's strength (1 for
+        /// the other slots).
+        tex_transform: [vec4; 24],
         /// `KHR_materials_clearcoat`: the coat's weight (`clearcoatFactor`), its roughness
         /// (`clearcoatRoughnessFactor`), unused, unused. Read only by kernels specialised for
         /// it (`HAS_CLEARCOAT`).
@@ -829,8 +845,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 352 bytes).
-    MATERIAL_TEXELS: uint = 22;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 560 bytes).
+    MATERIAL_TEXELS: uint = 35;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -848,14 +864,34 @@ gpu_constants! {
     /// `parallax.heightTexture`, R: 1 on the triangle, 0 at `scale` below it). Looked up only by
     /// kernels specialised for parallax (`HAS_PARALLAX`).
     MATERIAL_SLOT_HEIGHT: uint = 5;
+    /// Slot of `KHR_materials_specular`'s `specularTexture` (A: × `specularFactor`). Looked up
+    /// only by kernels specialised for it (`HAS_SPECULAR_MAP`, with the next slot).
+    MATERIAL_SLOT_SPECULAR: uint = 6;
+    /// Slot of `KHR_materials_specular`'s `specularColorTexture` (sRGB RGB:
+    /// × `specularColorFactor`).
+    MATERIAL_SLOT_SPECULAR_COLOR: uint = 7;
+    /// Slot of `KHR_materials_transmission`'s `transmissionTexture` (R: × `transmissionFactor`;
+    /// left empty where the factor is 0). Looked up only by kernels specialised for it
+    /// (`HAS_TRANSMISSION_MAP`).
+    MATERIAL_SLOT_TRANSMISSION: uint = 8;
+    /// Slot of `KHR_materials_clearcoat`'s `clearcoatTexture` (R: × `clearcoatFactor`; this and
+    /// the next two left empty where the factor is 0). Looked up only by kernels specialised for
+    /// the group (`HAS_CLEARCOAT_MAP`).
+    MATERIAL_SLOT_CLEARCOAT: uint = 9;
+    /// Slot of `clearcoatRoughnessTexture` (G: × `clearcoatRoughnessFactor`).
+    MATERIAL_SLOT_CLEARCOAT_ROUGHNESS: uint = 10;
+    /// Slot of `clearcoatNormalTexture`, the coat's own normal map (its scale in `tex_transform`'s
+    /// second row, w). Without it the coat lies on the interpolated normal, not the base's mapped
+    /// one.
+    MATERIAL_SLOT_CLEARCOAT_NORMAL: uint = 11;
     /// The texel of [`GpuMaterial::clearcoat`] in a material's texels.
-    MATERIAL_CLEARCOAT_TEXEL: uint = 19;
+    MATERIAL_CLEARCOAT_TEXEL: uint = 32;
     /// The texel of [`GpuMaterial::parallax`] in a material's texels.
-    MATERIAL_PARALLAX_TEXEL: uint = 20;
+    MATERIAL_PARALLAX_TEXEL: uint = 33;
     /// The texel of [`GpuMaterial::sheen`] in a material's texels.
-    MATERIAL_SHEEN_TEXEL: uint = 21;
+    MATERIAL_SHEEN_TEXEL: uint = 34;
     /// Texture slots a material has (each with two `tex_transform` rows).
-    MATERIAL_TEXTURE_SLOTS: uint = 6;
+    MATERIAL_TEXTURE_SLOTS: uint = 12;
     /// `GpuTexture::flags`: clamp s.
     TEXTURE_WRAP_S_CLAMP: uint = 1;
     /// `GpuTexture::flags`: mirror s.
@@ -1020,7 +1056,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax, sheen],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax, sheen],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1051,7 +1087,7 @@ kernels! {
     /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
     /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
     kernel wavefront {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax, sheen],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax, sheen],
         push: WaveParams,
         spec: {
             beckmann: bool = false,
@@ -1170,7 +1206,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit, parallax],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -1184,12 +1220,14 @@ kernels! {
             gb_emission: writeonly image rgba16f,
             /// Material index, octahedral geometric normal, UV1 (float bits).
             gb_material: writeonly image rgba32ui,
+            /// The layer textures' texels, unorm8 × 4 a word (written only where the scene has them).
+            gb_layers: writeonly image rgba32ui,
         }
     }
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, parallax, sheen],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, parallax, sheen],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1212,6 +1250,8 @@ kernels! {
             gb_emission: readonly image rgba16f,
             /// Material index, octahedral geometric normal, UV1 (float bits).
             gb_material: readonly image rgba32ui,
+            /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
+            gb_layers: readonly image rgba32ui,
             /// Shadow maps: the filter settings, each punctual light's record, the layers
             /// ([`GpuShadowLayer`]); one texel when the lights cast shadow rays.
             shadow_texels: readonly texels rgba32ui,
@@ -1245,7 +1285,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1261,6 +1301,8 @@ kernels! {
             gb_base: readonly image rgba16f,
             /// Material index, octahedral geometric normal, UV1 (float bits).
             gb_material: readonly image rgba32ui,
+            /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
+            gb_layers: readonly image rgba32ui,
             /// The previous frame's camera.
             prev_camera: readonly buffer GpuCamera,
             /// The previous frame's reservoirs.
@@ -1272,7 +1314,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1287,6 +1329,8 @@ kernels! {
             gb_base: readonly image rgba16f,
             /// Material index, octahedral geometric normal, UV1 (float bits).
             gb_material: readonly image rgba32ui,
+            /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
+            gb_layers: readonly image rgba32ui,
             /// The reservoirs before spatial reuse.
             reservoirs_in: readonly buffer [GpuReservoir],
             /// The frame's reservoirs.
@@ -1311,7 +1355,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, implicit],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, implicit],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1407,7 +1451,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1446,7 +1490,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1482,7 +1526,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1504,7 +1548,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, clearcoat, implicit, sheen],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, clearcoat, implicit, sheen],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

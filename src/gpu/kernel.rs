@@ -151,8 +151,8 @@ pub struct SceneFeatures {
     pub unlit: bool,
     /// Some material has a clear coat (`KHR_materials_clearcoat`).
     pub clearcoat: bool,
-    /// Bit k: some material has a texture in slot k (`MATERIAL_SLOT_*`, the features of
-    /// [`TEXTURE_SLOT_FEATURES`]).
+    /// Bit k: some material has a texture in slot k (`MATERIAL_SLOT_*`; the features of
+    /// [`TEXTURE_SLOT_FEATURES`] cover one slot or a group).
     pub texture_slots: u32,
     /// The BVH holds implicit shapes (`UMBRA_implicit`): the traversal ray-marches them.
     pub implicit: bool,
@@ -199,8 +199,8 @@ impl SceneFeatures {
             "parallax" => self.parallax,
             "sheen" => self.sheen,
             _ => {
-                let slot = TEXTURE_SLOT_FEATURES.iter().position(|f| *f == name)?;
-                self.texture_slots & (1 << slot) != 0
+                let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
+                self.texture_slots & slots != 0
             }
         })
     }

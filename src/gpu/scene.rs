@@ -320,6 +320,14 @@ impl ShadingArrays {
             .iter()
             .map(|m| {
                 let sigma = m.attenuation();
+                // A transmission texture scales a factor of 0 to nothing: no slot, no lookup.
+                let transmission_texture =
+                    m.transmission_texture.as_ref().filter(|_| m.transmission_factor > 0.0);
+                // So do the clear coat's to a coat of 0.
+                let coated = m.clearcoat > 0.0;
+                let coat_texture = m.clearcoat_texture.as_ref().filter(|_| coated);
+                let coat_roughness_texture = m.clearcoat_roughness_texture.as_ref().filter(|_| coated);
+                let coat_normal_texture = m.clearcoat_normal_texture.as_ref().filter(|_| coated);
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -336,8 +344,18 @@ impl ShadingArrays {
                         [
                             gpu_textures.slot(scene, m.occlusion_texture.as_ref()),
                             gpu_textures.slot(scene, m.parallax.as_ref().map(|p| &p.height)),
-                            0,
-                            0,
+                            gpu_textures.slot(scene, m.specular_texture.as_ref()),
+                            gpu_textures.slot(scene, m.specular_color_texture.as_ref()),
+                        ],
+                        [
+                            gpu_textures.slot(scene, transmission_texture),
+                            gpu_textures.slot(scene, coat_texture),
+                            gpu_textures.slot(scene, coat_roughness_texture),
+                            if scene.tangents.is_empty() {
+                                0
+                            } else {
+                                gpu_textures.slot(scene, coat_normal_texture)
+                            },
                         ],
                     ],
                     tex_transform: transforms([
@@ -347,6 +365,12 @@ impl ShadingArrays {
                         m.normal_texture.as_ref(),
                         m.occlusion_texture.as_ref(),
                         m.parallax.as_ref().map(|p| &p.height),
+                        m.specular_texture.as_ref(),
+                        m.specular_color_texture.as_ref(),
+                        transmission_texture,
+                        coat_texture,
+                        coat_roughness_texture,
+                        coat_normal_texture,
                     ]),
                     base_color: m.base_color_factor,
                     emissive_rough: {

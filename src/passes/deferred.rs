@@ -318,6 +318,7 @@ impl DeferredPass {
             gb_base: &gbuffer.base,
             gb_emission: &gbuffer.emission,
             gb_material: &gbuffer.material,
+            gb_layers: &gbuffer.layers,
             shadow_texels,
             shadow_depth,
             shadow_moments,

@@ -8,6 +8,7 @@
 //! | `base` | `R16G16B16A16_SFLOAT` | linear base colour rgb (textures applied, mipmapped ones filtered for the pixel's ray cone), metallic in a |
 //! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504); the material's ambient occlusion in a (glTF `occlusionTexture`: 1 + strength (r − 1), filtered like the other textures; 1 without one), which the lighting pass multiplies into the image-based (ambient) light only |
 //! | `material` | `R32G32B32A32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16`; z, w: the `TEXCOORD_1` coordinates as float bits (0 without them), where lightmaps are looked up |
+//! | `layers` | `R32G32B32A32_UINT` | the texels of the material's layer textures (filtered like the other textures; 1 where a slot is empty), four `packUnorm4x8` values a word (exact for 8-bit linear texels read unfiltered, within 1/510 otherwise): x: `specularColorTexture` rgb, `specularTexture` a; y: `transmissionTexture` r, then unused (1); z, w: unused (0). Written (and read by the lighting passes) only where the scene has some such texture: a host may leave it unwritten for scenes without |
 //!
 //! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
 //! with a compute-to-compute barrier. Where no surface was hit, `depth`, `normal`, `base` and
@@ -39,6 +40,8 @@ pub struct GBuffer {
     pub emission: Image,
     /// Material index and geometric normal.
     pub material: Image,
+    /// The layer textures' texels.
+    pub layers: Image,
 }
 
 impl GBuffer {
@@ -52,6 +55,7 @@ impl GBuffer {
             base: make("gbuffer base", raw::Format::R16G16B16A16_SFLOAT)?,
             emission: make("gbuffer emission", raw::Format::R16G16B16A16_SFLOAT)?,
             material: make("gbuffer material", raw::Format::R32G32B32A32_UINT)?,
+            layers: make("gbuffer layers", raw::Format::R32G32B32A32_UINT)?,
         };
         ctx.submit(|cmd| {
             for image in gbuffer.images() {
@@ -63,8 +67,8 @@ impl GBuffer {
     }
 
     /// The images in binding order.
-    pub fn images(&self) -> [&Image; 5] {
-        [&self.depth, &self.normal, &self.base, &self.emission, &self.material]
+    pub fn images(&self) -> [&Image; 6] {
+        [&self.depth, &self.normal, &self.base, &self.emission, &self.material, &self.layers]
     }
 
     /// Views of the images, for the passes that read a G-buffer.
@@ -76,6 +80,7 @@ impl GBuffer {
             base: self.base.view,
             emission: self.emission.view,
             material: self.material.view,
+            layers: self.layers.view,
         }
     }
 
@@ -92,6 +97,7 @@ impl GBuffer {
             base: half(&self.base)?,
             emission: half(&self.emission)?,
             material: self.material.read(ctx)?,
+            layers: self.layers.read(ctx)?,
         })
     }
 }
@@ -114,12 +120,14 @@ pub struct GBufferViews {
     pub emission: raw::ImageView,
     /// `R32G32B32A32_UINT` material index, geometric normal and UV1.
     pub material: raw::ImageView,
+    /// `R32G32B32A32_UINT` the layer textures' texels (only for scenes with such textures).
+    pub layers: raw::ImageView,
 }
 
 impl GBufferViews {
     /// The views in binding order.
-    pub fn in_order(&self) -> [raw::ImageView; 5] {
-        [self.depth, self.normal, self.base, self.emission, self.material]
+    pub fn in_order(&self) -> [raw::ImageView; 6] {
+        [self.depth, self.normal, self.base, self.emission, self.material, self.layers]
     }
 }
 
@@ -138,6 +146,8 @@ pub struct GBufferData {
     pub emission: Vec<[f32; 4]>,
     /// Material index, packed geometric normal.
     pub material: Vec<[u32; 4]>,
+    /// The layer textures' texels, unorm8 × 4 a word (unwritten for a scene without them).
+    pub layers: Vec<[u32; 4]>,
 }
 
 /// `gbuffer.comp`, specialised for whether the scene has textures and alpha-tested materials.
@@ -176,6 +186,7 @@ impl GBufferPass {
             gb_base: &target.base,
             gb_emission: &target.emission,
             gb_material: &target.material,
+            gb_layers: &target.layers,
         };
         self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);

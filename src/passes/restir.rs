@@ -266,6 +266,7 @@ impl RestirPass {
             gb_normal: &gbuffer.normal,
             gb_base: &gbuffer.base,
             gb_material: &gbuffer.material,
+            gb_layers: &gbuffer.layers,
             prev_camera: &reservoirs.prev_camera,
             history: &reservoirs.frame,
             reservoirs: &reservoirs.initial,
@@ -278,6 +279,7 @@ impl RestirPass {
             gb_normal: &gbuffer.normal,
             gb_base: &gbuffer.base,
             gb_material: &gbuffer.material,
+            gb_layers: &gbuffer.layers,
             reservoirs_in: &reservoirs.initial,
             reservoirs_out: &reservoirs.frame,
         };

@@ -23,6 +23,10 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     let mut materials = Vec::new();
     for m in asset.document.materials() {
         let mut material = Material::from_gltf(&m, &mut textures, &mut material_warnings);
+        material.read_extension_textures(&m, &asset.document, &mut textures).map_err(|e| {
+            let index = m.index().map_or("default".to_owned(), |i| i.to_string());
+            origin.error(format!("material {index} ('{}'): {e}", m.name().unwrap_or_default()))
+        })?;
         if let Some(value) = m.extension_value("UMBRA_implicit") {
             material.parallax = super::material::parse_parallax(value, &asset.document, &mut textures)
                 .map_err(|e| {

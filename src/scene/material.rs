@@ -65,7 +65,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 8] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 11] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -75,6 +75,9 @@ impl Material {
             &mut self.specular_texture,
             &mut self.specular_color_texture,
             &mut self.transmission_texture,
+            &mut self.clearcoat_texture,
+            &mut self.clearcoat_roughness_texture,
+            &mut self.clearcoat_normal_texture,
         ]
     }
 }
@@ -111,6 +114,9 @@ impl Material {
             specular_texture,
             specular_color_texture,
             transmission_texture,
+            clearcoat_texture,
+            clearcoat_roughness_texture,
+            clearcoat_normal_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -142,7 +148,16 @@ impl Material {
             h.f32s(sheen_color);
             h.f32s(&[*sheen_roughness]);
         }
-        for slot in [
+        let slot = |h: &mut super::ContentHasher, slot: &Option<TextureRef>| match slot {
+            None => h.u32(0),
+            Some(TextureRef { texture, tex_coord, transform, scale }) => {
+                h.u32(1);
+                h.u32s(&[*texture, *tex_coord]);
+                h.f32s(transform.as_flattened());
+                h.f32s(&[*scale]);
+            }
+        };
+        for s in [
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -152,14 +167,14 @@ impl Material {
             specular_color_texture,
             transmission_texture,
         ] {
-            match slot {
-                None => h.u32(0),
-                Some(TextureRef { texture, tex_coord, transform, scale }) => {
-                    h.u32(1);
-                    h.u32s(&[*texture, *tex_coord]);
-                    h.f32s(transform.as_flattened());
-                    h.f32s(&[*scale]);
-                }
+            slot(h, s);
+        }
+        // Nothing without the clear coat's textures: the hashes of scenes without them stay
+        // what they were.
+        let coat = [clearcoat_texture, clearcoat_roughness_texture, clearcoat_normal_texture];
+        if coat.iter().any(|t| t.is_some()) {
+            for s in coat {
+                slot(h, s);
             }
         }
     }
@@ -282,6 +297,14 @@ pub struct Material {
     pub specular_color_texture: Option<TextureRef>,
     /// Transmission in R (linear).
     pub transmission_texture: Option<TextureRef>,
+    /// `KHR_materials_clearcoat`'s `clearcoatTexture`: the coat's weight in R (linear).
+    pub clearcoat_texture: Option<TextureRef>,
+    /// `clearcoatRoughnessTexture`: the coat's roughness in G (linear).
+    pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// `clearcoatNormalTexture`: the coat's own tangent-space normal map (linear; `scale` scales
+    /// its XY). Without it the coat lies on the interpolated normal, whatever the base's
+    /// `normal_texture` does.
+    pub clearcoat_normal_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -318,6 +341,9 @@ impl Default for Material {
             specular_texture: None,
             specular_color_texture: None,
             transmission_texture: None,
+            clearcoat_texture: None,
+            clearcoat_roughness_texture: None,
+            clearcoat_normal_texture: None,
             parallax: None,
         }
     }
@@ -371,20 +397,6 @@ impl Material {
         // In [0, 1]: ranges.rs refuses a file with other values.
         let coat_number =
             |key: &str| clearcoat.and_then(|c| c.get(key)).and_then(Value::as_f64).map_or(0.0, |x| x as f32);
-        let coat_textures: Vec<&str> =
-            ["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"]
-                .into_iter()
-                .filter(|k| clearcoat.is_some_and(|c| c.get(*k).is_some()))
-                .collect();
-        if !coat_textures.is_empty() {
-            let warning = format!(
-                "material '{}': KHR_materials_clearcoat's {} not read (the factors alone are used)",
-                material.name().unwrap_or_default(),
-                coat_textures.join(", ")
-            );
-            log::warn!("{warning}");
-            warnings.push(warning);
-        }
         let sheen = material.extension_value("KHR_materials_sheen");
         // In [0, 1]: ranges.rs refuses a file with other values.
         let sheen_roughness = sheen
@@ -443,9 +455,65 @@ impl Material {
             specular_texture,
             specular_color_texture,
             transmission_texture,
+            // Read with the file's texture list (read_extension_textures).
+            clearcoat_texture: None,
+            clearcoat_roughness_texture: None,
+            clearcoat_normal_texture: None,
             parallax: None,
         }
     }
+
+    /// Reads the textures of the extensions the `gltf` crate leaves as raw JSON
+    /// (`KHR_materials_clearcoat`'s three), registering them in `textures`. Errors say which
+    /// texture reference is wrong; the caller names the file and the material.
+    pub(super) fn read_extension_textures(
+        &mut self,
+        material: &gltf::Material,
+        document: &gltf::Document,
+        textures: &mut TextureSet,
+    ) -> std::result::Result<(), String> {
+        if let Some(coat) = material.extension_value("KHR_materials_clearcoat") {
+            let mut read = |key: &str| {
+                let element = format!("KHR_materials_clearcoat.{key}");
+                coat.get(key).map(|info| raw_texture_ref(info, &element, document, textures)).transpose()
+            };
+            self.clearcoat_texture = read("clearcoatTexture")?;
+            self.clearcoat_roughness_texture = read("clearcoatRoughnessTexture")?;
+            self.clearcoat_normal_texture = read("clearcoatNormalTexture")?;
+        }
+        Ok(())
+    }
+}
+
+/// A `textureInfo` (or `normalTextureInfo`) in raw JSON, named `element` in errors: its texture
+/// (the index checked against the file's textures; linear texels), its UV set and
+/// `KHR_texture_transform`, and its `scale` (a normal texture's; 1 without one).
+fn raw_texture_ref(
+    info: &Value,
+    element: &str,
+    document: &gltf::Document,
+    textures: &mut TextureSet,
+) -> std::result::Result<TextureRef, String> {
+    let count = document.textures().len();
+    let index = info
+        .get("index")
+        .ok_or(format!("{element}.index is missing"))?
+        .as_u64()
+        .ok_or(format!("{element}.index must be a non-negative integer"))?;
+    let texture = document
+        .textures()
+        .nth(index as usize)
+        .ok_or(format!("{element}.index is {index}, but the file has {count} texture(s)"))?;
+    let tex_coord = match info.get("texCoord") {
+        None => 0,
+        Some(t) => {
+            t.as_u64().ok_or(format!("{element}.texCoord must be a non-negative integer, not {t}"))? as u32
+        }
+    };
+    let transform = info.get("extensions").and_then(|e| e.get("KHR_texture_transform"));
+    let (tex_coord, transform) = raw_transform(transform, tex_coord);
+    let scale = info.get("scale").and_then(Value::as_f64).map_or(1.0, |s| s as f32);
+    Ok(TextureRef { texture: textures.index_of(&texture, false), tex_coord, transform, scale })
 }
 
 /// `KHR_texture_transform` read from raw JSON (the `gltf` crate parses it only on plain texture

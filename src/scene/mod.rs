@@ -121,7 +121,7 @@ pub struct Scene {
     pub implicits: Vec<ImplicitShape>,
     /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
     /// optional glTF extensions it ignored (one entry naming them all), the parts of a material
-    /// it does not read (clearcoat and sheen textures: one entry per material each) and, for a file with
+    /// it does not read (sheen textures: one entry per material) and, for a file with
     /// animations, skins or morph targets, that one static pose is rendered (one entry); also
     /// logged as warnings.
     pub warnings: Vec<String>,

@@ -95,7 +95,7 @@ impl Checker {
         if slot == "occlusionTexture" {
             self.field(&element, info, "strength", Range::Closed(0.0, 1.0));
         }
-        if slot == "normalTexture" {
+        if slot == "normalTexture" || slot == "clearcoatNormalTexture" {
             self.field(&element, info, "scale", Range::Finite);
         }
     }

@@ -1,0 +1,267 @@
+//! The extensions' layer textures: `KHR_materials_specular`'s `specularTexture` (A) and
+//! `specularColorTexture` (RGB), `KHR_materials_transmission`'s `transmissionTexture` (R),
+//! `KHR_materials_clearcoat`'s `clearcoatTexture` (R), `clearcoatRoughnessTexture` (G) and
+//! `clearcoatNormalTexture` (and the coat's own, unmapped normal), in the path tracer and the
+//! hybrid renderer (which carries their texels in the G-buffer's `layers` image). A quad facing
+//! the camera fills the view; each render is compared with the same scene whose texture is folded
+//! into the material's factor, pixel by pixel.
+
+mod common;
+
+use common::Gpu;
+use glam::Vec3;
+use umbra::gpu::scene::GpuScene;
+use umbra::passes::deferred::LightingSettings;
+use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
+use umbra::scene::{
+    Filter, LightKind, Material, Sampler, Scene, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM,
+};
+
+const SIZE: (u32, u32) = (24, 24);
+
+/// A linear texture of one row of texels (nearest filtering, repeat).
+fn row_texture(texels: &[[u8; 4]]) -> Texture {
+    Texture {
+        name: "layer".into(),
+        width: texels.len() as u32,
+        height: 1,
+        rgba8: texels.concat(),
+        srgb: false,
+        sampler: Sampler {
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            mag_filter: Filter::Nearest,
+            min_filter: Filter::Nearest,
+            mipmaps: false,
+            mipmap_filter: Filter::Nearest,
+        },
+    }
+}
+
+fn slot() -> Option<TextureRef> {
+    Some(TextureRef { texture: 0, tex_coord: 0, transform: IDENTITY_TRANSFORM, scale: 1.0 })
+}
+
+/// The square [−1, 1]² at z = 0 facing a camera 2 m away (it fills the view), its UV set 0
+/// running left to right over u and top to bottom over v, its set 1 mirrored in u; a sun from
+/// the camera's side, a constant sky `env`; `texture` as texture 0.
+fn scene(material: Material, texture: Option<Texture>, sun: f32) -> Scene {
+    let quad = common::quad(Vec3::ZERO, Vec3::X, Vec3::Y);
+    let sun = common::light(LightKind::Directional, Vec3::ZERO, Vec3::new(-0.3, -0.2, -1.0), sun);
+    let camera = common::camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO);
+    let mut scene = common::build_with("layer textures", &[(quad, material)], vec![sun], camera);
+    scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
+    scene.uv1 = scene.uv0.iter().map(|&[u, v]| [1.0 - u, v]).collect();
+    scene.textures.extend(texture);
+    scene
+}
+
+/// Linear radiance per pixel from the path tracer (4 spp, one bounce) and from the hybrid
+/// renderer (split-sum IBL, no AO), under a constant sky `env`.
+fn renders(gpu: &Gpu, scene: &Scene, env: f32) -> [Vec<[f32; 4]>; 2] {
+    let gpu_scene = GpuScene::upload(gpu, scene).unwrap();
+    let camera = scene.camera(None).unwrap();
+    let path = PathSettings { size: SIZE, spp: 4, max_bounces: 1, env: [env; 3], ..Default::default() };
+    let traced = path_trace(gpu, &gpu_scene, &camera, &path, |_, _| {}).unwrap();
+    assert_eq!(traced.nonfinite_samples, 0, "NaN/Inf samples");
+    let settings = HybridSettings {
+        size: SIZE,
+        lighting: LightingSettings { env: [env; 3], ..Default::default() },
+        ao: None,
+        ..Default::default()
+    };
+    let lit = hybrid(gpu, &gpu_scene, &camera, &settings).unwrap();
+    [traced.mean, lit.color]
+}
+
+/// Pixel `i` of `a` and `b` agree in every channel within 1e-4 of `b` (1e-7 absolute).
+fn same(a: &[f32; 4], b: &[f32; 4]) -> bool {
+    (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-4 * b[c].abs().max(1e-3))
+}
+
+const MODES: [&str; 2] = ["path tracer", "hybrid"];
+
+/// A constant texture in each layer slot renders as the same material with its texel folded into
+/// the slot's factor, in both modes. The texel's channels all differ (R 128, G 64, B 200, A 160),
+/// so a slot that read another channel than the specification's (A for `specularTexture`, RGB
+/// for `specularColorTexture`, R for `transmissionTexture` and `clearcoatTexture`, G for
+/// `clearcoatRoughnessTexture`) would not match; the kernels are specialised per texture group
+/// (`specular_map`, `transmission_map`, `clearcoat_map`), so a slot left out of its group would
+/// render the factor alone. Every case is also checked to differ from the factor
+/// alone, so the texture has something to change.
+#[test]
+fn each_layer_texture_is_read_alone() {
+    let gpu = Gpu::new();
+    // Linear texels: n/255 is exact as the stored unorm16 (257 n / 65535), and as the G-buffer's.
+    let texel = [128u8, 64, 200, 160];
+    let t = texel.map(|c| c as f32 / 255.0);
+    let base = Material {
+        base_color_factor: [0.6, 0.5, 0.4, 1.0],
+        metallic: 0.0,
+        roughness: 0.4,
+        double_sided: true,
+        ..Default::default()
+    };
+    let cases = [
+        (
+            "specular",
+            Material { specular_factor: 0.9, specular_texture: slot(), ..base.clone() },
+            Material { specular_factor: 0.9 * t[3], ..base.clone() },
+            Material { specular_factor: 0.9, ..base.clone() },
+        ),
+        (
+            "specular colour",
+            Material {
+                specular_color_factor: [2.0, 1.5, 1.0],
+                specular_color_texture: slot(),
+                ..base.clone()
+            },
+            Material { specular_color_factor: [2.0 * t[0], 1.5 * t[1], t[2]], ..base.clone() },
+            Material { specular_color_factor: [2.0, 1.5, 1.0], ..base.clone() },
+        ),
+        (
+            "transmission",
+            Material { transmission_factor: 0.9, transmission_texture: slot(), ..base.clone() },
+            Material { transmission_factor: 0.9 * t[0], ..base.clone() },
+            Material { transmission_factor: 0.9, ..base.clone() },
+        ),
+        (
+            "clear coat",
+            Material { clearcoat: 0.9, clearcoat_roughness: 0.2, clearcoat_texture: slot(), ..base.clone() },
+            Material { clearcoat: 0.9 * t[0], clearcoat_roughness: 0.2, ..base.clone() },
+            Material { clearcoat: 0.9, clearcoat_roughness: 0.2, ..base.clone() },
+        ),
+        (
+            "clear coat roughness",
+            Material {
+                clearcoat: 1.0,
+                clearcoat_roughness: 0.8,
+                clearcoat_roughness_texture: slot(),
+                ..base.clone()
+            },
+            Material { clearcoat: 1.0, clearcoat_roughness: 0.8 * t[1], ..base.clone() },
+            Material { clearcoat: 1.0, clearcoat_roughness: 0.8, ..base.clone() },
+        ),
+    ];
+    // Every case and mode is checked before the test fails, naming each that does.
+    let mut failures = Vec::new();
+    for (name, textured, folded, factor) in cases {
+        let [a, b, f] = [(textured, true), (folded, false), (factor, false)]
+            .map(|(m, tex)| renders(&gpu, &scene(m, tex.then(|| row_texture(&[texel])), 2.0), 0.5));
+        for (mode, ((a, b), f)) in MODES.iter().zip(a.iter().zip(&b).zip(&f)) {
+            let centre = b[(SIZE.1 / 2 * SIZE.0 + SIZE.0 / 2) as usize];
+            assert!(centre[0] > 0.01, "{name}, {mode}: the quad is lit ({centre:?})");
+            if let Some((i, (p, q))) = a.iter().zip(b).enumerate().find(|(_, (p, q))| !same(p, q)) {
+                failures.push(format!("{name}, {mode}: pixel {i}: textured {p:?} vs factor × texel {q:?}"));
+            }
+            let differ = b.iter().zip(f).filter(|(p, q)| !same(p, q)).count();
+            if differ <= a.len() / 2 {
+                failures.push(format!("{name}, {mode}: the texel changes only {differ} pixels"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A texture that is not constant is read where the UVs say: `specularTexture` of A = 0 over the
+/// left half of the UV square and A = 1 over the right, on a black dielectric under a constant
+/// sky (the sun off). Where A = 0 the surface reflects nothing (F0 = F90 = 0, no diffuse): black;
+/// where A = 1 it equals the untextured material. The R, G, B channels hold the opposite (a
+/// channel mix-up swaps the halves). The same through `TEXCOORD_1` (mirrored in u: the halves
+/// swap) and through a `KHR_texture_transform` that mirrors u (swapped too).
+#[test]
+fn a_half_specular_texture_darkens_its_half() {
+    let gpu = Gpu::new();
+    let black = Material {
+        base_color_factor: [0.0, 0.0, 0.0, 1.0],
+        metallic: 0.0,
+        roughness: 0.3,
+        double_sided: true,
+        ..Default::default()
+    };
+    let texture = || Some(row_texture(&[[255, 255, 255, 0], [0, 0, 0, 255]]));
+    let plain = renders(&gpu, &scene(black.clone(), None, 0.0), 1.0);
+    let mirror = [[-1.0, 0.0, 1.0], [0.0, 1.0, 0.0]];
+    let cases = [
+        ("TEXCOORD_0", 0, IDENTITY_TRANSFORM, false),
+        ("TEXCOORD_1", 1, IDENTITY_TRANSFORM, true),
+        ("a mirroring transform", 0, mirror, true),
+    ];
+    let (w, h) = SIZE;
+    for (name, tex_coord, transform, swapped) in cases {
+        let specular_texture = Some(TextureRef { texture: 0, tex_coord, transform, scale: 1.0 });
+        let material = Material { specular_texture, ..black.clone() };
+        let images = renders(&gpu, &scene(material, texture(), 0.0), 1.0);
+        for (mode, (image, plain)) in MODES.iter().zip(images.iter().zip(&plain)) {
+            // Two columns clear of the seam (a path traced pixel's jitter crosses it).
+            for y in 0..h {
+                for x in (0..w).filter(|x| x + 2 < w / 2 || *x >= w / 2 + 2) {
+                    let i = (y * w + x) as usize;
+                    let dark = (x < w / 2) != swapped;
+                    let (p, q) = (image[i], plain[i]);
+                    assert!(q[0] > 0.01, "{mode}: pixel ({x}, {y}) reflects the sky without the texture");
+                    if dark {
+                        assert!(
+                            p[..3].iter().all(|&c| c == 0.0),
+                            "{name}, {mode}: ({x}, {y}) is {p:?}, not black"
+                        );
+                    } else {
+                        assert!(same(&p, &q), "{name}, {mode}: ({x}, {y}) is {p:?}, untextured {q:?}");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A tangent-space normal map of one texel tilting the normal by 45° towards the tangent (+x).
+fn tilt_map() -> Texture {
+    // (sin 45°, 0, cos 45°) encoded as (n + 1) / 2: 218 = round(255 × 0.8536).
+    row_texture(&[[218, 128, 218, 255]])
+}
+
+/// KHR_materials_clearcoat's normal: the coat lies on the unmapped (interpolated) normal, and
+/// only its own `clearcoatNormalTexture` tilts it. A black dielectric with no specular of its own
+/// (`specularFactor` 0: the base reflects nothing) under a smooth coat, lit by a sun from the
+/// camera's side: the image is the coat's highlight alone. A strong base normal map (45°) must
+/// leave it as it is without the map (within 1e-3 per pixel, both modes); the same map as the
+/// coat's normal must move it (the image's sum changes by more than half).
+#[test]
+fn the_coat_keeps_the_unmapped_normal() {
+    let gpu = Gpu::new();
+    let coated = Material {
+        base_color_factor: [0.0, 0.0, 0.0, 1.0],
+        metallic: 0.0,
+        roughness: 0.5,
+        specular_factor: 0.0,
+        clearcoat: 1.0,
+        clearcoat_roughness: 0.3,
+        double_sided: true,
+        ..Default::default()
+    };
+    let tangents = |mut s: Scene| {
+        s.tangents = vec![[1.0, 0.0, 0.0, 1.0]; s.positions.len()];
+        s
+    };
+    let render = |m: Material, map: bool| {
+        let mut s = tangents(scene(m, map.then(tilt_map), 0.0));
+        s.lights = vec![common::light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 3.0)];
+        renders(&gpu, &s, 0.0)
+    };
+    let plain = render(coated.clone(), false);
+    let base_mapped = render(Material { normal_texture: slot(), ..coated.clone() }, true);
+    let coat_mapped = render(Material { clearcoat_normal_texture: slot(), ..coated.clone() }, true);
+    for (mode, ((plain, base), coat)) in MODES.iter().zip(plain.iter().zip(&base_mapped).zip(&coat_mapped)) {
+        let sum = |image: &[[f32; 4]]| image.iter().map(|p| p[0] as f64).sum::<f64>();
+        assert!(sum(plain) > 1.0, "{mode}: the coat's highlight is seen ({})", sum(plain));
+        for (i, (p, q)) in base.iter().zip(plain).enumerate() {
+            assert!(
+                (0..3).all(|c| (p[c] - q[c]).abs() <= 1e-3 * q[c].abs().max(1e-2)),
+                "{mode}: pixel {i}: with the base's normal map {p:?}, without {q:?}"
+            );
+        }
+        let (moved, kept) = (sum(coat), sum(plain));
+        eprintln!("{mode}: coat highlight {kept:.3}, with the coat's own normal map {moved:.3}");
+        assert!((moved - kept).abs() > 0.5 * kept, "{mode}: the coat's normal map moves its highlight");
+    }
+}

@@ -54,9 +54,6 @@ uint trace_pixel(uvec2 region_pixel) {
     uvec2 pixel = region_pixel + uvec2(params.camera.region_x, params.camera.region_y);
     uint first = params.sample_index;
     uint count = params.sample_count;
-    // The samples accumulated so far (0: the host cleared the buffers to start a render).
-    vec4 mean = accum[index];
-    bool fresh = mean.a == 0.0;
 
     // Per sample: the first hit's base colour (the environment's colour, alpha 0, for a miss),
     // normal and distance, and what it emits; summed over the samples but for the normal and
@@ -78,12 +75,7 @@ uint trace_pixel(uvec2 region_pixel) {
             continue;
         }
         vec3 radiance = path.radiance;
-        if (any(isnan(radiance)) || any(isinf(radiance))) {
-            atomicAdd(stats.nonfinite_samples, 1u);
-            atomicOr(stats.nonfinite_sources, path.nonfinite);
-            radiance = vec3(0.0);
-            emitted_first = vec3(0.0);
-        }
+        finite_sample(radiance, emitted_first, path.nonfinite);
         sum += radiance;
         sum2 += radiance * radiance;
         sum_albedo += albedo;
@@ -101,18 +93,7 @@ uint trace_pixel(uvec2 region_pixel) {
         emitted_first = vec3(0.0);
     }
 
-    // The running mean and mean square over all samples so far.
-    float n_samples = mean.a + float(count);
-    vec4 m2 = moment[index];
-    accum[index] = vec4(mean.rgb + (sum - float(count) * mean.rgb) / n_samples, n_samples);
-    moment[index] = vec4(m2.rgb + (sum2 - float(count) * m2.rgb) / n_samples, 0.0);
-    vec4 mean_albedo = fresh ? vec4(0.0) : aov_albedo[index];
-    aov_albedo[index] = mean_albedo + (sum_albedo - float(count) * mean_albedo) / n_samples;
-    vec3 mean_emitted = fresh ? vec3(0.0) : aov_emission[index].rgb;
-    aov_emission[index] = vec4(mean_emitted + (sum_emitted - float(count) * mean_emitted) / n_samples, 0.0);
-    if (fresh) {
-        aov_normal_depth[index] = first_normal_depth;
-    }
+    accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, first_normal_depth);
     return segments;
 }
 
@@ -126,20 +107,11 @@ void main() {
     uvec2 pixel = tile_pixel();
     if (all(lessThan(pixel, params.size))) {
         atomicAdd(group_segments, trace_pixel(pixel));
-        if (HAS_IMPLICIT) {
-            if (implicit_marches_exhausted > 0u) {
-                atomicAdd(stats.marches_exhausted, implicit_marches_exhausted);
-            }
-        }
+        count_marches();
     }
-    // One global atomic per workgroup: the segment count, 64 bits as two words (an add that
-    // wraps the low word carries one into the high word).
+    // One global atomic per workgroup: the segment count.
     barrier();
     if (gl_LocalInvocationIndex == 0u) {
-        uint n = group_segments;
-        uint old = atomicAdd(stats.segments_lo, n);
-        if (old + n < old) {
-            atomicAdd(stats.segments_hi, 1u);
-        }
+        count_segments(group_segments);
     }
 }

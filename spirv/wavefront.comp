@@ -123,15 +123,6 @@ void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, uint 
     ++shade_shadows;
 }
 
-// The implicit-shape marches this invocation cut short, into the counters.
-void count_marches() {
-    if (HAS_IMPLICIT) {
-        if (implicit_marches_exhausted > 0u) {
-            atomicAdd(stats.marches_exhausted, implicit_marches_exhausted);
-        }
-    }
-}
-
 // Camera rays: path j * pixels + p is sample j of the wave at region pixel p.
 void camera_rays() {
     uvec2 region_pixel = tile_pixel();
@@ -170,11 +161,7 @@ void extend() {
     if (gl_LocalInvocationIndex == 0u) {
         uint count = wf_counts[ray_header(params.round) + 3u];
         uint first = gl_WorkGroupID.x * 64u;
-        uint n = min(count - min(count, first), 64u);
-        uint old = atomicAdd(stats.segments_lo, n);
-        if (old + n < old) {
-            atomicAdd(stats.segments_hi, 1u);
-        }
+        count_segments(min(count - min(count, first), 64u));
     }
 }
 
@@ -266,8 +253,6 @@ void accumulate() {
     uint wave_index = region_pixel.y * params.size.x + region_pixel.x;
     uint index = wave_index + params.first_row * params.size.x;  // in the accumulation buffers
     uint count = params.sample_count;
-    vec4 mean = accum[index];
-    bool fresh = mean.a == 0.0;
     vec4 sum_albedo = vec4(0.0);
     vec3 sum_emitted = vec3(0.0);
     vec3 sum = vec3(0.0);
@@ -277,28 +262,13 @@ void accumulate() {
         uvec4 r = load_field(F_RADIANCE, path);
         vec3 radiance = uintBitsToFloat(r.rgb);
         vec3 emitted_first = load_fieldf(F_EMITTED, path).rgb;
-        if (any(isnan(radiance)) || any(isinf(radiance))) {
-            atomicAdd(stats.nonfinite_samples, 1u);
-            atomicOr(stats.nonfinite_sources, r.w);
-            radiance = vec3(0.0);
-            emitted_first = vec3(0.0);
-        }
+        finite_sample(radiance, emitted_first, r.w);
         sum += radiance;
         sum2 += radiance * radiance;
         sum_albedo += load_fieldf(F_ALBEDO, path);
         sum_emitted += emitted_first;
     }
-    float n_samples = mean.a + float(count);
-    vec4 m2 = moment[index];
-    accum[index] = vec4(mean.rgb + (sum - float(count) * mean.rgb) / n_samples, n_samples);
-    moment[index] = vec4(m2.rgb + (sum2 - float(count) * m2.rgb) / n_samples, 0.0);
-    vec4 mean_albedo = fresh ? vec4(0.0) : aov_albedo[index];
-    aov_albedo[index] = mean_albedo + (sum_albedo - float(count) * mean_albedo) / n_samples;
-    vec3 mean_emitted = fresh ? vec3(0.0) : aov_emission[index].rgb;
-    aov_emission[index] = vec4(mean_emitted + (sum_emitted - float(count) * mean_emitted) / n_samples, 0.0);
-    if (fresh) {
-        aov_normal_depth[index] = load_fieldf(F_NORMAL, wave_index);
-    }
+    accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, load_fieldf(F_NORMAL, wave_index));
 }
 
 void main() {

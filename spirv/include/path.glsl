@@ -8,7 +8,8 @@
 // nothing blocks the shadow ray origin + t d, t < tmax: traced at once in the megakernel, queued
 // for a kernel of shadow rays in the wavefront. Include after random.glsl, camera.glsl,
 // environment.glsl and shading.glsl, with `params` a push-constant block holding PathParams'
-// fields but the camera.
+// fields but the camera, and the path tracers' accumulation bindings (`accum`, `moment`, the
+// `aov_*` buffers, `stats`).
 #ifndef UMBRA_PATH_GLSL
 #define UMBRA_PATH_GLSL
 
@@ -312,6 +313,55 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     path.dir = wi;
     path.depth = depth + 1u;
     return true;
+}
+
+// A finished sample's radiance for the running mean: itself when finite; else 0, and its
+// first-hit emission too, the sample counted with the stages (NONFINITE_* bits) that made it so.
+void finite_sample(inout vec3 radiance, inout vec3 emitted_first, uint nonfinite) {
+    if (any(isnan(radiance)) || any(isinf(radiance))) {
+        atomicAdd(stats.nonfinite_samples, 1u);
+        atomicOr(stats.nonfinite_sources, nonfinite);
+        radiance = vec3(0.0);
+        emitted_first = vec3(0.0);
+    }
+}
+
+// Folds `count` more samples of pixel `index` into the running means: the sums of their
+// radiance, its square, the first hit's albedo and emission; the first hit's normal and distance
+// kept from the render's first sample (the host clears the buffers, alpha 0, to start one).
+void accumulate_samples(uint index, uint count, vec3 sum, vec3 sum2, vec4 sum_albedo, vec3 sum_emitted,
+                        vec4 first_normal_depth) {
+    vec4 mean = accum[index];
+    bool fresh = mean.a == 0.0;
+    float n_samples = mean.a + float(count);
+    vec4 m2 = moment[index];
+    accum[index] = vec4(mean.rgb + (sum - float(count) * mean.rgb) / n_samples, n_samples);
+    moment[index] = vec4(m2.rgb + (sum2 - float(count) * m2.rgb) / n_samples, 0.0);
+    vec4 mean_albedo = fresh ? vec4(0.0) : aov_albedo[index];
+    aov_albedo[index] = mean_albedo + (sum_albedo - float(count) * mean_albedo) / n_samples;
+    vec3 mean_emitted = fresh ? vec3(0.0) : aov_emission[index].rgb;
+    aov_emission[index] = vec4(mean_emitted + (sum_emitted - float(count) * mean_emitted) / n_samples, 0.0);
+    if (fresh) {
+        aov_normal_depth[index] = first_normal_depth;
+    }
+}
+
+// Adds n path segments to the counters' 64-bit count, two words (an add that wraps the low
+// word carries one into the high word); one call per workgroup.
+void count_segments(uint n) {
+    uint old = atomicAdd(stats.segments_lo, n);
+    if (old + n < old) {
+        atomicAdd(stats.segments_hi, 1u);
+    }
+}
+
+// The implicit-shape marches this invocation cut short, into the counters.
+void count_marches() {
+    if (HAS_IMPLICIT) {
+        if (implicit_marches_exhausted > 0u) {
+            atomicAdd(stats.marches_exhausted, implicit_marches_exhausted);
+        }
+    }
 }
 
 #endif

@@ -38,8 +38,8 @@ impl Integrator {
     }
 }
 
-/// The paths a wave holds at most: the state's texels stay within 2^24 (256 MiB) and within
-/// every device's `maxTexelBufferElements` (2^27 on the GPUs umbra has met, 2^27 on lavapipe).
+/// The texels a wave's state holds at most (256 MiB): it bounds the paths a wave holds (a view
+/// past the device's `maxTexelBufferElements` is refused by [`TexelBuffer::new`]).
 const MAX_STATE_TEXELS: u64 = 1 << 24;
 
 /// The most paths a wave holds, however small their state.

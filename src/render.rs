@@ -361,8 +361,15 @@ impl Passes {
     /// The path tracer's pipeline for `options` (built now if it was not: an embedding host
     /// calls this before recording a frame).
     pub fn path_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&PathTracePass> {
+        let pass = self.lazy_path_pass(scene, options)?;
+        pass.prepare(&self.ctx, scene, false)?;
+        Ok(pass)
+    }
+
+    /// The path tracer's pass for `options`, its pipelines built at their first use.
+    fn lazy_path_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&PathTracePass> {
         self.check(scene)?;
-        built(&self.path[options.index()], || PathTracePass::for_scene(&self.ctx, scene, options))
+        built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))
     }
 
     /// The wavefront path tracer's stages for `options` (built now if they were not).
@@ -752,7 +759,7 @@ impl Passes {
         }
         match settings.integrator {
             Integrator::Megakernel => {
-                self.path_pass(scene, settings.options())?.record(&self.ctx, cmd, scene, target, &params)
+                self.lazy_path_pass(scene, settings.options())?.record(&self.ctx, cmd, scene, target, &params)
             }
             Integrator::Wavefront => self
                 .wavefront_pass(scene, settings.options())?
@@ -864,7 +871,10 @@ impl Passes {
         settings.validate()?;
         let clock = std::time::Instant::now();
         match settings.integrator {
-            Integrator::Megakernel => self.path_pass(scene, settings.options()).map(|_| ())?,
+            Integrator::Megakernel => self
+                .lazy_path_pass(scene, settings.options())?
+                .prepare(ctx, scene, settings.lobe_split)
+                .map(|_| ())?,
             Integrator::Wavefront => self.wavefront_pass(scene, settings.options()).map(|_| ())?,
         }
         let pipeline_ms = clock.elapsed().as_secs_f64() * 1e3;

@@ -391,10 +391,9 @@ impl PathTarget {
 
 /// `pathtrace.comp`, specialised for one scene's features and the chosen sampling.
 pub struct PathTracePass {
-    pipeline: Pipeline<pathtrace::Kernel>,
-    /// The kernel specialised for the lobe split, made at the first record into a target with
-    /// one.
-    split: std::sync::OnceLock<Pipeline<pathtrace::Kernel>>,
+    /// The kernel, and the kernel specialised for the lobe split, each made at its first use
+    /// (a record into a target without or with the split), or by [`PathTracePass::prepare`].
+    pipelines: [std::sync::OnceLock<Pipeline<pathtrace::Kernel>>; 2],
     options: PathOptions,
 }
 
@@ -406,8 +405,35 @@ impl PathTracePass {
     /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha,
     /// vertex colours, unlit materials) and what the options leave out cost nothing.
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
-        let spec = sampling_spec!(pathtrace::Spec, options, Default::default());
-        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)?, split: Default::default(), options })
+        let pass = Self::lazy(options);
+        pass.prepare(ctx, scene, false)?;
+        Ok(pass)
+    }
+
+    /// The pass for `options` with no pipeline built yet: each is built at its first use.
+    pub fn lazy(options: PathOptions) -> Self {
+        Self { pipelines: Default::default(), options }
+    }
+
+    /// The pipeline for `scene`, specialised for the lobe split or not (built now if it was not:
+    /// pipeline creation takes 1.5–1.7 s on lavapipe, so a render builds only the one it uses).
+    pub fn prepare(
+        &self,
+        ctx: &Context,
+        scene: &GpuScene,
+        lobe_split: bool,
+    ) -> Result<&Pipeline<pathtrace::Kernel>> {
+        let cell = &self.pipelines[lobe_split as usize];
+        if let Some(pipeline) = cell.get() {
+            return Ok(pipeline);
+        }
+        let spec = sampling_spec!(
+            pathtrace::Spec,
+            self.options,
+            pathtrace::Spec { split_lobes: lobe_split, ..Default::default() }
+        );
+        let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
+        Ok(cell.get_or_init(|| pipeline))
     }
 
     /// Samples per pixel one dispatch traces at most ([`PathTracePass::record`] splits longer
@@ -501,21 +527,7 @@ impl PathTracePass {
             aov_split,
             stats: &target.stats,
         };
-        let pipeline = match target.lobe_split {
-            None => &self.pipeline,
-            Some(_) => match self.split.get() {
-                Some(pipeline) => pipeline,
-                None => {
-                    let spec = sampling_spec!(
-                        pathtrace::Spec,
-                        self.options,
-                        pathtrace::Spec { split_lobes: true, ..Default::default() }
-                    );
-                    let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
-                    self.split.get_or_init(|| pipeline)
-                }
-            },
-        };
+        let pipeline = self.prepare(ctx, scene, target.lobe_split.is_some())?;
         let end = params.sample_index + params.sample_count;
         let mut dispatch = *params;
         while dispatch.sample_index < end {

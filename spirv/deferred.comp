@@ -150,10 +150,22 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     }
     vec3 dielectric_spec = s.f0 * table.x + s.f90 * table.y;
     float diffuse_weight = 1.0 - max3(s.f0) * table.z - s.f90 * table.w;
+    vec3 metal_spec = s.base * table.x + table.y;
+    if (s.iridescence > 0.0) {
+        // KHR_materials_iridescence: the film's Fresnel taken at n.v for the whole lobe (as the
+        // Sample Viewer does), times the lobe's albedo A + B; the diffuse lobe keeps 1 - max3(F)
+        // of the mixed Fresnel (C + D: the table's diffuse weighting of a constant F). The path
+        // tracer takes it at each microfacet's v.h (tests/ibl.rs measures the difference).
+        vec3 film = iridescent_fresnel(s.iridescence_ior, s.iridescence_thickness, s.f0, nv);
+        vec3 film_metal = iridescent_fresnel(s.iridescence_ior, s.iridescence_thickness, s.base, nv);
+        dielectric_spec = mix(dielectric_spec, film * (table.x + table.y), s.iridescence);
+        diffuse_weight = 1.0 - max3(mix(s.f0 * table.z + s.f90 * table.w, film * (table.z + table.w), s.iridescence));
+        metal_spec = mix(metal_spec, film_metal * (table.x + table.y), s.iridescence);
+    }
     // The diffuse lobe's share `transmission` transmits instead (as bsdf.glsl splits it).
     vec3 below = mix(irradiance_over_pi, transmitted_light, s.transmission);
     vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * below;
-    vec3 metal = (s.base * table.x + table.y) * specular_light;
+    vec3 metal = metal_spec * specular_light;
     vec3 result = mix(dielectric, metal, s.metallic);
     if (max3(s.sheen) > 0.0) {
         // KHR_materials_sheen: the material scaled by the sheen's albedo scaling at n.v alone

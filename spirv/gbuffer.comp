@@ -80,6 +80,6 @@ void main() {
         if (coat_normal_differs()) {
             coat_n = coat_normal_lod(tri, hit.bary, ng, uv, cone_lod);
         }
-        imageStore(gb_layers, pixel, gbuffer_pack_layers(layers.specular, layers.layers, coat_n));
+        imageStore(gb_layers, pixel, gbuffer_pack_layers(layers.specular, layers.layers, layers.iridescence, coat_n));
     }
 }

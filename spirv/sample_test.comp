@@ -3,7 +3,7 @@
 // bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests (modes 0
 // and 1); mode 2 evaluates bsdf_eval for tests/brdf.rs; mode 3 the dielectric's bsdf_eval and
 // bsdf_pdf at given directions, for tests/sampling.rs's check that it samples wherever it
-// scatters.
+// scatters; mode 4 the thin-film Fresnel of KHR_materials_iridescence (tests/iridescence.rs).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/sample_test.glsl"
 
@@ -17,6 +17,9 @@ vec4 sheen_table_texel(uint t) {
     return directions[uint(directions.length()) - SHEEN_TABLE_TEXELS + t];
 }
 
+// Sampler 8: an iridescent surface (KHR_materials_iridescence): base (0.8, 0.6, 0.4), metallic
+// 0.3, alpha `alpha`, under a film of ior 1.8 and 350 nm, weight 1 (the lobes' probabilities
+// follow its Fresnel).
 // Samplers 2-4: the whole BSDF of a white transmissive dielectric (reflection + transmission,
 // through bsdf_sample / bsdf_pdf): 2 entering glass (eta 1.5), 3 leaving it (eta 1/1.5),
 // 4 thin-walled. Sampler 5: an opaque grey dielectric (alpha 0.5) under a clear coat of weight 1
@@ -41,6 +44,29 @@ Surface dielectric(float alpha) {
         s.coat_n = params.kind == 7u ? normalize(vec3(0.5, 0.2, 1.0)) : vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.0);
         s.sheen_roughness = 1.0;
+        s.iridescence = 0.0;
+        s.iridescence_ior = 1.3;
+        s.iridescence_thickness = 0.0;
+        return s;
+    }
+    if (params.kind == 8u) {
+        Surface s;
+        s.base = vec3(0.8, 0.6, 0.4);
+        s.metallic = 0.3;
+        s.f0 = vec3(0.04);
+        s.f90 = 1.0;
+        s.alpha = alpha;
+        s.transmission = 0.0;
+        s.eta = 1.5;
+        s.thin = true;
+        s.coat = 0.0;
+        s.coat_alpha = 1.0;
+        s.coat_n = vec3(0.0, 0.0, 1.0);
+        s.sheen = vec3(0.0);
+        s.sheen_roughness = 1.0;
+        s.iridescence = 1.0;
+        s.iridescence_ior = 1.8;
+        s.iridescence_thickness = 350.0;
         return s;
     }
     if (params.kind == 6u) {
@@ -60,6 +86,9 @@ Surface dielectric(float alpha) {
         s.coat_n = vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.9, 0.6, 0.3);
         s.sheen_roughness = max(sqrt(alpha), SHEEN_ROUGHNESS_MIN);
+        s.iridescence = 0.0;
+        s.iridescence_ior = 1.3;
+        s.iridescence_thickness = 0.0;
         return s;
     }
     Surface s;
@@ -76,6 +105,9 @@ Surface dielectric(float alpha) {
     s.coat_n = vec3(0.0, 0.0, 1.0);
     s.sheen = vec3(0.0);
     s.sheen_roughness = 1.0;
+    s.iridescence = 0.0;
+    s.iridescence_ior = 1.3;
+    s.iridescence_thickness = 0.0;
     return s;
 }
 
@@ -117,7 +149,18 @@ void main() {
     s.coat_n = vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.0);
         s.sheen_roughness = 1.0;
+        s.iridescence = 0.0;
+        s.iridescence_ior = 1.3;
+        s.iridescence_thickness = 0.0;
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
+        return;
+    }
+    if (params.mode == 4u) {
+        // KHR_materials_iridescence's film Fresnel, each case two vec4s: (cos, thickness nm,
+        // film ior, unused), (base F0 rgb, unused).
+        vec4 c = directions[2u * i];
+        vec3 f0 = directions[2u * i + 1u].rgb;
+        results[i] = vec4(iridescent_fresnel(c.z, c.y, f0, c.x), 0.0);
         return;
     }
     if (params.mode == 3u) {

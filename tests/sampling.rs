@@ -69,6 +69,10 @@ enum Dielectric {
     /// The coated dielectric with the coat's own normal tilted 28° from the shading normal
     /// (towards +x and +y): the coat's lobe evaluated and sampled in its own frame.
     CoatTilted = 7,
+    /// Not a dielectric boundary: a half-metallic surface (base (0.8, 0.6, 0.4), metallic 0.3, the
+    /// case's α) under a thin film (`KHR_materials_iridescence`: weight 1, ior 1.8, 350 nm), whose
+    /// Fresnel sets the lobes' probabilities.
+    Iridescent = 8,
 }
 
 /// The kernel specialised for each [`Microfacet`], in [`Microfacet::ALL`] order, and the sheen's
@@ -302,6 +306,7 @@ fn cases() -> Vec<Sampler> {
             Dielectric::Coated,
             Dielectric::Sheened,
             Dielectric::CoatTilted,
+            Dielectric::Iridescent,
         ] {
             for alpha in [0.1, 0.5] {
                 for theta_degrees in [30.0, 60.0] {

@@ -801,10 +801,15 @@ fn json_that_breaks_gltf_rules_is_rejected() {
 #[test]
 fn unsupported_required_extensions_are_named_and_optional_ones_ignored() {
     let (mut json, bin) = read_glb(&khronos("Box"));
-    json["extensionsUsed"] = json!(["KHR_draco_mesh_compression", "KHR_texture_transform", "EXT_unknown"]);
+    json["extensionsUsed"] = json!([
+        "KHR_draco_mesh_compression",
+        "KHR_texture_transform",
+        "KHR_materials_iridescence",
+        "EXT_unknown"
+    ]);
     let scene =
         Scene::from_glb_bytes("optional.glb", &to_glb(&json, &bin)).expect("optional extensions are ignored");
-    // Named once, at warn level and in the scene's warnings; one umbra reads is not named.
+    // Named once, at warn level and in the scene's warnings; those umbra reads are not named.
     assert_eq!(
         scene.warnings,
         vec!["optional.glb: ignoring optional glTF extensions KHR_draco_mesh_compression, EXT_unknown: rendered without them"]
@@ -1431,6 +1436,59 @@ fn sheen_is_read() {
     assert!(error.contains("sheen.glb") && error.contains("sheenRoughnessFactor is 1.5"), "{error}");
     let error = load(json!({"sheenColorFactor": [0.5, -0.25, 0.5]})).unwrap_err().to_string();
     assert!(error.contains("sheen.glb") && error.contains("sheenColorFactor[1] is -0.25"), "{error}");
+}
+
+/// KHR_materials_iridescence's factor, ior, thickness range and two textures reach the material
+/// (factor 0, ior 1.3, thickness 100–400 nm and no textures without the extension; the defaults
+/// for the values the extension leaves out), with no warning; a value outside its range or a
+/// texture index beyond the file's textures is refused naming it.
+#[test]
+fn iridescence_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let load = |film: Value| {
+        let mut json = base.clone();
+        json["materials"][0]["extensions"] = json!({ "KHR_materials_iridescence": film });
+        Scene::from_glb_bytes("film.glb", &to_glb(&json, &bin))
+    };
+    let film = |m: &umbra::scene::Material| (m.iridescence, m.iridescence_ior, m.iridescence_thickness);
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    assert_eq!(film(&plain.materials[0]), (0.0, 1.3, [100.0, 400.0]));
+    assert!(plain.materials[0].iridescence_texture.is_none());
+    let scene = load(json!({"iridescenceFactor": 0.75})).unwrap();
+    assert_eq!(film(&scene.materials[0]), (0.75, 1.3, [100.0, 400.0]), "the defaults");
+    let scene = load(json!({
+        "iridescenceFactor": 0.5,
+        "iridescenceIor": 1.8,
+        "iridescenceThicknessMinimum": 250.0,
+        "iridescenceThicknessMaximum": 125.0,
+        "iridescenceTexture": {"index": 0},
+        "iridescenceThicknessTexture": {"index": 0, "texCoord": 1,
+            "extensions": {"KHR_texture_transform": {"offset": [0.25, 0.0]}}}
+    }))
+    .unwrap();
+    let m = &scene.materials[0];
+    assert_eq!(film(m), (0.5, 1.8, [250.0, 125.0]), "the minimum may exceed the maximum");
+    assert!(scene.warnings.iter().all(|w| !w.contains("iridescence")), "{:?}", scene.warnings);
+    let (weight, thickness) = (
+        m.iridescence_texture.expect("iridescenceTexture"),
+        m.iridescence_thickness_texture.expect("thickness"),
+    );
+    assert_eq!((weight.tex_coord, thickness.tex_coord), (0, 1));
+    assert_eq!(thickness.transform[0][2], 0.25, "the thickness texture's KHR_texture_transform");
+    assert!(!scene.textures[weight.texture as usize].srgb, "the film's textures are linear");
+    for (bad, named) in [
+        (json!({"iridescenceFactor": 1.5}), "iridescenceFactor is 1.5"),
+        (json!({"iridescenceIor": 0.5}), "iridescenceIor is 0.5"),
+        (json!({"iridescenceThicknessMinimum": -1.0}), "iridescenceThicknessMinimum is -1"),
+        (json!({"iridescenceThicknessMaximum": -2.0}), "iridescenceThicknessMaximum is -2"),
+        (
+            json!({"iridescenceFactor": 1.0, "iridescenceTexture": {"index": 7}}),
+            "iridescenceTexture.index is 7",
+        ),
+    ] {
+        let error = load(bad).unwrap_err().to_string();
+        assert!(error.contains("film.glb") && error.contains(named), "{named}: {error}");
+    }
 }
 
 /// KHR_materials_volume's attenuation reaches the material: colour and distance as written, the

@@ -42,6 +42,19 @@
 // samples the sheen as its own lobe, from the cosine-weighted hemisphere. A surface without a
 // sheen (`sheen` 0: a kernel not specialised for it sets the constant) costs nothing.
 //
+// KHR_materials_iridescence puts a thin dielectric film (its ior and thickness in nm) on the
+// material: the dielectric's and the metal's Fresnel F become
+//
+//   F = mix(F, F_film(cos), iridescence)
+//
+// with F_film the film's interference reflectance (iridescent_fresnel), evaluated at the same
+// cosine as F (V.H in the lobes; leaving the denser side of a refracting boundary, the transmitted
+// angle's, as dielectric_fresnel takes it) over the dielectric's F0 (ior and specular applied) or
+// the metal's base colour. The dielectric's diffuse and transmitted light keep 1 - max3(F), as the
+// extension's rgb_mix says. The clear coat and the sheen lie over it unchanged (the extension
+// ignores the coat-film interface). A surface without a film (`iridescence` 0: a kernel not
+// specialised for it sets the constant) costs nothing.
+//
 // The microfacet distribution is GGX (the specification) or, for comparison, Beckmann: the
 // including kernel declares `const bool BECKMANN` (a specialization constant). Half vectors are
 // sampled from GGX's visible normals (Heitz 2018) or, with `const bool GGX_WALTER` (also the
@@ -75,6 +88,9 @@ struct Surface {
     vec3 coat_n;         // the coat's unit normal in the shading frame ((0, 0, 1): the shading normal)
     vec3 sheen;              // KHR_materials_sheen's colour (0: no sheen)
     float sheen_roughness;   // its roughness, at least SHEEN_ROUGHNESS_MIN
+    float iridescence;            // KHR_materials_iridescence's weight (0: no film)
+    float iridescence_ior;        // the film's index of refraction
+    float iridescence_thickness;  // the film's thickness, nm
 };
 
 float max3(vec3 v) {
@@ -129,9 +145,68 @@ float micro_pdf(vec3 wo, vec3 h, float a) {
     return micro_pdf_h(wo, h, a) / (4.0 * oh);
 }
 
-// The dielectric layer's Fresnel at a microfacet with cos(wo, h) = c. Leaving the denser side
-// of a refracting boundary (eta < 1), Schlick's form takes the transmitted angle's cosine, and
-// beyond the critical angle reflection is total.
+// CIE 1931 XYZ to linear Rec. 709 (sRGB primaries, D65), column by column.
+const mat3 XYZ_TO_REC709 = mat3(3.2404542, -0.9692660, 0.0556434, -1.5371385, 1.8760108, -0.2040259,
+                                -0.4985314, 0.0415560, 1.0572252);
+
+// The colour (linear Rec. 709) of the interference term cos(2 pi opd / lambda + shift) seen
+// through the CIE colour matching functions under an equal-energy spectrum, normalised by the
+// integral of y: Belcour and Barla's (2017) Gaussian fit of the functions' Fourier transforms, as
+// the extension writes it. `opd`: the optical path difference in nm; `shift`: the phase per
+// channel of XYZ.
+vec3 iridescence_sensitivity(float opd, vec3 shift) {
+    float phase = 2.0 * PI * opd * 1.0e-9;
+    const vec3 val = vec3(5.4856e-13, 4.4201e-13, 5.2481e-13);
+    const vec3 pos = vec3(1.6810e+06, 1.7953e+06, 2.2084e+06);
+    const vec3 var = vec3(4.3278e+09, 9.3046e+09, 6.6121e+09);
+    vec3 xyz = val * sqrt(2.0 * PI * var) * cos(pos * phase + shift) * exp(-phase * phase * var);
+    xyz.x += 9.7470e-14 * sqrt(2.0 * PI * 4.5282e+09) * cos(2.2399e+06 * phase + shift.x)
+        * exp(-4.5282e+09 * phase * phase);
+    return XYZ_TO_REC709 * (xyz / 1.0685e-7);
+}
+
+// KHR_materials_iridescence's thin-film Fresnel (the extension's appendix, after Belcour and
+// Barla 2017): a film of index `film_ior` and `thickness` nm between air (index 1) and a base of
+// reflectance `base_f0` at normal incidence (its index from F0, per channel), lit at cosine
+// `cos1` in the air. Both interfaces by Schlick's form, phase shifts 0 or pi (polarisation
+// ignored), the Airy sum's mean and first two interference terms through
+// iridescence_sensitivity. Clamped to [0, 1]: the fit's colour can leave the gamut, below 0 (the
+// extension's max(I, 0)) and above 1 (by up to 0.28 for a film of index 2.5 over F0 0.85 at
+// grazing angles), which would create energy.
+vec3 iridescent_fresnel(float film_ior, float thickness, vec3 base_f0, float cos1) {
+    float cos2_sq = 1.0 - (1.0 - cos1 * cos1) / (film_ior * film_ior);
+    if (cos2_sq < 0.0) {
+        return vec3(1.0);  // total internal reflection in a film below the outside's index
+    }
+    float cos2 = sqrt(cos2_sq);
+    // Air to film.
+    float r0 = (film_ior - 1.0) / (film_ior + 1.0);
+    float r12 = fresnel_schlick(vec3(r0 * r0), vec3(1.0), cos1).x;
+    float t121 = 1.0 - r12;
+    float phi21 = film_ior < 1.0 ? 0.0 : PI;
+    // Film to base.
+    vec3 root = sqrt(clamp(base_f0, 0.0, 0.9999));
+    vec3 base_ior = (1.0 + root) / (1.0 - root);
+    vec3 r1 = (base_ior - film_ior) / (base_ior + film_ior);
+    vec3 r23 = fresnel_schlick(r1 * r1, vec3(1.0), cos2);
+    vec3 phi23 = mix(vec3(0.0), vec3(PI), lessThan(base_ior, vec3(film_ior)));
+    float opd = 2.0 * film_ior * thickness * cos2;
+    vec3 phi = phi21 + phi23;
+    // The Airy sum: its mean, then the terms of the first two round trips.
+    vec3 r123 = clamp(r12 * r23, 1e-5, 0.9999);
+    vec3 amplitude = sqrt(r123);
+    vec3 rs = t121 * t121 * r23 / (1.0 - r123);
+    vec3 f = r12 + rs;
+    vec3 cm = (rs - t121) * amplitude;
+    f += 2.0 * cm * iridescence_sensitivity(opd, phi);
+    cm *= amplitude;
+    f += 2.0 * cm * iridescence_sensitivity(2.0 * opd, 2.0 * phi);
+    return clamp(f, 0.0, 1.0);
+}
+
+// The dielectric layer's Fresnel at a microfacet with cos(wo, h) = c, the film's mixed in. Leaving
+// the denser side of a refracting boundary (eta < 1), Schlick's form takes the transmitted angle's
+// cosine, and beyond the critical angle reflection is total.
 vec3 dielectric_fresnel(Surface s, float c) {
     if (!s.thin && s.eta < 1.0) {
         float sin2_t = (1.0 - c * c) / (s.eta * s.eta);
@@ -140,7 +215,21 @@ vec3 dielectric_fresnel(Surface s, float c) {
         }
         c = sqrt(1.0 - sin2_t);
     }
-    return fresnel_schlick(s.f0, vec3(s.f90), c);
+    vec3 f = fresnel_schlick(s.f0, vec3(s.f90), c);
+    if (s.iridescence > 0.0) {
+        f = mix(f, iridescent_fresnel(s.iridescence_ior, s.iridescence_thickness, s.f0, c), s.iridescence);
+    }
+    return f;
+}
+
+// The metal's Fresnel at a microfacet with cos(wo, h) = c (its F0 the base colour), the film's
+// mixed in.
+vec3 metal_fresnel(Surface s, float c) {
+    vec3 f = fresnel_schlick(s.base, vec3(1.0), c);
+    if (s.iridescence > 0.0) {
+        f = mix(f, iridescent_fresnel(s.iridescence_ior, s.iridescence_thickness, s.base, c), s.iridescence);
+    }
+    return f;
 }
 
 // The generalized half vector of a refraction from wo (above) to wi (below), facing +z
@@ -191,7 +280,7 @@ vec3 bsdf_eval_base(Surface s, vec3 wo, vec3 wi) {
     float spec = micro_d(h, s.alpha) * micro_visibility(wo, wi, s.alpha);
     vec3 f_dielectric = dielectric_fresnel(s, oh);
     vec3 dielectric = (1.0 - max3(f_dielectric)) * (1.0 - s.transmission) * s.base * INV_PI + f_dielectric * spec;
-    vec3 metal = fresnel_schlick(s.base, vec3(1.0), oh) * spec;
+    vec3 metal = metal_fresnel(s, oh) * spec;
     return mix(dielectric, metal, s.metallic);
 }
 

@@ -24,17 +24,19 @@ vec3 oct_decode(vec2 e) {
 }
 
 // The G-buffer's `layers` image (src/passes/gbuffer.rs): the layer textures' texels
-// (shading.glsl's LayerTexels: `specular` in x, `layers` in y), four unorm8 values a word (exact
-// for an 8-bit linear texel read unfiltered, within 1/510 otherwise), and the clear coat's unit
-// normal (world), octahedral, in z.
-uvec4 gbuffer_pack_layers(vec4 specular, vec4 layers, vec3 coat_n) {
-    return uvec4(packUnorm4x8(specular), packUnorm4x8(layers), packSnorm2x16(oct_encode(coat_n)), 0u);
+// (shading.glsl's LayerTexels: `specular` in x, `layers` in y, four unorm8 values a word: exact
+// for an 8-bit linear texel read unfiltered, within 1/510 otherwise; `iridescence.xy` in w, two
+// unorm16), and the clear coat's unit normal (world), octahedral, in z.
+uvec4 gbuffer_pack_layers(vec4 specular, vec4 layers, vec4 iridescence, vec3 coat_n) {
+    return uvec4(packUnorm4x8(specular), packUnorm4x8(layers), packSnorm2x16(oct_encode(coat_n)),
+                 packUnorm2x16(iridescence.xy));
 }
 
-void gbuffer_unpack_layers(uvec4 bits, out vec4 specular, out vec4 layers, out vec3 coat_n) {
+void gbuffer_unpack_layers(uvec4 bits, out vec4 specular, out vec4 layers, out vec4 iridescence, out vec3 coat_n) {
     specular = unpackUnorm4x8(bits.x);
     layers = unpackUnorm4x8(bits.y);
     coat_n = oct_decode(unpackSnorm2x16(bits.z));
+    iridescence = vec4(unpackUnorm2x16(bits.w), 1.0, 1.0);
 }
 
 // The world-space point at view-space `depth` (along forward) on pixel `pixel`'s centre ray.

@@ -64,7 +64,7 @@ bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
     LayerTexels layers = layer_texels_none();
     vec3 coat_n = sp.n;
     if (gbuffer_has_layers()) {
-        gbuffer_unpack_layers(imageLoad(gb_layers, pixel), layers.specular, layers.layers, coat_n);
+        gbuffer_unpack_layers(imageLoad(gb_layers, pixel), layers.specular, layers.layers, layers.iridescence, coat_n);
     }
     sp.s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w, layers);
     surface_coat_normal(sp.s, coat_n, sp.t, sp.b, sp.n);

@@ -17,8 +17,8 @@
 #include "texture.glsl"
 
 // Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
-// specular, params, flags, textures[0..3], tex_transform[0..18], clearcoat, parallax, sheen), as
-// floats or as unsigned integers.
+// specular, params, flags, textures[0..4], tex_transform[0..32], clearcoat, parallax, sheen,
+// iridescence), as floats or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
 }
@@ -59,7 +59,7 @@ uint material_slot_texture(uint id, uint slot) {
 
 // Row `row` (0 or 1) of the texture transform of `slot` (GpuMaterial::tex_transform).
 vec4 material_slot_row(uint id, uint slot, uint row) {
-    return material_vec(id, 8u + 2u * slot + row);
+    return material_vec(id, 9u + 2u * slot + row);
 }
 
 // An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
@@ -163,6 +163,9 @@ bool slot_textured(uint slot) {
         textured = textured || slot == MATERIAL_SLOT_CLEARCOAT || slot == MATERIAL_SLOT_CLEARCOAT_ROUGHNESS
             || slot == MATERIAL_SLOT_CLEARCOAT_NORMAL;
     }
+    if (HAS_IRIDESCENCE_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_IRIDESCENCE || slot == MATERIAL_SLOT_IRIDESCENCE_THICKNESS;
+    }
     return textured;
 }
 
@@ -220,13 +223,16 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
 // KHR_materials_specular's colour (specularColorTexture, RGB), specular.a its strength
 // (specularTexture, A), layers.x KHR_materials_transmission's (transmissionTexture, R), layers.y
 // KHR_materials_clearcoat's weight (clearcoatTexture, R), layers.z its roughness
-// (clearcoatRoughnessTexture, G); layers.w unused (1). 1 where a material has no texture in the
-// slot, and in kernels not specialised for the slot's group (HAS_SPECULAR_MAP,
-// HAS_TRANSMISSION_MAP, HAS_CLEARCOAT_MAP). The hybrid's G-buffer stores them (gb_layers) for the
-// lighting passes.
+// (clearcoatRoughnessTexture, G); layers.w unused (1); iridescence.x KHR_materials_iridescence's
+// weight (iridescenceTexture, R), iridescence.y its film's thickness between the minimum and the
+// maximum (iridescenceThicknessTexture, G); iridescence.zw unused (1). 1 where a material has no
+// texture in the slot, and in kernels not specialised for the slot's group (HAS_SPECULAR_MAP,
+// HAS_TRANSMISSION_MAP, HAS_CLEARCOAT_MAP, HAS_IRIDESCENCE_MAP). The hybrid's G-buffer stores them
+// (gb_layers) for the lighting passes.
 struct LayerTexels {
     vec4 specular;
     vec4 layers;
+    vec4 iridescence;
 };
 
 // No layer textures: every texel 1.
@@ -234,6 +240,7 @@ LayerTexels layer_texels_none() {
     LayerTexels t;
     t.specular = vec4(1.0);
     t.layers = vec4(1.0);
+    t.iridescence = vec4(1.0);
     return t;
 }
 
@@ -252,6 +259,10 @@ LayerTexels material_layer_texels_lod(uint id, vec4 uv, vec2 cone_lod) {
         t.layers.y = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT, uv, cone_lod).r;
         t.layers.z = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT_ROUGHNESS, uv, cone_lod).g;
     }
+    if (HAS_IRIDESCENCE_MAP) {
+        t.iridescence.x = material_texture_lod(id, MATERIAL_SLOT_IRIDESCENCE, uv, cone_lod).r;
+        t.iridescence.y = material_texture_lod(id, MATERIAL_SLOT_IRIDESCENCE_THICKNESS, uv, cone_lod).g;
+    }
     return t;
 }
 
@@ -266,6 +277,9 @@ bool layer_textured() {
         textured = true;
     }
     if (HAS_CLEARCOAT_MAP) {
+        textured = true;
+    }
+    if (HAS_IRIDESCENCE_MAP) {
         textured = true;
     }
     return textured;
@@ -336,6 +350,24 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         vec4 sheen = material_vec(id, MATERIAL_SHEEN_TEXEL);
         s.sheen = clamp(sheen.rgb, 0.0, 1.0);
         s.sheen_roughness = clamp(sheen.w, SHEEN_ROUGHNESS_MIN, 1.0);
+    }
+    // The thin film only where the kernel is specialised for it (HAS_IRIDESCENCE): its weight
+    // (factor x texel), its ior, and its thickness from the minimum to the maximum by the
+    // thickness texel (1, the maximum, without a texture). A film of no thickness is none.
+    s.iridescence = 0.0;
+    s.iridescence_ior = 1.3;
+    s.iridescence_thickness = 0.0;
+    if (HAS_IRIDESCENCE) {
+        vec4 film = material_vec(id, MATERIAL_IRIDESCENCE_TEXEL);
+        float weight = film.x;
+        float thickness = 1.0;
+        if (HAS_IRIDESCENCE_MAP) {
+            weight *= tex.iridescence.x;
+            thickness = tex.iridescence.y;
+        }
+        s.iridescence_thickness = mix(film.z, film.w, thickness);
+        s.iridescence = s.iridescence_thickness > 0.0 ? clamp(weight, 0.0, 1.0) : 0.0;
+        s.iridescence_ior = film.y;
     }
     if (HAS_TRANSMISSION) {
         float transmission = material_vec(id, 3u).z;

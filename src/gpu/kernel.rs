@@ -161,6 +161,8 @@ pub struct SceneFeatures {
     pub parallax: bool,
     /// Some material has a sheen (`KHR_materials_sheen`).
     pub sheen: bool,
+    /// Some material has a thin film (`KHR_materials_iridescence`).
+    pub iridescence: bool,
 }
 
 impl SceneFeatures {
@@ -180,6 +182,7 @@ impl SceneFeatures {
             clearcoat: scene.has_clearcoat,
             parallax: scene.has_parallax,
             sheen: scene.has_sheen,
+            iridescence: scene.has_iridescence,
         }
     }
 
@@ -198,6 +201,7 @@ impl SceneFeatures {
             "implicit" => self.implicit,
             "parallax" => self.parallax,
             "sheen" => self.sheen,
+            "iridescence" => self.iridescence,
             _ => {
                 let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
                 self.texture_slots & slots != 0

@@ -72,6 +72,9 @@ pub struct GpuScene {
     /// Whether some material has a sheen (`KHR_materials_sheen`): the shading kernels evaluate
     /// and sample the sheen only then.
     pub has_sheen: bool,
+    /// Whether some material has a thin film (`KHR_materials_iridescence`): the shading kernels
+    /// mix its Fresnel in only then.
+    pub has_iridescence: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -328,6 +331,10 @@ impl ShadingArrays {
                 let coat_texture = m.clearcoat_texture.as_ref().filter(|_| coated);
                 let coat_roughness_texture = m.clearcoat_roughness_texture.as_ref().filter(|_| coated);
                 let coat_normal_texture = m.clearcoat_normal_texture.as_ref().filter(|_| coated);
+                // And the film's to a film of weight 0.
+                let film = m.iridescence > 0.0;
+                let film_texture = m.iridescence_texture.as_ref().filter(|_| film);
+                let film_thickness_texture = m.iridescence_thickness_texture.as_ref().filter(|_| film);
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -357,6 +364,12 @@ impl ShadingArrays {
                                 gpu_textures.slot(scene, coat_normal_texture)
                             },
                         ],
+                        [
+                            0,
+                            gpu_textures.slot(scene, film_texture),
+                            gpu_textures.slot(scene, film_thickness_texture),
+                            0,
+                        ],
                     ],
                     tex_transform: transforms([
                         m.base_color_texture.as_ref(),
@@ -371,6 +384,10 @@ impl ShadingArrays {
                         coat_texture,
                         coat_roughness_texture,
                         coat_normal_texture,
+                        None,
+                        film_texture,
+                        film_thickness_texture,
+                        None,
                     ]),
                     base_color: m.base_color_factor,
                     emissive_rough: {
@@ -389,6 +406,12 @@ impl ShadingArrays {
                         .parallax
                         .map_or([0.0; 4], |p| [p.scale, p.layers as f32, p.refinement as f32, 0.0]),
                     sheen: [m.sheen_color[0], m.sheen_color[1], m.sheen_color[2], m.sheen_roughness],
+                    iridescence: [
+                        m.iridescence,
+                        m.iridescence_ior,
+                        m.iridescence_thickness[0],
+                        m.iridescence_thickness[1],
+                    ],
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                             | if m.volume { GpuMaterial::VOLUME } else { 0 }
@@ -502,6 +525,7 @@ impl GpuScene {
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: coated(&arrays.materials),
             has_sheen: sheened(&arrays.materials),
+            has_iridescence: iridescent(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
@@ -554,6 +578,7 @@ impl GpuScene {
         self.has_clearcoat = coated(&arrays.materials);
         self.has_parallax = parallax(&arrays.materials);
         self.has_sheen = sheened(&arrays.materials);
+        self.has_iridescence = iridescent(&arrays.materials);
         Ok(())
     }
 }
@@ -634,6 +659,11 @@ fn material_texels(materials: &[GpuMaterial]) -> Vec<[u32; 4]> {
         texels.extend(SHEEN_TABLE.chunks(4).map(|c| [0, 1, 2, 3].map(|k| c[k].to_bits())));
     }
     texels
+}
+
+/// Whether some material has a thin film (an iridescence factor above 0).
+fn iridescent(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.iridescence[0] > 0.0)
 }
 
 /// Whether some material has a sheen (a sheen colour above 0).

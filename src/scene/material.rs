@@ -65,7 +65,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 11] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 13] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -78,6 +78,8 @@ impl Material {
             &mut self.clearcoat_texture,
             &mut self.clearcoat_roughness_texture,
             &mut self.clearcoat_normal_texture,
+            &mut self.iridescence_texture,
+            &mut self.iridescence_thickness_texture,
         ]
     }
 }
@@ -106,6 +108,9 @@ impl Material {
             clearcoat_roughness,
             sheen_color,
             sheen_roughness,
+            iridescence,
+            iridescence_ior,
+            iridescence_thickness,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -117,6 +122,8 @@ impl Material {
             clearcoat_texture,
             clearcoat_roughness_texture,
             clearcoat_normal_texture,
+            iridescence_texture,
+            iridescence_thickness_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -174,6 +181,20 @@ impl Material {
         let coat = [clearcoat_texture, clearcoat_roughness_texture, clearcoat_normal_texture];
         if coat.iter().any(|t| t.is_some()) {
             for s in coat {
+                slot(h, s);
+            }
+        }
+        // Nothing without a film: the hashes of scenes without it stay what they were.
+        let film = [iridescence_texture, iridescence_thickness_texture];
+        let default = Material::default();
+        if *iridescence != 0.0
+            || *iridescence_ior != default.iridescence_ior
+            || *iridescence_thickness != default.iridescence_thickness
+            || film.iter().any(|t| t.is_some())
+        {
+            h.f32s(&[*iridescence, *iridescence_ior]);
+            h.f32s(iridescence_thickness);
+            for s in film {
                 slot(h, s);
             }
         }
@@ -279,6 +300,16 @@ pub struct Material {
     pub sheen_color: [f32; 3],
     /// `sheenRoughnessFactor` (default 0; the kernels use at least 0.05).
     pub sheen_roughness: f32,
+    /// `KHR_materials_iridescence`'s `iridescenceFactor` (default 0: no film): the weight of a thin
+    /// dielectric film's interference Fresnel over the material's own (dielectric and metal),
+    /// after the extension's layering.
+    pub iridescence: f32,
+    /// `iridescenceIor`: the film's index of refraction (default 1.3).
+    pub iridescence_ior: f32,
+    /// `iridescenceThicknessMinimum` and `iridescenceThicknessMaximum`: the film's thickness in nm
+    /// where the thickness texture reads 0 and 1 (default 100 and 400; the maximum without a
+    /// texture). A film of thickness 0 is none (the material's own Fresnel).
+    pub iridescence_thickness: [f32; 2],
     /// Base colour (sRGB RGBA).
     pub base_color_texture: Option<TextureRef>,
     /// Roughness in G, metalness in B (linear).
@@ -305,6 +336,11 @@ pub struct Material {
     /// its XY). Without it the coat lies on the interpolated normal, whatever the base's
     /// `normal_texture` does.
     pub clearcoat_normal_texture: Option<TextureRef>,
+    /// `iridescenceTexture`: the film's weight in R (linear), × `iridescenceFactor`.
+    pub iridescence_texture: Option<TextureRef>,
+    /// `iridescenceThicknessTexture`: in G (linear), the film's thickness from the minimum (0) to
+    /// the maximum (1).
+    pub iridescence_thickness_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -333,6 +369,9 @@ impl Default for Material {
             clearcoat_roughness: 0.0,
             sheen_color: [0.0; 3],
             sheen_roughness: 0.0,
+            iridescence: 0.0,
+            iridescence_ior: 1.3,
+            iridescence_thickness: [100.0, 400.0],
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -344,6 +383,8 @@ impl Default for Material {
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
+            iridescence_texture: None,
+            iridescence_thickness_texture: None,
             parallax: None,
         }
     }
@@ -422,6 +463,12 @@ impl Material {
             log::warn!("{warning}");
             warnings.push(warning);
         }
+        let film = material.extension_value("KHR_materials_iridescence");
+        // In range: ranges.rs refuses a file with other values.
+        let film_number = |key: &str, default: f32| {
+            film.and_then(|c| c.get(key)).and_then(Value::as_f64).map_or(default, |x| x as f32)
+        };
+        let film_default = Self::default();
         Self {
             name: material.name().unwrap_or_default().to_owned(),
             base_color_factor: pbr.base_color_factor(),
@@ -447,6 +494,12 @@ impl Material {
             clearcoat_roughness: coat_number("clearcoatRoughnessFactor"),
             sheen_color,
             sheen_roughness,
+            iridescence: film_number("iridescenceFactor", film_default.iridescence),
+            iridescence_ior: film_number("iridescenceIor", film_default.iridescence_ior),
+            iridescence_thickness: [
+                film_number("iridescenceThicknessMinimum", film_default.iridescence_thickness[0]),
+                film_number("iridescenceThicknessMaximum", film_default.iridescence_thickness[1]),
+            ],
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -459,12 +512,15 @@ impl Material {
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
+            iridescence_texture: None,
+            iridescence_thickness_texture: None,
             parallax: None,
         }
     }
 
     /// Reads the textures of the extensions the `gltf` crate leaves as raw JSON
-    /// (`KHR_materials_clearcoat`'s three), registering them in `textures`. Errors say which
+    /// (`KHR_materials_clearcoat`'s three, `KHR_materials_iridescence`'s two), registering them in
+    /// `textures`. Errors say which
     /// texture reference is wrong; the caller names the file and the material.
     pub(super) fn read_extension_textures(
         &mut self,
@@ -480,6 +536,14 @@ impl Material {
             self.clearcoat_texture = read("clearcoatTexture")?;
             self.clearcoat_roughness_texture = read("clearcoatRoughnessTexture")?;
             self.clearcoat_normal_texture = read("clearcoatNormalTexture")?;
+        }
+        if let Some(film) = material.extension_value("KHR_materials_iridescence") {
+            let mut read = |key: &str| {
+                let element = format!("KHR_materials_iridescence.{key}");
+                film.get(key).map(|info| raw_texture_ref(info, &element, document, textures)).transpose()
+            };
+            self.iridescence_texture = read("iridescenceTexture")?;
+            self.iridescence_thickness_texture = read("iridescenceThicknessTexture")?;
         }
         Ok(())
     }

@@ -139,6 +139,16 @@ impl Checker {
             &["sheenColorTexture", "sheenRoughnessTexture"],
         );
         extension(
+            "KHR_materials_iridescence",
+            &[
+                ("iridescenceFactor", unit),
+                ("iridescenceIor", Range::AtLeast(1.0)),
+                ("iridescenceThicknessMinimum", Range::AtLeast(0.0)),
+                ("iridescenceThicknessMaximum", Range::AtLeast(0.0)),
+            ],
+            &["iridescenceTexture", "iridescenceThicknessTexture"],
+        );
+        extension(
             "KHR_materials_volume",
             &[
                 ("thicknessFactor", Range::AtLeast(0.0)),

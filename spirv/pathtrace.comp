@@ -117,14 +117,11 @@ uint trace_pixel(uvec2 region_pixel) {
         emitted_first = vec3(0.0);
     }
 
-    accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, first_normal_depth);
+    float n_samples;
+    bool fresh = accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, first_normal_depth, n_samples);
     if (SPLIT_LOBES) {
-        float n_samples = accum[index].a;
-        bool fresh = n_samples == float(count);
-        vec4 mean = fresh ? vec4(0.0) : aov_specular[index];
-        aov_specular[index] = mean + (sum_specular - float(count) * mean) / n_samples;
-        mean = fresh ? vec4(0.0) : aov_split[index];
-        aov_split[index] = mean + (sum_split - float(count) * mean) / n_samples;
+        aov_specular[index] = fold_mean(fresh ? vec4(0.0) : aov_specular[index], sum_specular, count, n_samples);
+        aov_split[index] = fold_mean(fresh ? vec4(0.0) : aov_split[index], sum_split, count, n_samples);
     }
     return segments;
 }

@@ -271,7 +271,8 @@ void accumulate() {
         sum_albedo += load_fieldf(F_ALBEDO, path);
         sum_emitted += emitted_first;
     }
-    accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, load_fieldf(F_NORMAL, wave_index));
+    float n_samples;
+    accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, load_fieldf(F_NORMAL, wave_index), n_samples);
 }
 
 void main() {

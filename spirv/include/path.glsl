@@ -378,24 +378,32 @@ void finite_sample(inout vec3 radiance, inout vec3 emitted_first, uint nonfinite
     }
 }
 
+// A running mean over n_samples samples after `count` more whose sum is `sum` (`mean`: over the
+// n_samples − count before them).
+vec4 fold_mean(vec4 mean, vec4 sum, uint count, float n_samples) {
+    return mean + (sum - float(count) * mean) / n_samples;
+}
+
 // Folds `count` more samples of pixel `index` into the running means: the sums of their
 // radiance, its square, the first hit's albedo and emission; the first hit's normal and distance
 // kept from the render's first sample (the host clears the buffers, alpha 0, to start one).
-void accumulate_samples(uint index, uint count, vec3 sum, vec3 sum2, vec4 sum_albedo, vec3 sum_emitted,
-                        vec4 first_normal_depth) {
+// Returns whether the render starts with them (`fresh`: the other running means of the pixel
+// start from 0), and their new count in `n_samples`.
+bool accumulate_samples(uint index, uint count, vec3 sum, vec3 sum2, vec4 sum_albedo, vec3 sum_emitted,
+                        vec4 first_normal_depth, out float n_samples) {
     vec4 mean = accum[index];
     bool fresh = mean.a == 0.0;
-    float n_samples = mean.a + float(count);
+    n_samples = mean.a + float(count);
     vec4 m2 = moment[index];
     accum[index] = vec4(mean.rgb + (sum - float(count) * mean.rgb) / n_samples, n_samples);
     moment[index] = vec4(m2.rgb + (sum2 - float(count) * m2.rgb) / n_samples, 0.0);
-    vec4 mean_albedo = fresh ? vec4(0.0) : aov_albedo[index];
-    aov_albedo[index] = mean_albedo + (sum_albedo - float(count) * mean_albedo) / n_samples;
+    aov_albedo[index] = fold_mean(fresh ? vec4(0.0) : aov_albedo[index], sum_albedo, count, n_samples);
     vec3 mean_emitted = fresh ? vec3(0.0) : aov_emission[index].rgb;
     aov_emission[index] = vec4(mean_emitted + (sum_emitted - float(count) * mean_emitted) / n_samples, 0.0);
     if (fresh) {
         aov_normal_depth[index] = first_normal_depth;
     }
+    return fresh;
 }
 
 // Adds n path segments to the counters' 64-bit count, two words (an add that wraps the low

@@ -332,21 +332,29 @@ pub struct LobeSplit {
 }
 
 impl PathTarget {
+    /// How every buffer of a target is used: by the kernels, read back, cleared.
+    const USAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::from_raw(
+        raw::BufferUsageFlags::STORAGE_BUFFER.as_raw()
+            | raw::BufferUsageFlags::TRANSFER_SRC.as_raw()
+            | raw::BufferUsageFlags::TRANSFER_DST.as_raw(),
+    );
+
+    /// A device-local buffer of one vec4 per pixel.
+    fn pixel_buffer(ctx: &Context, name: &str, (w, h): (u32, u32)) -> Result<Buffer> {
+        Buffer::new(ctx, name, w as u64 * h as u64 * 16, Self::USAGE, MemoryLocation::GpuOnly)
+    }
+
     /// Allocates the buffers (device-local; read back through staging).
-    pub fn new(ctx: &Context, (w, h): (u32, u32)) -> Result<Self> {
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER
-            | raw::BufferUsageFlags::TRANSFER_SRC
-            | raw::BufferUsageFlags::TRANSFER_DST;
-        let bytes = w as u64 * h as u64 * 16;
-        let make = |name| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+    pub fn new(ctx: &Context, size: (u32, u32)) -> Result<Self> {
+        let make = |name| Self::pixel_buffer(ctx, name, size);
         Ok(Self {
-            size: (w, h),
+            size,
             accum: make("path accum")?,
             moment: make("path moment")?,
             albedo: make("path albedo")?,
             normal_depth: make("path normal depth")?,
             emission: make("path emission")?,
-            stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], usage)?,
+            stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], Self::USAGE)?,
             lobe_split: None,
             wave: std::sync::OnceLock::new(),
         })
@@ -355,11 +363,7 @@ impl PathTarget {
     /// [`PathTarget::new`] with the buffers of the lobe split ([`LobeSplit`]; two more vec4s
     /// per pixel), which the megakernel then fills for the denoiser.
     pub fn with_lobe_split(ctx: &Context, size: (u32, u32)) -> Result<Self> {
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER
-            | raw::BufferUsageFlags::TRANSFER_SRC
-            | raw::BufferUsageFlags::TRANSFER_DST;
-        let bytes = size.0 as u64 * size.1 as u64 * 16;
-        let make = |name| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        let make = |name| Self::pixel_buffer(ctx, name, size);
         let lobe_split = LobeSplit { specular: make("path specular")?, split: make("path split")? };
         Ok(Self { lobe_split: Some(lobe_split), ..Self::new(ctx, size)? })
     }

@@ -8,10 +8,6 @@ mod common;
 
 use common::Gpu;
 use std::f64::consts::PI;
-use umbra::gpu::kernels::sample_test;
-use umbra::gpu::layout::SampleTestParams;
-use umbra::gpu::Pipeline;
-use umbra::vk::{raw, Buffer, MemoryLocation};
 
 /// One evaluation: unit vectors in the shading frame (z the normal), α = roughness², metalness,
 /// linear base colour.
@@ -105,19 +101,7 @@ fn gpu_brdf(gpu: &Gpu, cases: &[Case]) -> Vec<[f64; 3]> {
     let f = |a: [f64; 3], w: f64| [a[0] as f32, a[1] as f32, a[2] as f32, w as f32];
     let input: Vec<[f32; 4]> =
         cases.iter().flat_map(|c| [f(c.wo, c.alpha), f(c.wi, c.metallic), f(c.base, 0.0)]).collect();
-    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
-    let directions = Buffer::upload(gpu, "brdf cases", &input, usage).unwrap();
-    let count = cases.len() as u32;
-    let results = Buffer::new(gpu, "brdf values", count as u64 * 16, usage, MemoryLocation::GpuOnly).unwrap();
-    let pipeline = Pipeline::<sample_test::Kernel>::plain(gpu).unwrap();
-    let params = SampleTestParams { mode: 2, count, ..Default::default() };
-    gpu.submit(|cmd| {
-        let resources = sample_test::Resources { directions: &directions, results: &results };
-        pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
-    })
-    .unwrap();
-    let out: Vec<[f32; 4]> = results.read(gpu).unwrap();
-    out.iter().map(|r| [r[0] as f64, r[1] as f64, r[2] as f64]).collect()
+    common::sample_test_rgb(gpu, "brdf", 2, &input, cases.len() as u32)
 }
 
 /// Cases where GPU and CPU differ by more than f32 rounding allows: relative 1e-4 of the value,

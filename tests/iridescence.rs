@@ -8,19 +8,10 @@
 
 mod common;
 
+use common::quad::{same, slot, MODES};
 use common::Gpu;
-use glam::Vec3;
 use std::f64::consts::PI;
-use umbra::gpu::kernels::sample_test;
-use umbra::gpu::layout::SampleTestParams;
-use umbra::gpu::scene::GpuScene;
-use umbra::gpu::Pipeline;
-use umbra::passes::deferred::LightingSettings;
-use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
-use umbra::scene::{
-    Filter, LightKind, Material, Sampler, Scene, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM,
-};
-use umbra::vk::{raw, Buffer, MemoryLocation};
+use umbra::scene::{Material, Scene, Texture};
 
 /// The CIE 1931 2° standard observer (x̄, ȳ, z̄) from 380 to 780 nm every 5 nm (CIE 015:2018's
 /// table).
@@ -135,19 +126,7 @@ fn gpu_film(gpu: &Gpu, cases: &[(f64, f64, f64, [f64; 3])]) -> Vec<[f64; 3]> {
             [[c as f32, d as f32, n as f32, 0.0], [f0[0] as f32, f0[1] as f32, f0[2] as f32, 0.0]]
         })
         .collect();
-    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
-    let directions = Buffer::upload(gpu, "film cases", &input, usage).unwrap();
-    let count = cases.len() as u32;
-    let results = Buffer::new(gpu, "film values", count as u64 * 16, usage, MemoryLocation::GpuOnly).unwrap();
-    let pipeline = Pipeline::<sample_test::Kernel>::plain(gpu).unwrap();
-    let params = SampleTestParams { mode: 4, count, ..Default::default() };
-    gpu.submit(|cmd| {
-        let resources = sample_test::Resources { directions: &directions, results: &results };
-        pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
-    })
-    .unwrap();
-    let out: Vec<[f32; 4]> = results.read(gpu).unwrap();
-    out.iter().map(|r| [r[0] as f64, r[1] as f64, r[2] as f64]).collect()
+    common::sample_test_rgb(gpu, "film", 4, &input, cases.len() as u32)
 }
 
 /// The reference's own checks: the colour matching functions' three integrals are equal (the
@@ -223,68 +202,20 @@ fn thin_film_fresnel_matches_an_airy_reference() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-const SIZE: (u32, u32) = (24, 24);
-
-/// A linear texture of one texel (nearest filtering, repeat).
-fn texel_texture(texel: [u8; 4]) -> Texture {
-    Texture {
-        name: "film".into(),
-        width: 1,
-        height: 1,
-        rgba8: texel.to_vec(),
-        srgb: false,
-        sampler: Sampler {
-            wrap_s: Wrap::Repeat,
-            wrap_t: Wrap::Repeat,
-            mag_filter: Filter::Nearest,
-            min_filter: Filter::Nearest,
-            mipmaps: false,
-            mipmap_filter: Filter::Nearest,
-        },
-    }
-}
-
-fn slot() -> Option<TextureRef> {
-    Some(TextureRef { texture: 0, tex_coord: 0, transform: IDENTITY_TRANSFORM, scale: 1.0 })
-}
-
-/// The square [−1, 1]² at z = 0 filling the view of a camera 2 m away, a sun from the camera's
-/// side, `texture` as texture 0.
+/// The quad of `common::quad::scene` under a sun of 2 lux.
 fn scene(material: Material, texture: Option<Texture>) -> Scene {
-    let quad = common::quad(Vec3::ZERO, Vec3::X, Vec3::Y);
-    let sun = common::light(LightKind::Directional, Vec3::ZERO, Vec3::new(-0.3, -0.2, -1.0), 2.0);
-    let camera = common::camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO);
-    let mut scene = common::build_with("film", &[(quad, material)], vec![sun], camera);
-    scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
-    scene.uv1 = scene.uv0.clone();
-    scene.textures.extend(texture);
-    scene
+    common::quad::scene("film", material, texture, 2.0)
 }
 
-/// Linear radiance per pixel from the path tracer (4 spp, one bounce) and from the hybrid
-/// renderer (split-sum IBL, no AO), under a constant sky of 0.5.
+/// `common::quad::renders` under a sky of 0.5.
 fn renders(gpu: &Gpu, scene: &Scene) -> [Vec<[f32; 4]>; 2] {
-    let gpu_scene = GpuScene::upload(gpu, scene).unwrap();
-    let camera = scene.camera(None).unwrap();
-    let path = PathSettings { size: SIZE, spp: 4, max_bounces: 1, env: [0.5; 3], ..Default::default() };
-    let traced = path_trace(gpu, &gpu_scene, &camera, &path, |_, _| {}).unwrap();
-    assert_eq!(traced.nonfinite_samples, 0, "NaN/Inf samples");
-    let settings = HybridSettings {
-        size: SIZE,
-        lighting: LightingSettings { env: [0.5; 3], ..Default::default() },
-        ao: None,
-        ..Default::default()
-    };
-    let lit = hybrid(gpu, &gpu_scene, &camera, &settings).unwrap();
-    [traced.mean, lit.color]
+    common::quad::renders(gpu, scene, 0.5)
 }
 
-/// Pixels agree in every channel within 1e-4 of `b` (1e-7 absolute).
-fn same(a: &[f32; 4], b: &[f32; 4]) -> bool {
-    (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-4 * b[c].abs().max(1e-3))
+/// A linear 1×1 texture of `texel`.
+fn texel_texture(texel: [u8; 4]) -> Texture {
+    common::row_texture("film", &[texel])
 }
-
-const MODES: [&str; 2] = ["path tracer", "hybrid"];
 
 /// Half metal, half dielectric, so both Fresnels show the film.
 fn filmed(iridescence: f32, thickness: [f32; 2]) -> Material {

@@ -8,78 +8,15 @@
 
 mod common;
 
+use common::quad::{renders, same, slot, MODES, SIZE};
 use common::Gpu;
 use glam::Vec3;
-use umbra::gpu::scene::GpuScene;
-use umbra::passes::deferred::LightingSettings;
-use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
-use umbra::scene::{
-    Filter, LightKind, Material, Sampler, Scene, Texture, TextureRef, Wrap, IDENTITY_TRANSFORM,
-};
+use umbra::scene::{LightKind, Material, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
 
-const SIZE: (u32, u32) = (24, 24);
-
-/// A linear texture of one row of texels (nearest filtering, repeat).
-fn row_texture(texels: &[[u8; 4]]) -> Texture {
-    Texture {
-        name: "layer".into(),
-        width: texels.len() as u32,
-        height: 1,
-        rgba8: texels.concat(),
-        srgb: false,
-        sampler: Sampler {
-            wrap_s: Wrap::Repeat,
-            wrap_t: Wrap::Repeat,
-            mag_filter: Filter::Nearest,
-            min_filter: Filter::Nearest,
-            mipmaps: false,
-            mipmap_filter: Filter::Nearest,
-        },
-    }
+/// The quad of `common::quad::scene`, named for these tests.
+fn quad_scene(material: Material, texture: Option<Texture>, sun: f32) -> Scene {
+    common::quad::scene("layer textures", material, texture, sun)
 }
-
-fn slot() -> Option<TextureRef> {
-    Some(TextureRef { texture: 0, tex_coord: 0, transform: IDENTITY_TRANSFORM, scale: 1.0 })
-}
-
-/// The square [−1, 1]² at z = 0 facing a camera 2 m away (it fills the view), its UV set 0
-/// running left to right over u and top to bottom over v, its set 1 mirrored in u; a sun from
-/// the camera's side, a constant sky `env`; `texture` as texture 0.
-fn scene(material: Material, texture: Option<Texture>, sun: f32) -> Scene {
-    let quad = common::quad(Vec3::ZERO, Vec3::X, Vec3::Y);
-    let sun = common::light(LightKind::Directional, Vec3::ZERO, Vec3::new(-0.3, -0.2, -1.0), sun);
-    let camera = common::camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO);
-    let mut scene = common::build_with("layer textures", &[(quad, material)], vec![sun], camera);
-    scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
-    scene.uv1 = scene.uv0.iter().map(|&[u, v]| [1.0 - u, v]).collect();
-    scene.textures.extend(texture);
-    scene
-}
-
-/// Linear radiance per pixel from the path tracer (4 spp, one bounce) and from the hybrid
-/// renderer (split-sum IBL, no AO), under a constant sky `env`.
-fn renders(gpu: &Gpu, scene: &Scene, env: f32) -> [Vec<[f32; 4]>; 2] {
-    let gpu_scene = GpuScene::upload(gpu, scene).unwrap();
-    let camera = scene.camera(None).unwrap();
-    let path = PathSettings { size: SIZE, spp: 4, max_bounces: 1, env: [env; 3], ..Default::default() };
-    let traced = path_trace(gpu, &gpu_scene, &camera, &path, |_, _| {}).unwrap();
-    assert_eq!(traced.nonfinite_samples, 0, "NaN/Inf samples");
-    let settings = HybridSettings {
-        size: SIZE,
-        lighting: LightingSettings { env: [env; 3], ..Default::default() },
-        ao: None,
-        ..Default::default()
-    };
-    let lit = hybrid(gpu, &gpu_scene, &camera, &settings).unwrap();
-    [traced.mean, lit.color]
-}
-
-/// Pixel `i` of `a` and `b` agree in every channel within 1e-4 of `b` (1e-7 absolute).
-fn same(a: &[f32; 4], b: &[f32; 4]) -> bool {
-    (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-4 * b[c].abs().max(1e-3))
-}
-
-const MODES: [&str; 2] = ["path tracer", "hybrid"];
 
 /// A constant texture in each layer slot renders as the same material with its texel folded into
 /// the slot's factor, in both modes. The texel's channels all differ (R 128, G 64, B 200, A 160),
@@ -146,8 +83,9 @@ fn each_layer_texture_is_read_alone() {
     // Every case and mode is checked before the test fails, naming each that does.
     let mut failures = Vec::new();
     for (name, textured, folded, factor) in cases {
-        let [a, b, f] = [(textured, true), (folded, false), (factor, false)]
-            .map(|(m, tex)| renders(&gpu, &scene(m, tex.then(|| row_texture(&[texel])), 2.0), 0.5));
+        let [a, b, f] = [(textured, true), (folded, false), (factor, false)].map(|(m, tex)| {
+            renders(&gpu, &quad_scene(m, tex.then(|| common::row_texture("layer", &[texel])), 2.0), 0.5)
+        });
         for (mode, ((a, b), f)) in MODES.iter().zip(a.iter().zip(&b).zip(&f)) {
             let centre = b[(SIZE.1 / 2 * SIZE.0 + SIZE.0 / 2) as usize];
             assert!(centre[0] > 0.01, "{name}, {mode}: the quad is lit ({centre:?})");
@@ -179,8 +117,8 @@ fn a_half_specular_texture_darkens_its_half() {
         double_sided: true,
         ..Default::default()
     };
-    let texture = || Some(row_texture(&[[255, 255, 255, 0], [0, 0, 0, 255]]));
-    let plain = renders(&gpu, &scene(black.clone(), None, 0.0), 1.0);
+    let texture = || Some(common::row_texture("layer", &[[255, 255, 255, 0], [0, 0, 0, 255]]));
+    let plain = renders(&gpu, &quad_scene(black.clone(), None, 0.0), 1.0);
     let mirror = [[-1.0, 0.0, 1.0], [0.0, 1.0, 0.0]];
     let cases = [
         ("TEXCOORD_0", 0, IDENTITY_TRANSFORM, false),
@@ -191,7 +129,7 @@ fn a_half_specular_texture_darkens_its_half() {
     for (name, tex_coord, transform, swapped) in cases {
         let specular_texture = Some(TextureRef { texture: 0, tex_coord, transform, scale: 1.0 });
         let material = Material { specular_texture, ..black.clone() };
-        let images = renders(&gpu, &scene(material, texture(), 0.0), 1.0);
+        let images = renders(&gpu, &quad_scene(material, texture(), 0.0), 1.0);
         for (mode, (image, plain)) in MODES.iter().zip(images.iter().zip(&plain)) {
             // Two columns clear of the seam (a path traced pixel's jitter crosses it).
             for y in 0..h {
@@ -217,7 +155,7 @@ fn a_half_specular_texture_darkens_its_half() {
 /// A tangent-space normal map of one texel tilting the normal by 45° towards the tangent (+x).
 fn tilt_map() -> Texture {
     // (sin 45°, 0, cos 45°) encoded as (n + 1) / 2: 218 = round(255 × 0.8536).
-    row_texture(&[[218, 128, 218, 255]])
+    common::row_texture("layer", &[[218, 128, 218, 255]])
 }
 
 /// KHR_materials_clearcoat's normal: the coat lies on the unmapped (interpolated) normal, and
@@ -244,7 +182,7 @@ fn the_coat_keeps_the_unmapped_normal() {
         s
     };
     let render = |m: Material, map: bool| {
-        let mut s = tangents(scene(m, map.then(tilt_map), 0.0));
+        let mut s = tangents(quad_scene(m, map.then(tilt_map), 0.0));
         s.lights = vec![common::light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 3.0)];
         renders(&gpu, &s, 0.0)
     };

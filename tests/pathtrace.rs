@@ -717,26 +717,6 @@ fn textures_wrap_decode_and_transform() {
     }
 }
 
-/// A linear 1×1 texture of `texel`, nearest and repeating.
-fn one_texel(name: &str, texel: [u8; 4]) -> umbra::scene::Texture {
-    use umbra::scene::{Filter, Sampler, Texture, Wrap};
-    Texture {
-        name: name.into(),
-        width: 1,
-        height: 1,
-        rgba8: texel.to_vec(),
-        srgb: false,
-        sampler: Sampler {
-            wrap_s: Wrap::Repeat,
-            wrap_t: Wrap::Repeat,
-            mag_filter: Filter::Nearest,
-            min_filter: Filter::Nearest,
-            mipmaps: false,
-            mipmap_filter: Filter::Nearest,
-        },
-    }
-}
-
 /// A white directional light shining along `direction` with `intensity`.
 fn sun(direction: [f32; 3], intensity: f32) -> umbra::scene::Light {
     umbra::scene::Light {
@@ -786,7 +766,7 @@ fn normal_maps_tilt_the_shading_normal() {
         let mut scene = scene_of(&[(&quad, material, false)], cam);
         scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
         scene.tangents = vec![[1.0, 0.0, 0.0, 1.0]; scene.positions.len()];
-        scene.textures.push(one_texel("tilt", texel));
+        scene.textures.push(common::row_texture("tilt", &[texel]));
         scene.lights.push(sun((-light_dir).into(), 2.0));
         let settings = PathSettings { size: (16, 16), spp: 2, max_bounces: 1, ..Default::default() };
         let image = render(&gpu, &scene, &settings);
@@ -846,7 +826,7 @@ fn each_texture_slot_is_read_alone() {
             .map(|material| {
                 let mut scene = scene_of(&[(&quad, material, false)], cam);
                 scene.uv0 = scene.positions.iter().map(|p| [p[0] * 0.5 + 0.5, 0.5 - p[1] * 0.5]).collect();
-                scene.textures.push(one_texel("constant", texel));
+                scene.textures.push(common::row_texture("constant", &[texel]));
                 scene.lights.push(sun([-0.5, -0.3, -1.0], 3.0));
                 let settings = PathSettings { size: (16, 16), spp: 4, max_bounces: 1, ..Default::default() };
                 render(&gpu, &scene, &settings)

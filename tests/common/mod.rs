@@ -250,3 +250,48 @@ pub fn baked_probes(
     passes.bake_probes(&gpu_scene, &mut volume, &Default::default(), |_, _| {}).unwrap();
     volume
 }
+
+pub mod quad;
+
+/// A linear texture of one row of `texels` (nearest filtering, repeat).
+pub fn row_texture(name: &str, texels: &[[u8; 4]]) -> umbra::scene::Texture {
+    use umbra::scene::{Filter, Sampler, Texture, Wrap};
+    Texture {
+        name: name.into(),
+        width: texels.len() as u32,
+        height: 1,
+        rgba8: texels.concat(),
+        srgb: false,
+        sampler: Sampler {
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            mag_filter: Filter::Nearest,
+            min_filter: Filter::Nearest,
+            mipmaps: false,
+            mipmap_filter: Filter::Nearest,
+        },
+    }
+}
+
+/// Runs `sample_test.comp` in `mode` over `count` cases whose inputs are `input` (the mode's
+/// texels per case, in order): the first three channels of each case's result.
+pub fn sample_test_rgb(gpu: &Gpu, name: &str, mode: u32, input: &[[f32; 4]], count: u32) -> Vec<[f64; 3]> {
+    use umbra::gpu::kernels::sample_test;
+    use umbra::gpu::layout::SampleTestParams;
+    use umbra::gpu::Pipeline;
+    use umbra::vk::{raw, Buffer, MemoryLocation};
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
+    let directions = Buffer::upload(gpu, &format!("{name} cases"), input, usage).unwrap();
+    let results =
+        Buffer::new(gpu, &format!("{name} values"), count as u64 * 16, usage, MemoryLocation::GpuOnly)
+            .unwrap();
+    let pipeline = Pipeline::<sample_test::Kernel>::plain(gpu).unwrap();
+    let params = SampleTestParams { mode, count, ..Default::default() };
+    gpu.submit(|cmd| {
+        let resources = sample_test::Resources { directions: &directions, results: &results };
+        pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
+    })
+    .unwrap();
+    let out: Vec<[f32; 4]> = results.read(gpu).unwrap();
+    out.iter().map(|r| [r[0] as f64, r[1] as f64, r[2] as f64]).collect()
+}

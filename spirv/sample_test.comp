@@ -41,6 +41,8 @@ Surface dielectric(float alpha) {
         s.coat_n = params.kind == 7u ? normalize(vec3(0.5, 0.2, 1.0)) : vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.0);
         s.sheen_roughness = 1.0;
+        s.anisotropy = 0.0;
+        s.aniso_dir = vec2(1.0, 0.0);
         return s;
     }
     if (params.kind == 6u) {
@@ -60,6 +62,30 @@ Surface dielectric(float alpha) {
         s.coat_n = vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.9, 0.6, 0.3);
         s.sheen_roughness = max(sqrt(alpha), SHEEN_ROUGHNESS_MIN);
+        s.anisotropy = 0.0;
+        s.aniso_dir = vec2(1.0, 0.0);
+        return s;
+    }
+    if (params.kind == 8u) {
+        // KHR_materials_anisotropy: a surface of base colour `anisotropy_base`, metallic
+        // params.anisotropy.w (0: the dielectric's reflection over its diffuse lobe), alpha
+        // `alpha`, strength params.anisotropy.x along the unit direction params.anisotropy.yz.
+        Surface s;
+        s.base = vec3(params.anisotropy_base);
+        s.metallic = params.anisotropy.w;
+        s.f0 = vec3(0.04);
+        s.f90 = 1.0;
+        s.alpha = alpha;
+        s.transmission = 0.0;
+        s.eta = 1.5;
+        s.thin = true;
+        s.coat = 0.0;
+        s.coat_alpha = 1.0;
+        s.coat_n = vec3(0.0, 0.0, 1.0);
+        s.sheen = vec3(0.0);
+        s.sheen_roughness = 1.0;
+        s.anisotropy = params.anisotropy.x;
+        s.aniso_dir = params.anisotropy.yz;
         return s;
     }
     Surface s;
@@ -76,6 +102,8 @@ Surface dielectric(float alpha) {
     s.coat_n = vec3(0.0, 0.0, 1.0);
     s.sheen = vec3(0.0);
     s.sheen_roughness = 1.0;
+    s.anisotropy = 0.0;
+    s.aniso_dir = vec2(1.0, 0.0);
     return s;
 }
 
@@ -117,7 +145,20 @@ void main() {
     s.coat_n = vec3(0.0, 0.0, 1.0);
         s.sheen = vec3(0.0);
         s.sheen_roughness = 1.0;
+        s.anisotropy = 0.0;
+        s.aniso_dir = vec2(1.0, 0.0);
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
+        return;
+    }
+    if (params.mode == 4u) {
+        // bsdf_sample's weights f |cos| / pdf (0 for a failed sample), whose mean is the
+        // directional albedo: the white furnace.
+        vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
+        vec3 wi;
+        vec3 weight;
+        float pdf;
+        bool ok = bsdf_sample(dielectric(alpha), wo, u.xyz, wi, weight, pdf);
+        results[i] = ok ? vec4(weight, 1.0) : vec4(0.0);
         return;
     }
     if (params.mode == 3u) {

@@ -4,6 +4,7 @@
 #define UMBRA_GBUFFER_GLSL
 
 #include "camera.glsl"
+#include "sampling.glsl"
 
 // Octahedral encoding of a unit vector into [-1, 1]^2 (Cigolle et al. 2014, "A Survey of
 // Efficient Representations for Independent Unit Vectors").
@@ -25,16 +26,25 @@ vec3 oct_decode(vec2 e) {
 
 // The G-buffer's `layers` image (src/passes/gbuffer.rs): the layer textures' texels
 // (shading.glsl's LayerTexels: `specular` in x, `layers` in y), four unorm8 values a word (exact
-// for an 8-bit linear texel read unfiltered, within 1/510 otherwise), and the clear coat's unit
-// normal (world), octahedral, in z.
-uvec4 gbuffer_pack_layers(vec4 specular, vec4 layers, vec3 coat_n) {
-    return uvec4(packUnorm4x8(specular), packUnorm4x8(layers), packSnorm2x16(oct_encode(coat_n)), 0u);
+// for an 8-bit linear texel read unfiltered, within 1/510 otherwise), the clear coat's unit
+// normal (world), octahedral, in z, and KHR_materials_anisotropy in w: the direction's angle in
+// the shading frame (basis(n)'s t and b) and the strength, unorm16 each (within 5e-5 of a turn
+// and of the strength).
+uvec4 gbuffer_pack_layers(vec4 specular, vec4 layers, vec3 coat_n, float anisotropy, vec2 aniso_dir) {
+    float turn = atan(aniso_dir.y, aniso_dir.x) * (0.5 / PI) + 0.5;
+    return uvec4(packUnorm4x8(specular), packUnorm4x8(layers), packSnorm2x16(oct_encode(coat_n)),
+                 packUnorm2x16(vec2(turn, anisotropy)));
 }
 
-void gbuffer_unpack_layers(uvec4 bits, out vec4 specular, out vec4 layers, out vec3 coat_n) {
+void gbuffer_unpack_layers(uvec4 bits, out vec4 specular, out vec4 layers, out vec3 coat_n, out float anisotropy,
+                           out vec2 aniso_dir) {
     specular = unpackUnorm4x8(bits.x);
     layers = unpackUnorm4x8(bits.y);
     coat_n = oct_decode(unpackSnorm2x16(bits.z));
+    vec2 a = unpackUnorm2x16(bits.w);
+    float angle = (a.x - 0.5) * (2.0 * PI);
+    anisotropy = a.y;
+    aniso_dir = vec2(cos(angle), sin(angle));
 }
 
 // The world-space point at view-space `depth` (along forward) on pixel `pixel`'s centre ray.

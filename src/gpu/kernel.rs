@@ -161,6 +161,8 @@ pub struct SceneFeatures {
     pub parallax: bool,
     /// Some material has a sheen (`KHR_materials_sheen`).
     pub sheen: bool,
+    /// Some material is anisotropic (`KHR_materials_anisotropy`).
+    pub anisotropy: bool,
 }
 
 impl SceneFeatures {
@@ -180,6 +182,7 @@ impl SceneFeatures {
             clearcoat: scene.has_clearcoat,
             parallax: scene.has_parallax,
             sheen: scene.has_sheen,
+            anisotropy: scene.has_anisotropy,
         }
     }
 
@@ -198,6 +201,7 @@ impl SceneFeatures {
             "implicit" => self.implicit,
             "parallax" => self.parallax,
             "sheen" => self.sheen,
+            "anisotropy" => self.anisotropy,
             _ => {
                 let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
                 self.texture_slots & slots != 0

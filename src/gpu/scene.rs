@@ -72,6 +72,9 @@ pub struct GpuScene {
     /// Whether some material has a sheen (`KHR_materials_sheen`): the shading kernels evaluate
     /// and sample the sheen only then.
     pub has_sheen: bool,
+    /// Whether some material is anisotropic (`KHR_materials_anisotropy`): the shading kernels
+    /// evaluate and sample anisotropic specular lobes only then.
+    pub has_anisotropy: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -328,6 +331,9 @@ impl ShadingArrays {
                 let coat_texture = m.clearcoat_texture.as_ref().filter(|_| coated);
                 let coat_roughness_texture = m.clearcoat_roughness_texture.as_ref().filter(|_| coated);
                 let coat_normal_texture = m.clearcoat_normal_texture.as_ref().filter(|_| coated);
+                // And the anisotropy texture to a strength of 0 (or a scene without tangents).
+                let anisotropy_texture =
+                    m.anisotropy_texture.as_ref().filter(|_| m.anisotropic() && !scene.tangents.is_empty());
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -357,6 +363,7 @@ impl ShadingArrays {
                                 gpu_textures.slot(scene, coat_normal_texture)
                             },
                         ],
+                        [gpu_textures.slot(scene, anisotropy_texture), 0, 0, 0],
                     ],
                     tex_transform: transforms([
                         m.base_color_texture.as_ref(),
@@ -371,6 +378,10 @@ impl ShadingArrays {
                         coat_texture,
                         coat_roughness_texture,
                         coat_normal_texture,
+                        anisotropy_texture,
+                        None,
+                        None,
+                        None,
                     ]),
                     base_color: m.base_color_factor,
                     emissive_rough: {
@@ -389,6 +400,12 @@ impl ShadingArrays {
                         .parallax
                         .map_or([0.0; 4], |p| [p.scale, p.layers as f32, p.refinement as f32, 0.0]),
                     sheen: [m.sheen_color[0], m.sheen_color[1], m.sheen_color[2], m.sheen_roughness],
+                    anisotropy: if m.anisotropic() {
+                        let (sin, cos) = m.anisotropy_rotation.sin_cos();
+                        [m.anisotropy_strength, cos, sin, 0.0]
+                    } else {
+                        [0.0; 4]
+                    },
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                             | if m.volume { GpuMaterial::VOLUME } else { 0 }
@@ -502,6 +519,7 @@ impl GpuScene {
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: coated(&arrays.materials),
             has_sheen: sheened(&arrays.materials),
+            has_anisotropy: anisotropic(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
@@ -554,6 +572,7 @@ impl GpuScene {
         self.has_clearcoat = coated(&arrays.materials);
         self.has_parallax = parallax(&arrays.materials);
         self.has_sheen = sheened(&arrays.materials);
+        self.has_anisotropy = anisotropic(&arrays.materials);
         Ok(())
     }
 }
@@ -639,6 +658,11 @@ fn material_texels(materials: &[GpuMaterial]) -> Vec<[u32; 4]> {
 /// Whether some material has a sheen (a sheen colour above 0).
 fn sheened(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.sheen[..3].iter().any(|&c| c > 0.0))
+}
+
+/// Whether some material is anisotropic (a strength above 0).
+fn anisotropic(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.anisotropy[0] > 0.0)
 }
 
 fn parallax(materials: &[GpuMaterial]) -> bool {

@@ -65,7 +65,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 11] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 12] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -78,6 +78,7 @@ impl Material {
             &mut self.clearcoat_texture,
             &mut self.clearcoat_roughness_texture,
             &mut self.clearcoat_normal_texture,
+            &mut self.anisotropy_texture,
         ]
     }
 }
@@ -106,6 +107,8 @@ impl Material {
             clearcoat_roughness,
             sheen_color,
             sheen_roughness,
+            anisotropy_strength,
+            anisotropy_rotation,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -117,6 +120,7 @@ impl Material {
             clearcoat_texture,
             clearcoat_roughness_texture,
             clearcoat_normal_texture,
+            anisotropy_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -176,6 +180,11 @@ impl Material {
             for s in coat {
                 slot(h, s);
             }
+        }
+        // Nor without anisotropy.
+        if *anisotropy_strength != 0.0 || *anisotropy_rotation != 0.0 || anisotropy_texture.is_some() {
+            h.f32s(&[*anisotropy_strength, *anisotropy_rotation]);
+            slot(h, anisotropy_texture);
         }
     }
 }
@@ -279,6 +288,13 @@ pub struct Material {
     pub sheen_color: [f32; 3],
     /// `sheenRoughnessFactor` (default 0; the kernels use at least 0.05).
     pub sheen_roughness: f32,
+    /// `KHR_materials_anisotropy`'s `anisotropyStrength` (default 0: isotropic): the specular
+    /// lobes' GGX roughness along the anisotropy direction is αt = mix(α, 1, strength²), across
+    /// it αb = α.
+    pub anisotropy_strength: f32,
+    /// `anisotropyRotation` (radians, default 0): the anisotropy direction's angle from the
+    /// tangent towards the bitangent (the texture's direction, when there is one, rotated so).
+    pub anisotropy_rotation: f32,
     /// Base colour (sRGB RGBA).
     pub base_color_texture: Option<TextureRef>,
     /// Roughness in G, metalness in B (linear).
@@ -305,6 +321,9 @@ pub struct Material {
     /// its XY). Without it the coat lies on the interpolated normal, whatever the base's
     /// `normal_texture` does.
     pub clearcoat_normal_texture: Option<TextureRef>,
+    /// `anisotropyTexture` (linear): RG the direction in tangent space (2·rg − 1), B × the
+    /// strength.
+    pub anisotropy_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -333,6 +352,8 @@ impl Default for Material {
             clearcoat_roughness: 0.0,
             sheen_color: [0.0; 3],
             sheen_roughness: 0.0,
+            anisotropy_strength: 0.0,
+            anisotropy_rotation: 0.0,
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -344,6 +365,7 @@ impl Default for Material {
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
+            anisotropy_texture: None,
             parallax: None,
         }
     }
@@ -422,6 +444,10 @@ impl Material {
             log::warn!("{warning}");
             warnings.push(warning);
         }
+        let anisotropy = material.extension_value("KHR_materials_anisotropy");
+        // Strength in [0, 1], rotation finite: ranges.rs refuses a file with other values.
+        let anisotropy_number =
+            |key: &str| anisotropy.and_then(|a| a.get(key)).and_then(Value::as_f64).map_or(0.0, |x| x as f32);
         Self {
             name: material.name().unwrap_or_default().to_owned(),
             base_color_factor: pbr.base_color_factor(),
@@ -447,6 +473,8 @@ impl Material {
             clearcoat_roughness: coat_number("clearcoatRoughnessFactor"),
             sheen_color,
             sheen_roughness,
+            anisotropy_strength: anisotropy_number("anisotropyStrength"),
+            anisotropy_rotation: anisotropy_number("anisotropyRotation"),
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -459,12 +487,19 @@ impl Material {
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
+            anisotropy_texture: None,
             parallax: None,
         }
     }
 
+    /// Whether the material is anisotropic (`KHR_materials_anisotropy` with a strength above 0):
+    /// its primitives need tangents, as a normal map's do.
+    pub fn anisotropic(&self) -> bool {
+        self.anisotropy_strength > 0.0
+    }
+
     /// Reads the textures of the extensions the `gltf` crate leaves as raw JSON
-    /// (`KHR_materials_clearcoat`'s three), registering them in `textures`. Errors say which
+    /// (`KHR_materials_clearcoat`'s three, `KHR_materials_anisotropy`'s), registering them in `textures`. Errors say which
     /// texture reference is wrong; the caller names the file and the material.
     pub(super) fn read_extension_textures(
         &mut self,
@@ -480,6 +515,10 @@ impl Material {
             self.clearcoat_texture = read("clearcoatTexture")?;
             self.clearcoat_roughness_texture = read("clearcoatRoughnessTexture")?;
             self.clearcoat_normal_texture = read("clearcoatNormalTexture")?;
+        }
+        if let Some(info) = material.extension_value("KHR_materials_anisotropy").and_then(|a| a.get("anisotropyTexture")) {
+            let element = "KHR_materials_anisotropy.anisotropyTexture";
+            self.anisotropy_texture = Some(raw_texture_ref(info, element, document, textures)?);
         }
         Ok(())
     }

@@ -59,6 +59,7 @@ pub use texture::{mip_level_count, Filter, MipLevel, Sampler, Texture, Wrap};
 /// glTF extensions umbra reads; a file that *requires* any other one is rejected.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",

@@ -139,6 +139,11 @@ impl Checker {
             &["sheenColorTexture", "sheenRoughnessTexture"],
         );
         extension(
+            "KHR_materials_anisotropy",
+            &[("anisotropyStrength", unit), ("anisotropyRotation", Range::Finite)],
+            &["anisotropyTexture"],
+        );
+        extension(
             "KHR_materials_volume",
             &[
                 ("thicknessFactor", Range::AtLeast(0.0)),

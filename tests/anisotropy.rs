@@ -38,7 +38,8 @@ fn run(
     input.extend(umbra::sheen::table().chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
     let input = Buffer::upload(gpu, "anisotropy test directions", &input, usage).unwrap();
     let output =
-        Buffer::new(gpu, "anisotropy test results", count as u64 * 16, usage, MemoryLocation::GpuOnly).unwrap();
+        Buffer::new(gpu, "anisotropy test results", count as u64 * 16, usage, MemoryLocation::GpuOnly)
+            .unwrap();
     let params = SampleTestParams {
         wo: wo.as_vec3().into(),
         alpha: alpha as f32,
@@ -72,7 +73,8 @@ fn white_metal(wo: DVec3, wi: DVec3, alpha: f64, strength: f64, direction: f64) 
     let h = (o + i).normalize();
     let q = (h.x / at).powi(2) + (h.y / ab).powi(2) + h.z * h.z;
     let d = 1.0 / (std::f64::consts::PI * at * ab * q * q);
-    let lambda = |w: DVec3| (((at * w.x).powi(2) + (ab * w.y).powi(2)) / (w.z * w.z) + 1.0).sqrt() * 0.5 - 0.5;
+    let lambda =
+        |w: DVec3| (((at * w.x).powi(2) + (ab * w.y).powi(2)) / (w.z * w.z) + 1.0).sqrt() * 0.5 - 0.5;
     d / ((1.0 + lambda(o)) * (1.0 + lambda(i)) * 4.0 * o.z * i.z)
 }
 
@@ -161,8 +163,10 @@ fn white_furnace_anisotropic() {
             // The quadrature works in the lobe's frame: wo turned by −30°.
             let wo = direction_of(theta);
             let local = DVec3::new(direction.cos() * wo.x, -direction.sin() * wo.x, wo.z);
-            let (coarse, fine) =
-                (white_metal_albedo(local, alpha, strength, 800), white_metal_albedo(local, alpha, strength, 1600));
+            let (coarse, fine) = (
+                white_metal_albedo(local, alpha, strength, 800),
+                white_metal_albedo(local, alpha, strength, 1600),
+            );
             assert!((coarse - fine).abs() < 2e-4, "quadrature {coarse} vs {fine}");
             for metallic in [1.0f32, 0.0] {
                 let anisotropy = [strength as f32, direction.cos() as f32, direction.sin() as f32, metallic];

@@ -1257,7 +1257,11 @@ fn anisotropic_sphere(metallic: f32, roughness: f32, strength: f32) -> Scene {
 }
 
 /// Mean |hybrid − path| over the interior pixels relative to the path tracer's mean (green).
-fn interior_difference(hyb: &umbra::render::HybridImage, pt: &umbra::render::PathImage, view: &[glam::Vec3]) -> f64 {
+fn interior_difference(
+    hyb: &umbra::render::HybridImage,
+    pt: &umbra::render::PathImage,
+    view: &[glam::Vec3],
+) -> f64 {
     let pixels = interior_pixels(&hyb.gbuffer, view);
     let mean: f64 = pixels.iter().map(|&(i, _)| pt.mean[i][1] as f64).sum::<f64>() / pixels.len() as f64;
     let diff: f64 = pixels.iter().map(|&(i, _)| (hyb.color[i][1] as f64 - pt.mean[i][1] as f64).abs()).sum();
@@ -1296,21 +1300,26 @@ fn anisotropic_sphere_hybrid_matches_path_tracer() {
         let (hyb, pt, view) = render_pair(&gpu, &scene, None, [0.0; 3], size, spp, true);
         let difference = interior_difference(&hyb, &pt, &view);
         eprintln!("directional light, strength {strength}: mean |hybrid − path| / mean {difference:.4}");
-        assert!(difference < 0.02, "strength {strength}: hybrid differs from the path tracer by {difference}");
+        assert!(
+            difference < 0.02,
+            "strength {strength}: hybrid differs from the path tracer by {difference}"
+        );
         images.push((hyb, pt, view));
     }
     let ((_, aniso, view), (_, iso, _)) = (&images[0], &images[1]);
     let pixels = interior_pixels(&images[0].0.gbuffer, view);
     let mean: f64 = pixels.iter().map(|&(i, _)| aniso.mean[i][1] as f64).sum::<f64>() / pixels.len() as f64;
-    let power: f64 = pixels.iter().map(|&(i, _)| (aniso.mean[i][1] - iso.mean[i][1]).abs() as f64).sum::<f64>()
-        / pixels.len() as f64
-        / mean;
+    let power: f64 =
+        pixels.iter().map(|&(i, _)| (aniso.mean[i][1] - iso.mean[i][1]).abs() as f64).sum::<f64>()
+            / pixels.len() as f64
+            / mean;
     eprintln!("anisotropic vs isotropic path-traced: {power:.3}");
     assert!(power > 0.1, "the anisotropy changes the image by only {power}");
 
     let lum = |c: &[f32]| (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]) as f64;
     let smooth = |d: [f64; 3]| if d[1] < 0.0 { [0.0; 3] } else { [0.5 * d[1], 0.45 * d[1], 0.4 * d[1]] };
-    let skies: [(&str, &dyn Fn([f64; 3]) -> [f64; 3]); 2] = [("disc", &sky), ("smooth", &smooth)];
+    type Sky<'a> = &'a dyn Fn([f64; 3]) -> [f64; 3];
+    let skies: [(&str, Sky); 2] = [("disc", &sky), ("smooth", &smooth)];
     for ((name, f), strength) in skies.iter().flat_map(|s| [(s, 0.8f32), (s, 0.5), (s, 0.0)]) {
         let map = synthetic_map(256, 128, f);
         let scene = anisotropic_sphere(1.0, 0.4, strength);
@@ -1334,6 +1343,9 @@ fn anisotropic_sphere_hybrid_matches_path_tracer() {
             (_, true) => 2.2,
             _ => 0.06,
         };
-        assert!(error.abs() < bound, "sky {name}, strength {strength}: the hybrid's error {error} exceeds {bound}");
+        assert!(
+            error.abs() < bound,
+            "sky {name}, strength {strength}: the hybrid's error {error} exceeds {bound}"
+        );
     }
 }

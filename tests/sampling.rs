@@ -344,7 +344,13 @@ fn cases() -> Vec<Sampler> {
     for (alpha, strength) in [(0.05, 0.6), (0.2, 1.0), (0.5, 0.8)] {
         for metallic in [1.0, 0.0] {
             for theta_degrees in [30.0, 70.0] {
-                cases.push(Sampler::Anisotropic { alpha, strength, metallic, direction_degrees: 30.0, theta_degrees });
+                cases.push(Sampler::Anisotropic {
+                    alpha,
+                    strength,
+                    metallic,
+                    direction_degrees: 30.0,
+                    theta_degrees,
+                });
             }
         }
     }
@@ -454,7 +460,13 @@ fn a_wrong_pdf_is_rejected() {
             alpha: 0.5,
             theta_degrees: 30.0,
         },
-        Sampler::Anisotropic { alpha: 0.2, strength: 0.8, metallic: 1.0, direction_degrees: 30.0, theta_degrees: 30.0 },
+        Sampler::Anisotropic {
+            alpha: 0.2,
+            strength: 0.8,
+            metallic: 1.0,
+            direction_degrees: 30.0,
+            theta_degrees: 30.0,
+        },
     ] {
         let (p, chi2, dof, _) = chi_square(&gpu, &kernel, case, 1.1);
         eprintln!("wrong pdf {case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.2e}");

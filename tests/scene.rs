@@ -1463,15 +1463,18 @@ fn anisotropy_is_read() {
     let m = &scene.materials[0];
     assert_eq!((m.anisotropy_strength, m.anisotropy_rotation), (0.75, -1.25));
     assert!(scene.warnings.iter().all(|w| !w.contains("anisotropy")), "{:?}", scene.warnings);
-    let scene = load(json!({"anisotropyStrength": 1.0, "anisotropyTexture": {"index": 0, "texCoord": 1}})).unwrap();
+    let scene =
+        load(json!({"anisotropyStrength": 1.0, "anisotropyTexture": {"index": 0, "texCoord": 1}})).unwrap();
     let texture = scene.materials[0].anisotropy_texture.expect("anisotropyTexture");
     assert_eq!(texture.tex_coord, 1);
     assert!(!scene.textures[texture.texture as usize].srgb, "the anisotropy texture is linear");
     let error = load(json!({"anisotropyStrength": 1.5})).unwrap_err().to_string();
     assert!(error.contains("aniso.glb") && error.contains("anisotropyStrength is 1.5"), "{error}");
-    let error = load(json!({"anisotropyStrength": 1.0, "anisotropyTexture": {"index": 9}})).unwrap_err().to_string();
+    let error =
+        load(json!({"anisotropyStrength": 1.0, "anisotropyTexture": {"index": 9}})).unwrap_err().to_string();
     assert!(
-        error.contains("aniso.glb") && error.contains("KHR_materials_anisotropy.anisotropyTexture.index is 9"),
+        error.contains("aniso.glb")
+            && error.contains("KHR_materials_anisotropy.anisotropyTexture.index is 9"),
         "{error}"
     );
     // The floor (material 0, mesh 0) has TANGENT: no warning, every w ±1.
@@ -1496,7 +1499,9 @@ fn anisotropy_is_read() {
     let warned: Vec<&String> = scene.warnings.iter().filter(|w| w.contains("tangent frame")).collect();
     assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
     assert!(
-        warned[0].contains("aniso.glb") && warned[0].contains("mesh 0 ('plane') primitive 0") && warned[0].contains("isotropic"),
+        warned[0].contains("aniso.glb")
+            && warned[0].contains("mesh 0 ('plane') primitive 0")
+            && warned[0].contains("isotropic"),
         "{}",
         warned[0]
     );

@@ -419,14 +419,20 @@ impl<'a> Builder<'a> {
             m.normal_texture.or(m.anisotropy_texture).map(|t| t.tex_coord)
         };
         let wanted = Wanted {
-            tangents_from_uv: self.tangents.then(|| primitive.material().index().and_then(uv_set).unwrap_or(0)),
+            tangents_from_uv: self
+                .tangents
+                .then(|| primitive.material().index().and_then(uv_set).unwrap_or(0)),
             morph_weights,
             skinned,
         };
         let local = read_primitive(&self.reader, mesh, primitive, wanted)?.map(Rc::new);
         // KHR_materials_anisotropy's direction lies in the tangent frame: without one (no
         // TANGENT and no UVs to derive it from, tangent w = 0) the surface is rendered isotropic.
-        let anisotropic = primitive.material().index().and_then(|m| self.scene.materials.get(m)).is_some_and(Material::anisotropic);
+        let anisotropic = primitive
+            .material()
+            .index()
+            .and_then(|m| self.scene.materials.get(m))
+            .is_some_and(Material::anisotropic);
         if anisotropic && local.as_ref().is_some_and(|l| l.tangents.iter().any(|t| t.w == 0.0)) {
             self.frameless.push(super::geometry::label(mesh, primitive));
         }

@@ -1,5 +1,6 @@
-//! Materials: glTF 2.0 metallic-roughness with the emissive strength, specular, transmission, IOR
-//! and unlit extensions, and `KHR_texture_transform` on every texture slot.
+//! Materials: glTF 2.0 metallic-roughness with the emissive strength, specular, transmission, IOR,
+//! volume, unlit, clear coat, sheen and anisotropy extensions, and `KHR_texture_transform` on
+//! every texture slot.
 
 use super::texture::TextureSet;
 use gltf::json::Value;
@@ -516,7 +517,9 @@ impl Material {
             self.clearcoat_roughness_texture = read("clearcoatRoughnessTexture")?;
             self.clearcoat_normal_texture = read("clearcoatNormalTexture")?;
         }
-        if let Some(info) = material.extension_value("KHR_materials_anisotropy").and_then(|a| a.get("anisotropyTexture")) {
+        if let Some(info) =
+            material.extension_value("KHR_materials_anisotropy").and_then(|a| a.get("anisotropyTexture"))
+        {
             let element = "KHR_materials_anisotropy.anisotropyTexture";
             self.anisotropy_texture = Some(raw_texture_ref(info, element, document, textures)?);
         }

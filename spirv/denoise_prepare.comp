@@ -1,7 +1,8 @@
 #version 460
 // Denoiser step 1 (src/passes/denoise.rs): a path target's running mean less what the first hit
 // emits, divided by the albedo (denoise.glsl), with the variance of the mean of its luminance,
-// into `dn_color`; the first hit's unit normal and distance (−1 for a miss) into `dn_guide`, which
+// into `dn_color` (with DENOISE_SPLIT its diffuse part there, its specular part over the specular
+// albedo into `dn_specular`); the first hit's unit normal and distance (−1 for a miss) into `dn_guide`, which
 // the à-trous steps read.
 //
 // The variance: per channel the unbiased sample variance over the pixel's n samples divided by n,
@@ -26,9 +27,22 @@ void main() {
     vec3 albedo = denoise_albedo(aov_albedo[index]);
     vec3 emitted = aov_emission[index].rgb;
     float n = max(mean.a, 2.0);
-    vec3 sigma = sqrt(max(square - mean.rgb * mean.rgb, vec3(0.0)) / (n - 1.0)) / albedo;
-    float sigma_l = dot(DENOISE_LUMA, sigma);
-    imageStore(dn_color, ivec2(pixel), vec4((mean.rgb - emitted) / albedo, sigma_l * sigma_l));
+    if ((params.flags & DENOISE_SPLIT) != 0u) {
+        // The lobe split: the diffuse and the specular parts, each over its own divisor, each
+        // with the variance of its luminance's mean from the path tracer's per-sample squares.
+        vec4 specular = aov_specular[index];
+        vec4 split = aov_split[index];
+        vec3 diffuse = (mean.rgb - emitted - specular.rgb) / albedo;
+        float l = dot(DENOISE_LUMA, diffuse);
+        imageStore(dn_color, ivec2(pixel), vec4(diffuse, max(specular.a - l * l, 0.0) / (n - 1.0)));
+        vec3 spec = specular.rgb / denoise_spec_albedo(aov_albedo[index], split);
+        l = dot(DENOISE_LUMA, spec);
+        imageStore(dn_specular, ivec2(pixel), vec4(spec, max(split.a - l * l, 0.0) / (n - 1.0)));
+    } else {
+        vec3 sigma = sqrt(max(square - mean.rgb * mean.rgb, vec3(0.0)) / (n - 1.0)) / albedo;
+        float sigma_l = dot(DENOISE_LUMA, sigma);
+        imageStore(dn_color, ivec2(pixel), vec4((mean.rgb - emitted) / albedo, sigma_l * sigma_l));
+    }
     imageStore(dn_samples, ivec2(pixel), vec4(mean.a));
     vec4 normal_depth = aov_normal_depth[index];
     bool hit = normal_depth.w < 1e30 && dot(normal_depth.xyz, normal_depth.xyz) > 0.0;

@@ -19,9 +19,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "path.glsl"
 
 // A light sample's shadow ray, traced at once.
-void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, uint bit) {
+void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, vec3 c_spec, uint bit) {
     if (!bvh_any(origin, d, 0.0, tmax)) {
         path.radiance += c;
+        path.specular += c_spec;
         path.nonfinite |= nonfinite_bit(c, bit);
     }
 }
@@ -38,6 +39,22 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albed
 Path camera_path_of(uvec2 pixel, uint sample_index) {
     return camera_path(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
                        uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
+}
+
+// Folds a finished sample (`radiance`, finite_sample's) into the lobe split's sums: its specular
+// part and that part's divisor (the first hit's specular albedo) into `sum_specular` (rgb) and
+// `sum_split` (rgb); the luminance squared of the diffuse part (radiance less the first hit's
+// emission and the specular part) over the first hit's base colour into sum_specular.a, and of
+// the specular part over its divisor into sum_split.a: the denoiser's variances of the two.
+void split_sample(Path path, vec3 radiance, vec3 emitted_first, vec4 albedo, inout vec4 sum_specular,
+                  inout vec4 sum_split) {
+    vec3 specular = radiance == vec3(0.0) ? vec3(0.0) : path.specular;
+    vec3 diffuse_albedo = albedo.a > 0.0 ? max(albedo.rgb, vec3(DENOISE_MIN_ALBEDO)) : vec3(1.0);
+    vec3 spec_albedo = max(path.spec_albedo, vec3(DENOISE_MIN_ALBEDO));
+    float d = luminance((radiance - emitted_first - specular) / diffuse_albedo);
+    float l = luminance(specular / spec_albedo);
+    sum_specular += vec4(specular, d * d);
+    sum_split += vec4(path.spec_albedo, l * l);
 }
 
 // Samples params.sample_index .. + params.sample_count of one pixel of the region (its random
@@ -66,6 +83,10 @@ uint trace_pixel(uvec2 region_pixel) {
     vec3 sum_emitted = vec3(0.0);
     vec3 sum = vec3(0.0);   // of the finite samples
     vec3 sum2 = vec3(0.0);  // of their squares
+    // SPLIT_LOBES: the sums of the specular part and its divisor, and of the luminances squared
+    // of the two parts divided by their divisors (split_sample).
+    vec4 sum_specular = vec4(0.0);
+    vec4 sum_split = vec4(0.0);
     uint j = 0u;
     uint segments = 0u;
     Path path = camera_path_of(pixel, first);
@@ -76,6 +97,9 @@ uint trace_pixel(uvec2 region_pixel) {
         }
         vec3 radiance = path.radiance;
         finite_sample(radiance, emitted_first, path.nonfinite);
+        if (SPLIT_LOBES) {
+            split_sample(path, radiance, emitted_first, albedo, sum_specular, sum_split);
+        }
         sum += radiance;
         sum2 += radiance * radiance;
         sum_albedo += albedo;
@@ -94,6 +118,14 @@ uint trace_pixel(uvec2 region_pixel) {
     }
 
     accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, first_normal_depth);
+    if (SPLIT_LOBES) {
+        float n_samples = accum[index].a;
+        bool fresh = n_samples == float(count);
+        vec4 mean = fresh ? vec4(0.0) : aov_specular[index];
+        aov_specular[index] = mean + (sum_specular - float(count) * mean) / n_samples;
+        mean = fresh ? vec4(0.0) : aov_split[index];
+        aov_split[index] = mean + (sum_split - float(count) * mean) / n_samples;
+    }
     return segments;
 }
 

@@ -112,10 +112,13 @@ void path_pixel(uint path, out uvec2 pixel, out uint sample_index) {
 uint shade_path = 0u;
 uint shade_shadows = 0u;
 
+// The denoiser's lobe split is the megakernel's alone (PathTarget::with_lobe_split).
+const bool SPLIT_LOBES = false;
+
 #include "path.glsl"
 
 // A light sample's shadow ray, queued: the connect stage traces it.
-void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, uint bit) {
+void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, vec3 c_spec, uint bit) {
     int texel = shadow_texel(shade_path, shade_shadows);
     imageStore(wf_paths, texel, floatBitsToUint(vec4(origin, tmax)));
     imageStore(wf_paths, texel + 1, floatBitsToUint(vec4(d, 0.0)));

@@ -149,6 +149,14 @@ impl Renderer {
         PathTarget::new(&self.ctx, size)
     }
 
+    /// [`Renderer::path_target`] for images to denoise: the megakernel then splits each
+    /// sample's radiance by the first hit's lobes, diffuse and specular, which the denoiser
+    /// filters apart ([`crate::passes::pathtrace::LobeSplit`]; two more vec4s per pixel, and a
+    /// kernel of its own made at the first record).
+    pub fn denoised_path_target(&self, size: (u32, u32)) -> Result<PathTarget> {
+        PathTarget::with_lobe_split(&self.ctx, size)
+    }
+
     /// Records path-traced samples `first .. first + count` of the render into `target` (its
     /// samples `settings.first_sample + first ..` of the sequence; `first` 0 clears the target
     /// and restarts the running mean: a moved camera or changed scene restarts at 0).
@@ -178,10 +186,10 @@ impl Renderer {
     }
 
     /// Working images for [`Renderer::record_path_denoise`] at `size` (owned by umbra, freed on
-    /// drop); move them to `GENERAL` once with [`DenoiseImages::init_general`] in a command buffer
+    /// drop; with room for a target's lobe split, [`Renderer::denoised_path_target`]); move them to `GENERAL` once with [`DenoiseImages::init_general`] in a command buffer
     /// of the host's.
     pub fn denoise_images(&self, size: (u32, u32)) -> Result<DenoiseImages> {
-        DenoiseImages::new(&self.ctx, size)
+        DenoiseImages::with_lobe_split(&self.ctx, size)
     }
 
     /// Records the denoiser ([`crate::passes::denoise`]) of `target`'s samples so far into

@@ -454,7 +454,7 @@ enum StrategyArg {
     Light,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 enum IntegratorArg {
     Megakernel,
     Wavefront,
@@ -544,7 +544,15 @@ fn render(args: RenderArgs) -> Result<()> {
             IntegratorArg::Megakernel => umbra::passes::pathtrace::Integrator::Megakernel,
             IntegratorArg::Wavefront => umbra::passes::pathtrace::Integrator::Wavefront,
         },
+        // The denoiser filters the diffuse and specular parts apart where the integrator splits
+        // them (the megakernel).
+        lobe_split: args.denoise && args.integrator == IntegratorArg::Megakernel,
     };
+    if args.denoise && args.integrator == IntegratorArg::Wavefront {
+        log::info!(
+            "--integrator wavefront does not split the radiance by lobes: the denoiser filters their sum"
+        );
+    }
     if args.mode == Mode::Hybrid {
         return render_hybrid(&ctx, &loaded, &gpu_scene, &camera, &args);
     }
@@ -593,8 +601,15 @@ fn render(args: RenderArgs) -> Result<()> {
     // The image shown: the denoised one with --denoise, else the estimate itself.
     let shown = if args.denoise {
         let denoised = umbra::render::denoise(&ctx, &image, &denoise)?;
+        let split = match image.lobe_split {
+            Some(_) => format!(
+                ", diffuse and specular parts apart ({} on the specular)",
+                denoise.specular_iterations
+            ),
+            None => String::new(),
+        };
         println!(
-            "denoise: {} iterations in {:.2} ms GPU ({:.2} ms per sample of path tracing)",
+            "denoise: {} iterations{split} in {:.2} ms GPU ({:.2} ms per sample of path tracing)",
             denoise.iterations,
             denoised.gpu_ms,
             image.gpu_ms / image.spp as f64

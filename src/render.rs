@@ -51,6 +51,9 @@ pub struct PathImage {
     pub normal_depth: Vec<[f32; 4]>,
     /// Radiance emitted at the first hit (or the environment seen), mean over the samples.
     pub emission: Vec<[f32; 4]>,
+    /// With [`PathSettings::lobe_split`]: the split's per-pixel `specular` and `split`
+    /// ([`crate::passes::pathtrace::LobeSplit`]), which the denoiser reads.
+    pub lobe_split: Option<LobeSplitImage>,
     /// Samples that came out non-finite (replaced by zero); 0 unless something is wrong.
     pub nonfinite_samples: u32,
     /// Where they arose (see [`crate::gpu::layout::nonfinite_source_names`]).
@@ -63,6 +66,16 @@ pub struct PathImage {
     /// Implicit-shape marches that ran out of steps and were taken as misses
     /// ([`crate::gpu::layout::PathStats::marches_exhausted`]); 0 without implicit shapes.
     pub marches_exhausted: u32,
+}
+
+/// A path-traced image's lobe split, read back ([`crate::passes::pathtrace::LobeSplit`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LobeSplitImage {
+    /// Mean of the specular part rgb; mean of the diffuse part's demodulated luminance squared.
+    pub specular: Vec<[f32; 4]>,
+    /// Mean of the specular albedo rgb; mean of the specular part's demodulated luminance
+    /// squared.
+    pub split: Vec<[f32; 4]>,
 }
 
 impl PathImage {
@@ -780,12 +793,16 @@ impl Passes {
         settings.validate()?;
         let (w, h) = image.size;
         let pixels = w as usize * h as usize;
+        let (specular_len, split_len) =
+            image.lobe_split.as_ref().map_or((pixels, pixels), |l| (l.specular.len(), l.split.len()));
         for (name, len) in [
             ("mean", image.mean.len()),
             ("moment", image.moment.len()),
             ("albedo", image.albedo.len()),
             ("normal_depth", image.normal_depth.len()),
             ("emission", image.emission.len()),
+            ("lobe split's specular", specular_len),
+            ("lobe split's split", split_len),
         ] {
             if len != pixels {
                 return Err(Error::Invalid(format!(
@@ -799,6 +816,13 @@ impl Passes {
         let albedo = Buffer::upload(ctx, "denoise albedo", &image.albedo, usage)?;
         let normal_depth = Buffer::upload(ctx, "denoise normal depth", &image.normal_depth, usage)?;
         let emission = Buffer::upload(ctx, "denoise emission", &image.emission, usage)?;
+        let lobe_split = match &image.lobe_split {
+            Some(l) => Some((
+                Buffer::upload(ctx, "denoise specular", &l.specular, usage)?,
+                Buffer::upload(ctx, "denoise split", &l.split, usage)?,
+            )),
+            None => None,
+        };
         let inputs = DenoiseInputs {
             size: image.size,
             accum: &accum,
@@ -806,8 +830,12 @@ impl Passes {
             albedo: &albedo,
             normal_depth: &normal_depth,
             emission: &emission,
+            lobe_split: lobe_split.as_ref().map(|(a, b)| (a, b)),
         };
-        let images = DenoiseImages::new(ctx, image.size)?;
+        let images = match lobe_split {
+            Some(_) => DenoiseImages::with_lobe_split(ctx, image.size)?,
+            None => DenoiseImages::new(ctx, image.size)?,
+        };
         let output = Image::storage_2d(ctx, "denoised", w, h, raw::Format::R32G32B32A32_SFLOAT)?;
         let pass = self.denoise_pass()?;
         let mut timer = GpuTimer::new(ctx, 1)?;
@@ -840,7 +868,11 @@ impl Passes {
             Integrator::Wavefront => self.wavefront_pass(scene, settings.options()).map(|_| ())?,
         }
         let pipeline_ms = clock.elapsed().as_secs_f64() * 1e3;
-        let target = PathTarget::new(ctx, settings.size)?;
+        let target = if settings.lobe_split {
+            PathTarget::with_lobe_split(ctx, settings.size)?
+        } else {
+            PathTarget::new(ctx, settings.size)?
+        };
         // Batches of about 2^22 pixel-samples keep each submission short (progress, timeouts).
         let pixels = settings.size.0 as u64 * settings.size.1 as u64;
         let batch = ((1u64 << 22) / pixels.max(1)).clamp(1, 64) as u32;
@@ -887,6 +919,13 @@ impl Passes {
             albedo: target.albedo.read(ctx)?,
             normal_depth: target.normal_depth.read(ctx)?,
             emission: target.emission.read(ctx)?,
+            lobe_split: match &target.lobe_split {
+                Some(split) => Some(LobeSplitImage {
+                    specular: split.specular.read(ctx)?,
+                    split: split.split.read(ctx)?,
+                }),
+                None => None,
+            },
             nonfinite_samples: stats[0].nonfinite_samples,
             nonfinite_sources: stats[0].nonfinite_sources,
             gpu_ms,

@@ -159,6 +159,17 @@ fn waves_of_rows_and_progressive_batches_trace_the_same_samples() {
     let error = too_deep.validate().expect_err("1001 bounces through the wavefront").to_string();
     assert!(error.contains("at most 1000 bounces"), "{error}");
     assert!(PathSettings { integrator: Integrator::Megakernel, ..too_deep }.validate().is_ok());
+    // The denoiser's lobe split is the megakernel's alone: refused in the settings and by a split
+    // target.
+    let split = PathSettings { lobe_split: true, ..settings.clone() };
+    let error = split.validate().expect_err("a lobe split through the wavefront").to_string();
+    assert!(error.contains("does not split the radiance by lobes"), "{error}");
+    let split_target = PathTarget::with_lobe_split(&ctx, settings.size).unwrap();
+    let error = ctx
+        .submit(|cmd| passes.record_path_samples(cmd, &gpu_scene, &camera, &split_target, &settings, 0, 1))
+        .expect_err("a split target through the wavefront")
+        .to_string();
+    assert!(error.contains("does not split the radiance by lobes"), "{error}");
     let mut first = 0;
     for count in [1, 2, 3] {
         ctx.submit(|cmd| {

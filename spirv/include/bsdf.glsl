@@ -437,6 +437,23 @@ vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
     return f;
 }
 
+// The diffuse lobe's part of bsdf_eval(s, wo, wi): bsdf_eval_base's Lambertian term under the
+// sheen's and the coat's scalings (the denoiser's lobe split, path.glsl).
+vec3 bsdf_eval_diffuse(Surface s, vec3 wo, vec3 wi) {
+    if (wo.z <= 0.0 || wi.z <= 0.0) {
+        return vec3(0.0);
+    }
+    float oh = max(dot(wo, normalize(wo + wi)), 0.0);
+    vec3 f = (1.0 - max3(dielectric_fresnel(s, oh))) * (1.0 - s.transmission) * s.base * INV_PI * (1.0 - s.metallic);
+    if (max3(s.sheen) > 0.0) {
+        f *= max(0.0, min(sheen_scaling_at(s, wo.z), sheen_scaling_at(s, wi.z)));
+    }
+    if (s.coat > 0.0) {
+        f *= 1.0 - coat_weight(s, wo);
+    }
+    return f;
+}
+
 // Solid-angle density of wi (below the surface) under the transmission lobe's sampling.
 float transmission_pdf(Surface s, vec3 wo, vec3 wi) {
     if (s.thin) {

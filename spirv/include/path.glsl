@@ -76,11 +76,28 @@ struct Path {
     float prev_pdf;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
     uint depth;      // scattering events so far
     uint nonfinite;  // NONFINITE_* bits of the stages that produced a non-finite value
+    // SPLIT_LOBES only (the denoiser's lobe split): the part of `radiance` that left the first
+    // hit through its specular lobes (reflection, transmission, sheen, coat: all but the
+    // diffuse one), the share of what the path gathers beyond the first hit that does (per
+    // channel, f_specular / f at the first hit's sampled direction), and the first hit's
+    // specular albedo, the divisor of that part (1 for a dielectric, the base colour for a metal).
+    vec3 specular;
+    vec3 share;
+    vec3 spec_albedo;
 };
 
-// Defined by the kernel (this file's header): adds c to path.radiance when the shadow ray
-// origin + t d, t in [0, tmax), is unblocked.
-void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, uint bit);
+// Defined by the kernel (this file's header): adds c to path.radiance, and c_spec, its
+// specular part, to path.specular (SPLIT_LOBES), when the shadow ray origin + t d, t in
+// [0, tmax), is unblocked.
+void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, vec3 c_spec, uint bit);
+
+// The specular part of c, gathered beyond the first hit (SPLIT_LOBES; else 0).
+vec3 specular_part(Path path, vec3 c) {
+    if (SPLIT_LOBES) {
+        return c * path.share;
+    }
+    return vec3(0.0);
+}
 
 // Sample `sample_index` of `pixel` (of the whole image) through `camera`: its camera ray.
 Path camera_path(vec3 origin, vec3 forward, vec3 right, vec3 up, uvec2 image_size, uvec2 pixel, uint sample_index) {
@@ -93,7 +110,26 @@ Path camera_path(vec3 origin, vec3 forward, vec3 right, vec3 up, uvec2 image_siz
     path.prev_pdf = 0.0;
     path.depth = 0u;
     path.nonfinite = 0u;
+    path.specular = vec3(0.0);
+    path.share = vec3(0.0);
+    path.spec_albedo = vec3(1.0);
     return path;
+}
+
+// The specular share of f = bsdf_eval(s, wo, wi), per channel: (f − the diffuse lobe's) / f
+// (1 where f is 0: no diffuse lobe then).
+vec3 specular_share(Surface s, vec3 wo, vec3 wi, vec3 f) {
+    vec3 d = bsdf_eval_diffuse(s, wo, wi);
+    return mix(vec3(1.0), clamp((f - d) / f, 0.0, 1.0), greaterThan(f, vec3(0.0)));
+}
+
+// The specular part of a light sample's contribution c (through f = bsdf_eval(s, wo, wi)):
+// at the first hit by the lobes' shares of f, beyond it by the path's share (SPLIT_LOBES; else 0).
+vec3 first_specular(Path path, Surface s, vec3 wo, vec3 wi, vec3 f, vec3 c) {
+    if (SPLIT_LOBES) {
+        return c * (path.depth == 0u ? specular_share(s, wo, wi, f) : path.share);
+    }
+    return vec3(0.0);
 }
 
 // Adds what `path`'s ray finds at its end (`found`: its closest hit `hit`; else it left the
@@ -115,12 +151,14 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             }
             vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
             path.radiance += c;
+            path.specular += specular_part(path, c);
             path.nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
             if (depth == 0u) {
                 emitted_first = c;
             }
         } else {
             path.radiance += throughput * params.env;
+            path.specular += specular_part(path, throughput * params.env);
             if (depth == 0u) {
                 emitted_first = params.env;
             }
@@ -154,6 +192,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
         }
         vec3 c = throughput * le * w;
         path.radiance += c;
+        path.specular += specular_part(path, c);
         path.nonfinite |= nonfinite_bit(c, NONFINITE_EMISSION);
         if (depth == 0u) {
             emitted_first = c;
@@ -184,11 +223,15 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (depth == 0u) {
         albedo = vec4(s.base, 1.0);
         normal_depth = vec4(n, hit.t);
+        if (SPLIT_LOBES) {
+            path.spec_albedo = mix(vec3(1.0), s.base, s.metallic);
+        }
     }
     // KHR_materials_unlit, modelled as an emitter of its base colour that scatters nothing: the
     // path ends here, and no light sampling finds it (BSDF-sampled rays alone, weight 1).
     if (material_unlit(material)) {
         path.radiance += throughput * s.base;
+        path.specular += specular_part(path, throughput * s.base);
         if (depth == 0u) {
             emitted_first += s.base;
         }
@@ -245,8 +288,9 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
                 vec3 f = bsdf_eval(s, wo_local, wi_local);
                 float w = light_sample_weight(pdf, bsdf_pdf(s, wo_local, wi_local));
                 vec3 c = throughput * f * abs(wi_local.z) * l_in * (w / pdf);
+                vec3 c_spec = first_specular(path, s, wo_local, wi_local, f, c);
                 vec3 o = offset_ray(p, side * ng);
-                path_shadow(path, o, pick_env ? wi : target - o, pick_env ? BVH_INF : 0.9999, c,
+                path_shadow(path, o, pick_env ? wi : target - o, pick_env ? BVH_INF : 0.9999, c, c_spec,
                             pick_env ? NONFINITE_ENV_NEE : NONFINITE_EMISSIVE_NEE);
             }
         }
@@ -268,9 +312,12 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             vec3 wi_local;
             float side = light_side(ng, t, b, n, surface_transmits(s), wi, wi_local);
             if (any(greaterThan(li, vec3(0.0))) && side != 0.0) {
-                vec3 c = throughput * (weight * bsdf_eval(s, wo_local, wi_local) * abs(wi_local.z) * li);
+                vec3 f = bsdf_eval(s, wo_local, wi_local);
+                vec3 c = throughput * (weight * f * abs(wi_local.z) * li);
+                vec3 c_spec = first_specular(path, s, wo_local, wi_local, f, c);
                 vec3 o = offset_ray(p, side * ng);
-                path_shadow(path, o, to_point ? position - o : wi, to_point ? 0.9999 : BVH_INF, c, NONFINITE_PUNCTUAL);
+                path_shadow(path, o, to_point ? position - o : wi, to_point ? 0.9999 : BVH_INF, c, c_spec,
+                            NONFINITE_PUNCTUAL);
             }
         }
     }
@@ -298,6 +345,11 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
         }
     }
     path.nonfinite |= nonfinite_bit(weight * float(pdf), NONFINITE_BSDF_SAMPLE);
+    if (SPLIT_LOBES) {
+        if (depth == 0u) {
+            path.share = specular_share(s, wo_local, wi_local, bsdf_eval(s, wo_local, wi_local));
+        }
+    }
     throughput *= weight;
     // Light sampling covers both sides of a transmitting surface, so an emitter or the
     // environment reached either way is weighed by MIS against it.

@@ -714,7 +714,7 @@ gpu_structs! {
         /// The à-trous iteration's tap spacing in pixels (1, 2, 4, ...).
         step: uint,
         /// [`DENOISE_DEMODULATE`] | [`DENOISE_PREFILTER`] | [`DENOISE_SPATIAL_VARIANCE`] |
-        /// [`DENOISE_WIDE`] | [`DENOISE_EDGE_STOPPING`].
+        /// [`DENOISE_WIDE`] | [`DENOISE_EDGE_STOPPING`] | [`DENOISE_SPLIT`].
         flags: uint,
         /// Luminance edge-stopping: |Δl| over this × the standard deviation of l.
         sigma_luminance: float,
@@ -991,6 +991,14 @@ gpu_constants! {
     /// [`DenoiseParams::flags`]: weigh taps by normal, depth and luminance (else the plain
     /// B3-spline: a blur, for tests that must catch it).
     DENOISE_EDGE_STOPPING: uint = 4;
+    /// [`DenoiseParams::flags`]: the path target split its radiance by the first hit's lobes
+    /// (diffuse, specular); prepare and remodulate read the split's buffers.
+    DENOISE_SPLIT: uint = 32;
+    /// Below this an albedo channel the radiance is divided by (denoiser, lobe split) is raised
+    /// to it: a black surface (an emitter, a dark texel) is then divided by 0.01 and multiplied
+    /// back by the same, so nothing is lost, and the filter's luminance weight keeps its
+    /// amplified radiance apart from its neighbours'.
+    DENOISE_MIN_ALBEDO: float = 0.01;
     /// The G-buffer's material index where no surface was hit.
     GBUFFER_NO_SURFACE: uint = 0xffffffff;
     /// [`GpuReservoir::light`]: the reservoir holds no sample.
@@ -1091,7 +1099,8 @@ kernels! {
             power_heuristic: bool = true,
             unweighted_bsdf_hits: bool = false,
             light_sampling: bool = true,
-            bsdf_hits: bool = true
+            bsdf_hits: bool = true,
+            split_lobes: bool = false
         },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).
@@ -1106,6 +1115,13 @@ kernels! {
             /// Radiance emitted at the first hit (or the environment a camera ray sees), mean
             /// over the samples: the part of the image the denoiser leaves unfiltered.
             aov_emission: readwrite buffer [vec4],
+            /// `split_lobes`: the mean of the radiance's specular part rgb (what left the first
+            /// hit through another lobe than the diffuse one), the mean of the diffuse part's
+            /// luminance squared over the first hit's base colour. Unread otherwise.
+            aov_specular: readwrite buffer [vec4],
+            /// `split_lobes`: the mean of the first hit's specular albedo rgb (the specular
+            /// part's divisor), the mean of the specular part's luminance squared over it.
+            aov_split: readwrite buffer [vec4],
             /// Counters ([`PathStats`]).
             stats: readwrite buffer PathStats,
         }
@@ -1188,8 +1204,16 @@ kernels! {
             aov_normal_depth: readonly buffer [vec4],
             /// Radiance emitted at the first hit.
             aov_emission: readonly buffer [vec4],
-            /// Demodulated radiance rgb, the variance of its luminance's mean.
+            /// With [`DENOISE_SPLIT`]: the path target's `aov_specular` (else unread).
+            aov_specular: readonly buffer [vec4],
+            /// With [`DENOISE_SPLIT`]: the path target's `aov_split` (else unread).
+            aov_split: readonly buffer [vec4],
+            /// Demodulated radiance rgb (with [`DENOISE_SPLIT`], its diffuse part), the variance
+            /// of its luminance's mean.
             dn_color: writeonly image rgba32f,
+            /// With [`DENOISE_SPLIT`]: the demodulated specular part and its variance (else
+            /// unwritten).
+            dn_specular: writeonly image rgba32f,
             /// Unit normal xyz and distance (−1 for a miss).
             dn_guide: writeonly image rgba32f,
             /// The pixel's sample count.
@@ -1220,12 +1244,17 @@ kernels! {
         push: DenoiseParams,
         spec: {},
         bindings: {
-            /// The filtered, demodulated radiance.
+            /// The filtered, demodulated radiance (with [`DENOISE_SPLIT`], its diffuse part).
             dn_in: readonly image rgba32f,
+            /// With [`DENOISE_SPLIT`]: the filtered, demodulated specular part (else unread).
+            dn_specular: readonly image rgba32f,
             /// Base colour at the first hit (alpha 0 for a miss).
             aov_albedo: readonly buffer [vec4],
             /// Radiance emitted at the first hit (added back).
             aov_emission: readonly buffer [vec4],
+            /// With [`DENOISE_SPLIT`]: the path target's `aov_split` (the specular part's
+            /// divisor; else unread).
+            aov_split: readonly buffer [vec4],
             /// The denoised image: radiance rgb, alpha 1.
             out_color: writeonly image rgba32f,
         }

@@ -194,6 +194,11 @@ pub struct PathSettings {
     /// The megakernel or the wavefront path tracer: the same samples, laid out differently on
     /// the device.
     pub integrator: Integrator,
+    /// Split each sample's radiance by the lobes it left the first hit through, diffuse and
+    /// specular, for the denoiser (a target [`PathTarget::with_lobe_split`];
+    /// [`crate::render::PathImage::lobe_split`]). The megakernel's alone: the wavefront
+    /// integrator refuses it.
+    pub lobe_split: bool,
 }
 
 /// A region of a larger image (`umbra render --tile`): the render's `size` pixels from `origin`
@@ -223,6 +228,7 @@ impl Default for PathSettings {
             first_sample: 0,
             tile: None,
             integrator: Integrator::Megakernel,
+            lobe_split: false,
         }
     }
 }
@@ -264,6 +270,12 @@ impl PathSettings {
                 self.max_bounces
             )));
         }
+        if self.integrator == Integrator::Wavefront && self.lobe_split {
+            return Err(Error::Invalid(
+                "the wavefront integrator does not split the radiance by lobes for the denoiser (the megakernel does)"
+                    .into(),
+            ));
+        }
         if let Some(Tile { image, origin }) = self.tile {
             let fits = |o: u32, s: u32, i: u32| o.checked_add(s).is_some_and(|end| end <= i);
             if !fits(origin.0, self.size.0, image.0) || !fits(origin.1, self.size.1, image.1) {
@@ -295,9 +307,28 @@ pub struct PathTarget {
     pub emission: Buffer,
     /// [`PathStats`].
     pub stats: Buffer,
+    /// The lobe split's buffers, in a target made by [`PathTarget::with_lobe_split`]: the
+    /// megakernel then splits each sample's radiance for the denoiser.
+    pub lobe_split: Option<LobeSplit>,
     /// The wavefront path tracer's queues and path states, made at its first render into this
     /// target.
     pub wave: std::sync::OnceLock<WaveState>,
+}
+
+/// A path target's split of the radiance by the lobes it left the first hit through (the
+/// denoiser filters the two parts apart, each over its own albedo): the diffuse lobe's part and
+/// the rest, the specular part (reflection, transmission, sheen, clear coat). At the first hit a
+/// light sample's contribution splits by the lobes' shares of the BSDF, and all a path gathers
+/// beyond it by those shares at the direction it was sampled in.
+pub struct LobeSplit {
+    /// vec4 per pixel: the mean of the specular part rgb; the mean of the diffuse part's
+    /// (the radiance less the first hit's emission and the specular part) luminance squared
+    /// over the first hit's base colour.
+    pub specular: Buffer,
+    /// vec4 per pixel: the mean of the first hit's specular albedo rgb (1 for a dielectric or a
+    /// miss, the base colour for a metal: the specular part's divisor); the mean of the specular
+    /// part's luminance squared over it.
+    pub split: Buffer,
 }
 
 impl PathTarget {
@@ -316,8 +347,21 @@ impl PathTarget {
             normal_depth: make("path normal depth")?,
             emission: make("path emission")?,
             stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], usage)?,
+            lobe_split: None,
             wave: std::sync::OnceLock::new(),
         })
+    }
+
+    /// [`PathTarget::new`] with the buffers of the lobe split ([`LobeSplit`]; two more vec4s
+    /// per pixel), which the megakernel then fills for the denoiser.
+    pub fn with_lobe_split(ctx: &Context, size: (u32, u32)) -> Result<Self> {
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER
+            | raw::BufferUsageFlags::TRANSFER_SRC
+            | raw::BufferUsageFlags::TRANSFER_DST;
+        let bytes = size.0 as u64 * size.1 as u64 * 16;
+        let make = |name| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        let lobe_split = LobeSplit { specular: make("path specular")?, split: make("path split")? };
+        Ok(Self { lobe_split: Some(lobe_split), ..Self::new(ctx, size)? })
     }
 
     /// Makes the wavefront path tracer's state now (else its first render does, holding up to
@@ -348,6 +392,10 @@ impl PathTarget {
 /// `pathtrace.comp`, specialised for one scene's features and the chosen sampling.
 pub struct PathTracePass {
     pipeline: Pipeline<pathtrace::Kernel>,
+    /// The kernel specialised for the lobe split, made at the first record into a target with
+    /// one.
+    split: std::sync::OnceLock<Pipeline<pathtrace::Kernel>>,
+    options: PathOptions,
 }
 
 impl PathTracePass {
@@ -358,8 +406,8 @@ impl PathTracePass {
     /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha,
     /// vertex colours, unlit materials) and what the options leave out cost nothing.
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
-        let spec = sampling_spec!(pathtrace::Spec, options);
-        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)? })
+        let spec = sampling_spec!(pathtrace::Spec, options, Default::default());
+        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &spec)?, split: Default::default(), options })
     }
 
     /// Samples per pixel one dispatch traces at most ([`PathTracePass::record`] splits longer
@@ -437,6 +485,11 @@ impl PathTracePass {
         target: &PathTarget,
         params: &PathParams,
     ) -> Result<()> {
+        // Without the split its bindings hold buffers the kernel then never reads.
+        let (aov_specular, aov_split) = match &target.lobe_split {
+            Some(split) => (&split.specular, &split.split),
+            None => (&target.albedo, &target.emission),
+        };
         let resources = pathtrace::Resources {
             scene,
             accum: &target.accum,
@@ -444,7 +497,24 @@ impl PathTracePass {
             aov_albedo: &target.albedo,
             aov_normal_depth: &target.normal_depth,
             aov_emission: &target.emission,
+            aov_specular,
+            aov_split,
             stats: &target.stats,
+        };
+        let pipeline = match target.lobe_split {
+            None => &self.pipeline,
+            Some(_) => match self.split.get() {
+                Some(pipeline) => pipeline,
+                None => {
+                    let spec = sampling_spec!(
+                        pathtrace::Spec,
+                        self.options,
+                        pathtrace::Spec { split_lobes: true, ..Default::default() }
+                    );
+                    let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
+                    self.split.get_or_init(|| pipeline)
+                }
+            },
         };
         let end = params.sample_index + params.sample_count;
         let mut dispatch = *params;
@@ -455,13 +525,7 @@ impl PathTracePass {
                 Self::SAMPLES_PER_DISPATCH
             };
             dispatch.sample_count = most.min(end - dispatch.sample_index);
-            self.pipeline.record(
-                cmd,
-                &resources,
-                &dispatch,
-                [target.size.0, target.size.1, 1],
-                Self::LOCAL,
-            )?;
+            pipeline.record(cmd, &resources, &dispatch, [target.size.0, target.size.1, 1], Self::LOCAL)?;
             barrier::compute_to_compute(ctx, cmd);
             dispatch.sample_index += dispatch.sample_count;
         }

@@ -178,7 +178,8 @@ impl WavefrontPass {
 
     /// Records samples `params.sample_index .. + params.sample_count` per pixel into `target`,
     /// in waves (each followed by a barrier), through `target`'s wavefront state (made now if
-    /// the target has none). Never submits.
+    /// the target has none). Never submits. An error for a target with a lobe split
+    /// ([`PathTarget::with_lobe_split`]).
     pub fn record(
         &self,
         ctx: &Context,
@@ -188,6 +189,12 @@ impl WavefrontPass {
         settings: &PathSettings,
         params: &PathParams,
     ) -> Result<()> {
+        if target.lobe_split.is_some() {
+            return Err(Error::Invalid(
+                "the wavefront integrator does not split the radiance by lobes for the denoiser (the megakernel does)"
+                    .into(),
+            ));
+        }
         let state = match target.wave.get() {
             Some(state) => state,
             None => {

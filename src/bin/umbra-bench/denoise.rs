@@ -58,7 +58,11 @@ pub fn run_scene(
     let (reference, floor) = suite::reference_for(&renderer, camera, key, s)?;
     let measured =
         PathSettings { size: s.size, spp: s.max_spp, seed: 1, env: s.env, ..PathSettings::default() };
-    let target = renderer.path_target(s.size)?;
+    let target = if filter.lobe_split {
+        renderer.denoised_path_target(s.size)?
+    } else {
+        renderer.path_target(s.size)?
+    };
     let images = renderer.denoise_images(s.size)?;
     let make = |name| Image::storage_2d(ctx, name, s.size.0, s.size.1, raw::Format::R32G32B32A32_SFLOAT);
     let (resolved, denoised) = (make("bench resolve")?, make("bench denoised")?);
@@ -148,6 +152,8 @@ pub fn to_json(device: &str, s: &SuiteSettings, filter: &DenoiseSettings, result
         "spatial_variance": filter.spatial_variance,
         "wide": filter.wide,
         "albedo_offset": filter.albedo_offset,
+        "lobe_split": filter.lobe_split,
+        "specular_iterations": filter.specular_iterations,
         "scenes": results.iter().map(|r| json!({
             "scene": r.name,
             "reference_rel_mse_floor": r.reference_rel_mse_floor,
@@ -183,13 +189,19 @@ fn short(x: f64) -> String {
 pub fn table(doc: &Value) -> String {
     let columns = [1u64, 4, 16, 64, 256];
     let mut out = format!(
-        "{}×{}, {}-spp references, {}, {} à-trous iterations ({}); relative MSE raw → denoised (÷):\n\n\
+        "{}×{}, {}-spp references, {}, {} à-trous iterations{} ({}); relative MSE raw → denoised (÷):\n\n\
          | scene | filter | one sample | {} | denoising stops helping |\n|---|---:|---:|{}---|\n",
         doc["size"][0],
         doc["size"][1],
         doc["reference_spp"],
         doc["device"].as_str().unwrap_or("?"),
         doc["iterations"],
+        match doc["lobe_split"].as_bool() {
+            Some(true) =>
+                format!(", the lobe split with {} on the specular part", doc["specular_iterations"]),
+            Some(false) => ", no lobe split".to_string(),
+            None => String::new(),
+        },
         super::conditions_text(doc),
         columns.map(|c| format!("{c} spp")).join(" | "),
         "---|".repeat(columns.len()),

@@ -263,6 +263,13 @@ enum Command {
         /// The filter's spatial variance floor in its first iteration (true or false).
         #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().spatial_variance, action = clap::ArgAction::Set)]
         spatial_variance: bool,
+        /// Path trace with the lobe split and filter the diffuse and specular parts apart (true)
+        /// or their sum (false).
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().lobe_split, action = clap::ArgAction::Set)]
+        lobe_split: bool,
+        /// The filter's à-trous iterations on the specular part (with the lobe split).
+        #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().specular_iterations)]
+        specular_iterations: u32,
         /// glTF scenes to run as well (their first camera, or one framing them).
         #[arg(long = "gltf")]
         gltf: Vec<PathBuf>,
@@ -651,6 +658,8 @@ fn run(cli: Cli) -> Result<()> {
             albedo_offset,
             wide,
             spatial_variance,
+            lobe_split,
+            specular_iterations,
             gltf,
             out,
             table,
@@ -681,6 +690,8 @@ fn run(cli: Cli) -> Result<()> {
                     albedo_offset,
                     wide,
                     spatial_variance,
+                    lobe_split,
+                    specular_iterations,
                     ..Default::default()
                 };
                 filter.validate()?;

@@ -113,10 +113,25 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     // The prefiltered map assumed n = v = r; a rough lobe actually leans from the mirror direction
     // towards the normal: look up along the dominant direction (Lagarde and de Rousiers 2014,
     // "Moving Frostbite to PBR", eq. 56, with alpha as their linear roughness).
-    vec3 r = reflect(-wo, n);
+    vec3 rn = n;
+    if (s.anisotropy > 0.0) {
+        // KHR_materials_anisotropy: the Khronos Sample Viewer's bent normal (after Filament): the
+        // normal turned towards the plane of the view and the anisotropy bitangent (the lobe's
+        // narrow axis), by pow4(1 - strength (1 - roughness)); the prefiltered map then looked up
+        // about it at the base roughness (README: its error against the path tracer).
+        vec3 t;
+        vec3 b;
+        basis(n, t, b);
+        vec3 aniso_b = cross(n, s.aniso_dir.x * t + s.aniso_dir.y * b);
+        vec3 bent = normalize(cross(cross(aniso_b, wo), aniso_b));
+        float bend = 1.0 - s.anisotropy * (1.0 - roughness);
+        bend *= bend;
+        rn = normalize(mix(bent, n, bend * bend));
+    }
+    vec3 r = reflect(-wo, rn);
     if (params.ibl_dominant != 0u) {
         float smooth_ = clamp(1.0 - s.alpha, 0.0, 1.0);
-        r = normalize(mix(n, r, smooth_ * (sqrt(smooth_) + s.alpha)));
+        r = normalize(mix(rn, r, smooth_ * (sqrt(smooth_) + s.alpha)));
     }
     vec4 table = ibl_table(nv, roughness);
     vec3 env = params.ibl != 0u ? params.env : vec3(0.0);

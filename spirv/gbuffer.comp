@@ -72,14 +72,22 @@ void main() {
     imageStore(gb_base, pixel, vec4(s.base, s.metallic));
     imageStore(gb_emission, pixel, vec4(min(le, vec3(65504.0)), occlusion));
     imageStore(gb_material, pixel, uvec4(material, packSnorm2x16(oct_encode(ng)), floatBitsToUint(tri_uv1(tri, hit.bary))));
-    // The layer textures' texels (the lighting passes multiply the factors by them) and the clear
-    // coat's normal, only where the scene has some: the image is left unwritten otherwise.
+    // The layer textures' texels (the lighting passes multiply the factors by them), the clear
+    // coat's normal and the anisotropy, only where the scene has some: the image is left
+    // unwritten otherwise.
     if (gbuffer_has_layers()) {
         LayerTexels layers = material_layer_texels_lod(material, uv, cone_lod);
         vec3 coat_n = n;
         if (coat_normal_differs()) {
             coat_n = coat_normal_lod(tri, hit.bary, ng, uv, cone_lod);
         }
-        imageStore(gb_layers, pixel, gbuffer_pack_layers(layers.specular, layers.layers, layers.iridescence, coat_n));
+        // KHR_materials_anisotropy in the frame the lighting passes rebuild (basis(n)).
+        vec3 t;
+        vec3 b;
+        basis(n, t, b);
+        surface_anisotropy(s, tri, hit.bary, uv, cone_lod, t, b, n);
+        imageStore(gb_layers, pixel,
+                   gbuffer_pack_layers(layers.specular, layers.layers, layers.iridescence, coat_n, s.anisotropy,
+                                       s.aniso_dir));
     }
 }

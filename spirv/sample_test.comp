@@ -3,7 +3,8 @@
 // bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests (modes 0
 // and 1); mode 2 evaluates bsdf_eval for tests/brdf.rs; mode 3 the dielectric's bsdf_eval and
 // bsdf_pdf at given directions, for tests/sampling.rs's check that it samples wherever it
-// scatters; mode 4 the thin-film Fresnel of KHR_materials_iridescence (tests/iridescence.rs).
+// scatters; mode 4 the thin-film Fresnel of KHR_materials_iridescence (tests/iridescence.rs);
+// mode 5 bsdf_sample's weights (the white furnace, tests/anisotropy.rs).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/sample_test.glsl"
 
@@ -47,6 +48,8 @@ Surface dielectric(float alpha) {
         s.iridescence = 0.0;
         s.iridescence_ior = 1.3;
         s.iridescence_thickness = 0.0;
+        s.anisotropy = 0.0;
+        s.aniso_dir = vec2(1.0, 0.0);
         return s;
     }
     if (params.kind == 8u) {
@@ -67,6 +70,8 @@ Surface dielectric(float alpha) {
         s.iridescence = 1.0;
         s.iridescence_ior = 1.8;
         s.iridescence_thickness = 350.0;
+        s.anisotropy = 0.0;
+        s.aniso_dir = vec2(1.0, 0.0);
         return s;
     }
     if (params.kind == 6u) {
@@ -89,6 +94,33 @@ Surface dielectric(float alpha) {
         s.iridescence = 0.0;
         s.iridescence_ior = 1.3;
         s.iridescence_thickness = 0.0;
+        s.anisotropy = 0.0;
+        s.aniso_dir = vec2(1.0, 0.0);
+        return s;
+    }
+    if (params.kind == 9u) {
+        // KHR_materials_anisotropy: a surface of base colour `anisotropy_base`, metallic
+        // params.anisotropy.w (0: the dielectric's reflection over its diffuse lobe), alpha
+        // `alpha`, strength params.anisotropy.x along the unit direction params.anisotropy.yz.
+        Surface s;
+        s.base = vec3(params.anisotropy_base);
+        s.metallic = params.anisotropy.w;
+        s.f0 = vec3(0.04);
+        s.f90 = 1.0;
+        s.alpha = alpha;
+        s.transmission = 0.0;
+        s.eta = 1.5;
+        s.thin = true;
+        s.coat = 0.0;
+        s.coat_alpha = 1.0;
+        s.coat_n = vec3(0.0, 0.0, 1.0);
+        s.sheen = vec3(0.0);
+        s.sheen_roughness = 1.0;
+        s.iridescence = 0.0;
+        s.iridescence_ior = 1.3;
+        s.iridescence_thickness = 0.0;
+        s.anisotropy = params.anisotropy.x;
+        s.aniso_dir = params.anisotropy.yz;
         return s;
     }
     Surface s;
@@ -108,6 +140,8 @@ Surface dielectric(float alpha) {
     s.iridescence = 0.0;
     s.iridescence_ior = 1.3;
     s.iridescence_thickness = 0.0;
+    s.anisotropy = 0.0;
+    s.aniso_dir = vec2(1.0, 0.0);
     return s;
 }
 
@@ -152,6 +186,8 @@ void main() {
         s.iridescence = 0.0;
         s.iridescence_ior = 1.3;
         s.iridescence_thickness = 0.0;
+        s.anisotropy = 0.0;
+        s.aniso_dir = vec2(1.0, 0.0);
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
         return;
     }
@@ -161,6 +197,17 @@ void main() {
         vec4 c = directions[2u * i];
         vec3 f0 = directions[2u * i + 1u].rgb;
         results[i] = vec4(iridescent_fresnel(c.z, c.y, f0, c.x), 0.0);
+        return;
+    }
+    if (params.mode == 5u) {
+        // bsdf_sample's weights f |cos| / pdf (0 for a failed sample), whose mean is the
+        // directional albedo: the white furnace.
+        vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
+        vec3 wi;
+        vec3 weight;
+        float pdf;
+        bool ok = bsdf_sample(dielectric(alpha), wo, u.xyz, wi, weight, pdf);
+        results[i] = ok ? vec4(weight, 1.0) : vec4(0.0);
         return;
     }
     if (params.mode == 3u) {

@@ -48,6 +48,17 @@ enum Sampler {
         alpha: f32,
         theta_degrees: f32,
     },
+    /// `KHR_materials_anisotropy` (sample_test's kind 9): a grey (0.8) surface of `metallic`
+    /// (0: the dielectric's reflection over its diffuse lobe), α along the anisotropy direction
+    /// mix(α, 1, strength²) and α across it, the direction `direction_degrees` from the frame's x
+    /// towards y; wo in the xz plane.
+    Anisotropic {
+        alpha: f32,
+        strength: f32,
+        metallic: f32,
+        direction_degrees: f32,
+        theta_degrees: f32,
+    },
 }
 
 /// The transmissive dielectrics of `sample_test.comp` (its sampler numbers).
@@ -104,6 +115,7 @@ impl Kernel {
         dirs: &[[f32; 4]],
         count: u32,
     ) -> Vec<[f32; 4]> {
+        let mut anisotropy = [0.0f32; 4];
         let (microfacet, wo, alpha, which) = match sampler {
             Sampler::Cosine => (Microfacet::Ggx, Vec3::Z, 1.0, 0),
             Sampler::Microfacet { microfacet, alpha, theta_degrees } => {
@@ -113,6 +125,12 @@ impl Kernel {
             Sampler::Dielectric { microfacet, kind, alpha, theta_degrees } => {
                 let t = theta_degrees.to_radians();
                 (microfacet, Vec3::new(t.sin(), 0.0, t.cos()), alpha, kind as u32)
+            }
+            Sampler::Anisotropic { alpha, strength, metallic, direction_degrees, theta_degrees } => {
+                let t = theta_degrees.to_radians();
+                let d = direction_degrees.to_radians();
+                anisotropy = [strength, d.cos(), d.sin(), metallic];
+                (Microfacet::Ggx, Vec3::new(t.sin(), 0.0, t.cos()), alpha, 9)
             }
         };
         let pipeline = &self.0[microfacet as usize];
@@ -126,7 +144,17 @@ impl Kernel {
         let output =
             Buffer::new(gpu, "sample test results", count as u64 * 16, usage, MemoryLocation::GpuOnly)
                 .unwrap();
-        let params = SampleTestParams { wo: wo.into(), alpha, mode, count, seed: 12345, kind: which };
+        let params = SampleTestParams {
+            wo: wo.into(),
+            alpha,
+            mode,
+            count,
+            seed: 12345,
+            kind: which,
+            anisotropy,
+            anisotropy_base: 0.8,
+            ..Default::default()
+        };
         gpu.submit(|cmd| {
             let resources = sample_test::Resources { directions: &input, results: &output };
             pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
@@ -232,6 +260,7 @@ fn chi_square(gpu: &Gpu, kernel: &Kernel, sampler: Sampler, pdf_alpha_scale: f32
         sampler,
         Sampler::Microfacet { microfacet: Microfacet::Beckmann | Microfacet::GgxWalter, .. }
             | Sampler::Dielectric { .. }
+            | Sampler::Anisotropic { .. }
     ) {
         let missing = 1.0 - mass;
         assert!(
@@ -312,6 +341,21 @@ fn cases() -> Vec<Sampler> {
                 for theta_degrees in [30.0, 60.0] {
                     cases.push(Sampler::Dielectric { microfacet, kind, alpha, theta_degrees });
                 }
+            }
+        }
+    }
+    // KHR_materials_anisotropy: weak to total anisotropy (strength 1: α 1 along the direction),
+    // the direction off the frame's axes and off wo's plane, metal and dielectric.
+    for (alpha, strength) in [(0.05, 0.6), (0.2, 1.0), (0.5, 0.8)] {
+        for metallic in [1.0, 0.0] {
+            for theta_degrees in [30.0, 70.0] {
+                cases.push(Sampler::Anisotropic {
+                    alpha,
+                    strength,
+                    metallic,
+                    direction_degrees: 30.0,
+                    theta_degrees,
+                });
             }
         }
     }
@@ -398,7 +442,8 @@ fn the_dielectric_samples_wherever_it_scatters() {
 }
 
 /// The test has power: sampling but reporting the pdf of a 10 % larger alpha is rejected, for
-/// each microfacet sampling and for the dielectric with either GGX sampling.
+/// each microfacet sampling, for the dielectric with either GGX sampling and for an anisotropic
+/// metal.
 #[test]
 fn a_wrong_pdf_is_rejected() {
     let gpu = Gpu::new();
@@ -418,6 +463,13 @@ fn a_wrong_pdf_is_rejected() {
             microfacet: Microfacet::GgxWalter,
             kind: Dielectric::Entering,
             alpha: 0.5,
+            theta_degrees: 30.0,
+        },
+        Sampler::Anisotropic {
+            alpha: 0.2,
+            strength: 0.8,
+            metallic: 1.0,
+            direction_degrees: 30.0,
             theta_degrees: 30.0,
         },
     ] {

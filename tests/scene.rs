@@ -805,6 +805,7 @@ fn unsupported_required_extensions_are_named_and_optional_ones_ignored() {
         "KHR_draco_mesh_compression",
         "KHR_texture_transform",
         "KHR_materials_iridescence",
+        "KHR_materials_anisotropy",
         "EXT_unknown"
     ]);
     let scene =
@@ -1489,6 +1490,75 @@ fn iridescence_is_read() {
         let error = load(bad).unwrap_err().to_string();
         assert!(error.contains("film.glb") && error.contains(named), "{named}: {error}");
     }
+}
+
+/// KHR_materials_anisotropy's factors and texture reach the material (0 and none without the
+/// extension), with no warning and no longer among the ignored extensions; a strength outside
+/// [0, 1] or a texture index beyond the file's is refused naming it. A primitive of an
+/// anisotropic material needs a tangent frame: from TANGENT, else generated from its UVs (w ±1);
+/// with neither, its tangents' w is 0 (the kernels then shade it isotropic) and one warning names
+/// the primitive.
+#[test]
+fn anisotropy_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let with = |json: &mut Value, anisotropy: Value| {
+        json["extensionsUsed"] = json!(["KHR_materials_anisotropy"]);
+        json["materials"][0]["extensions"] = json!({ "KHR_materials_anisotropy": anisotropy });
+    };
+    let load = |anisotropy: Value| {
+        let mut json = base.clone();
+        with(&mut json, anisotropy);
+        Scene::from_glb_bytes("aniso.glb", &to_glb(&json, &bin))
+    };
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    let m = &plain.materials[0];
+    assert_eq!((m.anisotropy_strength, m.anisotropy_rotation, m.anisotropy_texture), (0.0, 0.0, None));
+    let scene = load(json!({"anisotropyStrength": 0.75, "anisotropyRotation": -1.25})).unwrap();
+    let m = &scene.materials[0];
+    assert_eq!((m.anisotropy_strength, m.anisotropy_rotation), (0.75, -1.25));
+    assert!(scene.warnings.iter().all(|w| !w.contains("anisotropy")), "{:?}", scene.warnings);
+    let scene =
+        load(json!({"anisotropyStrength": 1.0, "anisotropyTexture": {"index": 0, "texCoord": 1}})).unwrap();
+    let texture = scene.materials[0].anisotropy_texture.expect("anisotropyTexture");
+    assert_eq!(texture.tex_coord, 1);
+    assert!(!scene.textures[texture.texture as usize].srgb, "the anisotropy texture is linear");
+    let error = load(json!({"anisotropyStrength": 1.5})).unwrap_err().to_string();
+    assert!(error.contains("aniso.glb") && error.contains("anisotropyStrength is 1.5"), "{error}");
+    let error =
+        load(json!({"anisotropyStrength": 1.0, "anisotropyTexture": {"index": 9}})).unwrap_err().to_string();
+    assert!(
+        error.contains("aniso.glb")
+            && error.contains("KHR_materials_anisotropy.anisotropyTexture.index is 9"),
+        "{error}"
+    );
+    // The floor (material 0, mesh 0) has TANGENT: no warning, every w ±1.
+    let scene = load(json!({"anisotropyStrength": 0.5})).unwrap();
+    assert!(!scene.tangents.is_empty() && scene.tangents.iter().all(|t| t[3].abs() == 1.0));
+    // Without TANGENT, the tangents come from the UVs.
+    let mut json = base.clone();
+    with(&mut json, json!({"anisotropyStrength": 0.5}));
+    json["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap().remove("TANGENT");
+    let scene = Scene::from_glb_bytes("aniso.glb", &to_glb(&json, &bin)).unwrap();
+    assert!(scene.tangents.iter().all(|t| t[3].abs() == 1.0), "tangents from the UVs");
+    assert!(scene.warnings.iter().all(|w| !w.contains("tangent frame")), "{:?}", scene.warnings);
+    // Without TANGENT and UVs: w 0 on that primitive's vertices, and the warning.
+    let attributes = json["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap();
+    attributes.remove("TEXCOORD_0");
+    let scene = Scene::from_glb_bytes("aniso.glb", &to_glb(&json, &bin)).unwrap();
+    let floor: Vec<usize> = (0..scene.triangles.len())
+        .filter(|&t| scene.triangle_material[t] == 0)
+        .flat_map(|t| scene.triangles[t].map(|v| v as usize))
+        .collect();
+    assert!(!floor.is_empty() && floor.iter().all(|&v| scene.tangents[v][3] == 0.0), "{:?}", scene.tangents);
+    let warned: Vec<&String> = scene.warnings.iter().filter(|w| w.contains("tangent frame")).collect();
+    assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
+    assert!(
+        warned[0].contains("aniso.glb")
+            && warned[0].contains("mesh 0 ('plane') primitive 0")
+            && warned[0].contains("isotropic"),
+        "{}",
+        warned[0]
+    );
 }
 
 /// KHR_materials_volume's attenuation reaches the material: colour and distance as written, the

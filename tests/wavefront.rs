@@ -81,11 +81,21 @@ fn the_wavefront_traces_the_megakernels_samples_on_every_kind_of_scene() {
     let ctx = Gpu::new();
     let settings =
         PathSettings { size: (40, 32), spp: 5, max_bounces: 6, seed: 3, ..PathSettings::default() };
-    // The Cornell box (emissive triangles), textures, glass (transmission, volumes), a sphere
-    // grid, and 480 emitters with 136 punctual lights (sixteen picked by power per point).
+    // The Cornell box (emissive triangles), textures, the floor made anisotropic
+    // (KHR_materials_anisotropy), glass (transmission, volumes), a sphere grid, and 480 emitters
+    // with 136 punctual lights (sixteen picked by power per point).
+    let mut anisotropic = load("textured.glb");
+    let floor = &mut anisotropic.materials[0];
+    (floor.roughness, floor.anisotropy_strength, floor.anisotropy_rotation) = (0.3, 0.8, 0.5);
+    anisotropic.tangents = anisotropic
+        .normals
+        .iter()
+        .map(|n| Vec3::from(*n).any_orthonormal_vector().extend(1.0).to_array())
+        .collect();
     for (name, scene, env) in [
         ("cornell box", Scene::cornell_box(), [0.0; 3]),
         ("textured.glb", load("textured.glb"), [0.4, 0.5, 0.6]),
+        ("textured.glb, anisotropic floor", anisotropic, [0.4, 0.5, 0.6]),
         ("glass.glb", load("glass.glb"), [0.5; 3]),
         ("spheres.glb", load("spheres.glb"), [0.5; 3]),
         ("many-lights.glb", load("many-lights.glb"), [0.0; 3]),

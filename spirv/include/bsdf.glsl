@@ -55,6 +55,16 @@
 // ignores the coat-film interface). A surface without a film (`iridescence` 0: a kernel not
 // specialised for it sets the constant) costs nothing.
 //
+// KHR_materials_anisotropy makes the material's specular lobes (metal, dielectric reflection and
+// transmission; not the coat) anisotropic GGX: alpha_t = mix(alpha, 1, strength^2) along the
+// anisotropy direction (`aniso_dir`, a unit vector in the shading frame's xy plane), alpha_b =
+// alpha across it; D and Smith's G1 are Heitz 2014's anisotropic ones and half vectors are sampled
+// from the visible normals (Heitz 2018's stretch), all in a frame whose x is the direction (the
+// spec_* functions). A surface without anisotropy (`anisotropy` 0: a kernel not specialised for
+// it sets the constant) takes the isotropic micro_* functions: the branches fold. Anisotropic
+// lobes are GGX with visible-normal sampling whatever BECKMANN and GGX_WALTER say (those compare
+// isotropic distributions and samplers).
+//
 // The microfacet distribution is GGX (the specification) or, for comparison, Beckmann: the
 // including kernel declares `const bool BECKMANN` (a specialization constant). Half vectors are
 // sampled from GGX's visible normals (Heitz 2018) or, with `const bool GGX_WALTER` (also the
@@ -91,6 +101,8 @@ struct Surface {
     float iridescence;            // KHR_materials_iridescence's weight (0: no film)
     float iridescence_ior;        // the film's index of refraction
     float iridescence_thickness;  // the film's thickness, nm
+    float anisotropy;        // KHR_materials_anisotropy's strength in [0, 1] (0: isotropic)
+    vec2 aniso_dir;          // the anisotropy direction: unit, in the shading frame's xy plane
 };
 
 float max3(vec3 v) {
@@ -204,6 +216,70 @@ vec3 iridescent_fresnel(float film_ior, float thickness, vec3 base_f0, float cos
     return clamp(f, 0.0, 1.0);
 }
 
+// The material's specular lobes (KHR_materials_anisotropy): alpha along the anisotropy
+// direction (x) and across it (y).
+vec2 aniso_alpha(Surface s) {
+    return vec2(mix(s.alpha, 1.0, s.anisotropy * s.anisotropy), s.alpha);
+}
+
+// Direction v (shading frame) in the anisotropy frame: x along aniso_dir, z the normal.
+vec3 to_aniso(Surface s, vec3 v) {
+    vec2 d = s.aniso_dir;
+    return vec3(d.x * v.x + d.y * v.y, d.x * v.y - d.y * v.x, v.z);
+}
+
+// Direction v of the anisotropy frame back in the shading frame.
+vec3 from_aniso(Surface s, vec3 v) {
+    vec2 d = s.aniso_dir;
+    return vec3(d.x * v.x - d.y * v.y, d.y * v.x + d.x * v.y, v.z);
+}
+
+// The material's microfacet distribution at h: micro_d, or anisotropic GGX.
+float spec_d(Surface s, vec3 h) {
+    if (s.anisotropy > 0.0) {
+        return ggx_d_aniso(to_aniso(s, h), aniso_alpha(s));
+    }
+    return micro_d(h, s.alpha);
+}
+
+// The material's G1(wo) G1(wi) / (4 |wo.z| |wi.z|): micro_visibility, or anisotropic GGX's.
+float spec_visibility(Surface s, vec3 wo, vec3 wi) {
+    if (s.anisotropy > 0.0) {
+        vec2 a = aniso_alpha(s);
+        return 0.25 * ggx_g1_over_cos_aniso(to_aniso(s, wo), a) * ggx_g1_over_cos_aniso(to_aniso(s, wi), a);
+    }
+    return micro_visibility(wo, wi, s.alpha);
+}
+
+// A half vector of the material's lobes for wo: micro_sample, or anisotropic GGX's visible
+// normals.
+vec3 spec_sample(Surface s, vec3 wo, vec2 u) {
+    if (s.anisotropy > 0.0) {
+        return from_aniso(s, sample_ggx_vndf_aniso(to_aniso(s, wo), aniso_alpha(s), u));
+    }
+    return micro_sample(wo, s.alpha, u);
+}
+
+// Density of the half vector h under spec_sample(wo).
+float spec_pdf_h(Surface s, vec3 wo, vec3 h) {
+    if (s.anisotropy > 0.0) {
+        return pdf_ggx_vndf_aniso(to_aniso(s, wo), to_aniso(s, h), aniso_alpha(s));
+    }
+    return micro_pdf_h(wo, h, s.alpha);
+}
+
+// Solid-angle density of wi = reflect(-wo, h) under spec_sample.
+float spec_pdf(Surface s, vec3 wo, vec3 h) {
+    if (s.anisotropy > 0.0) {
+        float oh = dot(wo, h);
+        if (oh <= 0.0) {
+            return 0.0;
+        }
+        return spec_pdf_h(s, wo, h) / (4.0 * oh);
+    }
+    return micro_pdf(wo, h, s.alpha);
+}
+
 // The dielectric layer's Fresnel at a microfacet with cos(wo, h) = c, the film's mixed in. Leaving
 // the denser side of a refracting boundary (eta < 1), Schlick's form takes the transmitted angle's
 // cosine, and beyond the critical angle reflection is total.
@@ -251,7 +327,7 @@ vec3 bsdf_eval_transmission(Surface s, vec3 wo, vec3 wi) {
         vec3 wm = vec3(wi.xy, -wi.z);  // mirrored to wo's side
         vec3 h = normalize(wo + wm);
         vec3 f = dielectric_fresnel(s, max(dot(wo, h), 0.0));
-        return weight * (1.0 - max3(f)) * s.base * micro_d(h, s.alpha) * micro_visibility(wo, wm, s.alpha);
+        return weight * (1.0 - max3(f)) * s.base * spec_d(s, h) * spec_visibility(s, wo, wm);
     }
     vec3 h = refraction_half_vector(s, wo, wi);
     float oh = dot(wo, h);
@@ -263,7 +339,7 @@ vec3 bsdf_eval_transmission(Surface s, vec3 wo, vec3 wi) {
     float denom = s.eta * ih + oh;
     // |i.h| |o.h| (1 - F) D G1(o) G1(i) / (|i.n| |o.n| (eta i.h + o.h)^2); micro_visibility
     // carries G1 G1 / (4 |i.n| |o.n|).
-    float btdf = -ih * oh * micro_d(h, s.alpha) * 4.0 * micro_visibility(wo, wi, s.alpha) / (denom * denom);
+    float btdf = -ih * oh * spec_d(s, h) * 4.0 * spec_visibility(s, wo, wi) / (denom * denom);
     return weight * (1.0 - max3(f)) * s.base * btdf;
 }
 
@@ -277,7 +353,7 @@ vec3 bsdf_eval_base(Surface s, vec3 wo, vec3 wi) {
     }
     vec3 h = normalize(wo + wi);
     float oh = max(dot(wo, h), 0.0);
-    float spec = micro_d(h, s.alpha) * micro_visibility(wo, wi, s.alpha);
+    float spec = spec_d(s, h) * spec_visibility(s, wo, wi);
     vec3 f_dielectric = dielectric_fresnel(s, oh);
     vec3 dielectric = (1.0 - max3(f_dielectric)) * (1.0 - s.transmission) * s.base * INV_PI + f_dielectric * spec;
     vec3 metal = metal_fresnel(s, oh) * spec;
@@ -471,7 +547,7 @@ vec3 bsdf_eval_diffuse(Surface s, vec3 wo, vec3 wi) {
 float transmission_pdf(Surface s, vec3 wo, vec3 wi) {
     if (s.thin) {
         vec3 wm = vec3(wi.xy, -wi.z);
-        return micro_pdf(wo, normalize(wo + wm), s.alpha);
+        return spec_pdf(s, wo, normalize(wo + wm));
     }
     vec3 h = refraction_half_vector(s, wo, wi);
     float oh = dot(wo, h);
@@ -481,7 +557,7 @@ float transmission_pdf(Surface s, vec3 wo, vec3 wi) {
     }
     // Walter et al. 2007, eq. 17: |dh/dwi| = eta^2 |i.h| / (eta i.h + o.h)^2.
     float denom = s.eta * ih + oh;
-    return micro_pdf_h(wo, h, s.alpha) * s.eta * s.eta * -ih / (denom * denom);
+    return spec_pdf_h(s, wo, h) * s.eta * s.eta * -ih / (denom * denom);
 }
 
 float bsdf_pdf_base(Surface s, vec3 wo, vec3 wi) {
@@ -493,7 +569,7 @@ float bsdf_pdf_base(Surface s, vec3 wo, vec3 wi) {
         return p.y > 0.0 ? p.y * transmission_pdf(s, wo, wi) : 0.0;
     }
     vec3 h = normalize(wo + wi);
-    return p.x * micro_pdf(wo, h, s.alpha) + p.z * pdf_cosine_hemisphere(wi);
+    return p.x * spec_pdf(s, wo, h) + p.z * pdf_cosine_hemisphere(wi);
 }
 
 // The density of the material's and the sheen's sampling (bsdf_pdf_base when there is no sheen).
@@ -519,10 +595,10 @@ float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
 bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
     vec3 p = lobe_probabilities(s, wo);
     if (u.x < p.x) {
-        vec3 h = micro_sample(wo, s.alpha, u.yz);
+        vec3 h = spec_sample(s, wo, u.yz);
         wi = reflect(-wo, h);
     } else if (u.x < p.x + p.y) {
-        vec3 h = micro_sample(wo, s.alpha, u.yz);
+        vec3 h = spec_sample(s, wo, u.yz);
         if (s.thin) {
             wi = reflect(-wo, h);
             wi.z = -wi.z;

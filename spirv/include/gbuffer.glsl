@@ -4,6 +4,7 @@
 #define UMBRA_GBUFFER_GLSL
 
 #include "camera.glsl"
+#include "sampling.glsl"
 
 // Octahedral encoding of a unit vector into [-1, 1]^2 (Cigolle et al. 2014, "A Survey of
 // Efficient Representations for Independent Unit Vectors").
@@ -25,18 +26,30 @@ vec3 oct_decode(vec2 e) {
 
 // The G-buffer's `layers` image (src/passes/gbuffer.rs): the layer textures' texels
 // (shading.glsl's LayerTexels: `specular` in x, `layers` in y, four unorm8 values a word: exact
-// for an 8-bit linear texel read unfiltered, within 1/510 otherwise; `iridescence.xy` in w, two
-// unorm16), and the clear coat's unit normal (world), octahedral, in z.
-uvec4 gbuffer_pack_layers(vec4 specular, vec4 layers, vec4 iridescence, vec3 coat_n) {
+// for an 8-bit linear texel read unfiltered, within 1/510 otherwise), the clear coat's unit normal
+// (world), octahedral, in z, and in w four unorm8 values: `iridescence.xy` (the film's weight and
+// thickness texels, as x and y) and KHR_materials_anisotropy's direction and strength. The
+// direction is an axis (the lobes and the bent normal are the same for d and -d): its angle in the
+// shading frame (basis(n)'s t and b) modulo pi, within 1/512 of a half turn (0.18 degrees); the
+// strength within 1/510.
+uvec4 gbuffer_pack_layers(vec4 specular, vec4 layers, vec4 iridescence, vec3 coat_n, float anisotropy,
+                          vec2 aniso_dir) {
+    float half_turn = fract(atan(aniso_dir.y, aniso_dir.x) * (1.0 / PI) + 1.0);
+    // A half turn of 1 - 1/512 and above rounds to 1 = pi: the same axis as 0.
     return uvec4(packUnorm4x8(specular), packUnorm4x8(layers), packSnorm2x16(oct_encode(coat_n)),
-                 packUnorm2x16(iridescence.xy));
+                 packUnorm4x8(vec4(iridescence.xy, half_turn, anisotropy)));
 }
 
-void gbuffer_unpack_layers(uvec4 bits, out vec4 specular, out vec4 layers, out vec4 iridescence, out vec3 coat_n) {
+void gbuffer_unpack_layers(uvec4 bits, out vec4 specular, out vec4 layers, out vec4 iridescence, out vec3 coat_n,
+                           out float anisotropy, out vec2 aniso_dir) {
     specular = unpackUnorm4x8(bits.x);
     layers = unpackUnorm4x8(bits.y);
     coat_n = oct_decode(unpackSnorm2x16(bits.z));
-    iridescence = vec4(unpackUnorm2x16(bits.w), 1.0, 1.0);
+    vec4 w = unpackUnorm4x8(bits.w);
+    iridescence = vec4(w.xy, 1.0, 1.0);
+    float angle = w.z * PI;
+    anisotropy = w.w;
+    aniso_dir = vec2(cos(angle), sin(angle));
 }
 
 // The world-space point at view-space `depth` (along forward) on pixel `pixel`'s centre ray.

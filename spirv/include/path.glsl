@@ -214,6 +214,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (coat_normal_differs()) {
         surface_coat_normal(s, coat_normal_lod(tri, hit.bary, ng, uv, LOD_LEVEL0), t, b, n);
     }
+    surface_anisotropy(s, tri, hit.bary, uv, LOD_LEVEL0, t, b, n);
     if (HAS_TRANSMISSION) {
         // A refracting boundary: glass (ior) behind the front face, air behind the back.
         float ior = material_vec(material, 3u).y;

@@ -59,15 +59,23 @@ bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
     sp.wo = -dir;
     basis(sp.n, sp.t, sp.b);
     sp.wo_local = vec3(dot(sp.wo, sp.t), dot(sp.wo, sp.b), dot(sp.wo, sp.n));
-    // The layer textures' texels and the coat's normal, where the scene has some (the G-buffer
-    // leaves them unwritten otherwise).
+    // The layer textures' texels, the coat's normal and the anisotropy, where the scene has some
+    // (the G-buffer leaves them unwritten otherwise).
     LayerTexels layers = layer_texels_none();
     vec3 coat_n = sp.n;
+    float anisotropy = 0.0;
+    vec2 aniso_dir = vec2(1.0, 0.0);
     if (gbuffer_has_layers()) {
-        gbuffer_unpack_layers(imageLoad(gb_layers, pixel), layers.specular, layers.layers, layers.iridescence, coat_n);
+        gbuffer_unpack_layers(imageLoad(gb_layers, pixel), layers.specular, layers.layers, layers.iridescence, coat_n,
+                              anisotropy, aniso_dir);
     }
     sp.s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w, layers);
     surface_coat_normal(sp.s, coat_n, sp.t, sp.b, sp.n);
+    if (HAS_ANISOTROPY) {
+        // KHR_materials_anisotropy (the G-buffer's: in basis(n)'s frame, as sp.t and sp.b).
+        sp.s.anisotropy = anisotropy;
+        sp.s.aniso_dir = aniso_dir;
+    }
     if (HAS_TRANSMISSION) {
         // Seen from outside (wo on the front): glass (ior) behind the surface.
         sp.s.eta = material_vec(mat.x, 3u).y;

@@ -94,6 +94,46 @@ float pdf_ggx_walter(vec3 h, float a) {
     return ggx_d(h, a) * max(h.z, 0.0);
 }
 
+// ---- GGX, anisotropic: alpha = (alpha_x, alpha_y) along the frame's x and y ----
+// (Heitz 2014, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs"; the
+// isotropic functions above are these with alpha_x = alpha_y, kept apart so that kernels without
+// anisotropy compile to what they were.)
+
+// D(h) = 1 / (pi ax ay ((hx / ax)^2 + (hy / ay)^2 + hz^2)^2).
+float ggx_d_aniso(vec3 h, vec2 a) {
+    vec2 s = h.xy / a;
+    float d = dot(s, s) + h.z * h.z;
+    return h.z > 0.0 ? 1.0 / (PI * a.x * a.y * d * d) : 0.0;
+}
+
+// G1(w) / |w.z| (Smith, separable): 2 / (|w.z| + sqrt(ax^2 wx^2 + ay^2 wy^2 + wz^2)).
+float ggx_g1_over_cos_aniso(vec3 w, vec2 a) {
+    vec2 s = a * w.xy;
+    return 2.0 / (abs(w.z) + sqrt(dot(s, s) + w.z * w.z));
+}
+
+// Visible-normal sampling for anisotropic GGX (Heitz 2018: the view stretched by (ax, ay) to
+// the hemisphere configuration, a visible normal sampled there, stretched back).
+vec3 sample_ggx_vndf_aniso(vec3 wo, vec2 a, vec2 u) {
+    vec3 vh = normalize(vec3(a * wo.xy, wo.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    float p1 = r * cos(phi);
+    float p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3(a * nh.xy, max(1e-7, nh.z)));
+}
+
+// Density of the half vector h under sample_ggx_vndf_aniso(wo): G1(wo) max(0, wo.h) D(h) / wo.z.
+float pdf_ggx_vndf_aniso(vec3 wo, vec3 h, vec2 a) {
+    return ggx_g1_over_cos_aniso(wo, a) * max(0.0, dot(wo, h)) * ggx_d_aniso(h, a);
+}
+
 // ---- Beckmann, alpha = roughness^2 ----
 
 float beckmann_d(vec3 h, float a) {

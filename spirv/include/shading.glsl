@@ -18,7 +18,7 @@
 
 // Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
 // specular, params, flags, textures[0..4], tex_transform[0..32], clearcoat, parallax, sheen,
-// iridescence), as floats or as unsigned integers.
+// iridescence, anisotropy), as floats or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
 }
@@ -166,6 +166,9 @@ bool slot_textured(uint slot) {
     if (HAS_IRIDESCENCE_MAP) {
         textured = textured || slot == MATERIAL_SLOT_IRIDESCENCE || slot == MATERIAL_SLOT_IRIDESCENCE_THICKNESS;
     }
+    if (HAS_ANISOTROPY_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_ANISOTROPY;
+    }
     return textured;
 }
 
@@ -302,9 +305,14 @@ bool coat_normal_differs() {
     return differs;
 }
 
-// Whether the G-buffer's gb_layers image is written (and read): layer textures or a coat normal.
+// Whether the G-buffer's gb_layers image is written (and read): layer textures, a coat normal or
+// anisotropy.
 bool gbuffer_has_layers() {
-    return layer_textured() || coat_normal_differs();
+    bool anisotropic = false;
+    if (HAS_ANISOTROPY) {
+        anisotropic = true;
+    }
+    return layer_textured() || coat_normal_differs() || anisotropic;
 }
 
 // Material `id` as a BSDF surface, given its (textured) base colour, metallic and roughness and
@@ -346,6 +354,10 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     // The sheen only where the kernel is specialised for it (HAS_SHEEN).
     s.sheen = vec3(0.0);
     s.sheen_roughness = 1.0;
+    // Anisotropy only where the kernel is specialised for it and the caller gives the tangent
+    // frame (surface_anisotropy).
+    s.anisotropy = 0.0;
+    s.aniso_dir = vec2(1.0, 0.0);
     if (HAS_SHEEN) {
         vec4 sheen = material_vec(id, MATERIAL_SHEEN_TEXEL);
         s.sheen = clamp(sheen.rgb, 0.0, 1.0);
@@ -824,6 +836,52 @@ vec3 coat_normal_lod(uint tri, vec2 bary, vec3 ng, vec4 uv, vec2 cone_lod) {
 void surface_coat_normal(inout Surface s, vec3 coat_n, vec3 t, vec3 b, vec3 n) {
     if (coat_normal_differs()) {
         s.coat_n = vec3(dot(coat_n, t), dot(coat_n, b), dot(coat_n, n));
+    }
+}
+
+// KHR_materials_anisotropy at a hit of triangle `tri` (barycentrics `bary`, UV sets `uv`, the
+// anisotropy texture filtered for `cone_lod`) with shading frame (t, b, n): gives surface s its
+// strength and direction, in kernels specialised for it (HAS_ANISOTROPY). The direction in tangent
+// space is the texture's RG as 2 rg - 1 ((1, 0) without a texture) turned by anisotropyRotation
+// (counter-clockwise, from the tangent towards the bitangent); it is taken to world through the
+// interpolated vertex tangent made orthogonal to n and the bitangent cross(n, t) * sign (the
+// normal map's frame), the strength is anisotropyStrength times the texture's B. Where there is
+// no tangent frame (tangent w 0: no TANGENT and no UVs, src/scene/geometry.rs; implicit shapes)
+// or the direction is zero, s stays isotropic.
+void surface_anisotropy(inout Surface s, uint tri, vec2 bary, vec4 uv, vec2 cone_lod, vec3 t, vec3 b, vec3 n) {
+    if (HAS_ANISOTROPY) {
+        uint material = tri_material(tri);
+        vec4 aniso = material_vec(material, MATERIAL_ANISOTROPY_TEXEL);
+        float strength = aniso.x;
+        vec2 dir = vec2(1.0, 0.0);
+        if (HAS_ANISOTROPY_MAP) {
+            if (material_slot_texture(material, MATERIAL_SLOT_ANISOTROPY) != 0u) {
+                vec3 texel = material_texture_lod(material, MATERIAL_SLOT_ANISOTROPY, uv, cone_lod).rgb;
+                dir = texel.rg * 2.0 - 1.0;
+                strength *= texel.b;
+            }
+        }
+        dir = vec2(aniso.y * dir.x - aniso.z * dir.y, aniso.z * dir.x + aniso.y * dir.y);
+        vec3 d = vec3(0.0);
+        if (!bvh_is_implicit(tri)) {
+            uvec3 idx = tri_indices(tri);
+            float b0 = 1.0 - bary.x - bary.y;
+            vec4 ta = vertex_tangent(idx.x);
+            vec4 tg = b0 * ta + bary.x * vertex_tangent(idx.y) + bary.y * vertex_tangent(idx.z);
+            vec3 tt = tg.xyz - n * dot(n, tg.xyz);
+            float tl = length(tt);
+            if (tl > 1e-8 && abs(ta.w) > 0.5) {
+                tt /= tl;
+                vec3 bt = cross(n, tt) * (ta.w < 0.0 ? -1.0 : 1.0);
+                d = dir.x * tt + dir.y * bt;
+            }
+        }
+        vec2 local = vec2(dot(d, t), dot(d, b));
+        float len = length(local);
+        if (strength > 0.0 && len > 1e-6) {
+            s.anisotropy = min(strength, 1.0);
+            s.aniso_dir = local / len;
+        }
     }
 }
 

@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 22] = [
+pub const SCENE_FEATURES: [&str; 24] = [
     "textures",
     "alpha",
     "lights",
@@ -62,6 +62,8 @@ pub const SCENE_FEATURES: [&str; 22] = [
     "clearcoat_map",
     "iridescence",
     "iridescence_map",
+    "anisotropy",
+    "anisotropy_map",
 ];
 
 /// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
@@ -69,7 +71,7 @@ pub const SCENE_FEATURES: [&str; 22] = [
 /// material; one per extension's texture group (`KHR_materials_specular`'s two textures share
 /// `specular_map`), whose textures come together in the files seen (BENCHMARKS.md History: a
 /// scene with one of them pays for the others' lookups). The height slot is `parallax`'s.
-pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 9] = [
+pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 10] = [
     ("base_color_map", 1 << 0),
     ("metal_rough_map", 1 << 1),
     ("emissive_map", 1 << 2),
@@ -79,6 +81,7 @@ pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 9] = [
     ("transmission_map", 1 << 8),
     ("clearcoat_map", 1 << 9 | 1 << 10 | 1 << 11),
     ("iridescence_map", 1 << 13 | 1 << 14),
+    ("anisotropy_map", 1 << 12),
 ];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
@@ -264,7 +267,7 @@ gpu_structs! {
         /// The texture of each slot (`MATERIAL_SLOT_*`; slot k is `textures[k / 4][k % 4]`):
         /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, occlusion,
         /// height (parallax occlusion mapping), specular, specular colour, transmission, clear
-        /// coat, clear coat roughness, clear coat normal, (12: unused), iridescence, iridescence
+        /// coat, clear coat roughness, clear coat normal, anisotropy, iridescence, iridescence
         /// thickness, (15: unused).
         textures: [uvec4; 4],
         /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
@@ -288,6 +291,10 @@ gpu_structs! {
         /// `iridescenceThicknessMinimum`, `iridescenceThicknessMaximum` (nm). Read only by kernels
         /// specialised for it (`HAS_IRIDESCENCE`).
         iridescence: vec4,
+        /// `KHR_materials_anisotropy`: `anisotropyStrength`, cos and sin of
+        /// `anisotropyRotation`, unused. Read only by kernels specialised for it
+        /// (`HAS_ANISOTROPY`).
+        anisotropy: vec4,
     }
 
     /// A texture in the shared texel buffer (linear RGBA16, one RG32UI texel per texel,
@@ -745,15 +752,27 @@ gpu_structs! {
         alpha: float,
         /// 0 sample, 1 evaluate the pdf, 2 evaluate the BSDF of opaque surfaces (tests/brdf.rs),
         /// 3 the BSDF and its pdf at given directions, 4 the thin-film Fresnel
-        /// (tests/iridescence.rs).
+        /// (tests/iridescence.rs), 5 sample weights (the white furnace).
         mode: uint,
         /// Number of samples or directions.
         count: uint,
         /// Seed.
         seed: uint,
         /// 0 cosine, 1 microfacet, 2-4 dielectric BSDF (2 reflection side, 3 inside, 4 thin),
-        /// 5 and 7 coated, 6 sheened, 8 iridescent (spirv/sample_test.comp).
+        /// 5 and 7 coated, 6 sheened, 8 iridescent, 9 anisotropic (`anisotropy`;
+        /// spirv/sample_test.comp).
         kind: uint,
+        /// Kind 9's `KHR_materials_anisotropy`: strength, the direction's x and y in the
+        /// shading frame, metallic.
+        anisotropy: vec4,
+        /// Kind 9's base colour (grey).
+        anisotropy_base: float,
+        /// Padding.
+        pad0: float,
+        /// Padding.
+        pad1: float,
+        /// Padding.
+        pad2: float,
     }
 
     /// Push constants of `ssao.comp` and `rtao.comp`.
@@ -856,8 +875,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 720 bytes).
-    MATERIAL_TEXELS: uint = 45;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 736 bytes).
+    MATERIAL_TEXELS: uint = 46;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -910,7 +929,14 @@ gpu_constants! {
     MATERIAL_SHEEN_TEXEL: uint = 43;
     /// The texel of [`GpuMaterial::iridescence`] in a material's texels.
     MATERIAL_IRIDESCENCE_TEXEL: uint = 44;
-    /// Texture slots a material has (each with two `tex_transform` rows).
+    /// Slot of `KHR_materials_anisotropy`'s `anisotropyTexture` (RG: the direction in tangent
+    /// space, `2 x - 1`; B: × `anisotropyStrength`; left empty where the strength is 0). Looked
+    /// up only by kernels specialised for it (`HAS_ANISOTROPY_MAP`).
+    MATERIAL_SLOT_ANISOTROPY: uint = 12;
+    /// The texel of [`GpuMaterial::anisotropy`] in a material's texels.
+    MATERIAL_ANISOTROPY_TEXEL: uint = 45;
+    /// Texture slots a material has room for (each with two `tex_transform` rows; slot 15 is
+    /// unused).
     MATERIAL_TEXTURE_SLOTS: uint = 16;
     /// `GpuTexture::flags`: clamp s.
     TEXTURE_WRAP_S_CLAMP: uint = 1;
@@ -1084,7 +1110,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, anisotropy],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1123,7 +1149,7 @@ kernels! {
     /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
     /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
     kernel wavefront {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, anisotropy],
         push: WaveParams,
         spec: {
             beckmann: bool = false,
@@ -1255,7 +1281,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, anisotropy],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -1276,7 +1302,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, anisotropy],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1334,7 +1360,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, anisotropy],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1363,7 +1389,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, anisotropy],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1404,7 +1430,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1500,7 +1526,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1539,7 +1565,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1575,7 +1601,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1597,7 +1623,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -163,6 +163,8 @@ pub struct SceneFeatures {
     pub sheen: bool,
     /// Some material has a thin film (`KHR_materials_iridescence`).
     pub iridescence: bool,
+    /// Some material is anisotropic (`KHR_materials_anisotropy`).
+    pub anisotropy: bool,
 }
 
 impl SceneFeatures {
@@ -183,6 +185,7 @@ impl SceneFeatures {
             parallax: scene.has_parallax,
             sheen: scene.has_sheen,
             iridescence: scene.has_iridescence,
+            anisotropy: scene.has_anisotropy,
         }
     }
 
@@ -202,6 +205,7 @@ impl SceneFeatures {
             "parallax" => self.parallax,
             "sheen" => self.sheen,
             "iridescence" => self.iridescence,
+            "anisotropy" => self.anisotropy,
             _ => {
                 let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
                 self.texture_slots & slots != 0

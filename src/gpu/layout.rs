@@ -399,12 +399,14 @@ const _: () = assert!(size_of::<GpuMaterial>() == 16 * MATERIAL_TEXELS as usize)
 // on, two texels per slot.
 const _: () = assert!(offset_of!(GpuMaterial, textures) == 16 * 5);
 const _: () = assert!(offset_of!(GpuMaterial, tex_transform) == 16 * 9);
+const _: () = assert!(4 * 4 == MATERIAL_TEXTURE_SLOTS as usize);
 // The clear coat follows the transforms; the parallax parameters follow the clear coat.
 const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * (9 + 2 * MATERIAL_TEXTURE_SLOTS as usize));
 const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * MATERIAL_CLEARCOAT_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, parallax) == 16 * MATERIAL_PARALLAX_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, sheen) == 16 * MATERIAL_SHEEN_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, iridescence) == 16 * MATERIAL_IRIDESCENCE_TEXEL as usize);
+const _: () = assert!(offset_of!(GpuMaterial, anisotropy) == 16 * MATERIAL_ANISOTROPY_TEXEL as usize);
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);
@@ -419,7 +421,7 @@ const _: () = assert!(size_of::<IblParams>() == 48);
 #[cfg(feature = "testing")]
 const _: () = assert!(size_of::<LightTestParams>() == 64);
 #[cfg(feature = "testing")]
-const _: () = assert!(size_of::<SampleTestParams>() == 32);
+const _: () = assert!(size_of::<SampleTestParams>() == 64);
 
 impl TraceHit {
     /// `tri` of a ray that hit nothing.

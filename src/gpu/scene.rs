@@ -75,6 +75,9 @@ pub struct GpuScene {
     /// Whether some material has a thin film (`KHR_materials_iridescence`): the shading kernels
     /// mix its Fresnel in only then.
     pub has_iridescence: bool,
+    /// Whether some material is anisotropic (`KHR_materials_anisotropy`): the shading kernels
+    /// evaluate and sample anisotropic specular lobes only then.
+    pub has_anisotropy: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -335,6 +338,9 @@ impl ShadingArrays {
                 let film = m.iridescence > 0.0;
                 let film_texture = m.iridescence_texture.as_ref().filter(|_| film);
                 let film_thickness_texture = m.iridescence_thickness_texture.as_ref().filter(|_| film);
+                // And the anisotropy texture to a strength of 0 (or a scene without tangents).
+                let anisotropy_texture =
+                    m.anisotropy_texture.as_ref().filter(|_| m.anisotropic() && !scene.tangents.is_empty());
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -365,7 +371,7 @@ impl ShadingArrays {
                             },
                         ],
                         [
-                            0,
+                            gpu_textures.slot(scene, anisotropy_texture),
                             gpu_textures.slot(scene, film_texture),
                             gpu_textures.slot(scene, film_thickness_texture),
                             0,
@@ -384,7 +390,7 @@ impl ShadingArrays {
                         coat_texture,
                         coat_roughness_texture,
                         coat_normal_texture,
-                        None,
+                        anisotropy_texture,
                         film_texture,
                         film_thickness_texture,
                         None,
@@ -412,6 +418,12 @@ impl ShadingArrays {
                         m.iridescence_thickness[0],
                         m.iridescence_thickness[1],
                     ],
+                    anisotropy: if m.anisotropic() {
+                        let (sin, cos) = m.anisotropy_rotation.sin_cos();
+                        [m.anisotropy_strength, cos, sin, 0.0]
+                    } else {
+                        [0.0; 4]
+                    },
                     flags: [
                         if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
                             | if m.volume { GpuMaterial::VOLUME } else { 0 }
@@ -526,6 +538,7 @@ impl GpuScene {
             has_clearcoat: coated(&arrays.materials),
             has_sheen: sheened(&arrays.materials),
             has_iridescence: iridescent(&arrays.materials),
+            has_anisotropy: anisotropic(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
@@ -579,6 +592,7 @@ impl GpuScene {
         self.has_parallax = parallax(&arrays.materials);
         self.has_sheen = sheened(&arrays.materials);
         self.has_iridescence = iridescent(&arrays.materials);
+        self.has_anisotropy = anisotropic(&arrays.materials);
         Ok(())
     }
 }
@@ -669,6 +683,11 @@ fn iridescent(materials: &[GpuMaterial]) -> bool {
 /// Whether some material has a sheen (a sheen colour above 0).
 fn sheened(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.sheen[..3].iter().any(|&c| c > 0.0))
+}
+
+/// Whether some material is anisotropic (a strength above 0).
+fn anisotropic(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.anisotropy[0] > 0.0)
 }
 
 fn parallax(materials: &[GpuMaterial]) -> bool {

@@ -357,7 +357,9 @@ impl LocalPrimitive {
 }
 
 /// Per-vertex tangents from UV derivatives, accumulated over the triangles around each vertex and
-/// Gram-Schmidt orthonormalised against the normal (`w` = handedness). Without UVs, any tangent.
+/// Gram-Schmidt orthonormalised against the normal (`w` = handedness). Without UVs, any tangent
+/// with `w` = 0: no frame (a normal map reads its texel at UV 0 in it, as it did with `w` = 1;
+/// anisotropy, which needs a direction, is dropped there).
 fn generate_tangents(
     positions: &[Vec3],
     normals: &[Vec3],
@@ -382,6 +384,9 @@ fn generate_tangents(
                 dv[v] += tv;
             }
         }
+    }
+    if uvs.is_none() {
+        return normals.iter().map(|&n| n.any_orthonormal_vector().extend(0.0)).collect();
     }
     // glTF UVs grow downwards in the image, so the normal map's "up" (+Y, the bitangent) is -dP/dv.
     (0..positions.len())

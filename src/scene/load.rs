@@ -42,6 +42,7 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     let mut builder = Builder::new(&origin, &asset, materials);
     builder.walk()?;
     let posed = builder.static_pose_warning();
+    let frameless = builder.frameless_warning();
     let mut scene = builder.finish()?;
     let (decoded, failed, warnings) = textures.decode(&origin, &asset, options.missing_textures)?;
     scene.textures = decoded;
@@ -61,6 +62,7 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     scene.warnings.extend(material_warnings);
     scene.warnings.extend(asset.ignored_extensions.clone());
     scene.warnings.extend(posed);
+    scene.warnings.extend(frameless);
     scene.update_emissive();
     if log::log_enabled!(log::Level::Debug) {
         log::debug!("{name}: {:?}", scene.stats());
@@ -73,8 +75,11 @@ struct Builder<'a> {
     origin: &'a Origin,
     asset: &'a Asset<'a>,
     reader: Reader<'a>,
-    /// Whether any material has a normal map, so every vertex needs a tangent.
+    /// Whether any material has a normal map or is anisotropic, so every vertex needs a tangent.
     tangents: bool,
+    /// Primitives with an anisotropic material and no tangent frame (no `TANGENT`, no UVs), for
+    /// the warning that they are rendered isotropic.
+    frameless: Vec<String>,
     /// Each primitive read once per (mesh, primitive, morph weights' bits, skinned); `None` for
     /// primitives that are not triangles.
     primitives: HashMap<PrimitiveKey, Option<Rc<LocalPrimitive>>>,
@@ -97,7 +102,8 @@ impl<'a> Builder<'a> {
             origin,
             asset,
             reader: Reader { origin, buffers: &asset.buffers },
-            tangents: materials.iter().any(|m| m.normal_texture.is_some()),
+            tangents: materials.iter().any(|m| m.normal_texture.is_some() || m.anisotropic()),
+            frameless: Vec::new(),
             primitives: HashMap::new(),
             node_worlds: None,
             skinned_nodes: 0,
@@ -223,6 +229,24 @@ impl<'a> Builder<'a> {
     /// The one warning that the file moves (animations, skins, morph targets) and umbra renders
     /// it still: nodes at their default transforms, skins at the pose those give their joints,
     /// morph targets at their default weights. Logged here; `None` when nothing moves.
+    /// The one warning naming the anisotropic primitives without a tangent frame, if any.
+    fn frameless_warning(&self) -> Option<String> {
+        if self.frameless.is_empty() {
+            return None;
+        }
+        let warning = format!(
+            "{}: KHR_materials_anisotropy needs a tangent frame, and {} no TANGENT and no TEXCOORD to derive one from: rendered isotropic there",
+            self.origin.name(),
+            if self.frameless.len() == 1 {
+                format!("{} has", self.frameless[0])
+            } else {
+                format!("{} have", self.frameless.join(", "))
+            }
+        );
+        log::warn!("{warning}");
+        Some(warning)
+    }
+
     fn static_pose_warning(&self) -> Option<String> {
         let plural = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         let mut what = Vec::new();
@@ -389,16 +413,29 @@ impl<'a> Builder<'a> {
         if let Some(cached) = self.primitives.get(&key) {
             return Ok(cached.clone());
         }
-        let normal_uv_set =
-            |m: usize| self.scene.materials.get(m).and_then(|m| m.normal_texture).map(|t| t.tex_coord);
+        // Tangents from the normal map's UV set, else the anisotropy texture's, else set 0.
+        let uv_set = |m: usize| {
+            let m = self.scene.materials.get(m)?;
+            m.normal_texture.or(m.anisotropy_texture).map(|t| t.tex_coord)
+        };
         let wanted = Wanted {
             tangents_from_uv: self
                 .tangents
-                .then(|| primitive.material().index().and_then(normal_uv_set).unwrap_or(0)),
+                .then(|| primitive.material().index().and_then(uv_set).unwrap_or(0)),
             morph_weights,
             skinned,
         };
         let local = read_primitive(&self.reader, mesh, primitive, wanted)?.map(Rc::new);
+        // KHR_materials_anisotropy's direction lies in the tangent frame: without one (no
+        // TANGENT and no UVs to derive it from, tangent w = 0) the surface is rendered isotropic.
+        let anisotropic = primitive
+            .material()
+            .index()
+            .and_then(|m| self.scene.materials.get(m))
+            .is_some_and(Material::anisotropic);
+        if anisotropic && local.as_ref().is_some_and(|l| l.tangents.iter().any(|t| t.w == 0.0)) {
+            self.frameless.push(super::geometry::label(mesh, primitive));
+        }
         self.primitives.insert(key, local.clone());
         Ok(local)
     }

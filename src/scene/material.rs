@@ -1,5 +1,6 @@
-//! Materials: glTF 2.0 metallic-roughness with the emissive strength, specular, transmission, IOR
-//! and unlit extensions, and `KHR_texture_transform` on every texture slot.
+//! Materials: glTF 2.0 metallic-roughness with the emissive strength, specular, transmission, IOR,
+//! volume, unlit, clear coat, sheen and anisotropy extensions, and `KHR_texture_transform` on
+//! every texture slot.
 
 use super::texture::TextureSet;
 use gltf::json::Value;
@@ -65,7 +66,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 13] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 14] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -80,6 +81,7 @@ impl Material {
             &mut self.clearcoat_normal_texture,
             &mut self.iridescence_texture,
             &mut self.iridescence_thickness_texture,
+            &mut self.anisotropy_texture,
         ]
     }
 }
@@ -111,6 +113,8 @@ impl Material {
             iridescence,
             iridescence_ior,
             iridescence_thickness,
+            anisotropy_strength,
+            anisotropy_rotation,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -124,6 +128,7 @@ impl Material {
             clearcoat_normal_texture,
             iridescence_texture,
             iridescence_thickness_texture,
+            anisotropy_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -197,6 +202,11 @@ impl Material {
             for s in film {
                 slot(h, s);
             }
+        }
+        // Nor without anisotropy.
+        if *anisotropy_strength != 0.0 || *anisotropy_rotation != 0.0 || anisotropy_texture.is_some() {
+            h.f32s(&[*anisotropy_strength, *anisotropy_rotation]);
+            slot(h, anisotropy_texture);
         }
     }
 }
@@ -310,6 +320,13 @@ pub struct Material {
     /// where the thickness texture reads 0 and 1 (default 100 and 400; the maximum without a
     /// texture). A film of thickness 0 is none (the material's own Fresnel).
     pub iridescence_thickness: [f32; 2],
+    /// `KHR_materials_anisotropy`'s `anisotropyStrength` (default 0: isotropic): the specular
+    /// lobes' GGX roughness along the anisotropy direction is αt = mix(α, 1, strength²), across
+    /// it αb = α.
+    pub anisotropy_strength: f32,
+    /// `anisotropyRotation` (radians, default 0): the anisotropy direction's angle from the
+    /// tangent towards the bitangent (the texture's direction, when there is one, rotated so).
+    pub anisotropy_rotation: f32,
     /// Base colour (sRGB RGBA).
     pub base_color_texture: Option<TextureRef>,
     /// Roughness in G, metalness in B (linear).
@@ -341,6 +358,9 @@ pub struct Material {
     /// `iridescenceThicknessTexture`: in G (linear), the film's thickness from the minimum (0) to
     /// the maximum (1).
     pub iridescence_thickness_texture: Option<TextureRef>,
+    /// `anisotropyTexture` (linear): RG the direction in tangent space (2·rg − 1), B × the
+    /// strength.
+    pub anisotropy_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -372,6 +392,8 @@ impl Default for Material {
             iridescence: 0.0,
             iridescence_ior: 1.3,
             iridescence_thickness: [100.0, 400.0],
+            anisotropy_strength: 0.0,
+            anisotropy_rotation: 0.0,
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -385,6 +407,7 @@ impl Default for Material {
             clearcoat_normal_texture: None,
             iridescence_texture: None,
             iridescence_thickness_texture: None,
+            anisotropy_texture: None,
             parallax: None,
         }
     }
@@ -469,6 +492,10 @@ impl Material {
             film.and_then(|c| c.get(key)).and_then(Value::as_f64).map_or(default, |x| x as f32)
         };
         let film_default = Self::default();
+        let anisotropy = material.extension_value("KHR_materials_anisotropy");
+        // Strength in [0, 1], rotation finite: ranges.rs refuses a file with other values.
+        let anisotropy_number =
+            |key: &str| anisotropy.and_then(|a| a.get(key)).and_then(Value::as_f64).map_or(0.0, |x| x as f32);
         Self {
             name: material.name().unwrap_or_default().to_owned(),
             base_color_factor: pbr.base_color_factor(),
@@ -500,6 +527,8 @@ impl Material {
                 film_number("iridescenceThicknessMinimum", film_default.iridescence_thickness[0]),
                 film_number("iridescenceThicknessMaximum", film_default.iridescence_thickness[1]),
             ],
+            anisotropy_strength: anisotropy_number("anisotropyStrength"),
+            anisotropy_rotation: anisotropy_number("anisotropyRotation"),
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -514,13 +543,20 @@ impl Material {
             clearcoat_normal_texture: None,
             iridescence_texture: None,
             iridescence_thickness_texture: None,
+            anisotropy_texture: None,
             parallax: None,
         }
     }
 
+    /// Whether the material is anisotropic (`KHR_materials_anisotropy` with a strength above 0):
+    /// its primitives need tangents, as a normal map's do.
+    pub fn anisotropic(&self) -> bool {
+        self.anisotropy_strength > 0.0
+    }
+
     /// Reads the textures of the extensions the `gltf` crate leaves as raw JSON
-    /// (`KHR_materials_clearcoat`'s three, `KHR_materials_iridescence`'s two), registering them in
-    /// `textures`. Errors say which
+    /// (`KHR_materials_clearcoat`'s three, `KHR_materials_iridescence`'s two,
+    /// `KHR_materials_anisotropy`'s), registering them in `textures`. Errors say which
     /// texture reference is wrong; the caller names the file and the material.
     pub(super) fn read_extension_textures(
         &mut self,
@@ -544,6 +580,12 @@ impl Material {
             };
             self.iridescence_texture = read("iridescenceTexture")?;
             self.iridescence_thickness_texture = read("iridescenceThicknessTexture")?;
+        }
+        if let Some(info) =
+            material.extension_value("KHR_materials_anisotropy").and_then(|a| a.get("anisotropyTexture"))
+        {
+            let element = "KHR_materials_anisotropy.anisotropyTexture";
+            self.anisotropy_texture = Some(raw_texture_ref(info, element, document, textures)?);
         }
         Ok(())
     }

@@ -17,7 +17,9 @@
 //! - rejects a scene with no triangles left, and a node tree with a cycle or a shared node;
 //! - loads every root node when the file defines no scene at all;
 //! - generates per-vertex tangents from UV derivatives (not MikkTSpace) when a material has a
-//!   normal map and the primitive has no `TANGENT`;
+//!   normal map or anisotropy (`KHR_materials_anisotropy`) and the primitive has no `TANGENT`;
+//!   without UVs either, the tangents' `w` is 0 (no frame: anisotropy is dropped there, with one
+//!   warning naming the primitives);
 //! - renders one static pose of a file that moves: nodes at their default transforms (animations
 //!   are not played), morph targets at their default weights (the node's `weights`, else the
 //!   mesh's), skins at the pose their joints' default transforms give (linear blend skinning,
@@ -59,6 +61,7 @@ pub use texture::{mip_level_count, Filter, MipLevel, Sampler, Texture, Wrap};
 /// glTF extensions umbra reads; a file that *requires* any other one is rejected.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
@@ -92,7 +95,8 @@ pub struct Scene {
     /// Unit shading normals, world space.
     pub normals: Vec<[f32; 3]>,
     /// Unit tangents (xyz) with the bitangent sign in w (`bitangent = cross(normal, tangent) * w`).
-    /// Filled only when some material has a normal map; empty otherwise.
+    /// Filled only when some material has a normal map or anisotropy; empty otherwise. `w` 0: no
+    /// tangent frame (no `TANGENT` and no UVs to derive one from).
     pub tangents: Vec<[f32; 4]>,
     /// `TEXCOORD_0` (origin at the image's top-left); empty when no primitive has it, zero for
     /// the primitives that lack it.
@@ -122,7 +126,8 @@ pub struct Scene {
     pub implicits: Vec<ImplicitShape>,
     /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
     /// optional glTF extensions it ignored (one entry naming them all), the parts of a material
-    /// it does not read (sheen textures: one entry per material) and, for a file with
+    /// it does not read (sheen textures: one entry per material), the anisotropic primitives
+    /// without a tangent frame (one entry) and, for a file with
     /// animations, skins or morph targets, that one static pose is rendered (one entry); also
     /// logged as warnings.
     pub warnings: Vec<String>,

@@ -149,6 +149,11 @@ impl Checker {
             &["iridescenceTexture", "iridescenceThicknessTexture"],
         );
         extension(
+            "KHR_materials_anisotropy",
+            &[("anisotropyStrength", unit), ("anisotropyRotation", Range::Finite)],
+            &["anisotropyTexture"],
+        );
+        extension(
             "KHR_materials_volume",
             &[
                 ("thicknessFactor", Range::AtLeast(0.0)),

@@ -1,8 +1,9 @@
 //! The extensions' layer textures: `KHR_materials_specular`'s `specularTexture` (A) and
 //! `specularColorTexture` (RGB), `KHR_materials_transmission`'s `transmissionTexture` (R),
 //! `KHR_materials_clearcoat`'s `clearcoatTexture` (R), `clearcoatRoughnessTexture` (G) and
-//! `clearcoatNormalTexture` (and the coat's own, unmapped normal), in the path tracer and the
-//! hybrid renderer (which carries their texels in the G-buffer's `layers` image). A quad facing
+//! `clearcoatNormalTexture` (and the coat's own, unmapped normal), `KHR_materials_sheen`'s
+//! `sheenColorTexture` (RGB) and `sheenRoughnessTexture` (A), in the path tracer and the
+//! hybrid renderer (which carries their texels in the G-buffer's `layers` and `layers2` images). A quad facing
 //! the camera fills the view; each render is compared with the same scene whose texture is folded
 //! into the material's factor, pixel by pixel.
 
@@ -202,4 +203,74 @@ fn the_coat_keeps_the_unmapped_normal() {
         eprintln!("{mode}: coat highlight {kept:.3}, with the coat's own normal map {moved:.3}");
         assert!((moved - kept).abs() > 0.5 * kept, "{mode}: the coat's normal map moves its highlight");
     }
+}
+
+/// KHR_materials_sheen's two textures reach the lobe: a quad whose `sheenColorTexture` and
+/// `sheenRoughnessTexture` are one texture of two texels (the left and right halves of the UV
+/// square), lit by a grazing sun (75.5° from the normal, where the Charlie sheen is strongest)
+/// and a dim sky, renders on each half as the untextured material whose factors are × that half's
+/// texel (RGB for the colour, A for the roughness), pixel by pixel in both modes (the hybrid
+/// carries them in the G-buffer's `layers2`). The texels' channels all differ, so a slot that read
+/// another channel, or a half that read the other texel, would not match; each half must also
+/// differ from the factors alone.
+#[test]
+fn the_sheen_textures_reach_the_lobe() {
+    let gpu = Gpu::new();
+    let texels = [[200u8, 120, 40, 60], [60, 160, 230, 240]];
+    let t = texels.map(|texel| texel.map(|c| c as f32 / 255.0));
+    let base = Material {
+        base_color_factor: [0.2, 0.2, 0.2, 1.0],
+        metallic: 0.0,
+        roughness: 0.6,
+        sheen_color: [1.0, 0.9, 0.8],
+        sheen_roughness: 0.9,
+        double_sided: true,
+        ..Default::default()
+    };
+    let render = |m: Material, textured: bool| {
+        let mut s = quad_scene(m, textured.then(|| common::row_texture("sheen", &texels)), 0.0);
+        let grazing = Vec3::new(-0.968, 0.0, -0.25);
+        s.lights = vec![common::light(LightKind::Directional, Vec3::ZERO, grazing, 4.0)];
+        renders(&gpu, &s, 0.05)
+    };
+    let folded = |t: [f32; 4]| Material {
+        sheen_color: [0, 1, 2].map(|c| base.sheen_color[c] * t[c]),
+        sheen_roughness: base.sheen_roughness * t[3],
+        ..base.clone()
+    };
+    let textured = render(
+        Material { sheen_color_texture: slot(), sheen_roughness_texture: slot(), ..base.clone() },
+        true,
+    );
+    let halves = [render(folded(t[0]), false), render(folded(t[1]), false)];
+    let factor = render(base.clone(), false);
+    let (w, h) = SIZE;
+    let mut failures = Vec::new();
+    for (m, mode) in MODES.iter().enumerate() {
+        for (half, reference) in halves.iter().enumerate() {
+            // Two columns clear of the seam (a path traced pixel's jitter crosses it).
+            let columns: Vec<u32> =
+                if half == 0 { (0..w / 2 - 2).collect() } else { (w / 2 + 2..w).collect() };
+            let (mut differ, mut count) = (0, 0);
+            for y in 0..h {
+                for &x in &columns {
+                    let i = (y * w + x) as usize;
+                    let (p, q) = (textured[m][i], reference[m][i]);
+                    assert!(q[0] > 0.01, "{mode}: pixel ({x}, {y}) is lit ({q:?})");
+                    if !same(&p, &q) {
+                        failures
+                            .push(format!("{mode}, half {half}: ({x}, {y}) textured {p:?} vs folded {q:?}"));
+                    }
+                    differ += usize::from(!same(&q, &factor[m][i]));
+                    count += 1;
+                }
+            }
+            if differ <= count / 2 {
+                failures
+                    .push(format!("{mode}, half {half}: the texel changes only {differ} of {count} pixels"));
+            }
+        }
+    }
+    failures.truncate(8);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

@@ -1402,8 +1402,10 @@ fn clearcoat_is_read() {
     );
 }
 
-/// KHR_materials_sheen's factors reach the material (0 without the extension), its two textures
-/// are named in one warning per material, and a factor outside [0, 1] is refused naming it.
+/// KHR_materials_sheen's factors and two textures reach the material (0 and none without the
+/// extension), the colour texture decoded as sRGB and the roughness texture as linear, with no
+/// warning; a factor outside [0, 1] or a texture index beyond the file's textures is refused
+/// naming it.
 #[test]
 fn sheen_is_read() {
     let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
@@ -1426,13 +1428,24 @@ fn sheen_is_read() {
         "sheenRoughnessTexture": {"index": 0}
     }))
     .unwrap();
-    assert_eq!(scene.materials[0].sheen_color, [1.0; 3]);
-    let warned: Vec<&String> = scene
-        .warnings
-        .iter()
-        .filter(|w| w.contains("sheenColorTexture") && w.contains("sheenRoughnessTexture"))
-        .collect();
-    assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
+    let m = &scene.materials[0];
+    assert_eq!(m.sheen_color, [1.0; 3]);
+    let (color, roughness) =
+        (m.sheen_color_texture.as_ref().unwrap(), m.sheen_roughness_texture.as_ref().unwrap());
+    assert!(scene.textures[color.texture as usize].srgb, "the colour texture is sRGB");
+    assert!(!scene.textures[roughness.texture as usize].srgb, "the roughness texture is linear");
+    assert!(scene.warnings.iter().all(|w| !w.contains("sheen")), "{:?}", scene.warnings);
+    assert!(
+        plain.materials[0].sheen_color_texture.is_none()
+            && plain.materials[0].sheen_roughness_texture.is_none()
+    );
+    let error = load(json!({"sheenColorFactor": [1.0, 1.0, 1.0], "sheenRoughnessTexture": {"index": 7}}))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("sheen.glb") && error.contains("KHR_materials_sheen.sheenRoughnessTexture.index is 7"),
+        "{error}"
+    );
     let error = load(json!({"sheenRoughnessFactor": 1.5})).unwrap_err().to_string();
     assert!(error.contains("sheen.glb") && error.contains("sheenRoughnessFactor is 1.5"), "{error}");
     let error = load(json!({"sheenColorFactor": [0.5, -0.25, 0.5]})).unwrap_err().to_string();

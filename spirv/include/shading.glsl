@@ -17,7 +17,7 @@
 #include "texture.glsl"
 
 // Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
-// specular, params, flags, textures[0..4], tex_transform[0..32], clearcoat, parallax, sheen,
+// specular, params, flags, textures[0..5], tex_transform[0..40], clearcoat, parallax, sheen,
 // iridescence, anisotropy), as floats or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
@@ -59,7 +59,7 @@ uint material_slot_texture(uint id, uint slot) {
 
 // Row `row` (0 or 1) of the texture transform of `slot` (GpuMaterial::tex_transform).
 vec4 material_slot_row(uint id, uint slot, uint row) {
-    return material_vec(id, 9u + 2u * slot + row);
+    return material_vec(id, 10u + 2u * slot + row);
 }
 
 // An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
@@ -169,6 +169,9 @@ bool slot_textured(uint slot) {
     if (HAS_ANISOTROPY_MAP) {
         textured = textured || slot == MATERIAL_SLOT_ANISOTROPY;
     }
+    if (HAS_SHEEN_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_SHEEN_COLOR || slot == MATERIAL_SLOT_SHEEN_ROUGHNESS;
+    }
     return textured;
 }
 
@@ -228,14 +231,17 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
 // KHR_materials_clearcoat's weight (clearcoatTexture, R), layers.z its roughness
 // (clearcoatRoughnessTexture, G); layers.w unused (1); iridescence.x KHR_materials_iridescence's
 // weight (iridescenceTexture, R), iridescence.y its film's thickness between the minimum and the
-// maximum (iridescenceThicknessTexture, G); iridescence.zw unused (1). 1 where a material has no
-// texture in the slot, and in kernels not specialised for the slot's group (HAS_SPECULAR_MAP,
-// HAS_TRANSMISSION_MAP, HAS_CLEARCOAT_MAP, HAS_IRIDESCENCE_MAP). The hybrid's G-buffer stores them
-// (gb_layers) for the lighting passes.
+// maximum (iridescenceThicknessTexture, G); iridescence.zw unused (1); sheen.rgb
+// KHR_materials_sheen's colour (sheenColorTexture, RGB), sheen.a its roughness
+// (sheenRoughnessTexture, A). 1 where a material has no texture in the slot, and in kernels not
+// specialised for the slot's group (HAS_SPECULAR_MAP, HAS_TRANSMISSION_MAP, HAS_CLEARCOAT_MAP,
+// HAS_IRIDESCENCE_MAP, HAS_SHEEN_MAP). The hybrid's G-buffer stores them (gb_layers; the sheen's
+// in gb_layers2) for the lighting passes.
 struct LayerTexels {
     vec4 specular;
     vec4 layers;
     vec4 iridescence;
+    vec4 sheen;
 };
 
 // No layer textures: every texel 1.
@@ -244,6 +250,7 @@ LayerTexels layer_texels_none() {
     t.specular = vec4(1.0);
     t.layers = vec4(1.0);
     t.iridescence = vec4(1.0);
+    t.sheen = vec4(1.0);
     return t;
 }
 
@@ -266,11 +273,26 @@ LayerTexels material_layer_texels_lod(uint id, vec4 uv, vec2 cone_lod) {
         t.iridescence.x = material_texture_lod(id, MATERIAL_SLOT_IRIDESCENCE, uv, cone_lod).r;
         t.iridescence.y = material_texture_lod(id, MATERIAL_SLOT_IRIDESCENCE_THICKNESS, uv, cone_lod).g;
     }
+    if (HAS_SHEEN_MAP) {
+        t.sheen.rgb = material_texture_lod(id, MATERIAL_SLOT_SHEEN_COLOR, uv, cone_lod).rgb;
+        t.sheen.a = material_texture_lod(id, MATERIAL_SLOT_SHEEN_ROUGHNESS, uv, cone_lod).a;
+    }
     return t;
 }
 
-// Whether the kernel is specialised for some layer texture (the G-buffer's gb_layers is written
-// and read only then).
+// Whether the kernel is specialised for the sheen's textures (the G-buffer's gb_layers2 is written
+// and read only then; the slots are filled only for a material with a sheen, so a scene with them
+// has a sheen).
+bool sheen_textured() {
+    bool textured = false;
+    if (HAS_SHEEN_MAP) {
+        textured = true;
+    }
+    return textured;
+}
+
+// Whether the kernel is specialised for some layer texture but the sheen's (the G-buffer's
+// gb_layers is written and read only then).
 bool layer_textured() {
     bool textured = false;
     if (HAS_SPECULAR_MAP) {
@@ -360,6 +382,9 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.aniso_dir = vec2(1.0, 0.0);
     if (HAS_SHEEN) {
         vec4 sheen = material_vec(id, MATERIAL_SHEEN_TEXEL);
+        if (HAS_SHEEN_MAP) {
+            sheen *= tex.sheen;
+        }
         s.sheen = clamp(sheen.rgb, 0.0, 1.0);
         s.sheen_roughness = clamp(sheen.w, SHEEN_ROUGHNESS_MIN, 1.0);
     }

@@ -2,7 +2,7 @@
 //! emissive-triangle sampling table, uploaded once as storage buffers.
 
 use super::layout::{
-    GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources,
+    GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources, TexTransforms,
     MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
 };
 use crate::bvh::gpu::GpuBvh;
@@ -341,6 +341,10 @@ impl ShadingArrays {
                 // And the anisotropy texture to a strength of 0 (or a scene without tangents).
                 let anisotropy_texture =
                     m.anisotropy_texture.as_ref().filter(|_| m.anisotropic() && !scene.tangents.is_empty());
+                // And the sheen's to no sheen (a colour of 0).
+                let sheened = m.sheen_color.iter().any(|&c| c > 0.0);
+                let sheen_color_texture = m.sheen_color_texture.as_ref().filter(|_| sheened);
+                let sheen_roughness_texture = m.sheen_roughness_texture.as_ref().filter(|_| sheened);
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -374,10 +378,11 @@ impl ShadingArrays {
                             gpu_textures.slot(scene, anisotropy_texture),
                             gpu_textures.slot(scene, film_texture),
                             gpu_textures.slot(scene, film_thickness_texture),
-                            0,
+                            gpu_textures.slot(scene, sheen_color_texture),
                         ],
+                        [gpu_textures.slot(scene, sheen_roughness_texture), 0, 0, 0],
                     ],
-                    tex_transform: transforms([
+                    tex_transform: TexTransforms(transforms([
                         m.base_color_texture.as_ref(),
                         m.metallic_roughness_texture.as_ref(),
                         m.emissive_texture.as_ref(),
@@ -393,8 +398,12 @@ impl ShadingArrays {
                         anisotropy_texture,
                         film_texture,
                         film_thickness_texture,
+                        sheen_color_texture,
+                        sheen_roughness_texture,
                         None,
-                    ]),
+                        None,
+                        None,
+                    ])),
                     base_color: m.base_color_factor,
                     emissive_rough: {
                         let e = m.emission();

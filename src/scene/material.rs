@@ -66,7 +66,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 14] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 16] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -82,6 +82,8 @@ impl Material {
             &mut self.iridescence_texture,
             &mut self.iridescence_thickness_texture,
             &mut self.anisotropy_texture,
+            &mut self.sheen_color_texture,
+            &mut self.sheen_roughness_texture,
         ]
     }
 }
@@ -129,6 +131,8 @@ impl Material {
             iridescence_texture,
             iridescence_thickness_texture,
             anisotropy_texture,
+            sheen_color_texture,
+            sheen_roughness_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -207,6 +211,13 @@ impl Material {
         if *anisotropy_strength != 0.0 || *anisotropy_rotation != 0.0 || anisotropy_texture.is_some() {
             h.f32s(&[*anisotropy_strength, *anisotropy_rotation]);
             slot(h, anisotropy_texture);
+        }
+        // Nor without the sheen's textures.
+        let sheen = [sheen_color_texture, sheen_roughness_texture];
+        if sheen.iter().any(|t| t.is_some()) {
+            for s in sheen {
+                slot(h, s);
+            }
         }
     }
 }
@@ -361,6 +372,11 @@ pub struct Material {
     /// `anisotropyTexture` (linear): RG the direction in tangent space (2·rg − 1), B × the
     /// strength.
     pub anisotropy_texture: Option<TextureRef>,
+    /// `KHR_materials_sheen`'s `sheenColorTexture`: the sheen's colour in RGB (sRGB), ×
+    /// `sheenColorFactor`.
+    pub sheen_color_texture: Option<TextureRef>,
+    /// `sheenRoughnessTexture`: the sheen's roughness in A (linear), × `sheenRoughnessFactor`.
+    pub sheen_roughness_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -408,19 +424,16 @@ impl Default for Material {
             iridescence_texture: None,
             iridescence_thickness_texture: None,
             anisotropy_texture: None,
+            sheen_color_texture: None,
+            sheen_roughness_texture: None,
             parallax: None,
         }
     }
 }
 
 impl Material {
-    /// Converts a glTF material, registering the textures it uses in `textures`; what it reads
-    /// only in part is said in `warnings`.
-    pub(super) fn from_gltf(
-        material: &gltf::Material,
-        textures: &mut TextureSet,
-        warnings: &mut Vec<String>,
-    ) -> Self {
+    /// Converts a glTF material, registering the textures it uses in `textures`.
+    pub(super) fn from_gltf(material: &gltf::Material, textures: &mut TextureSet) -> Self {
         let pbr = material.pbr_metallic_roughness();
         let mut info = |info: Option<gltf::texture::Info>, srgb: bool| {
             info.map(|info| {
@@ -472,19 +485,6 @@ impl Material {
             for (out, v) in sheen_color.iter_mut().zip(c) {
                 *out = v.as_f64().unwrap_or(0.0) as f32;
             }
-        }
-        let sheen_textures: Vec<&str> = ["sheenColorTexture", "sheenRoughnessTexture"]
-            .into_iter()
-            .filter(|k| sheen.is_some_and(|c| c.get(*k).is_some()))
-            .collect();
-        if !sheen_textures.is_empty() {
-            let warning = format!(
-                "material '{}': KHR_materials_sheen's {} not read (the factors alone are used)",
-                material.name().unwrap_or_default(),
-                sheen_textures.join(", ")
-            );
-            log::warn!("{warning}");
-            warnings.push(warning);
         }
         let film = material.extension_value("KHR_materials_iridescence");
         // In range: ranges.rs refuses a file with other values.
@@ -544,6 +544,8 @@ impl Material {
             iridescence_texture: None,
             iridescence_thickness_texture: None,
             anisotropy_texture: None,
+            sheen_color_texture: None,
+            sheen_roughness_texture: None,
             parallax: None,
         }
     }
@@ -556,7 +558,7 @@ impl Material {
 
     /// Reads the textures of the extensions the `gltf` crate leaves as raw JSON
     /// (`KHR_materials_clearcoat`'s three, `KHR_materials_iridescence`'s two,
-    /// `KHR_materials_anisotropy`'s), registering them in `textures`. Errors say which
+    /// `KHR_materials_anisotropy`'s, `KHR_materials_sheen`'s two), registering them in `textures`. Errors say which
     /// texture reference is wrong; the caller names the file and the material.
     pub(super) fn read_extension_textures(
         &mut self,
@@ -587,6 +589,17 @@ impl Material {
             let element = "KHR_materials_anisotropy.anisotropyTexture";
             self.anisotropy_texture = Some(raw_texture_ref(info, element, document, textures)?);
         }
+        if let Some(sheen) = material.extension_value("KHR_materials_sheen") {
+            let mut read = |key: &str, srgb: bool| {
+                let element = format!("KHR_materials_sheen.{key}");
+                sheen
+                    .get(key)
+                    .map(|info| raw_texture_ref_as(info, &element, document, textures, srgb))
+                    .transpose()
+            };
+            self.sheen_color_texture = read("sheenColorTexture", true)?;
+            self.sheen_roughness_texture = read("sheenRoughnessTexture", false)?;
+        }
         Ok(())
     }
 }
@@ -599,6 +612,17 @@ fn raw_texture_ref(
     element: &str,
     document: &gltf::Document,
     textures: &mut TextureSet,
+) -> std::result::Result<TextureRef, String> {
+    raw_texture_ref_as(info, element, document, textures, false)
+}
+
+/// [`raw_texture_ref`] of a texture whose texels are sRGB-encoded where `srgb` (a colour).
+fn raw_texture_ref_as(
+    info: &Value,
+    element: &str,
+    document: &gltf::Document,
+    textures: &mut TextureSet,
+    srgb: bool,
 ) -> std::result::Result<TextureRef, String> {
     let count = document.textures().len();
     let index = info
@@ -619,7 +643,7 @@ fn raw_texture_ref(
     let transform = info.get("extensions").and_then(|e| e.get("KHR_texture_transform"));
     let (tex_coord, transform) = raw_transform(transform, tex_coord);
     let scale = info.get("scale").and_then(Value::as_f64).map_or(1.0, |s| s as f32);
-    Ok(TextureRef { texture: textures.index_of(&texture, false), tex_coord, transform, scale })
+    Ok(TextureRef { texture: textures.index_of(&texture, srgb), tex_coord, transform, scale })
 }
 
 /// `KHR_texture_transform` read from raw JSON (the `gltf` crate parses it only on plain texture

@@ -125,9 +125,8 @@ pub struct Scene {
     /// BVH as one procedural primitive, its world box, after the triangles.
     pub implicits: Vec<ImplicitShape>,
     /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
-    /// optional glTF extensions it ignored (one entry naming them all), the parts of a material
-    /// it does not read (sheen textures: one entry per material), the anisotropic primitives
-    /// without a tangent frame (one entry) and, for a file with
+    /// optional glTF extensions it ignored (one entry naming them all), the anisotropic
+    /// primitives without a tangent frame (one entry) and, for a file with
     /// animations, skins or morph targets, that one static pose is rendered (one entry); also
     /// logged as warnings.
     pub warnings: Vec<String>,

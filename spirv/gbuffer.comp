@@ -76,7 +76,7 @@ void main() {
     // coat's normal and the anisotropy, only where the scene has some: the image is left
     // unwritten otherwise.
     LayerTexels layers = layer_texels_none();
-    if (gbuffer_has_layers() || sheen_textured()) {
+    if (gbuffer_has_layers() || layers2_textured()) {
         layers = material_layer_texels_lod(material, uv, cone_lod);
     }
     if (gbuffer_has_layers()) {
@@ -93,8 +93,8 @@ void main() {
                    gbuffer_pack_layers(layers.specular, layers.layers, layers.iridescence, coat_n, s.anisotropy,
                                        s.aniso_dir));
     }
-    // The sheen's texels, only where the scene has them.
-    if (sheen_textured()) {
-        imageStore(gb_layers2, pixel, gbuffer_pack_layers2(layers.sheen));
+    // The sheen's and the diffuse transmission's texels, only where the scene has them.
+    if (layers2_textured()) {
+        imageStore(gb_layers2, pixel, gbuffer_pack_layers2(layers.sheen, layers.diffuse_transmission));
     }
 }

@@ -69,8 +69,8 @@ bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
         gbuffer_unpack_layers(imageLoad(gb_layers, pixel), layers.specular, layers.layers, layers.iridescence, coat_n,
                               anisotropy, aniso_dir);
     }
-    if (sheen_textured()) {
-        gbuffer_unpack_layers2(imageLoad(gb_layers2, pixel), layers.sheen);
+    if (layers2_textured()) {
+        gbuffer_unpack_layers2(imageLoad(gb_layers2, pixel), layers.sheen, layers.diffuse_transmission);
     }
     sp.s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w, layers);
     surface_coat_normal(sp.s, coat_n, sp.t, sp.b, sp.n);

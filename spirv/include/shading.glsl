@@ -172,6 +172,10 @@ bool slot_textured(uint slot) {
     if (HAS_SHEEN_MAP) {
         textured = textured || slot == MATERIAL_SLOT_SHEEN_COLOR || slot == MATERIAL_SLOT_SHEEN_ROUGHNESS;
     }
+    if (HAS_DIFFUSE_TRANSMISSION_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_DIFFUSE_TRANSMISSION
+            || slot == MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR;
+    }
     return textured;
 }
 
@@ -233,15 +237,19 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
 // weight (iridescenceTexture, R), iridescence.y its film's thickness between the minimum and the
 // maximum (iridescenceThicknessTexture, G); iridescence.zw unused (1); sheen.rgb
 // KHR_materials_sheen's colour (sheenColorTexture, RGB), sheen.a its roughness
-// (sheenRoughnessTexture, A). 1 where a material has no texture in the slot, and in kernels not
-// specialised for the slot's group (HAS_SPECULAR_MAP, HAS_TRANSMISSION_MAP, HAS_CLEARCOAT_MAP,
-// HAS_IRIDESCENCE_MAP, HAS_SHEEN_MAP). The hybrid's G-buffer stores them (gb_layers; the sheen's
-// in gb_layers2) for the lighting passes.
+// (sheenRoughnessTexture, A); diffuse_transmission.rgb KHR_materials_diffuse_transmission's
+// colour (diffuseTransmissionColorTexture, RGB), diffuse_transmission.a its share
+// (diffuseTransmissionTexture, A). 1 where a material has no texture in the slot, and in kernels
+// not specialised for the slot's group (HAS_SPECULAR_MAP, HAS_TRANSMISSION_MAP,
+// HAS_CLEARCOAT_MAP, HAS_IRIDESCENCE_MAP, HAS_SHEEN_MAP, HAS_DIFFUSE_TRANSMISSION_MAP). The
+// hybrid's G-buffer stores them (gb_layers; the sheen's and the diffuse transmission's in
+// gb_layers2) for the lighting passes.
 struct LayerTexels {
     vec4 specular;
     vec4 layers;
     vec4 iridescence;
     vec4 sheen;
+    vec4 diffuse_transmission;
 };
 
 // No layer textures: every texel 1.
@@ -251,6 +259,7 @@ LayerTexels layer_texels_none() {
     t.layers = vec4(1.0);
     t.iridescence = vec4(1.0);
     t.sheen = vec4(1.0);
+    t.diffuse_transmission = vec4(1.0);
     return t;
 }
 
@@ -277,15 +286,23 @@ LayerTexels material_layer_texels_lod(uint id, vec4 uv, vec2 cone_lod) {
         t.sheen.rgb = material_texture_lod(id, MATERIAL_SLOT_SHEEN_COLOR, uv, cone_lod).rgb;
         t.sheen.a = material_texture_lod(id, MATERIAL_SLOT_SHEEN_ROUGHNESS, uv, cone_lod).a;
     }
+    if (HAS_DIFFUSE_TRANSMISSION_MAP) {
+        t.diffuse_transmission.rgb =
+            material_texture_lod(id, MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR, uv, cone_lod).rgb;
+        t.diffuse_transmission.a = material_texture_lod(id, MATERIAL_SLOT_DIFFUSE_TRANSMISSION, uv, cone_lod).a;
+    }
     return t;
 }
 
-// Whether the kernel is specialised for the sheen's textures (the G-buffer's gb_layers2 is written
-// and read only then; the slots are filled only for a material with a sheen, so a scene with them
-// has a sheen).
-bool sheen_textured() {
+// Whether the kernel is specialised for the sheen's or the diffuse transmission's textures (the
+// G-buffer's gb_layers2 is written and read only then; the slots are filled only for a material
+// with the layer, so a scene with them has it).
+bool layers2_textured() {
     bool textured = false;
     if (HAS_SHEEN_MAP) {
+        textured = true;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION_MAP) {
         textured = true;
     }
     return textured;
@@ -405,6 +422,17 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         s.iridescence_thickness = mix(film.z, film.w, thickness);
         s.iridescence = s.iridescence_thickness > 0.0 ? clamp(weight, 0.0, 1.0) : 0.0;
         s.iridescence_ior = film.y;
+    }
+    // KHR_materials_diffuse_transmission only where the kernel is specialised for it.
+    s.diffuse_transmission = 0.0;
+    s.diffuse_transmission_color = vec3(1.0);
+    if (HAS_DIFFUSE_TRANSMISSION) {
+        vec4 through = material_vec(id, MATERIAL_DIFFUSE_TRANSMISSION_TEXEL);
+        if (HAS_DIFFUSE_TRANSMISSION_MAP) {
+            through *= tex.diffuse_transmission;
+        }
+        s.diffuse_transmission = clamp(through.w, 0.0, 1.0);
+        s.diffuse_transmission_color = clamp(through.rgb, 0.0, 1.0);
     }
     if (HAS_TRANSMISSION) {
         float transmission = material_vec(id, 3u).z;
@@ -983,10 +1011,30 @@ float emissive_pdf(uint tri, float area, float dist, vec3 ng, vec3 wo) {
     return tri_light_pmf(tri) / area * dist * dist / abs(dot(ng, wo));
 }
 
-// Whether light sampling at a surface covers the side below it too (a transmitting material,
-// in a kernel specialised for transmission).
+// Whether light sampling at a surface covers the side below it too (a transmitting material, or
+// a diffusely transmitting one, in a kernel specialised for it).
 bool surface_transmits(Surface s) {
-    return HAS_TRANSMISSION && s.transmission > 0.0 && s.metallic < 1.0;
+    bool transmits = false;
+    if (HAS_TRANSMISSION) {
+        transmits = s.transmission > 0.0;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION) {
+        transmits = transmits || s.diffuse_transmission > 0.0;
+    }
+    return transmits && s.metallic < 1.0;
+}
+
+// Whether the kernel is specialised for some transmission (KHR_materials_transmission or
+// _diffuse_transmission): light can pass a surface, into a volume's medium too.
+bool scene_transmits() {
+    bool transmits = false;
+    if (HAS_TRANSMISSION) {
+        transmits = true;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION) {
+        transmits = true;
+    }
+    return transmits;
 }
 
 // Punctual lights evaluated at a shading point: all of them up to PUNCTUAL_ALL; beyond,

@@ -425,6 +425,9 @@ const _: () = assert!(offset_of!(GpuMaterial, parallax) == 16 * MATERIAL_PARALLA
 const _: () = assert!(offset_of!(GpuMaterial, sheen) == 16 * MATERIAL_SHEEN_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, iridescence) == 16 * MATERIAL_IRIDESCENCE_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, anisotropy) == 16 * MATERIAL_ANISOTROPY_TEXEL as usize);
+const _: () = assert!(
+    offset_of!(GpuMaterial, diffuse_transmission) == 16 * MATERIAL_DIFFUSE_TRANSMISSION_TEXEL as usize
+);
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);

@@ -78,6 +78,9 @@ pub struct GpuScene {
     /// Whether some material is anisotropic (`KHR_materials_anisotropy`): the shading kernels
     /// evaluate and sample anisotropic specular lobes only then.
     pub has_anisotropy: bool,
+    /// Whether some material transmits diffusely (`KHR_materials_diffuse_transmission`): the
+    /// shading kernels evaluate and sample its lobe only then.
+    pub has_diffuse_transmission: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -345,6 +348,10 @@ impl ShadingArrays {
                 let sheened = m.sheen_color.iter().any(|&c| c > 0.0);
                 let sheen_color_texture = m.sheen_color_texture.as_ref().filter(|_| sheened);
                 let sheen_roughness_texture = m.sheen_roughness_texture.as_ref().filter(|_| sheened);
+                // And the diffuse transmission's to a factor of 0.
+                let through = m.diffuse_transmission > 0.0;
+                let through_texture = m.diffuse_transmission_texture.as_ref().filter(|_| through);
+                let through_color_texture = m.diffuse_transmission_color_texture.as_ref().filter(|_| through);
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -380,7 +387,12 @@ impl ShadingArrays {
                             gpu_textures.slot(scene, film_thickness_texture),
                             gpu_textures.slot(scene, sheen_color_texture),
                         ],
-                        [gpu_textures.slot(scene, sheen_roughness_texture), 0, 0, 0],
+                        [
+                            gpu_textures.slot(scene, sheen_roughness_texture),
+                            gpu_textures.slot(scene, through_texture),
+                            gpu_textures.slot(scene, through_color_texture),
+                            0,
+                        ],
                     ],
                     tex_transform: TexTransforms(transforms([
                         m.base_color_texture.as_ref(),
@@ -400,8 +412,8 @@ impl ShadingArrays {
                         film_thickness_texture,
                         sheen_color_texture,
                         sheen_roughness_texture,
-                        None,
-                        None,
+                        through_texture,
+                        through_color_texture,
                         None,
                     ])),
                     base_color: m.base_color_factor,
@@ -426,6 +438,12 @@ impl ShadingArrays {
                         m.iridescence_ior,
                         m.iridescence_thickness[0],
                         m.iridescence_thickness[1],
+                    ],
+                    diffuse_transmission: [
+                        m.diffuse_transmission_color[0],
+                        m.diffuse_transmission_color[1],
+                        m.diffuse_transmission_color[2],
+                        m.diffuse_transmission,
                     ],
                     anisotropy: if m.anisotropic() {
                         let (sin, cos) = m.anisotropy_rotation.sin_cos();
@@ -548,6 +566,7 @@ impl GpuScene {
             has_sheen: sheened(&arrays.materials),
             has_iridescence: iridescent(&arrays.materials),
             has_anisotropy: anisotropic(&arrays.materials),
+            has_diffuse_transmission: diffusely_transmits(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
@@ -602,6 +621,7 @@ impl GpuScene {
         self.has_sheen = sheened(&arrays.materials);
         self.has_iridescence = iridescent(&arrays.materials);
         self.has_anisotropy = anisotropic(&arrays.materials);
+        self.has_diffuse_transmission = diffusely_transmits(&arrays.materials);
         Ok(())
     }
 }
@@ -692,6 +712,11 @@ fn iridescent(materials: &[GpuMaterial]) -> bool {
 /// Whether some material has a sheen (a sheen colour above 0).
 fn sheened(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.sheen[..3].iter().any(|&c| c > 0.0))
+}
+
+/// Whether some material transmits diffusely (a diffuse transmission factor above 0).
+fn diffusely_transmits(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.diffuse_transmission[3] > 0.0)
 }
 
 /// Whether some material is anisotropic (a strength above 0).

@@ -9,7 +9,7 @@
 //! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504); the material's ambient occlusion in a (glTF `occlusionTexture`: 1 + strength (r − 1), filtered like the other textures; 1 without one), which the lighting pass multiplies into the image-based (ambient) light only |
 //! | `material` | `R32G32B32A32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16`; z, w: the `TEXCOORD_1` coordinates as float bits (0 without them), where lightmaps are looked up |
 //! | `layers` | `R32G32B32A32_UINT` | the texels of the material's layer textures (filtered like the other textures; 1 where a slot is empty), four `packUnorm4x8` values a word (exact for 8-bit linear texels read unfiltered, within 1/510 otherwise): x: `specularColorTexture` rgb, `specularTexture` a; y: `transmissionTexture` r, `clearcoatTexture` r, `clearcoatRoughnessTexture` g, unused (1); z: the clear coat's normal (octahedral, two snorm16); w: `iridescenceTexture` r and `iridescenceThicknessTexture` g (two `packUnorm2x16` values). Written (and read by the lighting passes) only where the scene has some such texture: a host may leave it unwritten for scenes without |
-//! | `layers2` | `R32G32B32A32_UINT` | more layer textures' texels, as `layers`: x: `KHR_materials_sheen`'s `sheenColorTexture` rgb, `sheenRoughnessTexture` a; y, z, w: unused (0). Written (and read) only where the scene has a sheen with textures |
+//! | `layers2` | `R32G32B32A32_UINT` | more layer textures' texels, as `layers`: x: `KHR_materials_sheen`'s `sheenColorTexture` rgb, `sheenRoughnessTexture` a; y: `KHR_materials_diffuse_transmission`'s `diffuseTransmissionColorTexture` rgb, `diffuseTransmissionTexture` a; z, w: unused (0). Written (and read) only where the scene has such a texture |
 //!
 //! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
 //! with a compute-to-compute barrier. Where no surface was hit, `depth`, `normal`, `base` and
@@ -43,7 +43,7 @@ pub struct GBuffer {
     pub material: Image,
     /// The layer textures' texels.
     pub layers: Image,
-    /// More layer textures' texels (the sheen's).
+    /// More layer textures' texels (the sheen's, the diffuse transmission's).
     pub layers2: Image,
 }
 
@@ -128,7 +128,8 @@ pub struct GBufferViews {
     pub material: raw::ImageView,
     /// `R32G32B32A32_UINT` the layer textures' texels (only for scenes with such textures).
     pub layers: raw::ImageView,
-    /// `R32G32B32A32_UINT` more layer textures' texels (only for scenes with a sheen's textures).
+    /// `R32G32B32A32_UINT` more layer textures' texels (only for scenes with a sheen's or a
+    /// diffuse transmission's textures).
     pub layers2: raw::ImageView,
 }
 

@@ -66,7 +66,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 16] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 18] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -84,6 +84,8 @@ impl Material {
             &mut self.anisotropy_texture,
             &mut self.sheen_color_texture,
             &mut self.sheen_roughness_texture,
+            &mut self.diffuse_transmission_texture,
+            &mut self.diffuse_transmission_color_texture,
         ]
     }
 }
@@ -117,6 +119,8 @@ impl Material {
             iridescence_thickness,
             anisotropy_strength,
             anisotropy_rotation,
+            diffuse_transmission,
+            diffuse_transmission_color,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -133,6 +137,8 @@ impl Material {
             anisotropy_texture,
             sheen_color_texture,
             sheen_roughness_texture,
+            diffuse_transmission_texture,
+            diffuse_transmission_color_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -216,6 +222,18 @@ impl Material {
         let sheen = [sheen_color_texture, sheen_roughness_texture];
         if sheen.iter().any(|t| t.is_some()) {
             for s in sheen {
+                slot(h, s);
+            }
+        }
+        // Nor without diffuse transmission.
+        let through = [diffuse_transmission_texture, diffuse_transmission_color_texture];
+        if *diffuse_transmission != 0.0
+            || *diffuse_transmission_color != [1.0; 3]
+            || through.iter().any(|t| t.is_some())
+        {
+            h.f32s(&[*diffuse_transmission]);
+            h.f32s(diffuse_transmission_color);
+            for s in through {
                 slot(h, s);
             }
         }
@@ -335,6 +353,11 @@ pub struct Material {
     /// lobes' GGX roughness along the anisotropy direction is αt = mix(α, 1, strength²), across
     /// it αb = α.
     pub anisotropy_strength: f32,
+    /// `KHR_materials_diffuse_transmission`'s `diffuseTransmissionFactor` (default 0: none): the
+    /// share of the dielectric's diffuse lobe that leaves through the back as a Lambertian lobe.
+    pub diffuse_transmission: f32,
+    /// `diffuseTransmissionColorFactor` (linear RGB, default 1): that lobe's colour.
+    pub diffuse_transmission_color: [f32; 3],
     /// `anisotropyRotation` (radians, default 0): the anisotropy direction's angle from the
     /// tangent towards the bitangent (the texture's direction, when there is one, rotated so).
     pub anisotropy_rotation: f32,
@@ -377,6 +400,12 @@ pub struct Material {
     pub sheen_color_texture: Option<TextureRef>,
     /// `sheenRoughnessTexture`: the sheen's roughness in A (linear), × `sheenRoughnessFactor`.
     pub sheen_roughness_texture: Option<TextureRef>,
+    /// `diffuseTransmissionTexture`: the diffuse transmission's share in A (linear), ×
+    /// `diffuseTransmissionFactor`.
+    pub diffuse_transmission_texture: Option<TextureRef>,
+    /// `diffuseTransmissionColorTexture`: its colour in RGB (sRGB), ×
+    /// `diffuseTransmissionColorFactor`.
+    pub diffuse_transmission_color_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -410,6 +439,8 @@ impl Default for Material {
             iridescence_thickness: [100.0, 400.0],
             anisotropy_strength: 0.0,
             anisotropy_rotation: 0.0,
+            diffuse_transmission: 0.0,
+            diffuse_transmission_color: [1.0; 3],
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -426,6 +457,8 @@ impl Default for Material {
             anisotropy_texture: None,
             sheen_color_texture: None,
             sheen_roughness_texture: None,
+            diffuse_transmission_texture: None,
+            diffuse_transmission_color_texture: None,
             parallax: None,
         }
     }
@@ -486,6 +519,16 @@ impl Material {
                 *out = v.as_f64().unwrap_or(0.0) as f32;
             }
         }
+        let through = material.extension_value("KHR_materials_diffuse_transmission");
+        // In [0, 1]: ranges.rs refuses a file with other values.
+        let through_number =
+            |key: &str| through.and_then(|t| t.get(key)).and_then(Value::as_f64).map_or(0.0, |x| x as f32);
+        let mut diffuse_transmission_color = [1.0f32; 3];
+        if let Some(Value::Array(c)) = through.and_then(|t| t.get("diffuseTransmissionColorFactor")) {
+            for (out, v) in diffuse_transmission_color.iter_mut().zip(c) {
+                *out = v.as_f64().unwrap_or(1.0) as f32;
+            }
+        }
         let film = material.extension_value("KHR_materials_iridescence");
         // In range: ranges.rs refuses a file with other values.
         let film_number = |key: &str, default: f32| {
@@ -529,6 +572,8 @@ impl Material {
             ],
             anisotropy_strength: anisotropy_number("anisotropyStrength"),
             anisotropy_rotation: anisotropy_number("anisotropyRotation"),
+            diffuse_transmission: through_number("diffuseTransmissionFactor"),
+            diffuse_transmission_color,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -546,6 +591,8 @@ impl Material {
             anisotropy_texture: None,
             sheen_color_texture: None,
             sheen_roughness_texture: None,
+            diffuse_transmission_texture: None,
+            diffuse_transmission_color_texture: None,
             parallax: None,
         }
     }
@@ -558,7 +605,8 @@ impl Material {
 
     /// Reads the textures of the extensions the `gltf` crate leaves as raw JSON
     /// (`KHR_materials_clearcoat`'s three, `KHR_materials_iridescence`'s two,
-    /// `KHR_materials_anisotropy`'s, `KHR_materials_sheen`'s two), registering them in `textures`. Errors say which
+    /// `KHR_materials_anisotropy`'s, `KHR_materials_sheen`'s two,
+    /// `KHR_materials_diffuse_transmission`'s two), registering them in `textures`. Errors say which
     /// texture reference is wrong; the caller names the file and the material.
     pub(super) fn read_extension_textures(
         &mut self,
@@ -599,6 +647,17 @@ impl Material {
             };
             self.sheen_color_texture = read("sheenColorTexture", true)?;
             self.sheen_roughness_texture = read("sheenRoughnessTexture", false)?;
+        }
+        if let Some(through) = material.extension_value("KHR_materials_diffuse_transmission") {
+            let mut read = |key: &str, srgb: bool| {
+                let element = format!("KHR_materials_diffuse_transmission.{key}");
+                through
+                    .get(key)
+                    .map(|info| raw_texture_ref_as(info, &element, document, textures, srgb))
+                    .transpose()
+            };
+            self.diffuse_transmission_texture = read("diffuseTransmissionTexture", false)?;
+            self.diffuse_transmission_color_texture = read("diffuseTransmissionColorTexture", true)?;
         }
         Ok(())
     }

@@ -2,9 +2,11 @@
 //! `specularColorTexture` (RGB), `KHR_materials_transmission`'s `transmissionTexture` (R),
 //! `KHR_materials_clearcoat`'s `clearcoatTexture` (R), `clearcoatRoughnessTexture` (G) and
 //! `clearcoatNormalTexture` (and the coat's own, unmapped normal), `KHR_materials_sheen`'s
-//! `sheenColorTexture` (RGB) and `sheenRoughnessTexture` (A), in the path tracer and the
-//! hybrid renderer (which carries their texels in the G-buffer's `layers` and `layers2` images). A quad facing
-//! the camera fills the view; each render is compared with the same scene whose texture is folded
+//! `sheenColorTexture` (RGB) and `sheenRoughnessTexture` (A),
+//! `KHR_materials_diffuse_transmission`'s `diffuseTransmissionTexture` (A) and
+//! `diffuseTransmissionColorTexture` (RGB), in the path tracer and the hybrid renderer (which
+//! carries their texels in the G-buffer's `layers` and `layers2` images). A quad facing the
+//! camera fills the view; each render is compared with the same scene whose texture is folded
 //! into the material's factor, pixel by pixel.
 
 mod common;
@@ -23,8 +25,10 @@ fn quad_scene(material: Material, texture: Option<Texture>, sun: f32) -> Scene {
 /// the slot's factor, in both modes. The texel's channels all differ (R 128, G 64, B 200, A 160),
 /// so a slot that read another channel than the specification's (A for `specularTexture`, RGB
 /// for `specularColorTexture`, R for `transmissionTexture` and `clearcoatTexture`, G for
-/// `clearcoatRoughnessTexture`) would not match; the kernels are specialised per texture group
-/// (`specular_map`, `transmission_map`, `clearcoat_map`), so a slot left out of its group would
+/// `clearcoatRoughnessTexture`, A for `diffuseTransmissionTexture`, RGB for
+/// `diffuseTransmissionColorTexture`, whose lobe the sky behind the quad lights) would not match;
+/// the kernels are specialised per texture group (`specular_map`, `transmission_map`,
+/// `clearcoat_map`, `diffuse_transmission_map`), so a slot left out of its group would
 /// render the factor alone. Every case is also checked to differ from the factor
 /// alone, so the texture has something to change.
 #[test]
@@ -79,6 +83,31 @@ fn each_layer_texture_is_read_alone() {
             },
             Material { clearcoat: 1.0, clearcoat_roughness: 0.8 * t[1], ..base.clone() },
             Material { clearcoat: 1.0, clearcoat_roughness: 0.8, ..base.clone() },
+        ),
+        (
+            "diffuse transmission",
+            Material { diffuse_transmission: 0.9, diffuse_transmission_texture: slot(), ..base.clone() },
+            Material { diffuse_transmission: 0.9 * t[3], ..base.clone() },
+            Material { diffuse_transmission: 0.9, ..base.clone() },
+        ),
+        (
+            "diffuse transmission colour",
+            Material {
+                diffuse_transmission: 0.9,
+                diffuse_transmission_color: [0.9, 0.8, 0.7],
+                diffuse_transmission_color_texture: slot(),
+                ..base.clone()
+            },
+            Material {
+                diffuse_transmission: 0.9,
+                diffuse_transmission_color: [0.9 * t[0], 0.8 * t[1], 0.7 * t[2]],
+                ..base.clone()
+            },
+            Material {
+                diffuse_transmission: 0.9,
+                diffuse_transmission_color: [0.9, 0.8, 0.7],
+                ..base.clone()
+            },
         ),
     ];
     // Every case and mode is checked before the test fails, naming each that does.

@@ -1452,6 +1452,57 @@ fn sheen_is_read() {
     assert!(error.contains("sheen.glb") && error.contains("sheenColorFactor[1] is -0.25"), "{error}");
 }
 
+/// KHR_materials_diffuse_transmission's factor, colour and two textures reach the material (0,
+/// white and none without the extension), the colour texture decoded as sRGB and the factor's as
+/// linear, with no warning and no longer among the ignored extensions; a factor or colour outside
+/// [0, 1] or a texture index beyond the file's textures is refused naming it.
+#[test]
+fn diffuse_transmission_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let load = |through: Value| {
+        let mut json = base.clone();
+        json["extensionsUsed"] = json!(["KHR_materials_diffuse_transmission"]);
+        json["materials"][0]["extensions"] = json!({ "KHR_materials_diffuse_transmission": through });
+        Scene::from_glb_bytes("through.glb", &to_glb(&json, &bin))
+    };
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    let m = &plain.materials[0];
+    assert_eq!((m.diffuse_transmission, m.diffuse_transmission_color), (0.0, [1.0; 3]));
+    assert!(m.diffuse_transmission_texture.is_none() && m.diffuse_transmission_color_texture.is_none());
+    let scene = load(json!({
+        "diffuseTransmissionFactor": 0.75,
+        "diffuseTransmissionColorFactor": [0.5, 0.25, 0.125],
+        "diffuseTransmissionTexture": {"index": 0},
+        "diffuseTransmissionColorTexture": {"index": 0, "texCoord": 1}
+    }))
+    .unwrap();
+    let m = &scene.materials[0];
+    assert_eq!((m.diffuse_transmission, m.diffuse_transmission_color), (0.75, [0.5, 0.25, 0.125]));
+    let (factor, colour) =
+        (m.diffuse_transmission_texture.unwrap(), m.diffuse_transmission_color_texture.unwrap());
+    assert_eq!(colour.tex_coord, 1);
+    assert!(!scene.textures[factor.texture as usize].srgb, "the factor's texture is linear");
+    assert!(scene.textures[colour.texture as usize].srgb, "the colour texture is sRGB");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let error = load(json!({"diffuseTransmissionFactor": 1.5})).unwrap_err().to_string();
+    assert!(error.contains("through.glb") && error.contains("diffuseTransmissionFactor is 1.5"), "{error}");
+    let error = load(json!({"diffuseTransmissionColorFactor": [0.5, 2.0, 0.5]})).unwrap_err().to_string();
+    assert!(
+        error.contains("through.glb") && error.contains("diffuseTransmissionColorFactor[1] is 2"),
+        "{error}"
+    );
+    let error =
+        load(json!({"diffuseTransmissionFactor": 1.0, "diffuseTransmissionColorTexture": {"index": 7}}))
+            .unwrap_err()
+            .to_string();
+    assert!(
+        error.contains("through.glb")
+            && error
+                .contains("KHR_materials_diffuse_transmission.diffuseTransmissionColorTexture.index is 7"),
+        "{error}"
+    );
+}
+
 /// KHR_materials_iridescence's factor, ior, thickness range and two textures reach the material
 /// (factor 0, ior 1.3, thickness 100–400 nm and no textures without the extension; the defaults
 /// for the values the extension leaves out), with no warning; a value outside its range or a

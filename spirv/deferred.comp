@@ -189,6 +189,13 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         diffuse_weight = 1.0 - max3(mix(s.f0 * table.z + s.f90 * table.w, film * (table.z + table.w), s.iridescence));
         metal_spec = mix(metal_spec, film_metal * (table.x + table.y), s.iridescence);
     }
+    if (HAS_TRANSMISSION) {
+        // KHR_materials_volume's attenuation, approximated as the Khronos Sample Viewer does:
+        // Beer-Lambert over the material's thickness (thicknessFactor x thicknessTexture, in the
+        // mesh's units), whatever the view angle; 1 without a volume (no thickness, no
+        // attenuation coefficient).
+        transmitted_light *= exp(-material_attenuation(material) * s.thickness);
+    }
     // The diffuse lobe's share `transmission` transmits instead (as bsdf.glsl splits it).
     vec3 below = mix(irradiance_over_pi, transmitted_light, s.transmission);
     vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * below;

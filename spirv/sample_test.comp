@@ -53,6 +53,7 @@ Surface dielectric(float alpha) {
         s.aniso_dir = vec2(1.0, 0.0);
         s.diffuse_transmission = 0.0;
         s.diffuse_transmission_color = vec3(1.0);
+        s.thickness = 0.0;
         return s;
     }
     if (params.kind == 8u) {
@@ -77,6 +78,7 @@ Surface dielectric(float alpha) {
         s.aniso_dir = vec2(1.0, 0.0);
         s.diffuse_transmission = 0.0;
         s.diffuse_transmission_color = vec3(1.0);
+        s.thickness = 0.0;
         return s;
     }
     if (params.kind == 6u) {
@@ -103,6 +105,7 @@ Surface dielectric(float alpha) {
         s.aniso_dir = vec2(1.0, 0.0);
         s.diffuse_transmission = 0.0;
         s.diffuse_transmission_color = vec3(1.0);
+        s.thickness = 0.0;
         return s;
     }
     if (params.kind == 10u) {
@@ -132,6 +135,7 @@ Surface dielectric(float alpha) {
         s.aniso_dir = vec2(1.0, 0.0);
         s.diffuse_transmission = params.anisotropy.x;
         s.diffuse_transmission_color = vec3(1.0, params.anisotropy_base, params.anisotropy_base * params.anisotropy_base);
+        s.thickness = 0.0;
         return s;
     }
     if (params.kind == 9u) {
@@ -159,6 +163,7 @@ Surface dielectric(float alpha) {
         s.aniso_dir = params.anisotropy.yz;
         s.diffuse_transmission = 0.0;
         s.diffuse_transmission_color = vec3(1.0);
+        s.thickness = 0.0;
         return s;
     }
     Surface s;
@@ -182,6 +187,7 @@ Surface dielectric(float alpha) {
     s.aniso_dir = vec2(1.0, 0.0);
     s.diffuse_transmission = 0.0;
     s.diffuse_transmission_color = vec3(1.0);
+    s.thickness = 0.0;
     return s;
 }
 
@@ -230,6 +236,7 @@ void main() {
         s.aniso_dir = vec2(1.0, 0.0);
         s.diffuse_transmission = 0.0;
         s.diffuse_transmission_color = vec3(1.0);
+        s.thickness = 0.0;
         results[i] = vec4(bsdf_eval(s, o.xyz, d.xyz), 0.0);
         return;
     }

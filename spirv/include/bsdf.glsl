@@ -118,6 +118,7 @@ struct Surface {
     vec2 aniso_dir;          // the anisotropy direction: unit, in the shading frame's xy plane
     float diffuse_transmission;        // KHR_materials_diffuse_transmission's share (0: none)
     vec3 diffuse_transmission_color;   // its colour
+    float thickness;     // KHR_materials_volume's thickness (the hybrid's attenuation; 0: none)
 };
 
 float max3(vec3 v) {

@@ -176,6 +176,9 @@ bool slot_textured(uint slot) {
         textured = textured || slot == MATERIAL_SLOT_DIFFUSE_TRANSMISSION
             || slot == MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR;
     }
+    if (HAS_THICKNESS_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_THICKNESS;
+    }
     return textured;
 }
 
@@ -233,7 +236,8 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
 // KHR_materials_specular's colour (specularColorTexture, RGB), specular.a its strength
 // (specularTexture, A), layers.x KHR_materials_transmission's (transmissionTexture, R), layers.y
 // KHR_materials_clearcoat's weight (clearcoatTexture, R), layers.z its roughness
-// (clearcoatRoughnessTexture, G); layers.w unused (1); iridescence.x KHR_materials_iridescence's
+// (clearcoatRoughnessTexture, G); layers.w KHR_materials_volume's thickness (thicknessTexture,
+// G); iridescence.x KHR_materials_iridescence's
 // weight (iridescenceTexture, R), iridescence.y its film's thickness between the minimum and the
 // maximum (iridescenceThicknessTexture, G); iridescence.zw unused (1); sheen.rgb
 // KHR_materials_sheen's colour (sheenColorTexture, RGB), sheen.a its roughness
@@ -277,6 +281,9 @@ LayerTexels material_layer_texels_lod(uint id, vec4 uv, vec2 cone_lod) {
     if (HAS_CLEARCOAT_MAP) {
         t.layers.y = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT, uv, cone_lod).r;
         t.layers.z = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT_ROUGHNESS, uv, cone_lod).g;
+    }
+    if (HAS_THICKNESS_MAP) {
+        t.layers.w = material_texture_lod(id, MATERIAL_SLOT_THICKNESS, uv, cone_lod).g;
     }
     if (HAS_IRIDESCENCE_MAP) {
         t.iridescence.x = material_texture_lod(id, MATERIAL_SLOT_IRIDESCENCE, uv, cone_lod).r;
@@ -322,6 +329,9 @@ bool layer_textured() {
         textured = true;
     }
     if (HAS_IRIDESCENCE_MAP) {
+        textured = true;
+    }
+    if (HAS_THICKNESS_MAP) {
         textured = true;
     }
     return textured;
@@ -434,7 +444,14 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         s.diffuse_transmission = clamp(through.w, 0.0, 1.0);
         s.diffuse_transmission_color = clamp(through.rgb, 0.0, 1.0);
     }
+    // The volume's thickness (the hybrid's attenuation) only where the kernel is specialised for
+    // transmission.
+    s.thickness = 0.0;
     if (HAS_TRANSMISSION) {
+        s.thickness = material_vec(id, MATERIAL_VOLUME_TEXEL).x;
+        if (HAS_THICKNESS_MAP) {
+            s.thickness *= tex.layers.w;
+        }
         float transmission = material_vec(id, 3u).z;
         if (HAS_TRANSMISSION_MAP) {
             transmission *= tex.layers.x;

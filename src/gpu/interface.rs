@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 27] = [
+pub const SCENE_FEATURES: [&str; 28] = [
     "textures",
     "alpha",
     "lights",
@@ -67,6 +67,7 @@ pub const SCENE_FEATURES: [&str; 27] = [
     "sheen_map",
     "diffuse_transmission",
     "diffuse_transmission_map",
+    "thickness_map",
 ];
 
 /// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
@@ -74,7 +75,7 @@ pub const SCENE_FEATURES: [&str; 27] = [
 /// material; one per extension's texture group (`KHR_materials_specular`'s two textures share
 /// `specular_map`), whose textures come together in the files seen (BENCHMARKS.md History: a
 /// scene with one of them pays for the others' lookups). The height slot is `parallax`'s.
-pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 12] = [
+pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 13] = [
     ("base_color_map", 1 << 0),
     ("metal_rough_map", 1 << 1),
     ("emissive_map", 1 << 2),
@@ -87,6 +88,7 @@ pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 12] = [
     ("anisotropy_map", 1 << 12),
     ("sheen_map", 1 << 15 | 1 << 16),
     ("diffuse_transmission_map", 1 << 17 | 1 << 18),
+    ("thickness_map", 1 << 19),
 ];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
@@ -274,7 +276,7 @@ gpu_structs! {
         /// height (parallax occlusion mapping), specular, specular colour, transmission, clear
         /// coat, clear coat roughness, clear coat normal, anisotropy, iridescence, iridescence
         /// thickness, sheen colour, sheen roughness, diffuse transmission, diffuse transmission
-        /// colour, (19: unused).
+        /// colour, volume thickness.
         textures: [uvec4; 5],
         /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
         /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; row1.w is the normal slot's
@@ -305,6 +307,10 @@ gpu_structs! {
         /// `diffuseTransmissionFactor`. Read only by kernels specialised for it
         /// (`HAS_DIFFUSE_TRANSMISSION`).
         diffuse_transmission: vec4,
+        /// `KHR_materials_volume`: `thicknessFactor` (0 without a volume), unused, unused,
+        /// unused. Read only by kernels specialised for transmission (`HAS_TRANSMISSION`): the
+        /// hybrid's attenuation of the transmitted environment.
+        volume: vec4,
     }
 
     /// A texture in the shared texel buffer (linear RGBA16, one RG32UI texel per texel,
@@ -885,8 +891,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 896 bytes).
-    MATERIAL_TEXELS: uint = 56;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 912 bytes).
+    MATERIAL_TEXELS: uint = 57;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -959,8 +965,12 @@ gpu_constants! {
     MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR: uint = 18;
     /// The texel of [`GpuMaterial::diffuse_transmission`] in a material's texels.
     MATERIAL_DIFFUSE_TRANSMISSION_TEXEL: uint = 55;
-    /// Texture slots a material has room for (each with two `tex_transform` rows; slot 19 is
-    /// unused).
+    /// Slot of `KHR_materials_volume`'s `thicknessTexture` (G: × `thicknessFactor`; left empty
+    /// without a volume). Looked up only by kernels specialised for it (`HAS_THICKNESS_MAP`).
+    MATERIAL_SLOT_THICKNESS: uint = 19;
+    /// The texel of [`GpuMaterial::volume`] in a material's texels.
+    MATERIAL_VOLUME_TEXEL: uint = 56;
+    /// Texture slots a material has room for (each with two `tex_transform` rows).
     MATERIAL_TEXTURE_SLOTS: uint = 20;
     /// `GpuTexture::flags`: clamp s.
     TEXTURE_WRAP_S_CLAMP: uint = 1;
@@ -1134,7 +1144,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, diffuse_transmission, anisotropy],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1173,7 +1183,7 @@ kernels! {
     /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
     /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
     kernel wavefront {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, diffuse_transmission, anisotropy],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: WaveParams,
         spec: {
             beckmann: bool = false,
@@ -1305,7 +1315,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, sheen_map, diffuse_transmission_map, diffuse_transmission, anisotropy],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -1329,7 +1339,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, diffuse_transmission, anisotropy],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1389,7 +1399,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, diffuse_transmission, anisotropy],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1420,7 +1430,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, diffuse_transmission, anisotropy],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1463,7 +1473,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map, sheen_map, diffuse_transmission_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1559,7 +1569,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1598,7 +1608,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1634,7 +1644,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1656,7 +1666,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

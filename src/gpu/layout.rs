@@ -428,6 +428,7 @@ const _: () = assert!(offset_of!(GpuMaterial, anisotropy) == 16 * MATERIAL_ANISO
 const _: () = assert!(
     offset_of!(GpuMaterial, diffuse_transmission) == 16 * MATERIAL_DIFFUSE_TRANSMISSION_TEXEL as usize
 );
+const _: () = assert!(offset_of!(GpuMaterial, volume) == 16 * MATERIAL_VOLUME_TEXEL as usize);
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);

@@ -352,6 +352,8 @@ impl ShadingArrays {
                 let through = m.diffuse_transmission > 0.0;
                 let through_texture = m.diffuse_transmission_texture.as_ref().filter(|_| through);
                 let through_color_texture = m.diffuse_transmission_color_texture.as_ref().filter(|_| through);
+                // And the volume's thickness texture without a volume.
+                let thickness_texture = m.thickness_texture.as_ref().filter(|_| m.volume);
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -391,7 +393,7 @@ impl ShadingArrays {
                             gpu_textures.slot(scene, sheen_roughness_texture),
                             gpu_textures.slot(scene, through_texture),
                             gpu_textures.slot(scene, through_color_texture),
-                            0,
+                            gpu_textures.slot(scene, thickness_texture),
                         ],
                     ],
                     tex_transform: TexTransforms(transforms([
@@ -414,7 +416,7 @@ impl ShadingArrays {
                         sheen_roughness_texture,
                         through_texture,
                         through_color_texture,
-                        None,
+                        thickness_texture,
                     ])),
                     base_color: m.base_color_factor,
                     emissive_rough: {
@@ -445,6 +447,7 @@ impl ShadingArrays {
                         m.diffuse_transmission_color[2],
                         m.diffuse_transmission,
                     ],
+                    volume: [if m.volume { m.thickness } else { 0.0 }, 0.0, 0.0, 0.0],
                     anisotropy: if m.anisotropic() {
                         let (sin, cos) = m.anisotropy_rotation.sin_cos();
                         [m.anisotropy_strength, cos, sin, 0.0]

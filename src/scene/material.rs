@@ -66,7 +66,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 18] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 19] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -86,6 +86,7 @@ impl Material {
             &mut self.sheen_roughness_texture,
             &mut self.diffuse_transmission_texture,
             &mut self.diffuse_transmission_color_texture,
+            &mut self.thickness_texture,
         ]
     }
 }
@@ -121,6 +122,7 @@ impl Material {
             anisotropy_rotation,
             diffuse_transmission,
             diffuse_transmission_color,
+            thickness,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -139,6 +141,7 @@ impl Material {
             sheen_roughness_texture,
             diffuse_transmission_texture,
             diffuse_transmission_color_texture,
+            thickness_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -224,6 +227,11 @@ impl Material {
             for s in sheen {
                 slot(h, s);
             }
+        }
+        // Nor without a volume's thickness.
+        if *thickness != 0.0 || thickness_texture.is_some() {
+            h.f32s(&[*thickness]);
+            slot(h, thickness_texture);
         }
         // Nor without diffuse transmission.
         let through = [diffuse_transmission_texture, diffuse_transmission_color_texture];
@@ -353,6 +361,10 @@ pub struct Material {
     /// lobes' GGX roughness along the anisotropy direction is αt = mix(α, 1, strength²), across
     /// it αb = α.
     pub anisotropy_strength: f32,
+    /// `KHR_materials_volume`'s `thicknessFactor` (default 0; above 0 the surface bounds a
+    /// volume, [`Material::volume`]): the hybrid's attenuation approximates the distance light
+    /// travels inside by it (the path tracer traces the distance).
+    pub thickness: f32,
     /// `KHR_materials_diffuse_transmission`'s `diffuseTransmissionFactor` (default 0: none): the
     /// share of the dielectric's diffuse lobe that leaves through the back as a Lambertian lobe.
     pub diffuse_transmission: f32,
@@ -406,6 +418,8 @@ pub struct Material {
     /// `diffuseTransmissionColorTexture`: its colour in RGB (sRGB), ×
     /// `diffuseTransmissionColorFactor`.
     pub diffuse_transmission_color_texture: Option<TextureRef>,
+    /// `KHR_materials_volume`'s `thicknessTexture`: in G (linear), × `thicknessFactor`.
+    pub thickness_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -441,6 +455,7 @@ impl Default for Material {
             anisotropy_rotation: 0.0,
             diffuse_transmission: 0.0,
             diffuse_transmission_color: [1.0; 3],
+            thickness: 0.0,
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -459,6 +474,7 @@ impl Default for Material {
             sheen_roughness_texture: None,
             diffuse_transmission_texture: None,
             diffuse_transmission_color_texture: None,
+            thickness_texture: None,
             parallax: None,
         }
     }
@@ -490,6 +506,7 @@ impl Material {
         let specular_color_texture = info(specular.as_ref().and_then(|s| s.specular_color_texture()), true);
         let transmission = material.transmission();
         let transmission_texture = info(transmission.as_ref().and_then(|t| t.transmission_texture()), false);
+        let thickness_texture = info(material.volume().and_then(|v| v.thickness_texture()), false);
         // Normal and occlusion textures are their own glTF types (with a scale or a strength), so
         // their KHR_texture_transform is read from the raw extension value.
         let mut raw_ref = |texture: gltf::Texture, tex_coord: u32, transform: Option<&Value>, scale: f32| {
@@ -574,6 +591,7 @@ impl Material {
             anisotropy_rotation: anisotropy_number("anisotropyRotation"),
             diffuse_transmission: through_number("diffuseTransmissionFactor"),
             diffuse_transmission_color,
+            thickness: material.volume().map_or(0.0, |v| v.thickness_factor()),
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -593,6 +611,7 @@ impl Material {
             sheen_roughness_texture: None,
             diffuse_transmission_texture: None,
             diffuse_transmission_color_texture: None,
+            thickness_texture,
             parallax: None,
         }
     }

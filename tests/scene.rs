@@ -1452,6 +1452,29 @@ fn sheen_is_read() {
     assert!(error.contains("sheen.glb") && error.contains("sheenColorFactor[1] is -0.25"), "{error}");
 }
 
+/// KHR_materials_volume's `thicknessFactor` and `thicknessTexture` reach the material (0 and none
+/// without the extension; the texture linear, its UV set kept), with no warning.
+#[test]
+fn volume_thickness_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    assert_eq!((plain.materials[0].thickness, plain.materials[0].thickness_texture), (0.0, None));
+    let mut json = base.clone();
+    json["extensionsUsed"] = json!(["KHR_materials_volume"]);
+    json["materials"][0]["extensions"] = json!({ "KHR_materials_volume": {
+        "thicknessFactor": 0.25,
+        "thicknessTexture": {"index": 0, "texCoord": 1}
+    }});
+    let scene = Scene::from_glb_bytes("volume.glb", &to_glb(&json, &bin)).unwrap();
+    let m = &scene.materials[0];
+    assert!(m.volume);
+    assert_eq!(m.thickness, 0.25);
+    let texture = m.thickness_texture.expect("thicknessTexture");
+    assert_eq!(texture.tex_coord, 1);
+    assert!(!scene.textures[texture.texture as usize].srgb, "the thickness texture is linear");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
 /// KHR_materials_diffuse_transmission's factor, colour and two textures reach the material (0,
 /// white and none without the extension), the colour texture decoded as sRGB and the factor's as
 /// linear, with no warning and no longer among the ignored extensions; a factor or colour outside

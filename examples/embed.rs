@@ -384,6 +384,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         ("emission", vk::Format::R16G16B16A16_SFLOAT),
         ("material", vk::Format::R32G32B32A32_UINT),
         ("layers", vk::Format::R32G32B32A32_UINT),
+        ("layers2", vk::Format::R32G32B32A32_UINT),
     ];
     let mut images = Vec::new();
     for set in ["host", "umbra"] {
@@ -395,7 +396,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         images.push(host.image(&format!("{set} ssao"), size, vk::Format::R32_SFLOAT)?);
         images.push(host.image(&format!("{set} ssao blurred"), size, vk::Format::R32_SFLOAT)?);
     }
-    const SET: usize = 10; // images per set: 6 G-buffer, hdr, ldr, ssao, ssao blurred
+    const SET: usize = 11; // images per set: 7 G-buffer, hdr, ldr, ssao, ssao blurred
     let views = |set: usize| {
         let v = |i: usize| images[set * SET + i].view;
         GBufferViews {
@@ -406,6 +407,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             emission: v(3),
             material: v(4),
             layers: v(5),
+            layers2: v(6),
         }
     };
     let (host_views, umbra_views) = (views(0), views(1));
@@ -507,7 +509,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             );
         }
         // The host's scene has no layer textures: its shader writes the first five images, and
-        // umbra never reads the sixth (`layers`) for such a scene.
+        // umbra never reads the last two (`layers`, `layers2`) for such a scene.
         for (i, info) in image_infos.iter().take(5).enumerate() {
             writes.push(
                 vk::WriteDescriptorSet::default()
@@ -584,21 +586,21 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
                 renderer.record_gbuffer(cmd, &camera, gbuffer)?;
             }
             let ao =
-                renderer.record_ssao(cmd, &camera, gbuffer, image(8).view, image(9).view, &ao_settings)?;
+                renderer.record_ssao(cmd, &camera, gbuffer, image(9).view, image(10).view, &ao_settings)?;
             renderer.record_lighting(
                 cmd,
                 &camera,
                 gbuffer,
-                image(6).view,
+                image(7).view,
                 &umbra::passes::deferred::LightingInputs { ao: Some(ao), ..Default::default() },
                 &lighting,
             )?;
-            renderer.record_tonemap(cmd, image(6).view, image(7).view, size, 0.0, curve)?;
+            renderer.record_tonemap(cmd, image(7).view, image(8).view, size, 0.0, curve)?;
         }
 
         // The host copies its LDR images out: its own barrier from umbra's compute writes, and
         // its own layout change (umbra leaves every image in GENERAL).
-        let to_copy: Vec<_> = [&images[7], &images[SET + 7]]
+        let to_copy: Vec<_> = [&images[8], &images[SET + 8]]
             .iter()
             .map(|i| {
                 vk::ImageMemoryBarrier2::default()
@@ -613,7 +615,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             })
             .collect();
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_copy));
-        for (image, buffer) in [&images[7], &images[SET + 7]].into_iter().zip(&readback) {
+        for (image, buffer) in [&images[8], &images[SET + 8]].into_iter().zip(&readback) {
             let region = vk::BufferImageCopy::default()
                 .image_subresource(vk::ImageSubresourceLayers {
                     aspect_mask: vk::ImageAspectFlags::COLOR,

@@ -154,6 +154,18 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         }
         irradiance_over_pi *= max(e, vec3(0.0)) * INV_PI;
     }
+    // KHR_materials_diffuse_transmission's light: the irradiance behind the surface, the
+    // environment's at -n (the probes and lightmaps hold the front's only).
+    vec3 back_over_pi = env;
+    if (HAS_ENV_MAP && params.ibl != 0u && s.diffuse_transmission > 0.0) {
+        float y[9];
+        sh9_basis(-n, y);
+        vec3 e = vec3(0.0);
+        for (uint k = 0u; k < 9u; ++k) {
+            e += ibl_sh[k].rgb * y[k];
+        }
+        back_over_pi *= max(e, vec3(0.0)) * INV_PI;
+    }
     if (PROBES) {
         irradiance_over_pi = probe_volume_irradiance(p, n, wo) * INV_PI;
     }
@@ -177,9 +189,22 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         diffuse_weight = 1.0 - max3(mix(s.f0 * table.z + s.f90 * table.w, film * (table.z + table.w), s.iridescence));
         metal_spec = mix(metal_spec, film_metal * (table.x + table.y), s.iridescence);
     }
+    if (HAS_TRANSMISSION) {
+        // KHR_materials_volume's attenuation, approximated as the Khronos Sample Viewer does:
+        // Beer-Lambert over the material's thickness (thicknessFactor x thicknessTexture, in the
+        // mesh's units), whatever the view angle; 1 without a volume (no thickness, no
+        // attenuation coefficient).
+        transmitted_light *= exp(-material_attenuation(material) * s.thickness);
+    }
     // The diffuse lobe's share `transmission` transmits instead (as bsdf.glsl splits it).
     vec3 below = mix(irradiance_over_pi, transmitted_light, s.transmission);
     vec3 dielectric = dielectric_spec * specular_light + diffuse_weight * s.base * below;
+    if (s.diffuse_transmission > 0.0) {
+        // KHR_materials_diffuse_transmission: its share of the diffuse lobe (what transmission
+        // leaves of it) lit from behind instead, tinted by its colour (as bsdf.glsl splits it).
+        dielectric += diffuse_weight * (1.0 - s.transmission) * s.diffuse_transmission
+            * (s.diffuse_transmission_color * back_over_pi - s.base * irradiance_over_pi);
+    }
     vec3 metal = metal_spec * specular_light;
     vec3 result = mix(dielectric, metal, s.metallic);
     if (max3(s.sheen) > 0.0) {

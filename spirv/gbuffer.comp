@@ -75,8 +75,11 @@ void main() {
     // The layer textures' texels (the lighting passes multiply the factors by them), the clear
     // coat's normal and the anisotropy, only where the scene has some: the image is left
     // unwritten otherwise.
+    LayerTexels layers = layer_texels_none();
+    if (gbuffer_has_layers() || layers2_textured()) {
+        layers = material_layer_texels_lod(material, uv, cone_lod);
+    }
     if (gbuffer_has_layers()) {
-        LayerTexels layers = material_layer_texels_lod(material, uv, cone_lod);
         vec3 coat_n = n;
         if (coat_normal_differs()) {
             coat_n = coat_normal_lod(tri, hit.bary, ng, uv, cone_lod);
@@ -89,5 +92,9 @@ void main() {
         imageStore(gb_layers, pixel,
                    gbuffer_pack_layers(layers.specular, layers.layers, layers.iridescence, coat_n, s.anisotropy,
                                        s.aniso_dir));
+    }
+    // The sheen's and the diffuse transmission's texels, only where the scene has them.
+    if (layers2_textured()) {
+        imageStore(gb_layers2, pixel, gbuffer_pack_layers2(layers.sheen, layers.diffuse_transmission));
     }
 }

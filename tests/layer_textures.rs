@@ -1,9 +1,12 @@
 //! The extensions' layer textures: `KHR_materials_specular`'s `specularTexture` (A) and
 //! `specularColorTexture` (RGB), `KHR_materials_transmission`'s `transmissionTexture` (R),
 //! `KHR_materials_clearcoat`'s `clearcoatTexture` (R), `clearcoatRoughnessTexture` (G) and
-//! `clearcoatNormalTexture` (and the coat's own, unmapped normal), in the path tracer and the
-//! hybrid renderer (which carries their texels in the G-buffer's `layers` image). A quad facing
-//! the camera fills the view; each render is compared with the same scene whose texture is folded
+//! `clearcoatNormalTexture` (and the coat's own, unmapped normal), `KHR_materials_sheen`'s
+//! `sheenColorTexture` (RGB) and `sheenRoughnessTexture` (A),
+//! `KHR_materials_diffuse_transmission`'s `diffuseTransmissionTexture` (A) and
+//! `diffuseTransmissionColorTexture` (RGB), in the path tracer and the hybrid renderer (which
+//! carries their texels in the G-buffer's `layers` and `layers2` images). A quad facing the
+//! camera fills the view; each render is compared with the same scene whose texture is folded
 //! into the material's factor, pixel by pixel.
 
 mod common;
@@ -22,8 +25,10 @@ fn quad_scene(material: Material, texture: Option<Texture>, sun: f32) -> Scene {
 /// the slot's factor, in both modes. The texel's channels all differ (R 128, G 64, B 200, A 160),
 /// so a slot that read another channel than the specification's (A for `specularTexture`, RGB
 /// for `specularColorTexture`, R for `transmissionTexture` and `clearcoatTexture`, G for
-/// `clearcoatRoughnessTexture`) would not match; the kernels are specialised per texture group
-/// (`specular_map`, `transmission_map`, `clearcoat_map`), so a slot left out of its group would
+/// `clearcoatRoughnessTexture`, A for `diffuseTransmissionTexture`, RGB for
+/// `diffuseTransmissionColorTexture`, whose lobe the sky behind the quad lights) would not match;
+/// the kernels are specialised per texture group (`specular_map`, `transmission_map`,
+/// `clearcoat_map`, `diffuse_transmission_map`), so a slot left out of its group would
 /// render the factor alone. Every case is also checked to differ from the factor
 /// alone, so the texture has something to change.
 #[test]
@@ -78,6 +83,31 @@ fn each_layer_texture_is_read_alone() {
             },
             Material { clearcoat: 1.0, clearcoat_roughness: 0.8 * t[1], ..base.clone() },
             Material { clearcoat: 1.0, clearcoat_roughness: 0.8, ..base.clone() },
+        ),
+        (
+            "diffuse transmission",
+            Material { diffuse_transmission: 0.9, diffuse_transmission_texture: slot(), ..base.clone() },
+            Material { diffuse_transmission: 0.9 * t[3], ..base.clone() },
+            Material { diffuse_transmission: 0.9, ..base.clone() },
+        ),
+        (
+            "diffuse transmission colour",
+            Material {
+                diffuse_transmission: 0.9,
+                diffuse_transmission_color: [0.9, 0.8, 0.7],
+                diffuse_transmission_color_texture: slot(),
+                ..base.clone()
+            },
+            Material {
+                diffuse_transmission: 0.9,
+                diffuse_transmission_color: [0.9 * t[0], 0.8 * t[1], 0.7 * t[2]],
+                ..base.clone()
+            },
+            Material {
+                diffuse_transmission: 0.9,
+                diffuse_transmission_color: [0.9, 0.8, 0.7],
+                ..base.clone()
+            },
         ),
     ];
     // Every case and mode is checked before the test fails, naming each that does.
@@ -202,4 +232,155 @@ fn the_coat_keeps_the_unmapped_normal() {
         eprintln!("{mode}: coat highlight {kept:.3}, with the coat's own normal map {moved:.3}");
         assert!((moved - kept).abs() > 0.5 * kept, "{mode}: the coat's normal map moves its highlight");
     }
+}
+
+/// KHR_materials_sheen's two textures reach the lobe: a quad whose `sheenColorTexture` and
+/// `sheenRoughnessTexture` are one texture of two texels (the left and right halves of the UV
+/// square), lit by a grazing sun (75.5° from the normal, where the Charlie sheen is strongest)
+/// and a dim sky, renders on each half as the untextured material whose factors are × that half's
+/// texel (RGB for the colour, A for the roughness), pixel by pixel in both modes (the hybrid
+/// carries them in the G-buffer's `layers2`). The texels' channels all differ, so a slot that read
+/// another channel, or a half that read the other texel, would not match; each half must also
+/// differ from the factors alone.
+#[test]
+fn the_sheen_textures_reach_the_lobe() {
+    let gpu = Gpu::new();
+    let texels = [[200u8, 120, 40, 60], [60, 160, 230, 240]];
+    let t = texels.map(|texel| texel.map(|c| c as f32 / 255.0));
+    let base = Material {
+        base_color_factor: [0.2, 0.2, 0.2, 1.0],
+        metallic: 0.0,
+        roughness: 0.6,
+        sheen_color: [1.0, 0.9, 0.8],
+        sheen_roughness: 0.9,
+        double_sided: true,
+        ..Default::default()
+    };
+    let render = |m: Material, textured: bool| {
+        let mut s = quad_scene(m, textured.then(|| common::row_texture("sheen", &texels)), 0.0);
+        let grazing = Vec3::new(-0.968, 0.0, -0.25);
+        s.lights = vec![common::light(LightKind::Directional, Vec3::ZERO, grazing, 4.0)];
+        renders(&gpu, &s, 0.05)
+    };
+    let folded = |t: [f32; 4]| Material {
+        sheen_color: [0, 1, 2].map(|c| base.sheen_color[c] * t[c]),
+        sheen_roughness: base.sheen_roughness * t[3],
+        ..base.clone()
+    };
+    let textured = render(
+        Material { sheen_color_texture: slot(), sheen_roughness_texture: slot(), ..base.clone() },
+        true,
+    );
+    let halves = [render(folded(t[0]), false), render(folded(t[1]), false)];
+    let factor = render(base.clone(), false);
+    let (w, h) = SIZE;
+    let mut failures = Vec::new();
+    for (m, mode) in MODES.iter().enumerate() {
+        for (half, reference) in halves.iter().enumerate() {
+            // Two columns clear of the seam (a path traced pixel's jitter crosses it).
+            let columns: Vec<u32> =
+                if half == 0 { (0..w / 2 - 2).collect() } else { (w / 2 + 2..w).collect() };
+            let (mut differ, mut count) = (0, 0);
+            for y in 0..h {
+                for &x in &columns {
+                    let i = (y * w + x) as usize;
+                    let (p, q) = (textured[m][i], reference[m][i]);
+                    assert!(q[0] > 0.01, "{mode}: pixel ({x}, {y}) is lit ({q:?})");
+                    if !same(&p, &q) {
+                        failures
+                            .push(format!("{mode}, half {half}: ({x}, {y}) textured {p:?} vs folded {q:?}"));
+                    }
+                    differ += usize::from(!same(&q, &factor[m][i]));
+                    count += 1;
+                }
+            }
+            if differ <= count / 2 {
+                failures
+                    .push(format!("{mode}, half {half}: the texel changes only {differ} of {count} pixels"));
+            }
+        }
+    }
+    failures.truncate(8);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// KHR_materials_volume's attenuation in the hybrid: Beer–Lambert over the material's thickness
+/// (`thicknessFactor` × `thicknessTexture` G), as the Sample Viewer approximates it, against the
+/// path tracer on a slab of that thickness. A glass slab 0.5 deep (ior 1: nothing bends or
+/// reflects, `specularFactor` 0: no Fresnel) filling the view under a sky of 1: the path tracer
+/// sees the sky through the slab attenuated by exp(−σ d / cos θ), the hybrid by exp(−σ t). At
+/// the image's centre (θ below 1.2°) both equal the closed form exp(−σ · 0.5) within 1e-3 per
+/// channel (σ = −ln(colour) / distance: colour (0.5, 0.25, 0.8) at distance 1). A thickness
+/// texture of G = 128 (R and B 255, A 0: another channel would read 1 or 0) gives the hybrid
+/// exp(−σ · 0.5 · 128/255) in every pixel, and leaves the path tracer, which traces the slab, as
+/// it was.
+#[test]
+fn the_hybrid_attenuates_by_the_thickness() {
+    use umbra::gpu::scene::GpuScene;
+    use umbra::passes::deferred::LightingSettings;
+    use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
+    let gpu = Gpu::new();
+    let slab = Material {
+        base_color_factor: [1.0; 4],
+        metallic: 0.0,
+        roughness: 0.0,
+        specular_factor: 0.0,
+        ior: 1.0,
+        transmission_factor: 1.0,
+        volume: true,
+        thickness: 0.5,
+        attenuation_color: [0.5, 0.25, 0.8],
+        attenuation_distance: 1.0,
+        ..Default::default()
+    };
+    let sigma = slab.attenuation();
+    let render = |m: Material, texture: Option<Texture>| {
+        let camera = common::camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO);
+        let soup = common::cuboid(Vec3::new(-4.0, -4.0, -0.5), Vec3::new(4.0, 4.0, 0.0));
+        let mut scene = common::build_with("thickness", &[(soup, m)], vec![], camera);
+        scene.uv0 = vec![[0.5, 0.5]; scene.positions.len()];
+        scene.textures.extend(texture);
+        let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
+        let camera = scene.camera(None).unwrap();
+        let path = PathSettings { size: SIZE, spp: 4, max_bounces: 4, env: [1.0; 3], ..Default::default() };
+        let traced = path_trace(&gpu, &gpu_scene, &camera, &path, |_, _| {}).unwrap();
+        let settings = HybridSettings {
+            size: SIZE,
+            lighting: LightingSettings { env: [1.0; 3], ..Default::default() },
+            ao: None,
+            ..Default::default()
+        };
+        let lit = hybrid(&gpu, &gpu_scene, &camera, &settings).unwrap();
+        [traced.mean, lit.color]
+    };
+    let centre = (SIZE.1 / 2 * SIZE.0 + SIZE.0 / 2) as usize;
+    let plain = render(slab.clone(), None);
+    let expected = sigma.map(|s| (-s * 0.5).exp());
+    for (mode, image) in MODES.iter().zip(&plain) {
+        let p = image[centre];
+        for c in 0..3 {
+            assert!(
+                (p[c] - expected[c]).abs() <= 1e-3,
+                "{mode}: centre channel {c}: {} vs exp(−σ d) {}",
+                p[c],
+                expected[c]
+            );
+        }
+    }
+    let half = common::row_texture("thickness", &[[255, 128, 255, 0]]);
+    let textured = render(Material { thickness_texture: slot(), ..slab.clone() }, Some(half));
+    let expected = sigma.map(|s| (-s * 0.5 * 128.0 / 255.0).exp());
+    for (i, p) in textured[1].iter().enumerate() {
+        for c in 0..3 {
+            assert!(
+                (p[c] - expected[c]).abs() <= 1e-3,
+                "hybrid: pixel {i} channel {c}: {} vs {}",
+                p[c],
+                expected[c]
+            );
+        }
+    }
+    let q = textured[0][centre];
+    let p = plain[0][centre];
+    assert!(same(&q, &p), "path tracer: the thickness texture changed the traced slab: {q:?} vs {p:?}");
 }

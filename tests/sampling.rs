@@ -59,6 +59,15 @@ enum Sampler {
         direction_degrees: f32,
         theta_degrees: f32,
     },
+    /// `KHR_materials_diffuse_transmission` (sample_test's kind 10): a grey (0.6) dielectric of
+    /// α `alpha` whose diffuse lobe sends `share` through the back (tinted 1, 0.8, 0.64), thin
+    /// transmission (`KHR_materials_transmission`) of `transmission` beside it; wo in the xz plane.
+    DiffuseTransmission {
+        alpha: f32,
+        share: f32,
+        transmission: f32,
+        theta_degrees: f32,
+    },
 }
 
 /// The transmissive dielectrics of `sample_test.comp` (its sampler numbers).
@@ -131,6 +140,11 @@ impl Kernel {
                 let d = direction_degrees.to_radians();
                 anisotropy = [strength, d.cos(), d.sin(), metallic];
                 (Microfacet::Ggx, Vec3::new(t.sin(), 0.0, t.cos()), alpha, 9)
+            }
+            Sampler::DiffuseTransmission { alpha, share, transmission, theta_degrees } => {
+                let t = theta_degrees.to_radians();
+                anisotropy = [share, transmission, 1.0, 0.6];
+                (Microfacet::Ggx, Vec3::new(t.sin(), 0.0, t.cos()), alpha, 10)
             }
         };
         let pipeline = &self.0[microfacet as usize];
@@ -261,6 +275,7 @@ fn chi_square(gpu: &Gpu, kernel: &Kernel, sampler: Sampler, pdf_alpha_scale: f32
         Sampler::Microfacet { microfacet: Microfacet::Beckmann | Microfacet::GgxWalter, .. }
             | Sampler::Dielectric { .. }
             | Sampler::Anisotropic { .. }
+            | Sampler::DiffuseTransmission { .. }
     ) {
         let missing = 1.0 - mass;
         assert!(
@@ -356,6 +371,15 @@ fn cases() -> Vec<Sampler> {
                     direction_degrees: 30.0,
                     theta_degrees,
                 });
+            }
+        }
+    }
+    // KHR_materials_diffuse_transmission: part and all of the diffuse lobe through the back,
+    // alone and beside thin specular transmission.
+    for (share, transmission) in [(0.5, 0.0), (1.0, 0.0), (0.6, 0.5)] {
+        for alpha in [0.1, 0.5] {
+            for theta_degrees in [30.0, 70.0] {
+                cases.push(Sampler::DiffuseTransmission { alpha, share, transmission, theta_degrees });
             }
         }
     }

@@ -1402,8 +1402,10 @@ fn clearcoat_is_read() {
     );
 }
 
-/// KHR_materials_sheen's factors reach the material (0 without the extension), its two textures
-/// are named in one warning per material, and a factor outside [0, 1] is refused naming it.
+/// KHR_materials_sheen's factors and two textures reach the material (0 and none without the
+/// extension), the colour texture decoded as sRGB and the roughness texture as linear, with no
+/// warning; a factor outside [0, 1] or a texture index beyond the file's textures is refused
+/// naming it.
 #[test]
 fn sheen_is_read() {
     let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
@@ -1426,17 +1428,102 @@ fn sheen_is_read() {
         "sheenRoughnessTexture": {"index": 0}
     }))
     .unwrap();
-    assert_eq!(scene.materials[0].sheen_color, [1.0; 3]);
-    let warned: Vec<&String> = scene
-        .warnings
-        .iter()
-        .filter(|w| w.contains("sheenColorTexture") && w.contains("sheenRoughnessTexture"))
-        .collect();
-    assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
+    let m = &scene.materials[0];
+    assert_eq!(m.sheen_color, [1.0; 3]);
+    let (color, roughness) =
+        (m.sheen_color_texture.as_ref().unwrap(), m.sheen_roughness_texture.as_ref().unwrap());
+    assert!(scene.textures[color.texture as usize].srgb, "the colour texture is sRGB");
+    assert!(!scene.textures[roughness.texture as usize].srgb, "the roughness texture is linear");
+    assert!(scene.warnings.iter().all(|w| !w.contains("sheen")), "{:?}", scene.warnings);
+    assert!(
+        plain.materials[0].sheen_color_texture.is_none()
+            && plain.materials[0].sheen_roughness_texture.is_none()
+    );
+    let error = load(json!({"sheenColorFactor": [1.0, 1.0, 1.0], "sheenRoughnessTexture": {"index": 7}}))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("sheen.glb") && error.contains("KHR_materials_sheen.sheenRoughnessTexture.index is 7"),
+        "{error}"
+    );
     let error = load(json!({"sheenRoughnessFactor": 1.5})).unwrap_err().to_string();
     assert!(error.contains("sheen.glb") && error.contains("sheenRoughnessFactor is 1.5"), "{error}");
     let error = load(json!({"sheenColorFactor": [0.5, -0.25, 0.5]})).unwrap_err().to_string();
     assert!(error.contains("sheen.glb") && error.contains("sheenColorFactor[1] is -0.25"), "{error}");
+}
+
+/// KHR_materials_volume's `thicknessFactor` and `thicknessTexture` reach the material (0 and none
+/// without the extension; the texture linear, its UV set kept), with no warning.
+#[test]
+fn volume_thickness_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    assert_eq!((plain.materials[0].thickness, plain.materials[0].thickness_texture), (0.0, None));
+    let mut json = base.clone();
+    json["extensionsUsed"] = json!(["KHR_materials_volume"]);
+    json["materials"][0]["extensions"] = json!({ "KHR_materials_volume": {
+        "thicknessFactor": 0.25,
+        "thicknessTexture": {"index": 0, "texCoord": 1}
+    }});
+    let scene = Scene::from_glb_bytes("volume.glb", &to_glb(&json, &bin)).unwrap();
+    let m = &scene.materials[0];
+    assert!(m.volume);
+    assert_eq!(m.thickness, 0.25);
+    let texture = m.thickness_texture.expect("thicknessTexture");
+    assert_eq!(texture.tex_coord, 1);
+    assert!(!scene.textures[texture.texture as usize].srgb, "the thickness texture is linear");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
+/// KHR_materials_diffuse_transmission's factor, colour and two textures reach the material (0,
+/// white and none without the extension), the colour texture decoded as sRGB and the factor's as
+/// linear, with no warning and no longer among the ignored extensions; a factor or colour outside
+/// [0, 1] or a texture index beyond the file's textures is refused naming it.
+#[test]
+fn diffuse_transmission_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let load = |through: Value| {
+        let mut json = base.clone();
+        json["extensionsUsed"] = json!(["KHR_materials_diffuse_transmission"]);
+        json["materials"][0]["extensions"] = json!({ "KHR_materials_diffuse_transmission": through });
+        Scene::from_glb_bytes("through.glb", &to_glb(&json, &bin))
+    };
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    let m = &plain.materials[0];
+    assert_eq!((m.diffuse_transmission, m.diffuse_transmission_color), (0.0, [1.0; 3]));
+    assert!(m.diffuse_transmission_texture.is_none() && m.diffuse_transmission_color_texture.is_none());
+    let scene = load(json!({
+        "diffuseTransmissionFactor": 0.75,
+        "diffuseTransmissionColorFactor": [0.5, 0.25, 0.125],
+        "diffuseTransmissionTexture": {"index": 0},
+        "diffuseTransmissionColorTexture": {"index": 0, "texCoord": 1}
+    }))
+    .unwrap();
+    let m = &scene.materials[0];
+    assert_eq!((m.diffuse_transmission, m.diffuse_transmission_color), (0.75, [0.5, 0.25, 0.125]));
+    let (factor, colour) =
+        (m.diffuse_transmission_texture.unwrap(), m.diffuse_transmission_color_texture.unwrap());
+    assert_eq!(colour.tex_coord, 1);
+    assert!(!scene.textures[factor.texture as usize].srgb, "the factor's texture is linear");
+    assert!(scene.textures[colour.texture as usize].srgb, "the colour texture is sRGB");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let error = load(json!({"diffuseTransmissionFactor": 1.5})).unwrap_err().to_string();
+    assert!(error.contains("through.glb") && error.contains("diffuseTransmissionFactor is 1.5"), "{error}");
+    let error = load(json!({"diffuseTransmissionColorFactor": [0.5, 2.0, 0.5]})).unwrap_err().to_string();
+    assert!(
+        error.contains("through.glb") && error.contains("diffuseTransmissionColorFactor[1] is 2"),
+        "{error}"
+    );
+    let error =
+        load(json!({"diffuseTransmissionFactor": 1.0, "diffuseTransmissionColorTexture": {"index": 7}}))
+            .unwrap_err()
+            .to_string();
+    assert!(
+        error.contains("through.glb")
+            && error
+                .contains("KHR_materials_diffuse_transmission.diffuseTransmissionColorTexture.index is 7"),
+        "{error}"
+    );
 }
 
 /// KHR_materials_iridescence's factor, ior, thickness range and two textures reach the material

@@ -55,6 +55,19 @@
 // ignores the coat-film interface). A surface without a film (`iridescence` 0: a kernel not
 // specialised for it sets the constant) costs nothing.
 //
+// KHR_materials_diffuse_transmission splits the dielectric's diffuse lobe (what transmission
+// leaves of it) into reflection and a Lambertian lobe on the other side of the surface, tinted by
+// its own colour (not the base colour), as the extension's layering says:
+//
+//   diffuse = mix(baseColor / pi, diffuseTransmissionColor / pi [wi below], diffuseTransmission)
+//
+// under the same 1 - max3(F) as the diffuse reflection, F taken at the half vector of wo and wi
+// mirrored to wo's side (as thin-walled transmission takes it). It is thin-walled: the light
+// leaves the back unbent; in a KHR_materials_volume it enters the medium (the path tracer
+// attenuates the segment inside). The path tracer samples it as its own lobe (the cosine
+// hemisphere below). A surface without it (`diffuse_transmission` 0: a kernel not specialised
+// for it sets the constant) costs nothing.
+//
 // KHR_materials_anisotropy makes the material's specular lobes (metal, dielectric reflection and
 // transmission; not the coat) anisotropic GGX: alpha_t = mix(alpha, 1, strength^2) along the
 // anisotropy direction (`aniso_dir`, a unit vector in the shading frame's xy plane), alpha_b =
@@ -103,6 +116,9 @@ struct Surface {
     float iridescence_thickness;  // the film's thickness, nm
     float anisotropy;        // KHR_materials_anisotropy's strength in [0, 1] (0: isotropic)
     vec2 aniso_dir;          // the anisotropy direction: unit, in the shading frame's xy plane
+    float diffuse_transmission;        // KHR_materials_diffuse_transmission's share (0: none)
+    vec3 diffuse_transmission_color;   // its colour
+    float thickness;     // KHR_materials_volume's thickness (the hybrid's attenuation; 0: none)
 };
 
 float max3(vec3 v) {
@@ -343,47 +359,76 @@ vec3 bsdf_eval_transmission(Surface s, vec3 wo, vec3 wi) {
     return weight * (1.0 - max3(f)) * s.base * btdf;
 }
 
+// KHR_materials_diffuse_transmission's Lambertian lobe for wi below the surface (wi.z < 0).
+vec3 bsdf_eval_diffuse_transmission(Surface s, vec3 wo, vec3 wi) {
+    vec3 wm = vec3(wi.xy, -wi.z);  // mirrored to wo's side
+    float oh = max(dot(wo, normalize(wo + wm)), 0.0);
+    float weight = (1.0 - s.metallic) * (1.0 - s.transmission) * s.diffuse_transmission;
+    return weight * (1.0 - max3(dielectric_fresnel(s, oh))) * s.diffuse_transmission_color * INV_PI;
+}
+
 // The material under the coat.
 vec3 bsdf_eval_base(Surface s, vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z == 0.0) {
         return vec3(0.0);
     }
     if (wi.z < 0.0) {
-        return bsdf_eval_transmission(s, wo, wi);
+        vec3 through = bsdf_eval_transmission(s, wo, wi);
+        if (s.diffuse_transmission > 0.0) {
+            through += bsdf_eval_diffuse_transmission(s, wo, wi);
+        }
+        return through;
     }
     vec3 h = normalize(wo + wi);
     float oh = max(dot(wo, h), 0.0);
     float spec = spec_d(s, h) * spec_visibility(s, wo, wi);
     vec3 f_dielectric = dielectric_fresnel(s, oh);
     vec3 dielectric = (1.0 - max3(f_dielectric)) * (1.0 - s.transmission) * s.base * INV_PI + f_dielectric * spec;
+    if (s.diffuse_transmission > 0.0) {
+        // The share that leaves through the back instead.
+        dielectric -= s.diffuse_transmission * (1.0 - max3(f_dielectric)) * (1.0 - s.transmission) * s.base * INV_PI;
+    }
     vec3 metal = metal_fresnel(s, oh) * spec;
     return mix(dielectric, metal, s.metallic);
 }
 
-// Probabilities of the specular reflection (x), transmission (y) and diffuse (z) lobes: their
-// shares of the Fresnel-weighted albedo at wo. Leaving the denser side of a refracting boundary,
+// Probabilities of the specular reflection (x), transmission (y), diffuse (z) and diffuse
+// transmission (w) lobes: their shares of the Fresnel-weighted albedo at wo. Leaving the denser side of a refracting boundary,
 // F at the normal is 1 beyond the critical angle, yet microfacets tilted towards wo still refract
 // (a rough boundary's transmission fades over degrees past it: at α 0.1, 37 % of the albedo at
 // 45°, 5 % at 60°), so F is taken 9:1 with Schlick's at the unbent angle there: transmission
 // keeps a probability wherever it can happen (tests/sampling.rs), reflection most of it under
 // total internal reflection.
-// The lobes' estimated albedos at wo: specular reflection (x), transmission (y), diffuse (z).
-vec3 lobe_albedos(Surface s, vec3 wo) {
+// The lobes' estimated albedos at wo: specular reflection (x), transmission (y), diffuse (z),
+// diffuse transmission (w, by its colour's luminance).
+vec4 lobe_albedos(Surface s, vec3 wo) {
     float f = max3(dielectric_fresnel(s, wo.z));
     if (!s.thin && s.eta < 1.0) {
         f = mix(max3(fresnel_schlick(s.f0, vec3(s.f90), wo.z)), f, 0.9);
     }
     float specular = mix(f, 1.0, s.metallic);
     float rest = (1.0 - s.metallic) * (1.0 - f) * luminance(s.base);
-    return vec3(specular, rest * s.transmission, rest * (1.0 - s.transmission));
+    vec4 a = vec4(specular, rest * s.transmission, rest * (1.0 - s.transmission), 0.0);
+    if (s.diffuse_transmission > 0.0) {
+        float diffuse = (1.0 - s.metallic) * (1.0 - f) * (1.0 - s.transmission);
+        a.z *= 1.0 - s.diffuse_transmission;
+        a.w = diffuse * s.diffuse_transmission * luminance(s.diffuse_transmission_color);
+    }
+    return a;
 }
 
-vec3 lobe_probabilities(Surface s, vec3 wo) {
-    vec3 a = lobe_albedos(s, wo);
-    float total = a.x + a.y + a.z;
+// The sum of the lobes' estimated albedos.
+float lobe_albedo_sum(vec4 a) {
+    return a.x + a.y + a.z + a.w;
+}
+
+vec4 lobe_probabilities(Surface s, vec3 wo) {
+    vec4 a = lobe_albedos(s, wo);
+    float total = lobe_albedo_sum(a);
     float p_spec = total > 0.0 ? a.x / total : 0.5;
     float p_trans = total > 0.0 ? a.y / total : 0.0;
-    return vec3(p_spec, p_trans, 1.0 - p_spec - p_trans);
+    float p_through = total > 0.0 ? a.w / total : 0.0;
+    return vec4(p_spec, p_trans, 1.0 - p_spec - p_trans - p_through, p_through);
 }
 
 // A coat's weight seen at cosine `nv` from its normal: clearcoat * F_schlick(0.04, 1, N.V).
@@ -499,19 +544,18 @@ vec3 bsdf_eval_sheened(Surface s, vec3 wo, vec3 wi) {
 // albedo (the material's scaled by the scaling at wo).
 float sheen_probability(Surface s, vec3 wo) {
     float e = max3(s.sheen) * sheen_albedo(wo.z, s.sheen_roughness);
-    vec3 a = lobe_albedos(s, wo);
-    float base = max(0.0, 1.0 - e) * (a.x + a.y + a.z);
+    float base = max(0.0, 1.0 - e) * lobe_albedo_sum(lobe_albedos(s, wo));
     return e + base > 0.0 ? e / (e + base) : 0.0;
 }
 
 // The probability of sampling the coat's lobe: its share of the estimated albedo.
 float coat_probability(Surface s, vec3 wo) {
     float w = coat_weight(s, wo);
-    vec3 a = lobe_albedos(s, wo);
-    float base = (1.0 - w) * (a.x + a.y + a.z);
+    float a = lobe_albedo_sum(lobe_albedos(s, wo));
+    float base = (1.0 - w) * a;
     if (max3(s.sheen) > 0.0) {
         float e = max3(s.sheen) * sheen_albedo(wo.z, s.sheen_roughness);
-        base = (1.0 - w) * (e + max(0.0, 1.0 - e) * (a.x + a.y + a.z));
+        base = (1.0 - w) * (e + max(0.0, 1.0 - e) * a);
     }
     return w + base > 0.0 ? w / (w + base) : 0.0;
 }
@@ -526,14 +570,25 @@ vec3 bsdf_eval(Surface s, vec3 wo, vec3 wi) {
     return f;
 }
 
-// The diffuse lobe's part of bsdf_eval(s, wo, wi): bsdf_eval_base's Lambertian term under the
-// sheen's and the coat's scalings (the denoiser's lobe split, path.glsl).
+// The diffuse lobes' part of bsdf_eval(s, wo, wi): bsdf_eval_base's Lambertian terms (reflection
+// and KHR_materials_diffuse_transmission's) under the sheen's and the coat's scalings (the
+// denoiser's lobe split, path.glsl).
 vec3 bsdf_eval_diffuse(Surface s, vec3 wo, vec3 wi) {
-    if (wo.z <= 0.0 || wi.z <= 0.0) {
+    if (wo.z <= 0.0 || wi.z == 0.0) {
         return vec3(0.0);
     }
-    float oh = max(dot(wo, normalize(wo + wi)), 0.0);
-    vec3 f = (1.0 - max3(dielectric_fresnel(s, oh))) * (1.0 - s.transmission) * s.base * INV_PI * (1.0 - s.metallic);
+    vec3 f = vec3(0.0);
+    if (wi.z < 0.0) {
+        if (s.diffuse_transmission > 0.0) {
+            f = bsdf_eval_diffuse_transmission(s, wo, wi);
+        }
+    } else {
+        float oh = max(dot(wo, normalize(wo + wi)), 0.0);
+        f = (1.0 - max3(dielectric_fresnel(s, oh))) * (1.0 - s.transmission) * s.base * INV_PI * (1.0 - s.metallic);
+        if (s.diffuse_transmission > 0.0) {
+            f *= 1.0 - s.diffuse_transmission;
+        }
+    }
     if (max3(s.sheen) > 0.0) {
         f *= max(0.0, min(sheen_scaling_at(s, wo.z), sheen_scaling_at(s, wi.z)));
     }
@@ -564,9 +619,13 @@ float bsdf_pdf_base(Surface s, vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z == 0.0) {
         return 0.0;
     }
-    vec3 p = lobe_probabilities(s, wo);
+    vec4 p = lobe_probabilities(s, wo);
     if (wi.z < 0.0) {
-        return p.y > 0.0 ? p.y * transmission_pdf(s, wo, wi) : 0.0;
+        float through = p.y > 0.0 ? p.y * transmission_pdf(s, wo, wi) : 0.0;
+        if (s.diffuse_transmission > 0.0) {
+            through += p.w * pdf_cosine_hemisphere(vec3(wi.xy, -wi.z));
+        }
+        return through;
     }
     vec3 h = normalize(wo + wi);
     return p.x * spec_pdf(s, wo, h) + p.z * pdf_cosine_hemisphere(wi);
@@ -593,7 +652,12 @@ float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
 // A direction from the base's lobes, picked by u.x; false when it leaves its lobe's side of the
 // surface (or cannot refract).
 bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
-    vec3 p = lobe_probabilities(s, wo);
+    vec4 p = lobe_probabilities(s, wo);
+    // KHR_materials_diffuse_transmission's lobe: the last share of u.x.
+    bool diffuse_through = false;
+    if (s.diffuse_transmission > 0.0) {
+        diffuse_through = u.x >= p.x + p.y + p.z;
+    }
     if (u.x < p.x) {
         vec3 h = spec_sample(s, wo, u.yz);
         wi = reflect(-wo, h);
@@ -610,8 +674,11 @@ bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
         }
     } else {
         wi = sample_cosine_hemisphere(u.yz);
+        if (diffuse_through) {
+            wi.z = -wi.z;
+        }
     }
-    return !(wi.z == 0.0 || (wi.z < 0.0 && !(u.x >= p.x && u.x < p.x + p.y)));
+    return !(wi.z == 0.0 || (wi.z < 0.0 && !(u.x >= p.x && u.x < p.x + p.y) && !diffuse_through));
 }
 
 // Samples wi; weight = f |cos| / pdf. False when the sample leaves its lobe's side of the surface

@@ -52,6 +52,18 @@ void gbuffer_unpack_layers(uvec4 bits, out vec4 specular, out vec4 layers, out v
     aniso_dir = vec2(cos(angle), sin(angle));
 }
 
+// The G-buffer's `layers2` image: KHR_materials_sheen's texels (shading.glsl's LayerTexels.sheen,
+// four unorm8 values) in x, KHR_materials_diffuse_transmission's (diffuse_transmission) in y; z, w
+// unused (0).
+uvec4 gbuffer_pack_layers2(vec4 sheen, vec4 diffuse_transmission) {
+    return uvec4(packUnorm4x8(sheen), packUnorm4x8(diffuse_transmission), 0u, 0u);
+}
+
+void gbuffer_unpack_layers2(uvec4 bits, out vec4 sheen, out vec4 diffuse_transmission) {
+    sheen = unpackUnorm4x8(bits.x);
+    diffuse_transmission = unpackUnorm4x8(bits.y);
+}
+
 // The world-space point at view-space `depth` (along forward) on pixel `pixel`'s centre ray.
 vec3 gbuffer_position(vec3 origin, vec3 forward, vec3 right, vec3 up, ivec2 pixel, uvec2 size, float depth) {
     vec3 dir = camera_ray(forward, right, up, vec2(pixel) + 0.5, size);

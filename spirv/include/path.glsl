@@ -175,7 +175,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     // Parallax occlusion mapping: the hit's attributes are read where the ray meets the material's
     // height field, whose self-shadowing then applies to every light sample (light_side).
     hit.bary = parallax_occlusion(tri, hit.bary, wo);
-    if (HAS_TRANSMISSION && dot(ng, wo) < 0.0 && material_flag(material, MATERIAL_VOLUME)) {
+    if (scene_transmits() && dot(ng, wo) < 0.0 && material_flag(material, MATERIAL_VOLUME)) {
         // A volume's boundary reached from behind: the segment ran inside it (a closed mesh
         // whose normals face out, as KHR_materials_volume requires), so Beer-Lambert.
         throughput *= exp(-material_attenuation(material) * hit.t);

@@ -12,7 +12,7 @@
 // power, the two pools picked with probability restir_emissive_share().
 //
 // The including kernel includes random.glsl, gbuffer.glsl and shading.glsl first and has the
-// G-buffer bound as gb_depth, gb_normal, gb_base, gb_material and gb_layers, and `params` with `camera`,
+// G-buffer bound as gb_depth, gb_normal, gb_base, gb_material, gb_layers and gb_layers2, and `params` with `camera`,
 // `size`, `light_count` and `punctual_count`.
 #ifndef UMBRA_RESTIR_GLSL
 #define UMBRA_RESTIR_GLSL
@@ -68,6 +68,9 @@ bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
     if (gbuffer_has_layers()) {
         gbuffer_unpack_layers(imageLoad(gb_layers, pixel), layers.specular, layers.layers, layers.iridescence, coat_n,
                               anisotropy, aniso_dir);
+    }
+    if (layers2_textured()) {
+        gbuffer_unpack_layers2(imageLoad(gb_layers2, pixel), layers.sheen, layers.diffuse_transmission);
     }
     sp.s = material_surface_from(mat.x, base_metal.rgb, base_metal.a, normal_rough.w, layers);
     surface_coat_normal(sp.s, coat_n, sp.t, sp.b, sp.n);

@@ -17,7 +17,7 @@
 #include "texture.glsl"
 
 // Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
-// specular, params, flags, textures[0..4], tex_transform[0..32], clearcoat, parallax, sheen,
+// specular, params, flags, textures[0..5], tex_transform[0..40], clearcoat, parallax, sheen,
 // iridescence, anisotropy), as floats or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
@@ -59,7 +59,7 @@ uint material_slot_texture(uint id, uint slot) {
 
 // Row `row` (0 or 1) of the texture transform of `slot` (GpuMaterial::tex_transform).
 vec4 material_slot_row(uint id, uint slot, uint row) {
-    return material_vec(id, 9u + 2u * slot + row);
+    return material_vec(id, 10u + 2u * slot + row);
 }
 
 // An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
@@ -169,6 +169,16 @@ bool slot_textured(uint slot) {
     if (HAS_ANISOTROPY_MAP) {
         textured = textured || slot == MATERIAL_SLOT_ANISOTROPY;
     }
+    if (HAS_SHEEN_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_SHEEN_COLOR || slot == MATERIAL_SLOT_SHEEN_ROUGHNESS;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_DIFFUSE_TRANSMISSION
+            || slot == MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR;
+    }
+    if (HAS_THICKNESS_MAP) {
+        textured = textured || slot == MATERIAL_SLOT_THICKNESS;
+    }
     return textured;
 }
 
@@ -226,16 +236,24 @@ vec4 material_texture_lod(uint id, uint slot, vec4 uv, vec2 cone_lod) {
 // KHR_materials_specular's colour (specularColorTexture, RGB), specular.a its strength
 // (specularTexture, A), layers.x KHR_materials_transmission's (transmissionTexture, R), layers.y
 // KHR_materials_clearcoat's weight (clearcoatTexture, R), layers.z its roughness
-// (clearcoatRoughnessTexture, G); layers.w unused (1); iridescence.x KHR_materials_iridescence's
+// (clearcoatRoughnessTexture, G); layers.w KHR_materials_volume's thickness (thicknessTexture,
+// G); iridescence.x KHR_materials_iridescence's
 // weight (iridescenceTexture, R), iridescence.y its film's thickness between the minimum and the
-// maximum (iridescenceThicknessTexture, G); iridescence.zw unused (1). 1 where a material has no
-// texture in the slot, and in kernels not specialised for the slot's group (HAS_SPECULAR_MAP,
-// HAS_TRANSMISSION_MAP, HAS_CLEARCOAT_MAP, HAS_IRIDESCENCE_MAP). The hybrid's G-buffer stores them
-// (gb_layers) for the lighting passes.
+// maximum (iridescenceThicknessTexture, G); iridescence.zw unused (1); sheen.rgb
+// KHR_materials_sheen's colour (sheenColorTexture, RGB), sheen.a its roughness
+// (sheenRoughnessTexture, A); diffuse_transmission.rgb KHR_materials_diffuse_transmission's
+// colour (diffuseTransmissionColorTexture, RGB), diffuse_transmission.a its share
+// (diffuseTransmissionTexture, A). 1 where a material has no texture in the slot, and in kernels
+// not specialised for the slot's group (HAS_SPECULAR_MAP, HAS_TRANSMISSION_MAP,
+// HAS_CLEARCOAT_MAP, HAS_IRIDESCENCE_MAP, HAS_SHEEN_MAP, HAS_DIFFUSE_TRANSMISSION_MAP). The
+// hybrid's G-buffer stores them (gb_layers; the sheen's and the diffuse transmission's in
+// gb_layers2) for the lighting passes.
 struct LayerTexels {
     vec4 specular;
     vec4 layers;
     vec4 iridescence;
+    vec4 sheen;
+    vec4 diffuse_transmission;
 };
 
 // No layer textures: every texel 1.
@@ -244,6 +262,8 @@ LayerTexels layer_texels_none() {
     t.specular = vec4(1.0);
     t.layers = vec4(1.0);
     t.iridescence = vec4(1.0);
+    t.sheen = vec4(1.0);
+    t.diffuse_transmission = vec4(1.0);
     return t;
 }
 
@@ -262,15 +282,41 @@ LayerTexels material_layer_texels_lod(uint id, vec4 uv, vec2 cone_lod) {
         t.layers.y = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT, uv, cone_lod).r;
         t.layers.z = material_texture_lod(id, MATERIAL_SLOT_CLEARCOAT_ROUGHNESS, uv, cone_lod).g;
     }
+    if (HAS_THICKNESS_MAP) {
+        t.layers.w = material_texture_lod(id, MATERIAL_SLOT_THICKNESS, uv, cone_lod).g;
+    }
     if (HAS_IRIDESCENCE_MAP) {
         t.iridescence.x = material_texture_lod(id, MATERIAL_SLOT_IRIDESCENCE, uv, cone_lod).r;
         t.iridescence.y = material_texture_lod(id, MATERIAL_SLOT_IRIDESCENCE_THICKNESS, uv, cone_lod).g;
     }
+    if (HAS_SHEEN_MAP) {
+        t.sheen.rgb = material_texture_lod(id, MATERIAL_SLOT_SHEEN_COLOR, uv, cone_lod).rgb;
+        t.sheen.a = material_texture_lod(id, MATERIAL_SLOT_SHEEN_ROUGHNESS, uv, cone_lod).a;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION_MAP) {
+        t.diffuse_transmission.rgb =
+            material_texture_lod(id, MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR, uv, cone_lod).rgb;
+        t.diffuse_transmission.a = material_texture_lod(id, MATERIAL_SLOT_DIFFUSE_TRANSMISSION, uv, cone_lod).a;
+    }
     return t;
 }
 
-// Whether the kernel is specialised for some layer texture (the G-buffer's gb_layers is written
-// and read only then).
+// Whether the kernel is specialised for the sheen's or the diffuse transmission's textures (the
+// G-buffer's gb_layers2 is written and read only then; the slots are filled only for a material
+// with the layer, so a scene with them has it).
+bool layers2_textured() {
+    bool textured = false;
+    if (HAS_SHEEN_MAP) {
+        textured = true;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION_MAP) {
+        textured = true;
+    }
+    return textured;
+}
+
+// Whether the kernel is specialised for some layer texture but the sheen's (the G-buffer's
+// gb_layers is written and read only then).
 bool layer_textured() {
     bool textured = false;
     if (HAS_SPECULAR_MAP) {
@@ -283,6 +329,9 @@ bool layer_textured() {
         textured = true;
     }
     if (HAS_IRIDESCENCE_MAP) {
+        textured = true;
+    }
+    if (HAS_THICKNESS_MAP) {
         textured = true;
     }
     return textured;
@@ -360,6 +409,9 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.aniso_dir = vec2(1.0, 0.0);
     if (HAS_SHEEN) {
         vec4 sheen = material_vec(id, MATERIAL_SHEEN_TEXEL);
+        if (HAS_SHEEN_MAP) {
+            sheen *= tex.sheen;
+        }
         s.sheen = clamp(sheen.rgb, 0.0, 1.0);
         s.sheen_roughness = clamp(sheen.w, SHEEN_ROUGHNESS_MIN, 1.0);
     }
@@ -381,7 +433,25 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         s.iridescence = s.iridescence_thickness > 0.0 ? clamp(weight, 0.0, 1.0) : 0.0;
         s.iridescence_ior = film.y;
     }
+    // KHR_materials_diffuse_transmission only where the kernel is specialised for it.
+    s.diffuse_transmission = 0.0;
+    s.diffuse_transmission_color = vec3(1.0);
+    if (HAS_DIFFUSE_TRANSMISSION) {
+        vec4 through = material_vec(id, MATERIAL_DIFFUSE_TRANSMISSION_TEXEL);
+        if (HAS_DIFFUSE_TRANSMISSION_MAP) {
+            through *= tex.diffuse_transmission;
+        }
+        s.diffuse_transmission = clamp(through.w, 0.0, 1.0);
+        s.diffuse_transmission_color = clamp(through.rgb, 0.0, 1.0);
+    }
+    // The volume's thickness (the hybrid's attenuation) only where the kernel is specialised for
+    // transmission.
+    s.thickness = 0.0;
     if (HAS_TRANSMISSION) {
+        s.thickness = material_vec(id, MATERIAL_VOLUME_TEXEL).x;
+        if (HAS_THICKNESS_MAP) {
+            s.thickness *= tex.layers.w;
+        }
         float transmission = material_vec(id, 3u).z;
         if (HAS_TRANSMISSION_MAP) {
             transmission *= tex.layers.x;
@@ -958,10 +1028,30 @@ float emissive_pdf(uint tri, float area, float dist, vec3 ng, vec3 wo) {
     return tri_light_pmf(tri) / area * dist * dist / abs(dot(ng, wo));
 }
 
-// Whether light sampling at a surface covers the side below it too (a transmitting material,
-// in a kernel specialised for transmission).
+// Whether light sampling at a surface covers the side below it too (a transmitting material, or
+// a diffusely transmitting one, in a kernel specialised for it).
 bool surface_transmits(Surface s) {
-    return HAS_TRANSMISSION && s.transmission > 0.0 && s.metallic < 1.0;
+    bool transmits = false;
+    if (HAS_TRANSMISSION) {
+        transmits = s.transmission > 0.0;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION) {
+        transmits = transmits || s.diffuse_transmission > 0.0;
+    }
+    return transmits && s.metallic < 1.0;
+}
+
+// Whether the kernel is specialised for some transmission (KHR_materials_transmission or
+// _diffuse_transmission): light can pass a surface, into a volume's medium too.
+bool scene_transmits() {
+    bool transmits = false;
+    if (HAS_TRANSMISSION) {
+        transmits = true;
+    }
+    if (HAS_DIFFUSE_TRANSMISSION) {
+        transmits = true;
+    }
+    return transmits;
 }
 
 // Punctual lights evaluated at a shading point: all of them up to PUNCTUAL_ALL; beyond,

@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 24] = [
+pub const SCENE_FEATURES: [&str; 28] = [
     "textures",
     "alpha",
     "lights",
@@ -64,6 +64,10 @@ pub const SCENE_FEATURES: [&str; 24] = [
     "iridescence_map",
     "anisotropy",
     "anisotropy_map",
+    "sheen_map",
+    "diffuse_transmission",
+    "diffuse_transmission_map",
+    "thickness_map",
 ];
 
 /// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
@@ -71,7 +75,7 @@ pub const SCENE_FEATURES: [&str; 24] = [
 /// material; one per extension's texture group (`KHR_materials_specular`'s two textures share
 /// `specular_map`), whose textures come together in the files seen (BENCHMARKS.md History: a
 /// scene with one of them pays for the others' lookups). The height slot is `parallax`'s.
-pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 10] = [
+pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 13] = [
     ("base_color_map", 1 << 0),
     ("metal_rough_map", 1 << 1),
     ("emissive_map", 1 << 2),
@@ -82,6 +86,9 @@ pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 10] = [
     ("clearcoat_map", 1 << 9 | 1 << 10 | 1 << 11),
     ("iridescence_map", 1 << 13 | 1 << 14),
     ("anisotropy_map", 1 << 12),
+    ("sheen_map", 1 << 15 | 1 << 16),
+    ("diffuse_transmission_map", 1 << 17 | 1 << 18),
+    ("thickness_map", 1 << 19),
 ];
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
@@ -268,13 +275,14 @@ gpu_structs! {
         /// index + 1 (0: none). Base colour, metallic-roughness, emissive, normal, occlusion,
         /// height (parallax occlusion mapping), specular, specular colour, transmission, clear
         /// coat, clear coat roughness, clear coat normal, anisotropy, iridescence, iridescence
-        /// thickness, (15: unused).
-        textures: [uvec4; 4],
+        /// thickness, sheen colour, sheen roughness, diffuse transmission, diffuse transmission
+        /// colour, volume thickness.
+        textures: [uvec4; 5],
         /// Per slot the two rows of the `KHR_texture_transform` (u' = row0 · (u, v, 1),
         /// v' = row1 · (u, v, 1)); the UV set (0 or 1) in row0.w; row1.w is the normal slot's
         /// normal scale (and the clear coat normal slot's) and the occlusion slot's strength (1 for
         /// the other slots).
-        tex_transform: [vec4; 32],
+        tex_transform: [vec4; 40] as TexTransforms,
         /// `KHR_materials_clearcoat`: the coat's weight (`clearcoatFactor`), its roughness
         /// (`clearcoatRoughnessFactor`), unused, unused. Read only by kernels specialised for
         /// it (`HAS_CLEARCOAT`).
@@ -295,6 +303,14 @@ gpu_structs! {
         /// `anisotropyRotation`, unused. Read only by kernels specialised for it
         /// (`HAS_ANISOTROPY`).
         anisotropy: vec4,
+        /// `KHR_materials_diffuse_transmission`: `diffuseTransmissionColorFactor` rgb,
+        /// `diffuseTransmissionFactor`. Read only by kernels specialised for it
+        /// (`HAS_DIFFUSE_TRANSMISSION`).
+        diffuse_transmission: vec4,
+        /// `KHR_materials_volume`: `thicknessFactor` (0 without a volume), unused, unused,
+        /// unused. Read only by kernels specialised for transmission (`HAS_TRANSMISSION`): the
+        /// hybrid's attenuation of the transmitted environment.
+        volume: vec4,
     }
 
     /// A texture in the shared texel buffer (linear RGBA16, one RG32UI texel per texel,
@@ -875,8 +891,8 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 736 bytes).
-    MATERIAL_TEXELS: uint = 46;
+    /// Texels of one [`GpuMaterial`] in `material_texels` (its 912 bytes).
+    MATERIAL_TEXELS: uint = 57;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -922,22 +938,40 @@ gpu_constants! {
     /// `iridescenceThicknessMinimum` at 0 to `iridescenceThicknessMaximum` at 1).
     MATERIAL_SLOT_IRIDESCENCE_THICKNESS: uint = 14;
     /// The texel of [`GpuMaterial::clearcoat`] in a material's texels.
-    MATERIAL_CLEARCOAT_TEXEL: uint = 41;
+    MATERIAL_CLEARCOAT_TEXEL: uint = 50;
     /// The texel of [`GpuMaterial::parallax`] in a material's texels.
-    MATERIAL_PARALLAX_TEXEL: uint = 42;
+    MATERIAL_PARALLAX_TEXEL: uint = 51;
     /// The texel of [`GpuMaterial::sheen`] in a material's texels.
-    MATERIAL_SHEEN_TEXEL: uint = 43;
+    MATERIAL_SHEEN_TEXEL: uint = 52;
     /// The texel of [`GpuMaterial::iridescence`] in a material's texels.
-    MATERIAL_IRIDESCENCE_TEXEL: uint = 44;
+    MATERIAL_IRIDESCENCE_TEXEL: uint = 53;
     /// Slot of `KHR_materials_anisotropy`'s `anisotropyTexture` (RG: the direction in tangent
     /// space, `2 x - 1`; B: × `anisotropyStrength`; left empty where the strength is 0). Looked
     /// up only by kernels specialised for it (`HAS_ANISOTROPY_MAP`).
     MATERIAL_SLOT_ANISOTROPY: uint = 12;
     /// The texel of [`GpuMaterial::anisotropy`] in a material's texels.
-    MATERIAL_ANISOTROPY_TEXEL: uint = 45;
-    /// Texture slots a material has room for (each with two `tex_transform` rows; slot 15 is
-    /// unused).
-    MATERIAL_TEXTURE_SLOTS: uint = 16;
+    MATERIAL_ANISOTROPY_TEXEL: uint = 54;
+    /// Slot of `KHR_materials_sheen`'s `sheenColorTexture` (sRGB RGB: × `sheenColorFactor`; this
+    /// and the next left empty where the material has no sheen). Looked up only by kernels
+    /// specialised for the group (`HAS_SHEEN_MAP`).
+    MATERIAL_SLOT_SHEEN_COLOR: uint = 15;
+    /// Slot of `sheenRoughnessTexture` (A: × `sheenRoughnessFactor`).
+    MATERIAL_SLOT_SHEEN_ROUGHNESS: uint = 16;
+    /// Slot of `KHR_materials_diffuse_transmission`'s `diffuseTransmissionTexture` (A:
+    /// × `diffuseTransmissionFactor`; this and the next left empty where the factor is 0). Looked
+    /// up only by kernels specialised for the group (`HAS_DIFFUSE_TRANSMISSION_MAP`).
+    MATERIAL_SLOT_DIFFUSE_TRANSMISSION: uint = 17;
+    /// Slot of `diffuseTransmissionColorTexture` (sRGB RGB: × `diffuseTransmissionColorFactor`).
+    MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR: uint = 18;
+    /// The texel of [`GpuMaterial::diffuse_transmission`] in a material's texels.
+    MATERIAL_DIFFUSE_TRANSMISSION_TEXEL: uint = 55;
+    /// Slot of `KHR_materials_volume`'s `thicknessTexture` (G: × `thicknessFactor`; left empty
+    /// without a volume). Looked up only by kernels specialised for it (`HAS_THICKNESS_MAP`).
+    MATERIAL_SLOT_THICKNESS: uint = 19;
+    /// The texel of [`GpuMaterial::volume`] in a material's texels.
+    MATERIAL_VOLUME_TEXEL: uint = 56;
+    /// Texture slots a material has room for (each with two `tex_transform` rows).
+    MATERIAL_TEXTURE_SLOTS: uint = 20;
     /// `GpuTexture::flags`: clamp s.
     TEXTURE_WRAP_S_CLAMP: uint = 1;
     /// `GpuTexture::flags`: mirror s.
@@ -1110,7 +1144,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, anisotropy],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1149,7 +1183,7 @@ kernels! {
     /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
     /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
     kernel wavefront {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, anisotropy],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: WaveParams,
         spec: {
             beckmann: bool = false,
@@ -1281,7 +1315,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, anisotropy],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -1297,12 +1331,15 @@ kernels! {
             gb_material: writeonly image rgba32ui,
             /// The layer textures' texels, unorm8 × 4 a word (written only where the scene has them).
             gb_layers: writeonly image rgba32ui,
+            /// More layer textures' texels (the sheen's, the diffuse transmission's), unorm8 × 4
+            /// a word (written only where the scene has them).
+            gb_layers2: writeonly image rgba32ui,
         }
     }
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, anisotropy],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1327,6 +1364,8 @@ kernels! {
             gb_material: readonly image rgba32ui,
             /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
             gb_layers: readonly image rgba32ui,
+            /// More layer textures' texels (the sheen's, the diffuse transmission's).
+            gb_layers2: readonly image rgba32ui,
             /// Shadow maps: the filter settings, each punctual light's record, the layers
             /// ([`GpuShadowLayer`]); one texel when the lights cast shadow rays.
             shadow_texels: readonly texels rgba32ui,
@@ -1360,7 +1399,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, anisotropy],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1378,6 +1417,8 @@ kernels! {
             gb_material: readonly image rgba32ui,
             /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
             gb_layers: readonly image rgba32ui,
+            /// More layer textures' texels (the sheen's, the diffuse transmission's).
+            gb_layers2: readonly image rgba32ui,
             /// The previous frame's camera.
             prev_camera: readonly buffer GpuCamera,
             /// The previous frame's reservoirs.
@@ -1389,7 +1430,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, anisotropy],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1406,6 +1447,8 @@ kernels! {
             gb_material: readonly image rgba32ui,
             /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
             gb_layers: readonly image rgba32ui,
+            /// More layer textures' texels (the sheen's, the diffuse transmission's).
+            gb_layers2: readonly image rgba32ui,
             /// The reservoirs before spatial reuse.
             reservoirs_in: readonly buffer [GpuReservoir],
             /// The frame's reservoirs.
@@ -1430,7 +1473,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1526,7 +1569,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ShadowRasterParams,
         spec: { fill: bool = false },
         bindings: {
@@ -1565,7 +1608,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ShadowRasterParams,
         spec: {},
         bindings: {
@@ -1601,7 +1644,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1623,7 +1666,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {

@@ -165,6 +165,8 @@ pub struct SceneFeatures {
     pub iridescence: bool,
     /// Some material is anisotropic (`KHR_materials_anisotropy`).
     pub anisotropy: bool,
+    /// Some material transmits diffusely (`KHR_materials_diffuse_transmission`).
+    pub diffuse_transmission: bool,
 }
 
 impl SceneFeatures {
@@ -186,6 +188,7 @@ impl SceneFeatures {
             sheen: scene.has_sheen,
             iridescence: scene.has_iridescence,
             anisotropy: scene.has_anisotropy,
+            diffuse_transmission: scene.has_diffuse_transmission,
         }
     }
 
@@ -206,6 +209,7 @@ impl SceneFeatures {
             "sheen" => self.sheen,
             "iridescence" => self.iridescence,
             "anisotropy" => self.anisotropy,
+            "diffuse_transmission" => self.diffuse_transmission,
             _ => {
                 let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
                 self.texture_slots & slots != 0

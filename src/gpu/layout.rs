@@ -365,6 +365,23 @@ macro_rules! kernels {
 
 include!("interface.rs");
 
+/// The Rust type of [`GpuMaterial::tex_transform`]: its 40 rows (two per texture slot). A newtype
+/// because the standard library derives `Default` only for arrays of up to 32 elements.
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexTransforms(pub [[f32; 4]; 2 * MATERIAL_TEXTURE_SLOTS as usize]);
+
+impl Default for TexTransforms {
+    fn default() -> Self {
+        Self([[0.0; 4]; 2 * MATERIAL_TEXTURE_SLOTS as usize])
+    }
+}
+
+// SAFETY: a transparent wrapper of an array of `f32`s: no padding, every bit pattern valid.
+unsafe impl Zeroable for TexTransforms {}
+// SAFETY: as above.
+unsafe impl Pod for TexTransforms {}
+
 /// One member of a GPU struct as the host lays it out.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MemberLayout {
@@ -395,18 +412,23 @@ const _: () = assert!(size_of::<TraceHit>() == 16);
 const _: () = assert!(size_of::<GpuTriangle>() == 32);
 const _: () = assert!(size_of::<GpuVertex>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 16 * MATERIAL_TEXELS as usize);
-// shading.glsl reads a material's texture slots from texel 5 on and their transforms from texel 9
+const _: () = assert!(size_of::<TexTransforms>() == 16 * 2 * MATERIAL_TEXTURE_SLOTS as usize);
+// shading.glsl reads a material's texture slots from texel 5 on and their transforms from texel 10
 // on, two texels per slot.
 const _: () = assert!(offset_of!(GpuMaterial, textures) == 16 * 5);
-const _: () = assert!(offset_of!(GpuMaterial, tex_transform) == 16 * 9);
-const _: () = assert!(4 * 4 == MATERIAL_TEXTURE_SLOTS as usize);
+const _: () = assert!(offset_of!(GpuMaterial, tex_transform) == 16 * 10);
+const _: () = assert!(5 * 4 == MATERIAL_TEXTURE_SLOTS as usize);
 // The clear coat follows the transforms; the parallax parameters follow the clear coat.
-const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * (9 + 2 * MATERIAL_TEXTURE_SLOTS as usize));
+const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * (10 + 2 * MATERIAL_TEXTURE_SLOTS as usize));
 const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * MATERIAL_CLEARCOAT_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, parallax) == 16 * MATERIAL_PARALLAX_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, sheen) == 16 * MATERIAL_SHEEN_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, iridescence) == 16 * MATERIAL_IRIDESCENCE_TEXEL as usize);
 const _: () = assert!(offset_of!(GpuMaterial, anisotropy) == 16 * MATERIAL_ANISOTROPY_TEXEL as usize);
+const _: () = assert!(
+    offset_of!(GpuMaterial, diffuse_transmission) == 16 * MATERIAL_DIFFUSE_TRANSMISSION_TEXEL as usize
+);
+const _: () = assert!(offset_of!(GpuMaterial, volume) == 16 * MATERIAL_VOLUME_TEXEL as usize);
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);

@@ -2,7 +2,7 @@
 //! emissive-triangle sampling table, uploaded once as storage buffers.
 
 use super::layout::{
-    GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources,
+    GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources, TexTransforms,
     MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
 };
 use crate::bvh::gpu::GpuBvh;
@@ -78,6 +78,9 @@ pub struct GpuScene {
     /// Whether some material is anisotropic (`KHR_materials_anisotropy`): the shading kernels
     /// evaluate and sample anisotropic specular lobes only then.
     pub has_anisotropy: bool,
+    /// Whether some material transmits diffusely (`KHR_materials_diffuse_transmission`): the
+    /// shading kernels evaluate and sample its lobe only then.
+    pub has_diffuse_transmission: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -341,6 +344,16 @@ impl ShadingArrays {
                 // And the anisotropy texture to a strength of 0 (or a scene without tangents).
                 let anisotropy_texture =
                     m.anisotropy_texture.as_ref().filter(|_| m.anisotropic() && !scene.tangents.is_empty());
+                // And the sheen's to no sheen (a colour of 0).
+                let sheened = m.sheen_color.iter().any(|&c| c > 0.0);
+                let sheen_color_texture = m.sheen_color_texture.as_ref().filter(|_| sheened);
+                let sheen_roughness_texture = m.sheen_roughness_texture.as_ref().filter(|_| sheened);
+                // And the diffuse transmission's to a factor of 0.
+                let through = m.diffuse_transmission > 0.0;
+                let through_texture = m.diffuse_transmission_texture.as_ref().filter(|_| through);
+                let through_color_texture = m.diffuse_transmission_color_texture.as_ref().filter(|_| through);
+                // And the volume's thickness texture without a volume.
+                let thickness_texture = m.thickness_texture.as_ref().filter(|_| m.volume);
                 GpuMaterial {
                     // In MATERIAL_SLOT_* order.
                     textures: [
@@ -374,10 +387,16 @@ impl ShadingArrays {
                             gpu_textures.slot(scene, anisotropy_texture),
                             gpu_textures.slot(scene, film_texture),
                             gpu_textures.slot(scene, film_thickness_texture),
-                            0,
+                            gpu_textures.slot(scene, sheen_color_texture),
+                        ],
+                        [
+                            gpu_textures.slot(scene, sheen_roughness_texture),
+                            gpu_textures.slot(scene, through_texture),
+                            gpu_textures.slot(scene, through_color_texture),
+                            gpu_textures.slot(scene, thickness_texture),
                         ],
                     ],
-                    tex_transform: transforms([
+                    tex_transform: TexTransforms(transforms([
                         m.base_color_texture.as_ref(),
                         m.metallic_roughness_texture.as_ref(),
                         m.emissive_texture.as_ref(),
@@ -393,8 +412,12 @@ impl ShadingArrays {
                         anisotropy_texture,
                         film_texture,
                         film_thickness_texture,
-                        None,
-                    ]),
+                        sheen_color_texture,
+                        sheen_roughness_texture,
+                        through_texture,
+                        through_color_texture,
+                        thickness_texture,
+                    ])),
                     base_color: m.base_color_factor,
                     emissive_rough: {
                         let e = m.emission();
@@ -418,6 +441,13 @@ impl ShadingArrays {
                         m.iridescence_thickness[0],
                         m.iridescence_thickness[1],
                     ],
+                    diffuse_transmission: [
+                        m.diffuse_transmission_color[0],
+                        m.diffuse_transmission_color[1],
+                        m.diffuse_transmission_color[2],
+                        m.diffuse_transmission,
+                    ],
+                    volume: [if m.volume { m.thickness } else { 0.0 }, 0.0, 0.0, 0.0],
                     anisotropy: if m.anisotropic() {
                         let (sin, cos) = m.anisotropy_rotation.sin_cos();
                         [m.anisotropy_strength, cos, sin, 0.0]
@@ -539,6 +569,7 @@ impl GpuScene {
             has_sheen: sheened(&arrays.materials),
             has_iridescence: iridescent(&arrays.materials),
             has_anisotropy: anisotropic(&arrays.materials),
+            has_diffuse_transmission: diffusely_transmits(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
@@ -593,6 +624,7 @@ impl GpuScene {
         self.has_sheen = sheened(&arrays.materials);
         self.has_iridescence = iridescent(&arrays.materials);
         self.has_anisotropy = anisotropic(&arrays.materials);
+        self.has_diffuse_transmission = diffusely_transmits(&arrays.materials);
         Ok(())
     }
 }
@@ -683,6 +715,11 @@ fn iridescent(materials: &[GpuMaterial]) -> bool {
 /// Whether some material has a sheen (a sheen colour above 0).
 fn sheened(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.sheen[..3].iter().any(|&c| c > 0.0))
+}
+
+/// Whether some material transmits diffusely (a diffuse transmission factor above 0).
+fn diffusely_transmits(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.diffuse_transmission[3] > 0.0)
 }
 
 /// Whether some material is anisotropic (a strength above 0).

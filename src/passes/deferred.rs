@@ -319,6 +319,7 @@ impl DeferredPass {
             gb_emission: &gbuffer.emission,
             gb_material: &gbuffer.material,
             gb_layers: &gbuffer.layers,
+            gb_layers2: &gbuffer.layers2,
             shadow_texels,
             shadow_depth,
             shadow_moments,

@@ -8,7 +8,8 @@
 //! | `base` | `R16G16B16A16_SFLOAT` | linear base colour rgb (textures applied, mipmapped ones filtered for the pixel's ray cone), metallic in a |
 //! | `emission` | `R16G16B16A16_SFLOAT` | emitted radiance towards the camera rgb (clamped to 65504); the material's ambient occlusion in a (glTF `occlusionTexture`: 1 + strength (r − 1), filtered like the other textures; 1 without one), which the lighting pass multiplies into the image-based (ambient) light only |
 //! | `material` | `R32G32B32A32_UINT` | x: material index ([`GBUFFER_NO_SURFACE`] where none); y: geometric normal facing the camera, octahedral, `packSnorm2x16`; z, w: the `TEXCOORD_1` coordinates as float bits (0 without them), where lightmaps are looked up |
-//! | `layers` | `R32G32B32A32_UINT` | the texels of the material's layer textures (filtered like the other textures; 1 where a slot is empty), four `packUnorm4x8` values a word (exact for 8-bit linear texels read unfiltered, within 1/510 otherwise): x: `specularColorTexture` rgb, `specularTexture` a; y: `transmissionTexture` r, `clearcoatTexture` r, `clearcoatRoughnessTexture` g, unused (1); z: the clear coat's normal (octahedral, two snorm16); w: `iridescenceTexture` r and `iridescenceThicknessTexture` g (two `packUnorm2x16` values). Written (and read by the lighting passes) only where the scene has some such texture: a host may leave it unwritten for scenes without |
+//! | `layers` | `R32G32B32A32_UINT` | the texels of the material's layer textures (filtered like the other textures; 1 where a slot is empty), four `packUnorm4x8` values a word (exact for 8-bit linear texels read unfiltered, within 1/510 otherwise): x: `specularColorTexture` rgb, `specularTexture` a; y: `transmissionTexture` r, `clearcoatTexture` r, `clearcoatRoughnessTexture` g, `KHR_materials_volume`'s `thicknessTexture` g; z: the clear coat's normal (octahedral, two snorm16); w: `iridescenceTexture` r and `iridescenceThicknessTexture` g (two `packUnorm2x16` values). Written (and read by the lighting passes) only where the scene has some such texture: a host may leave it unwritten for scenes without |
+//! | `layers2` | `R32G32B32A32_UINT` | more layer textures' texels, as `layers`: x: `KHR_materials_sheen`'s `sheenColorTexture` rgb, `sheenRoughnessTexture` a; y: `KHR_materials_diffuse_transmission`'s `diffuseTransmissionColorTexture` rgb, `diffuseTransmissionTexture` a; z, w: unused (0). Written (and read) only where the scene has such a texture |
 //!
 //! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
 //! with a compute-to-compute barrier. Where no surface was hit, `depth`, `normal`, `base` and
@@ -42,6 +43,8 @@ pub struct GBuffer {
     pub material: Image,
     /// The layer textures' texels.
     pub layers: Image,
+    /// More layer textures' texels (the sheen's, the diffuse transmission's).
+    pub layers2: Image,
 }
 
 impl GBuffer {
@@ -56,6 +59,7 @@ impl GBuffer {
             emission: make("gbuffer emission", raw::Format::R16G16B16A16_SFLOAT)?,
             material: make("gbuffer material", raw::Format::R32G32B32A32_UINT)?,
             layers: make("gbuffer layers", raw::Format::R32G32B32A32_UINT)?,
+            layers2: make("gbuffer layers2", raw::Format::R32G32B32A32_UINT)?,
         };
         ctx.submit(|cmd| {
             for image in gbuffer.images() {
@@ -67,8 +71,8 @@ impl GBuffer {
     }
 
     /// The images in binding order.
-    pub fn images(&self) -> [&Image; 6] {
-        [&self.depth, &self.normal, &self.base, &self.emission, &self.material, &self.layers]
+    pub fn images(&self) -> [&Image; 7] {
+        [&self.depth, &self.normal, &self.base, &self.emission, &self.material, &self.layers, &self.layers2]
     }
 
     /// Views of the images, for the passes that read a G-buffer.
@@ -81,6 +85,7 @@ impl GBuffer {
             emission: self.emission.view,
             material: self.material.view,
             layers: self.layers.view,
+            layers2: self.layers2.view,
         }
     }
 
@@ -98,6 +103,7 @@ impl GBuffer {
             emission: half(&self.emission)?,
             material: self.material.read(ctx)?,
             layers: self.layers.read(ctx)?,
+            layers2: self.layers2.read(ctx)?,
         })
     }
 }
@@ -122,12 +128,15 @@ pub struct GBufferViews {
     pub material: raw::ImageView,
     /// `R32G32B32A32_UINT` the layer textures' texels (only for scenes with such textures).
     pub layers: raw::ImageView,
+    /// `R32G32B32A32_UINT` more layer textures' texels (only for scenes with a sheen's or a
+    /// diffuse transmission's textures).
+    pub layers2: raw::ImageView,
 }
 
 impl GBufferViews {
     /// The views in binding order.
-    pub fn in_order(&self) -> [raw::ImageView; 6] {
-        [self.depth, self.normal, self.base, self.emission, self.material, self.layers]
+    pub fn in_order(&self) -> [raw::ImageView; 7] {
+        [self.depth, self.normal, self.base, self.emission, self.material, self.layers, self.layers2]
     }
 }
 
@@ -148,6 +157,8 @@ pub struct GBufferData {
     pub material: Vec<[u32; 4]>,
     /// The layer textures' texels, unorm8 × 4 a word (unwritten for a scene without them).
     pub layers: Vec<[u32; 4]>,
+    /// More layer textures' texels, as `layers` (unwritten for a scene without them).
+    pub layers2: Vec<[u32; 4]>,
 }
 
 /// `gbuffer.comp`, specialised for whether the scene has textures and alpha-tested materials.
@@ -187,6 +198,7 @@ impl GBufferPass {
             gb_emission: &target.emission,
             gb_material: &target.material,
             gb_layers: &target.layers,
+            gb_layers2: &target.layers2,
         };
         self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1], Self::LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);

@@ -267,6 +267,7 @@ impl RestirPass {
             gb_base: &gbuffer.base,
             gb_material: &gbuffer.material,
             gb_layers: &gbuffer.layers,
+            gb_layers2: &gbuffer.layers2,
             prev_camera: &reservoirs.prev_camera,
             history: &reservoirs.frame,
             reservoirs: &reservoirs.initial,
@@ -280,6 +281,7 @@ impl RestirPass {
             gb_base: &gbuffer.base,
             gb_material: &gbuffer.material,
             gb_layers: &gbuffer.layers,
+            gb_layers2: &gbuffer.layers2,
             reservoirs_in: &reservoirs.initial,
             reservoirs_out: &reservoirs.frame,
         };

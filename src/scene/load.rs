@@ -19,10 +19,9 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     let origin = Origin::new(name, base.map(Path::to_path_buf));
     let asset = source::open(&origin, bytes)?;
     let mut textures = TextureSet::default();
-    let mut material_warnings = Vec::new();
     let mut materials = Vec::new();
     for m in asset.document.materials() {
-        let mut material = Material::from_gltf(&m, &mut textures, &mut material_warnings);
+        let mut material = Material::from_gltf(&m, &mut textures);
         material.read_extension_textures(&m, &asset.document, &mut textures).map_err(|e| {
             let index = m.index().map_or("default".to_owned(), |i| i.to_string());
             origin.error(format!("material {index} ('{}'): {e}", m.name().unwrap_or_default()))
@@ -59,7 +58,6 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
         }
     }
     scene.warnings.extend(warnings);
-    scene.warnings.extend(material_warnings);
     scene.warnings.extend(asset.ignored_extensions.clone());
     scene.warnings.extend(posed);
     scene.warnings.extend(frameless);

@@ -66,7 +66,7 @@ impl Parallax {
 
 impl Material {
     /// Every texture slot, for changing them all (a missing image's uses are dropped).
-    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 14] {
+    pub(super) fn texture_slots_mut(&mut self) -> [&mut Option<TextureRef>; 19] {
         [
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
@@ -82,6 +82,11 @@ impl Material {
             &mut self.iridescence_texture,
             &mut self.iridescence_thickness_texture,
             &mut self.anisotropy_texture,
+            &mut self.sheen_color_texture,
+            &mut self.sheen_roughness_texture,
+            &mut self.diffuse_transmission_texture,
+            &mut self.diffuse_transmission_color_texture,
+            &mut self.thickness_texture,
         ]
     }
 }
@@ -115,6 +120,9 @@ impl Material {
             iridescence_thickness,
             anisotropy_strength,
             anisotropy_rotation,
+            diffuse_transmission,
+            diffuse_transmission_color,
+            thickness,
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -129,6 +137,11 @@ impl Material {
             iridescence_texture,
             iridescence_thickness_texture,
             anisotropy_texture,
+            sheen_color_texture,
+            sheen_roughness_texture,
+            diffuse_transmission_texture,
+            diffuse_transmission_color_texture,
+            thickness_texture,
             parallax,
         } = self;
         h.f32s(base_color_factor);
@@ -207,6 +220,30 @@ impl Material {
         if *anisotropy_strength != 0.0 || *anisotropy_rotation != 0.0 || anisotropy_texture.is_some() {
             h.f32s(&[*anisotropy_strength, *anisotropy_rotation]);
             slot(h, anisotropy_texture);
+        }
+        // Nor without the sheen's textures.
+        let sheen = [sheen_color_texture, sheen_roughness_texture];
+        if sheen.iter().any(|t| t.is_some()) {
+            for s in sheen {
+                slot(h, s);
+            }
+        }
+        // Nor without a volume's thickness.
+        if *thickness != 0.0 || thickness_texture.is_some() {
+            h.f32s(&[*thickness]);
+            slot(h, thickness_texture);
+        }
+        // Nor without diffuse transmission.
+        let through = [diffuse_transmission_texture, diffuse_transmission_color_texture];
+        if *diffuse_transmission != 0.0
+            || *diffuse_transmission_color != [1.0; 3]
+            || through.iter().any(|t| t.is_some())
+        {
+            h.f32s(&[*diffuse_transmission]);
+            h.f32s(diffuse_transmission_color);
+            for s in through {
+                slot(h, s);
+            }
         }
     }
 }
@@ -324,6 +361,15 @@ pub struct Material {
     /// lobes' GGX roughness along the anisotropy direction is αt = mix(α, 1, strength²), across
     /// it αb = α.
     pub anisotropy_strength: f32,
+    /// `KHR_materials_volume`'s `thicknessFactor` (default 0; above 0 the surface bounds a
+    /// volume, [`Material::volume`]): the hybrid's attenuation approximates the distance light
+    /// travels inside by it (the path tracer traces the distance).
+    pub thickness: f32,
+    /// `KHR_materials_diffuse_transmission`'s `diffuseTransmissionFactor` (default 0: none): the
+    /// share of the dielectric's diffuse lobe that leaves through the back as a Lambertian lobe.
+    pub diffuse_transmission: f32,
+    /// `diffuseTransmissionColorFactor` (linear RGB, default 1): that lobe's colour.
+    pub diffuse_transmission_color: [f32; 3],
     /// `anisotropyRotation` (radians, default 0): the anisotropy direction's angle from the
     /// tangent towards the bitangent (the texture's direction, when there is one, rotated so).
     pub anisotropy_rotation: f32,
@@ -361,6 +407,19 @@ pub struct Material {
     /// `anisotropyTexture` (linear): RG the direction in tangent space (2·rg − 1), B × the
     /// strength.
     pub anisotropy_texture: Option<TextureRef>,
+    /// `KHR_materials_sheen`'s `sheenColorTexture`: the sheen's colour in RGB (sRGB), ×
+    /// `sheenColorFactor`.
+    pub sheen_color_texture: Option<TextureRef>,
+    /// `sheenRoughnessTexture`: the sheen's roughness in A (linear), × `sheenRoughnessFactor`.
+    pub sheen_roughness_texture: Option<TextureRef>,
+    /// `diffuseTransmissionTexture`: the diffuse transmission's share in A (linear), ×
+    /// `diffuseTransmissionFactor`.
+    pub diffuse_transmission_texture: Option<TextureRef>,
+    /// `diffuseTransmissionColorTexture`: its colour in RGB (sRGB), ×
+    /// `diffuseTransmissionColorFactor`.
+    pub diffuse_transmission_color_texture: Option<TextureRef>,
+    /// `KHR_materials_volume`'s `thicknessTexture`: in G (linear), × `thicknessFactor`.
+    pub thickness_texture: Option<TextureRef>,
     /// Parallax occlusion mapping (`UMBRA_implicit`'s `parallax`), with its height map.
     pub parallax: Option<Parallax>,
 }
@@ -394,6 +453,9 @@ impl Default for Material {
             iridescence_thickness: [100.0, 400.0],
             anisotropy_strength: 0.0,
             anisotropy_rotation: 0.0,
+            diffuse_transmission: 0.0,
+            diffuse_transmission_color: [1.0; 3],
+            thickness: 0.0,
             base_color_texture: None,
             metallic_roughness_texture: None,
             normal_texture: None,
@@ -408,19 +470,19 @@ impl Default for Material {
             iridescence_texture: None,
             iridescence_thickness_texture: None,
             anisotropy_texture: None,
+            sheen_color_texture: None,
+            sheen_roughness_texture: None,
+            diffuse_transmission_texture: None,
+            diffuse_transmission_color_texture: None,
+            thickness_texture: None,
             parallax: None,
         }
     }
 }
 
 impl Material {
-    /// Converts a glTF material, registering the textures it uses in `textures`; what it reads
-    /// only in part is said in `warnings`.
-    pub(super) fn from_gltf(
-        material: &gltf::Material,
-        textures: &mut TextureSet,
-        warnings: &mut Vec<String>,
-    ) -> Self {
+    /// Converts a glTF material, registering the textures it uses in `textures`.
+    pub(super) fn from_gltf(material: &gltf::Material, textures: &mut TextureSet) -> Self {
         let pbr = material.pbr_metallic_roughness();
         let mut info = |info: Option<gltf::texture::Info>, srgb: bool| {
             info.map(|info| {
@@ -444,6 +506,7 @@ impl Material {
         let specular_color_texture = info(specular.as_ref().and_then(|s| s.specular_color_texture()), true);
         let transmission = material.transmission();
         let transmission_texture = info(transmission.as_ref().and_then(|t| t.transmission_texture()), false);
+        let thickness_texture = info(material.volume().and_then(|v| v.thickness_texture()), false);
         // Normal and occlusion textures are their own glTF types (with a scale or a strength), so
         // their KHR_texture_transform is read from the raw extension value.
         let mut raw_ref = |texture: gltf::Texture, tex_coord: u32, transform: Option<&Value>, scale: f32| {
@@ -473,18 +536,15 @@ impl Material {
                 *out = v.as_f64().unwrap_or(0.0) as f32;
             }
         }
-        let sheen_textures: Vec<&str> = ["sheenColorTexture", "sheenRoughnessTexture"]
-            .into_iter()
-            .filter(|k| sheen.is_some_and(|c| c.get(*k).is_some()))
-            .collect();
-        if !sheen_textures.is_empty() {
-            let warning = format!(
-                "material '{}': KHR_materials_sheen's {} not read (the factors alone are used)",
-                material.name().unwrap_or_default(),
-                sheen_textures.join(", ")
-            );
-            log::warn!("{warning}");
-            warnings.push(warning);
+        let through = material.extension_value("KHR_materials_diffuse_transmission");
+        // In [0, 1]: ranges.rs refuses a file with other values.
+        let through_number =
+            |key: &str| through.and_then(|t| t.get(key)).and_then(Value::as_f64).map_or(0.0, |x| x as f32);
+        let mut diffuse_transmission_color = [1.0f32; 3];
+        if let Some(Value::Array(c)) = through.and_then(|t| t.get("diffuseTransmissionColorFactor")) {
+            for (out, v) in diffuse_transmission_color.iter_mut().zip(c) {
+                *out = v.as_f64().unwrap_or(1.0) as f32;
+            }
         }
         let film = material.extension_value("KHR_materials_iridescence");
         // In range: ranges.rs refuses a file with other values.
@@ -529,6 +589,9 @@ impl Material {
             ],
             anisotropy_strength: anisotropy_number("anisotropyStrength"),
             anisotropy_rotation: anisotropy_number("anisotropyRotation"),
+            diffuse_transmission: through_number("diffuseTransmissionFactor"),
+            diffuse_transmission_color,
+            thickness: material.volume().map_or(0.0, |v| v.thickness_factor()),
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
@@ -544,6 +607,11 @@ impl Material {
             iridescence_texture: None,
             iridescence_thickness_texture: None,
             anisotropy_texture: None,
+            sheen_color_texture: None,
+            sheen_roughness_texture: None,
+            diffuse_transmission_texture: None,
+            diffuse_transmission_color_texture: None,
+            thickness_texture,
             parallax: None,
         }
     }
@@ -556,7 +624,8 @@ impl Material {
 
     /// Reads the textures of the extensions the `gltf` crate leaves as raw JSON
     /// (`KHR_materials_clearcoat`'s three, `KHR_materials_iridescence`'s two,
-    /// `KHR_materials_anisotropy`'s), registering them in `textures`. Errors say which
+    /// `KHR_materials_anisotropy`'s, `KHR_materials_sheen`'s two,
+    /// `KHR_materials_diffuse_transmission`'s two), registering them in `textures`. Errors say which
     /// texture reference is wrong; the caller names the file and the material.
     pub(super) fn read_extension_textures(
         &mut self,
@@ -587,6 +656,28 @@ impl Material {
             let element = "KHR_materials_anisotropy.anisotropyTexture";
             self.anisotropy_texture = Some(raw_texture_ref(info, element, document, textures)?);
         }
+        if let Some(sheen) = material.extension_value("KHR_materials_sheen") {
+            let mut read = |key: &str, srgb: bool| {
+                let element = format!("KHR_materials_sheen.{key}");
+                sheen
+                    .get(key)
+                    .map(|info| raw_texture_ref_as(info, &element, document, textures, srgb))
+                    .transpose()
+            };
+            self.sheen_color_texture = read("sheenColorTexture", true)?;
+            self.sheen_roughness_texture = read("sheenRoughnessTexture", false)?;
+        }
+        if let Some(through) = material.extension_value("KHR_materials_diffuse_transmission") {
+            let mut read = |key: &str, srgb: bool| {
+                let element = format!("KHR_materials_diffuse_transmission.{key}");
+                through
+                    .get(key)
+                    .map(|info| raw_texture_ref_as(info, &element, document, textures, srgb))
+                    .transpose()
+            };
+            self.diffuse_transmission_texture = read("diffuseTransmissionTexture", false)?;
+            self.diffuse_transmission_color_texture = read("diffuseTransmissionColorTexture", true)?;
+        }
         Ok(())
     }
 }
@@ -599,6 +690,17 @@ fn raw_texture_ref(
     element: &str,
     document: &gltf::Document,
     textures: &mut TextureSet,
+) -> std::result::Result<TextureRef, String> {
+    raw_texture_ref_as(info, element, document, textures, false)
+}
+
+/// [`raw_texture_ref`] of a texture whose texels are sRGB-encoded where `srgb` (a colour).
+fn raw_texture_ref_as(
+    info: &Value,
+    element: &str,
+    document: &gltf::Document,
+    textures: &mut TextureSet,
+    srgb: bool,
 ) -> std::result::Result<TextureRef, String> {
     let count = document.textures().len();
     let index = info
@@ -619,7 +721,7 @@ fn raw_texture_ref(
     let transform = info.get("extensions").and_then(|e| e.get("KHR_texture_transform"));
     let (tex_coord, transform) = raw_transform(transform, tex_coord);
     let scale = info.get("scale").and_then(Value::as_f64).map_or(1.0, |s| s as f32);
-    Ok(TextureRef { texture: textures.index_of(&texture, false), tex_coord, transform, scale })
+    Ok(TextureRef { texture: textures.index_of(&texture, srgb), tex_coord, transform, scale })
 }
 
 /// `KHR_texture_transform` read from raw JSON (the `gltf` crate parses it only on plain texture

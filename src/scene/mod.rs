@@ -63,6 +63,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
+    "KHR_materials_diffuse_transmission",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_iridescence",
@@ -125,9 +126,8 @@ pub struct Scene {
     /// BVH as one procedural primitive, its world box, after the triangles.
     pub implicits: Vec<ImplicitShape>,
     /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
-    /// optional glTF extensions it ignored (one entry naming them all), the parts of a material
-    /// it does not read (sheen textures: one entry per material), the anisotropic primitives
-    /// without a tangent frame (one entry) and, for a file with
+    /// optional glTF extensions it ignored (one entry naming them all), the anisotropic
+    /// primitives without a tangent frame (one entry) and, for a file with
     /// animations, skins or morph targets, that one static pose is rendered (one entry); also
     /// logged as warnings.
     pub warnings: Vec<String>,

@@ -139,6 +139,11 @@ impl Checker {
             &["sheenColorTexture", "sheenRoughnessTexture"],
         );
         extension(
+            "KHR_materials_diffuse_transmission",
+            &[("diffuseTransmissionFactor", unit), ("diffuseTransmissionColorFactor", unit)],
+            &["diffuseTransmissionTexture", "diffuseTransmissionColorTexture"],
+        );
+        extension(
             "KHR_materials_iridescence",
             &[
                 ("iridescenceFactor", unit),

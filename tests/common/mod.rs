@@ -295,3 +295,30 @@ pub fn sample_test_rgb(gpu: &Gpu, name: &str, mode: u32, input: &[[f32; 4]], cou
     let out: Vec<[f32; 4]> = results.read(gpu).unwrap();
     out.iter().map(|r| [r[0] as f64, r[1] as f64, r[2] as f64]).collect()
 }
+
+/// Runs `sample_test.comp` through `pipeline` with `params` (its mode, count, surface kind and
+/// parameters) over `input` (the mode's texels), the sheen's albedo table appended as the kernel
+/// reads it: every invocation's result.
+pub fn sample_test_run(
+    gpu: &Gpu,
+    pipeline: &umbra::gpu::Pipeline<umbra::gpu::kernels::sample_test::Kernel>,
+    params: &umbra::gpu::layout::SampleTestParams,
+    input: &[[f32; 4]],
+) -> Vec<[f32; 4]> {
+    use umbra::gpu::kernels::sample_test;
+    use umbra::vk::{raw, Buffer, MemoryLocation};
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
+    let mut texels: Vec<[f32; 4]> = input.to_vec();
+    texels.push([0.0; 4]);
+    texels.extend(umbra::sheen::table().chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
+    let directions = Buffer::upload(gpu, "sample test inputs", &texels, usage).unwrap();
+    let results =
+        Buffer::new(gpu, "sample test results", params.count as u64 * 16, usage, MemoryLocation::GpuOnly)
+            .unwrap();
+    gpu.submit(|cmd| {
+        let resources = sample_test::Resources { directions: &directions, results: &results };
+        pipeline.record(cmd, &resources, params, [params.count, 1, 1], [64, 1, 1])
+    })
+    .unwrap();
+    results.read(gpu).unwrap()
+}

@@ -554,7 +554,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             forward: v4(c.forward),
             right: v4(c.right),
             up: v4(c.up),
-            size: [size.0, size.1, tris.len() as u32, 0],
+            size: [size.0, size.1, tris.len() as u32, c.orthographic],
         };
         device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
         device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipeline_layout, 0, &[set], &[]);

@@ -29,9 +29,9 @@ layout(set = 0, binding = 6, rgba32ui) uniform writeonly uimage2D gb_material;
 layout(push_constant) uniform Push {
     vec4 origin;
     vec4 forward;
-    vec4 right;  // scaled by tan(yfov / 2) * aspect
-    vec4 up;     // scaled by tan(yfov / 2)
-    uvec4 size;  // width, height, triangle count
+    vec4 right;  // scaled by tan(yfov / 2) * aspect (orthographic: half the view's width)
+    vec4 up;     // scaled by tan(yfov / 2) (orthographic: half the view's height)
+    uvec4 size;  // width, height, triangle count, orthographic (0/1)
 } cam;
 
 #include "gbuffer.glsl"
@@ -43,8 +43,10 @@ void main() {
     if (any(greaterThanEqual(uvec2(pixel), cam.size.xy))) {
         return;
     }
-    vec3 o = cam.origin.xyz;
-    vec3 d = camera_ray(cam.forward.xyz, cam.right.xyz, cam.up.xyz, vec2(pixel) + 0.5, cam.size.xy);
+    vec3 o;
+    vec3 d;
+    camera_ray(cam.origin.xyz, cam.forward.xyz, cam.right.xyz, cam.up.xyz, cam.size.w != 0u, vec2(pixel) + 0.5,
+               cam.size.xy, o, d);
 
     // Möller–Trumbore against every triangle; the nearest hit wins.
     float best = 1e30;

@@ -21,11 +21,10 @@ vec3 cam_origin;
 vec3 cam_forward;
 vec3 cam_right;
 vec3 cam_up;
+bool cam_ortho;
 
 vec3 view_position(ivec2 pixel, float depth) {
-    vec3 forward = cam_forward;
-    vec3 dir = camera_ray(forward, cam_right, cam_up, vec2(pixel) + 0.5, params.size);
-    return dir * (depth / dot(dir, forward));
+    return camera_point(vec3(0.0), cam_forward, cam_right, cam_up, cam_ortho, vec2(pixel) + 0.5, params.size, depth);
 }
 
 void main() {
@@ -33,6 +32,7 @@ void main() {
     cam_forward = params.camera.forward;
     cam_right = params.camera.right;
     cam_up = params.camera.up;
+    cam_ortho = params.camera.orthographic != 0u;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(params.size);
     if (any(greaterThanEqual(pixel, size))) {

@@ -274,7 +274,10 @@ void main() {
     ShadePoint sp;
     if (!gbuffer_point(pixel, sp)) {
         // No surface: the environment seen directly.
-        vec3 dir = camera_ray(params.camera.forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, size);
+        vec3 origin;
+        vec3 dir;
+        camera_ray(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
+                   params.camera.orthographic != 0u, vec2(pixel) + 0.5, size, origin, dir);
         vec3 background = params.env;
         if (HAS_ENV_MAP) {
             background *= env_radiance(dir, params.env_size);
@@ -294,8 +297,12 @@ void main() {
     // specialised for parallax, as they read their neighbours' G-buffer points).
     if (HAS_PARALLAX) {
         if (material_slot_texture(sp.material, MATERIAL_SLOT_HEIGHT) != 0u) {
+            vec3 origin;
+            vec3 dir;
+            camera_ray(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
+                       params.camera.orthographic != 0u, vec2(pixel) + 0.5, size, origin, dir);
             Hit hit;
-            if (bvh_closest(params.camera.origin, -sp.wo, 0.0, BVH_INF, hit)) {
+            if (bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
                 parallax_occlusion(hit.tri, hit.bary, sp.wo);
             }
         }

@@ -23,9 +23,12 @@ void main() {
     if (any(greaterThanEqual(uvec2(pixel), size))) {
         return;
     }
-    vec3 origin = params.camera.origin;
     vec3 forward = params.camera.forward;
-    vec3 dir = camera_ray(forward, params.camera.right, params.camera.up, vec2(pixel) + 0.5, size);
+    bool orthographic = params.camera.orthographic != 0u;
+    vec3 origin;
+    vec3 dir;
+    camera_ray(params.camera.origin, forward, params.camera.right, params.camera.up, orthographic, vec2(pixel) + 0.5,
+               size, origin, dir);
 
     Hit hit;
     if (!bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
@@ -46,11 +49,12 @@ void main() {
     vec4 uv = tri_uv(tri, hit.bary);
     // One sample per pixel: textures are filtered over the pixel's footprint, a ray cone whose
     // spread is the angle of a pixel (Ray Tracing Gems ch. 20) and whose width at the hit is t
-    // times that.
+    // times that; an orthographic pixel's footprint is a beam of the pixel's width.
     vec2 cone_lod = LOD_LEVEL0;
     if (HAS_TEXTURES) {
-        float spread = atan(2.0 * length(params.camera.up) / float(size.y));
-        cone_lod = ray_cone_lod(tri, hit.t * spread, dir, ng);
+        float pixel_extent = 2.0 * length(params.camera.up) / float(size.y);
+        float width = orthographic ? pixel_extent : hit.t * atan(pixel_extent);
+        cone_lod = ray_cone_lod(tri, width, dir, ng);
     }
     vec3 le = emitted_lod(tri, hit.bary, ng, wo, cone_lod);
     if (dot(ng, wo) < 0.0) {

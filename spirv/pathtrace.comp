@@ -38,7 +38,7 @@ bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albed
 // Sample `sample_index` of `pixel` (of the whole image): its camera ray.
 Path camera_path_of(uvec2 pixel, uint sample_index) {
     return camera_path(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-                       uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
+                       params.camera.orthographic != 0u, uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
 }
 
 // Folds a finished sample (`radiance`, finite_sample's) into the lobe split's sums: its specular
@@ -68,7 +68,7 @@ void split_sample(Path path, vec3 radiance, vec3 emitted_first, vec4 albedo, ino
 // Returns the path segments it traced.
 uint trace_pixel(uvec2 region_pixel) {
     uint index = region_pixel.y * params.size.x + region_pixel.x;
-    uvec2 pixel = region_pixel + uvec2(params.camera.region_x, params.camera.region_y);
+    uvec2 pixel = region_pixel + uvec2(params.camera.region & 0xffffu, params.camera.region >> 16);
     uint first = params.sample_index;
     uint count = params.sample_count;
 

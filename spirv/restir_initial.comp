@@ -19,16 +19,8 @@ const bool GGX_WALTER = false;  // the BSDF is evaluated here, never sampled
 // Where world point p was in the previous frame's image (pixel coordinates, centres at +0.5),
 // and its view depth there; false when it was behind that camera.
 bool reproject(vec3 p, out vec2 pos, out float depth) {
-    vec3 d = p - prev_camera.origin;
-    depth = dot(d, prev_camera.forward);
-    if (depth <= 0.0) {
-        return false;
-    }
-    vec3 right = prev_camera.right;
-    vec3 up = prev_camera.up;
-    vec2 ndc = vec2(dot(d, right) / dot(right, right), dot(d, up) / dot(up, up)) / depth;
-    pos = vec2((ndc.x + 1.0) * 0.5 * float(params.size.x), (1.0 - ndc.y) * 0.5 * float(params.size.y));
-    return true;
+    return camera_project(prev_camera.origin, prev_camera.forward, prev_camera.right, prev_camera.up,
+                          prev_camera.orthographic != 0u, p, params.size, pos, depth);
 }
 
 void main() {

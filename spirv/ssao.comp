@@ -29,27 +29,23 @@ vec3 cam_origin;
 vec3 cam_forward;
 vec3 cam_right;
 vec3 cam_up;
+bool cam_ortho;
 
 const uint BAYER4[16] = uint[16](0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
 const float GOLDEN = 0.61803398874989485;
 
 vec3 position_at(ivec2 pixel, float depth) {
-    return gbuffer_position(cam_origin, cam_forward, cam_right,
-                            cam_up, pixel, params.size, depth);
+    return gbuffer_position(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, pixel, params.size, depth);
 }
 
 // Whether point q (world) is behind the depth buffer's surface, within range of p at depth d0.
 bool occluded(vec3 q, float d0, float radius, float bias) {
-    vec3 v = q - cam_origin;
-    float dq = dot(v, cam_forward);
-    if (dq <= 0.0) {
+    vec2 pos;
+    float dq;
+    if (!camera_project(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, q, params.size, pos, dq)) {
         return false;
     }
-    vec3 right = cam_right;
-    vec3 up = cam_up;
-    vec2 ndc = vec2(dot(v, right) / dot(right, right), dot(v, up) / dot(up, up)) / dq;
     vec2 size = vec2(params.size);
-    vec2 pos = vec2(0.5 * (ndc.x + 1.0), 0.5 * (1.0 - ndc.y)) * size;
     if (any(lessThan(pos, vec2(0.0))) || any(greaterThanEqual(pos, size))) {
         return false;
     }
@@ -68,6 +64,7 @@ void main() {
     cam_forward = params.camera.forward;
     cam_right = params.camera.right;
     cam_up = params.camera.up;
+    cam_ortho = params.camera.orthographic != 0u;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uvec2 size = params.size;
     if (any(greaterThanEqual(uvec2(pixel), size))) {

@@ -104,7 +104,7 @@ bool queue_entry(uint header, uint base, out uint path) {
 void path_pixel(uint path, out uvec2 pixel, out uint sample_index) {
     uint pixels = params.size.x * params.size.y;
     uint p = path % pixels;
-    pixel = uvec2(p % params.size.x, p / params.size.x) + uvec2(wf_camera.region_x, wf_camera.region_y);
+    pixel = uvec2(p % params.size.x, p / params.size.x) + uvec2(wf_camera.region & 0xffffu, wf_camera.region >> 16);
     sample_index = params.sample_index + path / pixels;
 }
 
@@ -137,7 +137,7 @@ void camera_rays() {
     uint sample_index;
     path_pixel(path, pixel, sample_index);
     Path p = camera_path(wf_camera.origin, wf_camera.forward, wf_camera.right, wf_camera.up,
-                         uvec2(wf_camera.image_width, wf_camera.image_height), pixel, sample_index);
+                         wf_camera.orthographic != 0u, uvec2(wf_camera.image_width, wf_camera.image_height), pixel, sample_index);
     store_fieldf(F_ORIGIN, path, vec4(p.origin, p.prev_pdf));
     store_field(F_DIR, path, uvec4(floatBitsToUint(p.dir), p.depth));
     store_fieldf(F_THROUGHPUT, path, vec4(p.throughput, 0.0));

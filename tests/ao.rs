@@ -84,6 +84,7 @@ fn camera(position: Vec3, target: Vec3, up: Vec3, yfov_degrees: f32) -> Camera {
         yfov: yfov_degrees.to_radians(),
         aspect: None,
         znear: 0.01,
+        orthographic: None,
     }
 }
 
@@ -338,6 +339,35 @@ fn ssao_agrees_with_rtao_inside_a_room() {
         blurred4 < 0.5 * unblurred4 && blurred4 < 0.05,
         "4 directions: blurred {blurred4}, unblurred {unblurred4}"
     );
+}
+
+/// SSAO under an orthographic camera (its kernel points projected to the screen without the
+/// perspective divide, its points reconstructed on parallel rays): the room's creases seen from
+/// inside by an orthographic view (half extents 0.9), blurred SSAO against the RTAO reference as in
+/// the perspective room (mean |SSAO − RTAO| < 0.05 over pixels at least r's screen size from the
+/// border). SSAO projecting with a pinhole's divide reads the wrong pixels and misses the creases.
+#[test]
+fn ssao_agrees_with_rtao_under_an_orthographic_camera() {
+    let gpu = Gpu::new();
+    let scene = room().upload(&gpu);
+    let pinhole = camera(Vec3::new(0.4, 1.4, 0.8), Vec3::new(-0.5, 0.2, -0.6), Vec3::Y, 60.0);
+    let magnification = umbra::scene::Orthographic { xmag: 0.9, ymag: 0.9, zfar: 10.0 };
+    let cam = Camera { yfov: 0.0, aspect: Some(1.0), orthographic: Some(magnification), ..pinhole };
+    let size = 64;
+    let (ssao, rtao) = ssao_and_reference(&gpu, &scene, &cam, size, 0.5);
+    dump("ortho_room_ssao", size, &ssao.values);
+    dump("ortho_room_rtao", size, &rtao.values);
+    // r = 0.5 is 0.5 / 0.9 × 32 ≈ 18 pixels at every depth.
+    let margin = 18;
+    let interior = |i: usize| {
+        let (x, y) = ((i as u32) % size, (i as u32) / size);
+        (margin..size - margin).contains(&x) && (margin..size - margin).contains(&y)
+    };
+    let (error, n) = mean_over(ssao.values.len(), interior, |i| abs_error(&ssao, &rtao, i));
+    let (occluded, _) = mean_over(ssao.values.len(), interior, |i| 1.0 - rtao.values[i] as f64);
+    eprintln!("orthographic room ({n} px, mean RTAO occlusion {occluded:.3}): mean |SSAO - RTAO| {error:.4}");
+    assert!(occluded > 0.1, "the view shows too little occlusion to compare ({occluded})");
+    assert!(error < 0.05, "mean |SSAO - RTAO| = {error}");
 }
 
 /// With UMBRA_AO_DUMP=dir set, writes the AO images of a test as grey PNGs (for looking).

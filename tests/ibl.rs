@@ -495,6 +495,7 @@ fn sphere_scene(base: [f32; 3], metallic: f32, roughness: f32) -> Scene {
         yfov,
         aspect: None,
         znear: 0.01,
+        orthographic: None,
     }];
     scene
 }

@@ -466,6 +466,7 @@ fn sphere_on_floor(implicit: bool, subdivisions: u32) -> Scene {
         yfov: 40f32.to_radians(),
         aspect: None,
         znear: 0.01,
+        orthographic: None,
     });
     scene.update_emissive();
     scene

@@ -46,6 +46,7 @@ fn looking_down(height: f32, yfov: f32) -> Camera {
         yfov,
         aspect: None,
         znear: 0.01,
+        orthographic: None,
     }
 }
 
@@ -98,6 +99,7 @@ fn camera(position: Vec3, target: Vec3, yfov_degrees: f32) -> Camera {
         yfov: yfov_degrees.to_radians(),
         aspect: None,
         znear: 0.01,
+        orthographic: None,
     }
 }
 

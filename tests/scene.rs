@@ -1676,21 +1676,43 @@ fn volume_attenuation_is_read() {
     assert!(clear.attenuation_distance.is_infinite() && clear.attenuation() == [0.0; 3]);
 }
 
-/// An orthographic camera, which umbra does not render, is skipped with a warning the scene
-/// keeps (not only a log line): the caller can see why its camera is absent.
+/// An orthographic camera is read (xmag, ymag, znear, zfar, placed by its node) with no warning;
+/// cameras keep the file's node order whatever their kind; a bad magnification or plane is an
+/// error naming the camera.
 #[test]
-fn orthographic_cameras_are_skipped_with_a_kept_warning() {
+fn orthographic_cameras_are_read() {
     let (mut json, bin) = read_glb(&scenes_dir().join("textured.glb"));
-    json["cameras"] = json!([{"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}}]);
-    let camera_node = json["nodes"].as_array().unwrap().len();
-    json["nodes"].as_array_mut().unwrap().push(json!({"camera": 0, "translation": [0.0, 0.0, 5.0]}));
+    json["cameras"] = json!([
+        {"type": "orthographic", "orthographic": {"xmag": 2.5, "ymag": 1.25, "znear": 0.1, "zfar": 10.0}},
+        {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.2}},
+    ]);
+    let first_node = json["nodes"].as_array().unwrap().len();
+    json["nodes"].as_array_mut().unwrap().push(json!({"camera": 0, "translation": [1.0, 2.0, 5.0]}));
+    json["nodes"].as_array_mut().unwrap().push(json!({"camera": 1}));
     let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
-    json["scenes"][scene_index]["nodes"].as_array_mut().unwrap().push(json!(camera_node));
+    for node in [first_node, first_node + 1] {
+        json["scenes"][scene_index]["nodes"].as_array_mut().unwrap().push(json!(node));
+    }
     let scene = Scene::from_glb_bytes("ortho.glb", &to_glb(&json, &bin)).unwrap();
-    assert!(scene.cameras.is_empty(), "the orthographic camera is not rendered");
-    assert!(
-        scene.warnings.iter().any(|w| w.contains("ortho.glb") && w.contains("camera 0 is orthographic")),
-        "{:?}",
-        scene.warnings
-    );
+    assert!(scene.warnings.iter().all(|w| !w.contains("camera")), "{:?}", scene.warnings);
+    let cameras: Vec<_> =
+        scene.cameras.iter().filter(|c| c.position == [1.0, 2.0, 5.0] || c.yfov == 0.5).collect();
+    assert_eq!(cameras.len(), 2, "{:?}", scene.cameras);
+    let (ortho, perspective) = (cameras[0], cameras[1]);
+    assert_eq!(ortho.orthographic, Some(umbra::scene::Orthographic { xmag: 2.5, ymag: 1.25, zfar: 10.0 }));
+    assert_eq!((ortho.znear, ortho.aspect), (0.1, Some(2.0)));
+    assert_eq!((ortho.forward, ortho.up), ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0]));
+    assert_eq!((perspective.orthographic, perspective.znear), (None, 0.2));
+
+    for (orthographic, problem) in [
+        (json!({"xmag": 0.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}), "xmag"),
+        (json!({"xmag": 1.0, "ymag": 1.0, "znear": 2.0, "zfar": 1.0}), "zfar"),
+    ] {
+        json["cameras"][0]["orthographic"] = orthographic;
+        let message = Scene::from_glb_bytes("ortho.glb", &to_glb(&json, &bin)).unwrap_err().to_string();
+        assert!(
+            message.contains("ortho.glb") && message.contains("camera 0") && message.contains(problem),
+            "{message}"
+        );
+    }
 }

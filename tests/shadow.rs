@@ -545,6 +545,68 @@ fn cascades_keep_their_texel_size_and_move_by_whole_texels() {
     }
 }
 
+/// Each directional cascade holds its slice of the view: the eight corners of the slice between
+/// its split depths (the last one's up to the scene's farthest view depth), of a pinhole's frustum
+/// and of an orthographic camera's box (whose slices do not narrow towards the eye), fall inside
+/// the cascade's map (texel coordinates within 1e-3 of [0, map size]); and the map is no wider
+/// than it need be: the sphere it is fitted to (map size × texel / 2, less the guard band's
+/// widening, taken as at most 5 %) is at most Jung's bound √(3/8) × the corners' diameter, which
+/// every set's smallest enclosing sphere meets (all but the last cascade, which reaches beyond the
+/// scene).
+#[test]
+fn cascades_cover_their_slice_of_a_pinhole_or_orthographic_view() {
+    let sun = umbra::gpu::layout::GpuLight {
+        direction_kind: [0.3, -0.9, 0.2, umbra::gpu::layout::GpuLight::DIRECTIONAL],
+        ..Default::default()
+    };
+    let bounds = [[-20.0, 0.0, -12.0], [20.0, 15.0, 12.0]];
+    let settings =
+        ShadowSettings { method: ShadowMethod::Hard, map_size: 1024, cascades: 4, ..Default::default() };
+    let (size, aspect) = ((1920, 1080), 1920.0 / 1080.0);
+    let pinhole = camera(Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.0, 1.0, -2.0));
+    let box_view = umbra::scene::Orthographic { xmag: 6.0 * aspect, ymag: 6.0, zfar: 100.0 };
+    let orthographic = Camera { yfov: 0.0, aspect: Some(aspect), orthographic: Some(box_view), ..pinhole };
+    for cam in [pinhole, orthographic] {
+        let layers = ShadowPlan::new(&[sun], bounds, &cam, size, &settings).unwrap().layers;
+        let (eye, forward) = (Vec3::from(cam.position), Vec3::from(cam.forward));
+        let (up, right) = (Vec3::from(cam.up), Vec3::from(cam.forward).cross(Vec3::from(cam.up)));
+        let deepest = (0..8)
+            .map(|i| Vec3::new(bounds[i & 1][0], bounds[i >> 1 & 1][1], bounds[i >> 2][2]))
+            .map(|c| (c - eye).dot(forward))
+            .fold(0.0, f32::max);
+        let mut near = 0.0;
+        for (k, layer) in layers.iter().enumerate() {
+            let far = layer.split.min(deepest);
+            let mut corners = Vec::new();
+            for z in [near, far] {
+                let (hx, hy) = cam.half_extent(z, aspect);
+                for (sx, sy) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
+                    let c = eye + forward * z + right * (sx * hx) + up * (sy * hy);
+                    corners.push(c);
+                    let texel = |row: [f32; 4]| Vec3::from_slice(&row[..3]).dot(c) + row[3];
+                    let (tx, ty) = (texel(layer.row0), texel(layer.row1));
+                    let inside = |t: f32| (-1e-3..=1024.0 * (1.0 + 1e-3)).contains(&t);
+                    assert!(
+                        inside(tx) && inside(ty),
+                        "{:?} camera, cascade {k}: corner at depth {z} lands on texel {tx}, {ty}",
+                        cam.orthographic
+                    );
+                }
+            }
+            let diameter =
+                corners.iter().flat_map(|a| corners.iter().map(move |b| a.distance(*b))).fold(0.0, f32::max);
+            let bound = 1.05 * (3.0f32 / 8.0).sqrt() * diameter;
+            assert!(
+                k + 1 == layers.len() || layer.texel_world * 512.0 <= bound,
+                "{:?} camera, cascade {k}: fitted to a sphere of radius {} for a slice of diameter {diameter}",
+                cam.orthographic,
+                layer.texel_world * 512.0
+            );
+            near = layer.split;
+        }
+    }
+}
+
 /// Alpha cut-outs: a plate over the floor whose base colour texture's alpha is a checker of 8×8
 /// holes (glTF MASK) casts the checker, through shadow rays (the traversal's alpha test) and
 /// through the map (the rasterizer's, the same test) alike: the floor the plate's shadow covers

@@ -182,6 +182,7 @@ fn grazing_floor(sampler: Sampler) -> Scene {
         yfov: 60f32.to_radians(),
         aspect: None,
         znear: 0.01,
+        orthographic: None,
     });
     scene.update_emissive();
     scene
@@ -387,6 +388,7 @@ fn gbuffer_of_a_magnified_texture_ignores_mipmaps() {
             yfov: 40f32.to_radians(),
             aspect: None,
             znear: 0.01,
+            orthographic: None,
         });
         scene.update_emissive();
         scene

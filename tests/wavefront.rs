@@ -76,6 +76,16 @@ fn check_same(name: &str, images: &[PathImage; 2]) {
     assert!(worst <= SAME_SAMPLES, "{name}: the integrators' images differ by up to {worst} (relative)");
 }
 
+/// The Cornell box seen by an orthographic camera in place of its own (the same place and
+/// direction; 0.3 × 0.3 half extents).
+fn orthographic_cornell() -> Scene {
+    let mut scene = Scene::cornell_box();
+    let magnification = umbra::scene::Orthographic { xmag: 0.3, ymag: 0.3, zfar: 10.0 };
+    let camera = umbra::scene::Camera { orthographic: Some(magnification), ..scene.cameras[0] };
+    scene.cameras = vec![camera];
+    scene
+}
+
 #[test]
 fn the_wavefront_traces_the_megakernels_samples_on_every_kind_of_scene() {
     let ctx = Gpu::new();
@@ -99,6 +109,7 @@ fn the_wavefront_traces_the_megakernels_samples_on_every_kind_of_scene() {
         ("glass.glb", load("glass.glb"), [0.5; 3]),
         ("spheres.glb", load("spheres.glb"), [0.5; 3]),
         ("many-lights.glb", load("many-lights.glb"), [0.0; 3]),
+        ("cornell box, orthographic camera", orthographic_cornell(), [0.0; 3]),
     ] {
         let gpu_scene = GpuScene::upload(&ctx, &scene).unwrap();
         let camera = scene.camera(None).unwrap();

@@ -1,11 +1,38 @@
-// The pinhole camera (src/render.rs camera_params): a unit view direction through the image
-// position `pos` in pixels (pixel centres at +0.5), row 0 at the top.
+// The camera (src/gpu/layout.rs GpuCamera, src/render.rs): a pinhole, whose rays leave `eye`, or
+// an orthographic view, whose rays run parallel to `forward` from the plane through `eye`
+// (`right` and `up` then the view's half extents). Image positions are in pixels (pixel centres
+// at +0.5), row 0 at the top; view depth is measured along `forward` (unit) from `eye`.
 #ifndef UMBRA_CAMERA_GLSL
 #define UMBRA_CAMERA_GLSL
 
-vec3 camera_ray(vec3 forward, vec3 right, vec3 up, vec2 pos, uvec2 size) {
+// The ray through image position `pos`: its origin and unit direction.
+void camera_ray(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, vec2 pos, uvec2 size,
+                out vec3 origin, out vec3 dir) {
     vec2 ndc = vec2(2.0 * pos.x / float(size.x) - 1.0, 1.0 - 2.0 * pos.y / float(size.y));
-    return normalize(forward + ndc.x * right + ndc.y * up);
+    vec3 offset = ndc.x * right + ndc.y * up;
+    origin = orthographic ? eye + offset : eye;
+    dir = orthographic ? forward : normalize(forward + offset);
+}
+
+// The world point at view depth `depth` on the ray through image position `pos`.
+vec3 camera_point(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, vec2 pos, uvec2 size,
+                  float depth) {
+    vec3 origin;
+    vec3 dir;
+    camera_ray(eye, forward, right, up, orthographic, pos, size, origin, dir);
+    return origin + dir * (depth / dot(dir, forward));
+}
+
+// Where world point `p` lies in the image and its view depth; false when it is behind the camera
+// (depth <= 0; `pos` is then meaningless).
+bool camera_project(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, vec3 p, uvec2 size,
+                    out vec2 pos, out float depth) {
+    vec3 d = p - eye;
+    depth = dot(d, forward);
+    vec2 ndc = vec2(dot(d, right) / dot(right, right), dot(d, up) / dot(up, up));
+    ndc /= orthographic ? 1.0 : max(depth, 1e-30);
+    pos = vec2((ndc.x + 1.0) * 0.5 * float(size.x), (1.0 - ndc.y) * 0.5 * float(size.y));
+    return depth > 0.0;
 }
 
 #endif

@@ -65,9 +65,9 @@ void gbuffer_unpack_layers2(uvec4 bits, out vec4 sheen, out vec4 diffuse_transmi
 }
 
 // The world-space point at view-space `depth` (along forward) on pixel `pixel`'s centre ray.
-vec3 gbuffer_position(vec3 origin, vec3 forward, vec3 right, vec3 up, ivec2 pixel, uvec2 size, float depth) {
-    vec3 dir = camera_ray(forward, right, up, vec2(pixel) + 0.5, size);
-    return origin + dir * (depth / dot(dir, forward));
+vec3 gbuffer_position(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, ivec2 pixel, uvec2 size,
+                      float depth) {
+    return camera_point(eye, forward, right, up, orthographic, vec2(pixel) + 0.5, size, depth);
 }
 
 #endif

@@ -100,11 +100,11 @@ vec3 specular_part(Path path, vec3 c) {
 }
 
 // Sample `sample_index` of `pixel` (of the whole image) through `camera`: its camera ray.
-Path camera_path(vec3 origin, vec3 forward, vec3 right, vec3 up, uvec2 image_size, uvec2 pixel, uint sample_index) {
+Path camera_path(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, uvec2 image_size, uvec2 pixel,
+                 uint sample_index) {
     vec4 jitter = rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), params.seed);
     Path path;
-    path.origin = origin;
-    path.dir = camera_ray(forward, right, up, vec2(pixel) + jitter.xy, image_size);
+    camera_ray(eye, forward, right, up, orthographic, vec2(pixel) + jitter.xy, image_size, path.origin, path.dir);
     path.radiance = vec3(0.0);
     path.throughput = vec3(1.0);
     path.prev_pdf = 0.0;

@@ -96,13 +96,13 @@ pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 13] = [
 pub const FIRST_KERNEL_SPEC_ID: u32 = 32;
 
 gpu_structs! {
-    /// A pinhole camera as every kernel that casts rays from it reads it (`camera.glsl`), and
-    /// the raster its rays cover: an `image_width` × `image_height` image of which a kernel
-    /// renders the region from pixel (`region_x`, `region_y`) on. The path tracer honours the
+    /// A pinhole or orthographic camera as every kernel that casts rays from it reads it
+    /// (`camera.glsl`), and the raster its rays cover: an `image_width` × `image_height` image of
+    /// which a kernel renders the region from pixel `region` on. The path tracer honours the
     /// region (`--tile`: a tile's pixels and random numbers are those of the whole image's); the
     /// other kernels render whole images (region 0, the image their size).
     struct GpuCamera {
-        /// Position.
+        /// Position (orthographic: the centre of the plane the rays start from).
         origin: vec3,
         /// Width of the whole image, pixels.
         image_width: uint,
@@ -110,14 +110,14 @@ gpu_structs! {
         forward: vec3,
         /// Height of the whole image, pixels.
         image_height: uint,
-        /// Right × tan(yfov/2) × aspect.
+        /// Pinhole: right × tan(yfov/2) × aspect; orthographic: right × half the view's width.
         right: vec3,
-        /// Left column of the region rendered.
-        region_x: uint,
-        /// Up × tan(yfov/2).
+        /// The region's left column | its top row << 16 (both below 65,536).
+        region: uint,
+        /// Pinhole: up × tan(yfov/2); orthographic: up × half the view's height.
         up: vec3,
-        /// Top row of the region rendered.
-        region_y: uint,
+        /// 1: orthographic (rays parallel to `forward` from the plane through `origin`), 0: pinhole.
+        orthographic: uint,
     }
 
     /// Push constants of `test_pattern.comp`.

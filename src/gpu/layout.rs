@@ -498,30 +498,43 @@ pub fn nonfinite_source_names(mask: u32) -> Vec<&'static str> {
 }
 
 impl GpuCamera {
-    /// The pinhole `camera` for an image of `size` (`camera.glsl`), rendered whole.
+    /// `camera` for an image of `size` (`camera.glsl`), rendered whole.
     pub fn new(camera: &crate::scene::Camera, size: (u32, u32)) -> Self {
         Self::region(camera, size, (0, 0))
     }
 
-    /// The pinhole `camera` for an image of `size` of which a kernel renders the region from
-    /// pixel `origin` on.
+    /// `camera` for an image of `size` of which a kernel renders the region from pixel `origin`
+    /// on (both coordinates below 65,536: umbra's images are at most 16,384 on a side).
     pub fn region(camera: &crate::scene::Camera, (w, h): (u32, u32), origin: (u32, u32)) -> Self {
         use glam::Vec3;
         let forward = Vec3::from(camera.forward).normalize();
         let right = forward.cross(Vec3::from(camera.up)).normalize();
         let up = right.cross(forward);
-        let tan = (camera.yfov * 0.5).tan();
-        let aspect = w as f32 / h as f32;
-        Self {
+        // Pinhole: the half extents at depth 1 (tan(yfov/2) × aspect, tan(yfov/2)).
+        let (half_w, half_h) = camera.half_extent(1.0, w as f32 / h as f32);
+        let mut gpu = Self {
             origin: camera.position,
             forward: forward.into(),
-            right: (right * tan * aspect).into(),
-            up: (up * tan).into(),
+            right: (right * half_w).into(),
+            up: (up * half_h).into(),
             image_width: w,
             image_height: h,
-            region_x: origin.0,
-            region_y: origin.1,
-        }
+            orthographic: camera.orthographic.is_some() as u32,
+            ..Default::default()
+        };
+        gpu.set_region_origin(origin);
+        gpu
+    }
+
+    /// The region's first pixel (left column, top row).
+    pub fn region_origin(&self) -> (u32, u32) {
+        (self.region & 0xffff, self.region >> 16)
+    }
+
+    /// Moves the region to start at pixel `origin` (left column, top row; each below 65,536).
+    pub fn set_region_origin(&mut self, (x, y): (u32, u32)) {
+        debug_assert!(x < 1 << 16 && y < 1 << 16, "region origin {x},{y} beyond 65,535");
+        self.region = x | y << 16;
     }
 }
 

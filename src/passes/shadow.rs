@@ -328,9 +328,13 @@ fn cascades(
     let s = settings.map_size as f32;
     let eye = Vec3::from(camera.position);
     let forward = Vec3::from(camera.forward).normalize();
-    let tan_y = (camera.yfov * 0.5).tan();
-    let tan_x = tan_y * camera.aspect.unwrap_or(size.0 as f32 / size.1.max(1) as f32);
-    let k2 = tan_x * tan_x + tan_y * tan_y;
+    let image_aspect = size.0 as f32 / size.1.max(1) as f32;
+    let aspect =
+        if camera.orthographic.is_some() { image_aspect } else { camera.aspect.unwrap_or(image_aspect) };
+    // A slice's corners at view depth z lie sqrt(k2) z off the axis (pinhole), or sqrt(k2)
+    // (orthographic: the view's half diagonal at every depth).
+    let (half_x, half_y) = camera.half_extent(1.0, aspect);
+    let k2 = half_x * half_x + half_y * half_y;
     // The cascades reach the scene's farthest corner from the eye, rounded up to a power of two:
     // independent of where the camera looks, and of small moves, so the slices (and with them
     // each cascade's texel size) stay put while the view changes.
@@ -353,8 +357,12 @@ fn cascades(
         .map(|i| {
             let (za, zb) = (if i == 0 { 0.0 } else { split(i) }, split(i + 1));
             // The smallest sphere around the slice's eight corners has its centre on the axis.
-            let zc = ((1.0 + k2) * 0.5 * (za + zb)).min(zb);
-            let radius = ((zc - za).powi(2) + za * za * k2).max((zb - zc).powi(2) + zb * zb * k2).sqrt();
+            let (zc, radius) = if camera.orthographic.is_some() {
+                (0.5 * (za + zb), (0.25 * (zb - za).powi(2) + k2).sqrt())
+            } else {
+                let zc = ((1.0 + k2) * 0.5 * (za + zb)).min(zb);
+                (zc, ((zc - za).powi(2) + za * za * k2).max((zb - zc).powi(2) + zb * zb * k2).sqrt())
+            };
             let texel = 2.0 * radius * widen / s;
             let centre = eye + forward * zc;
             let snap = |v: f32| (v / texel).floor() * texel;

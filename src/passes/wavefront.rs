@@ -240,14 +240,14 @@ impl WavefrontPass {
         let (w, h) = target.size;
         let end = params.sample_index + params.sample_count;
         let mut camera = params.camera;
-        let first_row = camera.region_y;
+        let (first_column, first_row) = camera.region_origin();
         while wave.sample_index < end {
             wave.sample_count = state.samples.min(end - wave.sample_index);
             for row in (0..h).step_by(state.rows as usize) {
                 let rows = state.rows.min(h - row);
                 // A wave over rows `row ..` of the region: a region of the region.
                 wave.size = [w, rows];
-                camera.region_y = first_row + row;
+                camera.set_region_origin((first_column, first_row + row));
                 // SAFETY: `cmd` is recording; both buffers are the state's, made with
                 // TRANSFER_DST, and no earlier command of this wave reads them any more (the
                 // barrier after the previous wave).

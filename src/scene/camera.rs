@@ -9,60 +9,108 @@ use gltf::json::validation::Checked;
 
 use super::source::Origin;
 
-/// A perspective camera in world space.
+/// A perspective or orthographic camera in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
-    /// Eye position.
+    /// Eye position (orthographic: the centre of the plane the rays start from).
     pub position: [f32; 3],
     /// Unit view direction.
     pub forward: [f32; 3],
     /// Unit up direction, perpendicular to `forward`.
     pub up: [f32; 3],
-    /// Vertical field of view in radians.
+    /// Vertical field of view in radians (perspective cameras; unused by orthographic ones).
     pub yfov: f32,
-    /// Width / height, when the file fixes it (otherwise the image's).
+    /// Width / height, when the file fixes it (otherwise the image's; orthographic: xmag / ymag).
     pub aspect: Option<f32>,
     /// Distance of the near plane.
     pub znear: f32,
+    /// `Some` for an orthographic camera (glTF `camera.orthographic`), `None` for a perspective one.
+    pub orthographic: Option<Orthographic>,
+}
+
+/// An orthographic camera's view: a box of parallel rays rather than a pyramid.
+///
+/// glTF's projection matrix puts `xmag` and `ymag` at the viewport's edges, so a viewport of
+/// another aspect than xmag / ymag stretches the view. umbra keeps the image's aspect, as it does
+/// for a perspective camera's `aspectRatio`: `ymag` is half the view's height and the half
+/// width is |ymag| × the image's width / height (= `xmag` when the image has the file's aspect);
+/// a negative magnification mirrors the image, as the matrix does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orthographic {
+    /// Half the view's width (glTF `xmag`), scene units.
+    pub xmag: f32,
+    /// Half the view's height (glTF `ymag`), scene units.
+    pub ymag: f32,
+    /// Distance of the far plane (read and checked; rays are not cut off there, as for
+    /// perspective cameras).
+    pub zfar: f32,
 }
 
 impl Camera {
-    /// Reads glTF camera `index` as placed by a node with transform `world`; for an orthographic
-    /// camera, which umbra does not render, the warning that says so instead (also logged).
+    /// Reads glTF camera `index` as placed by a node with transform `world`.
     pub(super) fn from_gltf(
         origin: &Origin,
         document: &gltf::Document,
         index: usize,
         world: Mat4,
-    ) -> Result<std::result::Result<Self, String>> {
+    ) -> Result<Self> {
         let camera = &document.as_json().cameras[index];
-        let perspective = match (&camera.type_, &camera.perspective) {
-            (Checked::Valid(json::camera::Type::Perspective), Some(p)) => p,
-            (Checked::Valid(json::camera::Type::Orthographic), _) => {
-                let warning = format!(
-                    "{}: camera {index} is orthographic; skipping it (umbra renders perspective)",
-                    origin.name()
-                );
-                log::warn!("{warning}");
-                return Ok(Err(warning));
+        let positive = |x: f32| x > 0.0 && x.is_finite();
+        let (position, forward, up) = frame(world);
+        match (&camera.type_, &camera.perspective, &camera.orthographic) {
+            (Checked::Valid(json::camera::Type::Perspective), Some(p), _) => {
+                let (yfov, znear, aspect) = (p.yfov, p.znear, p.aspect_ratio);
+                if !positive(yfov) || yfov >= std::f32::consts::PI {
+                    return Err(
+                        origin.error(format!("camera {index}: yfov {yfov} must lie between 0 and π radians"))
+                    );
+                }
+                if !positive(znear) || aspect.is_some_and(|a| !positive(a)) {
+                    return Err(origin.error(format!(
+                        "camera {index}: znear ({znear}) and aspectRatio ({aspect:?}) must be positive"
+                    )));
+                }
+                Ok(Self { position, forward, up, yfov, aspect, znear, orthographic: None })
             }
-            _ => {
-                return Err(origin
+            (Checked::Valid(json::camera::Type::Orthographic), _, Some(o)) => {
+                let (xmag, ymag, znear, zfar) = (o.xmag, o.ymag, o.znear, o.zfar);
+                let nonzero = |x: f32| x != 0.0 && x.is_finite();
+                if !nonzero(xmag) || !nonzero(ymag) {
+                    return Err(origin.error(format!(
+                        "camera {index}: orthographic xmag ({xmag}) and ymag ({ymag}) must be finite and not 0"
+                    )));
+                }
+                if !(znear >= 0.0 && zfar > znear && zfar.is_finite()) {
+                    return Err(origin.error(format!(
+                        "camera {index}: orthographic znear ({znear}) must be at least 0 and zfar ({zfar}) greater"
+                    )));
+                }
+                let (yfov, aspect) = (0.0, Some((xmag / ymag).abs()));
+                let orthographic = Some(Orthographic { xmag, ymag, zfar });
+                Ok(Self { position, forward, up, yfov, aspect, znear, orthographic })
+            }
+            (Checked::Valid(json::camera::Type::Perspective), None, _) => {
+                Err(origin
                     .error(format!("camera {index} is 'perspective' but has no perspective properties")))
             }
-        };
-        let (yfov, znear, aspect) = (perspective.yfov, perspective.znear, perspective.aspect_ratio);
-        let positive = |x: f32| x > 0.0 && x.is_finite();
-        if !positive(yfov) || yfov >= std::f32::consts::PI {
-            return Err(origin.error(format!("camera {index}: yfov {yfov} must lie between 0 and π radians")));
+            _ => {
+                Err(origin
+                    .error(format!("camera {index} is 'orthographic' but has no orthographic properties")))
+            }
         }
-        if !positive(znear) || aspect.is_some_and(|a| !positive(a)) {
-            return Err(origin.error(format!(
-                "camera {index}: znear ({znear}) and aspectRatio ({aspect:?}) must be positive"
-            )));
+    }
+
+    /// Half the view's width and height at view depth `depth` for an image of aspect
+    /// `image_aspect` (width / height): the pinhole's grow with depth, an orthographic camera's
+    /// do not (signed: a negative magnification mirrors).
+    pub fn half_extent(&self, depth: f32, image_aspect: f32) -> (f32, f32) {
+        match self.orthographic {
+            Some(o) => (o.ymag.abs() * image_aspect * o.xmag.signum(), o.ymag),
+            None => {
+                let tan = (self.yfov * 0.5).tan();
+                (depth * tan * image_aspect, depth * tan)
+            }
         }
-        let (position, forward, up) = frame(world);
-        Ok(Ok(Self { position, forward, up, yfov, aspect, znear }))
     }
 
     /// A camera looking down -Z at the centre of the box `lo..hi`, far enough back that the box's
@@ -79,6 +127,7 @@ impl Camera {
             yfov,
             aspect: None,
             znear: (distance - radius) * 0.5,
+            orthographic: None,
         }
     }
 }

@@ -164,10 +164,8 @@ impl<'a> Builder<'a> {
             )));
         }
         if let Some(camera) = node.camera() {
-            match Camera::from_gltf(self.origin, &self.asset.document, camera.index(), world)? {
-                Ok(camera) => self.scene.cameras.push(camera),
-                Err(warning) => self.scene.warnings.push(warning),
-            }
+            let camera = Camera::from_gltf(self.origin, &self.asset.document, camera.index(), world)?;
+            self.scene.cameras.push(camera);
         }
         if let Some(light) = node.light() {
             self.scene.lights.push(Light::from_gltf(&light, world));

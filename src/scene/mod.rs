@@ -51,7 +51,7 @@ use crate::error::{Error, Result};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
-pub use camera::{Camera, Light, LightKind};
+pub use camera::{Camera, Light, LightKind, Orthographic};
 pub use emissive::EmissiveTable;
 pub use hash::ContentHasher;
 pub use implicit::ImplicitShape;
@@ -114,7 +114,7 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Decoded textures, one per (image, sampler, colour space) in use.
     pub textures: Vec<Texture>,
-    /// Perspective cameras in node order (depth first).
+    /// Cameras, perspective and orthographic, in node order (depth first).
     pub cameras: Vec<Camera>,
     /// `KHR_lights_punctual` lights in node order (depth first).
     pub lights: Vec<Light>,

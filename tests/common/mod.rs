@@ -207,6 +207,7 @@ pub fn camera(position: Vec3, target: Vec3) -> Camera {
         yfov: 0.8,
         aspect: None,
         znear: 0.05,
+        orthographic: None,
     }
 }
 

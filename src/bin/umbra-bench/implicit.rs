@@ -111,6 +111,7 @@ fn camera() -> Camera {
         yfov: 45f32.to_radians(),
         aspect: None,
         znear: 0.01,
+        orthographic: None,
     }
 }
 

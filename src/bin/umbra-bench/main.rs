@@ -501,12 +501,13 @@ fn terrain_scene(name: &str, n: u32) -> RayScene {
     }
 }
 
-/// The file's first camera or, when it has none, one inside the bounds looking along their
-/// longest horizontal axis (the classic view down Sponza's atrium; every primary ray hits).
+/// The file's first perspective camera (the ray benchmark's rays are a pinhole's) or, when it has
+/// none, one inside the bounds looking along their longest horizontal axis (the classic view down
+/// Sponza's atrium; every primary ray hits).
 fn bench_camera(scene: &umbra::scene::Scene) -> umbra::scene::Camera {
     let (lo, hi) = scene.bounds();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    match scene.cameras.first() {
+    match scene.cameras.iter().find(|c| c.orthographic.is_none()) {
         Some(c) => *c,
         None => {
             let (center, extent) = ((lo + hi) * 0.5, hi - lo);
@@ -519,6 +520,7 @@ fn bench_camera(scene: &umbra::scene::Scene) -> umbra::scene::Camera {
                 yfov: 60f32.to_radians(),
                 aspect: None,
                 znear: 0.01,
+                orthographic: None,
             }
         }
     }

@@ -507,12 +507,9 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
     assert!(message.contains("'pcf'") && message.contains("no shadow maps"), "{message}");
 }
 
-/// Cascades are stable (no shimmering as the view changes): turning the camera keeps every
-/// cascade's texel size (the bounding sphere of a frustum slice does not depend on its
-/// orientation), and moving it shifts each cascade's grid by whole texels (the centre is
-/// snapped), checked on the placement alone for 50 random turns and moves.
-#[test]
-fn cascades_keep_their_texel_size_and_move_by_whole_texels() {
+/// A sun, a scene's bounds (40 × 15 × 24 m) and four hard 1024² cascades: the placement tests'
+/// set-up.
+fn cascade_setup() -> (umbra::gpu::layout::GpuLight, [[f32; 3]; 2], ShadowSettings) {
     let sun = umbra::gpu::layout::GpuLight {
         direction_kind: [0.3, -0.9, 0.2, umbra::gpu::layout::GpuLight::DIRECTIONAL],
         ..Default::default()
@@ -520,6 +517,16 @@ fn cascades_keep_their_texel_size_and_move_by_whole_texels() {
     let bounds = [[-20.0, 0.0, -12.0], [20.0, 15.0, 12.0]];
     let settings =
         ShadowSettings { method: ShadowMethod::Hard, map_size: 1024, cascades: 4, ..Default::default() };
+    (sun, bounds, settings)
+}
+
+/// Cascades are stable (no shimmering as the view changes): turning the camera keeps every
+/// cascade's texel size (the bounding sphere of a frustum slice does not depend on its
+/// orientation), and moving it shifts each cascade's grid by whole texels (the centre is
+/// snapped), checked on the placement alone for 50 random turns and moves.
+#[test]
+fn cascades_keep_their_texel_size_and_move_by_whole_texels() {
+    let (sun, bounds, settings) = cascade_setup();
     let place = |c: &Camera| ShadowPlan::new(&[sun], bounds, c, (1920, 1080), &settings).unwrap().layers;
     let base = camera(Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.0, 1.0, -2.0));
     let reference = place(&base);
@@ -555,13 +562,7 @@ fn cascades_keep_their_texel_size_and_move_by_whole_texels() {
 /// scene).
 #[test]
 fn cascades_cover_their_slice_of_a_pinhole_or_orthographic_view() {
-    let sun = umbra::gpu::layout::GpuLight {
-        direction_kind: [0.3, -0.9, 0.2, umbra::gpu::layout::GpuLight::DIRECTIONAL],
-        ..Default::default()
-    };
-    let bounds = [[-20.0, 0.0, -12.0], [20.0, 15.0, 12.0]];
-    let settings =
-        ShadowSettings { method: ShadowMethod::Hard, map_size: 1024, cascades: 4, ..Default::default() };
+    let (sun, bounds, settings) = cascade_setup();
     let (size, aspect) = ((1920, 1080), 1920.0 / 1080.0);
     let pinhole = camera(Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.0, 1.0, -2.0));
     let box_view = umbra::scene::Orthographic { xmag: 6.0 * aspect, ymag: 6.0, zfar: 100.0 };

@@ -55,22 +55,6 @@ float ggx_g1_over_cos(vec3 w, float a) {
     return 2.0 / (c + sqrt(a * a + (1.0 - a * a) * c * c));
 }
 
-// Visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of Visible Normals").
-vec3 sample_ggx_vndf(vec3 wo, float a, vec2 u) {
-    vec3 vh = normalize(vec3(a * wo.x, a * wo.y, wo.z));
-    float lensq = vh.x * vh.x + vh.y * vh.y;
-    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
-    vec3 t2 = cross(vh, t1);
-    float r = sqrt(u.x);
-    float phi = 2.0 * PI * u.y;
-    float p1 = r * cos(phi);
-    float p2 = r * sin(phi);
-    float s = 0.5 * (1.0 + vh.z);
-    p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
-    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
-    return normalize(vec3(a * nh.x, a * nh.y, max(1e-7, nh.z)));
-}
-
 // Density of the half vector h under sample_ggx_vndf(wo): G1(wo) max(0, wo.h) D(h) / wo.z.
 float pdf_ggx_vndf(vec3 wo, vec3 h, float a) {
     return ggx_g1_over_cos(wo, a) * max(0.0, dot(wo, h)) * ggx_d(h, a);
@@ -127,6 +111,12 @@ vec3 sample_ggx_vndf_aniso(vec3 wo, vec2 a, vec2 u) {
     p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
     vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
     return normalize(vec3(a * nh.xy, max(1e-7, nh.z)));
+}
+
+// Visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of Visible Normals"): the
+// isotropic case.
+vec3 sample_ggx_vndf(vec3 wo, float a, vec2 u) {
+    return sample_ggx_vndf_aniso(wo, vec2(a), u);
 }
 
 // Density of the half vector h under sample_ggx_vndf_aniso(wo): G1(wo) max(0, wo.h) D(h) / wo.z.

@@ -395,12 +395,16 @@ impl Passes {
     pub fn prepare_path_trace(&self, settings: &PathSettings) -> Result<()> {
         let options = settings.options();
         match settings.integrator {
-            Integrator::Megakernel => {
-                let pass = built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))?;
-                pass.prepare_for(&self.ctx, &self.features, settings.lobe_split).map(|_| ())
-            }
+            Integrator::Megakernel => self.megakernel(options, settings.lobe_split).map(|_| ()),
             Integrator::Wavefront => self.wavefront_stages(options).map(|_| ()),
         }
+    }
+
+    /// The megakernel's pass for `options` with its pipeline for `lobe_split` built.
+    pub(crate) fn megakernel(&self, options: PathOptions, lobe_split: bool) -> Result<&PathTracePass> {
+        let pass = built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))?;
+        pass.prepare_for(&self.ctx, &self.features, lobe_split)?;
+        Ok(pass)
     }
 
     /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.

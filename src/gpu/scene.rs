@@ -485,7 +485,7 @@ impl SceneFeatures {
     /// loaded: what [`SceneFeatures::of`] gives for its upload ([`GpuScene::upload`], then
     /// [`GpuScene::set_environment`] if `env_map`), known before the BVH is built and the scene
     /// uploaded, so that the pipelines specialised on them can be created meanwhile. The
-    /// materials' features come from [`gpu_material`] as the upload's do; the rest from the
+    /// materials' features come from `gpu_material` as the upload's do; the rest from the
     /// scene's lists the upload's arrays are made from (tests/scene.rs checks that the two agree
     /// on every scene at hand).
     pub fn of_scene(scene: &Scene, env_map: bool) -> Self {

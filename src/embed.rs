@@ -64,6 +64,7 @@
 
 use crate::error::Result;
 use crate::gpu::scene::GpuScene;
+use crate::gpu::SceneFeatures;
 use crate::passes::ao::AoSettings;
 use crate::passes::deferred::{LightingInputs, LightingSettings};
 use crate::passes::denoise::{DenoiseImages, DenoiseSettings};
@@ -91,14 +92,30 @@ pub struct Renderer {
 
 impl Renderer {
     /// Builds the BVH, uploads the scene, precomputes its image-based lighting and creates every
-    /// pipeline.
+    /// pipeline (the path tracer's, the longest to make, on a thread while the scene uploads).
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
-        Self::with_gpu_scene(ctx, GpuScene::upload(ctx, scene)?)
+        let passes = Passes::with_features(ctx, SceneFeatures::of_scene(scene, false));
+        let uploaded = std::thread::scope(|s| {
+            let path = s.spawn(|| passes.megakernel(PathOptions::default(), false).map(|_| ()));
+            let uploaded = GpuScene::upload(ctx, scene);
+            let prepared = path.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            prepared.and(uploaded)
+        })?;
+        Self::with_passes(ctx, uploaded, passes)
     }
 
     /// A renderer for a scene already on the GPU (with its environment map, if any).
     pub fn with_gpu_scene(ctx: &Context, scene: GpuScene) -> Result<Self> {
         let passes = Passes::new(ctx, &scene);
+        Self::with_passes(ctx, scene, passes)
+    }
+
+    /// A renderer for `scene` with `passes`, some of their pipelines perhaps built (new ones if
+    /// they were made for other features).
+    fn with_passes(ctx: &Context, scene: GpuScene, mut passes: Passes) -> Result<Self> {
+        if passes.features() != scene.features() {
+            passes = Passes::new(ctx, &scene);
+        }
         let path_options = PathOptions::default();
         // Built now, not at the first frame: a host records frames against a deadline.
         passes.prepare(&scene, path_options)?;

@@ -512,8 +512,6 @@ fn render(args: RenderArgs) -> Result<()> {
     let camera = loaded.scene.camera(args.camera)?;
     let ctx = Context::new(&ContextDesc::default())?;
     stages.lap("device");
-    let gpu_scene = loaded.upload(&ctx)?;
-    stages.lap("BVH and upload");
     let (first_sample, spp) = args.sample_range.map_or((0, args.spp), |(a, b)| (a, b - a));
     let settings = umbra::render::PathSettings {
         size: args.tile.map_or(args.size, |t| (t[2], t[3])),
@@ -553,20 +551,50 @@ fn render(args: RenderArgs) -> Result<()> {
             "--integrator wavefront does not split the radiance by lobes: the denoiser filters their sum"
         );
     }
-    if args.mode == Mode::Hybrid {
-        return render_hybrid(&ctx, &loaded, &gpu_scene, &camera, &args);
-    }
-    if matches!(args.mode, Mode::Ao | Mode::Rtao) {
+    if args.mode != Mode::Pathtrace {
+        let gpu_scene = loaded.upload(&ctx)?;
+        stages.lap("BVH and upload");
+        if args.mode == Mode::Hybrid {
+            return render_hybrid(&ctx, &loaded, &gpu_scene, &camera, &args);
+        }
         return render_ao(&ctx, &gpu_scene, &camera, &args);
+    }
+    // The path tracer's pipeline takes seconds to create on lavapipe: it is made on a thread
+    // while the BVH is built and the scene uploaded, from the features the loaded scene has.
+    let mut passes = Passes::with_features(&ctx, loaded.features());
+    let gpu_scene = std::thread::scope(|s| -> Result<_> {
+        let pipeline = s.spawn(|| {
+            let clock = std::time::Instant::now();
+            let prepared = passes.prepare_path_trace(&settings);
+            log::debug!(
+                "path tracer's pipeline made alongside in {:.1} ms",
+                clock.elapsed().as_secs_f64() * 1e3
+            );
+            prepared
+        });
+        let gpu_scene = loaded.upload(&ctx);
+        stages.lap("BVH and upload");
+        let prepared = pipeline.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        let gpu_scene = gpu_scene?;
+        prepared?;
+        stages.lap("pipeline (the rest)");
+        Ok(gpu_scene)
+    })?;
+    if passes.features() != gpu_scene.features() {
+        // SceneFeatures::of_scene missed something (tests/scene.rs checks that it does not).
+        log::warn!(
+            "the features read before the upload, {:?}, differ from the upload's, {:?}: making the pipeline again",
+            passes.features(),
+            gpu_scene.features()
+        );
+        passes = Passes::new(&ctx, &gpu_scene);
     }
     let bar = indicatif::ProgressBar::new(settings.spp as u64).with_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {per_sec}  ETA {eta}")
             .expect("valid template"),
     );
     let start = std::time::Instant::now();
-    let image = umbra::render::path_trace(&ctx, &gpu_scene, &camera, &settings, |done, _| {
-        bar.set_position(done as u64)
-    })?;
+    let image = passes.path_trace(&gpu_scene, &camera, &settings, |done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     stages.lap("path tracing");
     let pixels = (settings.size.0 * settings.size.1) as f64 * image.spp as f64;
@@ -748,6 +776,11 @@ impl LoadedScene {
             stats.sah_cost
         );
         Ok(gpu_scene)
+    }
+
+    /// The features the uploaded scene will have (known before the upload).
+    fn features(&self) -> umbra::gpu::SceneFeatures {
+        umbra::gpu::SceneFeatures::of_scene(&self.scene, self.env_map.is_some())
     }
 
     /// The hash a bake of this scene and environment records.

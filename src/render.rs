@@ -247,7 +247,11 @@ impl Passes {
         Self::with_features(ctx, scene.features())
     }
 
-    fn with_features(ctx: &Context, features: SceneFeatures) -> Self {
+    /// The passes for a scene with `features`, known before it is uploaded
+    /// ([`SceneFeatures::of_scene`]): their pipelines can be built while the scene uploads
+    /// ([`Passes::prepare_path_trace`] on another thread); they render only a scene with these
+    /// features.
+    pub fn with_features(ctx: &Context, features: SceneFeatures) -> Self {
         Self {
             ctx: ctx.clone(),
             features,
@@ -375,7 +379,32 @@ impl Passes {
     /// The wavefront path tracer's stages for `options` (built now if they were not).
     pub fn wavefront_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&WavefrontPass> {
         self.check(scene)?;
-        built(&self.wavefront[options.index()], || WavefrontPass::for_scene(&self.ctx, scene, options))
+        self.wavefront_stages(options)
+    }
+
+    fn wavefront_stages(&self, options: PathOptions) -> Result<&WavefrontPass> {
+        built(&self.wavefront[options.index()], || {
+            WavefrontPass::for_features(&self.ctx, &self.features, options)
+        })
+    }
+
+    /// Builds the pipelines [`Passes::path_trace`] with `settings` uses (the megakernel's, with
+    /// the lobe split or not, or the wavefront's stages), if they are not built yet. Needs no
+    /// scene: pipeline creation takes seconds on lavapipe, and a host can call this on a thread
+    /// (`std::thread::scope`) while the scene's BVH is built and uploaded.
+    pub fn prepare_path_trace(&self, settings: &PathSettings) -> Result<()> {
+        let options = settings.options();
+        match settings.integrator {
+            Integrator::Megakernel => self.megakernel(options, settings.lobe_split).map(|_| ()),
+            Integrator::Wavefront => self.wavefront_stages(options).map(|_| ()),
+        }
+    }
+
+    /// The megakernel's pass for `options` with its pipeline for `lobe_split` built.
+    pub(crate) fn megakernel(&self, options: PathOptions, lobe_split: bool) -> Result<&PathTracePass> {
+        let pass = built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))?;
+        pass.prepare_for(&self.ctx, &self.features, lobe_split)?;
+        Ok(pass)
     }
 
     /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.
@@ -870,13 +899,8 @@ impl Passes {
         let ctx = &self.ctx;
         settings.validate()?;
         let clock = std::time::Instant::now();
-        match settings.integrator {
-            Integrator::Megakernel => self
-                .lazy_path_pass(scene, settings.options())?
-                .prepare(ctx, scene, settings.lobe_split)
-                .map(|_| ())?,
-            Integrator::Wavefront => self.wavefront_pass(scene, settings.options()).map(|_| ())?,
-        }
+        self.check(scene)?;
+        self.prepare_path_trace(settings)?;
         let pipeline_ms = clock.elapsed().as_secs_f64() * 1e3;
         let target = if settings.lobe_split {
             PathTarget::with_lobe_split(ctx, settings.size)?

@@ -1,6 +1,7 @@
 //! The scene on the GPU: the BVH, triangles in BVH order, vertex attributes, materials and the
 //! emissive-triangle sampling table, uploaded once as storage buffers.
 
+use super::kernel::SceneFeatures;
 use super::layout::{
     GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources, TexTransforms,
     MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
@@ -9,7 +10,7 @@ use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
-use crate::scene::{AlphaMode, Scene};
+use crate::scene::{AlphaMode, Material, Scene, Texture, TextureRef};
 use crate::vk::{raw, Buffer, Context, DeviceInfo, TexelBuffer};
 use glam::Vec3;
 
@@ -318,7 +319,7 @@ impl ShadingArrays {
                 let n = scene.normals.get(i).copied().unwrap_or([0.0; 3]);
                 let uv0 = scene.uv0.get(i).copied().unwrap_or([0.0; 2]);
                 let uv1 = scene.uv1.get(i).copied().unwrap_or([0.0; 2]);
-                let color = scene.colors.get(i).copied().unwrap_or([1.0; 4]);
+                let color = scene.colors.get(i).copied().unwrap_or(WHITE);
                 GpuVertex {
                     normal_u: [n[0], n[1], n[2], uv0[0]],
                     v_uv1: [uv0[1], uv1[0], uv1[1], f32::from_bits(pack_color(color))],
@@ -327,152 +328,8 @@ impl ShadingArrays {
             })
             .collect();
         let mut gpu_textures = GpuTextures::default();
-        let materials = scene
-            .materials
-            .iter()
-            .map(|m| {
-                let sigma = m.attenuation();
-                // A transmission texture scales a factor of 0 to nothing: no slot, no lookup.
-                let transmission_texture =
-                    m.transmission_texture.as_ref().filter(|_| m.transmission_factor > 0.0);
-                // So do the clear coat's to a coat of 0.
-                let coated = m.clearcoat > 0.0;
-                let coat_texture = m.clearcoat_texture.as_ref().filter(|_| coated);
-                let coat_roughness_texture = m.clearcoat_roughness_texture.as_ref().filter(|_| coated);
-                let coat_normal_texture = m.clearcoat_normal_texture.as_ref().filter(|_| coated);
-                // And the film's to a film of weight 0.
-                let film = m.iridescence > 0.0;
-                let film_texture = m.iridescence_texture.as_ref().filter(|_| film);
-                let film_thickness_texture = m.iridescence_thickness_texture.as_ref().filter(|_| film);
-                // And the anisotropy texture to a strength of 0 (or a scene without tangents).
-                let anisotropy_texture =
-                    m.anisotropy_texture.as_ref().filter(|_| m.anisotropic() && !scene.tangents.is_empty());
-                // And the sheen's to no sheen (a colour of 0).
-                let sheened = m.sheen_color.iter().any(|&c| c > 0.0);
-                let sheen_color_texture = m.sheen_color_texture.as_ref().filter(|_| sheened);
-                let sheen_roughness_texture = m.sheen_roughness_texture.as_ref().filter(|_| sheened);
-                // And the diffuse transmission's to a factor of 0.
-                let through = m.diffuse_transmission > 0.0;
-                let through_texture = m.diffuse_transmission_texture.as_ref().filter(|_| through);
-                let through_color_texture = m.diffuse_transmission_color_texture.as_ref().filter(|_| through);
-                // And the volume's thickness texture without a volume.
-                let thickness_texture = m.thickness_texture.as_ref().filter(|_| m.volume);
-                GpuMaterial {
-                    // In MATERIAL_SLOT_* order.
-                    textures: [
-                        [
-                            gpu_textures.slot(scene, m.base_color_texture.as_ref()),
-                            gpu_textures.slot(scene, m.metallic_roughness_texture.as_ref()),
-                            gpu_textures.slot(scene, m.emissive_texture.as_ref()),
-                            if scene.tangents.is_empty() {
-                                0
-                            } else {
-                                gpu_textures.slot(scene, m.normal_texture.as_ref())
-                            },
-                        ],
-                        [
-                            gpu_textures.slot(scene, m.occlusion_texture.as_ref()),
-                            gpu_textures.slot(scene, m.parallax.as_ref().map(|p| &p.height)),
-                            gpu_textures.slot(scene, m.specular_texture.as_ref()),
-                            gpu_textures.slot(scene, m.specular_color_texture.as_ref()),
-                        ],
-                        [
-                            gpu_textures.slot(scene, transmission_texture),
-                            gpu_textures.slot(scene, coat_texture),
-                            gpu_textures.slot(scene, coat_roughness_texture),
-                            if scene.tangents.is_empty() {
-                                0
-                            } else {
-                                gpu_textures.slot(scene, coat_normal_texture)
-                            },
-                        ],
-                        [
-                            gpu_textures.slot(scene, anisotropy_texture),
-                            gpu_textures.slot(scene, film_texture),
-                            gpu_textures.slot(scene, film_thickness_texture),
-                            gpu_textures.slot(scene, sheen_color_texture),
-                        ],
-                        [
-                            gpu_textures.slot(scene, sheen_roughness_texture),
-                            gpu_textures.slot(scene, through_texture),
-                            gpu_textures.slot(scene, through_color_texture),
-                            gpu_textures.slot(scene, thickness_texture),
-                        ],
-                    ],
-                    tex_transform: TexTransforms(transforms([
-                        m.base_color_texture.as_ref(),
-                        m.metallic_roughness_texture.as_ref(),
-                        m.emissive_texture.as_ref(),
-                        m.normal_texture.as_ref(),
-                        m.occlusion_texture.as_ref(),
-                        m.parallax.as_ref().map(|p| &p.height),
-                        m.specular_texture.as_ref(),
-                        m.specular_color_texture.as_ref(),
-                        transmission_texture,
-                        coat_texture,
-                        coat_roughness_texture,
-                        coat_normal_texture,
-                        anisotropy_texture,
-                        film_texture,
-                        film_thickness_texture,
-                        sheen_color_texture,
-                        sheen_roughness_texture,
-                        through_texture,
-                        through_color_texture,
-                        thickness_texture,
-                    ])),
-                    base_color: m.base_color_factor,
-                    emissive_rough: {
-                        let e = m.emission();
-                        [e[0], e[1], e[2], m.roughness]
-                    },
-                    specular: [
-                        m.specular_color_factor[0],
-                        m.specular_color_factor[1],
-                        m.specular_color_factor[2],
-                        m.specular_factor,
-                    ],
-                    params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
-                    clearcoat: [m.clearcoat, m.clearcoat_roughness, 0.0, 0.0],
-                    parallax: m
-                        .parallax
-                        .map_or([0.0; 4], |p| [p.scale, p.layers as f32, p.refinement as f32, 0.0]),
-                    sheen: [m.sheen_color[0], m.sheen_color[1], m.sheen_color[2], m.sheen_roughness],
-                    iridescence: [
-                        m.iridescence,
-                        m.iridescence_ior,
-                        m.iridescence_thickness[0],
-                        m.iridescence_thickness[1],
-                    ],
-                    diffuse_transmission: [
-                        m.diffuse_transmission_color[0],
-                        m.diffuse_transmission_color[1],
-                        m.diffuse_transmission_color[2],
-                        m.diffuse_transmission,
-                    ],
-                    volume: [
-                        if m.volume { m.thickness } else { 0.0 },
-                        if m.disperses() { m.dispersion } else { 0.0 },
-                        0.0,
-                        0.0,
-                    ],
-                    anisotropy: if m.anisotropic() {
-                        let (sin, cos) = m.anisotropy_rotation.sin_cos();
-                        [m.anisotropy_strength, cos, sin, 0.0]
-                    } else {
-                        [0.0; 4]
-                    },
-                    flags: [
-                        if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
-                            | if m.volume { GpuMaterial::VOLUME } else { 0 }
-                            | if m.unlit { GpuMaterial::UNLIT } else { 0 },
-                        sigma[0].to_bits(),
-                        sigma[1].to_bits(),
-                        sigma[2].to_bits(),
-                    ],
-                }
-            })
-            .collect();
+        let materials =
+            scene.materials.iter().map(|m| gpu_material(scene, m, |r| gpu_textures.slot(scene, r))).collect();
         let punctual = punctual_lights(scene);
         if colored(&vertices) {
             gpu_textures.srgb_table();
@@ -480,6 +337,185 @@ impl ShadingArrays {
         let GpuTextures { textures, texels, .. } = gpu_textures;
         let emissive_power = table.total_power;
         Self { triangles, vertices, materials, lights, punctual, textures, texels, emissive_power }
+    }
+}
+
+/// Material `m` of `scene` laid out for the GPU, each texture slot `slot`'s value for the
+/// reference the slot uses (0 for none; the texture's index + 1 on upload). The one place that
+/// decides which slots a material fills and which of its lobes are on: the upload and
+/// [`SceneFeatures::of_scene`] both read their features from what it gives.
+fn gpu_material(
+    scene: &Scene,
+    m: &Material,
+    mut slot: impl FnMut(Option<&TextureRef>) -> u32,
+) -> GpuMaterial {
+    let sigma = m.attenuation();
+    // A transmission texture scales a factor of 0 to nothing: no slot, no lookup.
+    let transmission_texture = m.transmission_texture.as_ref().filter(|_| m.transmission_factor > 0.0);
+    // So do the clear coat's to a coat of 0.
+    let coated = m.clearcoat > 0.0;
+    let coat_texture = m.clearcoat_texture.as_ref().filter(|_| coated);
+    let coat_roughness_texture = m.clearcoat_roughness_texture.as_ref().filter(|_| coated);
+    let coat_normal_texture = m.clearcoat_normal_texture.as_ref().filter(|_| coated);
+    // And the film's to a film of weight 0.
+    let film = m.iridescence > 0.0;
+    let film_texture = m.iridescence_texture.as_ref().filter(|_| film);
+    let film_thickness_texture = m.iridescence_thickness_texture.as_ref().filter(|_| film);
+    // And the anisotropy texture to a strength of 0 (or a scene without tangents).
+    let anisotropy_texture =
+        m.anisotropy_texture.as_ref().filter(|_| m.anisotropic() && !scene.tangents.is_empty());
+    // And the sheen's to no sheen (a colour of 0).
+    let sheened = m.sheen_color.iter().any(|&c| c > 0.0);
+    let sheen_color_texture = m.sheen_color_texture.as_ref().filter(|_| sheened);
+    let sheen_roughness_texture = m.sheen_roughness_texture.as_ref().filter(|_| sheened);
+    // And the diffuse transmission's to a factor of 0.
+    let through = m.diffuse_transmission > 0.0;
+    let through_texture = m.diffuse_transmission_texture.as_ref().filter(|_| through);
+    let through_color_texture = m.diffuse_transmission_color_texture.as_ref().filter(|_| through);
+    // And the volume's thickness texture without a volume.
+    let thickness_texture = m.thickness_texture.as_ref().filter(|_| m.volume);
+    GpuMaterial {
+        // In MATERIAL_SLOT_* order.
+        textures: [
+            [
+                slot(m.base_color_texture.as_ref()),
+                slot(m.metallic_roughness_texture.as_ref()),
+                slot(m.emissive_texture.as_ref()),
+                if scene.tangents.is_empty() { 0 } else { slot(m.normal_texture.as_ref()) },
+            ],
+            [
+                slot(m.occlusion_texture.as_ref()),
+                slot(m.parallax.as_ref().map(|p| &p.height)),
+                slot(m.specular_texture.as_ref()),
+                slot(m.specular_color_texture.as_ref()),
+            ],
+            [
+                slot(transmission_texture),
+                slot(coat_texture),
+                slot(coat_roughness_texture),
+                if scene.tangents.is_empty() { 0 } else { slot(coat_normal_texture) },
+            ],
+            [
+                slot(anisotropy_texture),
+                slot(film_texture),
+                slot(film_thickness_texture),
+                slot(sheen_color_texture),
+            ],
+            [
+                slot(sheen_roughness_texture),
+                slot(through_texture),
+                slot(through_color_texture),
+                slot(thickness_texture),
+            ],
+        ],
+        tex_transform: TexTransforms(transforms([
+            m.base_color_texture.as_ref(),
+            m.metallic_roughness_texture.as_ref(),
+            m.emissive_texture.as_ref(),
+            m.normal_texture.as_ref(),
+            m.occlusion_texture.as_ref(),
+            m.parallax.as_ref().map(|p| &p.height),
+            m.specular_texture.as_ref(),
+            m.specular_color_texture.as_ref(),
+            transmission_texture,
+            coat_texture,
+            coat_roughness_texture,
+            coat_normal_texture,
+            anisotropy_texture,
+            film_texture,
+            film_thickness_texture,
+            sheen_color_texture,
+            sheen_roughness_texture,
+            through_texture,
+            through_color_texture,
+            thickness_texture,
+        ])),
+        base_color: m.base_color_factor,
+        emissive_rough: {
+            let e = m.emission();
+            [e[0], e[1], e[2], m.roughness]
+        },
+        specular: [
+            m.specular_color_factor[0],
+            m.specular_color_factor[1],
+            m.specular_color_factor[2],
+            m.specular_factor,
+        ],
+        params: [m.metallic, m.ior, m.transmission_factor, m.alpha_cutoff],
+        clearcoat: [m.clearcoat, m.clearcoat_roughness, 0.0, 0.0],
+        parallax: m.parallax.map_or([0.0; 4], |p| [p.scale, p.layers as f32, p.refinement as f32, 0.0]),
+        sheen: [m.sheen_color[0], m.sheen_color[1], m.sheen_color[2], m.sheen_roughness],
+        iridescence: [
+            m.iridescence,
+            m.iridescence_ior,
+            m.iridescence_thickness[0],
+            m.iridescence_thickness[1],
+        ],
+        diffuse_transmission: [
+            m.diffuse_transmission_color[0],
+            m.diffuse_transmission_color[1],
+            m.diffuse_transmission_color[2],
+            m.diffuse_transmission,
+        ],
+        volume: [
+            if m.volume { m.thickness } else { 0.0 },
+            if m.disperses() { m.dispersion } else { 0.0 },
+            0.0,
+            0.0,
+        ],
+        anisotropy: if m.anisotropic() {
+            let (sin, cos) = m.anisotropy_rotation.sin_cos();
+            [m.anisotropy_strength, cos, sin, 0.0]
+        } else {
+            [0.0; 4]
+        },
+        flags: [
+            if m.double_sided { GpuMaterial::DOUBLE_SIDED } else { 0 }
+                | if m.volume { GpuMaterial::VOLUME } else { 0 }
+                | if m.unlit { GpuMaterial::UNLIT } else { 0 },
+            sigma[0].to_bits(),
+            sigma[1].to_bits(),
+            sigma[2].to_bits(),
+        ],
+    }
+}
+
+impl SceneFeatures {
+    /// The features of `scene`, lit by an environment map if `env_map`, from the scene as
+    /// loaded: what [`SceneFeatures::of`] gives for its upload ([`GpuScene::upload`], then
+    /// [`GpuScene::set_environment`] if `env_map`), known before the BVH is built and the scene
+    /// uploaded, so that the pipelines specialised on them can be created meanwhile. The
+    /// materials' features come from `gpu_material` as the upload's do; the rest from the
+    /// scene's lists the upload's arrays are made from (tests/scene.rs checks that the two agree
+    /// on every scene at hand).
+    pub fn of_scene(scene: &Scene, env_map: bool) -> Self {
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| gpu_material(scene, m, |r| used_texture(scene, r).is_some() as u32))
+            .collect();
+        let slots = texture_slots(&materials);
+        Self {
+            textures: slots != 0,
+            // Every triangle is in the BVH (implicit shapes are never alpha-tested).
+            alpha: scene.triangle_material.iter().any(|&m| alpha_bits(scene, m) != 0),
+            lights: !scene.emissive.triangles.is_empty(),
+            punctual: !scene.lights.is_empty(),
+            env_map,
+            transmission: transmits(&materials),
+            // The vertices past the colour list are white.
+            colors: scene.colors.iter().take(scene.positions.len()).any(|&c| pack_color(c) != OPAQUE_WHITE),
+            unlit: unlit(&materials),
+            clearcoat: coated(&materials),
+            texture_slots: slots,
+            implicit: !scene.implicits.is_empty(),
+            parallax: parallax(&materials),
+            sheen: sheened(&materials),
+            iridescence: iridescent(&materials),
+            anisotropy: anisotropic(&materials),
+            diffuse_transmission: diffusely_transmits(&materials),
+            dispersion: disperses(&materials),
+        }
     }
 }
 
@@ -641,8 +677,14 @@ impl GpuScene {
 
 /// Whether some vertex's colour (as [`pack_color`] packed it) differs from opaque white.
 fn colored(vertices: &[GpuVertex]) -> bool {
-    vertices.iter().any(|v| v.v_uv1[3].to_bits() != u32::MAX)
+    vertices.iter().any(|v| v.v_uv1[3].to_bits() != OPAQUE_WHITE)
 }
+
+/// Opaque white, linear.
+const WHITE: [f32; 4] = [1.0; 4];
+
+/// Opaque white as [`pack_color`] packs it (a vertex without a `COLOR_0` gets it).
+const OPAQUE_WHITE: u32 = u32::MAX;
 
 /// A linear `COLOR_0` as the GPU vertex keeps it: RGBA8, rgb sRGB-encoded (8 bits hold dark
 /// colours better so), alpha linear, red in the low byte (`unpackUnorm4x8`'s order).
@@ -674,12 +716,29 @@ fn upload_texels(ctx: &Context, texels: &[[u32; 2]]) -> Result<TexelBuffer> {
 /// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits (0 opaque,
 /// 1 mask, 2 blend).
 fn alpha_modes(scene: &Scene, prim_order: &[u32]) -> Vec<u32> {
-    let bits = |m: &u32| match scene.materials.get(*m as usize).map(|m| m.alpha_mode) {
+    prim_order
+        .iter()
+        .map(|&p| scene.triangle_material.get(p as usize).map_or(0, |&m| alpha_bits(scene, m)))
+        .collect()
+}
+
+/// The traversal's alpha bits of material `material` (0 opaque, 1 mask, 2 blend).
+fn alpha_bits(scene: &Scene, material: u32) -> u32 {
+    match scene.materials.get(material as usize).map(|m| m.alpha_mode) {
         Some(AlphaMode::Mask) => 1,
         Some(AlphaMode::Blend) => 2,
         _ => 0,
-    };
-    prim_order.iter().map(|&p| scene.triangle_material.get(p as usize).map_or(0, bits)).collect()
+    }
+}
+
+/// The reference and its texture when `reference` names a texture `scene` has (a slot that
+/// names none stays empty).
+fn used_texture<'a, 'r>(
+    scene: &'a Scene,
+    reference: Option<&'r TextureRef>,
+) -> Option<(&'r TextureRef, &'a Texture)> {
+    let r = reference?;
+    Some((r, scene.textures.get(r.texture as usize)?))
 }
 
 fn transmits(materials: &[GpuMaterial]) -> bool {
@@ -829,8 +888,7 @@ impl GpuTextures {
 
     /// The GPU slot value (texture index + 1, or 0 for none) of a material's texture reference.
     fn slot(&mut self, scene: &Scene, reference: Option<&crate::scene::TextureRef>) -> u32 {
-        let Some(r) = reference else { return 0 };
-        let Some(texture) = scene.textures.get(r.texture as usize) else { return 0 };
+        let Some((r, texture)) = used_texture(scene, reference) else { return 0 };
         if let Some(&i) = self.index.get(&r.texture) {
             return i + 1;
         }

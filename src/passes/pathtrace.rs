@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::gpu::kernels::{pathtrace, resolve};
 use crate::gpu::layout::{GpuCamera, PathParams, PathStats, ResolveParams};
 use crate::gpu::scene::GpuScene;
-use crate::gpu::Pipeline;
+use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
 use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation};
 
@@ -427,6 +427,16 @@ impl PathTracePass {
         scene: &GpuScene,
         lobe_split: bool,
     ) -> Result<&Pipeline<pathtrace::Kernel>> {
+        self.prepare_for(ctx, &scene.features(), lobe_split)
+    }
+
+    /// [`PathTracePass::prepare`] for a scene with `features`, before it is uploaded.
+    pub fn prepare_for(
+        &self,
+        ctx: &Context,
+        features: &SceneFeatures,
+        lobe_split: bool,
+    ) -> Result<&Pipeline<pathtrace::Kernel>> {
         let cell = &self.pipelines[lobe_split as usize];
         if let Some(pipeline) = cell.get() {
             return Ok(pipeline);
@@ -436,7 +446,7 @@ impl PathTracePass {
             self.options,
             pathtrace::Spec { split_lobes: lobe_split, ..Default::default() }
         );
-        let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
+        let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         Ok(cell.get_or_init(|| pipeline))
     }
 

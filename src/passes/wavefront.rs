@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::gpu::kernels::wavefront;
 use crate::gpu::layout::{GpuCamera, PathParams, WaveParams, WAVE_FIELDS, WAVE_SHADOW_TEXELS};
 use crate::gpu::scene::GpuScene;
-use crate::gpu::Pipeline;
+use crate::gpu::{Pipeline, SceneFeatures};
 use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation, TexelBuffer};
 
 /// Which integrator traces the path tracer's samples. Both trace the same samples (the same
@@ -165,14 +165,36 @@ impl WavefrontPass {
     /// The stages for `scene` and `options` (the specialisations of
     /// [`super::pathtrace::PathTracePass::for_scene`]).
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
+        Self::for_features(ctx, &scene.features(), options)
+    }
+
+    /// The stages for a scene with `features` (before it is uploaded) and `options`.
+    pub fn for_features(ctx: &Context, features: &SceneFeatures, options: PathOptions) -> Result<Self> {
         let base = sampling_spec!(wavefront::Spec, options, Default::default());
-        let stage = |spec: wavefront::Spec| Pipeline::for_scene(ctx, scene, &spec);
+        let specs = [
+            wavefront::Spec { wf_camera_rays: true, ..base },
+            wavefront::Spec { wf_extend: true, ..base },
+            wavefront::Spec { wf_shade: true, ..base },
+            wavefront::Spec { wf_connect: true, ..base },
+            wavefront::Spec { wf_accumulate: true, ..base },
+        ];
+        // Each takes seconds on lavapipe, on one thread: made side by side.
+        let stages: Vec<Result<Pipeline<wavefront::Kernel>>> = std::thread::scope(|s| {
+            let threads: Vec<_> =
+                specs.iter().map(|spec| s.spawn(move || Pipeline::new(ctx, spec, Some(features)))).collect();
+            threads
+                .into_iter()
+                .map(|t| t.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+                .collect()
+        });
+        let [camera_rays, extend, shade, connect, accumulate] =
+            <[_; 5]>::try_from(stages).unwrap_or_else(|_| unreachable!("five stages"));
         Ok(Self {
-            camera_rays: stage(wavefront::Spec { wf_camera_rays: true, ..base })?,
-            extend: stage(wavefront::Spec { wf_extend: true, ..base })?,
-            shade: stage(wavefront::Spec { wf_shade: true, ..base })?,
-            connect: stage(wavefront::Spec { wf_connect: true, ..base })?,
-            accumulate: stage(wavefront::Spec { wf_accumulate: true, ..base })?,
+            camera_rays: camera_rays?,
+            extend: extend?,
+            shade: shade?,
+            connect: connect?,
+            accumulate: accumulate?,
         })
     }
 

@@ -129,22 +129,8 @@ fn deferred_direct_light_equals_path_traced_direct_light() {
     let settings = PathSettings { size, spp: 64, max_bounces: 1, ..Default::default() };
     let reference = path_trace(&gpu, &gpu_scene, &camera, &settings, |_, _| {}).unwrap();
     let hybrid = hybrid(&gpu, &gpu_scene, &camera, &HybridSettings { size, ..Default::default() }).unwrap();
-    let variance = reference.variance_of_mean();
     let keep = common::interior_pixels(&hybrid.gbuffer, &hybrid.color, 0.9);
-    let (mut compared, mut outliers, mut worst) = (0, 0, 0.0f32);
-    for i in 0..keep.len() {
-        if !keep[i] {
-            continue;
-        }
-        compared += 1;
-        let bad = (0..3).any(|c| {
-            let (d, r) = (hybrid.color[i][c], reference.mean[i][c]);
-            let z = (d - r).abs() / (variance[i][c].sqrt() + 2e-3 * r.abs() + 1e-6);
-            worst = worst.max(z);
-            z > 4.0
-        });
-        outliers += bad as usize;
-    }
+    let (compared, outliers, worst) = common::z_outliers(&reference, &hybrid.color, &keep);
     let on_spheres = (0..keep.len()).filter(|&i| keep[i] && hybrid.gbuffer.normal[i][1] < 0.999).count();
     eprintln!("{compared} interior pixels ({on_spheres} on spheres), {outliers} with |z| > 4, worst |z| {worst:.2}; passes {:?}", hybrid.pass_ms);
     let surface = hybrid.gbuffer.material.iter().filter(|m| m[0] != GBUFFER_NO_SURFACE).count();

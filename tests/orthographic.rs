@@ -100,20 +100,9 @@ fn hybrid_equals_the_path_tracer_under_an_orthographic_camera() {
     let settings = PathSettings { size, spp: 64, max_bounces: 1, ..Default::default() };
     let reference = path_trace(&gpu, &gpu_scene, &camera, &settings, |_, _| {}).unwrap();
     let hybrid = hybrid(&gpu, &gpu_scene, &camera, &HybridSettings { size, ..Default::default() }).unwrap();
-    let variance = reference.variance_of_mean();
     let keep = common::interior_pixels(&hybrid.gbuffer, &hybrid.color, 0.999);
-    let (mut compared, mut outliers, mut worst, mut lit) = (0, 0, 0.0f32, 0);
-    for i in (0..keep.len()).filter(|&i| keep[i]) {
-        compared += 1;
-        lit += (reference.mean[i][0] > 0.01) as usize;
-        let bad = (0..3).any(|c| {
-            let (d, r) = (hybrid.color[i][c], reference.mean[i][c]);
-            let z = (d - r).abs() / (variance[i][c].sqrt() + 2e-3 * r.abs() + 1e-6);
-            worst = worst.max(z);
-            z > 4.0
-        });
-        outliers += bad as usize;
-    }
+    let (compared, outliers, worst) = common::z_outliers(&reference, &hybrid.color, &keep);
+    let lit = (0..keep.len()).filter(|&i| keep[i] && reference.mean[i][0] > 0.01).count();
     let box_faces = (0..keep.len()).filter(|&i| keep[i] && hybrid.gbuffer.material[i][0] == 1).count();
     eprintln!("{compared} interior pixels ({box_faces} on the box, {lit} lit), {outliers} with |z| > 4, worst |z| {worst:.2}");
     assert!(

@@ -355,3 +355,26 @@ pub fn interior_pixels(
     }
     keep
 }
+
+/// Over the pixels `keep` marks: how many, how many of them have a channel of `color` more than
+/// 4 standard errors of the path-traced `reference`'s mean from it (with 2e-3 relative allowed
+/// for the G-buffer's half floats), and the largest |z|.
+pub fn z_outliers(
+    reference: &umbra::render::PathImage,
+    color: &[[f32; 4]],
+    keep: &[bool],
+) -> (usize, usize, f32) {
+    let variance = reference.variance_of_mean();
+    let (mut compared, mut outliers, mut worst) = (0, 0, 0.0f32);
+    for i in (0..keep.len()).filter(|&i| keep[i]) {
+        compared += 1;
+        let bad = (0..3).any(|c| {
+            let (d, r) = (color[i][c], reference.mean[i][c]);
+            let z = (d - r).abs() / (variance[i][c].sqrt() + 2e-3 * r.abs() + 1e-6);
+            worst = worst.max(z);
+            z > 4.0
+        });
+        outliers += bad as usize;
+    }
+    (compared, outliers, worst)
+}

@@ -217,8 +217,9 @@ struct RenderArgs {
     #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
     /// Path tracing: denoise the image (edge-avoiding à-trous filter guided by albedo, normal,
-    /// depth and per-pixel variance). The PNG and the EXR's main layer are denoised; the EXR keeps
-    /// the raw estimate as layer `noisy`.
+    /// depth and per-pixel variance; the diffuse and specular parts of the radiance filtered
+    /// apart, with either integrator). The PNG and the EXR's main layer are denoised; the EXR
+    /// keeps the raw estimate as layer `noisy`.
     #[arg(long)]
     denoise: bool,
     /// Path tracing with --denoise: à-trous iterations (1 to 8; taps 1, 2, 4, ... pixels apart).
@@ -544,15 +545,10 @@ fn render(args: RenderArgs) -> Result<()> {
             IntegratorArg::Megakernel => umbra::passes::pathtrace::Integrator::Megakernel,
             IntegratorArg::Wavefront => umbra::passes::pathtrace::Integrator::Wavefront,
         },
-        // The denoiser filters the diffuse and specular parts apart where the integrator splits
-        // them (the megakernel).
-        lobe_split: args.denoise && args.integrator == IntegratorArg::Megakernel,
+        // The denoiser filters the diffuse and specular parts apart (either integrator splits
+        // them).
+        lobe_split: args.denoise,
     };
-    if args.denoise && args.integrator == IntegratorArg::Wavefront {
-        log::info!(
-            "--integrator wavefront does not split the radiance by lobes: the denoiser filters their sum"
-        );
-    }
     if args.mode == Mode::Hybrid {
         return render_hybrid(&ctx, &loaded, &gpu_scene, &camera, &args);
     }

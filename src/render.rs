@@ -372,10 +372,18 @@ impl Passes {
         built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))
     }
 
-    /// The wavefront path tracer's stages for `options` (built now if they were not).
+    /// The wavefront path tracer's stages for `options`, without the lobe split (built now if
+    /// they were not).
     pub fn wavefront_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&WavefrontPass> {
+        let pass = self.lazy_wavefront_pass(scene, options)?;
+        pass.prepare(&self.ctx, scene, false)?;
+        Ok(pass)
+    }
+
+    /// The wavefront path tracer's pass for `options`, its stages built at their first use.
+    fn lazy_wavefront_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&WavefrontPass> {
         self.check(scene)?;
-        built(&self.wavefront[options.index()], || WavefrontPass::for_scene(&self.ctx, scene, options))
+        built(&self.wavefront[options.index()], || Ok(WavefrontPass::lazy(options)))
     }
 
     /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.
@@ -762,7 +770,7 @@ impl Passes {
                 self.lazy_path_pass(scene, settings.options())?.record(&self.ctx, cmd, scene, target, &params)
             }
             Integrator::Wavefront => self
-                .wavefront_pass(scene, settings.options())?
+                .lazy_wavefront_pass(scene, settings.options())?
                 .record(&self.ctx, cmd, scene, target, settings, &params),
         }
     }
@@ -875,7 +883,11 @@ impl Passes {
                 .lazy_path_pass(scene, settings.options())?
                 .prepare(ctx, scene, settings.lobe_split)
                 .map(|_| ())?,
-            Integrator::Wavefront => self.wavefront_pass(scene, settings.options()).map(|_| ())?,
+            Integrator::Wavefront => self.lazy_wavefront_pass(scene, settings.options())?.prepare(
+                ctx,
+                scene,
+                settings.lobe_split,
+            )?,
         }
         let pipeline_ms = clock.elapsed().as_secs_f64() * 1e3;
         let target = if settings.lobe_split {

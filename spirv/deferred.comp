@@ -7,7 +7,8 @@
 // what IBL approximates.
 // Transmissive materials (KHR_materials_transmission) transmit the prefiltered environment seen
 // through their one interface: straight on for thin-walled ones, refracted once for volumes (no
-// exit refraction, no second surface: the G-buffer knows only the first).
+// exit refraction, no second surface: the G-buffer knows only the first), once per colour
+// channel for a dispersive volume (KHR_materials_dispersion).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/deferred.glsl"
 #include "pixel.glsl"
@@ -144,7 +145,17 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     if (HAS_ENV_MAP && params.ibl != 0u) {
         specular_light *= prefiltered_light(r, roughness);
         if (surface_transmits(s) && dot(through, through) > 0.0) {
-            transmitted_light *= prefiltered_light(through, roughness);
+            float dispersion = s.thin ? 0.0 : material_dispersion(material);
+            if (dispersion > 0.0) {
+                // KHR_materials_dispersion: each colour channel refracted at its own index of
+                // refraction (the Sample Viewer's method, at the extension's Cauchy fit).
+                for (uint c = 0u; c < 3u; ++c) {
+                    vec3 through_c = refract(-wo, n, 1.0 / dispersed_ior(s.eta, dispersion, c));
+                    transmitted_light[c] *= prefiltered_light(through_c, roughness)[c];
+                }
+            } else {
+                transmitted_light *= prefiltered_light(through, roughness);
+            }
         }
         float y[9];
         sh9_basis(n, y);

@@ -32,7 +32,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 // Fields of a path's state (WAVE_FIELDS of them, `capacity` texels each).
 const uint F_ORIGIN = 0u;      // origin xyz, prev_pdf
-const uint F_DIR = 1u;         // direction xyz, depth
+const uint F_DIR = 1u;         // direction xyz, depth | the dispersion channel << 16
 const uint F_THROUGHPUT = 2u;  // throughput rgb, shadow rays queued this round
 const uint F_RADIANCE = 3u;    // radiance rgb, non-finite sources
 const uint F_ALBEDO = 4u;      // the first hit's base colour (alpha 0: a miss)
@@ -159,7 +159,7 @@ void camera_rays() {
     Path p = camera_path(wf_camera.origin, wf_camera.forward, wf_camera.right, wf_camera.up,
                          wf_camera.orthographic != 0u, uvec2(wf_camera.image_width, wf_camera.image_height), pixel, sample_index);
     store_fieldf(F_ORIGIN, path, vec4(p.origin, p.prev_pdf));
-    store_field(F_DIR, path, uvec4(floatBitsToUint(p.dir), p.depth));
+    store_field(F_DIR, path, uvec4(floatBitsToUint(p.dir), p.depth | p.channel << 16u));
     store_fieldf(F_THROUGHPUT, path, vec4(p.throughput, 0.0));
     store_field(F_RADIANCE, path, uvec4(floatBitsToUint(p.radiance), p.nonfinite));
     if (SPLIT_LOBES) {
@@ -211,7 +211,8 @@ void shade() {
     p.origin = o.xyz;
     p.prev_pdf = o.w;
     p.dir = uintBitsToFloat(d.xyz);
-    p.depth = d.w;
+    p.depth = d.w & 0xffffu;
+    p.channel = d.w >> 16u;
     p.throughput = tp.rgb;
     p.radiance = uintBitsToFloat(r.rgb);
     p.nonfinite = r.w;
@@ -251,7 +252,7 @@ void shade() {
     }
     if (goes_on) {
         store_fieldf(F_ORIGIN, path, vec4(p.origin, p.prev_pdf));
-        store_field(F_DIR, path, uvec4(floatBitsToUint(p.dir), p.depth));
+        store_field(F_DIR, path, uvec4(floatBitsToUint(p.dir), p.depth | p.channel << 16u));
         queue_append(ray_header(params.round + 1u), ((params.round + 1u) & 1u) * params.capacity, path);
     }
 }

@@ -16,7 +16,6 @@ use umbra::gpu::scene::GpuScene;
 use umbra::gpu::Pipeline;
 use umbra::render::{path_trace, PathImage, PathSettings};
 use umbra::scene::{LightKind, Material, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
-use umbra::vk::{raw, Buffer, MemoryLocation};
 
 /// `sample_test.comp` on its anisotropic surface (kind 9): `mode` 3 evaluates bsdf_eval (rgb) and
 /// bsdf_pdf (w) at `dirs`, mode 5 draws `count` bsdf_sample weights.
@@ -31,15 +30,6 @@ fn run(
     dirs: &[[f32; 4]],
     count: u32,
 ) -> Vec<[f32; 4]> {
-    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
-    // The sheen's albedo table after the directions, as the kernel reads it.
-    let mut input: Vec<[f32; 4]> = dirs.to_vec();
-    input.push([0.0; 4]);
-    input.extend(umbra::sheen::table().chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
-    let input = Buffer::upload(gpu, "anisotropy test directions", &input, usage).unwrap();
-    let output =
-        Buffer::new(gpu, "anisotropy test results", count as u64 * 16, usage, MemoryLocation::GpuOnly)
-            .unwrap();
     let params = SampleTestParams {
         wo: wo.as_vec3().into(),
         alpha: alpha as f32,
@@ -51,12 +41,7 @@ fn run(
         anisotropy_base: 1.0,
         ..Default::default()
     };
-    gpu.submit(|cmd| {
-        let resources = sample_test::Resources { directions: &input, results: &output };
-        pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
-    })
-    .unwrap();
-    output.read(gpu).unwrap()
+    common::sample_test_run(gpu, pipeline, &params, dirs)
 }
 
 /// The extension's anisotropic GGX for a white metal (F = 1): D G1(o) G1(i) / (4 o.z i.z) with

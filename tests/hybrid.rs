@@ -112,34 +112,6 @@ fn gbuffer_matches_cpu_traversal() {
     }
 }
 
-/// Pixels whose 3×3 neighbourhood lies on one smooth surface (same material, normals
-/// within ~8°; every material of the test scene is one convex or flat mesh) with smooth lighting (each neighbour's `color` within 10 % of the
-/// centre's: no shadow edge crosses the pixel): there the path tracer's box-filtered pixel and
-/// the G-buffer's centre sample see the same shading. A smooth error in the shading still shows;
-/// the caller asserts that most of the surface is compared.
-fn interior_pixels(g: &umbra::passes::gbuffer::GBufferData, color: &[[f32; 4]]) -> Vec<bool> {
-    let (w, h) = (g.size.0 as i64, g.size.1 as i64);
-    let mut keep = vec![false; (w * h) as usize];
-    for y in 1..h - 1 {
-        for x in 1..w - 1 {
-            let c = (y * w + x) as usize;
-            if g.material[c][0] == GBUFFER_NO_SURFACE {
-                continue;
-            }
-            let nc = Vec3::from_slice(&g.normal[c][..3]);
-            keep[c] = (-1..=1).all(|dy| {
-                (-1..=1).all(|dx| {
-                    let i = ((y + dy) * w + x + dx) as usize;
-                    g.material[i][0] == g.material[c][0]
-                        && Vec3::from_slice(&g.normal[i][..3]).dot(nc) > 0.9
-                        && (0..3).all(|k| (color[i][k] - color[c][k]).abs() <= 0.25 * color[c][k])
-                })
-            });
-        }
-    }
-    keep
-}
-
 /// With one directional light and nothing else, deferred shading equals the path tracer's
 /// direct-lighting image (one scattering event) within the path tracer's noise: the same BSDF,
 /// light and shadow rays, differing only in the pixel filter (centre sample vs box), so pixels on
@@ -158,7 +130,7 @@ fn deferred_direct_light_equals_path_traced_direct_light() {
     let reference = path_trace(&gpu, &gpu_scene, &camera, &settings, |_, _| {}).unwrap();
     let hybrid = hybrid(&gpu, &gpu_scene, &camera, &HybridSettings { size, ..Default::default() }).unwrap();
     let variance = reference.variance_of_mean();
-    let keep = interior_pixels(&hybrid.gbuffer, &hybrid.color);
+    let keep = common::interior_pixels(&hybrid.gbuffer, &hybrid.color, 0.9);
     let (mut compared, mut outliers, mut worst) = (0, 0, 0.0f32);
     for i in 0..keep.len() {
         if !keep[i] {

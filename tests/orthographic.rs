@@ -79,37 +79,11 @@ fn gbuffer_of_squares_facing_an_orthographic_camera_is_exact() {
     }
 }
 
-/// Pixels whose 3×3 neighbourhood lies on one flat face (same material and normal) with smooth
-/// shading (each neighbour's colour within 25 % of the centre's: no shadow edge crosses it):
-/// there the path tracer's box-filtered pixel and the G-buffer's centre sample see the same light.
-fn interior_pixels(g: &umbra::passes::gbuffer::GBufferData, color: &[[f32; 4]]) -> Vec<bool> {
-    let (w, h) = (g.size.0 as i64, g.size.1 as i64);
-    let mut keep = vec![false; (w * h) as usize];
-    for y in 1..h - 1 {
-        for x in 1..w - 1 {
-            let c = (y * w + x) as usize;
-            if g.material[c][0] == GBUFFER_NO_SURFACE {
-                continue;
-            }
-            let nc = Vec3::from_slice(&g.normal[c][..3]);
-            keep[c] = (-1..=1).all(|dy| {
-                (-1..=1).all(|dx| {
-                    let i = ((y + dy) * w + x + dx) as usize;
-                    g.material[i][0] == g.material[c][0]
-                        && Vec3::from_slice(&g.normal[i][..3]).dot(nc) > 0.999
-                        && (0..3).all(|k| (color[i][k] - color[c][k]).abs() <= 0.25 * color[c][k])
-                })
-            });
-        }
-    }
-    keep
-}
-
 /// A box on a floor under a point light, seen from above by an orthographic camera: the hybrid's
 /// deferred lighting (the G-buffer's orthographic rays, its points reconstructed from depth for
 /// the light and shadow rays) equals the path tracer's direct light (one scattering event; its
 /// orthographic camera rays) within the path tracer's noise on interior pixels (see
-/// [`interior_pixels`]). z = difference / standard error of the path-traced mean, with 2e-3
+/// [`common::interior_pixels`], one flat face: normals within 2.6°). z = difference / standard error of the path-traced mean, with 2e-3
 /// relative for the G-buffer's half floats; |z| > 4 has probability 6e-5 per channel for a
 /// Gaussian: at most 0.5 % of the pixels may exceed it. The light falls off with distance and
 /// angle everywhere, so a point reconstructed off its surface shows.
@@ -127,7 +101,7 @@ fn hybrid_equals_the_path_tracer_under_an_orthographic_camera() {
     let reference = path_trace(&gpu, &gpu_scene, &camera, &settings, |_, _| {}).unwrap();
     let hybrid = hybrid(&gpu, &gpu_scene, &camera, &HybridSettings { size, ..Default::default() }).unwrap();
     let variance = reference.variance_of_mean();
-    let keep = interior_pixels(&hybrid.gbuffer, &hybrid.color);
+    let keep = common::interior_pixels(&hybrid.gbuffer, &hybrid.color, 0.999);
     let (mut compared, mut outliers, mut worst, mut lit) = (0, 0, 0.0f32, 0);
     for i in (0..keep.len()).filter(|&i| keep[i]) {
         compared += 1;

@@ -1716,3 +1716,27 @@ fn orthographic_cameras_are_read() {
         );
     }
 }
+
+/// KHR_materials_dispersion's `dispersion` reaches the material (0 without the extension), with
+/// no warning and no longer among the ignored extensions; a negative one is refused naming it.
+#[test]
+fn dispersion_is_read() {
+    let (base, bin) = read_glb(&scenes_dir().join("textured.glb"));
+    let load = |dispersion: Value| {
+        let mut json = base.clone();
+        json["extensionsUsed"] = json!(["KHR_materials_dispersion", "KHR_materials_volume"]);
+        json["materials"][0]["extensions"] = json!({
+            "KHR_materials_dispersion": dispersion,
+            "KHR_materials_volume": {"thicknessFactor": 0.5},
+        });
+        Scene::from_glb_bytes("prism.glb", &to_glb(&json, &bin))
+    };
+    let plain = Scene::from_glb_bytes("plain.glb", &to_glb(&base, &bin)).unwrap();
+    assert_eq!(plain.materials[0].dispersion, 0.0);
+    let scene = load(json!({"dispersion": 0.33})).unwrap();
+    assert_eq!(scene.materials[0].dispersion, 0.33);
+    assert!(scene.materials[0].volume);
+    assert!(scene.warnings.iter().all(|w| !w.contains("dispersion")), "{:?}", scene.warnings);
+    let error = load(json!({"dispersion": -0.5})).unwrap_err().to_string();
+    assert!(error.contains("prism.glb") && error.contains("dispersion is -0.5"), "{error}");
+}

@@ -110,8 +110,16 @@ fn the_wavefront_traces_the_megakernels_samples_on_every_kind_of_scene() {
         .iter()
         .map(|n| Vec3::from(*n).any_orthonormal_vector().extend(1.0).to_array())
         .collect();
+    // glass.glb's volumes made dispersive (KHR_materials_dispersion): each path's colour channel
+    // travels in the wavefront's path state.
+    let mut dispersive = load("glass.glb");
+    for m in dispersive.materials.iter_mut().filter(|m| m.volume) {
+        m.dispersion = 1.0;
+    }
+    assert!(dispersive.materials.iter().any(|m| m.disperses()), "glass.glb has a transmitting volume");
     for (name, scene, env) in [
         ("cornell box", Scene::cornell_box(), [0.0; 3]),
+        ("glass.glb, dispersive", dispersive, [0.5; 3]),
         ("textured.glb", load("textured.glb"), [0.4, 0.5, 0.6]),
         ("textured.glb, anisotropic floor", anisotropic, [0.4, 0.5, 0.6]),
         ("glass.glb", load("glass.glb"), [0.5; 3]),

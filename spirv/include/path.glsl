@@ -77,6 +77,9 @@ struct Path {
     float prev_pdf;  // solid-angle pdf of the BSDF sample that made this ray; 0 for the camera
     uint depth;      // scattering events so far
     uint nonfinite;  // NONFINITE_* bits of the stages that produced a non-finite value
+    // KHR_materials_dispersion: 0 until the path meets a dispersive volume; then the colour
+    // channel + 1 it follows from there on (the throughput 0 in the others).
+    uint channel;
     // SPLIT_LOBES only (the denoiser's lobe split): the part of `radiance` that left the first
     // hit through its specular lobes (reflection, transmission, sheen, coat: all but the
     // diffuse one), the share of what the path gathers beyond the first hit that does (per
@@ -112,6 +115,7 @@ Path camera_path(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic,
     path.prev_pdf = 0.0;
     path.depth = 0u;
     path.nonfinite = 0u;
+    path.channel = 0u;
     path.specular = vec3(0.0);
     path.share = vec3(0.0);
     path.metallic = 0.0;
@@ -220,6 +224,21 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (HAS_TRANSMISSION) {
         // A refracting boundary: glass (ior) behind the front face, air behind the back.
         float ior = material_vec(material, 3u).y;
+        if (HAS_DISPERSION) {
+            // A dispersive volume refracts each wavelength its own way: the path follows one
+            // colour channel from the first such surface it meets, picked uniformly, its
+            // throughput 3x on that channel and 0 on the others (an unbiased estimate of each
+            // channel's own path), the channel's index of refraction from there on.
+            float dispersion = material_dispersion(material);
+            if (dispersion > 0.0 && s.transmission > 0.0) {
+                if (path.channel == 0u) {
+                    float u = rand4(pixel, sample_index, rng_stream(depth, RNG_DISPERSION), seed).x;
+                    path.channel = 1u + min(uint(u * 3.0), 2u);
+                    throughput *= 3.0 * vec3(equal(uvec3(path.channel), uvec3(1u, 2u, 3u)));
+                }
+                ior = dispersed_ior(ior, dispersion, path.channel - 1u);
+            }
+        }
         s.eta = front ? ior : 1.0 / ior;
     }
     if (depth == 0u) {

@@ -27,6 +27,7 @@ const uint RNG_EMISSIVE_NEE = 1u;  // emissive triangle by power (x), point on i
 const uint RNG_BSDF = 2u;          // BSDF sample (xyz), Russian roulette (w)
 const uint RNG_ENV_NEE = 3u;       // environment map sample
 const uint RNG_PUNCTUAL = 4u;      // punctual light pick (x)
+const uint RNG_DISPERSION = 5u;    // colour channel through a dispersive volume (x)
 
 uint rng_stream(uint depth, uint use) {
     return depth * RNG_STREAMS_PER_BOUNCE + use;

@@ -52,6 +52,25 @@ vec3 material_attenuation(uint id) {
     return uintBitsToFloat(material_uvec(id, 4u).yzw);
 }
 
+// KHR_materials_dispersion: the dispersion (20 / Abbe number) of material `id`, 0 unless it is a
+// transmitting volume that disperses and the kernel is specialised for it (HAS_DISPERSION).
+float material_dispersion(uint id) {
+    if (HAS_DISPERSION) {
+        return material_vec(id, MATERIAL_VOLUME_TEXEL).y;
+    }
+    return 0.0;
+}
+
+// The index of refraction of colour channel `c` (0 red, 1 green, 2 blue) of a volume of index
+// `ior` and dispersion `dispersion`: the extension's Cauchy fit n(lambda) = max(ior + (ior - 1)
+// dispersion / 20 (523655 / lambda^2 - 1.5168), 1) at the Fraunhofer line of the channel (C
+// 656.3 nm, d 587.6 nm, F 486.1 nm; scene::DISPERSION_WAVELENGTHS).
+float dispersed_ior(float ior, float dispersion, uint c) {
+    const float lambda[3] = float[3](656.3, 587.6, 486.1);
+    float l = lambda[c];
+    return max(ior + (ior - 1.0) * dispersion * 0.05 * (523655.0 / (l * l) - 1.5168), 1.0);
+}
+
 // Material `id`'s texture in `slot` (MATERIAL_SLOT_*): its index + 1, 0 when the slot is empty.
 uint material_slot_texture(uint id, uint slot) {
     return material_uvec(id, 5u + slot / 4u)[slot % 4u];

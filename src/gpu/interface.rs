@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 28] = [
+pub const SCENE_FEATURES: [&str; 29] = [
     "textures",
     "alpha",
     "lights",
@@ -68,6 +68,7 @@ pub const SCENE_FEATURES: [&str; 28] = [
     "diffuse_transmission",
     "diffuse_transmission_map",
     "thickness_map",
+    "dispersion",
 ];
 
 /// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
@@ -307,9 +308,11 @@ gpu_structs! {
         /// `diffuseTransmissionFactor`. Read only by kernels specialised for it
         /// (`HAS_DIFFUSE_TRANSMISSION`).
         diffuse_transmission: vec4,
-        /// `KHR_materials_volume`: `thicknessFactor` (0 without a volume), unused, unused,
-        /// unused. Read only by kernels specialised for transmission (`HAS_TRANSMISSION`): the
-        /// hybrid's attenuation of the transmitted environment.
+        /// `KHR_materials_volume`: `thicknessFactor` (0 without a volume), then
+        /// `KHR_materials_dispersion`'s `dispersion` (0 but for a transmitting volume), unused,
+        /// unused. Read only by kernels specialised for transmission (`HAS_TRANSMISSION`; the
+        /// dispersion only by those specialised for it, `HAS_DISPERSION`): the hybrid's
+        /// attenuation of the transmitted environment, the indices of refraction per channel.
         volume: vec4,
     }
 
@@ -1151,7 +1154,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1190,7 +1193,7 @@ kernels! {
     /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
     /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
     kernel wavefront {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion],
         push: WaveParams,
         spec: {
             beckmann: bool = false,
@@ -1356,7 +1359,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,

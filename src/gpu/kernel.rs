@@ -167,6 +167,8 @@ pub struct SceneFeatures {
     pub anisotropy: bool,
     /// Some material transmits diffusely (`KHR_materials_diffuse_transmission`).
     pub diffuse_transmission: bool,
+    /// Some transmitting volume disperses (`KHR_materials_dispersion`).
+    pub dispersion: bool,
 }
 
 impl SceneFeatures {
@@ -189,6 +191,7 @@ impl SceneFeatures {
             iridescence: scene.has_iridescence,
             anisotropy: scene.has_anisotropy,
             diffuse_transmission: scene.has_diffuse_transmission,
+            dispersion: scene.has_dispersion,
         }
     }
 
@@ -210,6 +213,7 @@ impl SceneFeatures {
             "iridescence" => self.iridescence,
             "anisotropy" => self.anisotropy,
             "diffuse_transmission" => self.diffuse_transmission,
+            "dispersion" => self.dispersion,
             _ => {
                 let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
                 self.texture_slots & slots != 0

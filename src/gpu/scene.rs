@@ -81,6 +81,9 @@ pub struct GpuScene {
     /// Whether some material transmits diffusely (`KHR_materials_diffuse_transmission`): the
     /// shading kernels evaluate and sample its lobe only then.
     pub has_diffuse_transmission: bool,
+    /// Whether some transmitting volume disperses (`KHR_materials_dispersion`): the path tracer
+    /// follows one colour channel through it, the hybrid refracts per channel, only then.
+    pub has_dispersion: bool,
     /// Whether the BVH holds implicit shapes (`UMBRA_implicit`): the tracing kernels march them
     /// only then.
     pub has_implicit: bool,
@@ -447,7 +450,12 @@ impl ShadingArrays {
                         m.diffuse_transmission_color[2],
                         m.diffuse_transmission,
                     ],
-                    volume: [if m.volume { m.thickness } else { 0.0 }, 0.0, 0.0, 0.0],
+                    volume: [
+                        if m.volume { m.thickness } else { 0.0 },
+                        if m.disperses() { m.dispersion } else { 0.0 },
+                        0.0,
+                        0.0,
+                    ],
                     anisotropy: if m.anisotropic() {
                         let (sin, cos) = m.anisotropy_rotation.sin_cos();
                         [m.anisotropy_strength, cos, sin, 0.0]
@@ -570,6 +578,7 @@ impl GpuScene {
             has_iridescence: iridescent(&arrays.materials),
             has_anisotropy: anisotropic(&arrays.materials),
             has_diffuse_transmission: diffusely_transmits(&arrays.materials),
+            has_dispersion: disperses(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
@@ -625,6 +634,7 @@ impl GpuScene {
         self.has_iridescence = iridescent(&arrays.materials);
         self.has_anisotropy = anisotropic(&arrays.materials);
         self.has_diffuse_transmission = diffusely_transmits(&arrays.materials);
+        self.has_dispersion = disperses(&arrays.materials);
         Ok(())
     }
 }
@@ -720,6 +730,11 @@ fn sheened(materials: &[GpuMaterial]) -> bool {
 /// Whether some material transmits diffusely (a diffuse transmission factor above 0).
 fn diffusely_transmits(materials: &[GpuMaterial]) -> bool {
     materials.iter().any(|m| m.diffuse_transmission[3] > 0.0)
+}
+
+/// Whether some material disperses (a transmitting volume's dispersion above 0).
+fn disperses(materials: &[GpuMaterial]) -> bool {
+    materials.iter().any(|m| m.volume[1] > 0.0)
 }
 
 /// Whether some material is anisotropic (a strength above 0).

@@ -55,7 +55,9 @@ pub use camera::{Camera, Light, LightKind, Orthographic};
 pub use emissive::EmissiveTable;
 pub use hash::ContentHasher;
 pub use implicit::ImplicitShape;
-pub use material::{texture_transform, AlphaMode, Material, Parallax, TextureRef, IDENTITY_TRANSFORM};
+pub use material::{
+    texture_transform, AlphaMode, Material, Parallax, TextureRef, DISPERSION_WAVELENGTHS, IDENTITY_TRANSFORM,
+};
 pub use texture::{mip_level_count, Filter, MipLevel, Sampler, Texture, Wrap};
 
 /// glTF extensions umbra reads; a file that *requires* any other one is rejected.
@@ -64,6 +66,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_diffuse_transmission",
+    "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_iridescence",

@@ -158,6 +158,7 @@ impl Checker {
             &[("anisotropyStrength", unit), ("anisotropyRotation", Range::Finite)],
             &["anisotropyTexture"],
         );
+        extension("KHR_materials_dispersion", &[("dispersion", Range::AtLeast(0.0))], &[]);
         extension(
             "KHR_materials_volume",
             &[

@@ -323,3 +323,35 @@ pub fn sample_test_run(
     .unwrap();
     results.read(gpu).unwrap()
 }
+
+/// Pixels whose 3×3 neighbourhood lies on one surface (the same material, every normal's cosine
+/// to the centre's above `min_cos`) with smooth lighting (each neighbour's `color` within 25 % of
+/// the centre's: no shadow edge crosses the pixel): there the path tracer's box-filtered pixel and
+/// the G-buffer's centre sample see the same shading (tests/hybrid.rs, tests/orthographic.rs).
+pub fn interior_pixels(
+    g: &umbra::passes::gbuffer::GBufferData,
+    color: &[[f32; 4]],
+    min_cos: f32,
+) -> Vec<bool> {
+    use umbra::passes::gbuffer::GBUFFER_NO_SURFACE;
+    let (w, h) = (g.size.0 as i64, g.size.1 as i64);
+    let mut keep = vec![false; (w * h) as usize];
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let c = (y * w + x) as usize;
+            if g.material[c][0] == GBUFFER_NO_SURFACE {
+                continue;
+            }
+            let nc = Vec3::from_slice(&g.normal[c][..3]);
+            keep[c] = (-1..=1).all(|dy| {
+                (-1..=1).all(|dx| {
+                    let i = ((y + dy) * w + x + dx) as usize;
+                    g.material[i][0] == g.material[c][0]
+                        && Vec3::from_slice(&g.normal[i][..3]).dot(nc) > min_cos
+                        && (0..3).all(|k| (color[i][k] - color[c][k]).abs() <= 0.25 * color[c][k])
+                })
+            });
+        }
+    }
+    keep
+}

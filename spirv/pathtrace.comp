@@ -41,22 +41,6 @@ Path camera_path_of(uvec2 pixel, uint sample_index) {
                        params.camera.orthographic != 0u, uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
 }
 
-// Folds a finished sample (`radiance`, finite_sample's) into the lobe split's sums: its specular
-// part and that part's divisor (the first hit's specular albedo) into `sum_specular` (rgb) and
-// `sum_split` (rgb); the luminance squared of the diffuse part (radiance less the first hit's
-// emission and the specular part) over the first hit's base colour into sum_specular.a, and of
-// the specular part over its divisor into sum_split.a: the denoiser's variances of the two.
-void split_sample(Path path, vec3 radiance, vec3 emitted_first, vec4 albedo, inout vec4 sum_specular,
-                  inout vec4 sum_split) {
-    vec3 specular = radiance == vec3(0.0) ? vec3(0.0) : path.specular;
-    vec3 diffuse_albedo = albedo.a > 0.0 ? max(albedo.rgb, vec3(DENOISE_MIN_ALBEDO)) : vec3(1.0);
-    vec3 spec_albedo = max(path.spec_albedo, vec3(DENOISE_MIN_ALBEDO));
-    float d = luminance((radiance - emitted_first - specular) / diffuse_albedo);
-    float l = luminance(specular / spec_albedo);
-    sum_specular += vec4(specular, d * d);
-    sum_split += vec4(path.spec_albedo, l * l);
-}
-
 // Samples params.sample_index .. + params.sample_count of one pixel of the region (its random
 // numbers and camera ray those of the whole image's pixel). A SIMD machine runs a group
 // of lanes until its last lane is done, and path lengths differ (escapes, Russian roulette), so
@@ -98,7 +82,7 @@ uint trace_pixel(uvec2 region_pixel) {
         vec3 radiance = path.radiance;
         finite_sample(radiance, emitted_first, path.nonfinite);
         if (SPLIT_LOBES) {
-            split_sample(path, radiance, emitted_first, albedo, sum_specular, sum_split);
+            split_sample(path.specular, path.metallic, radiance, emitted_first, albedo, sum_specular, sum_split);
         }
         sum += radiance;
         sum2 += radiance * radiance;
@@ -120,8 +104,7 @@ uint trace_pixel(uvec2 region_pixel) {
     float n_samples;
     bool fresh = accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, first_normal_depth, n_samples);
     if (SPLIT_LOBES) {
-        aov_specular[index] = fold_mean(fresh ? vec4(0.0) : aov_specular[index], sum_specular, count, n_samples);
-        aov_split[index] = fold_mean(fresh ? vec4(0.0) : aov_split[index], sum_split, count, n_samples);
+        accumulate_split(index, count, sum_specular, sum_split, fresh, n_samples);
     }
     return segments;
 }

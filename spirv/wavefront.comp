@@ -10,7 +10,8 @@
 //                contribution each brings if unblocked), the next ray (the path queued for round
 //                r + 1) or the path's end;
 //   connect      each path's queued shadow rays, in the order they were made, adding what reaches;
-//   accumulate   every pixel's samples of the wave into the running mean, as pathtrace.comp.
+//   accumulate   every pixel's samples of the wave into the running mean, as pathtrace.comp
+//                (and with SPLIT_LOBES, the denoiser's lobe split, into aov_specular and aov_split).
 // Each stage is this kernel specialised with one of the WF_* constants; the host dispatches the
 // queue stages indirectly from the queues' counts (wf_counts), so a stage runs as many lanes as
 // paths take it: a SIMD group no longer runs the union of its lanes' branches of a path step
@@ -38,6 +39,25 @@ const uint F_ALBEDO = 4u;      // the first hit's base colour (alpha 0: a miss)
 const uint F_NORMAL = 5u;      // the first hit's normal and distance
 const uint F_EMITTED = 6u;     // the first hit's emission rgb
 const uint F_HIT = 7u;         // this round's closest hit: t, triangle (WAVE_MISS), barycentrics
+// SPLIT_LOBES only (WAVE_SPLIT_FIELDS more: Path's fields for the lobe split):
+const uint F_SPECULAR = 8u;    // the radiance's specular part rgb
+const uint F_SPLIT = 9u;       // the specular share beyond the first hit rgb, the first hit's metallic
+
+// The fields of a path's state, and the texels of a queued shadow ray: texel 3 (SPLIT_LOBES
+// only) its contribution's specular part.
+uint path_fields() {
+    if (SPLIT_LOBES) {
+        return WAVE_FIELDS + WAVE_SPLIT_FIELDS;
+    }
+    return WAVE_FIELDS;
+}
+
+uint shadow_ray_texels() {
+    if (SPLIT_LOBES) {
+        return WAVE_SHADOW_TEXELS + WAVE_SPLIT_SHADOW_TEXELS;
+    }
+    return WAVE_SHADOW_TEXELS;
+}
 
 uvec4 load_field(uint field, uint path) {
     return imageLoad(wf_paths, int(field * params.capacity + path));
@@ -57,7 +77,7 @@ void store_fieldf(uint field, uint path, vec4 v) {
 
 // Shadow ray k of path `path`: its first texel.
 int shadow_texel(uint path, uint k) {
-    return int(WAVE_FIELDS * params.capacity + (path * params.shadows_per_path + k) * WAVE_SHADOW_TEXELS);
+    return int(path_fields() * params.capacity + (path * params.shadows_per_path + k) * shadow_ray_texels());
 }
 
 // The queues' headers in wf_counts: round r's ray queue and shadow queue.
@@ -112,9 +132,6 @@ void path_pixel(uint path, out uvec2 pixel, out uint sample_index) {
 uint shade_path = 0u;
 uint shade_shadows = 0u;
 
-// The denoiser's lobe split is the megakernel's alone (PathTarget::with_lobe_split).
-const bool SPLIT_LOBES = false;
-
 #include "path.glsl"
 
 // A light sample's shadow ray, queued: the connect stage traces it.
@@ -123,6 +140,9 @@ void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, vec3 
     imageStore(wf_paths, texel, floatBitsToUint(vec4(origin, tmax)));
     imageStore(wf_paths, texel + 1, floatBitsToUint(vec4(d, 0.0)));
     imageStore(wf_paths, texel + 2, uvec4(floatBitsToUint(c), bit));
+    if (SPLIT_LOBES) {
+        imageStore(wf_paths, texel + 3, uvec4(floatBitsToUint(c_spec), 0u));
+    }
     ++shade_shadows;
 }
 
@@ -142,6 +162,10 @@ void camera_rays() {
     store_field(F_DIR, path, uvec4(floatBitsToUint(p.dir), p.depth | p.channel << 16u));
     store_fieldf(F_THROUGHPUT, path, vec4(p.throughput, 0.0));
     store_field(F_RADIANCE, path, uvec4(floatBitsToUint(p.radiance), p.nonfinite));
+    if (SPLIT_LOBES) {
+        store_fieldf(F_SPECULAR, path, vec4(p.specular, 0.0));
+        store_fieldf(F_SPLIT, path, vec4(p.share, p.metallic));
+    }
     queue_append(ray_header(0u), 0u, path);
 }
 
@@ -192,6 +216,12 @@ void shade() {
     p.throughput = tp.rgb;
     p.radiance = uintBitsToFloat(r.rgb);
     p.nonfinite = r.w;
+    if (SPLIT_LOBES) {
+        p.specular = load_fieldf(F_SPECULAR, path).rgb;
+        vec4 split = load_fieldf(F_SPLIT, path);
+        p.share = split.rgb;
+        p.metallic = split.w;
+    }
     Hit hit;
     hit.t = uintBitsToFloat(h.x);
     hit.tri = h.y;
@@ -207,8 +237,15 @@ void shade() {
         store_fieldf(F_ALBEDO, path, albedo);
         store_fieldf(F_NORMAL, path, normal_depth);
         store_fieldf(F_EMITTED, path, vec4(emitted_first, 0.0));
+        if (SPLIT_LOBES) {
+            // The first hit sets the share and the metallic; later ones keep them.
+            store_fieldf(F_SPLIT, path, vec4(p.share, p.metallic));
+        }
     }
     store_field(F_RADIANCE, path, uvec4(floatBitsToUint(p.radiance), p.nonfinite));
+    if (SPLIT_LOBES) {
+        store_fieldf(F_SPECULAR, path, vec4(p.specular, 0.0));
+    }
     store_field(F_THROUGHPUT, path, uvec4(floatBitsToUint(p.throughput), shade_shadows));
     if (shade_shadows > 0u) {
         queue_append(shadow_header(params.round), 2u * params.capacity, path);
@@ -231,6 +268,10 @@ void connect() {
     uvec4 r = load_field(F_RADIANCE, path);
     vec3 radiance = uintBitsToFloat(r.rgb);
     uint nonfinite = r.w;
+    vec3 specular = vec3(0.0);
+    if (SPLIT_LOBES) {
+        specular = load_fieldf(F_SPECULAR, path).rgb;
+    }
     for (uint k = 0u; k < count; ++k) {
         int texel = shadow_texel(path, k);
         vec4 origin_tmax = uintBitsToFloat(imageLoad(wf_paths, texel));
@@ -240,14 +281,20 @@ void connect() {
             vec3 contribution = uintBitsToFloat(c.rgb);
             radiance += contribution;
             nonfinite |= nonfinite_bit(contribution, c.w);
+            if (SPLIT_LOBES) {
+                specular += uintBitsToFloat(imageLoad(wf_paths, texel + 3).rgb);
+            }
         }
     }
     store_field(F_RADIANCE, path, uvec4(floatBitsToUint(radiance), nonfinite));
+    if (SPLIT_LOBES) {
+        store_fieldf(F_SPECULAR, path, vec4(specular, 0.0));
+    }
     count_marches();
 }
 
 // Accumulate: the wave's samples of each pixel into the running mean and its second moment, the
-// AOVs as pathtrace.comp's trace_pixel.
+// AOVs and (SPLIT_LOBES) the lobe split as pathtrace.comp's trace_pixel.
 void accumulate() {
     uvec2 region_pixel = tile_pixel();
     if (any(greaterThanEqual(region_pixel, params.size))) {
@@ -261,19 +308,30 @@ void accumulate() {
     vec3 sum_emitted = vec3(0.0);
     vec3 sum = vec3(0.0);
     vec3 sum2 = vec3(0.0);
+    vec4 sum_specular = vec4(0.0);
+    vec4 sum_split = vec4(0.0);
     for (uint j = 0u; j < count; ++j) {
         uint path = j * pixels + wave_index;
         uvec4 r = load_field(F_RADIANCE, path);
         vec3 radiance = uintBitsToFloat(r.rgb);
         vec3 emitted_first = load_fieldf(F_EMITTED, path).rgb;
+        vec4 albedo = load_fieldf(F_ALBEDO, path);
         finite_sample(radiance, emitted_first, r.w);
+        if (SPLIT_LOBES) {
+            split_sample(load_fieldf(F_SPECULAR, path).rgb, load_fieldf(F_SPLIT, path).w, radiance, emitted_first,
+                         albedo, sum_specular, sum_split);
+        }
         sum += radiance;
         sum2 += radiance * radiance;
-        sum_albedo += load_fieldf(F_ALBEDO, path);
+        sum_albedo += albedo;
         sum_emitted += emitted_first;
     }
     float n_samples;
-    accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, load_fieldf(F_NORMAL, wave_index), n_samples);
+    bool fresh = accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted,
+                                    load_fieldf(F_NORMAL, wave_index), n_samples);
+    if (SPLIT_LOBES) {
+        accumulate_split(index, count, sum_specular, sum_split, fresh, n_samples);
+    }
 }
 
 void main() {

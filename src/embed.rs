@@ -166,10 +166,10 @@ impl Renderer {
         PathTarget::new(&self.ctx, size)
     }
 
-    /// [`Renderer::path_target`] for images to denoise: the megakernel then splits each
+    /// [`Renderer::path_target`] for images to denoise: either integrator then splits each
     /// sample's radiance by the first hit's lobes, diffuse and specular, which the denoiser
-    /// filters apart ([`crate::passes::pathtrace::LobeSplit`]; two more vec4s per pixel, and a
-    /// kernel of its own made at the first record).
+    /// filters apart ([`crate::passes::pathtrace::LobeSplit`]; two more vec4s per pixel, and
+    /// kernels of their own made at the first record).
     pub fn denoised_path_target(&self, size: (u32, u32)) -> Result<PathTarget> {
         PathTarget::with_lobe_split(&self.ctx, size)
     }

@@ -217,8 +217,9 @@ struct RenderArgs {
     #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
     /// Path tracing: denoise the image (edge-avoiding à-trous filter guided by albedo, normal,
-    /// depth and per-pixel variance). The PNG and the EXR's main layer are denoised; the EXR keeps
-    /// the raw estimate as layer `noisy`.
+    /// depth and per-pixel variance; the diffuse and specular parts of the radiance filtered
+    /// apart, with either integrator). The PNG and the EXR's main layer are denoised; the EXR
+    /// keeps the raw estimate as layer `noisy`.
     #[arg(long)]
     denoise: bool,
     /// Path tracing with --denoise: à-trous iterations (1 to 8; taps 1, 2, 4, ... pixels apart).
@@ -346,6 +347,14 @@ struct MergeArgs {
     /// Also a tonemapped PNG of the merged image.
     #[arg(long, value_parser = cli::parse_png)]
     png: Option<PathBuf>,
+    /// Denoise the merged render as `umbra render --denoise` denoises one (parts rendered with
+    /// --denoise carry the lobe split it filters apart): the PNG and the EXR's main layer are
+    /// denoised, the EXR keeps the merged estimate as layer `noisy`.
+    #[arg(long)]
+    denoise: bool,
+    /// With --denoise: à-trous iterations (1 to 8).
+    #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
+    denoise_iterations: u32,
     /// Exposure in stops for the PNG.
     #[arg(long, default_value_t = 0.0, value_parser = cli::parse_finite)]
     exposure: f32,
@@ -361,7 +370,23 @@ fn merge(args: MergeArgs) -> Result<()> {
         .iter()
         .map(|path| Ok((path.clone(), PathExr::read(path)?)))
         .collect::<Result<Vec<_>>>()?;
-    let merged = umbra::merge::merge(&parts)?;
+    let mut merged = umbra::merge::merge(&parts)?;
+    if args.denoise {
+        let settings = DenoiseSettings { iterations: args.denoise_iterations, ..Default::default() };
+        settings.validate()?;
+        let image = merged
+            .to_image()
+            .with_context(|| format!("denoising the merge of {}", args.inputs[0].display()))?;
+        let ctx = Context::new(&ContextDesc::default())?;
+        let denoised = umbra::render::denoise(&ctx, &image, &settings)?;
+        println!(
+            "denoise: {} iterations{} in {:.2} ms GPU",
+            settings.iterations,
+            if image.lobe_split.is_some() { ", diffuse and specular parts apart" } else { "" },
+            denoised.gpu_ms
+        );
+        merged.denoised = Some(denoised.color.iter().map(|p| [p[0], p[1], p[2]]).collect());
+    }
     merged.write(&args.output)?;
     let r = merged.region;
     println!(
@@ -377,7 +402,8 @@ fn merge(args: MergeArgs) -> Result<()> {
         args.output.display()
     );
     if let Some(png) = &args.png {
-        let rgba: Vec<f32> = merged.mean.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        let shown = merged.denoised.as_ref().unwrap_or(&merged.mean);
+        let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
         let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
         umbra::output::write_png(png, r.size.0, r.size.1, &display)
             .with_context(|| format!("writing {}", png.display()))?;
@@ -542,15 +568,10 @@ fn render(args: RenderArgs) -> Result<()> {
             IntegratorArg::Megakernel => umbra::passes::pathtrace::Integrator::Megakernel,
             IntegratorArg::Wavefront => umbra::passes::pathtrace::Integrator::Wavefront,
         },
-        // The denoiser filters the diffuse and specular parts apart where the integrator splits
-        // them (the megakernel).
-        lobe_split: args.denoise && args.integrator == IntegratorArg::Megakernel,
+        // The denoiser filters the diffuse and specular parts apart (either integrator splits
+        // them).
+        lobe_split: args.denoise,
     };
-    if args.denoise && args.integrator == IntegratorArg::Wavefront {
-        log::info!(
-            "--integrator wavefront does not split the radiance by lobes: the denoiser filters their sum"
-        );
-    }
     if args.mode != Mode::Pathtrace {
         let gpu_scene = loaded.upload(&ctx)?;
         stages.lap("BVH and upload");

@@ -11,7 +11,7 @@
 use crate::error::{Error, Result};
 use crate::output::{read_exr, write_exr_with, Layer};
 use crate::passes::pathtrace::PathSettings;
-use crate::render::PathImage;
+use crate::render::{LobeSplitImage, PathImage};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -42,7 +42,9 @@ impl Region {
 /// A path-traced render (or part of one) as its EXR holds it: the main RGB layer the mean, the
 /// layers `moment` (mean of the squared samples), `variance` (of the mean), `albedo` and
 /// `emission` (the first hit's, means over the samples), `normal` and `depth` (the first hit of
-/// the first sample), with `--denoise` the main layer denoised and the mean as `noisy`, and one
+/// the first sample), with `--denoise` the main layer denoised and the mean as `noisy` and the
+/// lobe split's layers `specular` and `split` (RGBA: [`LobeSplitImage`]'s means, which a merge
+/// weighs by sample counts as the mean, so the merged render denoises as one render), and one
 /// header attribute, `umbra.part`, of four lines: `samples A..B[,C..D…]` (the sample ranges),
 /// `image WxH` (the whole image), `region X,Y,WxH` and `render …` (what must agree between parts:
 /// scene, lighting, camera and every setting but the samples and the region). One attribute, so
@@ -63,6 +65,10 @@ pub struct PathExr {
     pub moment: Vec<[f32; 3]>,
     /// Base colour at the first hit, mean over the samples.
     pub albedo: Vec<[f32; 3]>,
+    /// The fraction of the samples whose first hit is a surface (the albedo's alpha, channel
+    /// `albedo.A`; the denoiser demodulates only where it is above 0). `None` in a file written
+    /// without it: such a part merges, but the merge cannot be denoised.
+    pub coverage: Option<Vec<f32>>,
     /// Shading normal at the first hit.
     pub normal: Vec<[f32; 3]>,
     /// Distance to the first hit (infinite for a miss).
@@ -73,12 +79,16 @@ pub struct PathExr {
     /// layer `noisy`. Never read back: [`PathExr::read`] takes the mean from `noisy`, so a merge
     /// joins raw estimates.
     pub denoised: Option<Vec<[f32; 3]>>,
+    /// The denoiser's lobe split ([`PathImage::lobe_split`]), in the parts of a `--denoise`
+    /// render: layers `specular` and `split`, RGBA.
+    pub lobe_split: Option<LobeSplitImage>,
 }
 
 const MAIN: [&str; 3] = ["R", "G", "B"];
 /// The header attribute that describes a part ([`PathExr`]).
 const PART_ATTRIBUTE: &str = "umbra.part";
 const XYZ: [&str; 3] = ["X", "Y", "Z"];
+const RGBA: [&str; 4] = ["R", "G", "B", "A"];
 
 impl PathExr {
     /// The EXR of `image`, rendered with `settings`; `render` names what else identifies the
@@ -97,11 +107,41 @@ impl PathExr {
             mean: rgb(&image.mean),
             moment: rgb(&image.moment),
             albedo: rgb(&image.albedo),
+            coverage: Some(image.albedo.iter().map(|p| p[3]).collect()),
             normal: rgb(&image.normal_depth),
             depth: image.normal_depth.iter().map(|p| p[3]).collect(),
             emission: rgb(&image.emission),
             denoised: None,
+            lobe_split: image.lobe_split.clone(),
         }
+    }
+
+    /// The render as the path tracer's image, for the denoiser: its mean with the sample count,
+    /// moment, albedo with its coverage, normal and depth, emission and lobe split. An error
+    /// without the coverage (a file written before it was kept).
+    pub fn to_image(&self) -> Result<PathImage> {
+        let coverage = self.coverage.as_ref().ok_or_else(|| {
+            Error::Invalid("the render has no albedo coverage (albedo.A): re-render it to denoise it".into())
+        })?;
+        let spp = self.spp();
+        let rgba = |v: &[[f32; 3]], a: &mut dyn FnMut(usize) -> f32| -> Vec<[f32; 4]> {
+            v.iter().enumerate().map(|(i, p)| [p[0], p[1], p[2], a(i)]).collect()
+        };
+        Ok(PathImage {
+            size: self.region.size,
+            spp,
+            mean: rgba(&self.mean, &mut |_| spp as f32),
+            moment: rgba(&self.moment, &mut |_| 0.0),
+            albedo: rgba(&self.albedo, &mut |i| coverage[i]),
+            normal_depth: rgba(&self.normal, &mut |i| self.depth[i]),
+            emission: rgba(&self.emission, &mut |_| 0.0),
+            lobe_split: self.lobe_split.clone(),
+            nonfinite_samples: 0,
+            nonfinite_sources: 0,
+            gpu_ms: 0.0,
+            segments: 0,
+            marches_exhausted: 0,
+        })
     }
 
     /// Samples per pixel.
@@ -122,8 +162,18 @@ impl PathExr {
     /// Writes the EXR.
     pub fn write(&self, path: &Path) -> Result<()> {
         let flat = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
-        let (mean, moment, albedo, normal) =
-            (flat(&self.mean), flat(&self.moment), flat(&self.albedo), flat(&self.normal));
+        let (mean, moment, normal) = (flat(&self.mean), flat(&self.moment), flat(&self.normal));
+        let albedo: Vec<f32> = match &self.coverage {
+            Some(coverage) => {
+                self.albedo.iter().zip(coverage).flat_map(|(p, a)| [p[0], p[1], p[2], *a]).collect()
+            }
+            None => flat(&self.albedo),
+        };
+        let albedo_channels: &[&str] = if self.coverage.is_some() { &RGBA } else { &MAIN };
+        let split = self.lobe_split.as_ref().map(|l| {
+            let flat4 = |v: &[[f32; 4]]| v.iter().flatten().copied().collect::<Vec<f32>>();
+            (flat4(&l.specular), flat4(&l.split))
+        });
         let emission = flat(&self.emission);
         let variance = flat(&self.variance_of_mean());
         let denoised = self.denoised.as_deref().map(flat);
@@ -138,7 +188,7 @@ impl PathExr {
                     Some(denoised) => Layer { name: "", channels: &MAIN, data: denoised },
                     None => Layer { name: "", channels: &MAIN, data: &mean },
                 },
-                Layer { name: "albedo", channels: &MAIN, data: &albedo },
+                Layer { name: "albedo", channels: albedo_channels, data: &albedo },
                 Layer { name: "normal", channels: &XYZ, data: &normal },
                 Layer { name: "depth", channels: &["Z"], data: &self.depth },
                 Layer { name: "emission", channels: &MAIN, data: &emission },
@@ -147,6 +197,12 @@ impl PathExr {
             ]
             .into_iter()
             .chain(denoised.is_some().then_some(Layer { name: "noisy", channels: &MAIN, data: &mean }))
+            .chain(split.iter().flat_map(|(specular, split)| {
+                [
+                    Layer { name: "specular", channels: &RGBA, data: specular },
+                    Layer { name: "split", channels: &RGBA, data: split },
+                ]
+            }))
             .collect::<Vec<_>>(),
             &[(
                 PART_ATTRIBUTE,
@@ -195,6 +251,21 @@ impl PathExr {
             let [a, b, c] = [channel(&full(names[0]))?, channel(&full(names[1]))?, channel(&full(names[2]))?];
             Ok((0..a.len()).map(|i| [a[i], b[i], c[i]]).collect())
         };
+        let has = |name: &str| exr.channels.iter().any(|(n, _)| n == name);
+        let rgba = |layer: &str| -> Result<Vec<[f32; 4]>> {
+            let [a, b, c, d] = RGBA.map(|c| channel(&format!("{layer}.{c}")));
+            let [a, b, c, d] = [a?, b?, c?, d?];
+            Ok((0..a.len()).map(|i| [a[i], b[i], c[i], d[i]]).collect())
+        };
+        let lobe_split = match (has("specular.R"), has("split.R")) {
+            (true, true) => Some(LobeSplitImage { specular: rgba("specular")?, split: rgba("split")? }),
+            (false, false) => None,
+            _ => {
+                return Err(bad(
+                    "one of the lobe split's layers 'specular' and 'split' without the other".into()
+                ))
+            }
+        };
         let image = parse_size(attribute("image")?).ok_or_else(|| bad("malformed image size".into()))?;
         let region = parse_region(attribute("region")?).ok_or_else(|| bad("malformed region".into()))?;
         let samples =
@@ -221,10 +292,12 @@ impl PathExr {
             },
             moment: rgb("moment", MAIN)?,
             albedo: rgb("albedo", MAIN)?,
+            coverage: if has("albedo.A") { Some(channel("albedo.A")?.to_vec()) } else { None },
             normal: rgb("normal", XYZ)?,
             depth: channel("depth.Z")?.to_vec(),
             emission: rgb("emission", MAIN)?,
             denoised: None,
+            lobe_split,
         })
     }
 }
@@ -274,10 +347,12 @@ fn describe(samples: &[Range<u32>]) -> String {
 
 /// Joins parts of one render (each with the file it came from, for the errors): parts of the
 /// same region and disjoint sample ranges into one of all their samples (means and second
-/// moments weighted by sample counts; the first-hit layers of the part with the earliest
-/// samples), then regions into the rectangle they tile. Refused, naming the files: parts of
-/// different renders or images, overlapping samples of one region, overlapping regions, regions
-/// with different samples, regions that leave a hole in their bounding rectangle.
+/// moments weighted by sample counts, as are the albedo, its coverage, the emission and the lobe
+/// split; the normal and depth of the part with the earliest samples), then regions into the
+/// rectangle they tile. The coverage and the lobe split are kept where every part has them.
+/// Refused, naming the files: parts of different renders or images, overlapping samples of one
+/// region, overlapping regions, regions with different samples, regions that leave a hole in
+/// their bounding rectangle.
 pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
     let (first_path, first) = parts.first().ok_or_else(|| Error::Invalid("nothing to merge".into()))?;
     let invalid = |message: String| Err(Error::Invalid(message));
@@ -322,6 +397,39 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
                 })
                 .collect()
         };
+        // The same weighting for the layers a part may lack and any number of channels: the
+        // parts' pixels, `None` where one lacks the layer.
+        let spp: Vec<f64> = group.iter().map(|(_, p)| p.spp() as f64).collect();
+        let weigh = |fields: Option<Vec<&[[f32; 4]]>>| -> Option<Vec<[f32; 4]>> {
+            let fields = fields?;
+            Some(
+                (0..fields[0].len())
+                    .map(|i| {
+                        [0, 1, 2, 3].map(|c| {
+                            let sum: f64 = spp.iter().zip(&fields).map(|(n, f)| n * f[i][c] as f64).sum();
+                            (sum / total) as f32
+                        })
+                    })
+                    .collect(),
+            )
+        };
+        let layer = |f: fn(&PathExr) -> Option<&[[f32; 4]]>| {
+            group.iter().map(|(_, p)| f(p)).collect::<Option<Vec<_>>>()
+        };
+        // The coverage as the first channel of 4-channel pixels (the others 0).
+        let coverage: Option<Vec<Vec<[f32; 4]>>> = group
+            .iter()
+            .map(|(_, p)| p.coverage.as_ref().map(|c| c.iter().map(|&a| [a, 0.0, 0.0, 0.0]).collect()))
+            .collect();
+        let coverage = weigh(coverage.as_ref().map(|c| c.iter().map(|v| v.as_slice()).collect()))
+            .map(|c| c.into_iter().map(|p| p[0]).collect());
+        let lobe_split = match (
+            weigh(layer(|p| p.lobe_split.as_ref().map(|l| l.specular.as_slice()))),
+            weigh(layer(|p| p.lobe_split.as_ref().map(|l| l.split.as_slice()))),
+        ) {
+            (Some(specular), Some(split)) => Some(LobeSplitImage { specular, split }),
+            _ => None,
+        };
         let (path, earliest) = group[0];
         tiles.push((
             path.clone(),
@@ -330,7 +438,9 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
                 mean: weighted(|p| &p.mean),
                 moment: weighted(|p| &p.moment),
                 albedo: weighted(|p| &p.albedo),
+                coverage,
                 emission: weighted(|p| &p.emission),
+                lobe_split,
                 ..earliest.clone()
             },
         ));
@@ -378,14 +488,18 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
         ));
     }
     let pixels = bounds.area() as usize;
+    let every = |f: fn(&PathExr) -> bool| tiles.iter().all(|(_, t)| f(t));
     let mut out = PathExr {
         region: bounds,
         mean: vec![[0.0; 3]; pixels],
         moment: vec![[0.0; 3]; pixels],
         albedo: vec![[0.0; 3]; pixels],
+        coverage: every(|t| t.coverage.is_some()).then(|| vec![0.0; pixels]),
         normal: vec![[0.0; 3]; pixels],
         depth: vec![0.0; pixels],
         emission: vec![[0.0; 3]; pixels],
+        lobe_split: every(|t| t.lobe_split.is_some())
+            .then(|| LobeSplitImage { specular: vec![[0.0; 4]; pixels], split: vec![[0.0; 4]; pixels] }),
         ..tiles[0].1.clone()
     };
     for (_, t) in &tiles {
@@ -402,6 +516,13 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
             out.normal[dst..dst + n].copy_from_slice(&t.normal[src..src + n]);
             out.depth[dst..dst + n].copy_from_slice(&t.depth[src..src + n]);
             out.emission[dst..dst + n].copy_from_slice(&t.emission[src..src + n]);
+            if let (Some(o), Some(c)) = (&mut out.coverage, &t.coverage) {
+                o[dst..dst + n].copy_from_slice(&c[src..src + n]);
+            }
+            if let (Some(o), Some(l)) = (&mut out.lobe_split, &t.lobe_split) {
+                o.specular[dst..dst + n].copy_from_slice(&l.specular[src..src + n]);
+                o.split[dst..dst + n].copy_from_slice(&l.split[src..src + n]);
+            }
         }
     }
     Ok(out)

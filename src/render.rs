@@ -376,27 +376,36 @@ impl Passes {
         built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))
     }
 
-    /// The wavefront path tracer's stages for `options` (built now if they were not).
+    /// The wavefront path tracer's stages for `options`, without the lobe split (built now if
+    /// they were not).
     pub fn wavefront_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&WavefrontPass> {
+        let pass = self.lazy_wavefront_pass(scene, options)?;
+        pass.prepare(&self.ctx, scene, false)?;
+        Ok(pass)
+    }
+
+    /// The wavefront path tracer's pass for `options`, its stages built at their first use.
+    fn lazy_wavefront_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&WavefrontPass> {
         self.check(scene)?;
-        self.wavefront_stages(options)
+        Ok(self.wavefront_stages(options))
     }
 
-    fn wavefront_stages(&self, options: PathOptions) -> Result<&WavefrontPass> {
-        built(&self.wavefront[options.index()], || {
-            WavefrontPass::for_features(&self.ctx, &self.features, options)
-        })
+    /// The wavefront path tracer's pass for `options`, no stage built yet.
+    fn wavefront_stages(&self, options: PathOptions) -> &WavefrontPass {
+        self.wavefront[options.index()].get_or_init(|| WavefrontPass::lazy(options))
     }
 
-    /// Builds the pipelines [`Passes::path_trace`] with `settings` uses (the megakernel's, with
-    /// the lobe split or not, or the wavefront's stages), if they are not built yet. Needs no
+    /// Builds the pipelines [`Passes::path_trace`] with `settings` uses (the megakernel's or the
+    /// wavefront's stages, with the lobe split or not), if they are not built yet. Needs no
     /// scene: pipeline creation takes seconds on lavapipe, and a host can call this on a thread
     /// (`std::thread::scope`) while the scene's BVH is built and uploaded.
     pub fn prepare_path_trace(&self, settings: &PathSettings) -> Result<()> {
         let options = settings.options();
         match settings.integrator {
             Integrator::Megakernel => self.megakernel(options, settings.lobe_split).map(|_| ()),
-            Integrator::Wavefront => self.wavefront_stages(options).map(|_| ()),
+            Integrator::Wavefront => {
+                self.wavefront_stages(options).prepare_for(&self.ctx, &self.features, settings.lobe_split)
+            }
         }
     }
 
@@ -791,7 +800,7 @@ impl Passes {
                 self.lazy_path_pass(scene, settings.options())?.record(&self.ctx, cmd, scene, target, &params)
             }
             Integrator::Wavefront => self
-                .wavefront_pass(scene, settings.options())?
+                .lazy_wavefront_pass(scene, settings.options())?
                 .record(&self.ctx, cmd, scene, target, settings, &params),
         }
     }

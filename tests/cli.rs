@@ -149,6 +149,7 @@ fn render_cornell_box_writes_png_and_exr_layers() {
         "B",
         "G",
         "R",
+        "albedo.A",
         "albedo.B",
         "albedo.G",
         "albedo.R",

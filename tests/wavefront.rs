@@ -1,7 +1,8 @@
 //! The wavefront path tracer traces the megakernel's samples: the same paths from the same
 //! random numbers, so the same image up to float rounding, the same path segments, on every kind
 //! of scene (emitters, punctual lights picked by power, an environment map, glass, textures), in
-//! waves of whole images or of rows, and progressively.
+//! waves of whole images or of rows, and progressively; and with the denoiser's lobe split, the
+//! same split.
 
 mod common;
 #[path = "support/generate.rs"]
@@ -38,11 +39,18 @@ fn both(
 
 /// How two renders of the same samples differ: the largest difference of a pixel's mean, of
 /// its second moment and of its AOVs, relative to the pixel's value (or 1 where it is below 1).
+/// With the lobe split in both, its buffers too (else neither may have it).
 fn largest_difference(a: &PathImage, b: &PathImage) -> f32 {
     let mut worst = 0.0f32;
-    for (x, y) in
-        [(&a.mean, &b.mean), (&a.moment, &b.moment), (&a.albedo, &b.albedo), (&a.emission, &b.emission)]
-    {
+    let mut buffers =
+        vec![(&a.mean, &b.mean), (&a.moment, &b.moment), (&a.albedo, &b.albedo), (&a.emission, &b.emission)];
+    match (&a.lobe_split, &b.lobe_split) {
+        (Some(p), Some(q)) => buffers.extend([(&p.specular, &q.specular), (&p.split, &q.split)]),
+        (None, None) => {}
+        _ => panic!("one render has the lobe split, the other not"),
+    }
+    for (x, y) in buffers {
+        assert_eq!(x.len(), y.len());
         for (p, q) in x.iter().zip(y) {
             for c in 0..4 {
                 worst = worst.max((p[c] - q[c]).abs() / p[c].abs().max(1.0));
@@ -178,35 +186,81 @@ fn waves_of_rows_and_progressive_batches_trace_the_same_samples() {
     let error = too_deep.validate().expect_err("1001 bounces through the wavefront").to_string();
     assert!(error.contains("at most 1000 bounces"), "{error}");
     assert!(PathSettings { integrator: Integrator::Megakernel, ..too_deep }.validate().is_ok());
-    // The denoiser's lobe split is the megakernel's alone: refused in the settings and by a split
-    // target.
+    // The same with the lobe split: a split target's state holds the split's fields and shadow
+    // texels too (fewer paths a wave in the same memory).
     let split = PathSettings { lobe_split: true, ..settings.clone() };
-    let error = split.validate().expect_err("a lobe split through the wavefront").to_string();
-    assert!(error.contains("does not split the radiance by lobes"), "{error}");
+    let whole_split = passes.path_trace(&gpu_scene, &camera, &split, |_, _| {}).unwrap();
     let split_target = PathTarget::with_lobe_split(&ctx, settings.size).unwrap();
-    let error = ctx
-        .submit(|cmd| passes.record_path_samples(cmd, &gpu_scene, &camera, &split_target, &settings, 0, 1))
-        .expect_err("a split target through the wavefront")
-        .to_string();
-    assert!(error.contains("does not split the radiance by lobes"), "{error}");
+    split_target.init_wave(&ctx, &gpu_scene, settings.max_bounces, 7 * 24).unwrap();
     let mut first = 0;
     for count in [1, 2, 3] {
         ctx.submit(|cmd| {
-            passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &settings, first, count)
+            passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &settings, first, count)?;
+            passes.record_path_samples(cmd, &gpu_scene, &camera, &split_target, &split, first, count)
         })
         .unwrap();
         first += count;
     }
-    let rows: Vec<[f32; 4]> = target.accum.read(&ctx).unwrap();
-    let mut worst = 0.0f32;
-    for (p, q) in whole.mean.iter().zip(&rows) {
-        assert_eq!(p[3], q[3], "sample counts");
-        for c in 0..3 {
-            worst = worst.max((p[c] - q[c]).abs() / p[c].abs().max(1.0));
+    let lobes = split_target.lobe_split.as_ref().unwrap();
+    let whole_lobes = whole_split.lobe_split.as_ref().unwrap();
+    for (name, whole, rows) in [
+        ("mean", &whole.mean, target.accum.read(&ctx).unwrap()),
+        ("split mean", &whole_split.mean, split_target.accum.read(&ctx).unwrap()),
+        ("specular", &whole_lobes.specular, lobes.specular.read(&ctx).unwrap()),
+        ("split", &whole_lobes.split, lobes.split.read(&ctx).unwrap()),
+    ] {
+        let rows: Vec<[f32; 4]> = rows;
+        let mut worst = 0.0f32;
+        for (p, q) in whole.iter().zip(&rows) {
+            if name.ends_with("mean") {
+                assert_eq!(p[3], q[3], "{name}: sample counts");
+            }
+            for c in 0..3 {
+                worst = worst.max((p[c] - q[c]).abs() / p[c].abs().max(1.0));
+            }
         }
+        // The running mean's arithmetic differs by batch (6 samples at once against 1 + 2 + 3).
+        assert!(worst <= 1e-5, "{name}: waves of rows differ from whole-image waves by up to {worst}");
     }
-    // The running mean's arithmetic differs by batch (6 samples at once against 1 + 2 + 3).
-    assert!(worst <= 1e-5, "waves of rows differ from whole-image waves by up to {worst}");
+}
+
+/// With the denoiser's lobe split (`PathSettings::lobe_split`) the wavefront splits each sample
+/// as the megakernel does: the same mean, moment and AOVs, and the same split buffers (the
+/// specular part and its divisor, the two parts' variances), on the Cornell box (emitters;
+/// with every material a metal too, where the split's divisor is the base colour), glass
+/// (transmission: specular paths past the first hit) and a textured scene under an environment.
+#[test]
+fn the_wavefront_splits_the_lobes_as_the_megakernel() {
+    let ctx = Gpu::new();
+    let settings = PathSettings {
+        size: (40, 32),
+        spp: 5,
+        max_bounces: 6,
+        seed: 7,
+        lobe_split: true,
+        ..PathSettings::default()
+    };
+    let mut metal = Scene::cornell_box();
+    for (i, m) in metal.materials.iter_mut().enumerate() {
+        (m.metallic, m.roughness) = (1.0, 0.2 + 0.1 * i as f32);
+    }
+    for (name, scene, env) in [
+        ("cornell box", Scene::cornell_box(), [0.0; 3]),
+        ("cornell box, metals", metal, [0.0; 3]),
+        ("glass.glb", load("glass.glb"), [0.5; 3]),
+        ("textured.glb", load("textured.glb"), [0.4, 0.5, 0.6]),
+    ] {
+        let gpu_scene = GpuScene::upload(&ctx, &scene).unwrap();
+        let camera = scene.camera(None).unwrap();
+        let images = both(&ctx, &gpu_scene, &camera, &PathSettings { env, ..settings.clone() });
+        check_same(name, &images);
+        // The split is there to compare: the specular part carries light.
+        let split = images[1].lobe_split.as_ref().expect("the wavefront's split");
+        let specular: f64 = split.specular.iter().map(|s| (s[0] + s[1] + s[2]) as f64).sum();
+        let total: f64 = images[1].mean.iter().map(|m| (m[0] + m[1] + m[2]) as f64).sum();
+        eprintln!("{name}: specular part {:.4} of the light", specular / total);
+        assert!(specular > 0.001 * total, "{name}: no specular part ({specular} of {total})");
+    }
 }
 
 /// `umbra render --integrator wavefront` renders the embedded Cornell box as the default

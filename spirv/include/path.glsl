@@ -9,7 +9,8 @@
 // for a kernel of shadow rays in the wavefront. Include after random.glsl, camera.glsl,
 // environment.glsl and shading.glsl, with `params` a push-constant block holding PathParams'
 // fields but the camera, and the path tracers' accumulation bindings (`accum`, `moment`, the
-// `aov_*` buffers, `stats`).
+// `aov_*` buffers, `aov_specular` and `aov_split` among them, `stats`) and the specialisation
+// constant SPLIT_LOBES.
 #ifndef UMBRA_PATH_GLSL
 #define UMBRA_PATH_GLSL
 
@@ -83,10 +84,11 @@ struct Path {
     // hit through its specular lobes (reflection, transmission, sheen, coat: all but the
     // diffuse one), the share of what the path gathers beyond the first hit that does (per
     // channel, f_specular / f at the first hit's sampled direction), and the first hit's
-    // specular albedo, the divisor of that part (1 for a dielectric, the base colour for a metal).
+    // metallic (0 for a miss), which with its base colour makes the divisor of that part
+    // (specular_albedo).
     vec3 specular;
     vec3 share;
-    vec3 spec_albedo;
+    float metallic;
 };
 
 // Defined by the kernel (this file's header): adds c to path.radiance, and c_spec, its
@@ -116,7 +118,7 @@ Path camera_path(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic,
     path.channel = 0u;
     path.specular = vec3(0.0);
     path.share = vec3(0.0);
-    path.spec_albedo = vec3(1.0);
+    path.metallic = 0.0;
     return path;
 }
 
@@ -243,7 +245,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
         albedo = vec4(s.base, 1.0);
         normal_depth = vec4(n, hit.t);
         if (SPLIT_LOBES) {
-            path.spec_albedo = mix(vec3(1.0), s.base, s.metallic);
+            path.metallic = s.metallic;
         }
     }
     // KHR_materials_unlit, modelled as an emitter of its base colour that scatters nothing: the
@@ -424,6 +426,39 @@ bool accumulate_samples(uint index, uint count, vec3 sum, vec3 sum2, vec4 sum_al
         aov_normal_depth[index] = first_normal_depth;
     }
     return fresh;
+}
+
+// The first hit's specular albedo, the divisor of the lobe split's specular part: 1 for a
+// dielectric or a miss (`albedo`, the first hit's base colour, alpha 0), the base colour for a
+// metal (`metallic`, the first hit's).
+vec3 specular_albedo(vec4 albedo, float metallic) {
+    return albedo.a > 0.0 ? mix(vec3(1.0), albedo.rgb, metallic) : vec3(1.0);
+}
+
+// Folds a finished sample (`radiance`, finite_sample's; `specular`, its specular part as the path
+// gathered it; `emitted_first`, `albedo` and `metallic`, its first hit's) into the lobe split's
+// sums: its specular part and that part's divisor (specular_albedo) into `sum_specular` (rgb) and
+// `sum_split` (rgb); the luminance squared of the diffuse part (radiance less the first hit's
+// emission and the specular part) over the first hit's base colour into sum_specular.a, and of
+// the specular part over its divisor into sum_split.a: the denoiser's variances of the two.
+void split_sample(vec3 specular, float metallic, vec3 radiance, vec3 emitted_first, vec4 albedo,
+                  inout vec4 sum_specular, inout vec4 sum_split) {
+    if (radiance == vec3(0.0)) {
+        specular = vec3(0.0);
+    }
+    vec3 spec_albedo = specular_albedo(albedo, metallic);
+    vec3 diffuse_albedo = albedo.a > 0.0 ? max(albedo.rgb, vec3(DENOISE_MIN_ALBEDO)) : vec3(1.0);
+    float d = luminance((radiance - emitted_first - specular) / diffuse_albedo);
+    float l = luminance(specular / max(spec_albedo, vec3(DENOISE_MIN_ALBEDO)));
+    sum_specular += vec4(specular, d * d);
+    sum_split += vec4(spec_albedo, l * l);
+}
+
+// Folds the lobe split's sums of `count` more samples of pixel `index` (split_sample's) into
+// its running means in aov_specular and aov_split (accumulate_samples' `fresh` and `n_samples`).
+void accumulate_split(uint index, uint count, vec4 sum_specular, vec4 sum_split, bool fresh, float n_samples) {
+    aov_specular[index] = fold_mean(fresh ? vec4(0.0) : aov_specular[index], sum_specular, count, n_samples);
+    aov_split[index] = fold_mean(fresh ? vec4(0.0) : aov_split[index], sum_split, count, n_samples);
 }
 
 // Adds n path segments to the counters' 64-bit count, two words (an add that wraps the low

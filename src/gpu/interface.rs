@@ -1075,6 +1075,13 @@ gpu_constants! {
     /// `wavefront.comp`: texels of one queued shadow ray (origin and tmax, direction, the
     /// contribution if unblocked and its non-finite source bit).
     WAVE_SHADOW_TEXELS: uint = 3;
+    /// `wavefront.comp` with the denoiser's lobe split (`split_lobes`): fields of a path's state
+    /// after the [`WAVE_FIELDS`]: the specular part of the radiance so far; the specular share
+    /// of what the path gathers beyond the first hit and the first hit's metallic.
+    WAVE_SPLIT_FIELDS: uint = 2;
+    /// `wavefront.comp` with the lobe split: texels of a queued shadow ray after the
+    /// [`WAVE_SHADOW_TEXELS`]: its contribution's specular part.
+    WAVE_SPLIT_SHADOW_TEXELS: uint = 1;
     /// `wavefront.comp`: the closest hit's triangle where the ray left the scene.
     WAVE_MISS: uint = 0xffffffff;
     /// Implicit shapes (`implicit.glsl`): a sphere (params: radius).
@@ -1199,13 +1206,16 @@ kernels! {
             wf_extend: bool = false,
             wf_shade: bool = false,
             wf_connect: bool = false,
-            wf_accumulate: bool = false
+            wf_accumulate: bool = false,
+            split_lobes: bool = false
         },
         bindings: {
             /// The camera.
             wf_camera: readonly buffer GpuCamera,
-            /// The paths' state: [`WAVE_FIELDS`] fields of `capacity` RGBA32UI texels each, then
-            /// the shadow rays, [`WAVE_SHADOW_TEXELS`] texels each, `shadows_per_path` per path.
+            /// The paths' state: [`WAVE_FIELDS`] fields of `capacity` RGBA32UI texels each (and
+            /// [`WAVE_SPLIT_FIELDS`] more with `split_lobes`), then the shadow rays,
+            /// [`WAVE_SHADOW_TEXELS`] texels each (and [`WAVE_SPLIT_SHADOW_TEXELS`] more with
+            /// `split_lobes`), `shadows_per_path` per path.
             wf_paths: readwrite texels rgba32ui,
             /// The queues: two of paths to extend (by round parity), then one of paths with
             /// shadow rays; `capacity` entries each.
@@ -1224,6 +1234,13 @@ kernels! {
             aov_normal_depth: readwrite buffer [vec4],
             /// Radiance emitted at the first hit, mean over the samples.
             aov_emission: readwrite buffer [vec4],
+            /// `split_lobes`: the mean of the radiance's specular part rgb, the mean of the
+            /// diffuse part's luminance squared over the first hit's base colour (as
+            /// `pathtrace`'s). Unread otherwise.
+            aov_specular: readwrite buffer [vec4],
+            /// `split_lobes`: the mean of the first hit's specular albedo rgb, the mean of the
+            /// specular part's luminance squared over it (as `pathtrace`'s).
+            aov_split: readwrite buffer [vec4],
             /// Counters ([`PathStats`]).
             stats: readwrite buffer PathStats,
         }

@@ -196,8 +196,7 @@ pub struct PathSettings {
     pub integrator: Integrator,
     /// Split each sample's radiance by the lobes it left the first hit through, diffuse and
     /// specular, for the denoiser (a target [`PathTarget::with_lobe_split`];
-    /// [`crate::render::PathImage::lobe_split`]). The megakernel's alone: the wavefront
-    /// integrator refuses it.
+    /// [`crate::render::PathImage::lobe_split`]), through either integrator.
     pub lobe_split: bool,
 }
 
@@ -270,12 +269,6 @@ impl PathSettings {
                 self.max_bounces
             )));
         }
-        if self.integrator == Integrator::Wavefront && self.lobe_split {
-            return Err(Error::Invalid(
-                "the wavefront integrator does not split the radiance by lobes for the denoiser (the megakernel does)"
-                    .into(),
-            ));
-        }
         if let Some(Tile { image, origin }) = self.tile {
             let fits = |o: u32, s: u32, i: u32| o.checked_add(s).is_some_and(|end| end <= i);
             if !fits(origin.0, self.size.0, image.0) || !fits(origin.1, self.size.1, image.1) {
@@ -307,8 +300,8 @@ pub struct PathTarget {
     pub emission: Buffer,
     /// [`PathStats`].
     pub stats: Buffer,
-    /// The lobe split's buffers, in a target made by [`PathTarget::with_lobe_split`]: the
-    /// megakernel then splits each sample's radiance for the denoiser.
+    /// The lobe split's buffers, in a target made by [`PathTarget::with_lobe_split`]: either
+    /// integrator then splits each sample's radiance for the denoiser.
     pub lobe_split: Option<LobeSplit>,
     /// The wavefront path tracer's queues and path states, made at its first render into this
     /// target.
@@ -361,7 +354,7 @@ impl PathTarget {
     }
 
     /// [`PathTarget::new`] with the buffers of the lobe split ([`LobeSplit`]; two more vec4s
-    /// per pixel), which the megakernel then fills for the denoiser.
+    /// per pixel), which either integrator then fills for the denoiser.
     pub fn with_lobe_split(ctx: &Context, size: (u32, u32)) -> Result<Self> {
         let make = |name| Self::pixel_buffer(ctx, name, size);
         let lobe_split = LobeSplit { specular: make("path specular")?, split: make("path split")? };
@@ -373,7 +366,7 @@ impl PathTarget {
     /// holding at most `max_paths` paths (a host bounding its memory; fewer paths, more waves).
     /// An error if the target has one already.
     pub fn init_wave(&self, ctx: &Context, scene: &GpuScene, max_bounces: u32, max_paths: u64) -> Result<()> {
-        let state = WaveState::new(ctx, scene, self.size, max_bounces, max_paths)?;
+        let state = WaveState::new(ctx, scene, self.size, max_bounces, max_paths, self.lobe_split.is_some())?;
         self.wave
             .set(state)
             .map_err(|_| Error::Invalid("the path target has a wavefront state already".into()))

@@ -7,10 +7,14 @@
 use super::pathtrace::{sampling_spec, Heuristic, Microfacet, PathOptions, PathSettings, PathTarget};
 use crate::error::{Error, Result};
 use crate::gpu::kernels::wavefront;
-use crate::gpu::layout::{GpuCamera, PathParams, WaveParams, WAVE_FIELDS, WAVE_SHADOW_TEXELS};
+use crate::gpu::layout::{
+    GpuCamera, PathParams, WaveParams, WAVE_FIELDS, WAVE_SHADOW_TEXELS, WAVE_SPLIT_FIELDS,
+    WAVE_SPLIT_SHADOW_TEXELS,
+};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation, TexelBuffer};
+use std::sync::OnceLock;
 
 /// Which integrator traces the path tracer's samples. Both trace the same samples (the same
 /// paths, random numbers and estimator); they differ in how the work is laid out on the device.
@@ -62,6 +66,10 @@ pub struct WaveState {
     capacity: u32,
     /// Shadow rays a path may queue in one round.
     shadows_per_path: u32,
+    /// Whether the paths carry the denoiser's lobe split (a target
+    /// [`PathTarget::with_lobe_split`]'s state: [`WAVE_SPLIT_FIELDS`] more fields a path,
+    /// [`WAVE_SPLIT_SHADOW_TEXELS`] more texels a shadow ray).
+    lobe_split: bool,
     /// The region's rows a wave covers, and samples per pixel.
     rows: u32,
     samples: u32,
@@ -78,19 +86,31 @@ impl WaveState {
         1 + scene.punctual_count.min(crate::gpu::layout::PUNCTUAL_ALL)
     }
 
+    /// The texels of one path's state: its fields and its shadow rays', with or without the
+    /// lobe split's.
+    pub fn texels_per_path(shadows_per_path: u32, lobe_split: bool) -> u64 {
+        let (fields, shadow) = if lobe_split {
+            (WAVE_FIELDS + WAVE_SPLIT_FIELDS, WAVE_SHADOW_TEXELS + WAVE_SPLIT_SHADOW_TEXELS)
+        } else {
+            (WAVE_FIELDS, WAVE_SHADOW_TEXELS)
+        };
+        (fields + shadows_per_path * shadow) as u64
+    }
+
     /// The state for waves over a `size` region of `scene`'s paths of at most `max_bounces`
-    /// scattering events, holding at most `max_paths` paths (and at most 2^24 texels): a wave
-    /// traces up to 16 samples of every pixel where they fit, else one sample of as many whole
-    /// rows as fit.
+    /// scattering events, holding at most `max_paths` paths (and at most 2^24 texels), with the
+    /// lobe split's fields or not: a wave traces up to 16 samples of every pixel where they fit,
+    /// else one sample of as many whole rows as fit.
     pub fn new(
         ctx: &Context,
         scene: &GpuScene,
         (w, h): (u32, u32),
         max_bounces: u32,
         max_paths: u64,
+        lobe_split: bool,
     ) -> Result<Self> {
         let shadows_per_path = Self::shadows_per_path(scene);
-        let per_path = (WAVE_FIELDS + shadows_per_path * WAVE_SHADOW_TEXELS) as u64;
+        let per_path = Self::texels_per_path(shadows_per_path, lobe_split);
         let most = (MAX_STATE_TEXELS / per_path).min(max_paths).max(w as u64);
         let pixels = w as u64 * h as u64;
         let (rows, samples) = if pixels <= most {
@@ -129,11 +149,18 @@ impl WaveState {
             usage,
             MemoryLocation::GpuOnly,
         )?;
-        Ok(Self { capacity, shadows_per_path, rows, samples, paths, queue, counts, camera })
+        Ok(Self { capacity, shadows_per_path, lobe_split, rows, samples, paths, queue, counts, camera })
     }
 
-    /// An error unless the state serves waves of `scene` with `max_bounces`.
-    fn check(&self, scene: &GpuScene, max_bounces: u32) -> Result<()> {
+    /// An error unless the state serves waves of `scene` with `max_bounces`, with the lobe split
+    /// or not.
+    fn check(&self, scene: &GpuScene, max_bounces: u32, lobe_split: bool) -> Result<()> {
+        if lobe_split != self.lobe_split {
+            return Err(Error::Invalid(format!(
+                "the path target's wavefront state was made {} the lobe split's fields: use a new target",
+                if self.lobe_split { "with" } else { "without" }
+            )));
+        }
         if max_bounces > MAX_BOUNCES {
             return Err(Error::Invalid(format!(
                 "the wavefront integrator traces at most {MAX_BOUNCES} bounces, not {max_bounces}"
@@ -152,10 +179,20 @@ impl WaveState {
     }
 }
 
-/// `wavefront.comp`'s five stages, specialised for one scene's features and the sampling options.
+/// `wavefront.comp`'s five stages, specialised for one scene's features and the sampling options;
+/// all but extend specialised for the lobe split or not.
 pub struct WavefrontPass {
+    options: PathOptions,
+    /// Extend (the same with or without the split), built at the first use of either set.
+    extend: OnceLock<Pipeline<wavefront::Kernel>>,
+    /// The other stages without and with the lobe split, each set built at its first use (a
+    /// record into a target without or with the split) or by [`WavefrontPass::prepare`].
+    stages: [OnceLock<Stages>; 2],
+}
+
+/// The stages of one specialisation (lobe split or not) but extend.
+struct Stages {
     camera_rays: Pipeline<wavefront::Kernel>,
-    extend: Pipeline<wavefront::Kernel>,
     shade: Pipeline<wavefront::Kernel>,
     connect: Pipeline<wavefront::Kernel>,
     accumulate: Pipeline<wavefront::Kernel>,
@@ -163,45 +200,83 @@ pub struct WavefrontPass {
 
 impl WavefrontPass {
     /// The stages for `scene` and `options` (the specialisations of
-    /// [`super::pathtrace::PathTracePass::for_scene`]).
+    /// [`super::pathtrace::PathTracePass::for_scene`]), without the lobe split.
     pub fn for_scene(ctx: &Context, scene: &GpuScene, options: PathOptions) -> Result<Self> {
         Self::for_features(ctx, &scene.features(), options)
     }
 
-    /// The stages for a scene with `features` (before it is uploaded) and `options`.
+    /// The stages for a scene with `features` (before it is uploaded) and `options`, without
+    /// the lobe split.
     pub fn for_features(ctx: &Context, features: &SceneFeatures, options: PathOptions) -> Result<Self> {
-        let base = sampling_spec!(wavefront::Spec, options, Default::default());
-        let specs = [
-            wavefront::Spec { wf_camera_rays: true, ..base },
-            wavefront::Spec { wf_extend: true, ..base },
-            wavefront::Spec { wf_shade: true, ..base },
-            wavefront::Spec { wf_connect: true, ..base },
-            wavefront::Spec { wf_accumulate: true, ..base },
-        ];
-        // Each takes seconds on lavapipe, on one thread: made side by side.
-        let stages: Vec<Result<Pipeline<wavefront::Kernel>>> = std::thread::scope(|s| {
+        let pass = Self::lazy(options);
+        pass.prepare_for(ctx, features, false)?;
+        Ok(pass)
+    }
+
+    /// The pass for `options` with no pipeline built yet: each is built at its first use.
+    pub fn lazy(options: PathOptions) -> Self {
+        Self { options, extend: OnceLock::new(), stages: Default::default() }
+    }
+
+    /// Builds the stages for `scene`, specialised for the lobe split or not, if they were not
+    /// (pipeline creation takes seconds on lavapipe, so a render builds only the set it uses).
+    pub fn prepare(&self, ctx: &Context, scene: &GpuScene, lobe_split: bool) -> Result<()> {
+        self.prepare_for(ctx, &scene.features(), lobe_split)
+    }
+
+    /// [`WavefrontPass::prepare`] for a scene with `features` (before it is uploaded).
+    pub fn prepare_for(&self, ctx: &Context, features: &SceneFeatures, lobe_split: bool) -> Result<()> {
+        self.pipelines(ctx, features, lobe_split).map(|_| ())
+    }
+
+    /// Extend and the other stages for a scene with `features`, with the lobe split or not (the
+    /// missing ones built now, side by side: each takes seconds on lavapipe, on one thread).
+    fn pipelines(
+        &self,
+        ctx: &Context,
+        features: &SceneFeatures,
+        lobe_split: bool,
+    ) -> Result<(&Pipeline<wavefront::Kernel>, &Stages)> {
+        let base = sampling_spec!(wavefront::Spec, self.options, Default::default());
+        let split = wavefront::Spec { split_lobes: lobe_split, ..base };
+        let cell = &self.stages[lobe_split as usize];
+        let mut specs = Vec::new();
+        if self.extend.get().is_none() {
+            specs.push(wavefront::Spec { wf_extend: true, ..base });
+        }
+        if cell.get().is_none() {
+            specs.extend([
+                wavefront::Spec { wf_camera_rays: true, ..split },
+                wavefront::Spec { wf_shade: true, ..split },
+                wavefront::Spec { wf_connect: true, ..split },
+                wavefront::Spec { wf_accumulate: true, ..split },
+            ]);
+        }
+        let built: Vec<Result<Pipeline<wavefront::Kernel>>> = std::thread::scope(|s| {
             let threads: Vec<_> =
                 specs.iter().map(|spec| s.spawn(move || Pipeline::new(ctx, spec, Some(features)))).collect();
             threads
                 .into_iter()
                 .map(|t| t.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
-                .collect()
+                .collect::<Vec<_>>()
         });
-        let [camera_rays, extend, shade, connect, accumulate] =
-            <[_; 5]>::try_from(stages).unwrap_or_else(|_| unreachable!("five stages"));
-        Ok(Self {
-            camera_rays: camera_rays?,
-            extend: extend?,
-            shade: shade?,
-            connect: connect?,
-            accumulate: accumulate?,
-        })
+        let mut built = built.into_iter().collect::<Result<Vec<_>>>()?.into_iter();
+        if self.extend.get().is_none() {
+            let extend = built.next().expect("extend was built");
+            self.extend.get_or_init(|| extend);
+        }
+        if cell.get().is_none() {
+            let mut next = || built.next().expect("four stages were built");
+            let stages = Stages { camera_rays: next(), shade: next(), connect: next(), accumulate: next() };
+            cell.get_or_init(|| stages);
+        }
+        Ok((self.extend.get().expect("extend is built"), cell.get().expect("the stages are built")))
     }
 
     /// Records samples `params.sample_index .. + params.sample_count` per pixel into `target`,
     /// in waves (each followed by a barrier), through `target`'s wavefront state (made now if
-    /// the target has none). Never submits. An error for a target with a lobe split
-    /// ([`PathTarget::with_lobe_split`]).
+    /// the target has none), splitting the radiance by lobes for the denoiser in a target with
+    /// the split ([`PathTarget::with_lobe_split`]). Never submits.
     pub fn record(
         &self,
         ctx: &Context,
@@ -211,20 +286,22 @@ impl WavefrontPass {
         settings: &PathSettings,
         params: &PathParams,
     ) -> Result<()> {
-        if target.lobe_split.is_some() {
-            return Err(Error::Invalid(
-                "the wavefront integrator does not split the radiance by lobes for the denoiser (the megakernel does)"
-                    .into(),
-            ));
-        }
+        let lobe_split = target.lobe_split.is_some();
         let state = match target.wave.get() {
             Some(state) => state,
             None => {
-                let state = WaveState::new(ctx, scene, target.size, settings.max_bounces, MAX_PATHS)?;
+                let state =
+                    WaveState::new(ctx, scene, target.size, settings.max_bounces, MAX_PATHS, lobe_split)?;
                 target.wave.get_or_init(|| state)
             }
         };
-        state.check(scene, params.max_bounces)?;
+        state.check(scene, params.max_bounces, lobe_split)?;
+        let (extend, stages) = self.pipelines(ctx, &scene.features(), lobe_split)?;
+        // Without the split its bindings hold buffers the stages then never read.
+        let (aov_specular, aov_split) = match &target.lobe_split {
+            Some(split) => (&split.specular, &split.split),
+            None => (&target.albedo, &target.emission),
+        };
         let resources = wavefront::Resources {
             scene,
             wf_camera: &state.camera,
@@ -236,6 +313,8 @@ impl WavefrontPass {
             aov_albedo: &target.albedo,
             aov_normal_depth: &target.normal_depth,
             aov_emission: &target.emission,
+            aov_specular,
+            aov_split,
             stats: &target.stats,
         };
         let mut wave = WaveParams {
@@ -270,15 +349,18 @@ impl WavefrontPass {
                 // A wave over rows `row ..` of the region: a region of the region.
                 wave.size = [w, rows];
                 camera.set_region_origin((first_column, first_row + row));
+                // The previous wave's kernels (this record's or an earlier one's in `cmd`) read
+                // and write the camera and the queues' headers: done before the updates.
+                barrier::memory(ctx, cmd, barrier::access::COMPUTE_RW, barrier::access::TRANSFER_WRITE);
                 // SAFETY: `cmd` is recording; both buffers are the state's, made with
-                // TRANSFER_DST, and no earlier command of this wave reads them any more (the
-                // barrier after the previous wave).
+                // TRANSFER_DST, and no earlier command reads or writes them any more (the barrier
+                // above).
                 unsafe {
                     device.cmd_update_buffer(cmd, state.camera.raw, 0, bytemuck::bytes_of(&camera));
                     device.cmd_update_buffer(cmd, state.counts.raw, 0, bytemuck::cast_slice(&headers));
                 }
                 barrier::transfer_to_indirect(ctx, cmd);
-                self.wave(ctx, cmd, state, &resources, &mut wave, row)?;
+                Self::wave(ctx, cmd, extend, stages, state, &resources, &mut wave, row)?;
             }
             wave.sample_index += wave.sample_count;
         }
@@ -287,10 +369,12 @@ impl WavefrontPass {
 
     /// Records one wave: `wave.sample_count` samples of the `wave.size` pixels from region row
     /// `row` (the accumulation buffers' rows).
+    #[allow(clippy::too_many_arguments)]
     fn wave(
-        &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
+        extend: &Pipeline<wavefront::Kernel>,
+        stages: &Stages,
         state: &WaveState,
         resources: &wavefront::Resources<'_>,
         wave: &mut WaveParams,
@@ -299,14 +383,14 @@ impl WavefrontPass {
         wave.round = 0;
         wave.first_row = row;
         let [w, rows] = wave.size;
-        self.camera_rays.record(cmd, resources, wave, [w, rows, wave.sample_count], LOCAL)?;
+        stages.camera_rays.record(cmd, resources, wave, [w, rows, wave.sample_count], LOCAL)?;
         barrier::compute_to_indirect(ctx, cmd);
         for round in 0..=wave.max_bounces {
             wave.round = round;
             let rays = 16 * round as u64;
             let shadows = 16 * (wave.max_bounces as u64 + 2 + round as u64);
-            for (stage, header) in [(&self.extend, rays), (&self.shade, rays), (&self.connect, shadows)] {
-                if std::ptr::eq(stage, &self.connect) && round == wave.max_bounces {
+            for (stage, header) in [(extend, rays), (&stages.shade, rays), (&stages.connect, shadows)] {
+                if std::ptr::eq(stage, &stages.connect) && round == wave.max_bounces {
                     // No light samples at the last round's hits.
                     continue;
                 }
@@ -316,7 +400,7 @@ impl WavefrontPass {
                 barrier::compute_to_indirect(ctx, cmd);
             }
         }
-        self.accumulate.record(cmd, resources, wave, [w, rows, 1], LOCAL)?;
+        stages.accumulate.record(cmd, resources, wave, [w, rows, 1], LOCAL)?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

@@ -24,7 +24,7 @@ use crate::error::{Error, Result};
 use crate::gpu::kernels::deferred;
 use crate::gpu::layout::{DeferredParams, GpuCamera, GpuReservoir};
 use crate::gpu::scene::GpuScene;
-use crate::gpu::Pipeline;
+use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
 use crate::vk::{barrier, raw, Buffer, Context, Image, TexelBuffer};
 
@@ -181,6 +181,18 @@ impl DeferredPass {
         lightmaps: bool,
         restir: bool,
     ) -> Result<Self> {
+        Self::for_features(ctx, &scene.features(), method, probes, lightmaps, restir)
+    }
+
+    /// [`DeferredPass::new`] for a scene with `features` (before it is uploaded).
+    pub fn for_features(
+        ctx: &Context,
+        features: &SceneFeatures,
+        method: ShadowMethod,
+        probes: bool,
+        lightmaps: bool,
+        restir: bool,
+    ) -> Result<Self> {
         let spec = deferred::Spec {
             beckmann: false,
             shadow_maps: method.uses_maps(),
@@ -191,7 +203,7 @@ impl DeferredPass {
             lightmaps,
             restir,
         };
-        let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
+        let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
         no_ao.write(ctx, &[1.0f32])?;
         let no_shadow = [

@@ -132,6 +132,9 @@ void path_pixel(uint path, out uvec2 pixel, out uint sample_index) {
 uint shade_path = 0u;
 uint shade_shadows = 0u;
 
+// path.glsl's RIS at the first hit is the megakernel's alone (src/passes/wavefront.rs refuses it).
+const bool RIS = false;
+
 #include "path.glsl"
 
 // A light sample's shadow ray, queued: the connect stage traces it.

@@ -243,11 +243,16 @@ struct RenderArgs {
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles.
     #[arg(long, default_value_t = 4)]
     shadow_rays: u32,
-    /// Hybrid: how direct light (punctual lights, emissive triangles) is sampled: every punctual
+    /// How direct light (punctual lights, emissive triangles) is sampled. Hybrid: every punctual
     /// light and --shadow-rays emissive samples by power (power), or ReSTIR DI's one resampled
     /// sample per pixel, reused over --restir-frames frames and neighbouring pixels (restir).
+    /// Path tracer: at the first hit, one emissive sample by power with MIS and the punctual
+    /// lights (power, as at every hit), or one sample resampled from --ris-candidates (ris).
     #[arg(long, value_enum, default_value = "power")]
     direct: DirectArg,
+    /// Path tracer, --direct ris: candidates resampled at each sample's first hit.
+    #[arg(long, default_value_t = 8)]
+    ris_candidates: u32,
     /// Hybrid, ReSTIR: candidates resampled per pixel and frame.
     #[arg(long, default_value_t = RestirSettings::default().candidates)]
     restir_candidates: u32,
@@ -416,6 +421,7 @@ fn merge(args: MergeArgs) -> Result<()> {
 enum DirectArg {
     Power,
     Restir,
+    Ris,
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -494,8 +500,11 @@ enum HeuristicArg {
 
 fn render(args: RenderArgs) -> Result<()> {
     use umbra::passes::pathtrace::{Heuristic, Microfacet, Strategy};
-    if args.direct != DirectArg::Power && args.mode != Mode::Hybrid {
-        anyhow::bail!("--direct applies to --mode hybrid (the path tracer samples its lights itself)");
+    if args.direct == DirectArg::Restir && args.mode != Mode::Hybrid {
+        anyhow::bail!("--direct restir applies to --mode hybrid (the path tracer's is --direct ris)");
+    }
+    if args.direct == DirectArg::Ris && args.mode != Mode::Pathtrace {
+        anyhow::bail!("--direct ris applies to --mode pathtrace (the hybrid's is --direct restir)");
     }
     if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
         anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
@@ -560,6 +569,10 @@ fn render(args: RenderArgs) -> Result<()> {
             StrategyArg::Mis => Strategy::Mis,
             StrategyArg::Bsdf => Strategy::Bsdf,
             StrategyArg::Light => Strategy::Light,
+        },
+        direct: match args.direct {
+            DirectArg::Ris => umbra::passes::pathtrace::DirectSampling::Ris(args.ris_candidates),
+            _ => umbra::passes::pathtrace::DirectSampling::Power,
         },
         env: args.scene.env_radiance(),
         env_nee: true,
@@ -710,7 +723,11 @@ fn render_identity(args: &RenderArgs, loaded: &LoadedScene) -> String {
         name(&args.microfacet),
         name(&args.heuristic),
         name(&args.strategy)
-    )
+    ) + &match args.direct {
+        // (Only RIS adds to it: renders made before it existed merge with today's.)
+        DirectArg::Ris => format!(" direct ris {}", args.ris_candidates),
+        _ => String::new(),
+    }
 }
 
 /// A scene and its environment map, loaded, not yet on the GPU.
@@ -970,7 +987,7 @@ fn hybrid_settings(args: &RenderArgs) -> umbra::render::HybridSettings {
             env: args.scene.env_radiance(),
             ibl: !args.no_ibl,
             direct: match args.direct {
-                DirectArg::Power => DirectLight::Power,
+                DirectArg::Power | DirectArg::Ris => DirectLight::Power,
                 DirectArg::Restir => DirectLight::Restir(RestirSettings {
                     candidates: args.restir_candidates,
                     neighbours: args.restir_neighbours,

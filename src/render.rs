@@ -265,8 +265,8 @@ impl Passes {
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
             tonemap: OnceLock::new(),
-            path: Default::default(),
-            wavefront: Default::default(),
+            path: std::array::from_fn(|_| OnceLock::new()),
+            wavefront: std::array::from_fn(|_| OnceLock::new()),
             resolve: OnceLock::new(),
             denoise: OnceLock::new(),
         }

@@ -185,6 +185,46 @@ fn restir_writes_json_a_chart_and_a_table() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `umbra-bench restir-pt` on a tiny image writes JSON with the power and RIS series and a chart,
+/// and its table prints them.
+#[test]
+fn restir_pt_writes_json_a_chart_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-restir-pt-bench-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args([
+            "restir-pt",
+            "--size",
+            "8x8",
+            "--reference-spp",
+            "16",
+            "--max-bounces",
+            "2",
+            "--repeats",
+            "1",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = dir.join("restir-pt.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("restir-pt.json written"))
+            .expect("parses");
+    let points = json["points"].as_array().expect("points");
+    for method in ["power", "RIS 4", "RIS 16", "RIS 32"] {
+        assert!(points.iter().any(|p| p["method"] == method), "{method} measured");
+    }
+    assert!(points.iter().all(|p| p["ms"].as_f64().unwrap() > 0.0 && p["rel_mse"].as_f64().unwrap() >= 0.0));
+    let svg = std::fs::read_to_string(dir.join("restir-pt.svg")).expect("SVG chart");
+    assert!(svg.contains("RIS 16"), "the RIS series are charted");
+    let table =
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench")).arg("restir-pt").arg("--table").arg(&path).output();
+    let table = String::from_utf8(table.unwrap().stdout).unwrap();
+    assert!(table.contains("| RIS 16 | 4 |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The commands that print BENCHMARKS.md's current tables from the JSON committed in docs/bench.
 const GENERATED_TABLES: &[&[&str]] = &[
     &["rays", "--table", "docs/bench/rays.json"],
@@ -202,6 +242,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["peers", "--table", "docs/bench/path-helmet.json"],
     &["implicit", "--table", "docs/bench/implicit.json"],
     &["restir", "--table", "docs/bench/restir.json"],
+    &["restir-pt", "--table", "docs/bench/restir-pt.json"],
 ];
 
 /// BENCHMARKS.md's figures cannot drift from their JSON: everything each `--table` command prints

@@ -153,7 +153,7 @@ fn estimators() -> Vec<Estimator> {
                 (Strategy::Bsdf, Heuristic::Power),
                 (Strategy::Light, Heuristic::Power),
             ] {
-                let options = PathOptions { microfacet, heuristic, strategy };
+                let options = PathOptions { microfacet, heuristic, strategy, ris: false };
                 if options == default_options(case) {
                     continue; // the scene's own test
                 }

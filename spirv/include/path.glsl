@@ -10,9 +10,11 @@
 // environment.glsl and shading.glsl, with `params` a push-constant block holding PathParams'
 // fields but the camera, and the path tracers' accumulation bindings (`accum`, `moment`, the
 // `aov_*` buffers, `aov_specular` and `aov_split` among them, `stats`) and the specialisation
-// constant SPLIT_LOBES.
+// constants SPLIT_LOBES and RIS.
 #ifndef UMBRA_PATH_GLSL
 #define UMBRA_PATH_GLSL
+
+#include "resample.glsl"
 
 // Which strategies find the emitters (LIGHT_SAMPLING and BSDF_HITS, never both false: `Strategy`
 // in src/passes/pathtrace.rs): light sampling (next-event estimation of the emissive triangles
@@ -63,6 +65,7 @@ const uint NONFINITE_EMISSIVE_NEE = 4u;
 const uint NONFINITE_PUNCTUAL = 8u;
 const uint NONFINITE_ENV_NEE = 16u;
 const uint NONFINITE_BSDF_SAMPLE = 32u;
+const uint NONFINITE_RIS = 64u;
 
 uint nonfinite_bit(vec3 v, uint bit) {
     return (any(isnan(v)) || any(isinf(v))) ? bit : 0u;
@@ -138,6 +141,44 @@ vec3 first_specular(Path path, Surface s, vec3 wo, vec3 wi, vec3 f, vec3 c) {
     return vec3(0.0);
 }
 
+// The first hit's direct light from the emissive triangles and punctual lights by RIS
+// (resample.glsl, the candidates and target of the hybrid's ReSTIR): params.ris_candidates
+// candidates resampled into one by p^ = the luminance of the unshadowed f cos Le G, its shadow
+// ray through path_shadow, its contribution f Le G V W with W = w_sum / (M p^(y)). Unbiased: p^
+// is positive wherever f Le G is (a luminance of non-negative colours), and the candidates'
+// densities cover every emitter light sampling covers.
+void path_ris(inout Path path, ShadePoint sp, vec3 throughput, uvec2 pixel, uint sample_index) {
+    uint seed = params.seed;
+    uint m = params.ris_candidates;
+    Reservoir r = reservoir_empty();
+    for (uint k = 0u; k < m; ++k) {
+        vec4 u = rand4(pixel, sample_index, rng_stream(k, RNG_RIS_CANDIDATE), seed);
+        vec2 bary;
+        float pdf;
+        uint id = restir_candidate(u, bary, pdf);
+        if (pdf > 0.0) {
+            float pick = rand4(pixel, sample_index, rng_stream(k, RNG_RIS_PICK), seed).x;
+            reservoir_add(r, id, bary, restir_target(sp, id, bary) / pdf, pick);
+        }
+    }
+    vec3 wi;
+    bool to_point;
+    vec3 target;
+    vec3 c = restir_contribution(sp, r.id, r.bary, wi, to_point, target);
+    reservoir_finish(r, luminance(c), float(m));
+    vec3 wi_local;
+    float side = light_side(sp.ng, sp.t, sp.b, sp.n, surface_transmits(sp.s), wi, wi_local);
+    if (r.w > 0.0 && side != 0.0) {
+        c *= throughput * r.w;
+        vec3 c_spec = vec3(0.0);
+        if (SPLIT_LOBES) {
+            c_spec = first_specular(path, sp.s, sp.wo_local, wi_local, bsdf_eval(sp.s, sp.wo_local, wi_local), c);
+        }
+        vec3 o = offset_ray(sp.p, side * sp.ng);
+        path_shadow(path, o, to_point ? target - o : wi, to_point ? 0.9999 : BVH_INF, c, c_spec, NONFINITE_RIS);
+    }
+}
+
 // Adds what `path`'s ray finds at its end (`found`: its closest hit `hit`; else it left the
 // scene): emission, direct light (through path_shadow); then samples the next ray. False when the
 // path ends there. At the first hit (or miss) it records the base colour and normal into `albedo`
@@ -152,7 +193,8 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (!found) {
         if (HAS_ENV_MAP) {
             float w = 1.0;
-            if (params.env_nee != 0u && path.prev_pdf > 0.0) {
+            // (The map's next-event estimation is on where it is picked at all.)
+            if (params.env_pick > 0.0 && path.prev_pdf > 0.0) {
                 w = bsdf_hit_weight(path.prev_pdf, env_pdf(dir, params.env_size) * params.env_pick);
             }
             vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
@@ -193,8 +235,16 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (any(greaterThan(le, vec3(0.0)))) {
         float w = 1.0;
         if (HAS_LIGHTS && path.prev_pdf > 0.0) {
-            float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo) * (1.0 - params.env_pick);
-            w = bsdf_hit_weight(path.prev_pdf, light_pdf);
+            float emissive = emissive_pdf(tri, area, hit.t, ng, wo);
+            w = bsdf_hit_weight(path.prev_pdf, emissive * (1.0 - params.env_pick));
+            if (RIS) {
+                // Reached from the first hit, whose RIS covered every emissive triangle of the
+                // table: counted there, not here (weight 0; no MIS: RIS's density of a point is
+                // not known in closed form).
+                if (depth == 1u && emissive > 0.0) {
+                    w = 0.0;
+                }
+            }
         }
         vec3 c = throughput * le * w;
         path.radiance += c;
@@ -262,17 +312,42 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
         return false;
     }
 
+    // RIS at the first hit (`ris`): its one resampled sample of the emissive triangles and
+    // punctual lights stands for both of them there (path_ris); the environment map keeps the
+    // next-event estimation below.
+    bool ris_here = false;
+    if (RIS) {
+        if (depth == 0u) {
+            ShadePoint sp;
+            sp.p = p;
+            sp.depth = hit.t;
+            sp.ng = ng;
+            sp.n = n;
+            sp.t = t;
+            sp.b = b;
+            sp.wo = wo;
+            sp.wo_local = wo_local;
+            sp.material = material;
+            sp.roughness = 0.0;
+            sp.uv1 = vec2(0.0);
+            sp.s = s;
+            path_ris(path, sp, throughput, pixel, sample_index);
+            ris_here = true;
+        }
+    }
+
     // Next-event estimation: one light sample and its shadow ray, from the emissive triangles
     // (one by power, a uniform point on it) or the environment map (importance-sampled by
     // luminance x sin(theta)), the map picked with probability params.env_pick (1 or 0 where the
-    // scene has one of them; by their power where it has both), weighted by MIS.
+    // scene has one of them; by their power where it has both), weighted by MIS. (Under RIS at
+    // the first hit only the map's share: an emissive pick samples nothing there.)
     bool tri_nee = false;
     if (HAS_LIGHTS) {
-        tri_nee = params.light_count > 0u;
+        tri_nee = params.light_count > 0u && !ris_here;
     }
     bool env_nee = false;
     if (HAS_ENV_MAP) {
-        env_nee = params.env_nee != 0u;
+        env_nee = params.env_pick > 0.0;
     }
     if (LIGHT_SAMPLING) {
         if (tri_nee || env_nee) {
@@ -295,7 +370,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
                 }
             }
             if (HAS_LIGHTS) {
-                if (!pick_env) {
+                if (!pick_env && tri_nee) {
                     sampled = emissive_point(p, u.xyz, params.light_count, wi, target, l_in, pdf);
                     pdf *= 1.0 - params.env_pick;
                 }
@@ -322,7 +397,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     // power, stratified by u: punctual_direct's estimator, each light's term added on its own).
     if (HAS_PUNCTUAL) {
         float u = rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
-        uint count = params.punctual_count;
+        uint count = ris_here ? 0u : params.punctual_count;
         for (uint j = 0u; j < min(count, PUNCTUAL_ALL); ++j) {
             float weight;
             uint k = punctual_evaluated(j, count, u, weight);

@@ -5,11 +5,9 @@
 // (spatial); the lighting pass then shades that one sample with one shadow ray
 // (src/passes/restir.rs documents the steps, the two combinations and where each is biased).
 //
-// The light samples: a point on an emissive triangle (its sampling-table entry and barycentrics:
-// area measure) or a punctual light (counting measure). The target function p^ is the luminance
-// of the unshadowed contribution f cos Le G at the shading point; the candidates come from the
-// emissive table by power (a uniform point on the triangle) or the punctual lights' table by
-// power, the two pools picked with probability restir_emissive_share().
+// The light samples, their target function and the reservoirs are resample.glsl's (shared with
+// the path tracer's first hit); this file adds the G-buffer's shading points and the reservoirs'
+// storage.
 //
 // The including kernel includes random.glsl, gbuffer.glsl and shading.glsl first and has the
 // G-buffer bound as gb_depth, gb_normal, gb_base, gb_material, gb_layers and gb_layers2, and `params` with `camera`,
@@ -17,28 +15,13 @@
 #ifndef UMBRA_RESTIR_GLSL
 #define UMBRA_RESTIR_GLSL
 
+#include "resample.glsl"
+
 // Random-number streams of the ReSTIR steps (rand4's sample index is frame-based).
 const uint RNG_RESTIR_CANDIDATE = 0u;
 const uint RNG_RESTIR_TEMPORAL = 1u;
 const uint RNG_RESTIR_SPATIAL = 2u;
 const uint RNG_RESTIR_PICK = 3u;  // which candidate a reservoir keeps
-
-// A G-buffer pixel as a shading point: position, view depth, frames, the material as a BSDF
-// surface and the viewing direction in its frame.
-struct ShadePoint {
-    vec3 p;
-    float depth;
-    vec3 ng;  // geometric normal (the G-buffer's, facing the camera)
-    vec3 n;   // shading normal
-    vec3 t;
-    vec3 b;
-    vec3 wo;  // towards the camera (world)
-    vec3 wo_local;
-    uint material;
-    float roughness;  // perceptual
-    vec2 uv1;         // the G-buffer's second UV set (lightmaps)
-    Surface s;
-};
 
 // Pixel `pixel`'s surface from the G-buffer; false where it has none (the environment).
 bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
@@ -92,141 +75,6 @@ bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
 // Whether direct light shades the point at all (a lit surface seen from its front).
 bool gbuffer_lit(ivec2 pixel, out ShadePoint sp) {
     return gbuffer_point(pixel, sp) && !material_unlit(sp.material) && sp.wo_local.z > 0.0;
-}
-
-// The probability that a candidate comes from the emissive triangles rather than the punctual
-// lights.
-float restir_emissive_share() {
-    bool emissive = false;
-    if (HAS_LIGHTS) {
-        emissive = params.light_count > 0u;
-    }
-    bool punctual = false;
-    if (HAS_PUNCTUAL) {
-        punctual = params.punctual_count > 0u;
-    }
-    return emissive ? (punctual ? 0.5 : 1.0) : 0.0;
-}
-
-// One candidate light sample from u: its id (GpuReservoir::light), barycentrics and source
-// density (area measure for a triangle's point, a probability for a punctual light; 0: none).
-uint restir_candidate(vec4 u, out vec2 bary, out float pdf) {
-    float share = restir_emissive_share();
-    bary = vec2(0.0);
-    pdf = 0.0;
-    uint id = RESTIR_NONE;
-    if (HAS_LIGHTS) {
-        if (u.w < share) {
-            uint k = pick_light(u.x, params.light_count);
-            vec3 cdf_pmf_area = light_cdf_pmf_area(k);
-            bary = sample_triangle(u.yz);
-            pdf = share * cdf_pmf_area.y / cdf_pmf_area.z;
-            id = k;
-        }
-    }
-    if (HAS_PUNCTUAL) {
-        if (u.w >= share) {
-            uint k = pick_punctual(u.x, params.punctual_count);
-            pdf = (1.0 - share) * punctual_vec(k, 3u).z;
-            id = RESTIR_PUNCTUAL | k;
-        }
-    }
-    return id;
-}
-
-// Light sample (id, bary) seen from sp, unshadowed: f cos Le G (rgb; 0 where it cannot light
-// the point), the direction towards it (world), and the shadow ray's end (a point, or none for a
-// directional light).
-vec3 restir_contribution(ShadePoint sp, uint id, vec2 bary, out vec3 wi, out bool to_point, out vec3 target) {
-    vec3 li = vec3(0.0);
-    wi = sp.n;
-    to_point = false;
-    target = sp.p;
-    if (id == RESTIR_NONE) {
-        return vec3(0.0);
-    }
-    // (A reused sample of a light the scene no longer has, after an update, lights nothing.)
-    if (HAS_PUNCTUAL) {
-        if ((id & RESTIR_PUNCTUAL) != 0u && (id & ~RESTIR_PUNCTUAL) < params.punctual_count) {
-            li = punctual_incident(id & ~RESTIR_PUNCTUAL, sp.p, wi, to_point, target);
-        }
-    }
-    if (HAS_LIGHTS) {
-        if ((id & RESTIR_PUNCTUAL) == 0u && id < params.light_count) {
-            uint ltri = light_tri(id);
-            target = (1.0 - bary.x - bary.y) * tri_vertex(ltri, 0u) + bary.x * tri_vertex(ltri, 1u)
-                   + bary.y * tri_vertex(ltri, 2u);
-            vec3 ln = normalize(tri_normal(ltri));
-            vec3 to_light = target - sp.p;
-            float dist2 = dot(to_light, to_light);
-            wi = to_light * inversesqrt(dist2);
-            to_point = true;
-            li = emitted(ltri, bary, ln, -wi) * (abs(dot(ln, wi)) / dist2);
-        }
-    }
-    vec3 wi_local;
-    if (light_side(sp.ng, sp.t, sp.b, sp.n, surface_transmits(sp.s), wi, wi_local) == 0.0) {
-        return vec3(0.0);
-    }
-    return bsdf_eval(sp.s, sp.wo_local, wi_local) * abs(wi_local.z) * li;
-}
-
-// The target function p^ of light sample (id, bary) at sp.
-float restir_target(ShadePoint sp, uint id, vec2 bary) {
-    vec3 wi;
-    bool to_point;
-    vec3 target;
-    return luminance(restir_contribution(sp, id, bary, wi, to_point, target));
-}
-
-// Whether nothing blocks the light sample's direction wi (towards `target` when to_point).
-bool restir_visible(ShadePoint sp, vec3 wi, bool to_point, vec3 target) {
-    vec3 wi_local;
-    return light_reaches(sp.p, sp.ng, sp.t, sp.b, sp.n, surface_transmits(sp.s), wi, to_point, target, wi_local);
-}
-
-// A reservoir being built: the sample kept, the sum of the resampling weights, the candidates it
-// stands for (M) and, once finished, the unbiased contribution weight W.
-struct Reservoir {
-    uint id;
-    vec2 bary;
-    float w_sum;
-    float m;
-    float w;
-};
-
-Reservoir reservoir_empty() {
-    Reservoir r;
-    r.id = RESTIR_NONE;
-    r.bary = vec2(0.0);
-    r.w_sum = 0.0;
-    r.m = 0.0;
-    r.w = 0.0;
-    return r;
-}
-
-// Streams one candidate of resampling weight `weight` into r, kept with probability weight /
-// the new sum (u uniform in [0, 1)); true when it was kept.
-bool reservoir_add(inout Reservoir r, uint id, vec2 bary, float weight, float u) {
-    if (!(weight > 0.0)) {
-        return false;
-    }
-    r.w_sum += weight;
-    if (u * r.w_sum < weight) {
-        r.id = id;
-        r.bary = bary;
-        return true;
-    }
-    return false;
-}
-
-// Finishes r: W = w_sum / (z p^(y)), z the candidate count the weights are normalised by (1/M
-// weights: z = M), 0 when the kept sample's target is 0.
-void reservoir_finish(inout Reservoir r, float target, float z) {
-    r.w = (target > 0.0 && z > 0.0) ? r.w_sum / (z * target) : 0.0;
-    if (!(r.w > 0.0)) {
-        r.w = 0.0;
-    }
 }
 
 // Reservoir i of the GpuReservoir array `buf` into r, and r with the surface it was built for

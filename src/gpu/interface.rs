@@ -369,8 +369,10 @@ gpu_structs! {
         camera: GpuCamera,
         /// Constant environment radiance rgb (or the environment map's multiplier).
         env: vec3,
-        /// Sample the environment map for next-event estimation (0/1).
-        env_nee: uint,
+        /// Candidates the first hit's light sample is resampled from (RIS, a kernel specialised
+        /// for it: `ris`); unread otherwise. (The environment map's next-event estimation is on
+        /// where `env_pick` > 0.)
+        ris_candidates: uint,
         /// Width and height of the region rendered (the whole image unless the camera says
         /// otherwise) and of the accumulation buffers.
         size: uvec2,
@@ -403,8 +405,8 @@ gpu_structs! {
     struct WaveParams {
         /// Constant environment radiance rgb (or the environment map's multiplier).
         env: vec3,
-        /// Sample the environment map for next-event estimation (0/1).
-        env_nee: uint,
+        /// [`PathParams::ris_candidates`]: unread (the wavefront path tracer does not resample).
+        ris_candidates: uint,
         /// Width and height of the region rendered and of the accumulation buffers.
         size: uvec2,
         /// The wave's first sample: the index in the counter-based sequence.
@@ -1163,7 +1165,8 @@ kernels! {
             unweighted_bsdf_hits: bool = false,
             light_sampling: bool = true,
             bsdf_hits: bool = true,
-            split_lobes: bool = false
+            split_lobes: bool = false,
+            ris: bool = false
         },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).

@@ -489,8 +489,15 @@ impl GpuLight {
 
 /// The stages of `pathtrace.comp` whose value first went NaN or infinite, bit 0 first
 /// ([`PathStats::nonfinite_sources`]).
-pub const NONFINITE_SOURCES: [&str; 6] =
-    ["environment", "emission", "emissive NEE", "punctual lights", "environment NEE", "BSDF sample weight"];
+pub const NONFINITE_SOURCES: [&str; 7] = [
+    "environment",
+    "emission",
+    "emissive NEE",
+    "punctual lights",
+    "environment NEE",
+    "BSDF sample weight",
+    "first-hit RIS",
+];
 
 /// The names of the stages set in a `nonfinite_sources` mask.
 pub fn nonfinite_source_names(mask: u32) -> Vec<&'static str> {

@@ -107,6 +107,49 @@ impl Strategy {
     }
 }
 
+/// How the path tracer samples the direct light of the emissive triangles and punctual lights
+/// at a path's first scattering vertex (beyond it, always as [`DirectSampling::Power`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DirectSampling {
+    /// As at every vertex: one emissive sample by power (a uniform point on the triangle picked),
+    /// weighed by MIS against BSDF sampling ([`Strategy`]), and every punctual light with its
+    /// shadow ray (up to 16; beyond, 16 picked by power).
+    #[default]
+    Power,
+    /// Resampled importance sampling (Talbot et al. 2005; the candidates and target of the
+    /// hybrid's ReSTIR DI, [`crate::passes::restir`]): this many candidates, each an emissive
+    /// sample or a punctual light (half and half where the scene has both, each pool by
+    /// power), resampled into one by the target p̂ = the luminance of the unshadowed f·cos·Lₑ·G;
+    /// one shadow ray for the kept sample, its contribution f·Lₑ·G·V·W. An emissive triangle a
+    /// BSDF-sampled ray from that vertex hits then counts nothing (weight 0, not MIS: the RIS
+    /// density of a point is not known in closed form). The environment map keeps its
+    /// next-event estimation and MIS. The megakernel only; 1 to
+    /// [`DirectSampling::MAX_CANDIDATES`] candidates.
+    Ris(u32),
+}
+
+impl DirectSampling {
+    /// Most RIS candidates (each one a loop iteration of a binary search over a light table;
+    /// llvmpipe ends an invocation's loops after 65,535 iterations in all).
+    pub const MAX_CANDIDATES: u32 = 256;
+
+    /// The command line's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            DirectSampling::Power => "power",
+            DirectSampling::Ris(_) => "ris",
+        }
+    }
+
+    /// The RIS candidates (0 for power sampling): the kernel's `ris_candidates`.
+    pub fn candidates(self) -> u32 {
+        match self {
+            DirectSampling::Power => 0,
+            DirectSampling::Ris(m) => m,
+        }
+    }
+}
+
 /// What the path tracer's pipeline is specialised on: the estimator, apart from the scene.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct PathOptions {
@@ -116,11 +159,14 @@ pub struct PathOptions {
     pub heuristic: Heuristic,
     /// Sampling strategies.
     pub strategy: Strategy,
+    /// The first hit's direct light by RIS ([`DirectSampling::Ris`]; the candidates' count is a
+    /// push constant): the megakernel only.
+    pub ris: bool,
 }
 
 impl PathOptions {
     /// How many distinct [`PathOptions::index`] values there are.
-    pub const COUNT: usize = 27;
+    pub const COUNT: usize = 54;
 
     /// A dense index below [`PathOptions::COUNT`], one per value (a pipeline cache's slot).
     pub fn index(self) -> usize {
@@ -130,7 +176,7 @@ impl PathOptions {
             #[cfg(feature = "testing")]
             Heuristic::UnweightedBsdfHits => 2,
         };
-        (self.microfacet as usize * 3 + heuristic) * 3 + self.strategy as usize
+        ((self.microfacet as usize * 3 + heuristic) * 3 + self.strategy as usize) * 2 + self.ris as usize
     }
 }
 
@@ -138,7 +184,7 @@ impl PathOptions {
 /// integrators' kernels (`pathtrace`, `wavefront`) declare; the rest from `$rest` (`..rest`).
 macro_rules! sampling_spec {
     ($spec:path, $options:expr $(, $rest:expr)?) => {{
-        let PathOptions { microfacet, heuristic, strategy } = $options;
+        let PathOptions { microfacet, heuristic, strategy, .. } = $options;
         let (light_sampling, bsdf_hits) = strategy.spec();
         $spec {
             beckmann: microfacet == Microfacet::Beckmann,
@@ -175,6 +221,8 @@ pub struct PathSettings {
     pub heuristic: Heuristic,
     /// Sampling strategies (MIS of both, or either alone).
     pub strategy: Strategy,
+    /// The first scattering vertex's light sampling: by power as at every vertex, or RIS.
+    pub direct: DirectSampling,
     /// Constant environment radiance (linear rgb) seen by rays that leave the scene, or, when
     /// the scene has an environment map, the map's multiplier.
     pub env: [f32; 3],
@@ -221,6 +269,7 @@ impl Default for PathSettings {
             microfacet: Microfacet::Ggx,
             heuristic: Heuristic::Power,
             strategy: Strategy::Mis,
+            direct: DirectSampling::Power,
             env: [0.0; 3],
             env_nee: true,
             target_error: None,
@@ -235,7 +284,12 @@ impl Default for PathSettings {
 impl PathSettings {
     /// The options the pipeline is specialised on.
     pub fn options(&self) -> PathOptions {
-        PathOptions { microfacet: self.microfacet, heuristic: self.heuristic, strategy: self.strategy }
+        PathOptions {
+            microfacet: self.microfacet,
+            heuristic: self.heuristic,
+            strategy: self.strategy,
+            ris: matches!(self.direct, DirectSampling::Ris(_)),
+        }
     }
 
     /// The camera's raster: the whole image and the region rendered (`size` from the tile's
@@ -249,7 +303,8 @@ impl PathSettings {
 
     /// An error unless the settings describe a render: at least one sample, a sample range
     /// within the sequence's 2^32 indices, a tile inside its image, at most
-    /// [`super::wavefront::MAX_BOUNCES`] bounces for the wavefront integrator.
+    /// [`super::wavefront::MAX_BOUNCES`] bounces for the wavefront integrator, RIS with the
+    /// megakernel, light sampling and 1 to [`DirectSampling::MAX_CANDIDATES`] candidates.
     pub fn validate(&self) -> Result<()> {
         if self.spp == 0 {
             return Err(Error::Invalid("samples per pixel must be at least 1".into()));
@@ -268,6 +323,25 @@ impl PathSettings {
                 super::wavefront::MAX_BOUNCES,
                 self.max_bounces
             )));
+        }
+        if let DirectSampling::Ris(m) = self.direct {
+            if m == 0 || m > DirectSampling::MAX_CANDIDATES {
+                return Err(Error::Invalid(format!(
+                    "{m} RIS candidates: must be 1 to {}",
+                    DirectSampling::MAX_CANDIDATES
+                )));
+            }
+            if self.integrator == Integrator::Wavefront {
+                return Err(Error::Invalid(
+                    "RIS at the first hit (--direct ris) runs in the megakernel only, not the wavefront integrator"
+                        .into(),
+                ));
+            }
+            if self.strategy == Strategy::Bsdf {
+                return Err(Error::Invalid(
+                    "RIS at the first hit (--direct ris) is light sampling: not with --strategy bsdf".into(),
+                ));
+            }
         }
         if let Some(Tile { image, origin }) = self.tile {
             let fits = |o: u32, s: u32, i: u32| o.checked_add(s).is_some_and(|end| end <= i);
@@ -437,7 +511,7 @@ impl PathTracePass {
         let spec = sampling_spec!(
             pathtrace::Spec,
             self.options,
-            pathtrace::Spec { split_lobes: lobe_split, ..Default::default() }
+            pathtrace::Spec { split_lobes: lobe_split, ris: self.options.ris, ..Default::default() }
         );
         let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         Ok(cell.get_or_init(|| pipeline))
@@ -454,6 +528,11 @@ impl PathTracePass {
     /// per instruction), and llvmpipe cuts an invocation's loops short past 65,535 iterations.
     pub const SAMPLES_PER_DISPATCH_IMPLICIT: u32 = 2;
 
+    /// RIS candidates one dispatch resamples at most, over its samples' first hits (each one a
+    /// binary search of a light table: llvmpipe's loop limit): a dispatch with
+    /// [`DirectSampling::Ris`] traces at most this ÷ the candidates samples (at least one).
+    pub const RIS_CANDIDATES_PER_DISPATCH: u32 = 512;
+
     /// The push constants for sample 0 of `settings` seen from `camera` (`sample_index` and
     /// `sample_count`: set them per dispatch).
     pub fn params(scene: &GpuScene, camera: &Camera, settings: &PathSettings) -> PathParams {
@@ -461,7 +540,7 @@ impl PathTracePass {
         PathParams {
             camera: settings.camera(camera),
             env: settings.env,
-            env_nee: settings.env_nee as u32,
+            ris_candidates: settings.direct.candidates(),
             size: [settings.size.0, settings.size.1],
             sample_index: 0,
             seed: settings.seed,
@@ -534,15 +613,25 @@ impl PathTracePass {
             aov_split,
             stats: &target.stats,
         };
+        if self.options.ris && !(1..=DirectSampling::MAX_CANDIDATES).contains(&params.ris_candidates) {
+            return Err(Error::Invalid(format!(
+                "the path tracer was built for RIS at the first hit, with {} candidates: must be 1 to {}",
+                params.ris_candidates,
+                DirectSampling::MAX_CANDIDATES
+            )));
+        }
         let pipeline = self.prepare(ctx, scene, target.lobe_split.is_some())?;
         let end = params.sample_index + params.sample_count;
         let mut dispatch = *params;
         while dispatch.sample_index < end {
-            let most = if scene.has_implicit {
+            let mut most = if scene.has_implicit {
                 Self::SAMPLES_PER_DISPATCH_IMPLICIT
             } else {
                 Self::SAMPLES_PER_DISPATCH
             };
+            if self.options.ris {
+                most = most.min((Self::RIS_CANDIDATES_PER_DISPATCH / dispatch.ris_candidates.max(1)).max(1));
+            }
             dispatch.sample_count = most.min(end - dispatch.sample_index);
             pipeline.record(cmd, &resources, &dispatch, [target.size.0, target.size.1, 1], Self::LOCAL)?;
             barrier::compute_to_compute(ctx, cmd);

@@ -237,6 +237,11 @@ impl WavefrontPass {
         features: &SceneFeatures,
         lobe_split: bool,
     ) -> Result<(&Pipeline<wavefront::Kernel>, &Stages)> {
+        if self.options.ris {
+            return Err(Error::Invalid(
+                "RIS at the first hit (--direct ris) runs in the megakernel only, not the wavefront integrator".into(),
+            ));
+        }
         let base = sampling_spec!(wavefront::Spec, self.options, Default::default());
         let split = wavefront::Spec { split_lobes: lobe_split, ..base };
         let cell = &self.stages[lobe_split as usize];
@@ -319,7 +324,7 @@ impl WavefrontPass {
         };
         let mut wave = WaveParams {
             env: params.env,
-            env_nee: params.env_nee,
+            ris_candidates: 0,
             size: params.size,
             sample_index: params.sample_index,
             seed: params.seed,

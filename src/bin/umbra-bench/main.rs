@@ -24,6 +24,7 @@ mod peers;
 mod probes;
 mod rays;
 mod restir;
+mod restir_pt;
 mod shadows;
 mod suite;
 
@@ -423,6 +424,32 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
+    /// The path tracer's first-hit light sampling by RIS against power sampling on a many-light
+    /// scene: error of the whole image (direct and indirect light) against time, and the
+    /// equal-error speed-up.
+    RestirPt {
+        /// The scene (default: scenes/many-lights.glb).
+        #[arg(long, default_value = "scenes/many-lights.glb")]
+        scene: PathBuf,
+        /// Image size.
+        #[arg(long, default_value = "64x64", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of the reference (power sampling).
+        #[arg(long, default_value_t = 1024)]
+        reference_spp: u32,
+        /// Scattering events per path.
+        #[arg(long, default_value_t = 4)]
+        max_bounces: u32,
+        /// Timed renders per point (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Where to write restir-pt.json and the chart.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
     /// Print the Markdown table of a `peers.py` run's JSON: `peers.json` (umbra's rays against
     /// Embree's) or `path.json` (the path tracer against Mitsuba 3 at equal error). The
     /// measurements are `src/bin/umbra-bench/peers.py`'s (Python, Embree, Mitsuba).
@@ -641,6 +668,19 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", restir::table(&doc));
             write_json(&out, "restir.json", &doc)?;
             restir::write_chart(&out, &doc)?;
+        }
+        Command::RestirPt { table: Some(path), .. } => print!("{}", restir_pt::table(&read_json(&path)?)),
+        Command::RestirPt { scene, size, reference_spp, max_bounces, repeats, out, table: None } => {
+            let ctx = Context::new(&ContextDesc::default())?;
+            let loaded = umbra::scene::Scene::load(&scene)?;
+            let camera = loaded.camera(None)?;
+            let settings = restir_pt::RestirPtBench { size, reference_spp, max_bounces, repeats };
+            let (points, floor) = restir_pt::run(&ctx, &loaded, &camera, &settings)?;
+            let mut doc = restir_pt::to_json(&ctx.info().name, &loaded.name, &settings, &points, floor);
+            add_conditions(&mut doc);
+            print!("{}", restir_pt::table(&doc));
+            write_json(&out, "restir-pt.json", &doc)?;
+            restir_pt::write_chart(&out, &doc)?;
         }
         Command::Peers { table } => print!("{}", peers::table(&read_json(&table)?)),
         Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {

@@ -159,13 +159,13 @@ pub fn run(ctx: &Context, scene: &Scene, camera: &Camera, s: &RestirBench) -> Re
 /// around it: `Within(ms)`; beyond its points, the bound they give: `Below(ms)` (its most
 /// accurate point's error is still above `error`, so it would take longer than that point),
 /// `Above(ms)` (its cheapest point is already better).
-enum PowerTime {
+pub(super) enum PowerTime {
     Within(f64),
     Below(f64),
     Above(f64),
 }
 
-fn power_time_at(points: &[&Value], error: f64) -> Option<PowerTime> {
+pub(super) fn power_time_at(points: &[&Value], error: f64) -> Option<PowerTime> {
     let mut pts: Vec<(f64, f64)> = points.iter().map(|p| (num(&p["rel_mse"]), num(&p["ms"]))).collect();
     pts.sort_by(|a, b| b.0.total_cmp(&a.0)); // decreasing error
     let (first, last) = (*pts.first()?, *pts.last()?);

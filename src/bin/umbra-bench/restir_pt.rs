@@ -1,0 +1,184 @@
+//! `umbra-bench restir-pt`: the path tracer's first-hit light sampling by RIS against power
+//! sampling (issue 22) on a many-light scene: per method (power; RIS with each candidate count)
+//! a series over samples per pixel, each point the path tracer's GPU time (median of repeats
+//! after a warm-up render) and the relative MSE of the whole image (direct and indirect light)
+//! against a converged reference (power sampling at many samples, its own noise subtracted from
+//! nothing: its relative MSE is charted as the floor). Equal error: power sampling's time
+//! interpolated (log-log) at a RIS point's error, over that point's time.
+
+use super::chart::{self, Chart, ChartPoint};
+use super::num;
+use super::rays::median;
+use super::restir::{power_time_at, PowerTime};
+use super::suite::errors;
+use anyhow::Result;
+use serde_json::{json, Value};
+use std::path::Path;
+use umbra::gpu::scene::GpuScene;
+use umbra::passes::pathtrace::DirectSampling;
+use umbra::render::{Passes, PathSettings};
+use umbra::scene::{Camera, Scene};
+use umbra::vk::Context;
+
+/// What the benchmark renders.
+pub struct RestirPtBench {
+    /// Image size.
+    pub size: (u32, u32),
+    /// Samples per pixel of the reference (power sampling).
+    pub reference_spp: u32,
+    /// Scattering events per path.
+    pub max_bounces: u32,
+    /// Timed renders per point (the median is reported).
+    pub repeats: usize,
+}
+
+/// Samples per pixel of each series' points.
+const SPP: [u32; 6] = [1, 2, 4, 8, 16, 32];
+/// The RIS series' candidate counts.
+const CANDIDATES: [u32; 4] = [4, 16, 32, 64];
+
+/// One measured point.
+pub struct Point {
+    /// "power" or "RIS M".
+    pub method: String,
+    /// RIS candidates (0 for power sampling).
+    pub candidates: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// The path tracer's GPU time, ms.
+    pub ms: f64,
+    /// Relative MSE against the reference.
+    pub rel_mse: f64,
+}
+
+fn settings(s: &RestirPtBench, direct: DirectSampling, spp: u32, seed: u32) -> PathSettings {
+    PathSettings { size: s.size, spp, seed, max_bounces: s.max_bounces, direct, ..PathSettings::default() }
+}
+
+/// Renders the reference and every point; returns the points and the reference's own relative
+/// MSE (its noise floor).
+pub fn run(ctx: &Context, scene: &Scene, camera: &Camera, s: &RestirPtBench) -> Result<(Vec<Point>, f64)> {
+    let gpu_scene = GpuScene::upload(ctx, scene)?;
+    let passes = Passes::new(ctx, &gpu_scene);
+    let reference_settings = settings(s, DirectSampling::Power, s.reference_spp, 0x5eed);
+    let reference = passes.path_trace(&gpu_scene, camera, &reference_settings, |_, _| {})?;
+    let floor = f64::from(reference.relative_error()).powi(2);
+    let mut runs = vec![(DirectSampling::Power, "power".to_string())];
+    runs.extend(CANDIDATES.map(|m| (DirectSampling::Ris(m), format!("RIS {m}"))));
+    let bar = super::progress_bar((runs.len() * SPP.len()) as u64, "points");
+    let mut points = Vec::new();
+    for (direct, method) in runs {
+        for spp in SPP {
+            let settings = settings(s, direct, spp, 7);
+            passes.path_trace(&gpu_scene, camera, &settings, |_, _| {})?; // warm-up
+            let mut times = Vec::new();
+            let mut image = None;
+            for _ in 0..s.repeats.max(1) {
+                let render = passes.path_trace(&gpu_scene, camera, &settings, |_, _| {})?;
+                times.push(render.gpu_ms);
+                image = Some(render.mean);
+            }
+            let (_, rel_mse) = errors(&image.expect("at least one repeat"), &reference.mean);
+            points.push(Point {
+                method: method.clone(),
+                candidates: direct.candidates(),
+                spp,
+                ms: median(&mut times),
+                rel_mse,
+            });
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    Ok((points, floor))
+}
+
+/// The JSON of a run.
+pub fn to_json(device: &str, scene: &str, s: &RestirPtBench, points: &[Point], floor: f64) -> Value {
+    json!({
+        "device": device,
+        "scene": scene,
+        "size": [s.size.0, s.size.1],
+        "reference_spp": s.reference_spp,
+        "reference_rel_mse_floor": floor,
+        "max_bounces": s.max_bounces,
+        "repeats": s.repeats,
+        "points": points.iter().map(|p| json!({
+            "method": p.method,
+            "candidates": p.candidates,
+            "spp": p.spp,
+            "ms": p.ms,
+            "rel_mse": p.rel_mse,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The Markdown table of a run: per point its time and error, and for RIS power sampling's time
+/// at the same error over RIS's.
+pub fn table(doc: &Value) -> String {
+    let points = doc["points"].as_array().cloned().unwrap_or_default();
+    let power: Vec<&Value> = points.iter().filter(|p| p["method"] == "power").collect();
+    let mut out = format!(
+        "{} at {}×{} on {} ({}), path tracer (megakernel), {} bounces; reference: {} spp of power sampling \
+         (its own relative MSE {:.1e}):\n\n\
+         | first-hit light sampling | spp | path tracer ms | rel. MSE | power sampling's time at this error ÷ this |\n\
+         |---|---:|---:|---:|---:|\n",
+        doc["scene"].as_str().unwrap_or("?"),
+        doc["size"][0],
+        doc["size"][1],
+        doc["device"].as_str().unwrap_or("?"),
+        super::conditions_text(doc),
+        doc["max_bounces"],
+        doc["reference_spp"],
+        num(&doc["reference_rel_mse_floor"]),
+    );
+    for p in &points {
+        let speedup = if p["method"] == "power" {
+            "—".to_string()
+        } else {
+            let ms = num(&p["ms"]);
+            match power_time_at(&power, num(&p["rel_mse"])) {
+                Some(PowerTime::Within(t)) => format!("{:.1}×", t / ms),
+                Some(PowerTime::Below(t)) => {
+                    format!("> {:.1}× (below power's error at its most spp)", t / ms)
+                }
+                Some(PowerTime::Above(t)) => format!("< {:.1}× (above power's error at 1 spp)", t / ms),
+                None => "—".into(),
+            }
+        };
+        out += &format!(
+            "| {} | {} | {:.1} | {:.4} | {speedup} |\n",
+            p["method"].as_str().unwrap_or("?"),
+            p["spp"],
+            num(&p["ms"]),
+            num(&p["rel_mse"]),
+        );
+    }
+    out
+}
+
+/// The error-against-time chart of a run.
+pub fn write_chart(out: &Path, doc: &Value) -> Result<()> {
+    let points = doc["points"].as_array().cloned().unwrap_or_default();
+    let chart_points: Vec<ChartPoint> = points
+        .iter()
+        .map(|p| ChartPoint {
+            method: p["method"].as_str().unwrap_or("?"),
+            unit: "spp",
+            value: p["spp"].as_u64().unwrap_or(0) as u32,
+            ms: num(&p["ms"]),
+            error: num(&p["rel_mse"]),
+        })
+        .collect();
+    let title = format!(
+        "{}: path tracer, first-hit RIS against power sampling — {}",
+        doc["scene"].as_str().unwrap_or("?"),
+        doc["device"].as_str().unwrap_or("?")
+    );
+    let chart = Chart {
+        title: &title,
+        y_desc: "relative MSE of the image (log)",
+        floor: num(&doc["reference_rel_mse_floor"]),
+    };
+    chart::write(&out.join("restir-pt"), &chart, &chart_points)
+}

@@ -192,6 +192,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["passes", "--table", "docs/bench/passes-cornell.json", "--table", "docs/bench/passes-spheres.json"],
     &["paths", "--table", "docs/bench/paths.json"],
     &["suite", "--table", "docs/bench/suite.json"],
+    &["suite", "--table", "docs/bench/suite-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-spheres.json"],
     &["mis", "--table", "docs/bench/mis.json"],

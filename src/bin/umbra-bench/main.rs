@@ -185,6 +185,12 @@ enum Command {
         /// punctual lights).
         #[arg(long, value_parser = cli::parse_direction)]
         sun: Option<[f32; 3]>,
+        /// Radius of point and spot lights for PCSS and the sized lights' rays, metres.
+        #[arg(long, default_value_t = umbra::passes::shadow::ShadowSettings::default().light_radius, value_parser = cli::parse_non_negative)]
+        light_radius: f32,
+        /// Angular radius of directional lights for PCSS and the sized lights' rays, degrees.
+        #[arg(long, default_value_t = umbra::passes::shadow::ShadowSettings::default().sun_angle.to_degrees(), value_parser = cli::parse_non_negative)]
+        sun_angle: f32,
         /// Timed repeats (after a warm-up).
         #[arg(long, default_value_t = 5)]
         repeats: usize,
@@ -651,9 +657,29 @@ fn run(cli: Cli) -> Result<()> {
             restir::write_chart(&out, &doc)?;
         }
         Command::Peers { table } => print!("{}", peers::table(&read_json(&table)?)),
-        Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {
+        Command::Shadows {
+            scene,
+            size,
+            map_size,
+            cascades,
+            sun,
+            light_radius,
+            sun_angle,
+            repeats,
+            out,
+            table,
+        } => match table {
             Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
-            None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
+            None => {
+                let settings = umbra::passes::shadow::ShadowSettings {
+                    map_size,
+                    cascades,
+                    light_radius,
+                    sun_angle: sun_angle.to_radians(),
+                    ..Default::default()
+                };
+                run_shadows(scene, size, &settings, sun, repeats, out)?
+            }
         },
         Command::Denoise {
             quick,
@@ -1069,8 +1095,7 @@ fn run_passes(
 fn run_shadows(
     scene: Option<PathBuf>,
     size: (u32, u32),
-    map_size: u32,
-    cascades: u32,
+    settings: &umbra::passes::shadow::ShadowSettings,
     sun: Option<[f32; 3]>,
     repeats: usize,
     out: PathBuf,
@@ -1085,23 +1110,23 @@ fn run_shadows(
     }
     let camera = bench_camera(&loaded);
     let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
-    let settings = umbra::passes::shadow::ShadowSettings { map_size, cascades, ..Default::default() };
     let layers = umbra::passes::shadow::ShadowPlan::new(
         &gpu_scene.punctual_lights,
         gpu_scene.bounds,
         &camera,
         size,
-        &settings,
+        settings,
     )?
     .layers
     .len();
-    let (timings, reference) = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, &settings)?;
+    settings.validate()?;
+    let (timings, reference) = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, settings)?;
     let doc = shadows::to_json(
         &ctx.info().name,
         &loaded.name,
         gpu_scene.bvh_stats.triangles,
         size,
-        &settings,
+        settings,
         layers,
         &timings,
         &reference,

@@ -284,7 +284,7 @@ pub fn table(doc: &Value) -> String {
     let reference = match r["kind"].as_str() {
         Some("rt sized") => format!(
             "ray-traced shadows of the sized lights (radius {} m, sun {:.2}°), {} rays per light in {} frames",
-            num(&r["light_radius"]),
+            num(&r["light_radius"]) as f32,
             num(&r["sun_angle"]).to_degrees(),
             r["rays"],
             r["frames"]
@@ -306,7 +306,7 @@ pub fn table(doc: &Value) -> String {
     for m in &methods {
         let maps = num(&m["maps_ms"]);
         let name = match m["method"].as_str().unwrap_or("?") {
-            "rt sized" => format!("rt sized, {} rays", m["rays"]),
+            "rt sized" => format!("rt sized, {} ray{}", m["rays"], if m["rays"] == 1 { "" } else { "s" }),
             other => other.to_string(),
         };
         let ratio = if m["maps_ms"] == 0.0 { "—".to_string() } else { format!("{:.2}", maps / rays_ms) };

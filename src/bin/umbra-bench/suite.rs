@@ -12,7 +12,11 @@
 //! - `hybrid, <filter> shadow maps` (scenes with punctual lights): the hybrid at 4 shadow rays
 //!   with its punctual lights shadowed by maps (hard, PCF, PCSS, moments) at a sweep of map
 //!   sizes; the time includes rendering the maps every frame (a moving light; a static one pays
-//!   only the lighting pass).
+//!   only the lighting pass). With them, `hybrid, rt sized shadows`: the hybrid with its punctual
+//!   lights' shadows ray-traced as sized lights at a sweep of rays per light. These series and
+//!   the hybrid's also get the shadow term's error: against the same hybrid with the sized lights'
+//!   shadows ray-traced with 256 rays per light ([`ShadowReference`], the truth PCSS's soft
+//!   shadows approximate; the path tracer's lights are points).
 //! - `hybrid + probes`: the hybrid at 4 shadow rays with irradiance probes baked at a sweep of
 //!   spacings (the scene's longest side / n) lighting its diffuse lobe; the bake is reported
 //!   apart, as precomputation.
@@ -707,7 +711,7 @@ pub fn table(doc: &serde_json::Value) -> String {
         let mut row = format!(
             "| {} | radius {} m, sun {:.2}°, {} rays per light | {} | {} |",
             scene["scene"].as_str().unwrap_or("?"),
-            num(&r["light_radius"]),
+            num(&r["light_radius"]) as f32,
             num(&r["sun_angle"]).to_degrees(),
             r["rays"],
             cell("hybrid", "shadow_rays", 4),

@@ -579,44 +579,20 @@ fn render(args: RenderArgs) -> Result<()> {
         // them).
         lobe_split: args.denoise,
     };
-    if args.mode != Mode::Pathtrace {
+    if matches!(args.mode, Mode::Ao | Mode::Rtao) {
         let gpu_scene = loaded.upload(&ctx)?;
         stages.lap("BVH and upload");
-        if args.mode == Mode::Hybrid {
-            return render_hybrid(&ctx, &loaded, &gpu_scene, &camera, &args);
-        }
         return render_ao(&ctx, &gpu_scene, &camera, &args);
     }
-    // The path tracer's pipeline takes seconds to create on lavapipe: it is made on a thread
-    // while the BVH is built and the scene uploaded, from the features the loaded scene has.
-    let mut passes = Passes::with_features(&ctx, loaded.features());
-    let gpu_scene = std::thread::scope(|s| -> Result<_> {
-        let pipeline = s.spawn(|| {
-            let clock = std::time::Instant::now();
-            let prepared = passes.prepare_path_trace(&settings);
-            log::debug!(
-                "path tracer's pipeline made alongside in {:.1} ms",
-                clock.elapsed().as_secs_f64() * 1e3
-            );
-            prepared
-        });
-        let gpu_scene = loaded.upload(&ctx);
-        stages.lap("BVH and upload");
-        let prepared = pipeline.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        let gpu_scene = gpu_scene?;
-        prepared?;
-        stages.lap("pipeline (the rest)");
-        Ok(gpu_scene)
-    })?;
-    if passes.features() != gpu_scene.features() {
-        // SceneFeatures::of_scene missed something (tests/scene.rs checks that it does not).
-        log::warn!(
-            "the features read before the upload, {:?}, differ from the upload's, {:?}: making the pipeline again",
-            passes.features(),
-            gpu_scene.features()
-        );
-        passes = Passes::new(&ctx, &gpu_scene);
+    if args.mode == Mode::Hybrid {
+        let hybrid = hybrid_settings(&args);
+        let (passes, gpu_scene) = upload_alongside(&ctx, &loaded, &mut stages, |passes| {
+            passes.prepare_hybrid(&hybrid, args.probes.is_some(), args.lightmaps)
+        })?;
+        return render_hybrid(&ctx, &passes, &loaded, &gpu_scene, &camera, &hybrid, &args);
     }
+    let (passes, gpu_scene) =
+        upload_alongside(&ctx, &loaded, &mut stages, |passes| passes.prepare_path_trace(&settings))?;
     let bar = indicatif::ProgressBar::new(settings.spp as u64).with_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {per_sec}  ETA {eta}")
             .expect("valid template"),
@@ -957,14 +933,44 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
     }
 }
 
-fn render_hybrid(
+/// Builds the BVH and uploads `loaded` while `prepare` makes pipelines on a thread (they take
+/// seconds on lavapipe) from the features the loaded scene has; the passes for the uploaded scene
+/// (made again if its features differ: `tests/scene.rs` checks that they do not).
+fn upload_alongside(
     ctx: &Context,
     loaded: &LoadedScene,
-    scene: &GpuScene,
-    camera: &umbra::scene::Camera,
-    args: &RenderArgs,
-) -> Result<()> {
-    let settings = umbra::render::HybridSettings {
+    stages: &mut Stages,
+    prepare: impl FnOnce(&Passes) -> umbra::Result<()> + Send,
+) -> Result<(Passes, GpuScene)> {
+    let passes = Passes::with_features(ctx, loaded.features());
+    let gpu_scene = std::thread::scope(|s| -> Result<_> {
+        let pipelines = s.spawn(|| {
+            let clock = std::time::Instant::now();
+            let prepared = prepare(&passes);
+            log::debug!("pipelines made alongside in {:.1} ms", clock.elapsed().as_secs_f64() * 1e3);
+            prepared
+        });
+        let gpu_scene = loaded.upload(ctx);
+        stages.lap("BVH and upload");
+        let prepared = pipelines.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        let gpu_scene = gpu_scene?;
+        prepared?;
+        stages.lap("pipelines (the rest)");
+        Ok(gpu_scene)
+    })?;
+    if passes.features() != gpu_scene.features() {
+        log::warn!(
+            "the features read before the upload, {:?}, differ from the upload's, {:?}: making the pipelines again",
+            passes.features(),
+            gpu_scene.features()
+        );
+        return Ok((Passes::new(ctx, &gpu_scene), gpu_scene));
+    }
+    Ok((passes, gpu_scene))
+}
+
+fn hybrid_settings(args: &RenderArgs) -> umbra::render::HybridSettings {
+    umbra::render::HybridSettings {
         size: args.size,
         lighting: LightingSettings {
             shadow_rays: args.shadow_rays,
@@ -996,12 +1002,22 @@ fn render_hybrid(
             ..Default::default()
         }),
         shadows: shadow_settings(args),
-    };
-    let passes = Passes::new(ctx, scene);
+    }
+}
+
+fn render_hybrid(
+    ctx: &Context,
+    passes: &Passes,
+    loaded: &LoadedScene,
+    scene: &GpuScene,
+    camera: &umbra::scene::Camera,
+    settings: &umbra::render::HybridSettings,
+    args: &RenderArgs,
+) -> Result<()> {
     let probes = match &args.probes {
         None => None,
         Some(ProbesArg::Bake) => {
-            Some(bake_probes(ctx, &passes, scene, &args.probe.settings(), &settings.lighting)?)
+            Some(bake_probes(ctx, passes, scene, &args.probe.settings(), &settings.lighting)?)
         }
         Some(ProbesArg::File(path)) => {
             let volume = umbra::bake::load_probes(ctx, path, loaded.hash(), settings.lighting.env)?;
@@ -1021,7 +1037,7 @@ fn render_hybrid(
         false => None,
         true => {
             let maps = bake_lightmaps(
-                &passes,
+                passes,
                 &loaded.scene,
                 scene,
                 &args.lightmap,
@@ -1031,7 +1047,7 @@ fn render_hybrid(
             Some(umbra::passes::lightmap::GpuLightmaps::upload(ctx, &maps, loaded.scene.materials.len())?)
         }
     };
-    let image = passes.hybrid_with(scene, camera, &settings, probes.as_ref(), lightmaps.as_ref())?;
+    let image = passes.hybrid_with(scene, camera, settings, probes.as_ref(), lightmaps.as_ref())?;
     let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();
     println!("hybrid: {}x{}; GPU {}", args.size.0, args.size.1, times.join(", "));
     let (w, h) = args.size;

@@ -305,7 +305,12 @@ impl Passes {
     }
 
     fn gbuffer_pass(&self, scene: &GpuScene) -> Result<&GBufferPass> {
-        built(&self.gbuffer, || GBufferPass::new(&self.ctx, scene))
+        self.check(scene)?;
+        self.gbuffer_stage()
+    }
+
+    fn gbuffer_stage(&self) -> Result<&GBufferPass> {
+        built(&self.gbuffer, || GBufferPass::for_features(&self.ctx, &self.features))
     }
 
     fn deferred_pass(
@@ -317,11 +322,40 @@ impl Passes {
         restir: bool,
         sized: bool,
     ) -> Result<&DeferredPass> {
+        self.check(scene)?;
+        self.deferred_stage(method, probes, lightmaps, restir, sized)
+    }
+
+    fn deferred_stage(
+        &self,
+        method: ShadowMethod,
+        probes: bool,
+        lightmaps: bool,
+        restir: bool,
+        sized: bool,
+    ) -> Result<&DeferredPass> {
         // Sized lights (ray-traced only) take the last eight.
         let kind = if sized { ShadowMethod::ALL.len() } else { method.index() };
         let index = 8 * kind + 4 * restir as usize + 2 * lightmaps as usize + probes as usize;
         built(&self.deferred[index], || {
-            DeferredPass::new(&self.ctx, scene, method, probes, lightmaps, restir, sized)
+            DeferredPass::for_features(&self.ctx, &self.features, method, probes, lightmaps, restir, sized)
+        })
+    }
+
+    /// Builds the two pipelines of [`Passes::hybrid_with`] that take seconds on lavapipe (the
+    /// G-buffer's and the lighting pass's for `settings`, with a probe volume and lightmaps or
+    /// not) side by side, if they are not built yet. Needs no scene: a host can call this on a
+    /// thread while the scene's BVH is built and uploaded, as [`Passes::prepare_path_trace`].
+    pub fn prepare_hybrid(&self, settings: &HybridSettings, probes: bool, lightmaps: bool) -> Result<()> {
+        let restir = settings.lighting.direct.restir().is_some();
+        let sized = settings.lighting_with_shadows().sized_lights.is_some();
+        std::thread::scope(|s| {
+            let lighting = s.spawn(|| {
+                self.deferred_stage(settings.shadows.method, probes, lightmaps, restir, sized).map(|_| ())
+            });
+            let gbuffer = self.gbuffer_stage().map(|_| ());
+            let lighting = lighting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            gbuffer.and(lighting)
         })
     }
 

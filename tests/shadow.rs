@@ -61,8 +61,11 @@ fn hard_maps(
 /// the depth of the first surface a ray from the light through the texel's centre meets in the
 /// BVH (the reference), within 1e-4 of the depth plus 1e-5 of the layer's range; where they
 /// differ, a ray 1e-3 texel away must agree (the centre lies on an edge: ties may go either
-/// way) or the ray's triangle is within 3° of edge-on, and such texels are under 0.5 %. Two scenes: textured.glb (large triangles: the tiled
-/// path) and a floor, a box and an icosphere (small triangles too: each rasterizes itself).
+/// way) or the ray's triangle is within 3° of edge-on, and such texels are under 0.5 %. Three scenes: textured.glb (large triangles: the tiled
+/// path), a floor, a box and an icosphere (small triangles too: each rasterizes itself), and a
+/// steep slope with a triangle floating 2 cm above part of it (the raster step's depth cull:
+/// the slope covers whole tiles and bounds their depth, and the triangle above it, farther than
+/// the slope at a tile's near corner but nearer at its far one, must survive the cull).
 #[test]
 fn rasterized_depth_matches_rays_through_the_bvh() {
     let gpu = Gpu::new();
@@ -87,7 +90,17 @@ fn rasterized_depth_matches_rays_through_the_bvh() {
         ],
         camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
     );
-    for scene in [textured, mixed] {
+    let slope = |x: f32, z: f32, lift: f32| Vec3::new(x, -0.5 * x + lift, z);
+    let stacked = build(
+        "stacked",
+        &[
+            quad(slope(0.0, 0.0, 0.0), Vec3::new(1.5, -0.75, 0.0), Vec3::new(0.0, 0.0, 1.5)),
+            vec![[slope(0.0, 1.0, 0.02), slope(1.2, 1.0, 0.02), slope(0.6, -1.0, 0.02)]],
+        ],
+        mixed.lights.clone(),
+        camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
+    );
+    for scene in [textured, mixed, stacked] {
         let arrays = SceneArrays::new(&scene).unwrap();
         let gpu_scene = GpuScene::from_arrays(&gpu, &arrays).unwrap();
         let (plan, depth) = hard_maps(&gpu, &gpu_scene, &scene, 96, 2);

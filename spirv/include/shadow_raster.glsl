@@ -99,6 +99,29 @@ bool shadow_covers(vec3 e0, vec3 e1, vec3 e2, vec3 d, uvec2 texel, out float dep
     return true;
 }
 
+// Whether the triangle with oriented edges e0..e2 and vertex depths d covers every texel centre
+// of the texels lo..hi (inclusive), and then `far`, a depth no covered centre among them exceeds
+// as shadow_covers computes it. Each corner centre must be inside every edge by a margin of
+// 1e-5 of the terms' magnitude (far beyond the evaluation's rounding): an edge function is
+// affine, so every centre between the corners is inside too. A triangle's depth along any line
+// of texel space is a ratio of two affine functions (affine under an orthographic light), so
+// over the box it is largest at a corner; `far` adds 1e-5 of the largest vertex depth for
+// rounding.
+bool shadow_covers_box(vec3 e0, vec3 e1, vec3 e2, vec3 d, uvec2 lo, uvec2 hi, out float far) {
+    far = 0.0;
+    for (uint k = 0u; k < 4u; ++k) {
+        vec2 p = vec2(uvec2((k & 1u) == 0u ? lo.x : hi.x, (k & 2u) == 0u ? lo.y : hi.y)) + 0.5;
+        vec3 w = vec3(dot(e0, vec3(p, 1.0)), dot(e1, vec3(p, 1.0)), dot(e2, vec3(p, 1.0)));
+        vec3 scale = vec3(dot(abs(e0), vec3(p, 1.0)), dot(abs(e1), vec3(p, 1.0)), dot(abs(e2), vec3(p, 1.0)));
+        if (!all(greaterThan(w, 1e-5 * scale))) {
+            return false;
+        }
+        far = max(far, dot(w, d) / (w.x + w.y + w.z));
+    }
+    far += 1e-5 * max(abs(d.x), max(abs(d.y), abs(d.z)));
+    return true;
+}
+
 // Whether triangle `tri` is opaque at barycentrics `bary` of texel `texel`: cut out as the
 // traversal cuts (the same test), a blend's coverage hashed per texel and layer.
 bool shadow_opaque(uint tri, vec2 bary, uvec2 texel) {

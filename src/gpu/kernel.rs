@@ -274,6 +274,7 @@ impl<K: Kernel> Pipeline<K> {
     /// The pipeline specialised with `spec` and, for a kernel that depends on them, the scene's
     /// `features` (an error when they are needed and not given).
     pub fn new(ctx: &Context, spec: &K::Spec, features: Option<&SceneFeatures>) -> Result<Self> {
+        let clock = std::time::Instant::now();
         let interface = K::INTERFACE;
         let mut specialization = Vec::new();
         for &name in interface.features {
@@ -302,6 +303,7 @@ impl<K: Kernel> Pipeline<K> {
                 specialization: &specialization,
             },
         )?;
+        log::debug!("pipeline '{}' made in {:.1} ms", interface.name, clock.elapsed().as_secs_f64() * 1e3);
         Ok(Self { pipeline, _kernel: PhantomData })
     }
 

@@ -24,7 +24,7 @@ use crate::error::{Error, Result};
 use crate::gpu::kernels::deferred;
 use crate::gpu::layout::{DeferredParams, GpuCamera, GpuReservoir};
 use crate::gpu::scene::GpuScene;
-use crate::gpu::Pipeline;
+use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
 use crate::vk::{barrier, raw, Buffer, Context, Image, TexelBuffer};
 
@@ -246,6 +246,19 @@ impl DeferredPass {
         restir: bool,
         sized: bool,
     ) -> Result<Self> {
+        Self::for_features(ctx, &scene.features(), method, probes, lightmaps, restir, sized)
+    }
+
+    /// [`DeferredPass::new`] for a scene with `features` (before it is uploaded).
+    pub fn for_features(
+        ctx: &Context,
+        features: &SceneFeatures,
+        method: ShadowMethod,
+        probes: bool,
+        lightmaps: bool,
+        restir: bool,
+        sized: bool,
+    ) -> Result<Self> {
         if sized && (method.uses_maps() || restir) {
             return Err(Error::Invalid(format!(
                 "shadow rays to sized lights need the '{}' method without ReSTIR",
@@ -263,7 +276,7 @@ impl DeferredPass {
             restir,
             shadow_sized: sized,
         };
-        let pipeline = Pipeline::for_scene(ctx, scene, &spec)?;
+        let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
         no_ao.write(ctx, &[1.0f32])?;
         let no_shadow = [

@@ -23,7 +23,7 @@ use crate::gpu::kernels::gbuffer;
 pub use crate::gpu::layout::GBUFFER_NO_SURFACE;
 use crate::gpu::layout::{GBufferParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
-use crate::gpu::Pipeline;
+use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
 use crate::vk::{barrier, raw, Context, Image};
 
@@ -172,7 +172,12 @@ impl GBufferPass {
 
     /// Builds the pipeline for what `scene` has (textures, alpha-tested materials).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &gbuffer::Spec::default())? })
+        Self::for_features(ctx, &scene.features())
+    }
+
+    /// [`GBufferPass::new`] for a scene with `features` (before it is uploaded).
+    pub fn for_features(ctx: &Context, features: &SceneFeatures) -> Result<Self> {
+        Ok(Self { pipeline: Pipeline::new(ctx, &gbuffer::Spec::default(), Some(features))? })
     }
 
     /// The push constants for `camera` over an image of `size`.

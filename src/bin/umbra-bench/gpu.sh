@@ -76,6 +76,14 @@ step suite "$BIN/umbra-bench" suite ${SUITE_ARGS:-} --out "$OUT/suite"
 sponza_args=()
 if [ -n "$SPONZA" ]; then sponza_args=(--sponza "$SPONZA"); fi
 step probes "$BIN/umbra-bench" probes --repeats "$REPEATS" "${sponza_args[@]}" --out "$OUT/probes"
+# Shadow maps against shadow rays (issue 19's goals: a 2048² sun map of Sponza in <= 0.3 ms, PCF
+# lighting at 1080p in <= 0.2 ms), the denoiser against one sample, ReSTIR against power sampling.
+if [ -n "$SPONZA" ]; then
+    step shadows-sponza "$BIN/umbra-bench" shadows "$SPONZA" --size "$SIZE" --map-size 2048 --repeats "$REPEATS" --out "$OUT/shadows-sponza"
+fi
+step shadows-spheres "$BIN/umbra-bench" shadows scenes/spheres.glb --size "$SIZE" --map-size 2048 --repeats "$REPEATS" --out "$OUT/shadows-spheres"
+step denoise "$BIN/umbra-bench" denoise --size "$SIZE" --reference-spp 512 --max-spp 64 --repeats "$REPEATS" --out "$OUT/denoise"
+step restir "$BIN/umbra-bench" restir --size "$SIZE" --repeats "$REPEATS" --out "$OUT/restir"
 grep -h "^pathtrace:" "$OUT"/pathtrace-*.log 2>/dev/null
 echo "wrote $OUT"
 exit $status

@@ -31,6 +31,12 @@ float punctual_shadow(uint k, vec3 p, vec3 ng, vec3 wi) {
     return shadow_map_visibility(k, p, ng, wi, params.camera.origin, params.camera.forward, gl_GlobalInvocationID.xy);
 }
 
+// Ray-traced shadows of sized lights (shadow.glsl), `shadow_rays` rays per light and pixel.
+float punctual_sized_shadow(uint k, vec3 p, vec3 ng, vec3 wi, bool to_point, vec3 position) {
+    return sized_light_visibility(k, p, ng, wi, to_point, position, params.light_radius, params.sun_one_minus_cos,
+                                  max(params.shadow_rays, 1u), params.frame, params.seed, gl_GlobalInvocationID.xy);
+}
+
 // The punctual light pick's stream (the emissive samples draw from RNG_EMISSIVE_NEE).
 const uint RNG_DEFERRED_PUNCTUAL = 2u;
 

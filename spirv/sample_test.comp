@@ -27,7 +27,8 @@ vec4 sheen_table_texel(uint t) {
 // and `alpha` (KHR_materials_clearcoat); sampler 7 the same with the coat's normal tilted.
 // Sampler 6: the grey dielectric under a sheen of roughness sqrt(`alpha`) (KHR_materials_sheen)
 // under a clear coat. Sampler 10: a diffusely transmitting dielectric
-// (KHR_materials_diffuse_transmission).
+// (KHR_materials_diffuse_transmission). Sampler 11: the uniform cone of sized lights' shadow
+// rays (sampling.glsl), 1 - cos θmax = `alpha`.
 Surface dielectric(float alpha) {
     if (params.kind == 5u || params.kind == 7u) {
         Surface s;
@@ -195,6 +196,11 @@ float sampler_pdf(vec3 wo, vec3 wi, float alpha) {
     if (params.kind == 0u) {
         return pdf_cosine_hemisphere(wi);
     }
+    if (params.kind == 11u) {
+        // Sampler 11: the uniform cone about +z with 1 - cos θmax = `alpha` (a sample on its edge
+        // may round 1e-7 past it).
+        return 1.0 - wi.z <= alpha + 1e-6 ? pdf_uniform_cone(alpha) : 0.0;
+    }
     if (params.kind >= 2u) {
         return bsdf_pdf(dielectric(alpha), wo, wi);
     }
@@ -268,7 +274,9 @@ void main() {
     if (params.mode == 0u) {
         vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
         vec3 wi;
-        if (params.kind >= 2u) {
+        if (params.kind == 11u) {
+            wi = sample_uniform_cone(u.xy, alpha);
+        } else if (params.kind >= 2u) {
             vec3 weight;
             float pdf;
             // A failed sample (outside its lobe's side, or beyond the critical angle) reports pdf 0.

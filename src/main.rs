@@ -240,7 +240,8 @@ struct RenderArgs {
     /// Tone curve for the PNG.
     #[arg(long, value_enum, default_value = "neutral")]
     tonemap: ToneArg,
-    /// Hybrid: shadow rays (light samples) per pixel for emissive triangles.
+    /// Hybrid: shadow rays (light samples) per pixel for emissive triangles (and, with
+    /// --rt-light-size, per punctual light).
     #[arg(long, default_value_t = 4)]
     shadow_rays: u32,
     /// How direct light (punctual lights, emissive triangles) is sampled. Hybrid: every punctual
@@ -293,10 +294,16 @@ struct RenderArgs {
     /// Hybrid shadow maps: PCF filter radius in texels.
     #[arg(long, default_value_t = ShadowSettings::default().pcf_radius, value_parser = cli::parse_positive)]
     pcf_radius: f32,
-    /// Hybrid shadow maps (pcss): radius of point and spot lights, metres.
+    /// Hybrid, rt shadows: shadow punctual lights as sized lights (a sphere of --light-radius, a
+    /// cone of --sun-angle) with --shadow-rays rays each, the unoccluded fraction (soft shadows,
+    /// what pcss approximates); without it rt shadows points, as the path tracer's lights are.
+    #[arg(long)]
+    rt_light_size: bool,
+    /// Hybrid shadow maps (pcss) and --rt-light-size: radius of point and spot lights, metres.
     #[arg(long, default_value_t = ShadowSettings::default().light_radius, value_parser = cli::parse_non_negative)]
     light_radius: f32,
-    /// Hybrid shadow maps (pcss): angular radius of directional lights, degrees (the sun: 0.27).
+    /// Hybrid shadow maps (pcss) and --rt-light-size: angular radius of directional lights,
+    /// degrees (the sun: 0.27).
     #[arg(long, default_value_t = ShadowSettings::default().sun_angle.to_degrees(), value_parser = cli::parse_non_negative)]
     sun_angle: f32,
     /// Hybrid shadow maps: cascades of a directional light.
@@ -938,6 +945,7 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
         pcf_radius: args.pcf_radius,
         light_radius: args.light_radius,
         sun_angle: args.sun_angle.to_radians(),
+        sized_rays: args.rt_light_size,
         ..Default::default()
     }
 }

@@ -15,7 +15,7 @@ use crate::gpu::layout::PathStats;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::SceneFeatures;
 use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
-use crate::passes::deferred::{DeferredPass, LightingInputs, LightingSettings};
+use crate::passes::deferred::{DeferredPass, LightingInputs, LightingSettings, SizedLights};
 pub use crate::passes::denoise::DenoiseSettings;
 use crate::passes::denoise::{DenoiseImages, DenoiseInputs, DenoisePass};
 use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
@@ -142,6 +142,20 @@ pub struct HybridSettings {
     pub shadows: ShadowSettings,
 }
 
+impl HybridSettings {
+    /// The lighting settings with the shadows' sized lights: with ray-traced shadows and
+    /// [`ShadowSettings::sized_rays`], the lights' size from [`ShadowSettings::light_radius`] and
+    /// [`ShadowSettings::sun_angle`] (what PCSS softens by); else the lighting as set.
+    pub fn lighting_with_shadows(&self) -> LightingSettings {
+        let mut lighting = self.lighting;
+        if self.shadows.sized_rays && !self.shadows.method.uses_maps() {
+            lighting.sized_lights =
+                Some(SizedLights { radius: self.shadows.light_radius, sun_angle: self.shadows.sun_angle });
+        }
+        lighting
+    }
+}
+
 /// A hybrid render: the linear image, its G-buffer and the GPU time of each pass.
 #[derive(Debug, Clone)]
 pub struct HybridImage {
@@ -223,7 +237,7 @@ pub struct Passes {
     gbuffer: OnceLock<GBufferPass>,
     /// One per shadow method, with or without probes, lightmaps, ReSTIR: index
     /// 8 [`ShadowMethod::index`] + 4 restir + 2 lightmaps + probes.
-    deferred: [OnceLock<DeferredPass>; 40],
+    deferred: [OnceLock<DeferredPass>; 48],
     /// ReSTIR's kernels: index 2 unbiased + temporal.
     restir: [OnceLock<RestirPass>; 4],
     shadow: OnceLock<ShadowPass>,
@@ -306,9 +320,10 @@ impl Passes {
         probes: bool,
         lightmaps: bool,
         restir: bool,
+        sized: bool,
     ) -> Result<&DeferredPass> {
         self.check(scene)?;
-        self.deferred_stage(method, probes, lightmaps, restir)
+        self.deferred_stage(method, probes, lightmaps, restir, sized)
     }
 
     fn deferred_stage(
@@ -317,10 +332,13 @@ impl Passes {
         probes: bool,
         lightmaps: bool,
         restir: bool,
+        sized: bool,
     ) -> Result<&DeferredPass> {
-        let index = 8 * method.index() + 4 * restir as usize + 2 * lightmaps as usize + probes as usize;
+        // Sized lights (ray-traced only) take the last eight.
+        let kind = if sized { ShadowMethod::ALL.len() } else { method.index() };
+        let index = 8 * kind + 4 * restir as usize + 2 * lightmaps as usize + probes as usize;
         built(&self.deferred[index], || {
-            DeferredPass::for_features(&self.ctx, &self.features, method, probes, lightmaps, restir)
+            DeferredPass::for_features(&self.ctx, &self.features, method, probes, lightmaps, restir, sized)
         })
     }
 
@@ -330,9 +348,10 @@ impl Passes {
     /// thread while the scene's BVH is built and uploaded, as [`Passes::prepare_path_trace`].
     pub fn prepare_hybrid(&self, settings: &HybridSettings, probes: bool, lightmaps: bool) -> Result<()> {
         let restir = settings.lighting.direct.restir().is_some();
+        let sized = settings.lighting_with_shadows().sized_lights.is_some();
         std::thread::scope(|s| {
             let lighting = s.spawn(|| {
-                self.deferred_stage(settings.shadows.method, probes, lightmaps, restir).map(|_| ())
+                self.deferred_stage(settings.shadows.method, probes, lightmaps, restir, sized).map(|_| ())
             });
             let gbuffer = self.gbuffer_stage().map(|_| ());
             let lighting = lighting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
@@ -400,7 +419,7 @@ impl Passes {
             let path = s.spawn(|| self.megakernel(options, false).map(|_| ()));
             let rest = self
                 .gbuffer_stage()
-                .and_then(|_| self.deferred_stage(ShadowMethod::RayTraced, false, false, false))
+                .and_then(|_| self.deferred_stage(ShadowMethod::RayTraced, false, false, false, false))
                 .and_then(|_| self.rtao_stage())
                 .and_then(|_| self.ssao_pass())
                 .and_then(|_| self.blur_pass())
@@ -559,11 +578,19 @@ impl Passes {
     ) -> Result<()> {
         self.check(scene)?;
         settings.validate()?;
+        settings.validate_sized_rays(scene.punctual_count)?;
         let params = DeferredPass::params(scene, camera, gbuffer.size, settings);
         let method = inputs.shadows.map_or(ShadowMethod::RayTraced, |m| m.settings.method);
         let (probes, lightmaps, restir) =
             (inputs.probes.is_some(), inputs.lightmaps.is_some(), inputs.restir.is_some());
-        self.deferred_pass(scene, method, probes, lightmaps, restir)?
+        let sized = settings.sized_lights.is_some();
+        if sized && method.uses_maps() {
+            return Err(Error::Invalid(format!(
+                "sized lights' ray-traced shadows were asked for, but the lighting is given '{}' shadow maps",
+                method.name()
+            )));
+        }
+        self.deferred_pass(scene, method, probes, lightmaps, restir, sized)?
             .record(&self.ctx, cmd, scene, gbuffer, output, ibl, inputs, &params)
     }
 
@@ -757,7 +784,7 @@ impl Passes {
         mut timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         self.check(scene)?;
-        settings.lighting.validate()?;
+        settings.lighting_with_shadows().validate()?;
         let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
             (false, _) => None,
             (true, Some(maps)) if maps.settings.method == settings.shadows.method => Some(maps),
@@ -801,7 +828,8 @@ impl Passes {
         timed(&mut timer, cmd, "lighting", || {
             let inputs =
                 LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
-            self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &settings.lighting)
+            let lighting = settings.lighting_with_shadows();
+            self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &lighting)
         })?;
         if let Some(ldr) = targets.ldr {
             timed(&mut timer, cmd, "tonemap", || {
@@ -1068,7 +1096,8 @@ impl Passes {
     ) -> Result<HybridImage> {
         let ctx = &self.ctx;
         self.check(scene)?;
-        settings.lighting.validate()?;
+        settings.lighting_with_shadows().validate()?;
+        settings.lighting_with_shadows().validate_sized_rays(scene.punctual_count)?;
         if let Some(ao) = &settings.ao {
             ao.validate()?;
         }

@@ -85,6 +85,27 @@ fn suite_quick_writes_json_csv_and_charts() {
             ao_points.iter().filter(|p| p["method"] == "rtao").map(|p| p["mse"].as_f64().unwrap()).collect();
         assert!(rtao[rtao.len() - 1] < rtao[0] / 4.0, "RTAO error does not fall with rays: {rtao:?}");
     }
+    // The sphere grid's sun: the shadow term against its sized rays (256 per light) is recorded
+    // for the maps and the sized rays' own series, whose error falls with rays (16 rays against
+    // 1: expected 1/16 of the variance; asked for a quarter).
+    let spheres = scenes.iter().find(|s| s["scene"] == "scenes/spheres.glb").expect("the sphere grid");
+    assert_eq!(spheres["shadow_reference"]["rays"], 256, "{}", spheres["shadow_reference"]);
+    let points = spheres["points"].as_array().unwrap();
+    let shadow = |method: &str| -> Vec<f64> {
+        let values: Vec<f64> = points
+            .iter()
+            .filter(|p| p["method"] == method)
+            .map(|p| p["shadow_rel_mse"].as_f64().unwrap())
+            .collect();
+        assert!(
+            !values.is_empty() && values.iter().all(|v| v.is_finite() && *v >= 0.0),
+            "{method}: {values:?}"
+        );
+        values
+    };
+    shadow("hybrid, pcss shadow maps");
+    let sized = shadow("hybrid, rt sized shadows");
+    assert!(sized[sized.len() - 1] < sized[0] / 4.0, "the sized rays' error does not fall: {sized:?}");
     let cornell = scenes[0]["points"].as_array().unwrap();
     let path: Vec<f64> = cornell
         .iter()
@@ -232,6 +253,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["passes", "--table", "docs/bench/passes-cornell.json", "--table", "docs/bench/passes-spheres.json"],
     &["paths", "--table", "docs/bench/paths.json"],
     &["suite", "--table", "docs/bench/suite.json"],
+    &["suite", "--table", "docs/bench/suite-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-spheres.json"],
     &["mis", "--table", "docs/bench/mis.json"],

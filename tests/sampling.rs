@@ -35,6 +35,11 @@ const CAP_SPOKES: usize = 4000;
 #[derive(Clone, Copy, Debug)]
 enum Sampler {
     Cosine,
+    /// Uniform in solid angle over the cone about +z with 1 − cos θmax = `one_minus_cos`
+    /// (sample_test's kind 11): the sized lights' shadow rays.
+    Cone {
+        one_minus_cos: f32,
+    },
     Microfacet {
         microfacet: Microfacet,
         alpha: f32,
@@ -127,6 +132,7 @@ impl Kernel {
         let mut anisotropy = [0.0f32; 4];
         let (microfacet, wo, alpha, which) = match sampler {
             Sampler::Cosine => (Microfacet::Ggx, Vec3::Z, 1.0, 0),
+            Sampler::Cone { one_minus_cos } => (Microfacet::Ggx, Vec3::Z, one_minus_cos, 11),
             Sampler::Microfacet { microfacet, alpha, theta_degrees } => {
                 let t = theta_degrees.to_radians();
                 (microfacet, Vec3::new(t.sin(), 0.0, t.cos()), alpha, 1)
@@ -334,7 +340,9 @@ fn pooled_chi_square(observed: &[f64], expected: &[f64], n: f64) -> (f64, f64, u
 }
 
 fn cases() -> Vec<Sampler> {
+    // Cones whose edge falls on a cell boundary in cos θ (cells 1/8 wide): the pdf is a step.
     let mut cases = vec![Sampler::Cosine];
+    cases.extend([0.125, 0.5, 1.0].map(|one_minus_cos| Sampler::Cone { one_minus_cos }));
     for microfacet in Microfacet::ALL {
         for alpha in [0.05, 0.2, 0.5, 1.0] {
             for theta_degrees in [0.0, 30.0, 60.0, 85.0] {
@@ -474,6 +482,7 @@ fn a_wrong_pdf_is_rejected() {
     let kernel = Kernel::new(&gpu);
     let alpha = 1.0 - 0.99f64.powf(1.0 / cases().len() as f64);
     for case in [
+        Sampler::Cone { one_minus_cos: 0.5 },
         Sampler::Microfacet { microfacet: Microfacet::Ggx, alpha: 0.5, theta_degrees: 30.0 },
         Sampler::Microfacet { microfacet: Microfacet::GgxWalter, alpha: 0.5, theta_degrees: 30.0 },
         Sampler::Microfacet { microfacet: Microfacet::Beckmann, alpha: 0.2, theta_degrees: 60.0 },

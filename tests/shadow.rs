@@ -9,6 +9,7 @@ use glam::{Mat3, Vec3};
 use umbra::bvh::traverse::Ray;
 use umbra::gpu::layout::{GpuShadowLayer, SHADOW_PERSPECTIVE};
 use umbra::gpu::scene::{GpuScene, SceneArrays};
+use umbra::passes::deferred::LightingSettings;
 use umbra::passes::shadow::{ShadowMethod, ShadowPlan, ShadowSettings};
 use umbra::render::{HybridSettings, Passes};
 use umbra::scene::{Camera, Light, LightKind, Scene};
@@ -700,4 +701,267 @@ fn alpha_masked_casters_cut_holes_in_the_map_as_in_the_rays() {
     );
     assert!(dark_holes * 20 < holes.len(), "the map fills the holes: {dark_holes} of {}", holes.len());
     assert!(lit_solid * 20 < solid, "the map opens the solid cells: {lit_solid} of {solid}");
+}
+
+/// The hybrid's linear image of `scene` seen by `camera` (`size`², no SSAO, no ambient light)
+/// with `shadows` and `rays` shadow rays, averaged over frames 0 to `frames` − 1 (sized lights'
+/// rays continue one sequence over them), and the G-buffer's material per pixel.
+fn hybrid_mean(
+    gpu: &Gpu,
+    scene: &Scene,
+    camera: &Camera,
+    size: u32,
+    shadows: ShadowSettings,
+    rays: u32,
+    frames: u32,
+) -> (Vec<[f32; 4]>, Vec<u32>) {
+    let gpu_scene = GpuScene::upload(gpu, scene).unwrap();
+    let passes = Passes::new(gpu, &gpu_scene);
+    let mut sum = vec![[0.0f32; 4]; (size * size) as usize];
+    let mut material = Vec::new();
+    for frame in 0..frames {
+        let lighting = LightingSettings { shadow_rays: rays, frame, ..Default::default() };
+        let settings =
+            HybridSettings { size: (size, size), lighting, ao: None, shadows, ..Default::default() };
+        let image = passes.hybrid(&gpu_scene, camera, &settings).unwrap();
+        for (s, c) in sum.iter_mut().zip(&image.color) {
+            for k in 0..4 {
+                s[k] += c[k] / frames as f32;
+            }
+        }
+        material = image.gbuffer.material.iter().map(|m| m[0]).collect();
+    }
+    (sum, material)
+}
+
+/// The fraction of a sized light a point sees past an occluding half-plane: the light's cone of
+/// directions (axis `w` towards its centre, half-angle `theta_max`), uniform in solid angle,
+/// and the directions d with d · m ≥ 0 unoccluded (m: the unit normal of the plane through the
+/// point and the half-plane's edge, on the open side). Per ring of the cone at angle θ from its
+/// axis the open share of the ring is exact, acos(−tan β / tan θ) / π with sin β = w · m; the
+/// rings are integrated by Simpson's rule over 4,000 intervals (error below 1e-5).
+fn open_fraction(w: glam::DVec3, m: glam::DVec3, theta_max: f64) -> f64 {
+    let sin_b = w.dot(m).clamp(-1.0, 1.0);
+    let tan_b = sin_b / (1.0 - sin_b * sin_b).sqrt().max(1e-300);
+    let ring = |t: f64| {
+        if t <= 0.0 {
+            return if sin_b >= 0.0 { 1.0 } else { 0.0 };
+        }
+        (-tan_b / t.tan()).clamp(-1.0, 1.0).acos() / std::f64::consts::PI
+    };
+    let n = 4000;
+    let h = theta_max / n as f64;
+    let mut sum = 0.0;
+    for i in 0..=n {
+        let t = i as f64 * h;
+        let weight = if i == 0 || i == n {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        sum += weight * t.sin() * ring(t);
+    }
+    sum * h / 3.0 / (1.0 - theta_max.cos())
+}
+
+/// An occluding half-plane (y = `HALF_PLANE_H`, x < 0) over a floor (y = 0), seen from below the
+/// half-plane by an orthographic camera 1 m across (`HALF_PLANE_PIXELS`² pixels): every pixel
+/// is floor, and a light above casts the half-plane's straight edge across the view.
+const HALF_PLANE_H: f32 = 1.0;
+const HALF_PLANE_PIXELS: u32 = 64;
+
+/// The floor, the half-plane and the camera of the half-plane stage.
+fn half_plane() -> (Vec<[Vec3; 3]>, Vec<[Vec3; 3]>, Camera) {
+    let h = HALF_PLANE_H;
+    let floor = quad(Vec3::ZERO, Vec3::new(20.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -20.0));
+    let blocker = quad(Vec3::new(-10.0, h, 0.0), Vec3::new(10.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -20.0));
+    let view = Camera {
+        position: [0.0, 0.5, 0.0],
+        forward: [0.0, -1.0, 0.0],
+        up: [0.0, 0.0, -1.0],
+        yfov: 0.8,
+        aspect: None,
+        znear: 0.01,
+        orthographic: Some(umbra::scene::Orthographic { xmag: 0.5, ymag: 0.5, zfar: 10.0 }),
+    };
+    (floor, blocker, view)
+}
+
+/// Per pixel of the half-plane stage the light's visibility on the floor (the lit floor over the
+/// floor alone, which nothing shadows: the radiance term is the same), with `shadows` and `rays`
+/// shadow rays per frame over `frames` frames.
+fn half_plane_visibility(
+    gpu: &Gpu,
+    l: &Light,
+    shadows: ShadowSettings,
+    rays: u32,
+    frames: u32,
+) -> Vec<Option<f64>> {
+    let (floor, blocker, view) = half_plane();
+    let size = HALF_PLANE_PIXELS;
+    let bare = build("floor", std::slice::from_ref(&floor), vec![l.clone()], view);
+    let full = build("half-plane", &[floor, blocker], vec![l.clone()], view);
+    let (open, _) = hybrid_mean(gpu, &bare, &view, size, ShadowSettings::default(), 1, 1);
+    let (lit, material) = hybrid_mean(gpu, &full, &view, size, shadows, rays, frames);
+    (0..lit.len())
+        .map(|i| (material[i] == 0 && open[i][1] > 1e-4).then(|| (lit[i][1] / open[i][1]) as f64))
+        .collect()
+}
+
+/// Ray-traced shadows of sized lights against the closed form: an occluding half-plane (y = 1,
+/// x < 0) over a floor (y = 0), lit by a point light made a sphere of radius 0.5 at height 3 and,
+/// apart, by a sun of angular radius 8° tilted 17° across the edge. Per floor pixel (64×64,
+/// orthographic from below the half-plane, 1 m across the penumbra) the visibility (the lit
+/// floor over the unoccluded floor) against the exact open fraction of the light (open_fraction)
+/// at 256 rays (4 frames of 64): the mean error over the penumbra within 0.004 (no bias; measured
+/// −0.0004 for the sphere, 0.00001 for the sun) and every pixel within 0.05 (a plain Monte Carlo
+/// estimate's standard deviation is up to 0.031 at 256 rays: plain sampling would miss 0.05 in
+/// some 10 % of the penumbra; the stratified sequence's largest errors measured 0.024 and 0.027).
+/// The pixels' estimates are independent (each its own rotation of the sequence), so the mean's
+/// standard deviation is below 0.031 / √1000: 0.004 is over 4 of them (significance < 10⁻⁴).
+#[test]
+fn sized_light_shadows_match_the_analytic_penumbra() {
+    use glam::DVec3;
+    let gpu = Gpu::new();
+    let (h, size, rays, frames) = (HALF_PLANE_H, HALF_PLANE_PIXELS, 64u32, 4u32);
+    let (_, _, view) = half_plane();
+    let gpu_camera = umbra::gpu::layout::GpuCamera::new(&view, (size, size));
+    let (right, up) = (Vec3::from(gpu_camera.right), Vec3::from(gpu_camera.up));
+    // The floor point a pixel's (orthographic) ray meets.
+    let floor_point = |i: usize| {
+        let (x, y) = ((i as u32 % size) as f32 + 0.5, (i as u32 / size) as f32 + 0.5);
+        let ndc = (2.0 * x / size as f32 - 1.0, 1.0 - 2.0 * y / size as f32);
+        let o = Vec3::from(view.position) + ndc.0 * right + ndc.1 * up;
+        DVec3::new(o.x as f64, 0.0, o.z as f64)
+    };
+    let (radius, centre) = (0.5f32, Vec3::new(0.0, 3.0, 0.0));
+    let sun_angle = 8f32.to_radians();
+    let sun_dir = Vec3::new(0.0, -1.0, 0.3).normalize();
+    let cases = [
+        ("sphere", light(LightKind::Point, centre, Vec3::NEG_Y, 5.0)),
+        ("sun", light(LightKind::Directional, Vec3::ZERO, sun_dir, 3.0)),
+    ];
+    for (name, l) in cases {
+        let sized =
+            ShadowSettings { sized_rays: true, light_radius: radius, sun_angle, ..ShadowSettings::default() };
+        let visibility = half_plane_visibility(&gpu, &l, sized, rays, frames);
+        let (mut sum, mut count, mut worst, mut floor_pixels) = (0.0, 0, (0.0f64, 0usize), 0);
+        for (i, got) in visibility.iter().enumerate() {
+            let Some(got) = *got else { continue };
+            floor_pixels += 1;
+            let p = floor_point(i);
+            let (w, theta_max) = if l.kind == LightKind::Point {
+                let to = centre.as_dvec3() - p;
+                (to.normalize(), (radius as f64 / to.length()).asin())
+            } else {
+                (-sun_dir.as_dvec3(), sun_angle as f64)
+            };
+            let m = DVec3::new(h as f64, p.x, 0.0).normalize();
+            let want = open_fraction(w, m, theta_max);
+            let err = got - want;
+            if want > 1e-4 && want < 1.0 - 1e-4 {
+                sum += err;
+                count += 1;
+            }
+            if err.abs() > worst.0 {
+                worst = (err.abs(), i);
+            }
+        }
+        let mean = sum / count.max(1) as f64;
+        eprintln!(
+            "{name}: {floor_pixels} floor pixels, {count} in the penumbra: mean error {mean:.5}, largest {:.4} \
+             (pixel {})",
+            worst.0, worst.1
+        );
+        assert!(floor_pixels == (size * size) as usize, "{name}: {floor_pixels} floor pixels");
+        assert!(count > 300, "{name}: too narrow a penumbra ({count} pixels)");
+        assert!(mean.abs() < 0.004, "{name}: mean error over the penumbra {mean}");
+        assert!(worst.0 < 0.05, "{name}: pixel {} off by {}", worst.1, worst.0);
+    }
+}
+
+/// Sized lights of radius 0 and angle 0 are points: their kernel (rays to the sphere or cone)
+/// gives today's hard ray-traced image bit for bit, for a point, a spot and a sun together (and
+/// a radius above 0 does change it: the kernel is the one in use).
+#[test]
+fn sized_lights_of_size_zero_are_the_hard_ray_traced_shadows() {
+    let gpu = Gpu::new();
+    let scene = build(
+        "mixed",
+        &[
+            quad(Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -2.0)),
+            cuboid(Vec3::new(-1.0, 0.0, -0.2), Vec3::new(-0.4, 0.7, 0.4)),
+            umbra::procedural::icosphere(3, Vec3::new(0.6, 0.5, 0.1), 0.45).soup(),
+        ],
+        vec![
+            light(LightKind::Point, Vec3::new(0.2, 1.6, 0.9), Vec3::NEG_Y, 5.0),
+            light(LightKind::Spot, Vec3::new(-1.5, 2.0, 1.5), Vec3::new(0.6, -0.8, -0.6), 5.0),
+            light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.3, -1.0, 0.2), 2.0),
+        ],
+        camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
+    );
+    let view = scene.camera(None).unwrap();
+    let point = ShadowSettings::default();
+    let zero = ShadowSettings { sized_rays: true, light_radius: 0.0, sun_angle: 0.0, ..point };
+    let sized = ShadowSettings { sized_rays: true, light_radius: 0.2, sun_angle: 0.05, ..point };
+    let (hard, _) = hybrid_mean(&gpu, &scene, &view, 96, point, 4, 1);
+    let (zeroed, _) = hybrid_mean(&gpu, &scene, &view, 96, zero, 4, 1);
+    let (soft, _) = hybrid_mean(&gpu, &scene, &view, 96, sized, 4, 1);
+    let differing = |a: &[[f32; 4]], b: &[[f32; 4]]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+    let (same, changed) = (differing(&hard, &zeroed), differing(&hard, &soft));
+    eprintln!("pixels differing from hard rays: size 0: {same}; radius 0.2, angle 0.05: {changed}");
+    assert_eq!(same, 0, "sized lights of size 0 differ from points in {same} pixels");
+    assert!(changed > 200, "sized lights hardly change the image: {changed} pixels");
+    // One invocation traces every light's rays: 3 lights × 32 rays is past the 64 it may.
+    let sized_lights = Some(umbra::passes::deferred::SizedLights { radius: 0.2, sun_angle: 0.05 });
+    let many = LightingSettings { shadow_rays: 32, sized_lights, ..Default::default() };
+    let error = many.validate_sized_rays(3).unwrap_err().to_string();
+    assert!(error.contains("32 shadow rays per sized light × 3 punctual lights"), "{error}");
+    assert!(LightingSettings { shadow_rays: 16, ..many }.validate_sized_rays(3).is_ok());
+}
+
+/// What sized lights' rays are for: PCSS (1024² maps, filter radius up to 64 texels, a sun of 8°
+/// across the half-plane's edge, so the penumbra spans a quarter of the view) is charted against
+/// ray-traced shadows of the same sized sun, not of a point: its floor visibility's RMS error
+/// against the sized rays (64 rays × 4 frames) is below half its error against the point's hard
+/// shadow (measured 0.042 against 0.163). (With the default largest radius of 16 texels PCSS
+/// cuts this penumbra short, and its errors are 0.088 and 0.083: the clamp looks harmless
+/// against the point reference.)
+#[test]
+fn pcss_is_closer_to_sized_light_rays_than_to_point_rays() {
+    let gpu = Gpu::new();
+    let sun_angle = 8f32.to_radians();
+    let sun = light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.0, -1.0, 0.3), 3.0);
+    // The penumbra's radius, about 0.14 m, is some 30 texels of the cascade the floor falls in:
+    // the default largest filter radius (16 texels) would cut it short.
+    let pcss = ShadowSettings {
+        method: ShadowMethod::Pcss,
+        map_size: 1024,
+        sun_angle,
+        max_radius: 64.0,
+        ..Default::default()
+    };
+    let sized = ShadowSettings { sized_rays: true, sun_angle, ..Default::default() };
+    let point = half_plane_visibility(&gpu, &sun, ShadowSettings::default(), 1, 1);
+    let soft = half_plane_visibility(&gpu, &sun, sized, 64, 4);
+    let filtered = half_plane_visibility(&gpu, &sun, pcss, 1, 1);
+    let rms = |a: &[Option<f64>]| {
+        let d: Vec<f64> =
+            a.iter().zip(&filtered).filter_map(|(a, f)| Some((a.as_ref()? - f.as_ref()?).powi(2))).collect();
+        (d.iter().sum::<f64>() / d.len().max(1) as f64).sqrt()
+    };
+    let (against_sized, against_point) = (rms(&soft), rms(&point));
+    let penumbra = soft.iter().filter(|v| v.is_some_and(|v| (0.05..0.95).contains(&v))).count();
+    eprintln!(
+        "{penumbra} of {} pixels in the sized rays' penumbra; PCSS RMS visibility error: against sized rays \
+         {against_sized:.4}, against point rays {against_point:.4}",
+        soft.len()
+    );
+    assert!(penumbra > 800, "too narrow a penumbra: {penumbra}");
+    assert!(
+        against_sized < 0.5 * against_point,
+        "PCSS against sized rays {against_sized}, against point rays {against_point}"
+    );
 }

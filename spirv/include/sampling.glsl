@@ -25,6 +25,20 @@ float pdf_cosine_hemisphere(vec3 w) {
     return max(w.z, 0.0) * INV_PI;
 }
 
+// A direction uniform in solid angle over the cone of half-angle θmax about +z, given
+// 1 − cos θmax (a sun's few milliradians keep their precision that way; cos θmax itself would
+// round to within 6e-8 of 1).
+vec3 sample_uniform_cone(vec2 u, float one_minus_cos_max) {
+    float omc = u.x * one_minus_cos_max;  // 1 - cos θ
+    float sin_t = sqrt(max(omc * (2.0 - omc), 0.0));
+    float phi = 2.0 * PI * u.y;
+    return vec3(sin_t * cos(phi), sin_t * sin(phi), 1.0 - omc);
+}
+
+float pdf_uniform_cone(float one_minus_cos_max) {
+    return 1.0 / (2.0 * PI * one_minus_cos_max);
+}
+
 // Uniform barycentrics (b1, b2) on a triangle.
 vec2 sample_triangle(vec2 u) {
     float s = sqrt(u.x);

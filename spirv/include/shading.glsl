@@ -1099,16 +1099,24 @@ uint pick_punctual(float u, uint count) {
 // Defined by a kernel that includes this file with UMBRA_SHADOW_MAPS defined: light k's
 // visibility at p from its shadow map, ng facing the light's side, wi towards the light.
 float punctual_shadow(uint k, vec3 p, vec3 ng, vec3 wi);
+// Likewise: light k's ray-traced visibility at p as a sized light (SHADOW_SIZED), ng facing the
+// light's side, wi towards its centre (at `position` when `to_point`).
+float punctual_sized_shadow(uint k, vec3 p, vec3 ng, vec3 wi, bool to_point, vec3 position);
 #endif
 
 // How much of punctual light k arriving along wi reaches p (0 or 1 with shadow rays; a filtered
-// fraction from a shadow map when the kernel has them, SHADOW_MAPS); wi in the frame.
+// fraction from a shadow map when the kernel has them, SHADOW_MAPS; the unoccluded fraction of
+// rays to the light's sphere or cone for sized lights, SHADOW_SIZED); wi in the frame.
 float punctual_visibility(uint k, vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, vec3 wi, bool to_point,
                           vec3 position, out vec3 wi_local) {
 #ifdef UMBRA_SHADOW_MAPS
     if (SHADOW_MAPS) {
         float side = light_side(ng, t, b, n, transmits, wi, wi_local);
         return side == 0.0 ? 0.0 : punctual_shadow(k, p, side * ng, wi);
+    }
+    if (SHADOW_SIZED) {
+        float side = light_side(ng, t, b, n, transmits, wi, wi_local);
+        return side == 0.0 ? 0.0 : punctual_sized_shadow(k, p, side * ng, wi, to_point, position);
     }
 #endif
     return light_reaches(p, ng, t, b, n, transmits, wi, to_point, position, wi_local) ? 1.0 : 0.0;

@@ -242,4 +242,56 @@ float shadow_map_visibility(uint k, vec3 p, vec3 ng, vec3 wi, vec3 view_origin, 
     return shadow_pcf(l, uv, d, g, radius, rotation);
 }
 
+// Ray-traced shadows of a sized punctual light (the reference the map filters' soft shadows are
+// charted against): the fraction of `rays` shadow rays from p that reach the light unoccluded.
+// A point or spot light is a sphere of `radius` around its position: the rays go uniformly in
+// solid angle over the cone the sphere subtends at p (a uniformly bright sphere looks like a
+// uniformly bright disc from anywhere, so its visible fraction is the unoccluded fraction of that
+// solid angle; points uniform on the sphere's surface would weigh the disc's rim too much) and
+// stop at the sphere's near surface. A directional light is the cone of directions with
+// 1 − cos of its angular radius `sun_omc`. The light's radiance term stays the centre's: only
+// visibility is averaged. Directions below the surface (ng, facing the light's side) count as
+// occluded by it. The rays' directions follow the R2 sequence (Roberts 2018) from index
+// frame × rays on, rotated per pixel and light (Cranley-Patterson), so successive frames continue
+// one stratified sequence. With radius and angle 0 every ray is the point light's one shadow ray.
+const uint RNG_SIZED_LIGHT = 64u;  // + the light's index: the per-pixel rotation
+
+float sized_light_visibility(uint k, vec3 p, vec3 ng, vec3 wi, bool to_point, vec3 position, float radius,
+                             float sun_omc, uint rays, uint frame, uint seed, uvec2 pixel) {
+    float omc = sun_omc;
+    vec3 to_light = position - p;
+    float d2 = dot(to_light, to_light);
+    if (to_point) {
+        // sin² of the cone's half-angle; a point inside the sphere sees the hemisphere towards its
+        // centre (a light is not meant to enclose a shaded surface).
+        float s2 = min(radius * radius / d2, 1.0);
+        omc = s2 / (1.0 + sqrt(1.0 - s2));
+    }
+    vec3 t;
+    vec3 b;
+    basis(wi, t, b);
+    vec2 rotation = rand4(pixel, 0u, RNG_SIZED_LIGHT + k, seed).xy;
+    vec3 o = offset_ray(p, ng);
+    float lit = 0.0;
+    for (uint r = 0u; r < rays; ++r) {
+        uint i = frame * rays + r;
+        // R2: i × (1/φ₂, 1/φ₂²) in 32-bit fixed point, wrapping exactly.
+        vec2 u = fract(rotation + vec2(uvec2(i * 3242174889u, i * 2447445413u) >> 8u) * (1.0 / 16777216.0));
+        vec3 c = sample_uniform_cone(u, omc);
+        vec3 dir = omc > 0.0 ? t * c.x + b * c.y + wi * c.z : wi;
+        vec3 target = position;
+        if (to_point && radius > 0.0) {
+            // The sphere's near surface along dir.
+            float along = dot(dir, to_light);
+            float near = along - sqrt(max(radius * radius - (d2 - along * along), 0.0));
+            vec3 m = p + dir * near - position;
+            target = position + radius * (m / max(length(m), 1e-30));
+        }
+        if (dot(dir, ng) > 0.0 && !bvh_any(o, to_point ? target - o : dir, 0.0, to_point ? 0.9999 : BVH_INF)) {
+            lit += 1.0;
+        }
+    }
+    return lit / float(rays);
+}
+
 #endif

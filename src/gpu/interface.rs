@@ -497,10 +497,12 @@ gpu_structs! {
         ibl_dominant: uint,
         /// Environment map width and height.
         env_size: uvec2,
-        /// Padding.
-        pad0: uint,
-        /// Padding.
-        pad1: uint,
+        /// Radius of point and spot lights for ray-traced shadows of sized lights (`shadow_sized`),
+        /// metres.
+        light_radius: float,
+        /// 1 − cos of directional lights' angular radius for ray-traced shadows of sized lights
+        /// (`shadow_sized`).
+        sun_one_minus_cos: float,
     }
 
     /// Push constants of the ReSTIR DI kernels (`restir_initial.comp`, `restir_spatial.comp`;
@@ -1372,7 +1374,8 @@ kernels! {
             shadow_moments: bool = false,
             probes: bool = false,
             lightmaps: bool = false,
-            restir: bool = false
+            restir: bool = false,
+            shadow_sized: bool = false
         },
         bindings: {
             /// View-space depth.

@@ -46,6 +46,30 @@ pub struct LightingSettings {
     pub ibl_lookup: IblLookup,
     /// How the direct light of the punctual lights and emissive triangles is sampled.
     pub direct: DirectLight,
+    /// Ray-traced shadows of sized punctual lights: `None` (the default) shadows each punctual
+    /// light as a point with one ray (what the path tracer's lights are); `Some` casts
+    /// [`LightingSettings::shadow_rays`] rays per light to its sphere or cone and takes the
+    /// unoccluded fraction. For shadow rays only (not with shadow maps nor ReSTIR);
+    /// [`crate::render::Passes::record_hybrid`] sets it from
+    /// [`crate::passes::shadow::ShadowSettings::sized_rays`].
+    pub sized_lights: Option<SizedLights>,
+}
+
+/// The size of the punctual lights for ray-traced soft shadows ([`LightingSettings::sized_lights`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizedLights {
+    /// Radius of point and spot lights' spheres, metres.
+    pub radius: f32,
+    /// Angular radius of directional lights' cones, radians (at most 0.5).
+    pub sun_angle: f32,
+}
+
+impl SizedLights {
+    /// 1 − cos of the sun's angular radius, without cos's rounding near 1.
+    pub fn sun_one_minus_cos(&self) -> f32 {
+        let s = (0.5 * self.sun_angle as f64).sin();
+        (2.0 * s * s) as f32
+    }
 }
 
 /// How the lighting pass samples direct light (punctual lights and emissive triangles).
@@ -80,6 +104,7 @@ impl Default for LightingSettings {
             ibl: true,
             ibl_lookup: IblLookup::Dominant,
             direct: DirectLight::Power,
+            sized_lights: None,
         }
     }
 }
@@ -109,6 +134,42 @@ impl LightingSettings {
         }
         if let Some(restir) = self.direct.restir() {
             restir.validate()?;
+        }
+        if let Some(sized) = self.sized_lights {
+            if self.direct.restir().is_some() {
+                return Err(Error::Invalid(
+                    "ray-traced shadows of sized lights are for power sampling, not ReSTIR (its reservoirs \
+                     test visibility to the lights' points)"
+                        .into(),
+                ));
+            }
+            for (name, value, max) in
+                [("light radius", sized.radius, f32::MAX), ("sun angle", sized.sun_angle, 0.5)]
+            {
+                if !(value.is_finite() && (0.0..=max).contains(&value)) {
+                    return Err(Error::Invalid(format!(
+                        "sized lights: {name} {value} must be finite, at least 0 and at most {max}"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks the shadow rays of sized lights against the `punctual` lights a shading point
+    /// evaluates: each casts [`Self::shadow_rays`], all in one invocation, so together at most
+    /// [`Self::MAX_SHADOW_RAYS`] (CPU devices cut loops short past 65,535 iterations); more rays
+    /// come from averaging frames (successive [`Self::frame`]s continue one sequence).
+    pub fn validate_sized_rays(&self, punctual: u32) -> Result<()> {
+        let lights = punctual.min(crate::gpu::layout::PUNCTUAL_ALL);
+        if self.sized_lights.is_some() && lights * self.shadow_rays > Self::MAX_SHADOW_RAYS {
+            return Err(Error::Invalid(format!(
+                "{} shadow rays per sized light × {lights} punctual lights: at most {} rays per pixel in one \
+                 frame (one kernel invocation traces them all, and CPU devices cut loops short past 65,535 \
+                 iterations); average frames for more",
+                self.shadow_rays,
+                Self::MAX_SHADOW_RAYS
+            )));
         }
         Ok(())
     }
@@ -161,6 +222,8 @@ pub struct DeferredPass {
     no_probes: [TexelBuffer; 2],
     /// Whether the pass shades ReSTIR's reservoirs.
     restir: bool,
+    /// Whether the pass casts shadow rays to sized lights.
+    sized: bool,
     /// One reservoir standing in for them otherwise.
     no_reservoirs: Buffer,
 }
@@ -172,7 +235,8 @@ impl DeferredPass {
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
     /// an environment map, unlit materials), for shadows by `method`, for indirect diffuse light from a probe
     /// volume when `probes` and from lightmaps when `lightmaps`, and for direct light from ReSTIR's
-    /// reservoirs when `restir` (else by power sampling).
+    /// reservoirs when `restir` (else by power sampling), and for shadow rays to sized lights
+    /// ([`LightingSettings::sized_lights`]) when `sized` (with [`ShadowMethod::RayTraced`] only).
     pub fn new(
         ctx: &Context,
         scene: &GpuScene,
@@ -180,8 +244,9 @@ impl DeferredPass {
         probes: bool,
         lightmaps: bool,
         restir: bool,
+        sized: bool,
     ) -> Result<Self> {
-        Self::for_features(ctx, &scene.features(), method, probes, lightmaps, restir)
+        Self::for_features(ctx, &scene.features(), method, probes, lightmaps, restir, sized)
     }
 
     /// [`DeferredPass::new`] for a scene with `features` (before it is uploaded).
@@ -192,7 +257,14 @@ impl DeferredPass {
         probes: bool,
         lightmaps: bool,
         restir: bool,
+        sized: bool,
     ) -> Result<Self> {
+        if sized && (method.uses_maps() || restir) {
+            return Err(Error::Invalid(format!(
+                "shadow rays to sized lights need the '{}' method without ReSTIR",
+                ShadowMethod::RayTraced.name()
+            )));
+        }
         let spec = deferred::Spec {
             beckmann: false,
             shadow_maps: method.uses_maps(),
@@ -202,6 +274,7 @@ impl DeferredPass {
             probes,
             lightmaps,
             restir,
+            shadow_sized: sized,
         };
         let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
@@ -224,7 +297,18 @@ impl DeferredPass {
             &[GpuReservoir::default()],
             raw::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-        Ok(Self { pipeline, method, no_ao, no_shadow, probes, lightmaps, no_probes, restir, no_reservoirs })
+        Ok(Self {
+            pipeline,
+            method,
+            no_ao,
+            no_shadow,
+            probes,
+            lightmaps,
+            no_probes,
+            restir,
+            sized,
+            no_reservoirs,
+        })
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -247,7 +331,8 @@ impl DeferredPass {
             shadow_rays: settings.shadow_rays.max(1),
             ibl_dominant: (settings.ibl_lookup == IblLookup::Dominant) as u32,
             env_size: [env_w, env_h],
-            ..Default::default()
+            light_radius: settings.sized_lights.map_or(0.0, |s| s.radius),
+            sun_one_minus_cos: settings.sized_lights.map_or(0.0, |s| s.sun_one_minus_cos()),
         }
     }
 
@@ -269,6 +354,12 @@ impl DeferredPass {
         params: &DeferredParams,
     ) -> Result<()> {
         let LightingInputs { ao, shadows, probes, lightmaps, restir } = *inputs;
+        let sized = params.light_radius > 0.0 || params.sun_one_minus_cos > 0.0;
+        if sized && !self.sized {
+            return Err(Error::Invalid(
+                "the lighting pass was built for point lights but was given sized lights".into(),
+            ));
+        }
         let reservoirs = match (self.restir, restir) {
             (false, None) => &self.no_reservoirs,
             (true, Some(r)) => {

@@ -123,6 +123,12 @@ pub struct ShadowSettings {
     pub moment_blur: u32,
     /// Moment bias α of 4MSM (towards two equal spikes at 0 and 1).
     pub moment_bias: f32,
+    /// With [`ShadowMethod::RayTraced`]: shadow the punctual lights as sized lights, a sphere of
+    /// [`ShadowSettings::light_radius`] or a cone of [`ShadowSettings::sun_angle`], by the
+    /// unoccluded fraction of `shadow_rays` rays per light
+    /// ([`crate::passes::deferred::LightingSettings::sized_lights`]): the soft shadows PCSS
+    /// approximates. Off by default: `rt` shadows points, as the path tracer's lights are.
+    pub sized_rays: bool,
 }
 
 impl Default for ShadowSettings {
@@ -141,6 +147,7 @@ impl Default for ShadowSettings {
             max_radius: 16.0,
             moment_blur: 2,
             moment_bias: 3e-5,
+            sized_rays: false,
         }
     }
 }

@@ -95,6 +95,14 @@ enum Command {
         /// glTF scenes to run as well (their first camera, or one framing them).
         #[arg(long = "gltf")]
         gltf: Vec<PathBuf>,
+        /// Dabrovic Sponza, lit by a sun along 0.25,-1,0.15 (not in --quick runs; skipped with a
+        /// message when the file is absent).
+        #[arg(long, default_value = "../shared/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb")]
+        sponza: PathBuf,
+        /// Run only the scenes of these keys (cornell, cornell-point, spheres, textured,
+        /// sponza-sun, a --gltf file's stem); all when absent.
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
         /// Where to write suite.json, suite.csv, the charts and the cached references.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
@@ -178,6 +186,12 @@ enum Command {
         /// punctual lights).
         #[arg(long, value_parser = cli::parse_direction)]
         sun: Option<[f32; 3]>,
+        /// Radius of point and spot lights for PCSS and the sized lights' rays, metres.
+        #[arg(long, default_value_t = umbra::passes::shadow::ShadowSettings::default().light_radius, value_parser = cli::parse_non_negative)]
+        light_radius: f32,
+        /// Angular radius of directional lights for PCSS and the sized lights' rays, degrees.
+        #[arg(long, default_value_t = umbra::passes::shadow::ShadowSettings::default().sun_angle.to_degrees(), value_parser = cli::parse_non_negative)]
+        sun_angle: f32,
         /// Timed repeats (after a warm-up).
         #[arg(long, default_value_t = 5)]
         repeats: usize,
@@ -683,9 +697,29 @@ fn run(cli: Cli) -> Result<()> {
             restir_pt::write_chart(&out, &doc)?;
         }
         Command::Peers { table } => print!("{}", peers::table(&read_json(&table)?)),
-        Command::Shadows { scene, size, map_size, cascades, sun, repeats, out, table } => match table {
+        Command::Shadows {
+            scene,
+            size,
+            map_size,
+            cascades,
+            sun,
+            light_radius,
+            sun_angle,
+            repeats,
+            out,
+            table,
+        } => match table {
             Some(path) => print!("{}", shadows::table(&read_json(&path)?)),
-            None => run_shadows(scene, size, map_size, cascades, sun, repeats, out)?,
+            None => {
+                let settings = umbra::passes::shadow::ShadowSettings {
+                    map_size,
+                    cascades,
+                    light_radius,
+                    sun_angle: sun_angle.to_radians(),
+                    ..Default::default()
+                };
+                run_shadows(scene, size, &settings, sun, repeats, out)?
+            }
         },
         Command::Denoise {
             quick,
@@ -827,6 +861,8 @@ fn run(cli: Cli) -> Result<()> {
             env_color,
             ao_radius,
             gltf,
+            sponza,
+            only,
             out,
             table,
         } => {
@@ -867,7 +903,7 @@ fn run(cli: Cli) -> Result<()> {
                     out,
                 }
             };
-            run_suite(&settings, quick, &gltf)?
+            run_suite(&settings, quick, &gltf, &sponza, &only)?
         }
     }
     Ok(())
@@ -917,7 +953,17 @@ fn cornell_point_light() -> umbra::scene::Scene {
     scene
 }
 
-fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> Result<()> {
+/// Samples per pixel of Sponza's reference and most measured in the suite (a path through
+/// Sponza costs about 3× one through the other scenes: this keeps its run to a few minutes).
+const SPONZA_SUITE_SPP: (u32, u32) = (512, 64);
+
+fn run_suite(
+    settings: &suite::SuiteSettings,
+    quick: bool,
+    gltf: &[PathBuf],
+    sponza: &std::path::Path,
+    only: &[String],
+) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
     std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
@@ -932,12 +978,45 @@ fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> 
             Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
         }
     }
+    if !quick {
+        match umbra::scene::Scene::load(sponza) {
+            Ok(mut scene) => {
+                add_sun(&mut scene, DEFAULT_SUN);
+                let stem =
+                    sponza.file_stem().map_or_else(|| "sponza".into(), |s| s.to_string_lossy().into_owned());
+                scene.name = format!("{stem} under a sun");
+                scenes.push(("sponza-sun".into(), scene));
+            }
+            Err(e) => {
+                eprintln!(
+                    "skipping Sponza under a sun: {e} (../shared/assets is absent on CI; --sponza PATH)"
+                )
+            }
+        }
+    }
     scenes.extend(load_gltf(gltf)?);
+    if !only.is_empty() {
+        scenes.retain(|(key, _)| only.contains(key));
+        if scenes.is_empty() {
+            anyhow::bail!("--only {}: none of the suite's scenes has that key", only.join(","));
+        }
+    }
     let mut results = Vec::new();
     for (key, scene) in &scenes {
         let camera = bench_camera(scene);
-        let result =
-            suite::run_scene(&ctx, key, scene, &camera, settings).with_context(|| scene.name.clone())?;
+        let capped;
+        let scene_settings = if key == "sponza-sun" {
+            capped = suite::SuiteSettings {
+                reference_spp: settings.reference_spp.min(SPONZA_SUITE_SPP.0),
+                max_spp: settings.max_spp.min(SPONZA_SUITE_SPP.1),
+                ..settings.clone()
+            };
+            &capped
+        } else {
+            settings
+        };
+        let result = suite::run_scene(&ctx, key, scene, &camera, scene_settings)
+            .with_context(|| scene.name.clone())?;
         println!(
             "\n{} ({} triangles), reference noise floor {:.2e}:",
             result.name, result.triangles, result.reference_rel_mse_floor
@@ -976,10 +1055,21 @@ fn run_suite(settings: &suite::SuiteSettings, quick: bool, gltf: &[PathBuf]) -> 
             "scene": r.name,
             "triangles": r.triangles,
             "reference_rel_mse_floor": r.reference_rel_mse_floor,
-            "points": r.points.iter().map(|p| json!({
-                "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms,
-                "rmse": p.rmse, "rel_mse": p.rel_mse, "flip": p.flip,
-            })).collect::<Vec<_>>(),
+            "reference_spp": r.reference_spp,
+            "shadow_reference": r.shadow_reference.as_ref().map(|s| json!({
+                "kind": "rt sized", "rays": s.rays, "frames": s.frames,
+                "light_radius": s.light_radius, "sun_angle": s.sun_angle,
+            })),
+            "points": r.points.iter().map(|p| {
+                let mut point = json!({
+                    "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms,
+                    "rmse": p.rmse, "rel_mse": p.rel_mse, "flip": p.flip,
+                });
+                if let Some(shadow) = p.shadow_rel_mse {
+                    point["shadow_rel_mse"] = json!(shadow);
+                }
+                point
+            }).collect::<Vec<_>>(),
             "ao_reference_mse_floor": r.ao_reference_mse_floor,
             "ao_points": r.ao_points.iter().map(|p| json!({
                 "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms, "mse": p.rel_mse,
@@ -1045,8 +1135,7 @@ fn run_passes(
 fn run_shadows(
     scene: Option<PathBuf>,
     size: (u32, u32),
-    map_size: u32,
-    cascades: u32,
+    settings: &umbra::passes::shadow::ShadowSettings,
     sun: Option<[f32; 3]>,
     repeats: usize,
     out: PathBuf,
@@ -1061,25 +1150,26 @@ fn run_shadows(
     }
     let camera = bench_camera(&loaded);
     let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
-    let settings = umbra::passes::shadow::ShadowSettings { map_size, cascades, ..Default::default() };
     let layers = umbra::passes::shadow::ShadowPlan::new(
         &gpu_scene.punctual_lights,
         gpu_scene.bounds,
         &camera,
         size,
-        &settings,
+        settings,
     )?
     .layers
     .len();
-    let timings = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, &settings)?;
+    settings.validate()?;
+    let (timings, reference) = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, settings)?;
     let doc = shadows::to_json(
         &ctx.info().name,
         &loaded.name,
         gpu_scene.bvh_stats.triangles,
         size,
-        &settings,
+        settings,
         layers,
         &timings,
+        &reference,
     );
     print!("{}", shadows::table(&doc));
     for t in &timings {

@@ -87,6 +87,7 @@ pub fn series(
                 rmse,
                 rel_mse,
                 flip,
+                shadow_rel_mse: None,
             },
             probes: volume.grid.count(),
             active,
@@ -181,7 +182,16 @@ pub fn lightmap_series(
             size,
             maps: maps.materials.len(),
             bake_ms,
-            point: Point { method, unit: "lightmap_size", value: size, ms, rmse, rel_mse, flip },
+            point: Point {
+                method,
+                unit: "lightmap_size",
+                value: size,
+                ms,
+                rmse,
+                rel_mse,
+                flip,
+                shadow_rel_mse: None,
+            },
         });
     }
     Ok(out)
@@ -209,7 +219,16 @@ pub fn run_scene(
         )?;
         let (rmse, rel_mse) = suite::errors(&image.color, &reference);
         let flip = Some(suite::flip_mean(&image.color, &reference, s.size));
-        plain.push(Point { method: method.into(), unit: "shadow_rays", value: 4, ms, rmse, rel_mse, flip });
+        plain.push(Point {
+            method: method.into(),
+            unit: "shadow_rays",
+            value: 4,
+            ms,
+            rmse,
+            rel_mse,
+            flip,
+            shadow_rel_mse: None,
+        });
     }
     let plain: [Point; 2] = plain.try_into().map_err(|_| anyhow::anyhow!("two hybrid points"))?;
     let probes = series(ctx, &renderer, camera, &reference, s, per_side)?;

@@ -4,6 +4,11 @@
 //! (so the error is the shadow term's: everything else is the same), each a median over repeats
 //! after a warm-up. The ray-traced shadows' own cost is the lighting pass's time with rays less
 //! its time with a hard map (the same shading, one map read instead of a ray per light).
+//!
+//! PCSS and the other filters soften shadows by the lights' size (`light_radius`, `sun_angle`),
+//! so when the lights have one, every method is also measured against ray-traced shadows of
+//! those sized lights with [`REFERENCE_RAYS`] rays per light (the [`Reference`], recorded in the
+//! JSON), and ray-traced sized lights themselves are timed at [`SIZED_RAYS`] rays.
 
 use super::num;
 use anyhow::Result;
@@ -11,30 +16,62 @@ use serde_json::{json, Value};
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
-use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
+use umbra::passes::gbuffer::GBufferViews;
+use umbra::passes::shadow::{ShadowMaps, ShadowMethod, ShadowSettings};
 use umbra::render::{HybridSettings, HybridTargets, Passes};
 use umbra::scene::Camera;
-use umbra::vk::{Context, GpuTimer};
+use umbra::vk::{raw, Context, GpuTimer};
 
 /// One method's measurements.
 pub struct ShadowTiming {
-    /// The method's name.
+    /// The method's name (`rt sized`: ray-traced shadows of the sized lights).
     pub method: &'static str,
+    /// Shadow rays per light and pixel (`rt sized`; 1 otherwise).
+    pub rays: u32,
     /// Median GPU milliseconds of rendering every layer (0 for rays).
     pub maps_ms: f64,
     /// The maps' steps (kernel, milliseconds summed over the layers) of the last repeat.
     pub steps: Vec<(String, f64)>,
     /// Median GPU milliseconds of the lighting pass.
     pub lighting_ms: f64,
-    /// Relative MSE of the lit image against the ray-traced one (mean over pixels and channels
-    /// of d² / (ref² + 0.01)).
+    /// Relative MSE of the lit image against the ray-traced one of point lights (mean over
+    /// pixels and channels of d² / (ref² + 0.01)).
     pub rel_mse: f64,
-    /// Fraction of pixels whose luminance differs from the ray-traced by more than 10 %.
+    /// Fraction of pixels whose luminance differs from the point lights' ray-traced by more
+    /// than 10 %.
     pub differing: f64,
+    /// Relative MSE against the [`Reference`].
+    pub ref_rel_mse: f64,
+    /// Fraction of pixels more than 10 % off the [`Reference`] in luminance.
+    pub ref_differing: f64,
 }
 
+/// What the methods' errors are measured against: ray-traced shadows of the sized lights (a
+/// sphere of `light_radius`, a cone of `sun_angle`) with `rays` rays per light and pixel, the
+/// mean of `frames` frames of another seed than the measured ones; or, when the lights have no
+/// size, the point lights' ray-traced image (`rays` 1).
+pub struct Reference {
+    /// `rt sized` or `rt` (points).
+    pub kind: &'static str,
+    /// Rays per light and pixel in all.
+    pub rays: u32,
+    /// Frames averaged.
+    pub frames: u32,
+    /// Radius of point and spot lights, metres.
+    pub light_radius: f32,
+    /// Angular radius of directional lights, radians.
+    pub sun_angle: f32,
+}
+
+/// Rays per light and pixel of the sized lights' reference.
+pub const REFERENCE_RAYS: u32 = 256;
+/// Shadow-ray counts of the `rt sized` series.
+pub const SIZED_RAYS: [u32; 3] = [1, 4, 16];
+
 /// Times every method on `scene` at `size` with maps of `shadows.map_size` (the other shadow
-/// settings as given), `repeats` times after a warm-up.
+/// settings as given), `repeats` times after a warm-up; then ray-traced shadows of the sized
+/// lights at [`SIZED_RAYS`]; and measures each against the point lights' ray-traced image and
+/// the [`Reference`].
 pub fn run(
     ctx: &Context,
     scene: &GpuScene,
@@ -42,16 +79,38 @@ pub fn run(
     size: (u32, u32),
     repeats: usize,
     shadows: &ShadowSettings,
-) -> Result<Vec<ShadowTiming>> {
+) -> Result<(Vec<ShadowTiming>, Reference)> {
     let passes = Passes::new(ctx, scene);
     let super::passes::FrameImages { gbuffer, output, ibl } =
         super::passes::FrameImages::new(ctx, scene, size)?;
     let views = gbuffer.views();
     let lighting = LightingSettings { env: [0.2; 3], ..LightingSettings::default() };
-    let mut reference: Option<Vec<[f32; 4]>> = None;
-    let mut out = Vec::new();
-    for method in ShadowMethod::ALL {
-        let settings = ShadowSettings { method, ..*shadows };
+    let mut point: Option<Vec<[f32; 4]>> = None;
+    let mut measured = Vec::new();
+    let mut runs: Vec<(ShadowMethod, u32)> = ShadowMethod::ALL.iter().map(|&m| (m, 1)).collect();
+    let sized = shadows.light_radius > 0.0 || shadows.sun_angle > 0.0;
+    if sized {
+        runs.extend(SIZED_RAYS.iter().map(|&rays| (ShadowMethod::RayTraced, rays)));
+    }
+    fn targets<'a>(
+        views: &'a GBufferViews,
+        hdr: raw::ImageView,
+        maps: Option<&'a ShadowMaps>,
+    ) -> HybridTargets<'a> {
+        HybridTargets {
+            gbuffer: views,
+            ao: None,
+            hdr,
+            ldr: None,
+            shadows: maps,
+            probes: None,
+            lightmaps: None,
+            reservoirs: None,
+        }
+    }
+    for (i, &(method, rays)) in runs.iter().enumerate() {
+        let sized_rays = i >= ShadowMethod::ALL.len();
+        let settings = ShadowSettings { method, sized_rays, ..*shadows };
         let mut maps = match method.uses_maps() {
             true => Some(passes.shadow_maps(scene, camera, size, &settings)?),
             false => None,
@@ -66,23 +125,17 @@ pub fn run(
                 maps_ms.push(steps.iter().map(|s| s.1).sum::<f64>());
             }
         }
-        let targets = HybridTargets {
-            gbuffer: &views,
-            ao: None,
-            hdr: output.view,
-            ldr: None,
-            shadows: maps.as_ref(),
-            probes: None,
-            lightmaps: None,
-            reservoirs: None,
-        };
+        let targets = targets(&views, output.view, maps.as_ref());
         let hybrid = HybridSettings {
             size,
-            lighting,
+            lighting: LightingSettings { shadow_rays: rays, ..lighting },
             ao: None::<AoSettings>,
             shadows: settings,
             ..HybridSettings::default()
         };
+        if sized_rays && hybrid.lighting_with_shadows().validate_sized_rays(scene.punctual_count).is_err() {
+            continue;
+        }
         let frame =
             || ctx.submit(|cmd| passes.record_hybrid(cmd, scene, &ibl, camera, &targets, &hybrid, None));
         super::rays::warm_up(frame)?;
@@ -97,18 +150,68 @@ pub fn run(
             lighting_ms.extend(times.iter().filter(|t| t.name == "lighting").map(|t| t.ms));
         }
         let image: Vec<[f32; 4]> = output.read(ctx)?;
-        let reference = reference.get_or_insert_with(|| image.clone());
-        let (rel_mse, differing) = compare(&image, reference);
-        out.push(ShadowTiming {
-            method: method.name(),
-            maps_ms: if maps_ms.is_empty() { 0.0 } else { super::rays::median(&mut maps_ms) },
-            steps,
-            lighting_ms: super::rays::median(&mut lighting_ms),
-            rel_mse,
-            differing,
-        });
+        let point = point.get_or_insert_with(|| image.clone());
+        let (rel_mse, differing) = compare(&image, point);
+        measured.push((
+            image,
+            ShadowTiming {
+                method: if sized_rays { "rt sized" } else { method.name() },
+                rays,
+                maps_ms: if maps_ms.is_empty() { 0.0 } else { super::rays::median(&mut maps_ms) },
+                steps,
+                lighting_ms: super::rays::median(&mut lighting_ms),
+                rel_mse,
+                differing,
+                ref_rel_mse: 0.0,
+                ref_differing: 0.0,
+            },
+        ));
     }
-    Ok(out)
+    // The reference: the sized lights' rays, as many per frame as one invocation may trace,
+    // frames averaged (their rays continue one sequence), another seed.
+    let lights = scene.punctual_count.clamp(1, umbra::gpu::layout::PUNCTUAL_ALL);
+    let per_frame = (LightingSettings::MAX_SHADOW_RAYS / lights).max(1);
+    let frames = if sized { REFERENCE_RAYS.div_ceil(per_frame) } else { 1 };
+    let reference = Reference {
+        kind: if sized { "rt sized" } else { "rt" },
+        rays: if sized { per_frame * frames } else { 1 },
+        frames,
+        light_radius: shadows.light_radius,
+        sun_angle: shadows.sun_angle,
+    };
+    let reference_image = match sized {
+        false => point.clone().unwrap_or_default(),
+        true => {
+            let settings = ShadowSettings { method: ShadowMethod::RayTraced, sized_rays: true, ..*shadows };
+            let targets = targets(&views, output.view, None);
+            let mut sum = vec![[0.0f32; 4]; (size.0 * size.1) as usize];
+            for f in 0..frames {
+                let hybrid = HybridSettings {
+                    size,
+                    lighting: LightingSettings { shadow_rays: per_frame, frame: f, seed: 1, ..lighting },
+                    ao: None::<AoSettings>,
+                    shadows: settings,
+                    ..HybridSettings::default()
+                };
+                ctx.submit(|cmd| passes.record_hybrid(cmd, scene, &ibl, camera, &targets, &hybrid, None))?;
+                let image: Vec<[f32; 4]> = output.read(ctx)?;
+                for (s, p) in sum.iter_mut().zip(&image) {
+                    for c in 0..4 {
+                        s[c] += p[c] / frames as f32;
+                    }
+                }
+            }
+            sum
+        }
+    };
+    let out = measured
+        .into_iter()
+        .map(|(image, mut t)| {
+            (t.ref_rel_mse, t.ref_differing) = compare(&image, &reference_image);
+            t
+        })
+        .collect();
+    Ok((out, reference))
 }
 
 /// (relative MSE, fraction of pixels more than 10 % off in luminance) of `image` against
@@ -129,6 +232,7 @@ fn compare(image: &[[f32; 4]], reference: &[[f32; 4]]) -> (f64, f64) {
 }
 
 /// The JSON document of a run.
+#[allow(clippy::too_many_arguments)]
 pub fn to_json(
     device: &str,
     scene: &str,
@@ -137,6 +241,7 @@ pub fn to_json(
     settings: &ShadowSettings,
     layers: usize,
     timings: &[ShadowTiming],
+    reference: &Reference,
 ) -> Value {
     json!({
         "device": device,
@@ -146,13 +251,23 @@ pub fn to_json(
         "map_size": settings.map_size,
         "cascades": settings.cascades,
         "layers": layers,
+        "reference": {
+            "kind": reference.kind,
+            "rays": reference.rays,
+            "frames": reference.frames,
+            "light_radius": reference.light_radius,
+            "sun_angle": reference.sun_angle,
+        },
         "methods": timings.iter().map(|t| json!({
             "method": t.method,
+            "rays": t.rays,
             "maps_ms": t.maps_ms,
             "steps": t.steps.iter().map(|(name, ms)| json!({"step": name, "ms": ms})).collect::<Vec<_>>(),
             "lighting_ms": t.lighting_ms,
             "rel_mse_vs_rt": t.rel_mse,
             "pixels_off_10pct": t.differing,
+            "rel_mse_vs_reference": t.ref_rel_mse,
+            "pixels_off_10pct_vs_reference": t.ref_differing,
         })).collect::<Vec<_>>(),
     })
 }
@@ -165,10 +280,21 @@ pub fn table(doc: &Value) -> String {
     };
     // What the shadow rays themselves cost: lighting with rays less lighting with a hard map.
     let rays_ms = lighting("rt") - lighting("hard");
+    let r = &doc["reference"];
+    let reference = match r["kind"].as_str() {
+        Some("rt sized") => format!(
+            "ray-traced shadows of the sized lights (radius {} m, sun {:.2}°), {} rays per light in {} frames",
+            num(&r["light_radius"]) as f32,
+            num(&r["sun_angle"]).to_degrees(),
+            r["rays"],
+            r["frames"]
+        ),
+        _ => "ray-traced shadows of the point lights".to_string(),
+    };
     let mut out = format!(
-        "{} ({} triangles) at {}×{}, maps {}² ({} layers), {}:\n\n\
-         | method | maps ms | lighting ms | maps ÷ shadow rays | rel. MSE vs rt | pixels > 10 % off |\n\
-         |---|---:|---:|---:|---:|---:|\n",
+        "{} ({} triangles) at {}×{}, maps {}² ({} layers), {}; reference: {reference}:\n\n\
+         | method | maps ms | lighting ms | maps ÷ shadow rays | rel. MSE vs rt (points) | pixels > 10 % off | rel. MSE vs reference | pixels > 10 % off the reference |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|\n",
         doc["scene"].as_str().unwrap_or("?"),
         doc["triangles"],
         doc["size"][0],
@@ -179,15 +305,20 @@ pub fn table(doc: &Value) -> String {
     );
     for m in &methods {
         let maps = num(&m["maps_ms"]);
-        let ratio = if m["method"] == "rt" { "—".to_string() } else { format!("{:.2}", maps / rays_ms) };
+        let name = match m["method"].as_str().unwrap_or("?") {
+            "rt sized" => format!("rt sized, {} ray{}", m["rays"], if m["rays"] == 1 { "" } else { "s" }),
+            other => other.to_string(),
+        };
+        let ratio = if m["maps_ms"] == 0.0 { "—".to_string() } else { format!("{:.2}", maps / rays_ms) };
         out += &format!(
-            "| {} | {:.1} | {:.1} | {} | {:.2e} | {:.2} % |\n",
-            m["method"].as_str().unwrap_or("?"),
+            "| {name} | {:.1} | {:.1} | {} | {:.2e} | {:.2} % | {:.2e} | {:.2} % |\n",
             maps,
             num(&m["lighting_ms"]),
             ratio,
             num(&m["rel_mse_vs_rt"]),
             100.0 * num(&m["pixels_off_10pct"]),
+            num(&m["rel_mse_vs_reference"]),
+            100.0 * num(&m["pixels_off_10pct_vs_reference"]),
         );
     }
     out += &format!(

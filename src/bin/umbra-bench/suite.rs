@@ -12,7 +12,11 @@
 //! - `hybrid, <filter> shadow maps` (scenes with punctual lights): the hybrid at 4 shadow rays
 //!   with its punctual lights shadowed by maps (hard, PCF, PCSS, moments) at a sweep of map
 //!   sizes; the time includes rendering the maps every frame (a moving light; a static one pays
-//!   only the lighting pass).
+//!   only the lighting pass). With them, `hybrid, rt sized shadows`: the hybrid with its punctual
+//!   lights' shadows ray-traced as sized lights at a sweep of rays per light. These series and
+//!   the hybrid's also get the shadow term's error: against the same hybrid with the sized lights'
+//!   shadows ray-traced with 256 rays per light ([`ShadowReference`], the truth PCSS's soft
+//!   shadows approximate; the path tracer's lights are points).
 //! - `hybrid + probes`: the hybrid at 4 shadow rays with irradiance probes baked at a sweep of
 //!   spacings (the scene's longest side / n) lighting its diffuse lobe; the bake is reported
 //!   apart, as precomputation.
@@ -34,11 +38,13 @@ use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::pathtrace::PathTarget;
+use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
 use umbra::render::{AoMethod, HybridSettings, PathSettings};
 use umbra::scene::{Camera, Scene};
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
 /// What the suite runs.
+#[derive(Clone)]
 pub struct SuiteSettings {
     /// Image size of every render.
     pub size: (u32, u32),
@@ -87,6 +93,68 @@ pub struct Point {
     /// Images: mean LDR-FLIP (NVIDIA's perceptual difference, 0–1) of the tone-mapped image
     /// (Khronos PBR Neutral, sRGB) against the tone-mapped reference. AO: none.
     pub flip: Option<f64>,
+    /// The shadow term's relative MSE: the hybrid image against the hybrid with ray-traced
+    /// shadows of the sized lights ([`ShadowReference`]), where the scene has punctual lights and
+    /// the point is a hybrid at 4 shadow rays or a shadow-map or sized-light series.
+    pub shadow_rel_mse: Option<f64>,
+}
+
+/// The shadow term's reference of a scene with punctual lights: the hybrid (SSAO 16, IBL) with
+/// ray-traced shadows of its punctual lights as sized lights (a sphere of `light_radius`, a cone
+/// of `sun_angle`: the size PCSS softens by), `rays` rays per light and pixel in `frames`
+/// frames of another seed, averaged; everything but the shadows as in the measured hybrids.
+#[derive(Clone, Debug)]
+pub struct ShadowReference {
+    /// Rays per light and pixel in all.
+    pub rays: u32,
+    /// Frames averaged.
+    pub frames: u32,
+    /// Radius of point and spot lights, metres.
+    pub light_radius: f32,
+    /// Angular radius of directional lights, radians.
+    pub sun_angle: f32,
+}
+
+/// Rays per light and pixel of the shadow term's reference.
+pub const SHADOW_REFERENCE_RAYS: u32 = 256;
+
+/// Shadow rays per light one frame may trace for sized lights with `punctual` punctual lights.
+fn sized_rays_per_frame(punctual: u32) -> u32 {
+    (LightingSettings::MAX_SHADOW_RAYS / punctual.clamp(1, umbra::gpu::layout::PUNCTUAL_ALL)).max(1)
+}
+
+/// The shadow term's reference image of the scene ([`ShadowReference`]), the hybrid's `settings`
+/// but for the shadows and the light samples' seed and count.
+fn shadow_reference(
+    renderer: &Renderer,
+    camera: &Camera,
+    settings: &HybridSettings,
+) -> Result<(Vec<[f32; 4]>, ShadowReference)> {
+    let scene = renderer.scene();
+    let per_frame = sized_rays_per_frame(scene.punctual_count);
+    let frames = SHADOW_REFERENCE_RAYS.div_ceil(per_frame);
+    let shadows = ShadowSettings { method: ShadowMethod::RayTraced, sized_rays: true, ..settings.shadows };
+    let mut sum = vec![[0.0f32; 4]; (settings.size.0 * settings.size.1) as usize];
+    for frame in 0..frames {
+        let lighting = LightingSettings { shadow_rays: per_frame, frame, seed: 2, ..settings.lighting };
+        let image = renderer.passes().hybrid(
+            scene,
+            camera,
+            &HybridSettings { lighting, shadows, ..settings.clone() },
+        )?;
+        for (s, p) in sum.iter_mut().zip(&image.color) {
+            for c in 0..4 {
+                s[c] += p[c] / frames as f32;
+            }
+        }
+    }
+    let reference = ShadowReference {
+        rays: per_frame * frames,
+        frames,
+        light_radius: shadows.light_radius,
+        sun_angle: shadows.sun_angle,
+    };
+    Ok((sum, reference))
 }
 
 /// One scene's results.
@@ -105,6 +173,10 @@ pub struct SceneResult {
     pub ao_reference_mse_floor: f64,
     /// One-off GPU work per scene (IBL tables and prefiltering), milliseconds by pass.
     pub precompute_ms: Vec<(String, f64)>,
+    /// The shadow term's reference (scenes with punctual lights).
+    pub shadow_reference: Option<ShadowReference>,
+    /// Samples per pixel of the scene's path-traced reference.
+    pub reference_spp: u32,
 }
 
 /// Relative MSE's ε: keeps dark pixels from dominating (as in the denoising literature).
@@ -221,6 +293,7 @@ pub fn run_scene(
             rmse,
             rel_mse,
             flip,
+            shadow_rel_mse: None,
         });
         level *= 2;
     }
@@ -230,7 +303,6 @@ pub fn run_scene(
     // SSAO kernel size at 4 shadow rays.
     let ssao = |samples| AoSettings { samples, radius: s.ao_radius, seed: 1, ..AoSettings::default() };
     let mut precompute_ms = Vec::new();
-    use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
     /// One hybrid setting: its series, what its value counts, the value, SSAO, IBL, shadows.
     struct Sweep(String, &'static str, u32, Option<AoSettings>, bool, ShadowSettings);
     let rt = ShadowSettings::default();
@@ -250,7 +322,20 @@ pub fn run_scene(
             rt,
         ));
     }
-    if renderer.scene().punctual_count > 0 {
+    let punctual = renderer.scene().punctual_count;
+    if punctual > 0 {
+        // Ray-traced shadows of the sized lights, as many rays as one frame may trace.
+        for &rays in s.shadow_rays.iter().filter(|&&r| r <= sized_rays_per_frame(punctual)) {
+            let shadows = ShadowSettings { sized_rays: true, ..rt };
+            sweeps.push(Sweep(
+                "hybrid, rt sized shadows".into(),
+                "shadow_rays",
+                rays,
+                Some(ssao(16)),
+                true,
+                shadows,
+            ));
+        }
         for method in [ShadowMethod::Hard, ShadowMethod::Pcf, ShadowMethod::Pcss, ShadowMethod::Moments] {
             for &map_size in &s.shadow_map_sizes {
                 let shadows = ShadowSettings { method, map_size, ..rt };
@@ -259,8 +344,24 @@ pub fn run_scene(
             }
         }
     }
+    // The shadow term's reference: the hybrid at 4 shadow rays with SSAO and IBL, its punctual
+    // lights' shadows ray-traced as sized lights with many rays.
+    let shadow_base = HybridSettings {
+        size: s.size,
+        lighting: LightingSettings { shadow_rays: 4, seed: 1, env, ibl: true, ..LightingSettings::default() },
+        ao: Some(ssao(16)),
+        shadows: rt,
+        ..HybridSettings::default()
+    };
+    let shadow_ref = match punctual > 0 {
+        true => Some(shadow_reference(&renderer, camera, &shadow_base)?),
+        false => None,
+    };
     for Sweep(method, unit, value, ao, ibl, shadows) in sweeps {
         let rays = if unit == "shadow_rays" { value } else { 4 };
+        // The shadow term's error where everything but the shadows (and the emissive triangles'
+        // sample count) is the reference's.
+        let same_but_shadows = ao.is_some_and(|a| a.samples == 16) && ibl;
         let settings = HybridSettings {
             size: s.size,
             lighting: LightingSettings {
@@ -281,7 +382,11 @@ pub fn run_scene(
         }
         let (rmse, rel_mse) = errors(&image.color, &reference);
         let flip = Some(flip_mean(&image.color, &reference, s.size));
-        points.push(Point { method, unit, value, ms, rmse, rel_mse, flip });
+        let shadow_rel_mse = match &shadow_ref {
+            Some((shadow_image, _)) if same_but_shadows => Some(errors(&image.color, shadow_image).1),
+            _ => None,
+        };
+        points.push(Point { method, unit, value, ms, rmse, rel_mse, flip, shadow_rel_mse });
     }
     // Irradiance probes, baked once per scene and spacing.
     for p in super::probes::series(ctx, &renderer, camera, &reference, s, &s.probes_per_side)? {
@@ -324,6 +429,8 @@ pub fn run_scene(
         ao_points,
         ao_reference_mse_floor: ao_floor,
         precompute_ms,
+        shadow_reference: shadow_ref.map(|(_, r)| r),
+        reference_spp: s.reference_spp,
     })
 }
 
@@ -468,6 +575,7 @@ fn ambient_occlusion_sweep(
             rmse: mse.sqrt(),
             rel_mse: mse,
             flip: None,
+            shadow_rel_mse: None,
         });
     }
     Ok((points, floor))
@@ -546,6 +654,10 @@ pub fn table(doc: &serde_json::Value) -> String {
             })
         };
         let mut row = format!("| {} |", scene["scene"].as_str().unwrap_or("?"));
+        if scene["reference_spp"].is_u64() && scene["reference_spp"] != doc["reference_spp"] {
+            row.pop();
+            row += &format!("({}-spp reference) |", scene["reference_spp"]);
+        }
         for spp in [1, 8, 32, 256] {
             row += &format!(" {} |", cell("pathtrace", "spp", spp));
         }
@@ -576,6 +688,40 @@ pub fn table(doc: &serde_json::Value) -> String {
             cells("ssao", "ssao_samples", &[4, 16, 32]),
             cells("rtao", "rays", &[1, 4, 16, 64])
         );
+    }
+    let shadowed: Vec<&serde_json::Value> =
+        scenes.iter().filter(|s| s["shadow_reference"].is_object()).collect();
+    if shadowed.is_empty() {
+        return out;
+    }
+    out += "\nThe shadow term: relative MSE of the hybrid (SSAO 16, IBL) against the same hybrid with \
+            ray-traced shadows of the sized lights (the reference), GPU time per frame:\n\n\
+            | scene | reference | rt, points, 4 rays | rt sized 1 / 4 / 16 rays | hard 1024² | PCF 1024² | PCSS 1024² | moments 1024² |\n\
+            |---|---|---|---|---|---|---|---|\n";
+    for scene in shadowed {
+        let points = &scene["points"];
+        let cell = |method: &str, unit: &str, value: u64| {
+            find(points, method, unit, value).map_or("—".to_string(), |p| {
+                format!("{}: r {}", time(num(&p["gpu_ms"])), sig(num(&p["shadow_rel_mse"]), 2))
+            })
+        };
+        let r = &scene["shadow_reference"];
+        let sized: Vec<String> =
+            [1, 4, 16].iter().map(|&n| cell("hybrid, rt sized shadows", "shadow_rays", n)).collect();
+        let mut row = format!(
+            "| {} | radius {} m, sun {:.2}°, {} rays per light | {} | {} |",
+            scene["scene"].as_str().unwrap_or("?"),
+            num(&r["light_radius"]) as f32,
+            num(&r["sun_angle"]).to_degrees(),
+            r["rays"],
+            cell("hybrid", "shadow_rays", 4),
+            sized.join(" / ")
+        );
+        for method in ["hard", "pcf", "pcss", "moments"] {
+            row += &format!(" {} |", cell(&format!("hybrid, {method} shadow maps"), "map_size", 1024));
+        }
+        out += &row;
+        out += "\n";
     }
     out
 }

@@ -304,29 +304,11 @@ impl Passes {
         Ok(())
     }
 
-    fn gbuffer_pass(&self, scene: &GpuScene) -> Result<&GBufferPass> {
-        self.check(scene)?;
-        self.gbuffer_stage()
-    }
-
-    fn gbuffer_stage(&self) -> Result<&GBufferPass> {
+    fn gbuffer_pass(&self) -> Result<&GBufferPass> {
         built(&self.gbuffer, || GBufferPass::for_features(&self.ctx, &self.features))
     }
 
     fn deferred_pass(
-        &self,
-        scene: &GpuScene,
-        method: ShadowMethod,
-        probes: bool,
-        lightmaps: bool,
-        restir: bool,
-        sized: bool,
-    ) -> Result<&DeferredPass> {
-        self.check(scene)?;
-        self.deferred_stage(method, probes, lightmaps, restir, sized)
-    }
-
-    fn deferred_stage(
         &self,
         method: ShadowMethod,
         probes: bool,
@@ -351,9 +333,9 @@ impl Passes {
         let sized = settings.lighting_with_shadows().sized_lights.is_some();
         std::thread::scope(|s| {
             let lighting = s.spawn(|| {
-                self.deferred_stage(settings.shadows.method, probes, lightmaps, restir, sized).map(|_| ())
+                self.deferred_pass(settings.shadows.method, probes, lightmaps, restir, sized).map(|_| ())
             });
-            let gbuffer = self.gbuffer_stage().map(|_| ());
+            let gbuffer = self.gbuffer_pass().map(|_| ());
             let lighting = lighting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
             gbuffer.and(lighting)
         })
@@ -402,8 +384,8 @@ impl Passes {
     /// that records frames against a deadline.
     pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
         self.check(scene)?;
-        self.gbuffer_pass(scene)?;
-        self.deferred_pass(scene, ShadowMethod::RayTraced, false, false, false, false)?;
+        self.gbuffer_pass()?;
+        self.deferred_pass(ShadowMethod::RayTraced, false, false, false, false)?;
         self.rtao_pass(scene)?;
         self.ssao_pass()?;
         self.blur_pass()?;
@@ -477,7 +459,7 @@ impl Passes {
     ) -> Result<()> {
         self.check(scene)?;
         let params = GBufferPass::params(camera, target.size);
-        self.gbuffer_pass(scene)?.record(&self.ctx, cmd, scene, target, &params)
+        self.gbuffer_pass()?.record(&self.ctx, cmd, scene, target, &params)
     }
 
     /// Records SSAO of `gbuffer` into `raw_ao` and, when `settings.blur`, its depth-aware blur
@@ -571,7 +553,7 @@ impl Passes {
                 method.name()
             )));
         }
-        self.deferred_pass(scene, method, probes, lightmaps, restir, sized)?
+        self.deferred_pass(method, probes, lightmaps, restir, sized)?
             .record(&self.ctx, cmd, scene, gbuffer, output, ibl, inputs, &params)
     }
 

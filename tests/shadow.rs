@@ -57,6 +57,25 @@ fn hard_maps(
     (maps.plan.clone(), depth)
 }
 
+/// A floor, a box and an icosphere (large and small triangles), lit by a point light, a spot
+/// light and `sun`.
+fn mixed_scene(sun: Light) -> Scene {
+    build(
+        "mixed",
+        &[
+            quad(Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -2.0)),
+            cuboid(Vec3::new(-1.0, 0.0, -0.2), Vec3::new(-0.4, 0.7, 0.4)),
+            umbra::procedural::icosphere(3, Vec3::new(0.6, 0.5, 0.1), 0.45).soup(),
+        ],
+        vec![
+            light(LightKind::Point, Vec3::new(0.2, 1.6, 0.9), Vec3::NEG_Y, 5.0),
+            light(LightKind::Spot, Vec3::new(-1.5, 2.0, 1.5), Vec3::new(0.6, -0.8, -0.6), 5.0),
+            sun,
+        ],
+        camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
+    )
+}
+
 /// Every texel of every layer (a point light's cube, a spot's map, a sun's two cascades) holds
 /// the depth of the first surface a ray from the light through the texel's centre meets in the
 /// BVH (the reference), within 1e-4 of the depth plus 1e-5 of the layer's range; where they
@@ -76,20 +95,7 @@ fn rasterized_depth_matches_rays_through_the_bvh() {
     textured.lights.push(sun.clone());
     let kinds: Vec<_> = textured.lights.iter().map(|l| l.kind).collect();
     assert!(kinds.contains(&LightKind::Point) && kinds.contains(&LightKind::Spot), "{kinds:?}");
-    let mixed = build(
-        "mixed",
-        &[
-            quad(Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -2.0)),
-            cuboid(Vec3::new(-1.0, 0.0, -0.2), Vec3::new(-0.4, 0.7, 0.4)),
-            umbra::procedural::icosphere(3, Vec3::new(0.6, 0.5, 0.1), 0.45).soup(),
-        ],
-        vec![
-            light(LightKind::Point, Vec3::new(0.2, 1.6, 0.9), Vec3::NEG_Y, 5.0),
-            light(LightKind::Spot, Vec3::new(-1.5, 2.0, 1.5), Vec3::new(0.6, -0.8, -0.6), 5.0),
-            sun,
-        ],
-        camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
-    );
+    let mixed = mixed_scene(sun);
     let slope = |x: f32, z: f32, lift: f32| Vec3::new(x, -0.5 * x + lift, z);
     let stacked = build(
         "stacked",
@@ -888,20 +894,7 @@ fn sized_light_shadows_match_the_analytic_penumbra() {
 #[test]
 fn sized_lights_of_size_zero_are_the_hard_ray_traced_shadows() {
     let gpu = Gpu::new();
-    let scene = build(
-        "mixed",
-        &[
-            quad(Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -2.0)),
-            cuboid(Vec3::new(-1.0, 0.0, -0.2), Vec3::new(-0.4, 0.7, 0.4)),
-            umbra::procedural::icosphere(3, Vec3::new(0.6, 0.5, 0.1), 0.45).soup(),
-        ],
-        vec![
-            light(LightKind::Point, Vec3::new(0.2, 1.6, 0.9), Vec3::NEG_Y, 5.0),
-            light(LightKind::Spot, Vec3::new(-1.5, 2.0, 1.5), Vec3::new(0.6, -0.8, -0.6), 5.0),
-            light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.3, -1.0, 0.2), 2.0),
-        ],
-        camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
-    );
+    let scene = mixed_scene(light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.3, -1.0, 0.2), 2.0));
     let view = scene.camera(None).unwrap();
     let point = ShadowSettings::default();
     let zero = ShadowSettings { sized_rays: true, light_radius: 0.0, sun_angle: 0.0, ..point };

@@ -181,6 +181,22 @@ pub(super) fn power_time_at(points: &[&Value], error: f64) -> Option<PowerTime> 
     Some(PowerTime::Within(t.exp()))
 }
 
+/// The last column of a table row `p`: power sampling's time at `p`'s error over `p`'s time,
+/// or the bound power sampling's points give (`most`, `one`: what power sampling's setting
+/// counts, plural and singular); "—" for power sampling's own rows.
+pub(super) fn speedup_cell(power: &[&Value], p: &Value, most: &str, one: &str) -> String {
+    if p["method"] == "power" {
+        return "—".to_string();
+    }
+    let ms = num(&p["ms"]);
+    match power_time_at(power, num(&p["rel_mse"])) {
+        Some(PowerTime::Within(t)) => format!("{:.1}×", t / ms),
+        Some(PowerTime::Below(t)) => format!("> {:.1}× (below power's error at its most {most})", t / ms),
+        Some(PowerTime::Above(t)) => format!("< {:.1}× (above power's error at 1 {one})", t / ms),
+        None => "—".into(),
+    }
+}
+
 /// The JSON of a run.
 pub fn to_json(device: &str, scene: &str, s: &RestirBench, points: &[Point], floor: f64) -> Value {
     json!({
@@ -222,19 +238,7 @@ pub fn table(doc: &Value) -> String {
         doc["frames"],
     );
     for p in &points {
-        let speedup = if p["method"] == "power" {
-            "—".to_string()
-        } else {
-            let ms = num(&p["ms"]);
-            match power_time_at(&power, num(&p["rel_mse"])) {
-                Some(PowerTime::Within(t)) => format!("{:.1}×", t / ms),
-                Some(PowerTime::Below(t)) => {
-                    format!("> {:.1}× (below power's error at its most rays)", t / ms)
-                }
-                Some(PowerTime::Above(t)) => format!("< {:.1}× (above power's error at 1 ray)", t / ms),
-                None => "—".into(),
-            }
-        };
+        let speedup = speedup_cell(&power, p, "rays", "ray");
         out += &format!(
             "| {} | {} {} | {:.1} | {:.3} | {:.3} | {speedup} |\n",
             p["method"].as_str().unwrap_or("?"),

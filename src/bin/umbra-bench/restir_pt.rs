@@ -9,7 +9,7 @@
 use super::chart::{self, Chart, ChartPoint};
 use super::num;
 use super::rays::median;
-use super::restir::{power_time_at, PowerTime};
+use super::restir::speedup_cell;
 use super::suite::errors;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -133,19 +133,7 @@ pub fn table(doc: &Value) -> String {
         num(&doc["reference_rel_mse_floor"]),
     );
     for p in &points {
-        let speedup = if p["method"] == "power" {
-            "—".to_string()
-        } else {
-            let ms = num(&p["ms"]);
-            match power_time_at(&power, num(&p["rel_mse"])) {
-                Some(PowerTime::Within(t)) => format!("{:.1}×", t / ms),
-                Some(PowerTime::Below(t)) => {
-                    format!("> {:.1}× (below power's error at its most spp)", t / ms)
-                }
-                Some(PowerTime::Above(t)) => format!("< {:.1}× (above power's error at 1 spp)", t / ms),
-                None => "—".into(),
-            }
-        };
+        let speedup = speedup_cell(&power, p, "spp", "spp");
         out += &format!(
             "| {} | {} | {:.1} | {:.4} | {speedup} |\n",
             p["method"].as_str().unwrap_or("?"),

@@ -72,26 +72,35 @@ impl Context {
         // SAFETY: valid device; the pool, fence and command buffer are destroyed below, or kept
         // in `abandoned` until the GPU has finished with them.
         unsafe {
-            let pool = match device.create_command_pool(&pool_info, None).call("vkCreateCommandPool") {
-                Ok(pool) => pool,
-                Err(e) => {
-                    shared.crumbs.lock().unwrap_or_else(|p| p.into_inner()).extend(crumb);
-                    return Err(e);
-                }
+            let idle = shared.idle_pools.lock().unwrap_or_else(|p| p.into_inner()).pop();
+            let (pool, idle_cmd) = match idle {
+                Some((pool, cmd)) => (pool, Some(cmd)),
+                None => match device.create_command_pool(&pool_info, None).call("vkCreateCommandPool") {
+                    Ok(pool) => (pool, None),
+                    Err(e) => {
+                        shared.crumbs.lock().unwrap_or_else(|p| p.into_inner()).extend(crumb);
+                        return Err(e);
+                    }
+                },
             };
             let mut fence = vk::Fence::null();
             let mut submitted = false;
             let mut timed_out = false;
             let mut recorded = None;
             let result = (|| {
-                let cmd = device
-                    .allocate_command_buffers(
-                        &vk::CommandBufferAllocateInfo::default()
-                            .command_pool(pool)
-                            .level(vk::CommandBufferLevel::PRIMARY)
-                            .command_buffer_count(1),
-                    )
-                    .call("vkAllocateCommandBuffers")?[0];
+                let cmd = match idle_cmd {
+                    Some(cmd) => cmd,
+                    None => {
+                        device
+                            .allocate_command_buffers(
+                                &vk::CommandBufferAllocateInfo::default()
+                                    .command_pool(pool)
+                                    .level(vk::CommandBufferLevel::PRIMARY)
+                                    .command_buffer_count(1),
+                            )
+                            .call("vkAllocateCommandBuffers")?[0]
+                    }
+                };
                 recorded = Some(cmd);
                 if let Some(c) = &crumb {
                     let trail = Trail { buffer: c.raw, passes: Vec::new() };
@@ -166,7 +175,18 @@ impl Context {
             } else {
                 // Finished, failed, or never submitted: nothing of it is in use.
                 device.destroy_fence(fence, None);
-                device.destroy_command_pool(pool, None);
+                // A pool whose work finished is reset and kept for the next submission (its
+                // command buffer back in the initial state); after a failure it is destroyed.
+                let reusable = match (&result, recorded) {
+                    (Ok(_), Some(cmd)) => {
+                        device.reset_command_pool(pool, vk::CommandPoolResetFlags::empty()).is_ok().then_some(cmd)
+                    }
+                    _ => None,
+                };
+                match reusable {
+                    Some(cmd) => shared.idle_pools.lock().unwrap_or_else(|p| p.into_inner()).push((pool, cmd)),
+                    None => device.destroy_command_pool(pool, None),
+                }
                 shared.crumbs.lock().unwrap_or_else(|p| p.into_inner()).extend(crumb);
             }
             result

@@ -106,6 +106,10 @@ pub(crate) struct Shared {
     pub trails: Mutex<HashMap<vk::CommandBuffer, Trail>>,
     /// Breadcrumb buffers no submission uses, for the next ones.
     pub crumbs: Mutex<Vec<CrumbBuffer>>,
+    /// Command pools (reset, each with its one command buffer) no submission uses, for the next
+    /// ones: a pool made and destroyed per submission costs driver work, and the validation
+    /// layer's synchronization checks (1.3.239) keep state for every pool ever made.
+    pub idle_pools: Mutex<Vec<(vk::CommandPool, vk::CommandBuffer)>>,
     /// Submissions a timeout gave up on while the GPU still ran them: freed once their fence
     /// signals ([`Context::wait_idle`], the next submit, or the context's drop).
     pub abandoned: Mutex<Vec<Abandoned>>,
@@ -231,6 +235,9 @@ impl Drop for Shared {
                 self.device.destroy_fence(a.fence, None);
                 self.device.destroy_command_pool(a.pool, None);
                 crumbs.extend(a.crumb);
+            }
+            for (pool, _) in std::mem::take(self.idle_pools.get_mut().unwrap_or_else(|p| p.into_inner())) {
+                self.device.destroy_command_pool(pool, None);
             }
             for crumb in crumbs {
                 crumb.destroy(self);
@@ -416,6 +423,7 @@ impl Context {
                 injected_wait_fault: Mutex::new(None),
                 trails: Mutex::new(HashMap::new()),
                 crumbs: Mutex::new(Vec::new()),
+                idle_pools: Mutex::new(Vec::new()),
                 abandoned: Mutex::new(Vec::new()),
                 submit_timeout_ns: AtomicU64::new(DEFAULT_SUBMIT_TIMEOUT.as_nanos() as u64),
             }),

@@ -374,7 +374,9 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         queue_family_index: host.queue_family,
         allocator: host.allocator.clone(),
     })?;
+    let clock = std::time::Instant::now();
     let renderer = Renderer::new(&ctx, &scene)?;
+    println!("umbra's renderer made in {:.0} ms", clock.elapsed().as_secs_f64() * 1e3);
 
     // The host's resources: two G-buffers (its own, and one umbra fills), HDR and LDR targets.
     let gbuffer_formats = [

@@ -92,11 +92,11 @@ pub struct Renderer {
 
 impl Renderer {
     /// Builds the BVH, uploads the scene, precomputes its image-based lighting and creates every
-    /// pipeline (the path tracer's, the longest to make, on a thread while the scene uploads).
+    /// pipeline (on threads while the scene uploads: [`Passes::prepare_every`]).
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
         let passes = Passes::with_features(ctx, SceneFeatures::of_scene(scene, false));
         let uploaded = std::thread::scope(|s| {
-            let path = s.spawn(|| passes.megakernel(PathOptions::default(), false).map(|_| ()));
+            let path = s.spawn(|| passes.prepare_every(PathOptions::default()));
             let uploaded = GpuScene::upload(ctx, scene);
             let prepared = path.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
             prepared.and(uploaded)

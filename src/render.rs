@@ -365,7 +365,12 @@ impl Passes {
     }
 
     fn rtao_pass(&self, scene: &GpuScene) -> Result<&RtaoPass> {
-        built(&self.rtao, || RtaoPass::new(&self.ctx, scene))
+        self.check(scene)?;
+        self.rtao_stage()
+    }
+
+    fn rtao_stage(&self) -> Result<&RtaoPass> {
+        built(&self.rtao, || RtaoPass::for_features(&self.ctx, &self.features))
     }
 
     fn tonemap_pass(&self) -> Result<&TonemapPass> {
@@ -384,15 +389,29 @@ impl Passes {
     /// that records frames against a deadline.
     pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
         self.check(scene)?;
-        self.gbuffer_pass()?;
-        self.deferred_pass(ShadowMethod::RayTraced, false, false, false, false)?;
-        self.rtao_pass(scene)?;
-        self.ssao_pass()?;
-        self.blur_pass()?;
-        self.tonemap_pass()?;
-        self.resolve_pass()?;
-        self.denoise_pass()?;
-        self.path_pass(scene, options).map(|_| ())
+        self.prepare_every(options)
+    }
+
+    /// [`Passes::prepare`] with no scene yet (from the passes' features): a host can call it
+    /// on a thread while the scene's BVH is built and uploaded. The path tracer's pipeline is
+    /// made on a thread of its own beside the others (the G-buffer's, the lighting pass's and
+    /// RTAO's take a second or more each on lavapipe).
+    pub fn prepare_every(&self, options: PathOptions) -> Result<()> {
+        std::thread::scope(|s| {
+            let path = s.spawn(|| self.megakernel(options, false).map(|_| ()));
+            let rest = self
+                .gbuffer_pass()
+                .and_then(|_| self.deferred_pass(ShadowMethod::RayTraced, false, false, false, false))
+                .and_then(|_| self.rtao_stage())
+                .and_then(|_| self.ssao_pass())
+                .and_then(|_| self.blur_pass())
+                .and_then(|_| self.tonemap_pass())
+                .and_then(|_| self.resolve_pass())
+                .and_then(|_| self.denoise_pass())
+                .map(|_| ());
+            let path = path.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            rest.and(path)
+        })
     }
 
     /// The path tracer's pipeline for `options` (built now if it was not: an embedding host

@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::gpu::kernels::{ao_blur, rtao, ssao};
 use crate::gpu::layout::{AoBlurParams, AoParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
-use crate::gpu::Pipeline;
+use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
 use crate::vk::{barrier, raw, Context};
 
@@ -194,7 +194,12 @@ impl RtaoPass {
     /// Builds the pipeline for `scene` (specialised for its textures and alpha-tested materials:
     /// masked and blended surfaces occlude as the path tracer sees them).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
-        Ok(Self { pipeline: Pipeline::for_scene(ctx, scene, &rtao::Spec::default())? })
+        Self::for_features(ctx, &scene.features())
+    }
+
+    /// [`RtaoPass::new`] for a scene with `features` (before it is uploaded).
+    pub fn for_features(ctx: &Context, features: &SceneFeatures) -> Result<Self> {
+        Ok(Self { pipeline: Pipeline::new(ctx, &rtao::Spec::default(), Some(features))? })
     }
 
     /// The push constants (see [`ao_params`]).

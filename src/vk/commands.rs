@@ -90,16 +90,14 @@ impl Context {
             let result = (|| {
                 let cmd = match idle_cmd {
                     Some(cmd) => cmd,
-                    None => {
-                        device
-                            .allocate_command_buffers(
-                                &vk::CommandBufferAllocateInfo::default()
-                                    .command_pool(pool)
-                                    .level(vk::CommandBufferLevel::PRIMARY)
-                                    .command_buffer_count(1),
-                            )
-                            .call("vkAllocateCommandBuffers")?[0]
-                    }
+                    None => device
+                        .allocate_command_buffers(
+                            &vk::CommandBufferAllocateInfo::default()
+                                .command_pool(pool)
+                                .level(vk::CommandBufferLevel::PRIMARY)
+                                .command_buffer_count(1),
+                        )
+                        .call("vkAllocateCommandBuffers")?[0],
                 };
                 recorded = Some(cmd);
                 if let Some(c) = &crumb {
@@ -178,13 +176,16 @@ impl Context {
                 // A pool whose work finished is reset and kept for the next submission (its
                 // command buffer back in the initial state); after a failure it is destroyed.
                 let reusable = match (&result, recorded) {
-                    (Ok(_), Some(cmd)) => {
-                        device.reset_command_pool(pool, vk::CommandPoolResetFlags::empty()).is_ok().then_some(cmd)
-                    }
+                    (Ok(_), Some(cmd)) => device
+                        .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
+                        .is_ok()
+                        .then_some(cmd),
                     _ => None,
                 };
                 match reusable {
-                    Some(cmd) => shared.idle_pools.lock().unwrap_or_else(|p| p.into_inner()).push((pool, cmd)),
+                    Some(cmd) => {
+                        shared.idle_pools.lock().unwrap_or_else(|p| p.into_inner()).push((pool, cmd))
+                    }
                     None => device.destroy_command_pool(pool, None),
                 }
                 shared.crumbs.lock().unwrap_or_else(|p| p.into_inner()).extend(crumb);

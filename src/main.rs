@@ -294,6 +294,10 @@ struct RenderArgs {
     /// Hybrid shadow maps: PCF filter radius in texels.
     #[arg(long, default_value_t = ShadowSettings::default().pcf_radius, value_parser = cli::parse_positive)]
     pcf_radius: f32,
+    /// Hybrid shadow maps: the largest filter radius in texels, PCSS's blocker search and
+    /// penumbra (a wider penumbra is cut to it); also the guard band of cube faces and spot maps.
+    #[arg(long, default_value_t = ShadowSettings::default().max_radius, value_parser = cli::parse_positive)]
+    shadow_max_radius: f32,
     /// Hybrid, rt shadows: shadow punctual lights as sized lights (a sphere of --light-radius, a
     /// cone of --sun-angle) with --shadow-rays rays each, the unoccluded fraction (soft shadows,
     /// what pcss approximates); without it rt shadows points, as the path tracer's lights are.
@@ -943,6 +947,7 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
         slope_bias: args.shadow_slope_bias,
         normal_bias: args.shadow_normal_bias,
         pcf_radius: args.pcf_radius,
+        max_radius: args.shadow_max_radius,
         light_radius: args.light_radius,
         sun_angle: args.sun_angle.to_radians(),
         sized_rays: args.rt_light_size,

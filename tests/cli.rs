@@ -67,6 +67,7 @@ fn non_finite_and_negative_numbers_are_rejected_by_the_parser() {
         ("--exposure", "inf", "not a finite number"),
         ("--ao-radius", "0", "greater than 0"),
         ("--ao-radius", "-0.5", "greater than 0"),
+        ("--shadow-max-radius", "0", "greater than 0"),
         ("--target-error", "NaN", "not a finite number"),
         ("--env-color", "1,nan,1", "non-negative numbers"),
         ("--spp", "-4", "not in 0..=4294967295"),
@@ -79,6 +80,23 @@ fn non_finite_and_negative_numbers_are_rejected_by_the_parser() {
         assert!(stderr.contains(flag) && stderr.contains(says), "{flag} {value}: {stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
+}
+
+/// Shadow-map settings the parser cannot judge alone (they depend on each other) are refused
+/// before any work, naming the setting, its value and the range: PCSS's largest filter radius
+/// against the map size.
+#[test]
+fn shadow_settings_out_of_range_are_refused() {
+    let out = umbra()
+        .args(["render", "--mode", "hybrid", "--shadows", "pcss", "--size", "8x8"])
+        .args(["--shadow-map-size", "64", "--shadow-max-radius", "9", "-o"])
+        .arg(std::env::temp_dir().join(format!("umbra-radius-{}.png", std::process::id())))
+        .output()
+        .expect("run umbra");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a radius of 9 texels on a 64² map accepted");
+    assert!(stderr.contains("largest filter radius 9 texels must be 0.5 to 8"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
 /// `--mode hybrid` writes the tonemapped PNG and an EXR with the colour and every G-buffer AOV;

@@ -192,6 +192,9 @@ enum Command {
         /// Angular radius of directional lights for PCSS and the sized lights' rays, degrees.
         #[arg(long, default_value_t = umbra::passes::shadow::ShadowSettings::default().sun_angle.to_degrees(), value_parser = cli::parse_non_negative)]
         sun_angle: f32,
+        /// PCSS's largest filter radius, texels.
+        #[arg(long, default_value_t = umbra::passes::shadow::ShadowSettings::default().max_radius, value_parser = cli::parse_positive)]
+        max_radius: f32,
         /// Timed repeats (after a warm-up).
         #[arg(long, default_value_t = 5)]
         repeats: usize,
@@ -705,6 +708,7 @@ fn run(cli: Cli) -> Result<()> {
             sun,
             light_radius,
             sun_angle,
+            max_radius,
             repeats,
             out,
             table,
@@ -716,6 +720,7 @@ fn run(cli: Cli) -> Result<()> {
                     cascades,
                     light_radius,
                     sun_angle: sun_angle.to_radians(),
+                    max_radius,
                     ..Default::default()
                 };
                 run_shadows(scene, size, &settings, sun, repeats, out)?

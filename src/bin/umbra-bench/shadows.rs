@@ -250,6 +250,7 @@ pub fn to_json(
         "size": [size.0, size.1],
         "map_size": settings.map_size,
         "cascades": settings.cascades,
+        "max_radius": settings.max_radius,
         "layers": layers,
         "reference": {
             "kind": reference.kind,

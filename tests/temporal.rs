@@ -335,6 +335,54 @@ fn a_disocclusion_starts_afresh() {
     assert!(((m_blind - expected) / expected).abs() >= 0.03, "the test cannot tell a ghost: {m_blind}");
 }
 
+/// A surface turned in place (the left half's normal 60° from the camera's axis in the last
+/// frame, the same distance, now lit 0.5 instead of 1): the depth test cannot see it, the normal
+/// test rejects the history there (length 1) and the half shows its new light (mean within 3 %);
+/// with the normal test off (tolerance −1) the old light ghosts there.
+#[test]
+fn a_turned_surface_starts_afresh() {
+    let gpu = Gpu::new();
+    let flat = |_: f32, _: f32| 1.0;
+    let plane = Layer { depth: 4.0, rect: None, albedo: [0.5, 0.5, 0.5], irradiance: &flat };
+    let mut input: Vec<(PathImage, Camera)> =
+        (0..9u64).map(|k| (frame(0.0, &[plane], 1, 0.3, 500 + k).0, camera(0.0))).collect();
+    let s = 0.75f32.sqrt();
+    let last = &mut input[8].0;
+    for (i, (nd, m)) in last.normal_depth.iter_mut().zip(last.mean.iter_mut()).enumerate() {
+        if i as u32 % SIZE.0 < 32 {
+            nd[0] = s;
+            nd[2] = 0.5;
+            for c in 0..3 {
+                m[c] *= 0.5;
+            }
+        }
+    }
+    let left = |x: u32, y: u32| (4..28).contains(&x) && (4..60).contains(&y);
+    let left_mean = |color: &[[f32; 4]]| {
+        let values: Vec<f64> = color
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| left(*i as u32 % SIZE.0, *i as u32 / SIZE.0))
+            .map(|(_, p)| p[1] as f64)
+            .collect();
+        values.iter().sum::<f64>() / values.len() as f64
+    };
+    let settings = DenoiseSettings::default();
+    let out = run(&gpu, &input, &settings, &TemporalSettings::default());
+    let blind =
+        run(&gpu, &input, &settings, &TemporalSettings { normal_tolerance: -1.0, ..Default::default() });
+    let result = out.last().unwrap();
+    let reset =
+        (0..SIZE.0 * SIZE.1).filter(|i| i % SIZE.0 < 32).all(|i| result.history_length[i as usize] == 1.0);
+    let (m, m_blind) = (left_mean(&result.color), left_mean(&blind.last().unwrap().color));
+    eprintln!(
+        "turned surface: left half mean {m:.4} (normal test off {m_blind:.4}, truth 0.25); reset {reset}"
+    );
+    assert!(reset, "the turned half kept its history");
+    assert!(((m - 0.25) / 0.25).abs() < 0.03, "ghosting: {m}");
+    assert!(((m_blind - 0.25) / 0.25).abs() >= 0.03, "the test cannot tell a ghost: {m_blind}");
+}
+
 /// Bad settings are refused with the setting's name.
 #[test]
 fn temporal_settings_are_validated() {
@@ -400,7 +448,7 @@ fn embedded_cornell_box_converges_over_frames() {
     .unwrap();
     let (mut temporal, mut spatial) = (Vec::new(), Vec::new());
     let denoise_settings = umbra::render::DenoiseSettings::default();
-    let mut frame = |renderer: &Renderer, history: &mut umbra::passes::temporal::TemporalHistory, k: u32| {
+    let frame = |renderer: &Renderer, history: &mut umbra::passes::temporal::TemporalHistory, k: u32| {
         let settings =
             PathSettings { size, spp: 1, seed: 3, first_sample: k, lobe_split: true, ..Default::default() };
         gpu.submit(|cmd| {

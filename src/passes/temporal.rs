@@ -226,6 +226,7 @@ impl TemporalPass {
     /// `history` and `images` as [`TemporalOutputs`] says (with the à-trous iteration counts
     /// `iterations` of the two parts), then a compute-to-compute barrier. The caller calls
     /// [`TemporalPass::advance`] once the frame is recorded.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn record<'a>(
         &self,
         ctx: &Context,

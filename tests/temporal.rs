@@ -178,10 +178,13 @@ fn a_still_camera_accumulates_the_mean_of_its_frames() {
         let mut pooled = frames[0].0.clone();
         let n = (k + 1) as f32;
         for (i, p) in pooled.mean.iter_mut().enumerate() {
-            for c in 0..3 {
-                p[c] = frames[..=k].iter().map(|(f, _)| f.mean[i][c]).sum::<f32>() / n;
-            }
-            p[3] = n;
+            *p = [0, 1, 2, 3].map(|c| {
+                if c == 3 {
+                    n
+                } else {
+                    frames[..=k].iter().map(|(f, _)| f.mean[i][c]).sum::<f32>() / n
+                }
+            });
         }
         denoise(&gpu, &pooled, &settings).unwrap().color
     };
@@ -352,8 +355,8 @@ fn a_turned_surface_starts_afresh() {
         if i as u32 % SIZE.0 < 32 {
             nd[0] = s;
             nd[2] = 0.5;
-            for c in 0..3 {
-                m[c] *= 0.5;
+            for v in &mut m[..3] {
+                *v *= 0.5;
             }
         }
     }

@@ -19,7 +19,7 @@ use umbra::vk::{raw, Context, GpuTimer, Image};
 fn turned(base: &Camera, angle: f32) -> Camera {
     let up = glam::Vec3::from(base.up).normalize();
     let forward = glam::Quat::from_axis_angle(up, angle) * glam::Vec3::from(base.forward);
-    Camera { forward: forward.into(), ..base.clone() }
+    Camera { forward: forward.into(), ..*base }
 }
 
 /// Runs the camera path and prints the per-frame errors (unless `timing_only`) and the timings.

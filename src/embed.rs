@@ -18,6 +18,12 @@
 //! renderer.record_path_resolve(cmd, &target, hdr_view)?;
 //! // or denoised into it (working images allocated once, moved to GENERAL once):
 //! renderer.record_path_denoise(cmd, &target, &denoise_images, hdr_view, &DenoiseSettings::default())?;
+//! // or accumulated over frames while the camera moves (a history kept from frame to frame,
+//! // made once per view size, moved to GENERAL once; umbra keeps the previous frame's camera):
+//! let mut history = renderer.temporal_history(size, TemporalSettings::default())?;
+//! renderer.record_path_samples(cmd, &camera, &target, &path_settings_of_this_frame, 0, spp)?;
+//! renderer.record_path_denoise_temporal(cmd, &camera, &target, &denoise_images, &mut history,
+//!     hdr_view, &DenoiseSettings::default())?;
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
 //!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
@@ -74,6 +80,7 @@ use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
 use crate::passes::probes::{ProbeSettings, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowSettings};
+use crate::passes::temporal::{TemporalHistory, TemporalSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
 use crate::scene::{Camera, Scene};
@@ -88,6 +95,9 @@ pub struct Renderer {
     ibl: IblResources,
     passes: Passes,
     path_options: PathOptions,
+    /// Counts [`Renderer::update_scene`] calls: a temporal history made under another starts
+    /// afresh.
+    generation: u64,
 }
 
 impl Renderer {
@@ -125,6 +135,7 @@ impl Renderer {
             path_options,
             scene,
             ctx: ctx.clone(),
+            generation: 0,
         })
     }
 
@@ -144,6 +155,7 @@ impl Renderer {
     /// them, so an engine can update every frame without compiling a kernel.
     pub fn update_scene(&mut self, scene: &Scene) -> Result<()> {
         self.scene.update(&self.ctx, scene)?;
+        self.generation += 1;
         if self.scene.features() != self.passes.features() {
             self.passes = Passes::new(&self.ctx, &self.scene);
             self.passes.prepare(&self.scene, self.path_options)?;
@@ -222,6 +234,40 @@ impl Renderer {
         settings: &DenoiseSettings,
     ) -> Result<()> {
         self.passes.record_denoise(cmd, target, images, output, settings)
+    }
+
+    /// The history of the temporal denoiser ([`crate::passes::temporal`]) for a view of `size`
+    /// (owned by umbra, freed on drop; keep it from frame to frame, one per view; move it to
+    /// `GENERAL` once with [`TemporalHistory::init_general`] in a command buffer of the host's).
+    /// A new size needs a new history.
+    pub fn temporal_history(&self, size: (u32, u32), settings: TemporalSettings) -> Result<TemporalHistory> {
+        let mut history = TemporalHistory::new(&self.ctx, size, settings)?;
+        history.generation = self.generation;
+        Ok(history)
+    }
+
+    /// [`Renderer::record_path_denoise`] with temporal accumulation: `target`'s samples (this
+    /// frame's: the host restarts the target each frame, `first` 0), seen by `camera`, blended
+    /// with `history` reprojected from the previous frame's camera (which `history` keeps), then
+    /// filtered into `output`; `history` then holds this frame. It starts afresh at its first
+    /// frame, after [`TemporalHistory::reset`] (a cut) and after [`Renderer::update_scene`].
+    /// Records into the host's command buffer, never submits.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_path_denoise_temporal(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        target: &PathTarget,
+        images: &DenoiseImages,
+        history: &mut TemporalHistory,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+    ) -> Result<()> {
+        if history.generation != self.generation {
+            history.reset();
+            history.generation = self.generation;
+        }
+        self.passes.record_denoise_temporal(cmd, camera, target, images, history, output, settings)
     }
 
     /// Records umbra's ray-cast G-buffer for `camera` into `target`.

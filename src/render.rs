@@ -11,7 +11,7 @@
 //! (tests/modules.rs keeps it so).
 
 use crate::error::{Error, Result};
-use crate::gpu::layout::PathStats;
+use crate::gpu::layout::{GpuCamera, PathStats};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::SceneFeatures;
 use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
@@ -28,6 +28,8 @@ use crate::passes::pathtrace::{Integrator, PathOptions, PathTarget, PathTracePas
 use crate::passes::probes::{ProbePass, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirPass, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
+pub use crate::passes::temporal::{TemporalFeedback, TemporalSettings};
+use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::passes::wavefront::WavefrontPass;
 use crate::scene::Camera;
@@ -121,6 +123,81 @@ pub struct DenoisedImage {
     pub color: Vec<[f32; 4]>,
     /// GPU time of the filter, in milliseconds.
     pub gpu_ms: f64,
+}
+
+/// One frame denoised with temporal accumulation ([`Passes::denoise_temporal`]).
+#[derive(Debug, Clone)]
+pub struct TemporalFrame {
+    /// Denoised radiance rgb, alpha 1, row-major from the top left.
+    pub color: Vec<[f32; 4]>,
+    /// Each pixel's history length after the frame (frames; 1: it started afresh).
+    pub history_length: Vec<f32>,
+    /// GPU time of the filter, in milliseconds.
+    pub gpu_ms: f64,
+}
+
+/// A path-traced image's buffers uploaded for the denoiser.
+struct UploadedImage {
+    size: (u32, u32),
+    accum: Buffer,
+    moment: Buffer,
+    albedo: Buffer,
+    normal_depth: Buffer,
+    emission: Buffer,
+    lobe_split: Option<(Buffer, Buffer)>,
+}
+
+impl UploadedImage {
+    /// Uploads `image`: an error naming the buffer whose length is not the image's.
+    fn new(ctx: &Context, image: &PathImage) -> Result<Self> {
+        let (w, h) = image.size;
+        let pixels = w as usize * h as usize;
+        let (specular_len, split_len) =
+            image.lobe_split.as_ref().map_or((pixels, pixels), |l| (l.specular.len(), l.split.len()));
+        for (name, len) in [
+            ("mean", image.mean.len()),
+            ("moment", image.moment.len()),
+            ("albedo", image.albedo.len()),
+            ("normal_depth", image.normal_depth.len()),
+            ("emission", image.emission.len()),
+            ("lobe split's specular", specular_len),
+            ("lobe split's split", split_len),
+        ] {
+            if len != pixels {
+                return Err(Error::Invalid(format!(
+                    "the image to denoise is {w}x{h} but its {name} has {len} pixels"
+                )));
+            }
+        }
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            size: image.size,
+            accum: Buffer::upload(ctx, "denoise mean", &image.mean, usage)?,
+            moment: Buffer::upload(ctx, "denoise moment", &image.moment, usage)?,
+            albedo: Buffer::upload(ctx, "denoise albedo", &image.albedo, usage)?,
+            normal_depth: Buffer::upload(ctx, "denoise normal depth", &image.normal_depth, usage)?,
+            emission: Buffer::upload(ctx, "denoise emission", &image.emission, usage)?,
+            lobe_split: match &image.lobe_split {
+                Some(l) => Some((
+                    Buffer::upload(ctx, "denoise specular", &l.specular, usage)?,
+                    Buffer::upload(ctx, "denoise split", &l.split, usage)?,
+                )),
+                None => None,
+            },
+        })
+    }
+
+    fn inputs(&self) -> DenoiseInputs<'_> {
+        DenoiseInputs {
+            size: self.size,
+            accum: &self.accum,
+            moment: &self.moment,
+            albedo: &self.albedo,
+            normal_depth: &self.normal_depth,
+            emission: &self.emission,
+            lobe_split: self.lobe_split.as_ref().map(|(a, b)| (a, b)),
+        }
+    }
 }
 
 /// Settings of a hybrid (deferred) render.
@@ -253,6 +330,7 @@ pub struct Passes {
     wavefront: [OnceLock<WavefrontPass>; PathOptions::COUNT],
     resolve: OnceLock<ResolvePass>,
     denoise: OnceLock<DenoisePass>,
+    temporal: OnceLock<TemporalPass>,
 }
 
 impl Passes {
@@ -283,6 +361,7 @@ impl Passes {
             wavefront: std::array::from_fn(|_| OnceLock::new()),
             resolve: OnceLock::new(),
             denoise: OnceLock::new(),
+            temporal: OnceLock::new(),
         }
     }
 
@@ -385,6 +464,10 @@ impl Passes {
         built(&self.denoise, || DenoisePass::new(&self.ctx))
     }
 
+    fn temporal_pass(&self) -> Result<&TemporalPass> {
+        built(&self.temporal, || TemporalPass::new(&self.ctx))
+    }
+
     /// Builds every pipeline now (the path tracer's for `options`), not at first use: for a host
     /// that records frames against a deadline.
     pub fn prepare(&self, scene: &GpuScene, options: PathOptions) -> Result<()> {
@@ -408,6 +491,7 @@ impl Passes {
                 .and_then(|_| self.tonemap_pass())
                 .and_then(|_| self.resolve_pass())
                 .and_then(|_| self.denoise_pass())
+                .and_then(|_| self.temporal_pass())
                 .map(|_| ());
             let path = path.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
             rest.and(path)
@@ -897,51 +981,12 @@ impl Passes {
     pub fn denoise(&self, image: &PathImage, settings: &DenoiseSettings) -> Result<DenoisedImage> {
         let ctx = &self.ctx;
         settings.validate()?;
-        let (w, h) = image.size;
-        let pixels = w as usize * h as usize;
-        let (specular_len, split_len) =
-            image.lobe_split.as_ref().map_or((pixels, pixels), |l| (l.specular.len(), l.split.len()));
-        for (name, len) in [
-            ("mean", image.mean.len()),
-            ("moment", image.moment.len()),
-            ("albedo", image.albedo.len()),
-            ("normal_depth", image.normal_depth.len()),
-            ("emission", image.emission.len()),
-            ("lobe split's specular", specular_len),
-            ("lobe split's split", split_len),
-        ] {
-            if len != pixels {
-                return Err(Error::Invalid(format!(
-                    "the image to denoise is {w}x{h} but its {name} has {len} pixels"
-                )));
-            }
-        }
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
-        let accum = Buffer::upload(ctx, "denoise mean", &image.mean, usage)?;
-        let moment = Buffer::upload(ctx, "denoise moment", &image.moment, usage)?;
-        let albedo = Buffer::upload(ctx, "denoise albedo", &image.albedo, usage)?;
-        let normal_depth = Buffer::upload(ctx, "denoise normal depth", &image.normal_depth, usage)?;
-        let emission = Buffer::upload(ctx, "denoise emission", &image.emission, usage)?;
-        let lobe_split = match &image.lobe_split {
-            Some(l) => Some((
-                Buffer::upload(ctx, "denoise specular", &l.specular, usage)?,
-                Buffer::upload(ctx, "denoise split", &l.split, usage)?,
-            )),
-            None => None,
-        };
-        let inputs = DenoiseInputs {
-            size: image.size,
-            accum: &accum,
-            moment: &moment,
-            albedo: &albedo,
-            normal_depth: &normal_depth,
-            emission: &emission,
-            lobe_split: lobe_split.as_ref().map(|(a, b)| (a, b)),
-        };
-        let images = match lobe_split {
+        let uploaded = UploadedImage::new(ctx, image)?;
+        let images = match image.lobe_split {
             Some(_) => DenoiseImages::with_lobe_split(ctx, image.size)?,
             None => DenoiseImages::new(ctx, image.size)?,
         };
+        let (w, h) = image.size;
         let output = Image::storage_2d(ctx, "denoised", w, h, raw::Format::R32G32B32A32_SFLOAT)?;
         let pass = self.denoise_pass()?;
         let mut timer = GpuTimer::new(ctx, 1)?;
@@ -950,11 +995,92 @@ impl Passes {
             output.init_general(ctx, cmd);
             timer.reset(cmd);
             timer.begin(cmd, "denoise")?;
-            pass.record(ctx, cmd, &inputs, &images, output.view, settings)?;
+            pass.record(ctx, cmd, &uploaded.inputs(), &images, output.view, settings)?;
             timer.end(cmd)
         })?;
         let gpu_ms = timer.read()?.iter().map(|t| t.ms).sum();
         Ok(DenoisedImage { size: image.size, color: output.read(ctx)?, gpu_ms })
+    }
+
+    /// Records the denoiser of `target`'s samples with temporal accumulation
+    /// ([`crate::passes::temporal`]): the frame, seen by `camera`, blended with `history` (which
+    /// then holds it), filtered into `output` (`R32G32B32A32_SFLOAT`, the target's size,
+    /// `GENERAL` layout) through `images`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_denoise_temporal(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        target: &PathTarget,
+        images: &DenoiseImages,
+        history: &mut TemporalHistory,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+    ) -> Result<()> {
+        let camera = GpuCamera::new(camera, target.size);
+        let temporal = (self.temporal_pass()?, history, &camera);
+        self.denoise_pass()?.record_temporal(
+            &self.ctx,
+            cmd,
+            &DenoiseInputs::from(target),
+            images,
+            output,
+            settings,
+            temporal,
+        )
+    }
+
+    /// Denoises a sequence of path-traced frames, each `(image, camera)`, with temporal
+    /// accumulation (uploaded, filtered one frame per submission, read back; the history starts
+    /// afresh at the first frame): per frame, the denoised radiance, each pixel's history length
+    /// after it and the filter's GPU time. The frames' AOVs must be there (as
+    /// [`Passes::path_trace`] returns them); a test may make them up.
+    pub fn denoise_temporal(
+        &self,
+        frames: &[(&PathImage, &Camera)],
+        settings: &DenoiseSettings,
+        temporal: &TemporalSettings,
+    ) -> Result<Vec<TemporalFrame>> {
+        let ctx = &self.ctx;
+        settings.validate()?;
+        let Some((first, _)) = frames.first() else { return Ok(Vec::new()) };
+        let size = first.size;
+        let images = DenoiseImages::with_lobe_split(ctx, size)?;
+        let mut history = TemporalHistory::new(ctx, size, *temporal)?;
+        let output = Image::storage_2d(ctx, "denoised", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
+        let (pass, temporal_pass) = (self.denoise_pass()?, self.temporal_pass()?);
+        ctx.submit(|cmd| {
+            images.init_general(ctx, cmd);
+            history.init_general(ctx, cmd);
+            output.init_general(ctx, cmd);
+            Ok(())
+        })?;
+        let mut timer = GpuTimer::new(ctx, 1)?;
+        let mut out = Vec::new();
+        for (image, camera) in frames {
+            if image.size != size {
+                return Err(Error::Invalid(format!(
+                    "the frames to denoise change size: {:?}, then {:?}",
+                    size, image.size
+                )));
+            }
+            let uploaded = UploadedImage::new(ctx, image)?;
+            let camera = GpuCamera::new(camera, size);
+            ctx.submit(|cmd| {
+                timer.reset(cmd);
+                timer.begin(cmd, "denoise")?;
+                let temporal = (temporal_pass, &mut history, &camera);
+                pass.record_temporal(ctx, cmd, &uploaded.inputs(), &images, output.view, settings, temporal)?;
+                timer.end(cmd)
+            })?;
+            let gpu_ms = timer.read()?.iter().map(|t| t.ms).sum();
+            out.push(TemporalFrame {
+                color: output.read(ctx)?,
+                history_length: history.lengths(ctx)?,
+                gpu_ms,
+            });
+        }
+        Ok(out)
     }
 
     /// Path traces `settings.spp` samples per pixel, calling `progress(done, total)` after each
@@ -1261,6 +1387,17 @@ pub fn ambient_occlusion(
     settings: &AoSettings,
 ) -> Result<AoImage> {
     Passes::new(ctx, scene).ambient_occlusion(scene, camera, size, method, settings)
+}
+
+/// Denoises a sequence of frames with temporal accumulation ([`Passes::denoise_temporal`] with
+/// passes built for this filter).
+pub fn denoise_temporal(
+    ctx: &Context,
+    frames: &[(&PathImage, &Camera)],
+    settings: &DenoiseSettings,
+    temporal: &TemporalSettings,
+) -> Result<Vec<TemporalFrame>> {
+    Passes::with_features(ctx, SceneFeatures::default()).denoise_temporal(frames, settings, temporal)
 }
 
 /// Denoises a path-traced image once ([`Passes::denoise`] with passes built for this filter).

@@ -757,6 +757,47 @@ gpu_structs! {
         albedo_offset: float,
     }
 
+    /// Push constants of `denoise_temporal.comp`: the frame's camera and the previous frame's
+    /// (each as [`GpuCamera`] has it: origin, unit forward, right and up scaled to the view's half
+    /// extents), with the blend's settings in the spare lanes.
+    struct TemporalParams {
+        /// This frame's camera position.
+        origin: vec3,
+        /// [`TEMPORAL_HISTORY`] | [`TEMPORAL_SPLIT`] | [`TEMPORAL_ORTHOGRAPHIC`] |
+        /// [`TEMPORAL_PREV_ORTHOGRAPHIC`].
+        flags: uint,
+        /// This frame's unit forward.
+        forward: vec3,
+        /// The colour's least blend weight (SVGF's α, 0.2).
+        alpha: float,
+        /// This frame's right × half extent.
+        right: vec3,
+        /// The moments' least blend weight (SVGF's α_μ, 0.2).
+        alpha_moments: float,
+        /// This frame's up × half extent.
+        up: vec3,
+        /// A history tap is rejected when its point lies farther than this × its distance (plus
+        /// two pixel footprints) from the tangent plane of the pixel's point.
+        depth_tolerance: float,
+        /// The previous frame's camera position.
+        prev_origin: vec3,
+        /// A history tap is rejected when its normal's cosine with the pixel's is below this.
+        normal_tolerance: float,
+        /// The previous frame's unit forward.
+        prev_forward: vec3,
+        /// Image width.
+        width: uint,
+        /// The previous frame's right × half extent.
+        prev_right: vec3,
+        /// Image height.
+        height: uint,
+        /// The previous frame's up × half extent.
+        prev_up: vec3,
+        /// History length (frames) from which the variance is the temporal moments' (below it,
+        /// the variance carried through the blend, with the à-trous' spatial floor).
+        variance_frames: float,
+    }
+
     /// Push constants of `resolve.comp`.
     struct ResolveParams {
         /// Width, height.
@@ -1054,6 +1095,17 @@ gpu_constants! {
     /// [`DenoiseParams::flags`]: the path target split its radiance by the first hit's lobes
     /// (diffuse, specular); prepare and remodulate read the split's buffers.
     DENOISE_SPLIT: uint = 32;
+    /// [`TemporalParams::flags`]: the history holds a previous frame (else every pixel starts
+    /// afresh).
+    TEMPORAL_HISTORY: uint = 1;
+    /// [`TemporalParams::flags`]: the specular part of the lobe split is accumulated too.
+    TEMPORAL_SPLIT: uint = 2;
+    /// [`TemporalParams::flags`]: this frame's camera is orthographic.
+    TEMPORAL_ORTHOGRAPHIC: uint = 4;
+    /// [`TemporalParams::flags`]: the previous frame's camera is orthographic.
+    TEMPORAL_PREV_ORTHOGRAPHIC: uint = 8;
+    /// Longest history a pixel keeps (frames).
+    TEMPORAL_MAX_LENGTH: float = 65536.0;
     /// Below this an albedo channel the radiance is divided by (denoiser, lobe split) is raised
     /// to it: a black surface (an emitter, a dark texel) is then divided by 0.01 and multiplied
     /// back by the same, so nothing is lost, and the filter's luminance weight keeps its
@@ -1296,6 +1348,44 @@ kernels! {
             dn_guide: writeonly image rgba32f,
             /// The pixel's sample count.
             dn_samples: writeonly image r32f,
+        }
+    }
+
+    /// Denoiser, temporal step (between steps 1 and 2, [`crate::passes::temporal`]): the
+    /// prepared frame blended with its reprojected history.
+    kernel denoise_temporal {
+        scene: none,
+        push: TemporalParams,
+        spec: {},
+        bindings: {
+            /// This frame's demodulated radiance (diffuse part) and its variance (step 1's).
+            dn_color: readonly image rgba32f,
+            /// With [`TEMPORAL_SPLIT`]: its specular part and variance (else unread).
+            dn_specular: readonly image rgba32f,
+            /// This frame's unit normal and distance (−1 for a miss).
+            dn_guide: readonly image rgba32f,
+            /// In: this frame's sample count; out: the accumulated estimate's effective count.
+            dn_samples: readwrite image r32f,
+            /// The history's colour (diffuse part) and variance.
+            hist_color: readonly image rgba32f,
+            /// The history's specular part and variance.
+            hist_specular: readonly image rgba32f,
+            /// The history's luminance moments: diffuse E[l], E[l²], specular E[l], E[l²].
+            hist_moments: readonly image rgba32f,
+            /// The history's normal and distance (its frame's guide).
+            hist_guide: readonly image rgba32f,
+            /// The history's length (frames) and the sum of its colour weights squared.
+            hist_state: readonly image rgba32f,
+            /// The accumulated colour (diffuse part) and its variance.
+            out_color: writeonly image rgba32f,
+            /// With [`TEMPORAL_SPLIT`]: the accumulated specular part and its variance.
+            out_specular: writeonly image rgba32f,
+            /// The next history's moments.
+            out_moments: writeonly image rgba32f,
+            /// The next history's guide (this frame's).
+            out_guide: writeonly image rgba32f,
+            /// The next history's length and weights squared.
+            out_state: writeonly image rgba32f,
         }
     }
 

@@ -439,6 +439,7 @@ const _: () = assert!(size_of::<DeferredParams>() == 128);
 const _: () = assert!(size_of::<GBufferParams>() == 80);
 const _: () = assert!(size_of::<AoParams>() == 112);
 const _: () = assert!(size_of::<AoBlurParams>() == 80);
+const _: () = assert!(size_of::<TemporalParams>() == 128);
 const _: () = assert!(size_of::<IblParams>() == 48);
 #[cfg(feature = "testing")]
 const _: () = assert!(size_of::<LightTestParams>() == 64);

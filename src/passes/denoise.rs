@@ -19,17 +19,20 @@
 //! `denoise_atrous.comp` ([`DenoiseSettings::iterations`] iterations, taps 1, 2, 4, ... pixels
 //! apart, ping-ponging between two images) and `denoise_remodulate.comp` (× albedo, + emission,
 //! into the output image). Every image is in `GENERAL` layout; a compute-to-compute barrier
-//! follows each dispatch; [`DenoisePass::record`] never submits. No temporal accumulation: one
-//! frame's samples are filtered on their own.
+//! follows each dispatch; [`DenoisePass::record`] never submits. One frame's samples are filtered
+//! on their own; [`DenoisePass::record_temporal`] blends them with the previous frames' first
+//! (temporal accumulation with reprojection, [`crate::passes::temporal`]).
 
 use crate::error::{Error, Result};
 use crate::gpu::kernels::{denoise_atrous, denoise_prepare, denoise_remodulate};
+use crate::gpu::layout::GpuCamera;
 use crate::gpu::layout::{
     DenoiseParams, DENOISE_DEMODULATE, DENOISE_EDGE_STOPPING, DENOISE_PREFILTER, DENOISE_SPATIAL_VARIANCE,
     DENOISE_SPLIT, DENOISE_WIDE,
 };
 use crate::gpu::Pipeline;
 use crate::passes::pathtrace::PathTarget;
+use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::vk::{barrier, raw, Buffer, Context, Image};
 
 /// The filter's settings. The σ's are SVGF's (σ_l 4, σ_n 128, σ_z 1); the rest were chosen on
@@ -281,6 +284,37 @@ impl DenoisePass {
         output: raw::ImageView,
         settings: &DenoiseSettings,
     ) -> Result<()> {
+        self.record_frame(ctx, cmd, inputs, images, output, settings, None)
+    }
+
+    /// [`DenoisePass::record`] with the temporal step ([`crate::passes::temporal`]) between the
+    /// preparation and the à-trous iterations: the frame, seen by `camera`, blended with
+    /// `history`, which then holds this frame for the next (one more dispatch and barrier).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_temporal(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        inputs: &DenoiseInputs<'_>,
+        images: &DenoiseImages,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+        temporal: (&TemporalPass, &mut TemporalHistory, &GpuCamera),
+    ) -> Result<()> {
+        self.record_frame(ctx, cmd, inputs, images, output, settings, Some(temporal))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn record_frame(
+        &self,
+        ctx: &Context,
+        cmd: raw::CommandBuffer,
+        inputs: &DenoiseInputs<'_>,
+        images: &DenoiseImages,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+        temporal: Option<(&TemporalPass, &mut TemporalHistory, &GpuCamera)>,
+    ) -> Result<()> {
         settings.validate()?;
         let size = inputs.size;
         if images.size != size {
@@ -325,18 +359,35 @@ impl DenoisePass {
             Self::LOCAL,
         )?;
         barrier::compute_to_compute(ctx, cmd);
+        // Where the iterations start (the prepared or the accumulated image) and, with the
+        // history fed back after the first iteration, where that one writes.
+        let (specular_ping, specular_pong) = split.map_or((&images.ping, &images.pong), |(_, (a, b))| (a, b));
+        let mut starts = (&images.ping, None, specular_ping, None);
+        if let Some((pass, history, camera)) = &temporal {
+            let iterations = (settings.iterations, settings.specular_iterations);
+            let out = pass.record(ctx, cmd, images, history, camera, split.is_some(), iterations)?;
+            starts = (out.diffuse, out.diffuse_first, out.specular, out.specular_first);
+        }
+        let (diffuse_src, diffuse_first, specular_src, specular_first) = starts;
         let diffuse = self.record_iterations(
             ctx,
             cmd,
             images,
-            (&images.ping, &images.pong),
+            (diffuse_src, diffuse_first),
+            (&images.pong, &images.ping),
             settings.iterations,
             &params,
         )?;
         let specular = match split {
-            Some((_, (ping, pong))) => {
-                self.record_iterations(ctx, cmd, images, (ping, pong), settings.specular_iterations, &params)?
-            }
+            Some(_) => self.record_iterations(
+                ctx,
+                cmd,
+                images,
+                (specular_src, specular_first),
+                (specular_pong, specular_ping),
+                settings.specular_iterations,
+                &params,
+            )?,
             None => &images.pong,
         };
         self.remodulate.record(
@@ -354,23 +405,34 @@ impl DenoisePass {
             Self::LOCAL,
         )?;
         barrier::compute_to_compute(ctx, cmd);
+        if let Some((_, history, camera)) = temporal {
+            TemporalPass::advance(history, camera, split.is_some());
+        }
         Ok(())
     }
 
-    /// Records `iterations` à-trous iterations ping-ponging from `pair.0` (which holds the
-    /// prepared image): the image that holds the result.
+    /// Records `iterations` à-trous iterations from `start.0` (the prepared or accumulated
+    /// image), the first into `start.1` if given, each other into whichever of `pair` it does not
+    /// read: the image that holds the result.
+    #[allow(clippy::too_many_arguments)]
     fn record_iterations<'i>(
         &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
         images: &DenoiseImages,
+        start: (&'i Image, Option<&'i Image>),
         pair: (&'i Image, &'i Image),
         iterations: u32,
         params: &dyn Fn(u32) -> DenoiseParams,
     ) -> Result<&'i Image> {
-        let (mut src, mut dst) = pair;
+        let mut src = start.0;
         let size = images.size;
         for i in 0..iterations {
+            let dst = match start.1 {
+                Some(first) if i == 0 => first,
+                _ if src.raw == pair.0.raw => pair.1,
+                _ => pair.0,
+            };
             self.atrous.record(
                 cmd,
                 &denoise_atrous::Resources {
@@ -384,7 +446,7 @@ impl DenoisePass {
                 Self::LOCAL,
             )?;
             barrier::compute_to_compute(ctx, cmd);
-            std::mem::swap(&mut src, &mut dst);
+            src = dst;
         }
         Ok(src)
     }

@@ -10,5 +10,6 @@ pub mod pathtrace;
 pub mod probes;
 pub mod restir;
 pub mod shadow;
+pub mod temporal;
 pub mod tonemap;
 pub mod wavefront;

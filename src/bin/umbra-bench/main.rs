@@ -27,6 +27,7 @@ mod restir;
 mod restir_pt;
 mod shadows;
 mod suite;
+mod temporal;
 
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
@@ -297,6 +298,30 @@ enum Command {
         /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
         #[arg(long)]
         table: Option<PathBuf>,
+    },
+    /// The denoiser's temporal accumulation on a camera path (the Cornell box, a slow pan, one
+    /// sample a frame): per frame the relative MSE of the raw sample, the spatial filter alone
+    /// and the temporal denoiser against a reference of the frame's camera; then the filter's GPU
+    /// time with and without the temporal step. Prints Markdown.
+    Temporal {
+        /// Image size.
+        #[arg(long, default_value = "64x64", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Frames of the camera path.
+        #[arg(long, default_value_t = 16)]
+        frames: u32,
+        /// How far the camera turns a frame, in pixels at the image's centre.
+        #[arg(long, default_value_t = 0.5)]
+        pan: f32,
+        /// Samples per pixel of each frame's reference.
+        #[arg(long, default_value_t = 1024)]
+        reference_spp: u32,
+        /// Timed repeats of each filter (after a warm-up); the medians are reported.
+        #[arg(long, default_value_t = 11)]
+        repeats: usize,
+        /// Only the timings (no references, no errors).
+        #[arg(long)]
+        timing_only: bool,
     },
     /// The path tracer's estimators side by side (the MIS figure, measured): each microfacet
     /// sampling × {MIS power, MIS balance, BSDF sampling alone, light sampling alone} on the
@@ -779,6 +804,9 @@ fn run(cli: Cli) -> Result<()> {
                 run_denoise(&settings, &filter, quick, &gltf)?
             }
         },
+        Command::Temporal { size, frames, pan, reference_spp, repeats, timing_only } => {
+            temporal::run(size, frames, pan, reference_spp, repeats, timing_only)?
+        }
         Command::Probes {
             sponza,
             gltf,

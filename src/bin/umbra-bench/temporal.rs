@@ -1,0 +1,188 @@
+//! `umbra-bench temporal`: the denoiser's temporal accumulation ([`umbra::passes::temporal`])
+//! on a camera path, through the embedding API: the Cornell box, a slow pan (the camera turned
+//! by a fraction of a pixel a frame), one sample per pixel a frame. Per frame the relative MSE
+//! against a converged reference of that frame's camera, for the raw sample, the spatial filter
+//! alone and the temporal denoiser (the accumulated colour fed back, and SVGF's first-iteration
+//! feedback); then the filter's GPU time with and without the temporal step (medians of
+//! alternating repeats after a warm-up).
+
+use super::rays::{median, warm_up};
+use super::suite;
+use anyhow::Result;
+use umbra::embed::Renderer;
+use umbra::passes::temporal::{TemporalFeedback, TemporalSettings};
+use umbra::render::{path_trace, DenoiseSettings, PathSettings};
+use umbra::scene::{Camera, Scene};
+use umbra::vk::{raw, Context, GpuTimer, Image};
+
+/// `base` turned about its up axis by `angle` radians.
+fn turned(base: &Camera, angle: f32) -> Camera {
+    let up = glam::Vec3::from(base.up).normalize();
+    let forward = glam::Quat::from_axis_angle(up, angle) * glam::Vec3::from(base.forward);
+    Camera { forward: forward.into(), ..*base }
+}
+
+/// Runs the camera path and prints the per-frame errors (unless `timing_only`) and the timings.
+pub fn run(
+    size: (u32, u32),
+    frames: u32,
+    pan_pixels: f32,
+    reference_spp: u32,
+    repeats: usize,
+    timing_only: bool,
+) -> Result<()> {
+    let ctx = Context::new(&umbra::vk::ContextDesc::default())?;
+    let scene = Scene::cornell_box();
+    let base = scene.camera(None)?;
+    let renderer = Renderer::new(&ctx, &scene)?;
+    // The angle of a pixel at the image's centre.
+    let pixel_angle = 2.0 * (base.yfov * 0.5).tan() / size.1 as f32;
+    let cameras: Vec<Camera> =
+        (0..frames).map(|k| turned(&base, -(k as f32) * pan_pixels * pixel_angle)).collect();
+
+    let target = renderer.denoised_path_target(size)?;
+    let images = renderer.denoise_images(size)?;
+    let mut accumulated = renderer.temporal_history(size, TemporalSettings::default())?;
+    let first = TemporalSettings { feedback: TemporalFeedback::FirstIteration, ..Default::default() };
+    let mut svgf = renderer.temporal_history(size, first)?;
+    let make = |name| Image::storage_2d(&ctx, name, size.0, size.1, raw::Format::R32G32B32A32_SFLOAT);
+    let (raw_image, output) = (make("bench raw")?, make("bench denoised")?);
+    ctx.submit(|cmd| {
+        images.init_general(&ctx, cmd);
+        accumulated.init_general(&ctx, cmd);
+        svgf.init_general(&ctx, cmd);
+        raw_image.init_general(&ctx, cmd);
+        output.init_general(&ctx, cmd);
+        Ok(())
+    })?;
+    let filter = DenoiseSettings::default();
+    let settings = |k: u32| PathSettings {
+        size,
+        spp: 1,
+        seed: 1,
+        first_sample: k,
+        lobe_split: true,
+        ..Default::default()
+    };
+
+    if !timing_only {
+        println!("| frame | raw 1 spp | spatial only | temporal (accumulated fed back) | temporal (first iteration fed back) | reference's own |");
+        println!("|---:|---:|---:|---:|---:|---:|");
+        let mut sums = [0.0f64; 4];
+        for (k, camera) in cameras.iter().enumerate() {
+            let reference_settings =
+                PathSettings { size, spp: reference_spp, seed: 1000 + k as u32, ..Default::default() };
+            let reference = path_trace(&ctx, renderer.scene(), camera, &reference_settings, |_, _| {})?;
+            let floor = reference.relative_error() as f64;
+            let k = k as u32;
+            let mut errors = [0.0f64; 4];
+            ctx.submit(|cmd| {
+                renderer.record_path_samples(cmd, camera, &target, &settings(k), 0, 1)?;
+                renderer.record_path_resolve(cmd, &target, raw_image.view)
+            })?;
+            errors[0] = suite::errors(&raw_image.read(&ctx)?, &reference.mean).1;
+            ctx.submit(|cmd| renderer.record_path_denoise(cmd, &target, &images, output.view, &filter))?;
+            errors[1] = suite::errors(&output.read(&ctx)?, &reference.mean).1;
+            for (i, history) in [&mut accumulated, &mut svgf].into_iter().enumerate() {
+                ctx.submit(|cmd| {
+                    renderer.record_path_denoise_temporal(
+                        cmd,
+                        camera,
+                        &target,
+                        &images,
+                        history,
+                        output.view,
+                        &filter,
+                    )
+                })?;
+                errors[2 + i] = suite::errors(&output.read(&ctx)?, &reference.mean).1;
+            }
+            for (s, e) in sums.iter_mut().zip(errors) {
+                *s += e;
+            }
+            println!(
+                "| {} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1e} |",
+                k + 1,
+                errors[0],
+                errors[1],
+                errors[2],
+                errors[3],
+                floor * floor
+            );
+        }
+        let n = frames as f64;
+        println!(
+            "| mean | {:.2e} | {:.2e} | {:.2e} | {:.2e} | |",
+            sums[0] / n,
+            sums[1] / n,
+            sums[2] / n,
+            sums[3] / n
+        );
+    } else {
+        ctx.submit(|cmd| renderer.record_path_samples(cmd, &cameras[0], &target, &settings(0), 0, 1))?;
+    }
+
+    // Timing: the filter alone, spatial and temporal alternating, on the last frame's samples.
+    let camera = cameras.last().expect("at least one frame");
+    warm_up(|| ctx.submit(|cmd| renderer.record_path_denoise(cmd, &target, &images, output.view, &filter)))?;
+    warm_up(|| {
+        ctx.submit(|cmd| {
+            renderer.record_path_denoise_temporal(
+                cmd,
+                camera,
+                &target,
+                &images,
+                &mut accumulated,
+                output.view,
+                &filter,
+            )
+        })
+    })?;
+    let mut timer = GpuTimer::new(&ctx, 1)?;
+    let (mut spatial, mut temporal) = (Vec::new(), Vec::new());
+    for _ in 0..repeats.max(1) {
+        ctx.submit(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "spatial")?;
+            renderer.record_path_denoise(cmd, &target, &images, output.view, &filter)?;
+            timer.end(cmd)
+        })?;
+        spatial.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
+        ctx.submit(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "temporal")?;
+            renderer.record_path_denoise_temporal(
+                cmd,
+                camera,
+                &target,
+                &images,
+                &mut accumulated,
+                output.view,
+                &filter,
+            )?;
+            timer.end(cmd)
+        })?;
+        temporal.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
+    }
+    let mut one_sample = Vec::new();
+    for _ in 0..repeats.max(1) {
+        ctx.submit(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "sample")?;
+            renderer.record_path_samples(cmd, camera, &target, &settings(0), 0, 1)?;
+            timer.end(cmd)
+        })?;
+        one_sample.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
+    }
+    let (s, t, o) = (median(&mut spatial), median(&mut temporal), median(&mut one_sample));
+    println!(
+        "{}x{} on {}: filter {s:.2} ms spatial, {t:.2} ms temporal (+{:.2} ms, {:.2}x); one sample {o:.2} ms (medians of {})",
+        size.0,
+        size.1,
+        ctx.info().name,
+        t - s,
+        t / s,
+        repeats.max(1)
+    );
+    Ok(())
+}

@@ -745,7 +745,7 @@ gpu_structs! {
         /// The à-trous iteration's tap spacing in pixels (1, 2, 4, ...).
         step: uint,
         /// [`DENOISE_DEMODULATE`] | [`DENOISE_PREFILTER`] | [`DENOISE_SPATIAL_VARIANCE`] |
-        /// [`DENOISE_WIDE`] | [`DENOISE_EDGE_STOPPING`] | [`DENOISE_SPLIT`].
+        /// [`DENOISE_WIDE`] | [`DENOISE_EDGE_STOPPING`] | [`DENOISE_SPLIT`] | [`DENOISE_BOTH`].
         flags: uint,
         /// Luminance edge-stopping: |Δl| over this × the standard deviation of l.
         sigma_luminance: float,
@@ -1095,6 +1095,10 @@ gpu_constants! {
     /// [`DenoiseParams::flags`]: the path target split its radiance by the first hit's lobes
     /// (diffuse, specular); prepare and remodulate read the split's buffers.
     DENOISE_SPLIT: uint = 32;
+    /// [`DenoiseParams::flags`]: the à-trous iteration filters two images at once (`dn_in` into
+    /// `dn_out`, `dn_in2` into `dn_out2`: the lobe split's diffuse and specular parts), their
+    /// taps' normal and depth weights computed once; else `dn_in2` and `dn_out2` are unread.
+    DENOISE_BOTH: uint = 64;
     /// [`TemporalParams::flags`]: the history holds a previous frame (else every pixel starts
     /// afresh).
     TEMPORAL_HISTORY: uint = 1;
@@ -1370,7 +1374,7 @@ kernels! {
             hist_color: readonly image rgba32f,
             /// The history's specular part and variance.
             hist_specular: readonly image rgba32f,
-            /// The history's luminance moments: diffuse E[l], E[l²], specular E[l], E[l²].
+            /// The history's luminance moments: diffuse `E[l]`, `E[l²]`, specular `E[l]`, `E[l²]`.
             hist_moments: readonly image rgba32f,
             /// The history's normal and distance (its frame's guide).
             hist_guide: readonly image rgba32f,
@@ -1403,6 +1407,10 @@ kernels! {
             dn_samples: readonly image r32f,
             /// Filtered radiance rgb and its variance.
             dn_out: writeonly image rgba32f,
+            /// With [`DENOISE_BOTH`]: the second image's radiance and variance (else unread).
+            dn_in2: readonly image rgba32f,
+            /// With [`DENOISE_BOTH`]: the second image filtered (else unwritten).
+            dn_out2: writeonly image rgba32f,
         }
     }
 

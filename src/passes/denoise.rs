@@ -17,7 +17,9 @@
 //! Three kernels: `denoise_prepare.comp` (the path target's buffers into images: demodulated
 //! radiance and the variance of its luminance; normal and distance; sample count),
 //! `denoise_atrous.comp` ([`DenoiseSettings::iterations`] iterations, taps 1, 2, 4, ... pixels
-//! apart, ping-ponging between two images) and `denoise_remodulate.comp` (× albedo, + emission,
+//! apart, ping-ponging between two images; with the lobe split one dispatch filters both parts
+//! while both have iterations left, [`DenoiseSettings::specular_iterations`] on the specular
+//! part) and `denoise_remodulate.comp` (× albedo, + emission,
 //! into the output image). Every image is in `GENERAL` layout; a compute-to-compute barrier
 //! follows each dispatch; [`DenoisePass::record`] never submits. One frame's samples are filtered
 //! on their own; [`DenoisePass::record_temporal`] blends them with the previous frames' first
@@ -27,8 +29,8 @@ use crate::error::{Error, Result};
 use crate::gpu::kernels::{denoise_atrous, denoise_prepare, denoise_remodulate};
 use crate::gpu::layout::GpuCamera;
 use crate::gpu::layout::{
-    DenoiseParams, DENOISE_DEMODULATE, DENOISE_EDGE_STOPPING, DENOISE_PREFILTER, DENOISE_SPATIAL_VARIANCE,
-    DENOISE_SPLIT, DENOISE_WIDE,
+    DenoiseParams, DENOISE_BOTH, DENOISE_DEMODULATE, DENOISE_EDGE_STOPPING, DENOISE_PREFILTER,
+    DENOISE_SPATIAL_VARIANCE, DENOISE_SPLIT, DENOISE_WIDE,
 };
 use crate::gpu::Pipeline;
 use crate::passes::pathtrace::PathTarget;
@@ -369,27 +371,21 @@ impl DenoisePass {
             starts = (out.diffuse, out.diffuse_first, out.specular, out.specular_first);
         }
         let (diffuse_src, diffuse_first, specular_src, specular_first) = starts;
-        let diffuse = self.record_iterations(
-            ctx,
-            cmd,
-            images,
-            (diffuse_src, diffuse_first),
-            (&images.pong, &images.ping),
-            settings.iterations,
-            &params,
-        )?;
-        let specular = match split {
-            Some(_) => self.record_iterations(
-                ctx,
-                cmd,
-                images,
-                (specular_src, specular_first),
-                (specular_pong, specular_ping),
-                settings.specular_iterations,
-                &params,
-            )?,
-            None => &images.pong,
+        let diffuse_chain = Chain {
+            src: diffuse_src,
+            first: diffuse_first,
+            pair: (&images.pong, &images.ping),
+            iterations: settings.iterations,
         };
+        let specular_chain = split.map(|_| Chain {
+            src: specular_src,
+            first: specular_first,
+            pair: (specular_pong, specular_ping),
+            iterations: settings.specular_iterations,
+        });
+        let (diffuse, specular) =
+            self.record_iterations(ctx, cmd, images, diffuse_chain, specular_chain, &params)?;
+        let specular = specular.unwrap_or(&images.pong);
         self.remodulate.record(
             cmd,
             &denoise_remodulate::Resources {
@@ -411,43 +407,79 @@ impl DenoisePass {
         Ok(())
     }
 
-    /// Records `iterations` à-trous iterations from `start.0` (the prepared or accumulated
-    /// image), the first into `start.1` if given, each other into whichever of `pair` it does not
-    /// read: the image that holds the result.
-    #[allow(clippy::too_many_arguments)]
+    /// Records the à-trous iterations of `first` and, with the lobe split, of `second`: while
+    /// both have iterations left one dispatch filters both (`DENOISE_BOTH`: the guide read and
+    /// the normal and depth weights once for the two), then the longer goes on alone. The images
+    /// that hold the results.
     fn record_iterations<'i>(
         &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
         images: &DenoiseImages,
-        start: (&'i Image, Option<&'i Image>),
-        pair: (&'i Image, &'i Image),
-        iterations: u32,
+        mut first: Chain<'i>,
+        mut second: Option<Chain<'i>>,
         params: &dyn Fn(u32) -> DenoiseParams,
-    ) -> Result<&'i Image> {
-        let mut src = start.0;
+    ) -> Result<(&'i Image, Option<&'i Image>)> {
         let size = images.size;
-        for i in 0..iterations {
-            let dst = match start.1 {
-                Some(first) if i == 0 => first,
-                _ if src.raw == pair.0.raw => pair.1,
-                _ => pair.0,
+        let rounds = first.iterations.max(second.as_ref().map_or(0, |c| c.iterations));
+        for i in 0..rounds {
+            // The chains with an iteration `i`: (source, destination) of each.
+            let a = (i < first.iterations).then(|| (first.src, first.dst(i)));
+            let b = second.as_ref().filter(|c| i < c.iterations).map(|c| (c.src, c.dst(i)));
+            let (one, two) = match (a, b) {
+                (Some(a), b) => (a, b),
+                (None, Some(b)) => (b, None),
+                (None, None) => unreachable!("a round has a chain with an iteration"),
             };
+            let mut p = params(1 << i);
+            if two.is_some() {
+                p.flags |= DENOISE_BOTH;
+            }
+            // Without a second image its bindings repeat the first's (never read or written).
+            let (in2, out2) = two.unwrap_or(one);
             self.atrous.record(
                 cmd,
                 &denoise_atrous::Resources {
-                    dn_in: &src.view,
+                    dn_in: &one.0.view,
                     dn_guide: &images.guide.view,
                     dn_samples: &images.samples.view,
-                    dn_out: &dst.view,
+                    dn_out: &one.1.view,
+                    dn_in2: &in2.view,
+                    dn_out2: &out2.view,
                 },
-                &params(1 << i),
+                &p,
                 [size.0, size.1, 1],
                 Self::LOCAL,
             )?;
             barrier::compute_to_compute(ctx, cmd);
-            src = dst;
+            if let Some((_, dst)) = a {
+                first.src = dst;
+            }
+            if let (Some(c), Some((_, dst))) = (second.as_mut(), b) {
+                c.src = dst;
+            }
         }
-        Ok(src)
+        Ok((first.src, second.map(|c| c.src)))
+    }
+}
+
+/// One image's à-trous iterations ([`DenoisePass::record_iterations`]): where they start (the
+/// prepared or the accumulated image), where the first writes if not into `pair` (the temporal
+/// step's feedback image), the two images the others alternate between, and how many.
+struct Chain<'i> {
+    src: &'i Image,
+    first: Option<&'i Image>,
+    pair: (&'i Image, &'i Image),
+    iterations: u32,
+}
+
+impl<'i> Chain<'i> {
+    /// Where iteration `i` writes, reading `self.src`.
+    fn dst(&self, i: u32) -> &'i Image {
+        match self.first {
+            Some(first) if i == 0 => first,
+            _ if self.src.raw == self.pair.0.raw => self.pair.1,
+            _ => self.pair.0,
+        }
     }
 }

@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::Gpu;
+use common::{relative_mse, Gpu};
 use umbra::gpu::scene::GpuScene;
 use umbra::render::{denoise, path_trace, DenoiseSettings, LobeSplitImage, PathImage, PathSettings};
 use umbra::scene::Scene;
@@ -457,18 +457,6 @@ fn settings_are_validated() {
     short.albedo.pop();
     let e = denoise(&gpu, &short, &DenoiseSettings::default()).unwrap_err().to_string();
     assert!(e.contains("albedo"), "{e}");
-}
-
-/// Relative MSE: the mean over pixels and channels of (x − ref)² / (ref² + 0.01).
-fn relative_mse(image: &[[f32; 4]], reference: &[[f32; 3]]) -> f64 {
-    let sum: f64 = image
-        .iter()
-        .zip(reference)
-        .map(|(p, r)| {
-            (0..3).map(|c| ((p[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01)).sum::<f64>()
-        })
-        .sum();
-    sum / (image.len() * 3) as f64
 }
 
 /// The embedded Cornell box at 4 spp (48×48, the stored reference's size) against its

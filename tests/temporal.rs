@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::Gpu;
+use common::{relative_mse, Gpu};
 use umbra::render::{
     denoise, denoise_temporal, DenoiseSettings, PathImage, TemporalFeedback, TemporalFrame, TemporalSettings,
 };
@@ -399,18 +399,6 @@ fn temporal_settings_are_validated() {
         let e = settings.validate().unwrap_err().to_string();
         assert!(e.contains(words), "{e}");
     }
-}
-
-/// Relative MSE: the mean over pixels and channels of (x − ref)² / (ref² + 0.01).
-fn relative_mse(image: &[[f32; 4]], reference: &[[f32; 3]]) -> f64 {
-    let sum: f64 = image
-        .iter()
-        .zip(reference)
-        .map(|(p, r)| {
-            (0..3).map(|c| ((p[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01)).sum::<f64>()
-        })
-        .sum();
-    sum / (image.len() * 3) as f64
 }
 
 /// Through the embedding API, recorded into the caller's command buffers (validation on): the

@@ -378,3 +378,15 @@ pub fn z_outliers(
     }
     (compared, outliers, worst)
 }
+
+/// Relative MSE of an RGBA image against an RGB reference: the mean over pixels and channels of (x − ref)² / (ref² + 0.01).
+pub fn relative_mse(image: &[[f32; 4]], reference: &[[f32; 3]]) -> f64 {
+    let sum: f64 = image
+        .iter()
+        .zip(reference)
+        .map(|(p, r)| {
+            (0..3).map(|c| ((p[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01)).sum::<f64>()
+        })
+        .sum();
+    sum / (image.len() * 3) as f64
+}

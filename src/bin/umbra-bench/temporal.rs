@@ -124,42 +124,34 @@ pub fn run(
 
     // Timing: the filter alone, spatial and temporal alternating, on the last frame's samples.
     let camera = cameras.last().expect("at least one frame");
-    warm_up(|| ctx.submit(|cmd| renderer.record_path_denoise(cmd, &target, &images, output.view, &filter)))?;
-    warm_up(|| {
-        ctx.submit(|cmd| {
-            renderer.record_path_denoise_temporal(
-                cmd,
-                camera,
-                &target,
-                &images,
-                &mut accumulated,
-                output.view,
-                &filter,
-            )
-        })
-    })?;
+    let record_spatial = |cmd| renderer.record_path_denoise(cmd, &target, &images, output.view, &filter);
+    let mut record_temporal = |cmd| {
+        renderer.record_path_denoise_temporal(
+            cmd,
+            camera,
+            &target,
+            &images,
+            &mut accumulated,
+            output.view,
+            &filter,
+        )
+    };
+    warm_up(|| ctx.submit(record_spatial))?;
+    warm_up(|| ctx.submit(&mut record_temporal))?;
     let mut timer = GpuTimer::new(&ctx, 1)?;
     let (mut spatial, mut temporal) = (Vec::new(), Vec::new());
     for _ in 0..repeats.max(1) {
         ctx.submit(|cmd| {
             timer.reset(cmd);
             timer.begin(cmd, "spatial")?;
-            renderer.record_path_denoise(cmd, &target, &images, output.view, &filter)?;
+            record_spatial(cmd)?;
             timer.end(cmd)
         })?;
         spatial.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
         ctx.submit(|cmd| {
             timer.reset(cmd);
             timer.begin(cmd, "temporal")?;
-            renderer.record_path_denoise_temporal(
-                cmd,
-                camera,
-                &target,
-                &images,
-                &mut accumulated,
-                output.view,
-                &filter,
-            )?;
+            record_temporal(cmd)?;
             timer.end(cmd)
         })?;
         temporal.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());

@@ -265,6 +265,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["implicit", "--table", "docs/bench/implicit.json"],
     &["restir", "--table", "docs/bench/restir.json"],
     &["restir-pt", "--table", "docs/bench/restir-pt.json"],
+    &["temporal", "--table", "docs/bench/temporal.json"],
 ];
 
 /// BENCHMARKS.md's figures cannot drift from their JSON: everything each `--table` command prints

@@ -302,7 +302,7 @@ enum Command {
     /// The denoiser's temporal accumulation on a camera path (the Cornell box, a slow pan, one
     /// sample a frame): per frame the relative MSE of the raw sample, the spatial filter alone
     /// and the temporal denoiser against a reference of the frame's camera; then the filter's GPU
-    /// time with and without the temporal step. Prints Markdown.
+    /// time with and without the temporal step. Writes temporal.json and prints its table.
     Temporal {
         /// Image size.
         #[arg(long, default_value = "64x64", value_parser = cli::parse_size)]
@@ -322,6 +322,12 @@ enum Command {
         /// Only the timings (no references, no errors).
         #[arg(long)]
         timing_only: bool,
+        /// Where to write temporal.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the table of an earlier run's JSON instead of measuring.
+        #[arg(long)]
+        table: Option<PathBuf>,
     },
     /// The path tracer's estimators side by side (the MIS figure, measured): each microfacet
     /// sampling × {MIS power, MIS balance, BSDF sampling alone, light sampling alone} on the
@@ -804,8 +810,12 @@ fn run(cli: Cli) -> Result<()> {
                 run_denoise(&settings, &filter, quick, &gltf)?
             }
         },
-        Command::Temporal { size, frames, pan, reference_spp, repeats, timing_only } => {
-            temporal::run(size, frames, pan, reference_spp, repeats, timing_only)?
+        Command::Temporal { table: Some(path), .. } => print!("{}", temporal::table(&read_json(&path)?)),
+        Command::Temporal { size, frames, pan, reference_spp, repeats, timing_only, out, table: None } => {
+            let mut doc = temporal::run(size, frames, pan, reference_spp, repeats, timing_only)?;
+            add_conditions(&mut doc);
+            print!("{}", temporal::table(&doc));
+            write_json(&out, "temporal.json", &doc)?;
         }
         Command::Probes {
             sponza,

@@ -9,6 +9,7 @@
 use super::rays::{median, warm_up};
 use super::suite;
 use anyhow::Result;
+use serde_json::{json, Value};
 use umbra::embed::Renderer;
 use umbra::passes::temporal::{TemporalFeedback, TemporalSettings};
 use umbra::render::{path_trace, DenoiseSettings, PathSettings};
@@ -22,7 +23,8 @@ fn turned(base: &Camera, angle: f32) -> Camera {
     Camera { forward: forward.into(), ..*base }
 }
 
-/// Runs the camera path and prints the per-frame errors (unless `timing_only`) and the timings.
+/// Runs the camera path: the per-frame errors (unless `timing_only`) and the timings, as JSON
+/// ([`table`] prints it).
 pub fn run(
     size: (u32, u32),
     frames: u32,
@@ -30,7 +32,7 @@ pub fn run(
     reference_spp: u32,
     repeats: usize,
     timing_only: bool,
-) -> Result<()> {
+) -> Result<Value> {
     let ctx = Context::new(&umbra::vk::ContextDesc::default())?;
     let scene = Scene::cornell_box();
     let base = scene.camera(None)?;
@@ -65,10 +67,8 @@ pub fn run(
         ..Default::default()
     };
 
+    let mut rows = Vec::new();
     if !timing_only {
-        println!("| frame | raw 1 spp | spatial only | temporal (accumulated fed back) | temporal (first iteration fed back) | reference's own |");
-        println!("|---:|---:|---:|---:|---:|---:|");
-        let mut sums = [0.0f64; 4];
         for (k, camera) in cameras.iter().enumerate() {
             let reference_settings =
                 PathSettings { size, spp: reference_spp, seed: 1000 + k as u32, ..Default::default() };
@@ -97,27 +97,15 @@ pub fn run(
                 })?;
                 errors[2 + i] = suite::errors(&output.read(&ctx)?, &reference.mean).1;
             }
-            for (s, e) in sums.iter_mut().zip(errors) {
-                *s += e;
-            }
-            println!(
-                "| {} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1e} |",
-                k + 1,
-                errors[0],
-                errors[1],
-                errors[2],
-                errors[3],
-                floor * floor
-            );
+            rows.push(json!({
+                "frame": k + 1,
+                "raw": errors[0],
+                "spatial": errors[1],
+                "temporal": errors[2],
+                "temporal_first_iteration": errors[3],
+                "reference_rel_mse": floor * floor,
+            }));
         }
-        let n = frames as f64;
-        println!(
-            "| mean | {:.2e} | {:.2e} | {:.2e} | {:.2e} | |",
-            sums[0] / n,
-            sums[1] / n,
-            sums[2] / n,
-            sums[3] / n
-        );
     } else {
         ctx.submit(|cmd| renderer.record_path_samples(cmd, &cameras[0], &target, &settings(0), 0, 1))?;
     }
@@ -167,14 +155,56 @@ pub fn run(
         one_sample.push(timer.read()?.iter().map(|t| t.ms).sum::<f64>());
     }
     let (s, t, o) = (median(&mut spatial), median(&mut temporal), median(&mut one_sample));
-    println!(
-        "{}x{} on {}: filter {s:.2} ms spatial, {t:.2} ms temporal (+{:.2} ms, {:.2}x); one sample {o:.2} ms (medians of {})",
-        size.0,
-        size.1,
-        ctx.info().name,
+    Ok(json!({
+        "device": ctx.info().name,
+        "size": [size.0, size.1],
+        "frames": frames,
+        "pan_pixels": pan_pixels,
+        "reference_spp": reference_spp,
+        "repeats": repeats.max(1),
+        "rows": rows,
+        "filter_spatial_ms": s,
+        "filter_temporal_ms": t,
+        "one_sample_ms": o,
+    }))
+}
+
+/// The Markdown of a run's JSON ([`run`]): the per-frame errors (and their means), then the
+/// timings.
+pub fn table(doc: &Value) -> String {
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    let mut out = String::new();
+    let rows = doc["rows"].as_array().cloned().unwrap_or_default();
+    let columns = ["raw", "spatial", "temporal", "temporal_first_iteration"];
+    if !rows.is_empty() {
+        out += "| frame | raw 1 spp | spatial only | temporal (accumulated fed back) | temporal (first iteration fed back) | reference's own |\n";
+        out += "|---:|---:|---:|---:|---:|---:|\n";
+        for row in &rows {
+            let e: Vec<String> = columns.iter().map(|c| format!("{:.2e}", num(&row[*c]))).collect();
+            out += &format!(
+                "| {} | {} | {:.1e} |\n",
+                row["frame"],
+                e.join(" | "),
+                num(&row["reference_rel_mse"])
+            );
+        }
+        let n = rows.len() as f64;
+        let means: Vec<String> = columns
+            .iter()
+            .map(|c| format!("{:.2e}", rows.iter().map(|r| num(&r[*c])).sum::<f64>() / n))
+            .collect();
+        out += &format!("| mean | {} | |\n", means.join(" | "));
+    }
+    let (s, t) = (num(&doc["filter_spatial_ms"]), num(&doc["filter_temporal_ms"]));
+    out += &format!(
+        "\n{}x{} on {}: filter {s:.2} ms spatial, {t:.2} ms temporal (+{:.2} ms, {:.2}x); one sample {:.2} ms (medians of {})\n",
+        doc["size"][0],
+        doc["size"][1],
+        doc["device"].as_str().unwrap_or("?"),
         t - s,
         t / s,
-        repeats.max(1)
+        num(&doc["one_sample_ms"]),
+        doc["repeats"]
     );
-    Ok(())
+    out
 }

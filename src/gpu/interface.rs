@@ -1411,7 +1411,7 @@ kernels! {
             hist_color: readonly image rgba32f,
             /// The history's specular part and variance.
             hist_specular: readonly image rgba32f,
-            /// The history's luminance moments: diffuse E[l], E[l²], specular E[l], E[l²].
+            /// The history's luminance moments: diffuse E\[l\], E\[l²\], specular E\[l\], E\[l²\].
             hist_moments: readonly image rgba32f,
             /// The history's normal and distance (its frame's guide).
             hist_guide: readonly image rgba32f,

@@ -120,7 +120,7 @@ pub struct HistorySlot {
     pub color: Image,
     /// The lobe split's specular part and its variance.
     pub specular: Image,
-    /// Luminance moments: diffuse E[l], E[l²], specular E[l], E[l²].
+    /// Luminance moments: diffuse E\[l\], E\[l²\], specular E\[l\], E\[l²\].
     pub moments: Image,
     /// The frame's unit normal and distance (−1 for a miss).
     pub guide: Image,

@@ -3,7 +3,7 @@
 //! converges to the image power-sampled light sampling converges to, on the many-light scene and
 //! on the Cornell box (z-tests per region and channel); bad settings are refused with clear
 //! errors; the command line renders with it. With reuse (`PathSettings::ris_reuse`: the previous
-//! sample index's reservoirs of the pixel and its neighbours, the unbiased 1/Z combination) it
+//! sample index's reservoirs of the pixel and its neighbours, combined by pairwise MIS) it
 //! converges to the same image (t-tests over independent renders, whose samples are correlated
 //! within a render) and caps the reservoirs' counts.
 
@@ -261,8 +261,8 @@ fn reuse_matches_power(
 
 /// scenes/many-lights.glb, three bounces: RIS with the previous sample index's reservoirs of the
 /// pixel and its neighbours (8 candidates), and of the pixel alone (1 candidate: the reused
-/// reservoirs carry most of the weight), each as 16 renders of 16 samples, against 256 samples
-/// of power sampling. Fails if Z counts reservoirs whose surface cannot produce the kept sample
+/// reservoirs carry most of the weight), each as 32 renders of 8 samples, against 256 samples
+/// of power sampling. Fails if the MIS weights leave out the targets at the reservoirs' own hits
 /// (1/M), if a reused sample keeps its own pixel's target instead of this one's, or if W leaves
 /// out the reused weights.
 #[test]
@@ -282,9 +282,10 @@ fn ris_reuse_converges_to_power_sampling_on_many_lights() {
 /// A one-sided emissive quad standing on a floor, facing +x, seen from above: the floor on its
 /// back side is unlit, so a neighbour there (as similar as a surface can be: the same plane)
 /// cannot produce the quad's samples that the lit side keeps. Direct light only, spatial reuse
-/// (2 candidates) and both (8), 16 renders of 16 samples each, against 256 samples of power
-/// sampling. Fails if Z counts the unlit neighbours (1/M: the lit floor darkens by up to half
-/// along the quad's foot), or if a reused sample keeps its own pixel's target.
+/// (2 candidates) and both (8), 64 renders of 16 samples each, against 256 samples of power
+/// sampling. Fails if the MIS weights give the unlit neighbours a share of the quad's samples
+/// (1/M: the lit floor darkens by up to half along the quad's foot), or if a reused sample keeps
+/// its own pixel's target.
 #[test]
 fn ris_reuse_converges_to_power_sampling_across_a_one_sided_emitter() {
     use common::{build_with, camera, quad};

@@ -4,10 +4,9 @@
 // pixel's previous sample, another point of the pixel) and RIS_REUSE_NEIGHBOURS random pixels'
 // within RIS_REUSE_RADIUS (RIS_SPATIAL), where they were built for a similar surface (distance
 // from the camera within 10 %, normals within about 25 degrees), each reused sample weighed by
-// its target function p^ at this pixel's hit. The combination is ReSTIR's unbiased one (Bitterli
-// et al. 2020, algorithm 6): W = w_sum / (Z p^(y)), Z the counts M of the merged reservoirs whose
-// own surface gives the kept sample p^ > 0 (each stored surface rebuilt from its hit); the
-// merged M is capped at RIS_REUSE_CAP times the candidates. No visibility enters the reuse: the
+// its target function p^ at this pixel's hit. The combination is unbiased, by pairwise MIS
+// (ris_reuse below: each stored hit's surface rebuilt, for its own target); the merged M is
+// capped at RIS_REUSE_CAP times the candidates. No visibility enters the reuse: the
 // kept sample gets path_ris's one shadow ray. The result is written for the next sample index
 // (`ris_next`; the host swaps `ris_prev` and `ris_next` between dispatches of one sample each).
 //
@@ -96,18 +95,24 @@ void ris_reuse_clear(uint index) {
     ris_next[index].normal = 0u;
 }
 
-// Merges into r (the fresh candidates' reservoir at sp: their weights' sum, the kept sample, M =
-// m candidates) the previous sample index's reservoirs (this file's header), finishes it (its W
-// by 1/Z) and stores it with its first hit (`hit`) for the next sample index. Returns the kept
-// sample's unshadowed contribution at sp (restir_contribution's, with wi, to_point and target).
+// Merges with r (the fresh candidates' reservoir at sp, the canonical one: their weights' sum,
+// the kept sample, M = m candidates) the previous sample index's reservoirs (this file's header)
+// by pairwise MIS, finishes the result and stores it with its first hit (`hit`) for the next
+// sample index. Returns the kept sample's unshadowed contribution at sp (restir_contribution's,
+// with wi, to_point and target).
 vec3 ris_reuse(inout Reservoir r, ShadePoint sp, Hit hit, uvec2 pixel, uint sample_index, out vec3 wi,
                out bool to_point, out vec3 target) {
     uint seed = params.seed;
     float m = r.m;
     uint index = pixel.y * params.size.x + pixel.x;
-    // The reservoirs merged: their pixels and counts (for Z).
+    // The canonical sample X_c: p^_c(X_c) and p^_c(X_c) W_c (= w_sum / m).
+    uint c_id = r.id;
+    vec2 c_bary = r.bary;
+    float c_hat = restir_target(sp, c_id, c_bary);
+    float c_weight = c_hat > 0.0 ? r.w_sum / m : 0.0;
+    // The reservoirs taken (similar first hits): their pixels and draws.
     uint taken[RIS_REUSE_NEIGHBOURS + 1u];
-    float taken_m[RIS_REUSE_NEIGHBOURS + 1u];
+    uint taken_j[RIS_REUSE_NEIGHBOURS + 1u];
     uint n_taken = 0u;
     for (uint j = 0u; j <= RIS_REUSE_NEIGHBOURS; ++j) {
         vec4 v = rand4(pixel, sample_index, rng_stream(RIS_REUSE_DEPTH + j, RNG_RIS_CANDIDATE), seed);
@@ -130,8 +135,7 @@ vec3 ris_reuse(inout Reservoir r, ShadePoint sp, Hit hit, uvec2 pixel, uint samp
             continue;
         }
         uint qi = uint(q.y) * params.size.x + uint(q.x);
-        float hm = ris_prev[qi].count;
-        if (!(hm > 0.0)) {
+        if (!(ris_prev[qi].count > 0.0)) {
             continue;
         }
         vec3 hn = oct_decode(unpackSnorm2x16(ris_prev[qi].normal));
@@ -139,29 +143,43 @@ vec3 ris_reuse(inout Reservoir r, ShadePoint sp, Hit hit, uvec2 pixel, uint samp
         if (!(abs(hd - sp.depth) <= 0.1 * sp.depth && dot(hn, sp.n) >= 0.9)) {
             continue;
         }
-        uint hid = ris_prev[qi].light;
-        vec2 hb = ris_prev[qi].bary;
-        float h_hat = restir_target(sp, hid, hb);
-        float pick = rand4(pixel, sample_index, rng_stream(RIS_REUSE_DEPTH + j, RNG_RIS_PICK), seed).x;
-        reservoir_add(r, hid, hb, h_hat * ris_prev[qi].weight * hm, pick);
-        r.m += hm;
         taken[n_taken] = qi;
-        taken_m[n_taken] = hm;
+        taken_j[n_taken] = j;
         ++n_taken;
     }
-    vec3 c = restir_contribution(sp, r.id, r.bary, wi, to_point, target);
-    float c_hat = luminance(c);
-    // 1/Z: only the reservoirs whose surface could have produced the kept sample count.
-    float z = c_hat > 0.0 ? m : 0.0;
+    // Pairwise MIS (Bitterli 2022, Lin et al. 2022's GRIS with confidence weights): each taken
+    // reservoir i and the canonical one weigh their samples by the balance heuristic of the two
+    // (M_i p^_i against M_c / n p^_c, p^_i the target at i's own first hit), each pair 1/n of
+    // the whole; the weights then sum to 1 wherever p^_c > 0, and vanish where a reservoir's
+    // own target does: W = w_sum / p^_c(y), unbiased.
+    float n = float(n_taken);
+    float m_c = n_taken == 0u ? 1.0 : 0.0;
+    float total_m = m;
+    Reservoir o = reservoir_empty();
     for (uint k = 0u; k < n_taken; ++k) {
         uint qi = taken[k];
         ShadePoint sq = ris_stored_point(ris_prev[qi].hit_tri, ris_prev[qi].hit_bary, ris_prev[qi].position);
-        if (restir_target(sq, r.id, r.bary) > 0.0) {
-            z += taken_m[k];
-        }
+        uint hid = ris_prev[qi].light;
+        vec2 hb = ris_prev[qi].bary;
+        float hm = ris_prev[qi].count;
+        float own = hm * restir_target(sq, hid, hb);                // M_i p^_i(X_i)
+        float here = restir_target(sp, hid, hb);                     // p^_c(X_i)
+        float canon = (m / n) * here;
+        float m_i = own + canon > 0.0 ? own / (own + canon) / n : 0.0;
+        float pick = rand4(pixel, sample_index, rng_stream(RIS_REUSE_DEPTH + taken_j[k], RNG_RIS_PICK), seed).x;
+        reservoir_add(o, hid, hb, m_i * here * ris_prev[qi].weight, pick);
+        float other = hm * restir_target(sq, c_id, c_bary);          // M_i p^_i(X_c)
+        float mine = (m / n) * c_hat;
+        m_c += mine + other > 0.0 ? mine / (mine + other) / n : 0.0;
+        total_m += hm;
     }
-    reservoir_finish(r, c_hat, z);
-    r.m = min(r.m, RIS_REUSE_CAP * m);
+    float pick_c =
+        rand4(pixel, sample_index, rng_stream(RIS_REUSE_DEPTH + RIS_REUSE_NEIGHBOURS + 1u, RNG_RIS_PICK), seed).x;
+    reservoir_add(o, c_id, c_bary, m_c * c_weight, pick_c);
+    vec3 c = restir_contribution(sp, o.id, o.bary, wi, to_point, target);
+    reservoir_finish(o, luminance(c), 1.0);
+    o.m = min(total_m, RIS_REUSE_CAP * m);
+    r = o;
     ris_next[index].light = r.id;
     ris_next[index].weight = r.w;
     ris_next[index].bary = r.bary;

@@ -1152,7 +1152,7 @@ gpu_constants! {
     RIS_REUSE_RADIUS: float = 8.0;
     /// The path tracer's first-hit reuse: a reservoir counts at most this many times the
     /// candidates (M capped, as ReSTIR caps its history).
-    RIS_REUSE_CAP: float = 20.0;
+    RIS_REUSE_CAP: float = 4.0;
     /// Punctual lights a shading point evaluates at most (`punctual_direct`, `path_shade`): all of
     /// them up to this many, beyond it this many picked by power.
     PUNCTUAL_ALL: uint = 16;

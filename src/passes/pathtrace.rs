@@ -155,10 +155,10 @@ impl DirectSampling {
 /// (`spirv/include/ris_reuse.glsl`). Each pixel's reservoir (the light sample kept, its W and
 /// M, and the first hit it was built for) is written to a per-pixel buffer, two of them swapped
 /// between sample indices, so a render with reuse traces one sample per dispatch. A reused
-/// sample is weighed by its target p̂ at this pixel's first hit; the combination is ReSTIR's
-/// unbiased one (Bitterli et al. 2020, algorithm 6): W = w_sum / (Z·p̂(y)), Z the counts M of
-/// only those merged reservoirs whose own first hit gives the kept sample p̂ > 0 (each stored
-/// hit's surface rebuilt for it); the merged M is capped at
+/// sample is weighed by its target p̂ at this pixel's first hit; the combination is unbiased by
+/// pairwise MIS (each reused reservoir against the pixel's fresh one, the balance heuristic of
+/// their M·p̂, a reused one's p̂ at its own first hit, whose surface is rebuilt for it; then
+/// W = w_sum / p̂(y)); the merged M is capped at
 /// [`crate::gpu::layout::RIS_REUSE_CAP`] × the candidates. Reservoirs are merged where their
 /// first hit is similar (distance from the camera within 10 %, normals within about 25°). No
 /// visibility enters the reuse: the kept sample has the one shadow ray RIS traces anyway. The

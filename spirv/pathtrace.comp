@@ -15,6 +15,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "camera.glsl"
 #include "environment.glsl"
 #include "shading.glsl"
+#include "ris_reuse.glsl"
 
 #include "path.glsl"
 
@@ -73,6 +74,11 @@ uint trace_pixel(uvec2 region_pixel) {
     vec4 sum_split = vec4(0.0);
     uint j = 0u;
     uint segments = 0u;
+    if (ris_reuses()) {
+        // One sample per dispatch (the host's): this index's reservoir, none unless path_ris
+        // makes one.
+        ris_reuse_clear(index);
+    }
     Path path = camera_path_of(pixel, first);
     while (true) {
         ++segments;

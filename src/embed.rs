@@ -189,7 +189,9 @@ impl Renderer {
     /// Records path-traced samples `first .. first + count` of the render into `target` (its
     /// samples `settings.first_sample + first ..` of the sequence; `first` 0 clears the target
     /// and restarts the running mean: a moved camera or changed scene restarts at 0).
-    /// `settings.size` must be the target's.
+    /// `settings.size` must be the target's. RIS reuse ([`crate::passes::pathtrace::RisReuse`])
+    /// works here too: the target's reservoir buffers (two per-pixel buffers of
+    /// [`crate::gpu::layout::GpuPathReservoir`]) are made at its first record with reuse.
     pub fn record_path_samples(
         &self,
         cmd: raw::CommandBuffer,

@@ -254,6 +254,11 @@ struct RenderArgs {
     /// Path tracer, --direct ris: candidates resampled at each sample's first hit.
     #[arg(long, default_value_t = 8)]
     ris_candidates: u32,
+    /// Path tracer, --direct ris: reuse the previous sample index's first-hit reservoirs, the
+    /// pixel's own (samples), neighbouring pixels' (spatial) or both (unbiased combination; one
+    /// dispatch per sample).
+    #[arg(long, value_enum, default_value = "off")]
+    ris_reuse: RisReuseArg,
     /// Hybrid, ReSTIR: candidates resampled per pixel and frame.
     #[arg(long, default_value_t = RestirSettings::default().candidates)]
     restir_candidates: u32,
@@ -436,6 +441,14 @@ enum DirectArg {
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+enum RisReuseArg {
+    Off,
+    Samples,
+    Spatial,
+    Both,
+}
+
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 enum ShadowsArg {
     Rt,
     Hard,
@@ -517,6 +530,9 @@ fn render(args: RenderArgs) -> Result<()> {
     if args.direct == DirectArg::Ris && args.mode != Mode::Pathtrace {
         anyhow::bail!("--direct ris applies to --mode pathtrace (the hybrid's is --direct restir)");
     }
+    if args.ris_reuse != RisReuseArg::Off && args.direct != DirectArg::Ris {
+        anyhow::bail!("--ris-reuse reuses the path tracer's first-hit RIS: it needs --direct ris");
+    }
     if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
         anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
     }
@@ -584,6 +600,12 @@ fn render(args: RenderArgs) -> Result<()> {
         direct: match args.direct {
             DirectArg::Ris => umbra::passes::pathtrace::DirectSampling::Ris(args.ris_candidates),
             _ => umbra::passes::pathtrace::DirectSampling::Power,
+        },
+        ris_reuse: match args.ris_reuse {
+            RisReuseArg::Off => umbra::passes::pathtrace::RisReuse::Off,
+            RisReuseArg::Samples => umbra::passes::pathtrace::RisReuse::Samples,
+            RisReuseArg::Spatial => umbra::passes::pathtrace::RisReuse::Spatial,
+            RisReuseArg::Both => umbra::passes::pathtrace::RisReuse::Both,
         },
         env: args.scene.env_radiance(),
         env_nee: true,
@@ -736,7 +758,13 @@ fn render_identity(args: &RenderArgs, loaded: &LoadedScene) -> String {
         name(&args.strategy)
     ) + &match args.direct {
         // (Only RIS adds to it: renders made before it existed merge with today's.)
-        DirectArg::Ris => format!(" direct ris {}", args.ris_candidates),
+        DirectArg::Ris => format!(" direct ris {}", args.ris_candidates)
+            + match args.ris_reuse {
+                RisReuseArg::Off => "",
+                RisReuseArg::Samples => " reuse samples",
+                RisReuseArg::Spatial => " reuse spatial",
+                RisReuseArg::Both => " reuse both",
+            },
         _ => String::new(),
     }
 }

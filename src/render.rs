@@ -908,7 +908,9 @@ impl Passes {
     /// Records path-traced samples `first .. first + count` of `settings`' render into `target`
     /// (its samples `settings.first_sample + first ..` of the sequence; `first` 0 records the
     /// target's clearing first and restarts the running mean). `settings.size` must be the
-    /// target's.
+    /// target's. With RIS reuse ([`crate::passes::pathtrace::RisReuse`]) the target's reservoirs
+    /// are made at the first such record, and the samples continue from those the last record
+    /// left (`first` 0 clears them too).
     #[allow(clippy::too_many_arguments)]
     pub fn record_path_samples(
         &self,
@@ -920,6 +922,10 @@ impl Passes {
         first: u32,
         count: u32,
     ) -> Result<()> {
+        if settings.ris_reuse != crate::passes::pathtrace::RisReuse::Off {
+            // (Reuse chains the samples: the settings that cannot be split are refused.)
+            settings.validate()?;
+        }
         if settings.size != target.size {
             return Err(Error::Invalid(format!(
                 "path settings are for {:?} but the target is {:?}",

@@ -206,8 +206,8 @@ fn restir_writes_json_a_chart_and_a_table() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `umbra-bench restir-pt` on a tiny image writes JSON with the power and RIS series and a chart,
-/// and its table prints them.
+/// `umbra-bench restir-pt` on a tiny image writes JSON with the power, RIS and RIS-with-reuse
+/// series and a chart, and its table prints them.
 #[test]
 fn restir_pt_writes_json_a_chart_and_a_table() {
     let dir = std::env::temp_dir().join(format!("umbra-restir-pt-bench-{}", std::process::id()));
@@ -233,7 +233,7 @@ fn restir_pt_writes_json_a_chart_and_a_table() {
         serde_json::from_str(&std::fs::read_to_string(&path).expect("restir-pt.json written"))
             .expect("parses");
     let points = json["points"].as_array().expect("points");
-    for method in ["power", "RIS 4", "RIS 16", "RIS 32"] {
+    for method in ["power", "RIS 16", "RIS 32", "RIS 16 + samples", "RIS 16 + spatial", "RIS 4 + both"] {
         assert!(points.iter().any(|p| p["method"] == method), "{method} measured");
     }
     assert!(points.iter().all(|p| p["ms"].as_f64().unwrap() > 0.0 && p["rel_mse"].as_f64().unwrap() >= 0.0));

@@ -41,7 +41,7 @@ mod common;
 use common::{gamma_q, Gpu};
 use std::path::{Path, PathBuf};
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::pathtrace::{Heuristic, Microfacet, PathOptions, Strategy};
+use umbra::passes::pathtrace::{Heuristic, Microfacet, PathOptions, RisReuse, Strategy};
 use umbra::render::{path_trace, PathImage, PathSettings};
 use umbra::scene::Scene;
 
@@ -153,7 +153,8 @@ fn estimators() -> Vec<Estimator> {
                 (Strategy::Bsdf, Heuristic::Power),
                 (Strategy::Light, Heuristic::Power),
             ] {
-                let options = PathOptions { microfacet, heuristic, strategy, ris: false };
+                let options =
+                    PathOptions { microfacet, heuristic, strategy, ris: false, ris_reuse: RisReuse::Off };
                 if options == default_options(case) {
                     continue; // the scene's own test
                 }

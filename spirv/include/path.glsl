@@ -147,7 +147,11 @@ vec3 first_specular(Path path, Surface s, vec3 wo, vec3 wi, vec3 f, vec3 c) {
 // ray through path_shadow, its contribution f Le G V W with W = w_sum / (M p^(y)). Unbiased: p^
 // is positive wherever f Le G is (a luminance of non-negative colours), and the candidates'
 // densities cover every emitter light sampling covers.
-void path_ris(inout Path path, ShadePoint sp, vec3 throughput, uvec2 pixel, uint sample_index) {
+//
+// With reuse (ris_reuse.glsl, included by the megakernel where RIS_TEMPORAL or RIS_SPATIAL may
+// be on) the reservoir then merges the previous sample index's reservoirs and W comes from their
+// unbiased combination; `hit` (the closest hit, after parallax mapping) is stored with it.
+void path_ris(inout Path path, ShadePoint sp, Hit hit, vec3 throughput, uvec2 pixel, uint sample_index) {
     uint seed = params.seed;
     uint m = params.ris_candidates;
     Reservoir r = reservoir_empty();
@@ -164,8 +168,19 @@ void path_ris(inout Path path, ShadePoint sp, vec3 throughput, uvec2 pixel, uint
     vec3 wi;
     bool to_point;
     vec3 target;
-    vec3 c = restir_contribution(sp, r.id, r.bary, wi, to_point, target);
-    reservoir_finish(r, luminance(c), float(m));
+    vec3 c;
+    bool reused = false;
+#ifdef UMBRA_RIS_REUSE
+    if (ris_reuses()) {
+        r.m = float(m);
+        c = ris_reuse(r, sp, hit, pixel, sample_index, wi, to_point, target);
+        reused = true;
+    }
+#endif
+    if (!reused) {
+        c = restir_contribution(sp, r.id, r.bary, wi, to_point, target);
+        reservoir_finish(r, luminance(c), float(m));
+    }
     vec3 wi_local;
     float side = light_side(sp.ng, sp.t, sp.b, sp.n, surface_transmits(sp.s), wi, wi_local);
     if (r.w > 0.0 && side != 0.0) {
@@ -331,7 +346,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             sp.roughness = 0.0;
             sp.uv1 = vec2(0.0);
             sp.s = s;
-            path_ris(path, sp, throughput, pixel, sample_index);
+            path_ris(path, sp, hit, throughput, pixel, sample_index);
             ris_here = true;
         }
     }

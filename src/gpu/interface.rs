@@ -554,6 +554,31 @@ gpu_structs! {
         flags: uint,
     }
 
+    /// The path tracer's first-hit reservoir of one pixel and sample index, with reuse
+    /// (`--ris-reuse`, [`crate::passes::pathtrace::RisReuse`]): the light sample kept (as
+    /// [`GpuReservoir`]'s), its W and M, and the first hit it was resampled for (the closest
+    /// hit's triangle and barycentrics, its position and shading normal), from which a later
+    /// sample index evaluates that surface's target function again.
+    struct GpuPathReservoir {
+        /// The light sample kept ([`GpuReservoir::light`]'s encoding).
+        light: uint,
+        /// Its unbiased contribution weight W.
+        weight: float,
+        /// Its barycentrics on the emissive triangle.
+        bary: vec2,
+        /// The candidates it stands for (M, capped); 0: no reservoir (a miss, an unlit surface,
+        /// a cleared buffer).
+        count: float,
+        /// The first hit's triangle (the `Hit`'s `tri`).
+        hit_tri: uint,
+        /// The first hit's barycentrics (the `Hit`'s `bary`, after parallax mapping).
+        hit_bary: vec2,
+        /// The first hit's position.
+        position: vec3,
+        /// Its shading normal (facing the camera), octahedral, `packSnorm2x16`.
+        normal: uint,
+    }
+
     /// One shadow-map layer (a spot light's map, a cube face, a cascade) as the rasterizer and
     /// the lighting pass read it: six RGBA32UI texels in `shadow_texels` (float bits but for
     /// `offset`, `size`, `kind`).
@@ -1124,6 +1149,14 @@ gpu_constants! {
     RESTIR_PUNCTUAL: uint = 0x80000000;
     /// [`GpuReservoir::flags`]: the weight includes the sample's visibility.
     RESTIR_VISIBLE: uint = 1;
+    /// The path tracer's first-hit reuse (`ris_spatial`): neighbours whose previous reservoirs a
+    /// pixel's first hit takes.
+    RIS_REUSE_NEIGHBOURS: uint = 4;
+    /// The path tracer's first-hit reuse (`ris_spatial`): radius of the neighbourhood, pixels.
+    RIS_REUSE_RADIUS: float = 8.0;
+    /// The path tracer's first-hit reuse: a reservoir counts at most this many times the
+    /// candidates (M capped, as ReSTIR caps its history).
+    RIS_REUSE_CAP: float = 4.0;
     /// Punctual lights a shading point evaluates at most (`punctual_direct`, `path_shade`): all of
     /// them up to this many, beyond it this many picked by power.
     PUNCTUAL_ALL: uint = 16;
@@ -1224,7 +1257,9 @@ kernels! {
             light_sampling: bool = true,
             bsdf_hits: bool = true,
             split_lobes: bool = false,
-            ris: bool = false
+            ris: bool = false,
+            ris_temporal: bool = false,
+            ris_spatial: bool = false
         },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).
@@ -1248,6 +1283,12 @@ kernels! {
             aov_split: readwrite buffer [vec4],
             /// Counters ([`PathStats`]).
             stats: readwrite buffer PathStats,
+            /// `ris_temporal` or `ris_spatial`: the first-hit reservoirs of the previous sample
+            /// index, one per pixel. Unread otherwise.
+            ris_prev: readonly buffer [GpuPathReservoir],
+            /// `ris_temporal` or `ris_spatial`: this sample index's first-hit reservoirs (every
+            /// pixel writes its own). Unwritten otherwise.
+            ris_next: readwrite buffer [GpuPathReservoir],
         }
     }
 

@@ -5,7 +5,7 @@ pub use super::wavefront::Integrator;
 use super::wavefront::WaveState;
 use crate::error::{Error, Result};
 use crate::gpu::kernels::{pathtrace, resolve};
-use crate::gpu::layout::{GpuCamera, PathParams, PathStats, ResolveParams};
+use crate::gpu::layout::{GpuCamera, GpuPathReservoir, PathParams, PathStats, ResolveParams};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
@@ -150,6 +150,57 @@ impl DirectSampling {
     }
 }
 
+/// Reuse for the first hit's RIS ([`DirectSampling::Ris`], the megakernel only): which first-hit
+/// reservoirs of the previous sample index a pixel's first hit merges after its fresh candidates
+/// (`spirv/include/ris_reuse.glsl`). Each pixel's reservoir (the light sample kept, its W and
+/// M, and the first hit it was built for) is written to a per-pixel buffer, two of them swapped
+/// between sample indices, so a render with reuse traces one sample per dispatch. A reused
+/// sample is weighed by its target p̂ at this pixel's first hit; the combination is unbiased by
+/// pairwise MIS (each reused reservoir against the pixel's fresh one, the balance heuristic of
+/// their M·p̂, a reused one's p̂ at its own first hit, whose surface is rebuilt for it; then
+/// W = w_sum / p̂(y)); the merged M is capped at
+/// [`crate::gpu::layout::RIS_REUSE_CAP`] × the candidates. Reservoirs are merged where their
+/// first hit is similar (distance from the camera within 10 %, normals within about 25°). No
+/// visibility enters the reuse: the kept sample has the one shadow ray RIS traces anyway. The
+/// samples of one render are correlated across sample indices (each index's reservoirs feed the
+/// next), so a render with reuse cannot be split into sample ranges or tiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RisReuse {
+    /// No reuse: every sample's RIS from its own candidates.
+    #[default]
+    Off,
+    /// The pixel's own reservoir of the previous sample index (another point of the pixel).
+    Samples,
+    /// [`crate::gpu::layout::RIS_REUSE_NEIGHBOURS`] random pixels' reservoirs of the previous
+    /// sample index, within [`crate::gpu::layout::RIS_REUSE_RADIUS`] pixels.
+    Spatial,
+    /// Both.
+    Both,
+}
+
+impl RisReuse {
+    /// Every value, in [`PathOptions::index`] order.
+    pub const ALL: [RisReuse; 4] = [RisReuse::Off, RisReuse::Samples, RisReuse::Spatial, RisReuse::Both];
+
+    /// The command line's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            RisReuse::Off => "off",
+            RisReuse::Samples => "samples",
+            RisReuse::Spatial => "spatial",
+            RisReuse::Both => "both",
+        }
+    }
+
+    /// The kernel's (`ris_temporal`, `ris_spatial`).
+    fn spec(self) -> (bool, bool) {
+        (
+            matches!(self, RisReuse::Samples | RisReuse::Both),
+            matches!(self, RisReuse::Spatial | RisReuse::Both),
+        )
+    }
+}
+
 /// What the path tracer's pipeline is specialised on: the estimator, apart from the scene.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct PathOptions {
@@ -162,11 +213,13 @@ pub struct PathOptions {
     /// The first hit's direct light by RIS ([`DirectSampling::Ris`]; the candidates' count is a
     /// push constant): the megakernel only.
     pub ris: bool,
+    /// Reuse for the first hit's RIS ([`RisReuse`]; with `ris` only).
+    pub ris_reuse: RisReuse,
 }
 
 impl PathOptions {
     /// How many distinct [`PathOptions::index`] values there are.
-    pub const COUNT: usize = 54;
+    pub const COUNT: usize = 216;
 
     /// A dense index below [`PathOptions::COUNT`], one per value (a pipeline cache's slot).
     pub fn index(self) -> usize {
@@ -176,7 +229,9 @@ impl PathOptions {
             #[cfg(feature = "testing")]
             Heuristic::UnweightedBsdfHits => 2,
         };
-        ((self.microfacet as usize * 3 + heuristic) * 3 + self.strategy as usize) * 2 + self.ris as usize
+        (((self.microfacet as usize * 3 + heuristic) * 3 + self.strategy as usize) * 2 + self.ris as usize)
+            * 4
+            + self.ris_reuse as usize
     }
 }
 
@@ -223,6 +278,9 @@ pub struct PathSettings {
     pub strategy: Strategy,
     /// The first scattering vertex's light sampling: by power as at every vertex, or RIS.
     pub direct: DirectSampling,
+    /// Reuse for the first hit's RIS ([`RisReuse`]; with [`DirectSampling::Ris`] only, the
+    /// megakernel, no tile and no sample range after 0).
+    pub ris_reuse: RisReuse,
     /// Constant environment radiance (linear rgb) seen by rays that leave the scene, or, when
     /// the scene has an environment map, the map's multiplier.
     pub env: [f32; 3],
@@ -270,6 +328,7 @@ impl Default for PathSettings {
             heuristic: Heuristic::Power,
             strategy: Strategy::Mis,
             direct: DirectSampling::Power,
+            ris_reuse: RisReuse::Off,
             env: [0.0; 3],
             env_nee: true,
             target_error: None,
@@ -289,6 +348,7 @@ impl PathSettings {
             heuristic: self.heuristic,
             strategy: self.strategy,
             ris: matches!(self.direct, DirectSampling::Ris(_)),
+            ris_reuse: self.ris_reuse,
         }
     }
 
@@ -343,6 +403,25 @@ impl PathSettings {
                 ));
             }
         }
+        if self.ris_reuse != RisReuse::Off {
+            let refuse = |why: &str| {
+                Err(Error::Invalid(format!("RIS reuse (--ris-reuse {}) {why}", self.ris_reuse.name())))
+            };
+            if !matches!(self.direct, DirectSampling::Ris(_)) {
+                return refuse("reuses the first hit's RIS reservoirs: it needs --direct ris");
+            }
+            if self.integrator == Integrator::Wavefront {
+                return refuse("runs in the megakernel only, not the wavefront integrator");
+            }
+            if self.tile.is_some() {
+                return refuse("takes neighbours across the whole image: not with --tile");
+            }
+            if self.first_sample != 0 {
+                return refuse(
+                    "chains each sample index to the one before: a sample range must start at 0 (--sample-range)",
+                );
+            }
+        }
         if let Some(Tile { image, origin }) = self.tile {
             let fits = |o: u32, s: u32, i: u32| o.checked_add(s).is_some_and(|end| end <= i);
             if !fits(origin.0, self.size.0, image.0) || !fits(origin.1, self.size.1, image.1) {
@@ -380,6 +459,11 @@ pub struct PathTarget {
     /// The wavefront path tracer's queues and path states, made at its first render into this
     /// target.
     pub wave: std::sync::OnceLock<WaveState>,
+    /// The first hit's RIS reservoirs for reuse ([`RisReuse`]; one
+    /// [`crate::gpu::layout::GpuPathReservoir`] per pixel each, the previous sample index's and
+    /// this one's, swapped between dispatches), made at the first render with reuse into this
+    /// target.
+    pub ris_reservoirs: std::sync::OnceLock<[Buffer; 2]>,
 }
 
 /// A path target's split of the radiance by the lobes it left the first hit through (the
@@ -424,6 +508,7 @@ impl PathTarget {
             stats: Buffer::upload(ctx, "path stats", &[PathStats::default()], Self::USAGE)?,
             lobe_split: None,
             wave: std::sync::OnceLock::new(),
+            ris_reservoirs: std::sync::OnceLock::new(),
         })
     }
 
@@ -456,7 +541,34 @@ impl PathTarget {
             device.cmd_fill_buffer(cmd, self.accum.raw, 0, raw::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, self.moment.raw, 0, raw::WHOLE_SIZE, 0);
         }
+        // A render with RIS reuse starts without reservoirs (count 0).
+        if let Some(reservoirs) = self.ris_reservoirs.get() {
+            Self::record_clear_reservoirs(ctx, cmd, reservoirs);
+        }
         barrier::transfer_to_compute(ctx, cmd);
+    }
+
+    /// Records the clearing of the RIS reservoirs (every count 0: no reservoir), without a barrier.
+    fn record_clear_reservoirs(ctx: &Context, cmd: raw::CommandBuffer, reservoirs: &[Buffer; 2]) {
+        for buffer in reservoirs {
+            // SAFETY: `cmd` is recording; the buffers are this target's, made with TRANSFER_DST.
+            unsafe { ctx.device().cmd_fill_buffer(cmd, buffer.raw, 0, raw::WHOLE_SIZE, 0) };
+        }
+    }
+
+    /// The RIS reservoirs for reuse, made (and their clearing recorded, with a barrier) if the
+    /// target has none yet; an error when one would exceed the device's storage-buffer range.
+    fn ris_reservoirs(&self, ctx: &Context, cmd: raw::CommandBuffer) -> Result<&[Buffer; 2]> {
+        if let Some(reservoirs) = self.ris_reservoirs.get() {
+            return Ok(reservoirs);
+        }
+        // (Buffer::new refuses a buffer over the device's storage-buffer range, naming it.)
+        let bytes = self.size.0 as u64 * self.size.1 as u64 * std::mem::size_of::<GpuPathReservoir>() as u64;
+        let make = |name| Buffer::new(ctx, name, bytes, Self::USAGE, MemoryLocation::GpuOnly);
+        let reservoirs = [make("path RIS reservoirs 0")?, make("path RIS reservoirs 1")?];
+        Self::record_clear_reservoirs(ctx, cmd, &reservoirs);
+        barrier::transfer_to_compute(ctx, cmd);
+        Ok(self.ris_reservoirs.get_or_init(|| reservoirs))
     }
 }
 
@@ -511,7 +623,13 @@ impl PathTracePass {
         let spec = sampling_spec!(
             pathtrace::Spec,
             self.options,
-            pathtrace::Spec { split_lobes: lobe_split, ris: self.options.ris, ..Default::default() }
+            pathtrace::Spec {
+                split_lobes: lobe_split,
+                ris: self.options.ris,
+                ris_temporal: self.options.ris_reuse.spec().0,
+                ris_spatial: self.options.ris_reuse.spec().1,
+                ..Default::default()
+            }
         );
         let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         Ok(cell.get_or_init(|| pipeline))
@@ -602,7 +720,10 @@ impl PathTracePass {
             Some(split) => (&split.specular, &split.split),
             None => (&target.albedo, &target.emission),
         };
-        let resources = pathtrace::Resources {
+        let reuse = self.options.ris_reuse != RisReuse::Off;
+        // Without reuse the reservoir bindings hold buffers the kernel never reads or writes.
+        let reservoirs = if reuse { Some(target.ris_reservoirs(ctx, cmd)?) } else { None };
+        let mut resources = pathtrace::Resources {
             scene,
             accum: &target.accum,
             moment: &target.moment,
@@ -612,6 +733,8 @@ impl PathTracePass {
             aov_specular,
             aov_split,
             stats: &target.stats,
+            ris_prev: &target.accum,
+            ris_next: &target.moment,
         };
         if self.options.ris && !(1..=DirectSampling::MAX_CANDIDATES).contains(&params.ris_candidates) {
             return Err(Error::Invalid(format!(
@@ -631,6 +754,13 @@ impl PathTracePass {
             };
             if self.options.ris {
                 most = most.min((Self::RIS_CANDIDATES_PER_DISPATCH / dispatch.ris_candidates.max(1)).max(1));
+            }
+            if let Some(reservoirs) = reservoirs {
+                // One sample index per dispatch: it reads the reservoirs of the one before.
+                most = 1;
+                let next = (dispatch.sample_index & 1) as usize;
+                resources.ris_next = &reservoirs[next];
+                resources.ris_prev = &reservoirs[next ^ 1];
             }
             dispatch.sample_count = most.min(end - dispatch.sample_index);
             pipeline.record(cmd, &resources, &dispatch, [target.size.0, target.size.1, 1], Self::LOCAL)?;

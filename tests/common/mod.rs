@@ -59,29 +59,77 @@ pub fn run_validated(command: &mut std::process::Command) -> String {
     stderr
 }
 
+/// ln Γ(z) for z > 0 (Lanczos approximation, g = 7, n = 9).
+pub fn ln_gamma(z: f64) -> f64 {
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    let z = z - 1.0;
+    let mut s = C[0];
+    for (i, c) in C.iter().enumerate().skip(1) {
+        s += c / (z + i as f64);
+    }
+    let t = z + 7.5;
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (z + 0.5) * t.ln() - t + s.ln()
+}
+
+/// The two-sided p-value of Student's t statistic `t` with `df` degrees of freedom:
+/// I_x(df/2, 1/2) at x = df / (df + t²) (the regularised incomplete beta function, Numerical
+/// Recipes' betai with Lentz's continued fraction).
+pub fn student_t_p(t: f64, df: f64) -> f64 {
+    let (a, b, x) = (0.5 * df, 0.5, df / (df + t * t));
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x >= 1.0 {
+        return 1.0;
+    }
+    let front = (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln()).exp();
+    let fraction = |a: f64, b: f64, x: f64| {
+        let tiny = 1e-300;
+        let (qab, qap, qam) = (a + b, a + 1.0, a - 1.0);
+        let mut c = 1.0;
+        let mut d = 1.0 - qab * x / qap;
+        d = if d.abs() < tiny { tiny } else { d };
+        d = 1.0 / d;
+        let mut h = d;
+        for m in 1..10_000 {
+            let m = m as f64;
+            let m2 = 2.0 * m;
+            for aa in [
+                m * (b - m) * x / ((qam + m2) * (a + m2)),
+                -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2)),
+            ] {
+                d = 1.0 + aa * d;
+                d = if d.abs() < tiny { tiny } else { d };
+                c = 1.0 + aa / c;
+                c = if c.abs() < tiny { tiny } else { c };
+                d = 1.0 / d;
+                h *= d * c;
+            }
+            if (d * c - 1.0).abs() < 1e-15 {
+                break;
+            }
+        }
+        h
+    };
+    if x < (a + 1.0) / (a + b + 2.0) {
+        front * fraction(a, b, x) / a
+    } else {
+        1.0 - front * fraction(b, a, 1.0 - x) / b
+    }
+}
+
 /// Regularised upper incomplete gamma Q(a, x) (Numerical Recipes' gammq).
 pub fn gamma_q(a: f64, x: f64) -> f64 {
-    let ln_gamma = |z: f64| {
-        // Lanczos approximation (g = 7, n = 9).
-        const C: [f64; 9] = [
-            0.999_999_999_999_809_9,
-            676.520_368_121_885_1,
-            -1_259.139_216_722_402_8,
-            771.323_428_777_653_1,
-            -176.615_029_162_140_6,
-            12.507_343_278_686_905,
-            -0.138_571_095_265_720_12,
-            9.984_369_578_019_572e-6,
-            1.505_632_735_149_311_6e-7,
-        ];
-        let z = z - 1.0;
-        let mut s = C[0];
-        for (i, c) in C.iter().enumerate().skip(1) {
-            s += c / (z + i as f64);
-        }
-        let t = z + 7.5;
-        0.5 * (2.0 * std::f64::consts::PI).ln() + (z + 0.5) * t.ln() - t + s.ln()
-    };
     if x <= 0.0 {
         return 1.0;
     }

@@ -1,6 +1,7 @@
 //! `umbra-bench restir-pt`: the path tracer's first-hit light sampling by RIS against power
-//! sampling (issue 22) on a many-light scene: per method (power; RIS with each candidate count)
-//! a series over samples per pixel, each point the path tracer's GPU time (median of repeats
+//! sampling (issue 22) on a many-light scene: per method (power; RIS with each candidate count;
+//! RIS with reuse of the previous sample index's first-hit reservoirs, `--ris-reuse`, with each
+//! reuse and candidate count of [`REUSE`]) a series over samples per pixel, each point the path tracer's GPU time (median of repeats
 //! after a warm-up render) and the relative MSE of the whole image (direct and indirect light)
 //! against a converged reference (power sampling at many samples, its own noise subtracted from
 //! nothing: its relative MSE is charted as the floor). Equal error: power sampling's time
@@ -15,7 +16,7 @@ use anyhow::Result;
 use serde_json::{json, Value};
 use std::path::Path;
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::pathtrace::DirectSampling;
+use umbra::passes::pathtrace::{DirectSampling, RisReuse};
 use umbra::render::{Passes, PathSettings};
 use umbra::scene::{Camera, Scene};
 use umbra::vk::Context;
@@ -33,16 +34,26 @@ pub struct RestirPtBench {
 }
 
 /// Samples per pixel of each series' points.
-const SPP: [u32; 6] = [1, 2, 4, 8, 16, 32];
-/// The RIS series' candidate counts.
-const CANDIDATES: [u32; 4] = [4, 16, 32, 64];
+const SPP: [u32; 7] = [1, 2, 4, 8, 16, 32, 64];
+/// The candidate counts of the RIS series without reuse.
+const CANDIDATES: [u32; 2] = [16, 32];
+/// The RIS series with reuse: what each reuses and its candidate count.
+const REUSE: [(RisReuse, u32); 5] = [
+    (RisReuse::Samples, 16),
+    (RisReuse::Spatial, 16),
+    (RisReuse::Both, 4),
+    (RisReuse::Both, 16),
+    (RisReuse::Both, 32),
+];
 
 /// One measured point.
 pub struct Point {
-    /// "power" or "RIS M".
+    /// "power", "RIS M" or, with reuse, "RIS M + samples|spatial|both".
     pub method: String,
     /// RIS candidates (0 for power sampling).
     pub candidates: u32,
+    /// The RIS's reuse (`RisReuse::name`: "off" without).
+    pub reuse: &'static str,
     /// Samples per pixel.
     pub spp: u32,
     /// The path tracer's GPU time, ms.
@@ -63,13 +74,16 @@ pub fn run(ctx: &Context, scene: &Scene, camera: &Camera, s: &RestirPtBench) -> 
     let reference_settings = settings(s, DirectSampling::Power, s.reference_spp, 0x5eed);
     let reference = passes.path_trace(&gpu_scene, camera, &reference_settings, |_, _| {})?;
     let floor = f64::from(reference.relative_error()).powi(2);
-    let mut runs = vec![(DirectSampling::Power, "power".to_string())];
-    runs.extend(CANDIDATES.map(|m| (DirectSampling::Ris(m), format!("RIS {m}"))));
+    let mut runs = vec![(DirectSampling::Power, RisReuse::Off, "power".to_string())];
+    runs.extend(CANDIDATES.map(|m| (DirectSampling::Ris(m), RisReuse::Off, format!("RIS {m}"))));
+    runs.extend(
+        REUSE.map(|(reuse, m)| (DirectSampling::Ris(m), reuse, format!("RIS {m} + {}", reuse.name()))),
+    );
     let bar = super::progress_bar((runs.len() * SPP.len()) as u64, "points");
     let mut points = Vec::new();
-    for (direct, method) in runs {
+    for (direct, ris_reuse, method) in runs {
         for spp in SPP {
-            let settings = settings(s, direct, spp, 7);
+            let settings = PathSettings { ris_reuse, ..settings(s, direct, spp, 7) };
             passes.path_trace(&gpu_scene, camera, &settings, |_, _| {})?; // warm-up
             let mut times = Vec::new();
             let mut image = None;
@@ -82,6 +96,7 @@ pub fn run(ctx: &Context, scene: &Scene, camera: &Camera, s: &RestirPtBench) -> 
             points.push(Point {
                 method: method.clone(),
                 candidates: direct.candidates(),
+                reuse: ris_reuse.name(),
                 spp,
                 ms: median(&mut times),
                 rel_mse,
@@ -106,6 +121,7 @@ pub fn to_json(device: &str, scene: &str, s: &RestirPtBench, points: &[Point], f
         "points": points.iter().map(|p| json!({
             "method": p.method,
             "candidates": p.candidates,
+            "reuse": p.reuse,
             "spp": p.spp,
             "ms": p.ms,
             "rel_mse": p.rel_mse,

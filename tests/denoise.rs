@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{relative_mse, Gpu};
+use common::{push_noisy_pixel, relative_mse, synthetic_image, Gpu, Rng};
 use umbra::gpu::scene::GpuScene;
 use umbra::render::{denoise, path_trace, DenoiseSettings, LobeSplitImage, PathImage, PathSettings};
 use umbra::scene::Scene;
@@ -26,26 +26,6 @@ struct Truth {
     depth: f32,
 }
 
-/// A small counter-based generator (SplitMix64), so the images are the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// A standard normal number (Box–Muller).
-    fn normal(&mut self) -> f64 {
-        let u = self.next_f64().max(1e-300);
-        let v = self.next_f64();
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
-}
-
 /// An image of `spp` samples per pixel of `truth`, each sample the true radiance × (1 + `noise` g)
 /// with g a standard normal number shared by the channels (a path's channels move together).
 fn synthetic(
@@ -56,40 +36,13 @@ fn synthetic(
 ) -> (PathImage, Vec<[f32; 3]>) {
     let mut rng = Rng(seed);
     let (w, h) = SIZE;
-    let mut image = PathImage {
-        size: SIZE,
-        spp,
-        mean: Vec::new(),
-        moment: Vec::new(),
-        albedo: Vec::new(),
-        normal_depth: Vec::new(),
-        emission: Vec::new(),
-        lobe_split: None,
-        nonfinite_samples: 0,
-        nonfinite_sources: 0,
-        gpu_ms: 0.0,
-        segments: 0,
-        marches_exhausted: 0,
-    };
+    let mut image = synthetic_image(SIZE, spp);
     let mut expected = Vec::new();
     for y in 0..h {
         for x in 0..w {
             let t = truth(x, y);
-            let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
-            for _ in 0..spp {
-                let g = 1.0 + noise as f64 * rng.normal();
-                for c in 0..3 {
-                    let s = t.radiance[c] as f64 * g;
-                    sum[c] += s;
-                    sum2[c] += s * s;
-                }
-            }
-            let n = spp as f64;
-            image.mean.push([(sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32, spp as f32]);
-            image.moment.push([(sum2[0] / n) as f32, (sum2[1] / n) as f32, (sum2[2] / n) as f32, 0.0]);
-            image.albedo.push([t.albedo[0], t.albedo[1], t.albedo[2], 1.0]);
-            image.normal_depth.push([t.normal[0], t.normal[1], t.normal[2], t.depth]);
-            image.emission.push([0.0; 4]);
+            let normal_depth = [t.normal[0], t.normal[1], t.normal[2], t.depth];
+            push_noisy_pixel(&mut image, &mut rng, noise as f64, t.radiance, t.albedo, normal_depth);
             expected.push(t.radiance);
         }
     }

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{relative_mse, Gpu};
+use common::{push_noisy_pixel, relative_mse, synthetic_image, Gpu, Rng};
 use umbra::render::{
     denoise, denoise_temporal, DenoiseSettings, PathImage, TemporalFeedback, TemporalFrame, TemporalSettings,
 };
@@ -16,26 +16,6 @@ use umbra::scene::Camera;
 
 const SIZE: (u32, u32) = (64, 64);
 const YFOV: f32 = 0.8;
-
-/// SplitMix64, so the frames are the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// A standard normal number (Box–Muller).
-    fn normal(&mut self) -> f64 {
-        let u = self.next_f64().max(1e-300);
-        let v = self.next_f64();
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
-}
 
 /// A pinhole camera at (x, 0, 0) looking down −Z.
 fn camera(x: f32) -> Camera {
@@ -71,21 +51,7 @@ fn frame(x: f32, layers: &[Layer], spp: u32, noise: f64, seed: u64) -> (PathImag
     let mut rng = Rng(seed);
     let (w, h) = SIZE;
     let tan = (YFOV * 0.5).tan();
-    let mut image = PathImage {
-        size: SIZE,
-        spp,
-        mean: Vec::new(),
-        moment: Vec::new(),
-        albedo: Vec::new(),
-        normal_depth: Vec::new(),
-        emission: Vec::new(),
-        lobe_split: None,
-        nonfinite_samples: 0,
-        nonfinite_sources: 0,
-        gpu_ms: 0.0,
-        segments: 0,
-        marches_exhausted: 0,
-    };
+    let mut image = synthetic_image(SIZE, spp);
     let mut truth = Vec::new();
     for py in 0..h {
         for px in 0..w {
@@ -103,23 +69,8 @@ fn frame(x: f32, layers: &[Layer], spp: u32, noise: f64, seed: u64) -> (PathImag
                 .expect("the last layer is a whole plane");
             let (wx, wy) = (x + dx * layer.depth, dy * layer.depth);
             let radiance = layer.albedo.map(|a| a * (layer.irradiance)(wx, wy));
-            let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
-            for _ in 0..spp {
-                let g = 1.0 + noise * rng.normal();
-                for c in 0..3 {
-                    let s = radiance[c] as f64 * g;
-                    sum[c] += s;
-                    sum2[c] += s * s;
-                }
-            }
-            let n = spp as f64;
-            image.mean.push([0, 1, 2, 3].map(|c| if c == 3 { spp as f32 } else { (sum[c] / n) as f32 }));
-            image.moment.push([0, 1, 2, 3].map(|c| if c == 3 { 0.0 } else { (sum2[c] / n) as f32 }));
-            let a = layer.albedo;
-            image.albedo.push([a[0], a[1], a[2], 1.0]);
             let distance = layer.depth * (1.0 + dx * dx + dy * dy).sqrt();
-            image.normal_depth.push([0.0, 0.0, 1.0, distance]);
-            image.emission.push([0.0; 4]);
+            push_noisy_pixel(&mut image, &mut rng, noise, radiance, layer.albedo, [0.0, 0.0, 1.0, distance]);
             truth.push(radiance);
         }
     }

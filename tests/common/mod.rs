@@ -438,3 +438,72 @@ pub fn relative_mse(image: &[[f32; 4]], reference: &[[f32; 3]]) -> f64 {
         .sum();
     sum / (image.len() * 3) as f64
 }
+
+/// A small counter-based generator (SplitMix64), so synthetic images are the same on every run.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_f64(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A standard normal number (Box–Muller).
+    pub fn normal(&mut self) -> f64 {
+        let u = self.next_f64().max(1e-300);
+        let v = self.next_f64();
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+}
+
+/// A path tracer's image of `size` at `spp` samples per pixel with no pixels yet, for the
+/// denoiser's tests to fill with [`push_noisy_pixel`].
+pub fn synthetic_image(size: (u32, u32), spp: u32) -> umbra::render::PathImage {
+    umbra::render::PathImage {
+        size,
+        spp,
+        mean: Vec::new(),
+        moment: Vec::new(),
+        albedo: Vec::new(),
+        normal_depth: Vec::new(),
+        emission: Vec::new(),
+        lobe_split: None,
+        nonfinite_samples: 0,
+        nonfinite_sources: 0,
+        gpu_ms: 0.0,
+        segments: 0,
+        marches_exhausted: 0,
+    }
+}
+
+/// Appends a pixel of `image.spp` samples, each the true `radiance` × (1 + `noise` g) with g a
+/// standard normal number shared by the channels (a path's channels move together): its mean
+/// (sample count in alpha), mean square, albedo, normal and distance, and no emission.
+pub fn push_noisy_pixel(
+    image: &mut umbra::render::PathImage,
+    rng: &mut Rng,
+    noise: f64,
+    radiance: [f32; 3],
+    albedo: [f32; 3],
+    normal_depth: [f32; 4],
+) {
+    let spp = image.spp;
+    let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
+    for _ in 0..spp {
+        let g = 1.0 + noise * rng.normal();
+        for c in 0..3 {
+            let s = radiance[c] as f64 * g;
+            sum[c] += s;
+            sum2[c] += s * s;
+        }
+    }
+    let n = spp as f64;
+    image.mean.push([(sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32, spp as f32]);
+    image.moment.push([(sum2[0] / n) as f32, (sum2[1] / n) as f32, (sum2[2] / n) as f32, 0.0]);
+    image.albedo.push([albedo[0], albedo[1], albedo[2], 1.0]);
+    image.normal_depth.push(normal_depth);
+    image.emission.push([0.0; 4]);
+}

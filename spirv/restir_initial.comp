@@ -39,7 +39,7 @@ void main() {
             vec4 u = rand4(uvec2(pixel), params.frame * m + i, RNG_RESTIR_CANDIDATE, params.seed);
             vec2 bary;
             float pdf;
-            uint id = restir_candidate(u, bary, pdf);
+            uint id = restir_candidate(u, 0.0, bary, pdf);
             if (pdf > 0.0) {
                 float pick = rand4(uvec2(pixel), params.frame * m + i, RNG_RESTIR_PICK, params.seed).x;
                 reservoir_add(r, id, bary, restir_target(sp, id, bary) / pdf, pick);

@@ -247,11 +247,12 @@ struct RenderArgs {
     /// How direct light (punctual lights, emissive triangles) is sampled. Hybrid: every punctual
     /// light and --shadow-rays emissive samples by power (power), or ReSTIR DI's one resampled
     /// sample per pixel, reused over --restir-frames frames and neighbouring pixels (restir).
-    /// Path tracer: at the first hit, one emissive sample by power with MIS and the punctual
-    /// lights (power, as at every hit), or one sample resampled from --ris-candidates (ris).
+    /// Path tracer: at every vertex, one emissive sample by power with MIS and the punctual
+    /// lights (power), or one sample resampled from --ris-candidates (ris).
     #[arg(long, value_enum, default_value = "power")]
     direct: DirectArg,
-    /// Path tracer, --direct ris: candidates resampled at each sample's first hit.
+    /// Path tracer, --direct ris: candidates resampled at each vertex (at most 512 over a path's
+    /// --max-bounces).
     #[arg(long, default_value_t = 8)]
     ris_candidates: u32,
     /// Path tracer, --direct ris: reuse the previous sample index's first-hit reservoirs, the

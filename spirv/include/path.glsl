@@ -141,27 +141,59 @@ vec3 first_specular(Path path, Surface s, vec3 wo, vec3 wi, vec3 f, vec3 c) {
     return vec3(0.0);
 }
 
-// The first hit's direct light from the emissive triangles and punctual lights by RIS
-// (resample.glsl, the candidates and target of the hybrid's ReSTIR): params.ris_candidates
+// The direct light at a vertex (bounce `depth`) from the emissive triangles and punctual lights
+// by RIS (resample.glsl, the candidates and target of the hybrid's ReSTIR): params.ris_candidates
 // candidates resampled into one by p^ = the luminance of the unshadowed f cos Le G, its shadow
-// ray through path_shadow, its contribution f Le G V W with W = w_sum / (M p^(y)). Unbiased: p^
-// is positive wherever f Le G is (a luminance of non-negative colours), and the candidates'
-// densities cover every emitter light sampling covers.
+// ray through path_shadow, its contribution f Le G V W with W = w_sum / (M p^(y)), an emissive
+// point's weighted by MIS against BSDF sampling (ris_emissive_weight). Unbiased: p^ is positive
+// wherever f Le G is (a luminance of non-negative colours), and the candidates' densities cover
+// every emitter light sampling covers.
 //
 // With reuse (ris_reuse.glsl, included by the megakernel where RIS_TEMPORAL or RIS_SPATIAL may
-// be on) the reservoir then merges the previous sample index's reservoirs and W comes from their
-// unbiased combination; `hit` (the closest hit, after parallax mapping) is stored with it.
-void path_ris(inout Path path, ShadePoint sp, Hit hit, vec3 throughput, uvec2 pixel, uint sample_index) {
+// be on) the first hit's reservoir then merges the previous sample index's reservoirs and W comes
+// from their unbiased combination; `hit` (the closest hit, after parallax mapping) is stored with
+// it. Deeper vertices do not reuse.
+// The share of the path tracer's RIS candidates that pick their light uniformly within its pool
+// (restir_candidate's defensive mixture; the rest by power).
+const float RIS_FLAT = 0.5;
+
+// The density, in solid angle towards wi, that stands for RIS's in the MIS between RIS and BSDF
+// sampling of an emissive point: m times the candidates' source density (the share of emissive
+// candidates, the triangle's power pick, a uniform point on it). Any weights that sum to one
+// across the two strategies keep the sum unbiased, and a deterministic one keeps RIS's estimate
+// of its weighted part unbiased (RIS's own density of a point is not known in closed form).
+float ris_emissive_pdf(float pdf_area, float dist2, float cos_light, uint m) {
+    return float(m) * restir_emissive_share() * pdf_area * dist2 / max(cos_light, 1e-8);
+}
+
+// RIS's MIS weight for its kept sample `id` seen along wi (world) / wi_local from sp: against BSDF
+// sampling for an emissive point, 1 for a punctual light (a delta: BSDF sampling cannot find it).
+float ris_emissive_weight(ShadePoint sp, uint id, vec3 wi, vec3 wi_local, vec3 target, uint m) {
+    if (HAS_LIGHTS) {
+        if ((id & RESTIR_PUNCTUAL) == 0u && id < params.light_count) {
+            uint ltri = light_tri(id);
+            vec3 cdf_pmf_area = light_cdf_pmf_area(id);
+            vec3 d = target - sp.p;
+            float cos_light = abs(dot(normalize(tri_normal(ltri)), wi));
+            float pick = restir_pick_pmf(cdf_pmf_area.y, params.light_count, RIS_FLAT);
+            float p = ris_emissive_pdf(pick / cdf_pmf_area.z, dot(d, d), cos_light, m);
+            return light_sample_weight(p, bsdf_pdf(sp.s, sp.wo_local, wi_local));
+        }
+    }
+    return 1.0;
+}
+
+void path_ris(inout Path path, ShadePoint sp, Hit hit, vec3 throughput, uvec2 pixel, uint sample_index, uint depth) {
     uint seed = params.seed;
     uint m = params.ris_candidates;
     Reservoir r = reservoir_empty();
     for (uint k = 0u; k < m; ++k) {
-        vec4 u = rand4(pixel, sample_index, rng_stream(k, RNG_RIS_CANDIDATE), seed);
+        vec4 u = rand4(pixel, sample_index, rng_stream(ris_depth(depth) + k, RNG_RIS_CANDIDATE), seed);
         vec2 bary;
         float pdf;
-        uint id = restir_candidate(u, bary, pdf);
+        uint id = restir_candidate(u, RIS_FLAT, bary, pdf);
         if (pdf > 0.0) {
-            float pick = rand4(pixel, sample_index, rng_stream(k, RNG_RIS_PICK), seed).x;
+            float pick = rand4(pixel, sample_index, rng_stream(ris_depth(depth) + k, RNG_RIS_PICK), seed).x;
             reservoir_add(r, id, bary, restir_target(sp, id, bary) / pdf, pick);
         }
     }
@@ -171,7 +203,7 @@ void path_ris(inout Path path, ShadePoint sp, Hit hit, vec3 throughput, uvec2 pi
     vec3 c;
     bool reused = false;
 #ifdef UMBRA_RIS_REUSE
-    if (ris_reuses()) {
+    if (ris_reuses() && depth == 0u) {
         r.m = float(m);
         c = ris_reuse(r, sp, hit, pixel, sample_index, wi, to_point, target);
         reused = true;
@@ -184,7 +216,7 @@ void path_ris(inout Path path, ShadePoint sp, Hit hit, vec3 throughput, uvec2 pi
     vec3 wi_local;
     float side = light_side(sp.ng, sp.t, sp.b, sp.n, surface_transmits(sp.s), wi, wi_local);
     if (r.w > 0.0 && side != 0.0) {
-        c *= throughput * r.w;
+        c *= throughput * r.w * ris_emissive_weight(sp, r.id, wi, wi_local, target, m);
         vec3 c_spec = vec3(0.0);
         if (SPLIT_LOBES) {
             c_spec = first_specular(path, sp.s, sp.wo_local, wi_local, bsdf_eval(sp.s, sp.wo_local, wi_local), c);
@@ -253,11 +285,12 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             float emissive = emissive_pdf(tri, area, hit.t, ng, wo);
             w = bsdf_hit_weight(path.prev_pdf, emissive * (1.0 - params.env_pick));
             if (RIS) {
-                // Reached from the first hit, whose RIS covered every emissive triangle of the
-                // table: counted there, not here (weight 0; no MIS: RIS's density of a point is
-                // not known in closed form).
-                if (depth == 1u && emissive > 0.0) {
-                    w = 0.0;
+                // Reached from a vertex whose RIS covered every emissive triangle of the table:
+                // weighed against RIS's stand-in density (ris_emissive_weight's).
+                if (emissive > 0.0) {
+                    float pick = restir_pick_pmf(tri_light_pmf(tri), params.light_count, RIS_FLAT);
+                    float ris = ris_emissive_pdf(pick / area, hit.t * hit.t, abs(dot(ng, wo)), params.ris_candidates);
+                    w = bsdf_hit_weight(path.prev_pdf, ris);
                 }
             }
         }
@@ -327,35 +360,33 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
         return false;
     }
 
-    // RIS at the first hit (`ris`): its one resampled sample of the emissive triangles and
-    // punctual lights stands for both of them there (path_ris); the environment map keeps the
+    // RIS (`ris`): at every vertex its one resampled sample of the emissive triangles and
+    // punctual lights stands for both of them (path_ris); the environment map keeps the
     // next-event estimation below.
     bool ris_here = false;
     if (RIS) {
-        if (depth == 0u) {
-            ShadePoint sp;
-            sp.p = p;
-            sp.depth = hit.t;
-            sp.ng = ng;
-            sp.n = n;
-            sp.t = t;
-            sp.b = b;
-            sp.wo = wo;
-            sp.wo_local = wo_local;
-            sp.material = material;
-            sp.roughness = 0.0;
-            sp.uv1 = vec2(0.0);
-            sp.s = s;
-            path_ris(path, sp, hit, throughput, pixel, sample_index);
-            ris_here = true;
-        }
+        ShadePoint sp;
+        sp.p = p;
+        sp.depth = hit.t;
+        sp.ng = ng;
+        sp.n = n;
+        sp.t = t;
+        sp.b = b;
+        sp.wo = wo;
+        sp.wo_local = wo_local;
+        sp.material = material;
+        sp.roughness = 0.0;
+        sp.uv1 = vec2(0.0);
+        sp.s = s;
+        path_ris(path, sp, hit, throughput, pixel, sample_index, depth);
+        ris_here = true;
     }
 
     // Next-event estimation: one light sample and its shadow ray, from the emissive triangles
     // (one by power, a uniform point on it) or the environment map (importance-sampled by
     // luminance x sin(theta)), the map picked with probability params.env_pick (1 or 0 where the
-    // scene has one of them; by their power where it has both), weighted by MIS. (Under RIS at
-    // the first hit only the map's share: an emissive pick samples nothing there.)
+    // scene has one of them; by their power where it has both), weighted by MIS. (Under RIS only
+    // the map's share: an emissive pick samples nothing.)
     bool tri_nee = false;
     if (HAS_LIGHTS) {
         tri_nee = params.light_count > 0u && !ris_here;

@@ -28,11 +28,18 @@ const uint RNG_BSDF = 2u;          // BSDF sample (xyz), Russian roulette (w)
 const uint RNG_ENV_NEE = 3u;       // environment map sample
 const uint RNG_PUNCTUAL = 4u;      // punctual light pick (x)
 const uint RNG_DISPERSION = 5u;    // colour channel through a dispersive volume (x)
-// RIS at the first hit (path.glsl's path_ris, at depth 0 only): candidate k draws its light
-// sample from stream rng_stream(k, RNG_RIS_CANDIDATE) and whether the reservoir keeps it from
-// rng_stream(k, RNG_RIS_PICK) (x): these two uses are RIS's at every "depth".
+// RIS (path.glsl's path_ris) at bounce `depth`: candidate k draws its light sample from stream
+// rng_stream(ris_depth(depth) + k, RNG_RIS_CANDIDATE) and whether the reservoir keeps it from
+// rng_stream(ris_depth(depth) + k, RNG_RIS_PICK) (x): these two uses are RIS's at every "depth".
+// Each bounce has RIS_DEPTHS of those "depths": 256 for the candidates (DirectSampling's most),
+// then, at the first hit, the reuse's (ris_reuse.glsl's RIS_REUSE_DEPTH).
 const uint RNG_RIS_CANDIDATE = 6u;
 const uint RNG_RIS_PICK = 7u;
+const uint RIS_DEPTHS = 512u;
+
+uint ris_depth(uint depth) {
+    return depth * RIS_DEPTHS;
+}
 
 uint rng_stream(uint depth, uint use) {
     return depth * RNG_STREAMS_PER_BOUNCE + use;

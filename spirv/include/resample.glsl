@@ -44,26 +44,50 @@ float restir_emissive_share() {
     return emissive ? (punctual ? 0.5 : 1.0) : 0.0;
 }
 
+// The candidates' pick of a light of a pool of `count` whose power pick has probability `pmf`:
+// with probability `uniform_share` a uniform pick, else by power (a defensive mixture: a light
+// of little power close to a surface is picked no less often than uniform_share / count, which
+// bounds its samples' weights).
+float restir_pick_pmf(float pmf, uint count, float uniform_share) {
+    return uniform_share / float(count) + (1.0 - uniform_share) * pmf;
+}
+
+// restir_pick_pmf's uniform pick, `k`, where u < uniform_share (u uniform in [0, 1)); else the
+// number in [0, 1) for the power pick, in `rest`.
+bool restir_uniform_pick(float u, uint count, float uniform_share, out uint k, out float rest) {
+    k = min(uint(u / max(uniform_share, 1e-30) * float(count)), count - 1u);
+    rest = (u - uniform_share) / (1.0 - uniform_share);
+    return u < uniform_share;
+}
+
 // One candidate light sample from u: its id (GpuReservoir::light), barycentrics and source
-// density (area measure for a triangle's point, a probability for a punctual light; 0: none).
-uint restir_candidate(vec4 u, out vec2 bary, out float pdf) {
+// density (area measure for a triangle's point, a probability for a punctual light; 0: none);
+// each pool's light by restir_pick_pmf's mixture with share `uniform_share` of uniform picks
+// (0: by power alone).
+uint restir_candidate(vec4 u, float uniform_share, out vec2 bary, out float pdf) {
     float share = restir_emissive_share();
     bary = vec2(0.0);
     pdf = 0.0;
     uint id = RESTIR_NONE;
+    uint k;
+    float rest;
     if (HAS_LIGHTS) {
         if (u.w < share) {
-            uint k = pick_light(u.x, params.light_count);
+            if (!restir_uniform_pick(u.x, params.light_count, uniform_share, k, rest)) {
+                k = pick_light(rest, params.light_count);
+            }
             vec3 cdf_pmf_area = light_cdf_pmf_area(k);
             bary = sample_triangle(u.yz);
-            pdf = share * cdf_pmf_area.y / cdf_pmf_area.z;
+            pdf = share * restir_pick_pmf(cdf_pmf_area.y, params.light_count, uniform_share) / cdf_pmf_area.z;
             id = k;
         }
     }
     if (HAS_PUNCTUAL) {
         if (u.w >= share) {
-            uint k = pick_punctual(u.x, params.punctual_count);
-            pdf = (1.0 - share) * punctual_vec(k, 3u).z;
+            if (!restir_uniform_pick(u.x, params.punctual_count, uniform_share, k, rest)) {
+                k = pick_punctual(rest, params.punctual_count);
+            }
+            pdf = (1.0 - share) * restir_pick_pmf(punctual_vec(k, 3u).z, params.punctual_count, uniform_share);
             id = RESTIR_PUNCTUAL | k;
         }
     }

@@ -22,7 +22,8 @@
 // The reuse's random numbers: reused reservoir j (neighbour j < RIS_REUSE_NEIGHBOURS, the pixel's
 // own at j = RIS_REUSE_NEIGHBOURS) draws its pixel from rng_stream(RIS_REUSE_DEPTH + j,
 // RNG_RIS_CANDIDATE) and whether it is kept from rng_stream(RIS_REUSE_DEPTH + j, RNG_RIS_PICK):
-// past the candidates' streams (k < DirectSampling::MAX_CANDIDATES).
+// past the candidates' streams (k < DirectSampling::MAX_CANDIDATES), within the first hit's
+// RIS_DEPTHS (random.glsl).
 const uint RIS_REUSE_DEPTH = 256u;
 
 // Whether the kernel reuses at all (spec constants only as plain `if` conditions).

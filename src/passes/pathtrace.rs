@@ -108,7 +108,7 @@ impl Strategy {
 }
 
 /// How the path tracer samples the direct light of the emissive triangles and punctual lights
-/// at a path's first scattering vertex (beyond it, always as [`DirectSampling::Power`]).
+/// at a path's scattering vertices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum DirectSampling {
     /// As at every vertex: one emissive sample by power (a uniform point on the triangle picked),
@@ -120,11 +120,14 @@ pub enum DirectSampling {
     /// hybrid's ReSTIR DI, [`crate::passes::restir`]): this many candidates, each an emissive
     /// sample or a punctual light (half and half where the scene has both, each pool by
     /// power), resampled into one by the target p̂ = the luminance of the unshadowed f·cos·Lₑ·G;
-    /// one shadow ray for the kept sample, its contribution f·Lₑ·G·V·W. An emissive triangle a
-    /// BSDF-sampled ray from that vertex hits then counts nothing (weight 0, not MIS: the RIS
-    /// density of a point is not known in closed form). The environment map keeps its
-    /// next-event estimation and MIS. The megakernel only; 1 to
-    /// [`DirectSampling::MAX_CANDIDATES`] candidates.
+    /// one shadow ray for the kept sample, its contribution f·Lₑ·G·V·W; at every vertex.
+    /// An emissive point RIS keeps and an emissive triangle a BSDF-sampled ray from that vertex
+    /// hits are weighed by MIS with a stand-in for RIS's density (which is not known in closed
+    /// form): the candidates × their source density, a deterministic weight, so both estimates
+    /// stay unbiased. The environment map keeps its next-event estimation and MIS. The
+    /// megakernel only; 1 to [`DirectSampling::MAX_CANDIDATES`] candidates, and at most
+    /// [`PathTracePass::RIS_CANDIDATES_PER_DISPATCH`] over a path's vertices (the candidates ×
+    /// the bounces).
     Ris(u32),
 }
 
@@ -210,8 +213,8 @@ pub struct PathOptions {
     pub heuristic: Heuristic,
     /// Sampling strategies.
     pub strategy: Strategy,
-    /// The first hit's direct light by RIS ([`DirectSampling::Ris`]; the candidates' count is a
-    /// push constant): the megakernel only.
+    /// The direct light by RIS ([`DirectSampling::Ris`]; the candidates' count is a push
+    /// constant): the megakernel only.
     pub ris: bool,
     /// Reuse for the first hit's RIS ([`RisReuse`]; with `ris` only).
     pub ris_reuse: RisReuse,
@@ -276,7 +279,7 @@ pub struct PathSettings {
     pub heuristic: Heuristic,
     /// Sampling strategies (MIS of both, or either alone).
     pub strategy: Strategy,
-    /// The first scattering vertex's light sampling: by power as at every vertex, or RIS.
+    /// The light sampling at every scattering vertex: by power, or RIS.
     pub direct: DirectSampling,
     /// Reuse for the first hit's RIS ([`RisReuse`]; with [`DirectSampling::Ris`] only, the
     /// megakernel, no tile and no sample range after 0).
@@ -364,7 +367,8 @@ impl PathSettings {
     /// An error unless the settings describe a render: at least one sample, a sample range
     /// within the sequence's 2^32 indices, a tile inside its image, at most
     /// [`super::wavefront::MAX_BOUNCES`] bounces for the wavefront integrator, RIS with the
-    /// megakernel, light sampling and 1 to [`DirectSampling::MAX_CANDIDATES`] candidates.
+    /// megakernel, light sampling and 1 to [`DirectSampling::MAX_CANDIDATES`] candidates, at most
+    /// [`PathTracePass::RIS_CANDIDATES_PER_DISPATCH`] over a path's bounces.
     pub fn validate(&self) -> Result<()> {
         if self.spp == 0 {
             return Err(Error::Invalid("samples per pixel must be at least 1".into()));
@@ -391,15 +395,23 @@ impl PathSettings {
                     DirectSampling::MAX_CANDIDATES
                 )));
             }
+            let per_path = u64::from(m) * u64::from(self.max_bounces.max(1));
+            if per_path > u64::from(PathTracePass::RIS_CANDIDATES_PER_DISPATCH) {
+                return Err(Error::Invalid(format!(
+                    "{m} RIS candidates at each of up to {} bounces is {per_path} a path: at most {} \
+                     (llvmpipe cuts an invocation's loops short); fewer candidates or bounces",
+                    self.max_bounces,
+                    PathTracePass::RIS_CANDIDATES_PER_DISPATCH
+                )));
+            }
             if self.integrator == Integrator::Wavefront {
                 return Err(Error::Invalid(
-                    "RIS at the first hit (--direct ris) runs in the megakernel only, not the wavefront integrator"
-                        .into(),
+                    "RIS (--direct ris) runs in the megakernel only, not the wavefront integrator".into(),
                 ));
             }
             if self.strategy == Strategy::Bsdf {
                 return Err(Error::Invalid(
-                    "RIS at the first hit (--direct ris) is light sampling: not with --strategy bsdf".into(),
+                    "RIS (--direct ris) is light sampling: not with --strategy bsdf".into(),
                 ));
             }
         }
@@ -646,9 +658,10 @@ impl PathTracePass {
     /// per instruction), and llvmpipe cuts an invocation's loops short past 65,535 iterations.
     pub const SAMPLES_PER_DISPATCH_IMPLICIT: u32 = 2;
 
-    /// RIS candidates one dispatch resamples at most, over its samples' first hits (each one a
+    /// RIS candidates one dispatch resamples at most, over its samples' vertices (each one a
     /// binary search of a light table: llvmpipe's loop limit): a dispatch with
-    /// [`DirectSampling::Ris`] traces at most this ÷ the candidates samples (at least one).
+    /// [`DirectSampling::Ris`] traces at most this ÷ (the candidates × the bounces) samples (at
+    /// least one; [`PathSettings::validate`] refuses a path of more).
     pub const RIS_CANDIDATES_PER_DISPATCH: u32 = 512;
 
     /// The push constants for sample 0 of `settings` seen from `camera` (`sample_index` and
@@ -738,7 +751,7 @@ impl PathTracePass {
         };
         if self.options.ris && !(1..=DirectSampling::MAX_CANDIDATES).contains(&params.ris_candidates) {
             return Err(Error::Invalid(format!(
-                "the path tracer was built for RIS at the first hit, with {} candidates: must be 1 to {}",
+                "the path tracer was built for RIS, with {} candidates: must be 1 to {}",
                 params.ris_candidates,
                 DirectSampling::MAX_CANDIDATES
             )));
@@ -753,7 +766,8 @@ impl PathTracePass {
                 Self::SAMPLES_PER_DISPATCH
             };
             if self.options.ris {
-                most = most.min((Self::RIS_CANDIDATES_PER_DISPATCH / dispatch.ris_candidates.max(1)).max(1));
+                let per_sample = dispatch.ris_candidates.max(1).saturating_mul(dispatch.max_bounces.max(1));
+                most = most.min((Self::RIS_CANDIDATES_PER_DISPATCH / per_sample).max(1));
             }
             if let Some(reservoirs) = reservoirs {
                 // One sample index per dispatch: it reads the reservoirs of the one before.

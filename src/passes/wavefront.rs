@@ -239,7 +239,7 @@ impl WavefrontPass {
     ) -> Result<(&Pipeline<wavefront::Kernel>, &Stages)> {
         if self.options.ris {
             return Err(Error::Invalid(
-                "RIS at the first hit (--direct ris) runs in the megakernel only, not the wavefront integrator".into(),
+                "RIS (--direct ris) runs in the megakernel only, not the wavefront integrator".into(),
             ));
         }
         let base = sampling_spec!(wavefront::Spec, self.options, Default::default());

@@ -237,6 +237,9 @@ fn restir_pt_writes_json_a_chart_and_a_table() {
         assert!(points.iter().any(|p| p["method"] == method), "{method} measured");
     }
     assert!(points.iter().all(|p| p["ms"].as_f64().unwrap() > 0.0 && p["rel_mse"].as_f64().unwrap() >= 0.0));
+    // Power sampling's series runs past the others' (so their errors fall within it).
+    assert!(points.iter().any(|p| p["method"] == "power" && p["spp"] == 256), "power at 256 spp");
+    assert!(!points.iter().any(|p| p["method"] == "RIS 16" && p["spp"] == 256), "RIS up to 64 spp");
     let svg = std::fs::read_to_string(dir.join("restir-pt.svg")).expect("SVG chart");
     assert!(svg.contains("RIS 16"), "the RIS series are charted");
     let table =

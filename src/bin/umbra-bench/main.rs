@@ -472,7 +472,7 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
-    /// The path tracer's first-hit light sampling by RIS against power sampling on a many-light
+    /// The path tracer's light sampling by RIS (at every vertex) against power sampling on a many-light
     /// scene: error of the whole image (direct and indirect light) against time, and the
     /// equal-error speed-up.
     RestirPt {
@@ -488,7 +488,8 @@ enum Command {
         /// Scattering events per path.
         #[arg(long, default_value_t = 4)]
         max_bounces: u32,
-        /// Timed renders per point (after a warm-up); the median is reported.
+        /// Timed renders per point (after a warm-up), each with its own seed: the median time and
+        /// the mean error are reported.
         #[arg(long, default_value_t = 3)]
         repeats: usize,
         /// Where to write restir-pt.json and the chart.

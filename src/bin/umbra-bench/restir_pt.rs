@@ -1,11 +1,12 @@
-//! `umbra-bench restir-pt`: the path tracer's first-hit light sampling by RIS against power
-//! sampling (issue 22) on a many-light scene: per method (power; RIS with each candidate count;
-//! RIS with reuse of the previous sample index's first-hit reservoirs, `--ris-reuse`, with each
-//! reuse and candidate count of [`REUSE`]) a series over samples per pixel, each point the path tracer's GPU time (median of repeats
-//! after a warm-up render) and the relative MSE of the whole image (direct and indirect light)
-//! against a converged reference (power sampling at many samples, its own noise subtracted from
-//! nothing: its relative MSE is charted as the floor). Equal error: power sampling's time
-//! interpolated (log-log) at a RIS point's error, over that point's time.
+//! `umbra-bench restir-pt`: the path tracer's light sampling by RIS (at every vertex) against
+//! power sampling (issue 22) on a many-light scene: per method (power; RIS with each candidate
+//! count; RIS with reuse of the previous sample index's first-hit reservoirs, `--ris-reuse`, with
+//! each reuse and candidate count of [`REUSE`]) a series over samples per pixel, each point the
+//! path tracer's GPU time (median of repeats after a warm-up render) and the relative MSE of the
+//! whole image (direct and indirect light) against a converged reference (power sampling at many
+//! samples, its own noise subtracted from nothing: its relative MSE is charted as the floor).
+//! Equal error: power sampling's time interpolated (log-log) at a RIS point's error, over that
+//! point's time; power's series runs to [`POWER_SPP`] so that RIS's errors at 64 spp fall within it.
 
 use super::chart::{self, Chart, ChartPoint};
 use super::num;
@@ -29,12 +30,15 @@ pub struct RestirPtBench {
     pub reference_spp: u32,
     /// Scattering events per path.
     pub max_bounces: u32,
-    /// Timed renders per point (the median is reported).
+    /// Timed renders per point, each with its own seed (the median time and the mean error are
+    /// reported).
     pub repeats: usize,
 }
 
-/// Samples per pixel of each series' points.
+/// Samples per pixel of each RIS series' points.
 const SPP: [u32; 7] = [1, 2, 4, 8, 16, 32, 64];
+/// Samples per pixel of power sampling's points, the scale RIS's points are read against.
+const POWER_SPP: [u32; 9] = [1, 2, 4, 8, 16, 32, 64, 128, 256];
 /// The candidate counts of the RIS series without reuse.
 const CANDIDATES: [u32; 2] = [16, 32];
 /// The RIS series with reuse: what each reuses and its candidate count.
@@ -58,7 +62,7 @@ pub struct Point {
     pub spp: u32,
     /// The path tracer's GPU time, ms.
     pub ms: f64,
-    /// Relative MSE against the reference.
+    /// Relative MSE against the reference, the mean over the repeats' seeds.
     pub rel_mse: f64,
 }
 
@@ -79,20 +83,25 @@ pub fn run(ctx: &Context, scene: &Scene, camera: &Camera, s: &RestirPtBench) -> 
     runs.extend(
         REUSE.map(|(reuse, m)| (DirectSampling::Ris(m), reuse, format!("RIS {m} + {}", reuse.name()))),
     );
-    let bar = super::progress_bar((runs.len() * SPP.len()) as u64, "points");
+    let bar = super::progress_bar(((runs.len() - 1) * SPP.len() + POWER_SPP.len()) as u64, "points");
     let mut points = Vec::new();
     for (direct, ris_reuse, method) in runs {
-        for spp in SPP {
+        let spps: &[u32] = if direct == DirectSampling::Power { &POWER_SPP } else { &SPP };
+        for &spp in spps {
             let settings = PathSettings { ris_reuse, ..settings(s, direct, spp, 7) };
             passes.path_trace(&gpu_scene, camera, &settings, |_, _| {})?; // warm-up
             let mut times = Vec::new();
-            let mut image = None;
-            for _ in 0..s.repeats.max(1) {
+            let mut rel_mse = 0.0;
+            let repeats = s.repeats.max(1);
+            for repeat in 0..repeats {
+                // Each repeat another seed: a light close to a surface that power picks rarely
+                // gives rare, large samples, so one render's error is a poor estimate of the
+                // expected error at few samples.
+                let settings = PathSettings { seed: 7 + repeat as u32, ..settings.clone() };
                 let render = passes.path_trace(&gpu_scene, camera, &settings, |_, _| {})?;
                 times.push(render.gpu_ms);
-                image = Some(render.mean);
+                rel_mse += errors(&render.mean, &reference.mean).1 / repeats as f64;
             }
-            let (_, rel_mse) = errors(&image.expect("at least one repeat"), &reference.mean);
             points.push(Point {
                 method: method.clone(),
                 candidates: direct.candidates(),
@@ -137,7 +146,7 @@ pub fn table(doc: &Value) -> String {
     let mut out = format!(
         "{} at {}×{} on {} ({}), path tracer (megakernel), {} bounces; reference: {} spp of power sampling \
          (its own relative MSE {:.1e}):\n\n\
-         | first-hit light sampling | spp | path tracer ms | rel. MSE | power sampling's time at this error ÷ this |\n\
+         | light sampling | spp | path tracer ms | rel. MSE (mean of {} seeds) | power sampling's time at this error ÷ this |\n\
          |---|---:|---:|---:|---:|\n",
         doc["scene"].as_str().unwrap_or("?"),
         doc["size"][0],
@@ -147,6 +156,7 @@ pub fn table(doc: &Value) -> String {
         doc["max_bounces"],
         doc["reference_spp"],
         num(&doc["reference_rel_mse_floor"]),
+        doc["repeats"],
     );
     for p in &points {
         let speedup = speedup_cell(&power, p, "spp", "spp");
@@ -175,7 +185,7 @@ pub fn write_chart(out: &Path, doc: &Value) -> Result<()> {
         })
         .collect();
     let title = format!(
-        "{}: path tracer, first-hit RIS against power sampling — {}",
+        "{}: path tracer, RIS against power sampling — {}",
         doc["scene"].as_str().unwrap_or("?"),
         doc["device"].as_str().unwrap_or("?")
     );

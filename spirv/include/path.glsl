@@ -141,6 +141,38 @@ vec3 first_specular(Path path, Surface s, vec3 wo, vec3 wi, vec3 f, vec3 c) {
     return vec3(0.0);
 }
 
+// The share of the path tracer's RIS candidates that pick their light uniformly within its pool
+// (restir_candidate's defensive mixture; the rest by power).
+const float RIS_FLAT = 0.5;
+
+// The density, in solid angle towards a point on an emissive triangle (its power pick `pmf`,
+// its `area`; the point at squared distance dist2, its normal at cosine cos_light with the
+// direction), that stands for RIS's in the MIS between RIS and BSDF sampling: m times the
+// candidates' source density (the share of emissive candidates, restir_candidate's pick of the
+// triangle with RIS_FLAT, a uniform point on it). Any weights that sum to one across the two
+// strategies keep the sum unbiased, and a deterministic one keeps RIS's estimate of its weighted
+// part unbiased (RIS's own density of a point is not known in closed form).
+float ris_emissive_pdf(float pmf, float area, float dist2, float cos_light, uint m) {
+    float pick = restir_pick_pmf(pmf, params.light_count, RIS_FLAT);
+    return float(m) * restir_emissive_share() * (pick / area) * dist2 / max(cos_light, 1e-8);
+}
+
+// RIS's MIS weight for its kept sample `id` seen along wi (world) / wi_local from sp: against BSDF
+// sampling for an emissive point, 1 for a punctual light (a delta: BSDF sampling cannot find it).
+float ris_emissive_weight(ShadePoint sp, uint id, vec3 wi, vec3 wi_local, vec3 target, uint m) {
+    if (HAS_LIGHTS) {
+        if ((id & RESTIR_PUNCTUAL) == 0u && id < params.light_count) {
+            uint ltri = light_tri(id);
+            vec3 cdf_pmf_area = light_cdf_pmf_area(id);
+            vec3 d = target - sp.p;
+            float cos_light = abs(dot(normalize(tri_normal(ltri)), wi));
+            float p = ris_emissive_pdf(cdf_pmf_area.y, cdf_pmf_area.z, dot(d, d), cos_light, m);
+            return light_sample_weight(p, bsdf_pdf(sp.s, sp.wo_local, wi_local));
+        }
+    }
+    return 1.0;
+}
+
 // The direct light at a vertex (bounce `depth`) from the emissive triangles and punctual lights
 // by RIS (resample.glsl, the candidates and target of the hybrid's ReSTIR): params.ris_candidates
 // candidates resampled into one by p^ = the luminance of the unshadowed f cos Le G, its shadow
@@ -153,36 +185,6 @@ vec3 first_specular(Path path, Surface s, vec3 wo, vec3 wi, vec3 f, vec3 c) {
 // be on) the first hit's reservoir then merges the previous sample index's reservoirs and W comes
 // from their unbiased combination; `hit` (the closest hit, after parallax mapping) is stored with
 // it. Deeper vertices do not reuse.
-// The share of the path tracer's RIS candidates that pick their light uniformly within its pool
-// (restir_candidate's defensive mixture; the rest by power).
-const float RIS_FLAT = 0.5;
-
-// The density, in solid angle towards wi, that stands for RIS's in the MIS between RIS and BSDF
-// sampling of an emissive point: m times the candidates' source density (the share of emissive
-// candidates, the triangle's power pick, a uniform point on it). Any weights that sum to one
-// across the two strategies keep the sum unbiased, and a deterministic one keeps RIS's estimate
-// of its weighted part unbiased (RIS's own density of a point is not known in closed form).
-float ris_emissive_pdf(float pdf_area, float dist2, float cos_light, uint m) {
-    return float(m) * restir_emissive_share() * pdf_area * dist2 / max(cos_light, 1e-8);
-}
-
-// RIS's MIS weight for its kept sample `id` seen along wi (world) / wi_local from sp: against BSDF
-// sampling for an emissive point, 1 for a punctual light (a delta: BSDF sampling cannot find it).
-float ris_emissive_weight(ShadePoint sp, uint id, vec3 wi, vec3 wi_local, vec3 target, uint m) {
-    if (HAS_LIGHTS) {
-        if ((id & RESTIR_PUNCTUAL) == 0u && id < params.light_count) {
-            uint ltri = light_tri(id);
-            vec3 cdf_pmf_area = light_cdf_pmf_area(id);
-            vec3 d = target - sp.p;
-            float cos_light = abs(dot(normalize(tri_normal(ltri)), wi));
-            float pick = restir_pick_pmf(cdf_pmf_area.y, params.light_count, RIS_FLAT);
-            float p = ris_emissive_pdf(pick / cdf_pmf_area.z, dot(d, d), cos_light, m);
-            return light_sample_weight(p, bsdf_pdf(sp.s, sp.wo_local, wi_local));
-        }
-    }
-    return 1.0;
-}
-
 void path_ris(inout Path path, ShadePoint sp, Hit hit, vec3 throughput, uvec2 pixel, uint sample_index, uint depth) {
     uint seed = params.seed;
     uint m = params.ris_candidates;
@@ -288,8 +290,8 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
                 // Reached from a vertex whose RIS covered every emissive triangle of the table:
                 // weighed against RIS's stand-in density (ris_emissive_weight's).
                 if (emissive > 0.0) {
-                    float pick = restir_pick_pmf(tri_light_pmf(tri), params.light_count, RIS_FLAT);
-                    float ris = ris_emissive_pdf(pick / area, hit.t * hit.t, abs(dot(ng, wo)), params.ris_candidates);
+                    float ris = ris_emissive_pdf(tri_light_pmf(tri), area, hit.t * hit.t, abs(dot(ng, wo)),
+                                                 params.ris_candidates);
                     w = bsdf_hit_weight(path.prev_pdf, ris);
                 }
             }

@@ -55,9 +55,14 @@ float restir_pick_pmf(float pmf, uint count, float uniform_share) {
 // restir_pick_pmf's uniform pick, `k`, where u < uniform_share (u uniform in [0, 1)); else the
 // number in [0, 1) for the power pick, in `rest`.
 bool restir_uniform_pick(float u, uint count, float uniform_share, out uint k, out float rest) {
-    k = min(uint(u / max(uniform_share, 1e-30) * float(count)), count - 1u);
+    k = 0u;
+    rest = 0.0;
+    if (u < uniform_share) {
+        k = min(uint(u / uniform_share * float(count)), count - 1u);
+        return true;
+    }
     rest = (u - uniform_share) / (1.0 - uniform_share);
-    return u < uniform_share;
+    return false;
 }
 
 // One candidate light sample from u: its id (GpuReservoir::light), barycentrics and source

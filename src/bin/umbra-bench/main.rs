@@ -472,9 +472,9 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
-    /// The path tracer's light sampling by RIS (at every vertex) against power sampling on a many-light
-    /// scene: error of the whole image (direct and indirect light) against time, and the
-    /// equal-error speed-up.
+    /// The path tracer's light sampling by RIS (at every vertex) against power sampling on a
+    /// many-light scene: error of the whole image (direct and indirect light) against time, and
+    /// the equal-error speed-up.
     RestirPt {
         /// The scene (default: scenes/many-lights.glb).
         #[arg(long, default_value = "scenes/many-lights.glb")]

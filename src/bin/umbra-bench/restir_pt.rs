@@ -83,11 +83,11 @@ pub fn run(ctx: &Context, scene: &Scene, camera: &Camera, s: &RestirPtBench) -> 
     runs.extend(
         REUSE.map(|(reuse, m)| (DirectSampling::Ris(m), reuse, format!("RIS {m} + {}", reuse.name()))),
     );
-    let bar = super::progress_bar(((runs.len() - 1) * SPP.len() + POWER_SPP.len()) as u64, "points");
+    let spps = |direct| if direct == DirectSampling::Power { &POWER_SPP[..] } else { &SPP[..] };
+    let bar = super::progress_bar(runs.iter().map(|(direct, ..)| spps(*direct).len() as u64).sum(), "points");
     let mut points = Vec::new();
     for (direct, ris_reuse, method) in runs {
-        let spps: &[u32] = if direct == DirectSampling::Power { &POWER_SPP } else { &SPP };
-        for &spp in spps {
+        for &spp in spps(direct) {
             let settings = PathSettings { ris_reuse, ..settings(s, direct, spp, 7) };
             passes.path_trace(&gpu_scene, camera, &settings, |_, _| {})?; // warm-up
             let mut times = Vec::new();
@@ -97,7 +97,7 @@ pub fn run(ctx: &Context, scene: &Scene, camera: &Camera, s: &RestirPtBench) -> 
                 // Each repeat another seed: a light close to a surface that power picks rarely
                 // gives rare, large samples, so one render's error is a poor estimate of the
                 // expected error at few samples.
-                let settings = PathSettings { seed: 7 + repeat as u32, ..settings.clone() };
+                let settings = PathSettings { seed: settings.seed + repeat as u32, ..settings.clone() };
                 let render = passes.path_trace(&gpu_scene, camera, &settings, |_, _| {})?;
                 times.push(render.gpu_ms);
                 rel_mse += errors(&render.mean, &reference.mean).1 / repeats as f64;

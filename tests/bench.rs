@@ -255,6 +255,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["build", "--table", "docs/bench/build.json"],
     &["passes", "--table", "docs/bench/passes-cornell.json", "--table", "docs/bench/passes-spheres.json"],
     &["paths", "--table", "docs/bench/paths.json"],
+    &["pipelines", "--table", "docs/bench/pipelines.json"],
     &["suite", "--table", "docs/bench/suite.json"],
     &["suite", "--table", "docs/bench/suite-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-sponza.json"],

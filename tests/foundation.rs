@@ -3,7 +3,7 @@
 mod common;
 
 use common::Gpu;
-use umbra::gpu::kernels::{test_buffer, test_pattern};
+use umbra::gpu::kernels::{fold_test, test_buffer, test_pattern};
 use umbra::gpu::layout::{BufferTestParams, PatternParams};
 use umbra::gpu::Pipeline;
 use umbra::vk::{raw, Buffer, ComputePipeline, Descriptor, GpuTimer, Image, PipelineDesc};
@@ -115,6 +115,70 @@ fn buffers_round_trip_through_staging_and_a_kernel() {
     let out: Vec<u32> = dst.read(&gpu).unwrap();
     let expected: Vec<u32> = input.iter().map(|v| v.wrapping_mul(3).wrapping_add(17)).collect();
     assert_eq!(out, expected);
+}
+
+/// What `fold_test.comp` writes for `v` with its constants at `a` and `b`.
+fn fold_expected(v: u32, a: bool, b: bool, add: u32) -> u32 {
+    let mut r = if a { 1 } else { 2 };
+    if a && v & 1 == 1 {
+        r |= 4;
+    }
+    if v % 3 == 0 || b {
+        r |= 8;
+    }
+    if b || v % 5 == 0 {
+        r |= 16;
+    }
+    if !(a && v > 5) {
+        r |= 32;
+    }
+    if a {
+        r |= if b { 64 } else { 128 };
+    } else if v > 100 {
+        r |= 256;
+    }
+    if b {
+        let h = (0..v & 3).fold(v, |h, _| h.wrapping_mul(2654435761).wrapping_add(1));
+        r |= (h & 1) << 9;
+    }
+    r + add
+}
+
+/// The host folds a pipeline's boolean constants into its branches before the driver sees them
+/// (src/vk/specialize.rs): each of the four settings of fold_test's two constants must give what
+/// the unfolded kernel means, and the folding must have happened (branches folded, blocks cut).
+#[test]
+fn folded_specialization_constants_keep_the_kernels_meaning() {
+    let gpu = Gpu::new();
+    let count = 1000u32;
+    let input: Vec<u32> = (0..count).map(|i| i.wrapping_mul(2654435761) % 997).collect();
+    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
+    let src = Buffer::upload(&gpu, "input", &input, usage).unwrap();
+    let words = umbra::kernels::kernel("fold_test").unwrap().words();
+    for (a, b) in [(false, false), (false, true), (true, false), (true, true)] {
+        let (_, folded) = umbra::vk::specialize::specialize(words, &[(32, a as u32), (33, b as u32)]);
+        assert!(folded.branches >= 6 && folded.blocks_cut >= 6, "a {a}, b {b}: only {folded:?}");
+        let dst = Buffer::upload(&gpu, "output", &vec![0u32; count as usize], usage).unwrap();
+        let pipeline =
+            Pipeline::<fold_test::Kernel>::new(&gpu, &fold_test::Spec { flag_a: a, flag_b: b }, None)
+                .unwrap();
+        let params = BufferTestParams { count, add: 1 << 12 };
+        gpu.submit(|cmd| {
+            let resources = fold_test::Resources { values_in: &src, values_out: &dst };
+            pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
+        })
+        .unwrap();
+        let out: Vec<u32> = dst.read(&gpu).unwrap();
+        let expected: Vec<u32> = input.iter().map(|&v| fold_expected(v, a, b, params.add)).collect();
+        let wrong = out.iter().zip(&expected).position(|(o, e)| o != e);
+        assert!(
+            wrong.is_none(),
+            "constants a {a}, b {b}: input {} gave {:#b}, meant {:#b}",
+            input[wrong.unwrap()],
+            out[wrong.unwrap()],
+            expected[wrong.unwrap()]
+        );
+    }
 }
 
 #[test]

@@ -1900,6 +1900,21 @@ kernels! {
         }
     }
 
+    /// Test-only: `out = ` bits of the branches taken on specialization constants in every form
+    /// glslang emits them (plain, empty side, short-circuit with a runtime value, nested, around
+    /// a call), for the test of the host-side folding (`src/vk/specialize.rs`).
+    test_kernel fold_test {
+        scene: none,
+        push: BufferTestParams,
+        spec: { flag_a: bool = false, flag_b: bool = true },
+        bindings: {
+            /// Input.
+            values_in: readonly buffer [uint],
+            /// Output.
+            values_out: readwrite buffer [uint],
+        }
+    }
+
     /// Test-only: hangs until released (the breadcrumb test).
     test_kernel spin_test {
         scene: none,

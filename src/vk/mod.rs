@@ -8,6 +8,7 @@ mod context;
 mod debug;
 mod image;
 mod pipeline;
+pub mod specialize;
 mod timer;
 
 pub use buffer::{Buffer, TexelBuffer};

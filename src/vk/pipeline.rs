@@ -100,8 +100,19 @@ impl ComputePipeline {
             pipeline.layout =
                 device.create_pipeline_layout(&layout_info, None).call("vkCreatePipelineLayout")?;
 
+            let (words, folded) = if super::specialize::folding() {
+                super::specialize::specialize(k.words(), desc.specialization)
+            } else {
+                (k.words().to_vec(), Default::default())
+            };
+            log::debug!(
+                "kernel '{}': {} selections folded by its constants, {} blocks cut",
+                k.name,
+                folded.branches,
+                folded.blocks_cut
+            );
             let module = device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(k.words()), None)
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
                 .call("vkCreateShaderModule")?;
             let entries: Vec<_> = desc
                 .specialization

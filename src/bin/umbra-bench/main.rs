@@ -21,6 +21,7 @@ mod mis;
 mod passes;
 mod paths;
 mod peers;
+mod pipelines;
 mod probes;
 mod rays;
 mod restir;
@@ -394,6 +395,28 @@ enum Command {
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
         /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
+    /// What making a scene's pipelines costs: `vkCreateComputePipelines` for the path tracer's
+    /// megakernel and wavefront kernel and the hybrid's G-buffer and lighting kernels, specialised
+    /// on each scene, with the host folding their constants and without (JSON and a Markdown
+    /// table).
+    Pipelines {
+        /// glTF scenes; when none are given, the embedded Cornell box, scenes/many-lights.glb and
+        /// DamagedHelmet under --assets.
+        scenes: Vec<PathBuf>,
+        /// Sample models for the default set.
+        #[arg(long, default_value = "../shared/assets/gltf")]
+        assets: PathBuf,
+        /// Folded pipelines made per kernel and scene (the median is reported); the unfolded one
+        /// is made once.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Where to write pipelines.json.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is made).
         #[arg(long)]
         table: Option<PathBuf>,
     },
@@ -883,6 +906,26 @@ fn run(cli: Cli) -> Result<()> {
                 let doc = paths::to_json(&ctx.info().name, &settings, &rows);
                 print!("{}", paths::table(&doc));
                 write_json(&out, "paths.json", &doc)?;
+            }
+        },
+        Command::Pipelines { scenes, assets, repeats, out, table } => match table {
+            Some(path) => print!("{}", pipelines::table(&read_json(&path)?)),
+            None => {
+                let ctx = Context::new(&ContextDesc::default())?;
+                let scenes = if scenes.is_empty() {
+                    let mut set = vec![("cornell-box".to_string(), umbra::scene::Scene::cornell_box())];
+                    set.extend(load_gltf(&[
+                        PathBuf::from("scenes/many-lights.glb"),
+                        assets.join("DamagedHelmet/DamagedHelmet.glb"),
+                    ])?);
+                    set
+                } else {
+                    load_gltf(&scenes)?
+                };
+                let rows = pipelines::run(&ctx, &scenes, repeats)?;
+                let doc = pipelines::to_json(&ctx.info().name, repeats, &rows);
+                print!("{}", pipelines::table(&doc));
+                write_json(&out, "pipelines.json", &doc)?;
             }
         },
         Command::Mis { references, reference_dir, spp, seeds, out, table } => match table {

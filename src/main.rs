@@ -984,9 +984,9 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
     }
 }
 
-/// Builds the BVH and uploads `loaded` while `prepare` makes pipelines on a thread (they take
-/// seconds on lavapipe) from the features the loaded scene has; the passes for the uploaded scene
-/// (made again if its features differ: `tests/scene.rs` checks that they do not).
+/// Builds the BVH and uploads `loaded` while `prepare` makes pipelines on a thread (up to a
+/// second each on lavapipe) from the features the loaded scene has; the passes for the uploaded
+/// scene (made again if its features differ: `tests/scene.rs` checks that they do not).
 fn upload_alongside(
     ctx: &Context,
     loaded: &LoadedScene,

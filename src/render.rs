@@ -403,7 +403,7 @@ impl Passes {
         })
     }
 
-    /// Builds the two pipelines of [`Passes::hybrid_with`] that take seconds on lavapipe (the
+    /// Builds the two pipelines of [`Passes::hybrid_with`] that take longest on lavapipe (the
     /// G-buffer's and the lighting pass's for `settings`, with a probe volume and lightmaps or
     /// not) side by side, if they are not built yet. Needs no scene: a host can call this on a
     /// thread while the scene's BVH is built and uploaded, as [`Passes::prepare_path_trace`].
@@ -533,8 +533,8 @@ impl Passes {
 
     /// Builds the pipelines [`Passes::path_trace`] with `settings` uses (the megakernel's or the
     /// wavefront's stages, with the lobe split or not), if they are not built yet. Needs no
-    /// scene: pipeline creation takes seconds on lavapipe, and a host can call this on a thread
-    /// (`std::thread::scope`) while the scene's BVH is built and uploaded.
+    /// scene: pipeline creation takes up to a second on lavapipe, and a host can call this on a
+    /// thread (`std::thread::scope`) while the scene's BVH is built and uploaded.
     pub fn prepare_path_trace(&self, settings: &PathSettings) -> Result<()> {
         let options = settings.options();
         match settings.integrator {

@@ -219,7 +219,8 @@ impl WavefrontPass {
     }
 
     /// Builds the stages for `scene`, specialised for the lobe split or not, if they were not
-    /// (pipeline creation takes seconds on lavapipe, so a render builds only the set it uses).
+    /// (pipeline creation takes up to a second on lavapipe, so a render builds only the set it
+    /// uses).
     pub fn prepare(&self, ctx: &Context, scene: &GpuScene, lobe_split: bool) -> Result<()> {
         self.prepare_for(ctx, &scene.features(), lobe_split)
     }
@@ -230,7 +231,7 @@ impl WavefrontPass {
     }
 
     /// Extend and the other stages for a scene with `features`, with the lobe split or not (the
-    /// missing ones built now, side by side: each takes seconds on lavapipe, on one thread).
+    /// missing ones built now, side by side: each takes up to a second on lavapipe, on one thread).
     fn pipelines(
         &self,
         ctx: &Context,

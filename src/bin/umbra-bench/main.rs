@@ -323,6 +323,10 @@ enum Command {
         /// Only the timings (no references, no errors).
         #[arg(long)]
         timing_only: bool,
+        /// Also write each frame's reference, raw sample and filtered images to DIR/frameNN.exr
+        /// (one layer each), to see where an error lies.
+        #[arg(long, value_name = "DIR")]
+        dump: Option<PathBuf>,
         /// Where to write temporal.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
@@ -835,8 +839,19 @@ fn run(cli: Cli) -> Result<()> {
             }
         },
         Command::Temporal { table: Some(path), .. } => print!("{}", temporal::table(&read_json(&path)?)),
-        Command::Temporal { size, frames, pan, reference_spp, repeats, timing_only, out, table: None } => {
-            let mut doc = temporal::run(size, frames, pan, reference_spp, repeats, timing_only)?;
+        Command::Temporal {
+            size,
+            frames,
+            pan,
+            reference_spp,
+            repeats,
+            timing_only,
+            dump,
+            out,
+            table: None,
+        } => {
+            let mut doc =
+                temporal::run(size, frames, pan, reference_spp, repeats, timing_only, dump.as_deref())?;
             add_conditions(&mut doc);
             print!("{}", temporal::table(&doc));
             write_json(&out, "temporal.json", &doc)?;

@@ -32,6 +32,7 @@ pub fn run(
     reference_spp: u32,
     repeats: usize,
     timing_only: bool,
+    dump: Option<&std::path::Path>,
 ) -> Result<Value> {
     let ctx = Context::new(&umbra::vk::ContextDesc::default())?;
     let scene = Scene::cornell_box();
@@ -76,13 +77,20 @@ pub fn run(
             let floor = reference.relative_error() as f64;
             let k = k as u32;
             let mut errors = [0.0f64; 4];
+            // Each estimate of the frame, for --dump.
+            let mut frames: Vec<(&str, Vec<[f32; 4]>)> = vec![("reference", reference.mean.clone())];
+            let mut score = |name: &'static str, image: Vec<[f32; 4]>| {
+                let error = suite::errors(&image, &reference.mean).1;
+                frames.push((name, image));
+                error
+            };
             ctx.submit(|cmd| {
                 renderer.record_path_samples(cmd, camera, &target, &settings(k), 0, 1)?;
                 renderer.record_path_resolve(cmd, &target, raw_image.view)
             })?;
-            errors[0] = suite::errors(&raw_image.read(&ctx)?, &reference.mean).1;
+            errors[0] = score("raw", raw_image.read(&ctx)?);
             ctx.submit(|cmd| renderer.record_path_denoise(cmd, &target, &images, output.view, &filter))?;
-            errors[1] = suite::errors(&output.read(&ctx)?, &reference.mean).1;
+            errors[1] = score("spatial", output.read(&ctx)?);
             for (i, history) in [&mut accumulated, &mut svgf].into_iter().enumerate() {
                 ctx.submit(|cmd| {
                     renderer.record_path_denoise_temporal(
@@ -95,7 +103,21 @@ pub fn run(
                         &filter,
                     )
                 })?;
-                errors[2 + i] = suite::errors(&output.read(&ctx)?, &reference.mean).1;
+                errors[2 + i] = score(["temporal", "temporal_first_iteration"][i], output.read(&ctx)?);
+            }
+            if let Some(dir) = dump {
+                std::fs::create_dir_all(dir)?;
+                let data: Vec<Vec<f32>> = frames
+                    .iter()
+                    .map(|(_, image)| image.iter().flat_map(|p| p[..3].to_vec()).collect())
+                    .collect();
+                let layers: Vec<umbra::output::Layer<'_>> = frames
+                    .iter()
+                    .zip(&data)
+                    .map(|((name, _), data)| umbra::output::Layer { name, channels: &["R", "G", "B"], data })
+                    .collect();
+                let path = dir.join(format!("frame{:02}.exr", k + 1));
+                umbra::output::write_exr(&path, size.0 as usize, size.1 as usize, &layers)?;
             }
             rows.push(json!({
                 "frame": k + 1,

@@ -179,6 +179,22 @@ impl WaveState {
     }
 }
 
+/// The constants of `wavefront.comp`'s five stages from `base` (the sampling options): extend's
+/// (the same with or without the lobe split), then camera rays, shade, connect and accumulate,
+/// with the split or not.
+pub fn stage_specs(base: wavefront::Spec, lobe_split: bool) -> (wavefront::Spec, [wavefront::Spec; 4]) {
+    let split = wavefront::Spec { split_lobes: lobe_split, ..base };
+    (
+        wavefront::Spec { wf_extend: true, ..base },
+        [
+            wavefront::Spec { wf_camera_rays: true, ..split },
+            wavefront::Spec { wf_shade: true, ..split },
+            wavefront::Spec { wf_connect: true, ..split },
+            wavefront::Spec { wf_accumulate: true, ..split },
+        ],
+    )
+}
+
 /// `wavefront.comp`'s five stages, specialised for one scene's features and the sampling options;
 /// all but extend specialised for the lobe split or not.
 pub struct WavefrontPass {
@@ -243,20 +259,15 @@ impl WavefrontPass {
                 "RIS (--direct ris) runs in the megakernel only, not the wavefront integrator".into(),
             ));
         }
-        let base = sampling_spec!(wavefront::Spec, self.options, Default::default());
-        let split = wavefront::Spec { split_lobes: lobe_split, ..base };
+        let (extend, split) =
+            stage_specs(sampling_spec!(wavefront::Spec, self.options, Default::default()), lobe_split);
         let cell = &self.stages[lobe_split as usize];
         let mut specs = Vec::new();
         if self.extend.get().is_none() {
-            specs.push(wavefront::Spec { wf_extend: true, ..base });
+            specs.push(extend);
         }
         if cell.get().is_none() {
-            specs.extend([
-                wavefront::Spec { wf_camera_rays: true, ..split },
-                wavefront::Spec { wf_shade: true, ..split },
-                wavefront::Spec { wf_connect: true, ..split },
-                wavefront::Spec { wf_accumulate: true, ..split },
-            ]);
+            specs.extend(split);
         }
         let built: Vec<Result<Pipeline<wavefront::Kernel>>> = std::thread::scope(|s| {
             let threads: Vec<_> =

@@ -6,8 +6,9 @@
 //! inlined body, at a cost that grows faster than the body. The path tracer's megakernel carries
 //! every material extension, the environment map, RIS and its reuse behind such branches, so a
 //! Cornell box paid for all of them: 25 s of `vkCreateComputePipelines` (BENCHMARKS.md History,
-//! "Pipeline creation"). Here the untaken side is cut off from the control-flow graph; blocks no
-//! branch reaches are never translated, so what they call is never inlined.
+//! "the kernels' constants folded before the driver sees them"). Here the untaken side is cut off
+//! from the control-flow graph; blocks no branch reaches are never translated, so what they call
+//! is never inlined.
 //!
 //! The module stays valid SPIR-V (the validation layer checks every test's modules) and means
 //! exactly what the specialised original means:
@@ -18,9 +19,12 @@
 //!   pipeline's values (or their defaults), `OpSpecConstantOp` and plain logical operations of
 //!   known operands, and an `OpPhi` whose incoming values from the blocks still reached all agree
 //!   (glslang's short-circuit `X && y` ends in one). Repeated until nothing more folds.
-//! - Blocks no longer reached stay in the module (a construct may still name one as its merge);
-//!   the phis that list them keep their pairs, which the predecessor count of the validator and
-//!   Mesa's translator (it skips pairs from blocks it never emitted) both expect.
+//! - Blocks no longer reached stay in the module (a construct may still name one as its merge)
+//!   but end in `OpUnreachable` without their merge instructions, since what they branched to may
+//!   be a construct they no longer sit in; a continue target of a loop still reached keeps its
+//!   back edge. A phi keeps the pairs of exactly the blocks that still branch to it, reached or
+//!   not: the validator counts the unreached ones among a block's predecessors, and Mesa's
+//!   translator skips pairs from blocks it never emitted.
 
 use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -61,6 +65,7 @@ const OP_BRANCH: u32 = 249;
 const OP_BRANCH_CONDITIONAL: u32 = 250;
 const OP_SWITCH: u32 = 251;
 const OP_UNREACHABLE: u32 = 255;
+const OP_TERMINATE_INVOCATION: u32 = 4416;
 
 /// What [`specialize`] did, for the log.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -79,7 +84,7 @@ struct Inst {
     len: usize,
 }
 
-/// One basic block: its label, its phis, its selection merge (if any) and its terminator.
+/// One basic block: its label, its phis, its selection or loop merge (if any) and its terminator.
 struct Block {
     label: u32,
     phis: Vec<usize>,
@@ -298,8 +303,8 @@ fn blocks(words: &[u32], insts: &[Inst]) -> Vec<Vec<Block>> {
                     b.loop_merge = Some(k);
                 }
             }
-            // Every terminator: branches, returns, kill, unreachable, terminate-invocation.
-            249..=255 | 4416 => {
+            // Every terminator: branches, switch, kill, returns, unreachable, terminate-invocation.
+            OP_BRANCH..=OP_UNREACHABLE | OP_TERMINATE_INVOCATION => {
                 if let (Some(mut b), Some(f)) = (open.take(), current.as_mut()) {
                     b.terminator = k;
                     f.push(b);

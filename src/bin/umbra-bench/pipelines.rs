@@ -11,6 +11,7 @@ use umbra::gpu::kernel::Kernel;
 use umbra::gpu::kernels::{deferred, gbuffer, pathtrace, wavefront};
 use umbra::gpu::scene::GpuScene;
 use umbra::gpu::Pipeline;
+use umbra::passes::wavefront::stage_specs;
 use umbra::scene::Scene;
 use umbra::vk::specialize::set_folding;
 use umbra::vk::Context;
@@ -27,29 +28,11 @@ pub struct PipelineRow {
     pub unfolded_ms: f64,
 }
 
-/// Milliseconds to make `K`'s pipeline for `scene` with its default constants.
-fn time_one<K: Kernel>(ctx: &Context, scene: &GpuScene) -> Result<f64> {
-    let clock = std::time::Instant::now();
-    let pipeline = Pipeline::<K>::for_scene(ctx, scene, &Default::default())?;
-    let ms = clock.elapsed().as_secs_f64() * 1e3;
-    drop(pipeline);
-    Ok(ms)
-}
-
-/// Milliseconds to make the wavefront integrator's five stage pipelines for `scene` (what a
-/// render with `--integrator wavefront` makes).
-fn time_wavefront(ctx: &Context, scene: &GpuScene) -> Result<f64> {
-    let base = wavefront::Spec::default();
-    let stages = [
-        wavefront::Spec { wf_camera_rays: true, ..base },
-        wavefront::Spec { wf_extend: true, ..base },
-        wavefront::Spec { wf_shade: true, ..base },
-        wavefront::Spec { wf_connect: true, ..base },
-        wavefront::Spec { wf_accumulate: true, ..base },
-    ];
+/// Milliseconds to make `K`'s pipelines of `specs` for `scene`, one after another.
+fn time_specs<K: Kernel>(ctx: &Context, scene: &GpuScene, specs: &[K::Spec]) -> Result<f64> {
     let clock = std::time::Instant::now();
     let pipelines: Result<Vec<_>> =
-        stages.iter().map(|spec| Ok(Pipeline::<wavefront::Kernel>::for_scene(ctx, scene, spec)?)).collect();
+        specs.iter().map(|spec| Ok(Pipeline::<K>::for_scene(ctx, scene, spec)?)).collect();
     let ms = clock.elapsed().as_secs_f64() * 1e3;
     drop(pipelines?);
     Ok(ms)
@@ -59,10 +42,15 @@ fn time_wavefront(ctx: &Context, scene: &GpuScene) -> Result<f64> {
 pub fn run(ctx: &Context, scenes: &[(String, Scene)], repeats: usize) -> Result<Vec<PipelineRow>> {
     type Timer = fn(&Context, &GpuScene) -> Result<f64>;
     let kernels: [(&'static str, Timer); 4] = [
-        ("pathtrace", time_one::<pathtrace::Kernel>),
-        ("wavefront (5 stages)", time_wavefront),
-        ("gbuffer", time_one::<gbuffer::Kernel>),
-        ("deferred", time_one::<deferred::Kernel>),
+        ("pathtrace", |ctx, scene| time_specs::<pathtrace::Kernel>(ctx, scene, &[Default::default()])),
+        // What a render with `--integrator wavefront` makes.
+        ("wavefront (5 stages)", |ctx, scene| {
+            let (extend, others) = stage_specs(Default::default(), false);
+            let specs: Vec<_> = std::iter::once(extend).chain(others).collect();
+            time_specs::<wavefront::Kernel>(ctx, scene, &specs)
+        }),
+        ("gbuffer", |ctx, scene| time_specs::<gbuffer::Kernel>(ctx, scene, &[Default::default()])),
+        ("deferred", |ctx, scene| time_specs::<deferred::Kernel>(ctx, scene, &[Default::default()])),
     ];
     let mut rows = Vec::new();
     for (name, scene) in scenes {

@@ -13,7 +13,17 @@
 // `depth_tolerance` × distance + two pixel footprints of the pixel's tangent plane. No tap
 // counts (a disocclusion, the image's edge, a miss, no history): the pixel starts afresh.
 //
-// Blend: n the history's length + 1, α = max(1/n, alpha) for the colour and max(1/n,
+// Blend: the frame's divisors (what step 1 divided its radiance by: the first hit's albedo, mean
+// of the pixel's samples) and first-hit emission are blended like the colour and written back for
+// the remodulation, and the colour is the blend of the numerators (colour × its divisor) over the
+// blended divisor. The path tracer jitters each sample's first hit inside the pixel, so at a
+// sub-pixel edge (an emitter's rim, a texture's or a wall's edge) a frame's one sample gives a
+// divisor and an emission of one side only; remodulating the accumulated colour by them would
+// give each frame that side's colour (the flicker of the temporal spikes, BENCHMARKS.md History);
+// with a still camera the result is the pooled frames' own (numerator and divisor both the
+// frames' means).
+//
+// n the history's length + 1, α = max(1/n, alpha) for the colour and max(1/n,
 // alpha_moments) for the luminance moments E[l], E[l²] (per part with the lobe split). The sum
 // of the colour's weights squared, s (1/n while α = 1/n), gives the accumulated mean's variance:
 // from `variance_frames` frames on, (E[l²] − E[l]²) × s (the temporal variance); before, the
@@ -45,6 +55,11 @@ void main() {
     vec4 h_specular = vec4(0.0);
     vec4 h_moments = vec4(0.0);
     vec2 h_state = vec2(0.0);
+    // The history's divisors and emission, and whether it is read at one pixel (no resampling).
+    bool whole = false;
+    vec3 h_albedo = vec3(0.0);
+    vec3 h_spec_albedo = vec3(0.0);
+    vec3 h_emission = vec3(0.0);
     float h_weight = 0.0;
     if ((params.flags & TEMPORAL_HISTORY) != 0u && g0.w >= 0.0) {
         vec3 origin;
@@ -67,6 +82,7 @@ void main() {
             f = mix(f, vec2(0.0), lessThan(f, vec2(1e-3)));
             base += mix(vec2(0.0), vec2(1.0), greaterThan(f, vec2(1.0 - 1e-3)));
             f = mix(f, vec2(0.0), greaterThan(f, vec2(1.0 - 1e-3)));
+            whole = all(equal(f, vec2(0.0)));
             for (int j = 0; j <= 1; ++j) {
                 for (int i = 0; i <= 1; ++i) {
                     float w = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y);
@@ -87,8 +103,11 @@ void main() {
                         continue;
                     }
                     h_color += w * imageLoad(hist_color, q);
+                    h_albedo += w * imageLoad(hist_albedo, q).rgb;
+                    h_emission += w * imageLoad(hist_emission, q).rgb;
                     if (split) {
                         h_specular += w * imageLoad(hist_specular, q);
+                        h_spec_albedo += w * imageLoad(hist_spec_albedo, q).rgb;
                     }
                     h_moments += w * imageLoad(hist_moments, q);
                     h_state += w * imageLoad(hist_state, q).xy;
@@ -103,6 +122,9 @@ void main() {
         h_specular /= h_weight;
         h_moments /= h_weight;
         h_state /= h_weight;
+        h_albedo /= h_weight;
+        h_spec_albedo /= h_weight;
+        h_emission /= h_weight;
     }
     float n = history ? min(h_state.x + 1.0, TEMPORAL_MAX_LENGTH) : 1.0;
     float alpha = history ? max(1.0 / n, params.alpha) : 1.0;
@@ -113,8 +135,24 @@ void main() {
     float ls = dot(LUMA, specular.rgb);
     vec4 frame_moments = vec4(l, l * l, ls, ls * ls);
     vec4 moments = history ? mix(h_moments, frame_moments, alpha_m) : frame_moments;
+    vec3 frame_albedo = imageLoad(dn_albedo, pixel).rgb;
+    vec3 frame_spec_albedo = split ? imageLoad(dn_spec_albedo, pixel).rgb : vec3(1.0);
+    vec3 albedo = frame_albedo;
+    vec3 spec_albedo = frame_spec_albedo;
+    vec3 emission = imageLoad(dn_emission, pixel).rgb;
     vec3 rgb = history ? mix(h_color.rgb, color.rgb, alpha) : color.rgb;
     vec3 spec = history ? mix(h_specular.rgb, specular.rgb, alpha) : specular.rgb;
+    if (history && whole) {
+        // Read at one pixel: the divisors and the emission blended, the colour the blend of the
+        // numerators (colour × divisor) over the blended divisor.
+        albedo = mix(h_albedo, frame_albedo, alpha);
+        rgb = mix(h_color.rgb * h_albedo, color.rgb * frame_albedo, alpha) / albedo;
+        emission = mix(h_emission, emission, alpha);
+        if (split) {
+            spec_albedo = mix(h_spec_albedo, frame_spec_albedo, alpha);
+            spec = mix(h_specular.rgb * h_spec_albedo, specular.rgb * frame_spec_albedo, alpha) / spec_albedo;
+        }
+    }
     float carried = (1.0 - alpha) * (1.0 - alpha);
     float var = carried * h_color.a + alpha * alpha * color.a;
     float var_s = carried * h_specular.a + alpha * alpha * specular.a;
@@ -130,4 +168,12 @@ void main() {
     imageStore(out_guide, pixel, g0);
     imageStore(out_state, pixel, vec4(n, s, 0.0, 0.0));
     imageStore(dn_samples, pixel, vec4(spp / s));
+    imageStore(out_albedo, pixel, vec4(albedo, 0.0));
+    imageStore(dn_albedo, pixel, vec4(albedo, 0.0));
+    imageStore(out_emission, pixel, vec4(emission, 0.0));
+    imageStore(dn_emission, pixel, vec4(emission, 0.0));
+    if (split) {
+        imageStore(out_spec_albedo, pixel, vec4(spec_albedo, 0.0));
+        imageStore(dn_spec_albedo, pixel, vec4(spec_albedo, 0.0));
+    }
 }

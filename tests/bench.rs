@@ -270,6 +270,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["restir", "--table", "docs/bench/restir.json"],
     &["restir-pt", "--table", "docs/bench/restir-pt.json"],
     &["temporal", "--table", "docs/bench/temporal.json"],
+    &["temporal", "--table", "docs/bench/temporal-still.json"],
 ];
 
 /// BENCHMARKS.md's figures cannot drift from their JSON: everything each `--table` command prints

@@ -1393,6 +1393,13 @@ kernels! {
             dn_guide: writeonly image rgba32f,
             /// The pixel's sample count.
             dn_samples: writeonly image r32f,
+            /// What the radiance (with [`DENOISE_SPLIT`], its diffuse part) was divided by, rgb.
+            dn_albedo: writeonly image rgba32f,
+            /// With [`DENOISE_SPLIT`]: what the specular part was divided by, rgb (else
+            /// unwritten).
+            dn_spec_albedo: writeonly image rgba32f,
+            /// Radiance emitted at the first hit, rgb (left out of the filter, added back).
+            dn_emission: writeonly image rgba32f,
         }
     }
 
@@ -1411,6 +1418,13 @@ kernels! {
             dn_guide: readonly image rgba32f,
             /// In: this frame's sample count; out: the accumulated estimate's effective count.
             dn_samples: readwrite image r32f,
+            /// In: this frame's divisor of the colour (diffuse part); out: the accumulated one.
+            dn_albedo: readwrite image rgba32f,
+            /// With [`TEMPORAL_SPLIT`], in: this frame's divisor of the specular part; out: the
+            /// accumulated one (else untouched).
+            dn_spec_albedo: readwrite image rgba32f,
+            /// In: this frame's first-hit emission; out: the accumulated one.
+            dn_emission: readwrite image rgba32f,
             /// The history's colour (diffuse part) and variance.
             hist_color: readonly image rgba32f,
             /// The history's specular part and variance.
@@ -1421,6 +1435,12 @@ kernels! {
             hist_guide: readonly image rgba32f,
             /// The history's length (frames) and the sum of its colour weights squared.
             hist_state: readonly image rgba32f,
+            /// The history's divisor of the colour (diffuse part).
+            hist_albedo: readonly image rgba32f,
+            /// The history's divisor of the specular part.
+            hist_spec_albedo: readonly image rgba32f,
+            /// The history's first-hit emission.
+            hist_emission: readonly image rgba32f,
             /// The accumulated colour (diffuse part) and its variance.
             out_color: writeonly image rgba32f,
             /// With [`TEMPORAL_SPLIT`]: the accumulated specular part and its variance.
@@ -1431,6 +1451,12 @@ kernels! {
             out_guide: writeonly image rgba32f,
             /// The next history's length and weights squared.
             out_state: writeonly image rgba32f,
+            /// The next history's divisor of the colour (diffuse part).
+            out_albedo: writeonly image rgba32f,
+            /// With [`TEMPORAL_SPLIT`]: the next history's divisor of the specular part.
+            out_spec_albedo: writeonly image rgba32f,
+            /// The next history's first-hit emission.
+            out_emission: writeonly image rgba32f,
         }
     }
 
@@ -1465,13 +1491,13 @@ kernels! {
             dn_in: readonly image rgba32f,
             /// With [`DENOISE_SPLIT`]: the filtered, demodulated specular part (else unread).
             dn_specular: readonly image rgba32f,
-            /// Base colour at the first hit (alpha 0 for a miss).
-            aov_albedo: readonly buffer [vec4],
+            /// What the radiance (diffuse part) was divided by (step 1's, or the temporal
+            /// step's accumulated one).
+            dn_albedo: readonly image rgba32f,
+            /// With [`DENOISE_SPLIT`]: what the specular part was divided by (else unread).
+            dn_spec_albedo: readonly image rgba32f,
             /// Radiance emitted at the first hit (added back).
-            aov_emission: readonly buffer [vec4],
-            /// With [`DENOISE_SPLIT`]: the path target's `aov_split` (the specular part's
-            /// divisor; else unread).
-            aov_split: readonly buffer [vec4],
+            dn_emission: readonly image rgba32f,
             /// The denoised image: radiance rgb, alpha 1.
             out_color: writeonly image rgba32f,
         }

@@ -203,7 +203,8 @@ impl<'a> From<&'a PathTarget> for DenoiseInputs<'a> {
 }
 
 /// The denoiser's working images (`R32G32B32A32_SFLOAT` but for `samples`): two the iterations
-/// ping-pong between, the guide (normal, distance) and the sample counts.
+/// ping-pong between, the guide (normal, distance), the sample counts, and what the remodulation
+/// multiplies and adds back (the divisors, the first hit's emission).
 pub struct DenoiseImages {
     /// Width and height.
     pub size: (u32, u32),
@@ -215,8 +216,15 @@ pub struct DenoiseImages {
     pub guide: Image,
     /// `R32_SFLOAT`: each pixel's sample count.
     pub samples: Image,
-    /// The specular part's ping and pong, in images made by [`DenoiseImages::with_lobe_split`].
+    /// What the radiance (diffuse part) is divided by and multiplied back by, rgb.
+    pub albedo: Image,
+    /// The first hit's emission, rgb (left out of the filter, added back).
+    pub emission: Image,
+    /// The specular part's ping and pong, in images made by
+    /// [`DenoiseImages::with_lobe_split`].
     pub specular: Option<(Image, Image)>,
+    /// The specular part's divisor, rgb, with [`DenoiseImages::with_lobe_split`].
+    pub spec_albedo: Option<Image>,
 }
 
 impl DenoiseImages {
@@ -230,7 +238,10 @@ impl DenoiseImages {
             pong: make("denoise pong")?,
             guide: make("denoise guide")?,
             samples: Image::storage_2d(ctx, "denoise samples", w, h, raw::Format::R32_SFLOAT)?,
+            albedo: make("denoise albedo")?,
+            emission: make("denoise emission")?,
             specular: None,
+            spec_albedo: None,
         })
     }
 
@@ -239,12 +250,22 @@ impl DenoiseImages {
     pub fn with_lobe_split(ctx: &Context, (w, h): (u32, u32)) -> Result<Self> {
         let make = |name| Image::storage_2d(ctx, name, w, h, raw::Format::R32G32B32A32_SFLOAT);
         let specular = Some((make("denoise specular ping")?, make("denoise specular pong")?));
-        Ok(Self { specular, ..Self::new(ctx, (w, h))? })
+        let spec_albedo = Some(make("denoise specular albedo")?);
+        Ok(Self { specular, spec_albedo, ..Self::new(ctx, (w, h))? })
+    }
+
+    /// The specular part's divisor, or without the lobe split the diffuse part's, which then
+    /// fills the binding of kernels that do not read it.
+    pub(crate) fn spec_albedo_or_albedo(&self) -> &Image {
+        self.spec_albedo.as_ref().unwrap_or(&self.albedo)
     }
 
     /// Records the move of every image from `UNDEFINED` to `GENERAL`.
     pub fn init_general(&self, ctx: &Context, cmd: raw::CommandBuffer) {
-        for image in [&self.ping, &self.pong, &self.guide, &self.samples] {
+        for image in [&self.ping, &self.pong, &self.guide, &self.samples, &self.albedo, &self.emission] {
+            image.init_general(ctx, cmd);
+        }
+        if let Some(image) = &self.spec_albedo {
             image.init_general(ctx, cmd);
         }
         if let Some((ping, pong)) = &self.specular {
@@ -355,6 +376,9 @@ impl DenoisePass {
                 dn_specular: &split.map_or(&images.pong, |(_, (ping, _))| ping).view,
                 dn_guide: &images.guide.view,
                 dn_samples: &images.samples.view,
+                dn_albedo: &images.albedo.view,
+                dn_spec_albedo: &images.spec_albedo_or_albedo().view,
+                dn_emission: &images.emission.view,
             },
             &params(0),
             grid,
@@ -391,9 +415,9 @@ impl DenoisePass {
             &denoise_remodulate::Resources {
                 dn_in: &diffuse.view,
                 dn_specular: &specular.view,
-                aov_albedo: inputs.albedo,
-                aov_emission: inputs.emission,
-                aov_split,
+                dn_albedo: &images.albedo.view,
+                dn_spec_albedo: &images.spec_albedo_or_albedo().view,
+                dn_emission: &images.emission.view,
                 out_color: &output,
             },
             &params(0),

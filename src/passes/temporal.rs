@@ -5,8 +5,13 @@
 //!
 //! The history ([`TemporalHistory`], two slots the frames alternate between) holds per pixel the
 //! demodulated colour (both parts of the lobe split when the target has it) and its variance, the
-//! first and second moments of each part's luminance, the frame's normal and distance, and the
-//! history's length. umbra keeps the previous frame's camera in the history (the host passes
+//! first and second moments of each part's luminance, the frame's normal and distance, the
+//! history's length, and what the remodulation multiplies and adds back: each part's divisor
+//! (the first hit's albedo) and the first hit's emission. These are blended like the colour, and
+//! the colour is the blend of the numerators (colour × divisor) over the blended divisor: a frame
+//! of one sample a pixel sees one side of a sub-pixel edge (the path tracer jitters its first
+//! hits), and remodulating with that frame's divisor and emission alone made edge pixels flicker
+//! (an emitter's rim, the spikes of BENCHMARKS.md's temporal table). umbra keeps the previous frame's camera in the history (the host passes
 //! only the frame's camera): each frame's first hits (the ray through the pixel's centre at the
 //! first sample's distance) are projected into it, and the four history pixels around the
 //! projection (bilinear) count when their normal and depth agree (`spirv/denoise_temporal.comp`;
@@ -126,6 +131,12 @@ pub struct HistorySlot {
     pub guide: Image,
     /// History length in frames, sum of the colour's blend weights squared.
     pub state: Image,
+    /// What the colour (diffuse part) is divided by: the blended divisors of the frames.
+    pub albedo: Image,
+    /// What the specular part is divided by, likewise.
+    pub spec_albedo: Image,
+    /// The first hit's emission, blended.
+    pub emission: Image,
 }
 
 /// The per-pixel history of the temporal denoiser, for one view of one size: two slots, the
@@ -157,6 +168,9 @@ impl TemporalHistory {
                 moments: make(&format!("history {i} moments"))?,
                 guide: make(&format!("history {i} guide"))?,
                 state: make(&format!("history {i} state"))?,
+                albedo: make(&format!("history {i} albedo"))?,
+                spec_albedo: make(&format!("history {i} specular albedo"))?,
+                emission: make(&format!("history {i} emission"))?,
             })
         };
         Ok(Self {
@@ -172,7 +186,16 @@ impl TemporalHistory {
     /// Records the move of every image from `UNDEFINED` to `GENERAL`.
     pub fn init_general(&self, ctx: &Context, cmd: raw::CommandBuffer) {
         for slot in &self.slots {
-            for image in [&slot.color, &slot.specular, &slot.moments, &slot.guide, &slot.state] {
+            for image in [
+                &slot.color,
+                &slot.specular,
+                &slot.moments,
+                &slot.guide,
+                &slot.state,
+                &slot.albedo,
+                &slot.spec_albedo,
+                &slot.emission,
+            ] {
                 image.init_general(ctx, cmd);
             }
         }
@@ -292,16 +315,25 @@ impl TemporalPass {
                 dn_specular: &spec_ping.view,
                 dn_guide: &images.guide.view,
                 dn_samples: &images.samples.view,
+                dn_albedo: &images.albedo.view,
+                dn_spec_albedo: &images.spec_albedo_or_albedo().view,
+                dn_emission: &images.emission.view,
                 hist_color: &prev.color.view,
                 hist_specular: &prev.specular.view,
                 hist_moments: &prev.moments.view,
                 hist_guide: &prev.guide.view,
                 hist_state: &prev.state.view,
+                hist_albedo: &prev.albedo.view,
+                hist_spec_albedo: &prev.spec_albedo.view,
+                hist_emission: &prev.emission.view,
                 out_color: &outputs.diffuse.view,
                 out_specular: &outputs.specular.view,
                 out_moments: &next.moments.view,
                 out_guide: &next.guide.view,
                 out_state: &next.state.view,
+                out_albedo: &next.albedo.view,
+                out_spec_albedo: &next.spec_albedo.view,
+                out_emission: &next.emission.view,
             },
             &params,
             [images.size.0, images.size.1, 1],

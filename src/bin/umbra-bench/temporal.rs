@@ -219,9 +219,11 @@ pub fn table(doc: &Value) -> String {
     }
     let (s, t) = (num(&doc["filter_spatial_ms"]), num(&doc["filter_temporal_ms"]));
     out += &format!(
-        "\n{}x{} on {}: filter {s:.2} ms spatial, {t:.2} ms temporal (+{:.2} ms, {:.2}x); one sample {:.2} ms (medians of {})\n",
+        "\n{}x{}, the camera turned {} pixels a frame, on {}: filter {s:.2} ms spatial, {t:.2} ms temporal (+{:.2} ms, \
+         {:.2}x); one sample {:.2} ms (medians of {})\n",
         doc["size"][0],
         doc["size"][1],
+        doc["pan_pixels"],
         doc["device"].as_str().unwrap_or("?"),
         t - s,
         t / s,

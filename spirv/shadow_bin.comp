@@ -1,12 +1,13 @@
 #version 460
 // Shadow maps, step 1 (`FILL` false) and 3 (`FILL` true), one invocation per scene triangle
-// (`raster_tris`: the BVH holds a split triangle once per piece, each the whole triangle). A triangle whose
-// texel box spans at most SHADOW_DIRECT_SPAN texels a side rasterizes itself in step 1: it
-// loops over its box and keeps the nearest depth of each covered texel in the scratch layer
-// with atomicMin on the float's bits (positive floats order as their bits). A larger one counts
-// itself into every tile its box overlaps and does not lie wholly outside of (step 1), then
-// enters itself in their lists and writes its edge functions and depths for shadow_raster.comp
-// (step 3, after shadow_scan.comp's prefix sum).
+// (`raster_tris`: the BVH holds a split triangle once per piece, each the whole triangle). Only
+// the layer's marked tiles (`tile_marks`, the ones shadow_tiles.comp lists) are rendered. A
+// triangle whose texel box spans at most SHADOW_DIRECT_SPAN texels a side rasterizes itself in
+// step 1: it loops over its box and keeps the nearest depth of each covered texel of a marked
+// tile in the scratch layer with atomicMin on the float's bits (positive floats order as their
+// bits). A larger one counts itself into every marked tile its box overlaps and does not lie
+// wholly outside of (step 1), then enters itself in their lists and writes its edge functions and
+// depths for shadow_raster.comp (step 3, after shadow_scan.comp's prefix sum).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_bin.glsl"
 
@@ -30,19 +31,34 @@ void main() {
     if (!shadow_texel_box(a, b, c, box, bounded)) {
         return;
     }
+    bool direct = bounded && all(lessThan(box.zw - box.xy, uvec2(SHADOW_DIRECT_SPAN)));
+    if (direct) {
+        if (FILL) {
+            return;
+        }
+        // The box spans at most 2 × 2 tiles: none marked, nothing to do.
+        uvec4 range = box / SHADOW_TILE;
+        uint row0 = params.list_at + range.y * params.tiles;
+        uint row1 = params.list_at + range.w * params.tiles;
+        if ((tile_marks[row0 + range.x] | tile_marks[row0 + range.z] | tile_marks[row1 + range.x]
+             | tile_marks[row1 + range.z]) == 0u) {
+            return;
+        }
+    }
     vec3 e0;
     vec3 e1;
     vec3 e2;
     if (!shadow_edges(a, b, c, e0, e1, e2)) {
         return;
     }
-    if (bounded && all(lessThan(box.zw - box.xy, uvec2(SHADOW_DIRECT_SPAN)))) {
-        if (FILL) {
-            return;
-        }
+    if (direct) {
         vec3 d = vec3(a.z, b.z, c.z);
         for (uint y = box.y; y <= box.w; ++y) {
             for (uint x = box.x; x <= box.z; ++x) {
+                // Only listed tiles' texels: shadow_raster.comp merges and resets just those.
+                if (tile_marks[params.list_at + (y / SHADOW_TILE) * params.tiles + x / SHADOW_TILE] == 0u) {
+                    continue;
+                }
                 float depth;
                 vec2 bary;
                 if (shadow_covers(e0, e1, e2, d, uvec2(x, y), depth, bary) && shadow_opaque(tri, bary, uvec2(x, y))) {
@@ -60,6 +76,10 @@ void main() {
     uvec4 range = box / SHADOW_TILE;
     for (uint ty = range.y; ty <= range.w; ++ty) {
         for (uint tx = range.x; tx <= range.z; ++tx) {
+            uint t = ty * params.tiles + tx;
+            if (tile_marks[params.list_at + t] == 0u) {
+                continue;
+            }
             // Skip a tile wholly outside one edge (at all four corner texel centres: the edge
             // function is linear, so at every centre between them too).
             vec2 lo = vec2(uvec2(tx, ty) * SHADOW_TILE) + 0.5;
@@ -67,7 +87,6 @@ void main() {
             if (shadow_edge_outside(e0, lo, hi) || shadow_edge_outside(e1, lo, hi) || shadow_edge_outside(e2, lo, hi)) {
                 continue;
             }
-            uint t = ty * params.tiles + tx;
             if (FILL) {
                 uint slot = tile_start[t] + atomicAdd(tile_count[t], 1u);
                 if (slot < params.capacity) {

@@ -2,15 +2,22 @@
 // Moment shadow maps (Peters and Klein 2015): the layer's depth as its four power moments
 // (z, z², z³, z⁴) of the depth mapped to [0, 1] (empty texels at 1), box-filtered over
 // (2 radius + 1)² texels in two separable passes (along x from the depth map, then along y).
-// The filter stays inside the layer (taps clamp to its edge).
+// One workgroup per tile the rasterizer rendered (the indirect dispatch over shadow_tiles.comp's
+// list), one invocation per texel; the taps clamp to the layer's window (`first`, `last`), as the
+// texels outside are undefined. Texels of a rendered tile near an unrendered one blend undefined
+// depths, but no pixel reads them: the view's marks reach a filter's radius past what it reads.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_moments.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 16, local_size_y = 16) in;
+
+ivec2 unpack_texel(uint packed) {
+    return ivec2(packed & 0xffffu, packed >> 16);
+}
 
 vec4 moments_at(ivec2 q) {
     int size = int(params.size);
-    q = clamp(q, ivec2(0), ivec2(size - 1));
+    q = clamp(q, unpack_texel(params.first), unpack_texel(params.last));
     int index = int(params.offset) + q.y * size + q.x;
     if (params.direction == 0u) {
         float z = clamp(imageLoad(shadow_depth, index).x / params.depth_far, 0.0, 1.0);
@@ -21,9 +28,11 @@ vec4 moments_at(ivec2 q) {
 }
 
 void main() {
-    ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+    uint tiles = (params.size + SHADOW_TILE - 1u) / SHADOW_TILE;
+    uint listed = tile_list[params.list_at + gl_WorkGroupID.x];
+    ivec2 texel = ivec2(uvec2(listed % tiles, listed / tiles) * SHADOW_TILE + gl_LocalInvocationID.xy);
     int size = int(params.size);
-    if (any(greaterThanEqual(texel, ivec2(size)))) {
+    if (any(greaterThan(texel, unpack_texel(params.last)))) {
         return;
     }
     int r = int(params.radius);

@@ -1,5 +1,6 @@
 #version 460
-// Shadow maps, step 4: one workgroup per tile of SHADOW_TILE² texels, one invocation per texel,
+// Shadow maps, step 4: one workgroup per listed tile of SHADOW_TILE² texels (an indirect dispatch
+// over shadow_tiles.comp's list), one invocation per texel,
 // over the large triangles in the tile's list (shadow_bin.comp, which also wrote their edge
 // functions and depths). Each invocation tests its texel centre against them (shadow_raster.glsl:
 // watertight edge functions, a tie rule), keeps the nearest depth, merges
@@ -31,7 +32,9 @@ const bool GGX_WALTER = false;
 #include "shadow_raster.glsl"
 
 void main() {
-    uvec2 tile = gl_WorkGroupID.xy;
+    // One workgroup per listed tile (shadow_tiles.comp: the window's, or the view's marked ones).
+    uint listed = tile_list[params.list_at + gl_WorkGroupID.x];
+    uvec2 tile = uvec2(listed % params.tiles, listed / params.tiles);
     uvec2 texel = tile * SHADOW_TILE + gl_LocalInvocationID.xy;
     bool mine = all(lessThan(texel, uvec2(params.size)));
     uint t = tile.y * params.tiles + tile.x;

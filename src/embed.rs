@@ -32,7 +32,11 @@
 //! // shadow maps instead of shadow rays: placed once, re-recorded when a light, the geometry
 //! // or (for a directional light's cascades) the camera changes:
 //! let maps = renderer.shadow_maps(&camera, size, &shadow_settings)?;
-//! renderer.record_shadow_maps(cmd, &maps)?;  // then `shadows: Some(&maps)` in the inputs
+//! renderer.record_shadow_maps(cmd, &maps, None)?;  // then `shadows: Some(&maps)` in the inputs
+//! // or for the view, the cascades' tiles no pixel reads skipped: G-buffer, maps, the rest
+//! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;
+//! renderer.record_shadow_maps(cmd, &maps, Some(ShadowView { camera: &camera, gbuffer: &gbuffer_views }))?;
+//! renderer.record_hybrid_shading(cmd, &camera, &targets, &settings, None)?;
 //! // many lights: ReSTIR DI, its reservoirs kept from frame to frame (their history):
 //! let reservoirs = renderer.reservoirs(size)?;                       // once per view
 //! renderer.record_restir(cmd, &camera, &gbuffer_views, &reservoirs, &restir, &lighting)?;
@@ -79,7 +83,7 @@ use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
 use crate::passes::probes::{ProbeSettings, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirSettings};
-use crate::passes::shadow::{ShadowMaps, ShadowSettings};
+use crate::passes::shadow::{ShadowMaps, ShadowSettings, ShadowView};
 use crate::passes::temporal::{TemporalHistory, TemporalSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
@@ -418,10 +422,17 @@ impl Renderer {
     }
 
     /// Records the rendering of `maps` (when a light, the geometry or, for cascades, the camera
-    /// changed). After the host's submission completes, [`ShadowMaps::check`] says whether their
-    /// tile lists sufficed ([`ShadowMaps::reserve`] and record again if not).
-    pub fn record_shadow_maps(&self, cmd: raw::CommandBuffer, maps: &ShadowMaps) -> Result<()> {
-        self.passes.record_shadow_maps(cmd, &self.scene, maps)
+    /// changed), for a `view` whose G-buffer is recorded before when given (the cascades' tiles
+    /// its pixels do not read are skipped: [`ShadowSettings::view_marks`]). After the host's
+    /// submission completes, [`ShadowMaps::check`] says whether their tile lists sufficed
+    /// ([`ShadowMaps::reserve`] and record again if not).
+    pub fn record_shadow_maps(
+        &self,
+        cmd: raw::CommandBuffer,
+        maps: &ShadowMaps,
+        view: Option<ShadowView<'_>>,
+    ) -> Result<()> {
+        self.passes.record_shadow_maps(cmd, &self.scene, maps, view)
     }
 
     /// Records a whole hybrid frame into the host's `targets` (G-buffer, SSAO and blur when
@@ -437,6 +448,19 @@ impl Renderer {
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         self.passes.record_hybrid(cmd, &self.scene, &self.ibl, camera, targets, settings, timer)
+    }
+
+    /// [`Self::record_hybrid`] but its G-buffer, already recorded into `targets.gbuffer`
+    /// ([`Self::record_gbuffer`] of `camera`; shadow maps for its view in between).
+    pub fn record_hybrid_shading(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        self.passes.record_hybrid_shading(cmd, &self.scene, &self.ibl, camera, targets, settings, timer)
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`

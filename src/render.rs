@@ -27,7 +27,7 @@ pub use crate::passes::pathtrace::PathSettings;
 use crate::passes::pathtrace::{Integrator, PathOptions, PathTarget, PathTracePass, ResolvePass};
 use crate::passes::probes::{ProbePass, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirPass, RestirSettings};
-use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings};
+use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings, ShadowView};
 pub use crate::passes::temporal::{TemporalFeedback, TemporalSettings};
 use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
@@ -749,29 +749,38 @@ impl Passes {
     }
 
     /// Records the rendering of every layer of `maps` (after a light, the geometry or, for
-    /// directional cascades, the camera changed). Never submits. After the submission,
-    /// [`ShadowMaps::check`] says whether the tile lists sufficed.
+    /// directional cascades, the camera changed); for a `view` whose G-buffer is recorded before
+    /// (with [`ShadowSettings::view_marks`]: its cascades' tiles that no pixel reads are skipped,
+    /// so the G-buffer must change no more often than the maps are recorded). Never submits.
+    /// After the submission, [`ShadowMaps::check`] says whether the tile lists sufficed.
     pub fn record_shadow_maps(
         &self,
         cmd: raw::CommandBuffer,
         scene: &GpuScene,
         maps: &ShadowMaps,
+        view: Option<ShadowView<'_>>,
     ) -> Result<()> {
         self.check(scene)?;
-        self.shadow_pass(scene)?.record(&self.ctx, cmd, scene, maps, None)
+        self.shadow_pass(scene)?.record(&self.ctx, cmd, scene, maps, view, None)
     }
 
-    /// Renders `maps` now (submits and waits), growing their tile lists and rendering again
-    /// when they overflowed; returns the GPU milliseconds of each step of the last rendering
-    /// (summed over the layers, by kernel).
-    pub fn render_shadow_maps(&self, scene: &GpuScene, maps: &mut ShadowMaps) -> Result<Vec<(String, f64)>> {
+    /// Renders `maps` now (submits and waits) for `view` (its G-buffer already rendered), as
+    /// [`Passes::record_shadow_maps`] records them, growing their tile lists and rendering
+    /// again when they overflowed; returns the GPU milliseconds of each step of the last
+    /// rendering (summed over the layers, by kernel).
+    pub fn render_shadow_maps(
+        &self,
+        scene: &GpuScene,
+        maps: &mut ShadowMaps,
+        view: Option<ShadowView<'_>>,
+    ) -> Result<Vec<(String, f64)>> {
         let ctx = &self.ctx;
         self.check(scene)?;
         for _ in 0..2 {
             let mut timer = GpuTimer::new(ctx, ShadowPass::timer_entries(maps))?;
             ctx.submit(|cmd| {
                 timer.reset(cmd);
-                self.shadow_pass(scene)?.record(ctx, cmd, scene, maps, Some(&mut timer))
+                self.shadow_pass(scene)?.record(ctx, cmd, scene, maps, view, Some(&mut timer))
             })?;
             let mut steps: Vec<(String, f64)> = Vec::new();
             for t in timer.read()? {
@@ -851,6 +860,26 @@ impl Passes {
     ) -> Result<()> {
         self.check(scene)?;
         settings.lighting_with_shadows().validate()?;
+        timed(&mut timer, cmd, "gbuffer", || self.record_gbuffer(cmd, scene, camera, targets.gbuffer))?;
+        self.record_hybrid_shading(cmd, scene, ibl, camera, targets, settings, timer)
+    }
+
+    /// [`Passes::record_hybrid`] after its G-buffer, which `targets.gbuffer` already holds
+    /// ([`Passes::record_gbuffer`] of `camera`): for shadow maps rendered for the view between
+    /// the two ([`crate::passes::shadow::ShadowView`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_hybrid_shading(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        ibl: &IblResources,
+        camera: &Camera,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.lighting_with_shadows().validate()?;
         let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
             (false, _) => None,
             (true, Some(maps)) if maps.settings.method == settings.shadows.method => Some(maps),
@@ -869,7 +898,6 @@ impl Passes {
             }
         };
         let gbuffer = targets.gbuffer;
-        timed(&mut timer, cmd, "gbuffer", || self.record_gbuffer(cmd, scene, camera, gbuffer))?;
         let ao = match (&settings.ao, targets.ao) {
             (Some(ao), Some(images)) => {
                 Some(self.record_ssao_timed(cmd, camera, gbuffer, images, ao, timer.as_deref_mut())?)
@@ -1228,15 +1256,26 @@ impl Passes {
             }
             None => None,
         };
+        let views = gbuffer.views();
+        // The environment's tables and the G-buffer first (the shadow maps render for its
+        // view), then the rest of the frame.
+        let mut first_timer = GpuTimer::new(ctx, 8)?;
+        ctx.submit(|cmd| {
+            first_timer.reset(cmd);
+            ibl.record(ctx, cmd, scene, Some(&mut first_timer))?;
+            first_timer.begin(cmd, "gbuffer")?;
+            self.record_gbuffer(cmd, scene, camera, &views)?;
+            first_timer.end(cmd)
+        })?;
         let mut shadow_ms = Vec::new();
         let shadows = if settings.shadows.method.uses_maps() {
             let mut maps = self.shadow_maps(scene, camera, size, &settings.shadows)?;
-            shadow_ms = self.render_shadow_maps(scene, &mut maps)?;
+            let view = ShadowView { camera, gbuffer: &views };
+            shadow_ms = self.render_shadow_maps(scene, &mut maps, Some(view))?;
             Some(maps)
         } else {
             None
         };
-        let views = gbuffer.views();
         let reservoirs = match settings.lighting.direct.restir() {
             Some(_) => Some(Reservoirs::new(ctx, size)?),
             None => None,
@@ -1263,17 +1302,16 @@ impl Passes {
                 b.init_general(ctx, cmd);
             }
             timer.reset(cmd);
-            ibl.record(ctx, cmd, scene, Some(&mut timer))?;
             for f in 0..frames {
                 let mut frame = settings.clone();
                 frame.lighting.frame = settings.lighting.frame.wrapping_mul(frames).wrapping_add(f);
                 let timer = if f + 1 == frames { Some(&mut timer) } else { None };
-                self.record_hybrid(cmd, scene, &ibl, camera, &targets, &frame, timer)?;
+                self.record_hybrid_shading(cmd, scene, &ibl, camera, &targets, &frame, timer)?;
             }
             Ok(())
         })?;
         let mut pass_ms = shadow_ms;
-        pass_ms.extend(timer.read()?.into_iter().map(|t| (t.name, t.ms)));
+        pass_ms.extend(first_timer.read()?.into_iter().chain(timer.read()?).map(|t| (t.name, t.ms)));
         Ok(HybridImage {
             size,
             color: output.read(ctx)?,

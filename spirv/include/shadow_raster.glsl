@@ -25,8 +25,8 @@ vec4 shadow_vertex(uint tri, uint k) {
 }
 
 // The texel box (x0, y0, x1, y1, inclusive) of the texel centres a triangle can cover, and
-// whether it is bounded (every vertex in front: w > 0; otherwise the whole layer); false when it
-// covers none.
+// whether it is bounded (every vertex in front: w > 0; otherwise the whole window), clipped to
+// the layer's window (ShadowRasterParams::window_lo, window_hi); false when it covers none.
 bool shadow_texel_box(vec4 v0, vec4 v1, vec4 v2, out uvec4 box, out bool bounded) {
     float s = float(params.size);
     // Wholly outside one plane of the layer's pyramid (x ≥ 0, x ≤ size w, same for y, w > 0):
@@ -40,7 +40,11 @@ bool shadow_texel_box(vec4 v0, vec4 v1, vec4 v2, out uvec4 box, out bool bounded
         return false;
     }
     bounded = !any(out_w);
-    box = uvec4(0u, 0u, params.size - 1u, params.size - 1u);
+    // The layer's window (the tiles rendered): the box never leaves it.
+    uvec2 w_lo = uvec2(params.window_lo & 0xffffu, params.window_lo >> 16) * SHADOW_TILE;
+    uvec2 w_hi = min((uvec2(params.window_hi & 0xffffu, params.window_hi >> 16) + 1u) * SHADOW_TILE,
+                     uvec2(params.size)) - 1u;
+    box = uvec4(w_lo, w_hi);
     if (bounded) {
         // Texel centres x + 0.5 within the projected box, a texel wider each side against the
         // division's rounding (the edge functions decide).
@@ -49,9 +53,9 @@ bool shadow_texel_box(vec4 v0, vec4 v1, vec4 v2, out uvec4 box, out bool bounded
         vec2 c = v2.xy / v2.w;
         vec2 lo = clamp(floor(min(a, min(b, c)) - 0.5), vec2(0.0), vec2(s - 1.0));
         vec2 hi = clamp(ceil(max(a, max(b, c)) - 0.5), vec2(0.0), vec2(s - 1.0));
-        box = uvec4(uvec2(lo), uvec2(hi));
+        box = uvec4(max(uvec2(lo), w_lo), min(uvec2(hi), w_hi));
     }
-    return true;
+    return all(lessThanEqual(box.xy, box.zw));
 }
 
 // The oriented edge functions of a triangle; false when it is edge-on to the light (it covers

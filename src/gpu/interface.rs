@@ -635,12 +635,34 @@ gpu_structs! {
         offset: uint,
         /// Entries the tile lists hold.
         capacity: uint,
+        /// The first tile rendered ([`crate::passes::shadow::ShadowPlan::windows`]): column |
+        /// row << 16.
+        window_lo: uint,
+        /// The last tile rendered: column | row << 16.
+        window_hi: uint,
+        /// The layer's first entry in `tile_marks` and `tile_list` (layer × tiles²).
+        list_at: uint,
+    }
+
+    /// Push constants of `shadow_mark.comp`: the view whose G-buffer marks the tiles its pixels
+    /// read.
+    struct ShadowMarkParams {
+        /// The G-buffer's camera.
+        camera: GpuCamera,
+        /// G-buffer width and height.
+        size: uvec2,
+        /// Punctual lights (records in `shadow_texels`).
+        lights: uint,
+        /// Texel of `shadow_texels` where the layers start.
+        layers_at: uint,
+        /// Tiles per side of a layer.
+        tiles: uint,
+        /// Texels around a pixel's point marked (the filters' reach).
+        reach: float,
         /// Padding.
         pad0: uint,
         /// Padding.
         pad1: uint,
-        /// Padding.
-        pad2: uint,
     }
 
     /// The probe volume's grid, the first [`PROBE_HEADER_TEXELS`] texels of `probe_texels`
@@ -745,12 +767,13 @@ gpu_structs! {
         direction: uint,
         /// Depth mapped to moment depth 1 ([`GpuShadowLayer::depth_far`]).
         depth_far: float,
-        /// Padding.
-        pad0: float,
-        /// Padding.
-        pad1: float,
-        /// Padding.
-        pad2: float,
+        /// The first texel filtered (the layer's window, [`crate::passes::shadow::ShadowPlan::windows`]):
+        /// column | row << 16; the dispatch covers the window from there.
+        first: uint,
+        /// The window's last texel (column | row << 16): taps clamp to the window.
+        last: uint,
+        /// The layer's first entry in `tile_list` (layer × tiles²).
+        list_at: uint,
     }
 
     /// Push constants of `tonemap.comp`.
@@ -1082,6 +1105,8 @@ gpu_constants! {
     SHADOW_LIGHT_CASCADES: uint = 3;
     /// Side of a shadow rasterizer tile in texels (its workgroup is one tile).
     SHADOW_TILE: uint = 16;
+    /// The most cascades of a directional light.
+    SHADOW_MAX_CASCADES: uint = 8;
     /// The largest box (texels a side) a triangle rasterizes itself in: smaller ones loop over
     /// their own texels, larger ones go through the tiles.
     SHADOW_DIRECT_SPAN: uint = 16;
@@ -1778,6 +1803,39 @@ kernels! {
             /// Per large triangle (by BVH index) its oriented edge functions and vertex depths,
             /// three `vec4`s (written by the fill, step 3).
             tile_setup: readwrite buffer [vec4],
+            /// Per layer and tile, nonzero where the tile is rendered.
+            tile_marks: readonly buffer [uint],
+        }
+    }
+
+    /// Shadow maps, step 0 for a view: the tiles of the cascades each G-buffer pixel reads,
+    /// marked.
+    kernel shadow_mark {
+        scene: none,
+        push: ShadowMarkParams,
+        spec: {},
+        bindings: {
+            /// View-space depth.
+            gb_depth: readonly image r32f,
+            /// The lights' records and layers ([`GpuShadowLayer`]).
+            shadow_texels: readonly texels rgba32ui,
+            /// Per layer and tile, set to 1 where a pixel reads it.
+            tile_marks: readwrite buffer [uint],
+        }
+    }
+
+    /// Shadow maps, per layer: the window's marked tiles listed, their count an indirect dispatch.
+    kernel shadow_tiles {
+        scene: none,
+        push: ShadowRasterParams,
+        spec: {},
+        bindings: {
+            /// Per layer and tile, nonzero where the tile is rendered.
+            tile_marks: readonly buffer [uint],
+            /// Per layer, its rendered tiles (row-major tile indices).
+            tile_list: readwrite buffer [uint],
+            /// Per layer four words: the rendered tiles, 1, 1 (a `VkDispatchIndirectCommand`), a pad.
+            tile_dispatch: readwrite buffer [uint],
         }
     }
 
@@ -1811,6 +1869,8 @@ kernels! {
             tile_tris: readonly buffer [uint],
             /// `shadow_bin`'s `tile_setup`, read as RGBA32F texels.
             setup_texels: readonly texels rgba32f,
+            /// Per layer, the tiles rendered (one workgroup each).
+            tile_list: readonly buffer [uint],
             /// The small triangles' depth bits (read, then reset to infinity's for the next layer).
             shadow_scratch: readwrite buffer [uint],
             /// The map: linear depth per texel (infinity where nothing is).
@@ -1830,6 +1890,8 @@ kernels! {
             moments_x: readwrite texels rgba32f,
             /// Moments filtered along both axes (written in direction 1).
             shadow_moments: writeonly texels rgba32f,
+            /// Per layer, the tiles rendered (one workgroup each).
+            tile_list: readonly buffer [uint],
         }
     }
 

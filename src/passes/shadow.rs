@@ -6,10 +6,11 @@
 //! (orthographic maps over slices of the camera's view depth, after Zhang et al. 2006's practical
 //! split scheme up to the scene's farthest corner rounded up to a power of two, each sized by the
 //! slice's bounding sphere and its centre snapped to whole texels so the maps do not shimmer as
-//! the camera turns or moves). Per layer four kernels run:
-//! `shadow_bin` counts each triangle into the tiles (16×16 texels) its light-space box overlaps,
-//! `shadow_scan` turns the counts into list offsets, `shadow_bin` again fills the lists, and
-//! `shadow_raster` runs one workgroup per tile, one invocation per texel, over the tile's list:
+//! the camera turns or moves). Per layer five kernels run: `shadow_tiles` lists the tiles
+//! (16×16 texels) to render, `shadow_bin` counts each triangle into the listed tiles its
+//! light-space box overlaps, `shadow_scan` turns the counts into list offsets, `shadow_bin` again
+//! fills the lists, and `shadow_raster` runs one workgroup per listed tile, one invocation per
+//! texel, over the tile's list:
 //! watertight homogeneous edge functions with a tie rule, alpha cut-outs as in the traversal, the
 //! nearest linear depth stored. [`ShadowMethod::Moments`] adds their four moments, box-filtered.
 //!
@@ -18,19 +19,31 @@
 //! keep their own methods. Cube faces and spot maps are rendered with a guard band a little
 //! wider than the face, so a filter centred inside the face never reads past the map (seams).
 //!
+//! A directional cascade renders only its window ([`ShadowPlan::windows`]): the tiles around the
+//! box its slice of the view makes in the layer, widened by the filters' reach, since no pixel of
+//! that view reads the rest ([`ShadowSettings::cascade_windows`]). Maps rendered for a view
+//! ([`ShadowView`], after its G-buffer) go further, as virtual shadow maps do: `shadow_mark`
+//! marks the tiles each pixel's lookup reaches, `shadow_tiles` lists a layer's marked tiles, and
+//! binning, rasterizing and the moments' filter visit only those (indirect dispatches over the
+//! list; [`ShadowSettings::view_marks`]). Both measured in BENCHMARKS.md History, "cascade windows
+//! and view marks".
+//!
 //! The maps depend on the lights and the geometry, and for directional lights on the camera:
 //! [`ShadowPlan::new`] places the layers (a moved light or camera needs a new plan, so new
 //! [`ShadowMaps`]), and a host re-records them only when one of those changes.
 
 use crate::error::{Error, Result};
-use crate::gpu::kernels::{shadow_bin, shadow_moments, shadow_raster, shadow_scan};
+use crate::gpu::kernels::{
+    shadow_bin, shadow_mark, shadow_moments, shadow_raster, shadow_scan, shadow_tiles,
+};
 use crate::gpu::layout::{
-    GpuLight, GpuShadowLayer, ShadowMomentParams, ShadowRasterParams, ShadowStats, SHADOW_HEADER_TEXELS,
-    SHADOW_LAYER_TEXELS, SHADOW_LIGHT_CASCADES, SHADOW_LIGHT_CUBE, SHADOW_LIGHT_SINGLE, SHADOW_ORTHOGRAPHIC,
-    SHADOW_PERSPECTIVE, SHADOW_TILE,
+    GpuCamera, GpuLight, GpuShadowLayer, ShadowMarkParams, ShadowMomentParams, ShadowRasterParams,
+    ShadowStats, SHADOW_HEADER_TEXELS, SHADOW_LAYER_TEXELS, SHADOW_LIGHT_CASCADES, SHADOW_LIGHT_CUBE,
+    SHADOW_LIGHT_SINGLE, SHADOW_MAX_CASCADES, SHADOW_ORTHOGRAPHIC, SHADOW_PERSPECTIVE, SHADOW_TILE,
 };
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
+use crate::passes::gbuffer::GBufferViews;
 use crate::scene::Camera;
 use crate::vk::{barrier, raw, Buffer, Context, GpuTimer, TexelBuffer};
 use glam::{Vec3, Vec4};
@@ -129,6 +142,15 @@ pub struct ShadowSettings {
     /// ([`crate::passes::deferred::LightingSettings::sized_lights`]): the soft shadows PCSS
     /// approximates. Off by default: `rt` shadows points, as the path tracer's lights are.
     pub sized_rays: bool,
+    /// Directional cascades render only the tiles their slice of the view can read: the
+    /// slice's box in the layer, widened by the filters' reach and the normal offset
+    /// ([`ShadowPlan::windows`]); texels outside it are left undefined. Off: the whole layer.
+    pub cascade_windows: bool,
+    /// Maps rendered for a view ([`ShadowView`]: by [`crate::render::Passes::hybrid`], and
+    /// by hosts that pass one) render of each cascade only the tiles its G-buffer's pixels read,
+    /// within the filters' reach; the rest is left undefined. Off: the window
+    /// ([`ShadowSettings::cascade_windows`]).
+    pub view_marks: bool,
 }
 
 impl Default for ShadowSettings {
@@ -148,6 +170,8 @@ impl Default for ShadowSettings {
             moment_blur: 2,
             moment_bias: 3e-5,
             sized_rays: false,
+            cascade_windows: true,
+            view_marks: true,
         }
     }
 }
@@ -162,7 +186,7 @@ impl ShadowSettings {
     /// The smallest map side.
     pub const MIN_MAP_SIZE: u32 = 16;
     /// The most cascades.
-    pub const MAX_CASCADES: u32 = 8;
+    pub const MAX_CASCADES: u32 = SHADOW_MAX_CASCADES;
 
     /// Checks every setting, naming the one out of range.
     pub fn validate(&self) -> Result<()> {
@@ -222,6 +246,20 @@ impl ShadowSettings {
     fn guard(&self) -> u32 {
         self.max_radius.max(self.pcf_radius).max(self.moment_blur as f32).ceil() as u32 + 2
     }
+
+    /// Texels around where a shaded point lands in a directional cascade that its lookup may
+    /// read: the method's filter (`shadow.glsl`: PCF's taps within its radius, PCSS's search and
+    /// taps within the largest radius, the moments' blur, each with a bilinear texel more), the
+    /// normal offset (at most that many texels in an orthographic layer), and a texel to spare.
+    fn reach(&self) -> f32 {
+        let filter = match self.method {
+            ShadowMethod::RayTraced | ShadowMethod::Hard => 0.0,
+            ShadowMethod::Pcf => self.pcf_radius.ceil() + 1.0,
+            ShadowMethod::Pcss => self.max_radius.ceil() + 1.0,
+            ShadowMethod::Moments => self.moment_blur as f32 + 1.0,
+        };
+        filter + self.normal_bias.ceil() + 1.0
+    }
 }
 
 /// Where the layers of every punctual light are and how each is placed, computed on the host
@@ -232,6 +270,10 @@ pub struct ShadowPlan {
     pub layers: Vec<GpuShadowLayer>,
     /// Per punctual light: (its first layer, layer count, `SHADOW_LIGHT_*`).
     pub lights: Vec<(u32, u32, u32)>,
+    /// Per layer, the tiles ([`SHADOW_TILE`]² texels) the rasterizer renders: first and last
+    /// tile column, first and last tile row. The whole layer but for directional cascades with
+    /// [`ShadowSettings::cascade_windows`]; the layer's texels outside are undefined.
+    pub windows: Vec<[u32; 4]>,
 }
 
 impl ShadowPlan {
@@ -250,7 +292,8 @@ impl ShadowPlan {
             .map(|i| Vec3::new([lo.x, hi.x][i & 1], [lo.y, hi.y][(i >> 1) & 1], [lo.z, hi.z][i >> 2]))
             .collect();
         let s = settings.map_size;
-        let mut plan = ShadowPlan { layers: Vec::new(), lights: Vec::new() };
+        let mut plan = ShadowPlan { layers: Vec::new(), lights: Vec::new(), windows: Vec::new() };
+        let whole = [0, 0, s.div_ceil(SHADOW_TILE) - 1, s.div_ceil(SHADOW_TILE) - 1];
         for light in lights {
             let first = plan.layers.len() as u32;
             let position = Vec3::from_slice(&light.position_range[..3]);
@@ -258,15 +301,20 @@ impl ShadowPlan {
             let kind = light.direction_kind[3];
             let far = corners.iter().map(|c| c.distance(position)).fold(1e-6, f32::max);
             let record = if kind == GpuLight::DIRECTIONAL {
-                plan.layers.extend(cascades(direction, &corners, camera, size, settings));
+                for (layer, window) in cascades(direction, &corners, camera, size, settings) {
+                    plan.layers.push(layer);
+                    plan.windows.push(if settings.cascade_windows { window } else { whole });
+                }
                 SHADOW_LIGHT_CASCADES
             } else if kind == GpuLight::SPOT && light.cone[0] >= SPOT_SINGLE_MAP_MAX_ANGLE.cos() {
                 let tan = (1.0 - light.cone[0] * light.cone[0]).max(0.0).sqrt() / light.cone[0];
                 plan.layers.push(perspective(position, direction, tan, far, s, settings.guard()));
+                plan.windows.push(whole);
                 SHADOW_LIGHT_SINGLE
             } else {
                 for axis in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z] {
                     plan.layers.push(perspective(position, axis, 1.0, far, s, settings.guard()));
+                    plan.windows.push(whole);
                 }
                 SHADOW_LIGHT_CUBE
             };
@@ -324,14 +372,16 @@ fn perspective(origin: Vec3, axis: Vec3, tan: f32, far: f32, size: u32, guard: u
 
 /// A directional light's cascades over the view depth of `camera` (image `size`), each an
 /// orthographic layer around the bounding sphere of its slice of the view frustum, centred on a
-/// whole texel; depth measured along the light from the scene's nearest corner.
+/// whole texel; depth measured along the light from the scene's nearest corner. With each, the
+/// tiles that can be read ([`ShadowPlan::windows`]): the box of the slice's eight corners in the
+/// layer, widened by [`ShadowSettings::guard`] and the normal offset.
 fn cascades(
     direction: Vec3,
     corners: &[Vec3],
     camera: &Camera,
     size: (u32, u32),
     settings: &ShadowSettings,
-) -> Vec<GpuShadowLayer> {
+) -> Vec<(GpuShadowLayer, [u32; 4])> {
     let s = settings.map_size as f32;
     let eye = Vec3::from(camera.position);
     let forward = Vec3::from(camera.forward).normalize();
@@ -360,6 +410,10 @@ fn cascades(
     let depth0 = corners.iter().map(|c| c.dot(direction)).fold(f32::INFINITY, f32::min);
     let depth1 = corners.iter().map(|c| c.dot(direction)).fold(f32::NEG_INFINITY, f32::max);
     let widen = s / (s - 2.0 * settings.guard() as f32);
+    let view_right = forward.cross(Vec3::from(camera.up)).normalize();
+    let view_up = view_right.cross(forward);
+    let reach = settings.reach();
+    let last_tile = (settings.map_size.div_ceil(SHADOW_TILE) - 1) as f32;
     (0..n)
         .map(|i| {
             let (za, zb) = (if i == 0 { 0.0 } else { split(i) }, split(i + 1));
@@ -374,7 +428,7 @@ fn cascades(
             let centre = eye + forward * zc;
             let snap = |v: f32| (v / texel).floor() * texel;
             let (cx, cy) = (snap(centre.dot(right)), snap(centre.dot(up)));
-            GpuShadowLayer {
+            let layer = GpuShadowLayer {
                 row0: (right / texel).extend(-cx / texel + 0.5 * s).to_array(),
                 row1: (-up / texel).extend(cy / texel + 0.5 * s).to_array(),
                 row2: direction.extend(-depth0).to_array(),
@@ -384,7 +438,24 @@ fn cascades(
                 depth_far: (depth1 - depth0).max(1e-6),
                 split: if i + 1 == n { f32::MAX } else { zb },
                 ..Default::default()
+            };
+            // The slice's corners in texels, their box widened, as tiles.
+            let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
+            for corner in 0..8 {
+                let z = if corner & 1 == 0 { za } else { zb };
+                let scale = if camera.orthographic.is_some() { 1.0 } else { z };
+                let sx = if corner & 2 == 0 { -half_x } else { half_x };
+                let sy = if corner & 4 == 0 { -half_y } else { half_y };
+                let p = eye + forward * z + (view_right * sx + view_up * sy) * scale;
+                let t = glam::Vec2::new(
+                    Vec3::from_slice(&layer.row0[..3]).dot(p) + layer.row0[3],
+                    Vec3::from_slice(&layer.row1[..3]).dot(p) + layer.row1[3],
+                );
+                (lo, hi) = (lo.min(t), hi.max(t));
             }
+            let tile = |v: f32| ((v / SHADOW_TILE as f32).floor().clamp(0.0, last_tile)) as u32;
+            let window = [tile(lo.x - reach), tile(lo.y - reach), tile(hi.x + reach), tile(hi.y + reach)];
+            (layer, window)
         })
         .collect()
 }
@@ -416,6 +487,23 @@ pub struct ShadowMaps {
     setup: TexelBuffer,
     stats: Buffer,
     capacity: u32,
+    /// Per layer and tile: nonzero where rendered.
+    marks: Buffer,
+    /// Per layer, the rendered tiles.
+    tile_list: Buffer,
+    /// Per layer, the indirect dispatch over its rendered tiles (four words).
+    dispatch: Buffer,
+}
+
+/// The view shadow maps are rendered for: with [`ShadowSettings::view_marks`] each directional
+/// cascade renders only the tiles the G-buffer's pixels read. The G-buffer must hold this
+/// camera's view when the maps' recording runs.
+#[derive(Clone, Copy)]
+pub struct ShadowView<'a> {
+    /// The camera the G-buffer was rendered with.
+    pub camera: &'a Camera,
+    /// The G-buffer (its depth is read).
+    pub gbuffer: &'a GBufferViews,
 }
 
 impl ShadowMaps {
@@ -436,6 +524,9 @@ impl ShadowMaps {
             )));
         }
         let tiles = (settings.map_size.div_ceil(SHADOW_TILE) as u64).pow(2);
+        let storage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        let per_tile =
+            |name| Buffer::new(ctx, name, 4 * layers.max(1) * tiles, storage, MemoryLocation::GpuOnly);
         let capacity = (4 * unique.len() as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
         let texels = TexelBuffer::upload(
             ctx,
@@ -447,7 +538,6 @@ impl ShadowMaps {
         let f32x4 = raw::Format::R32G32B32A32_SFLOAT;
         let no_usage = raw::BufferUsageFlags::empty();
         let moment_texels = if moments { layers * s * s } else { 1 };
-        let storage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
         let stats = Buffer::new(
             ctx,
             "shadow stats",
@@ -489,6 +579,15 @@ impl ShadowMaps {
             )?,
             stats,
             capacity,
+            marks: per_tile("shadow tile marks")?,
+            tile_list: per_tile("shadow tile lists of layers")?,
+            dispatch: Buffer::new(
+                ctx,
+                "shadow tile dispatches",
+                16 * layers.max(1),
+                storage | raw::BufferUsageFlags::INDIRECT_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::GpuOnly,
+            )?,
             plan,
         })
     }
@@ -540,6 +639,12 @@ impl ShadowMaps {
         Ok(())
     }
 
+    /// Per layer, the tiles ([`SHADOW_TILE`]² texels) the last submitted rendering rendered (read
+    /// back; submits a copy); texels of the others are undefined.
+    pub fn rendered_tiles(&self, ctx: &Context) -> Result<Vec<u32>> {
+        Ok(self.dispatch.read::<[u32; 4]>(ctx)?.iter().map(|d| d[0]).collect())
+    }
+
     /// Reads every layer's depth back (tests and dumps), row-major per layer.
     pub fn read_depth(&self, ctx: &Context) -> Result<Vec<f32>> {
         let n = self.plan.layers.len() * (self.settings.map_size as usize).pow(2);
@@ -560,6 +665,8 @@ pub struct ShadowPass {
     scan: Pipeline<shadow_scan::Kernel>,
     raster: Pipeline<shadow_raster::Kernel>,
     moments: Pipeline<shadow_moments::Kernel>,
+    mark: Pipeline<shadow_mark::Kernel>,
+    tiles: Pipeline<shadow_tiles::Kernel>,
 }
 
 impl ShadowPass {
@@ -571,23 +678,29 @@ impl ShadowPass {
             scan: Pipeline::plain(ctx)?,
             raster: Pipeline::for_scene(ctx, scene, &shadow_raster::Spec {})?,
             moments: Pipeline::plain(ctx)?,
+            mark: Pipeline::plain(ctx)?,
+            tiles: Pipeline::plain(ctx)?,
         })
     }
 
-    /// Timer entries [`ShadowPass::record`] uses for `maps`: one per step and layer.
+    /// Timer entries [`ShadowPass::record`] uses for `maps`: one per step and layer, and the
+    /// marks.
     pub fn timer_entries(maps: &ShadowMaps) -> u32 {
-        maps.plan.layers.len() as u32 * 6
+        maps.plan.layers.len() as u32 * 7 + 1
     }
 
     /// Records every layer of `maps` (and their moments when the method needs them), each
     /// step behind a compute barrier, each timed under its kernel's name into `timer` when
-    /// given (room for [`ShadowPass::timer_entries`]). Never submits.
+    /// given (room for [`ShadowPass::timer_entries`]). With a `view` and
+    /// [`ShadowSettings::view_marks`], cascades render only the tiles its pixels read. Never
+    /// submits.
     pub fn record(
         &self,
         ctx: &Context,
         cmd: raw::CommandBuffer,
         scene: &GpuScene,
         maps: &ShadowMaps,
+        view: Option<ShadowView<'_>>,
         mut timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         let mut step = |name: &str, record: &mut dyn FnMut() -> Result<()>| -> Result<()> {
@@ -602,15 +715,65 @@ impl ShadowPass {
             Ok(())
         };
         let device = ctx.device();
+        let s = maps.settings.map_size;
+        let tiles = s.div_ceil(SHADOW_TILE);
+        let layer_bytes = 4 * (tiles * tiles) as u64;
+        let view = view.filter(|_| maps.settings.view_marks);
         // SAFETY: recording into a command buffer in the recording state; the buffers outlive it.
         unsafe {
             device.cmd_fill_buffer(cmd, maps.tile_count.raw, 0, raw::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, maps.stats.raw, 0, raw::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, maps.scratch.raw, 0, raw::WHOLE_SIZE, f32::INFINITY.to_bits());
+            device.cmd_fill_buffer(cmd, maps.dispatch.raw, 0, raw::WHOLE_SIZE, 0);
+            // Test builds poison every texel first (depth and moments 0: an occluder at the
+            // light): a lit point whose lookup reads one left unrendered shows as shadowed
+            // (tests/shadow.rs compares against whole layers).
+            #[cfg(feature = "testing")]
+            for texels in [&maps.depth, &maps.moments_x, &maps.moments] {
+                device.cmd_fill_buffer(cmd, texels.buffer.raw, 0, raw::WHOLE_SIZE, 0);
+            }
+            // Every tile of a window is marked but the cascades' for a view, which the view
+            // marks.
+            for (first, count, kind) in &maps.plan.lights {
+                let marked = view.is_none() || *kind != SHADOW_LIGHT_CASCADES;
+                let at = *first as u64 * layer_bytes;
+                device.cmd_fill_buffer(
+                    cmd,
+                    maps.marks.raw,
+                    at,
+                    *count as u64 * layer_bytes,
+                    u32::from(marked),
+                );
+            }
         }
         barrier::transfer_to_compute(ctx, cmd);
-        let s = maps.settings.map_size;
-        let tiles = s.div_ceil(SHADOW_TILE);
+        if let Some(view) = view {
+            let size = view.gbuffer.size;
+            let params = ShadowMarkParams {
+                camera: GpuCamera::new(view.camera, size),
+                size: [size.0, size.1],
+                lights: maps.plan.lights.len() as u32,
+                layers_at: SHADOW_HEADER_TEXELS + maps.plan.lights.len() as u32,
+                tiles,
+                reach: maps.settings.reach(),
+                ..Default::default()
+            };
+            let resources = shadow_mark::Resources {
+                gb_depth: &view.gbuffer.depth,
+                shadow_texels: &maps.texels,
+                tile_marks: &maps.marks,
+            };
+            step("shadow_mark", &mut || {
+                // An invocation per 2 × 2 pixels.
+                self.mark.record(
+                    cmd,
+                    &resources,
+                    &params,
+                    [size.0.div_ceil(2), size.1.div_ceil(2), 1],
+                    [8, 8, 1],
+                )
+            })?;
+        }
         let tri_count = maps.raster_count;
         let bins = shadow_bin::Resources {
             scene,
@@ -620,8 +783,14 @@ impl ShadowPass {
             tile_tris: &maps.tile_tris,
             shadow_scratch: &maps.scratch,
             tile_setup: &maps.setup.buffer,
+            tile_marks: &maps.marks,
         };
-        for layer in &maps.plan.layers {
+        let listing = shadow_tiles::Resources {
+            tile_marks: &maps.marks,
+            tile_list: &maps.tile_list,
+            tile_dispatch: &maps.dispatch,
+        };
+        for (i, (layer, window)) in maps.plan.layers.iter().zip(&maps.plan.windows).enumerate() {
             let params = ShadowRasterParams {
                 row0: layer.row0,
                 row1: layer.row1,
@@ -632,8 +801,17 @@ impl ShadowPass {
                 tri_count,
                 offset: layer.offset,
                 capacity: maps.capacity,
-                ..Default::default()
+                window_lo: window[0] | window[1] << 16,
+                window_hi: window[2] | window[3] << 16,
+                list_at: i as u32 * tiles * tiles,
             };
+            // The window's tiles.
+            let span = [window[2] - window[0] + 1, window[3] - window[1] + 1];
+            step("shadow_tiles", &mut || {
+                self.tiles.record(cmd, &listing, &params, [span[0], span[1], 1], [8, 8, 1])?;
+                barrier::compute_to_indirect(ctx, cmd);
+                Ok(())
+            })?;
             step("shadow_bin", &mut || {
                 self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])
             })?;
@@ -652,12 +830,15 @@ impl ShadowPass {
                 tile_start: &maps.tile_start,
                 tile_tris: &maps.tile_tris,
                 setup_texels: &maps.setup,
+                tile_list: &maps.tile_list,
                 shadow_scratch: &maps.scratch,
                 shadow_depth: &maps.depth,
             };
-            let texels = tiles * SHADOW_TILE;
             step("shadow_raster", &mut || {
-                self.raster.record(cmd, &raster, &params, [texels, texels, 1], [SHADOW_TILE, SHADOW_TILE, 1])
+                self.raster.bind(cmd, &raster)?;
+                self.raster.push_constants(cmd, &params)?;
+                self.raster.dispatch_indirect(cmd, &maps.dispatch, 16 * i as u64);
+                Ok(())
             })?;
         }
         if maps.settings.method == ShadowMethod::Moments {
@@ -665,8 +846,15 @@ impl ShadowPass {
                 shadow_depth: &maps.depth,
                 moments_x: &maps.moments_x,
                 shadow_moments: &maps.moments,
+                tile_list: &maps.tile_list,
             };
-            for layer in &maps.plan.layers {
+            for (i, (layer, window)) in maps.plan.layers.iter().zip(&maps.plan.windows).enumerate() {
+                // The window's texels (a last tile may reach past the layer's edge).
+                let first = [window[0] * SHADOW_TILE, window[1] * SHADOW_TILE];
+                let span = [
+                    ((window[2] + 1) * SHADOW_TILE).min(s) - first[0],
+                    ((window[3] + 1) * SHADOW_TILE).min(s) - first[1],
+                ];
                 for direction in 0..2 {
                     let params = ShadowMomentParams {
                         offset: layer.offset,
@@ -674,10 +862,15 @@ impl ShadowPass {
                         radius: maps.settings.moment_blur,
                         direction,
                         depth_far: layer.depth_far,
-                        ..Default::default()
+                        first: first[0] | first[1] << 16,
+                        last: (first[0] + span[0] - 1) | (first[1] + span[1] - 1) << 16,
+                        list_at: i as u32 * tiles * tiles,
                     };
                     step("shadow_moments", &mut || {
-                        self.moments.record(cmd, &resources, &params, [s, s, 1], [8, 8, 1])
+                        self.moments.bind(cmd, &resources)?;
+                        self.moments.push_constants(cmd, &params)?;
+                        self.moments.dispatch_indirect(cmd, &maps.dispatch, 16 * i as u64);
+                        Ok(())
                     })?;
                 }
             }

@@ -197,6 +197,10 @@ enum Command {
         /// PCSS's largest filter radius, texels.
         #[arg(long, default_value_t = umbra::passes::shadow::ShadowSettings::default().max_radius, value_parser = cli::parse_positive)]
         max_radius: f32,
+        /// Render the cascades' whole windows, not only the tiles the view's pixels read (the
+        /// comparison for the marks' gain).
+        #[arg(long)]
+        no_view_marks: bool,
         /// Timed repeats (after a warm-up).
         #[arg(long, default_value_t = 5)]
         repeats: usize,
@@ -768,6 +772,7 @@ fn run(cli: Cli) -> Result<()> {
             light_radius,
             sun_angle,
             max_radius,
+            no_view_marks,
             repeats,
             out,
             table,
@@ -780,6 +785,7 @@ fn run(cli: Cli) -> Result<()> {
                     light_radius,
                     sun_angle: sun_angle.to_radians(),
                     max_radius,
+                    view_marks: !no_view_marks,
                     ..Default::default()
                 };
                 run_shadows(scene, size, &settings, sun, repeats, out)?

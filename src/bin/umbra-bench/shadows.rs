@@ -17,7 +17,7 @@ use umbra::gpu::scene::GpuScene;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::gbuffer::GBufferViews;
-use umbra::passes::shadow::{ShadowMaps, ShadowMethod, ShadowSettings};
+use umbra::passes::shadow::{ShadowMaps, ShadowMethod, ShadowSettings, ShadowView};
 use umbra::render::{HybridSettings, HybridTargets, Passes};
 use umbra::scene::Camera;
 use umbra::vk::{raw, Context, GpuTimer};
@@ -32,6 +32,8 @@ pub struct ShadowTiming {
     pub maps_ms: f64,
     /// The maps' steps (kernel, milliseconds summed over the layers) of the last repeat.
     pub steps: Vec<(String, f64)>,
+    /// Fraction of the layers' tiles rendered (the windows', or the view's marked ones).
+    pub tiles: f64,
     /// Median GPU milliseconds of the lighting pass.
     pub lighting_ms: f64,
     /// Relative MSE of the lit image against the ray-traced one of point lights (mean over
@@ -84,6 +86,9 @@ pub fn run(
     let super::passes::FrameImages { gbuffer, output, ibl } =
         super::passes::FrameImages::new(ctx, scene, size)?;
     let views = gbuffer.views();
+    // The view's G-buffer, which the maps' marks read (record_hybrid renders the same again).
+    ctx.submit(|cmd| passes.record_gbuffer(cmd, scene, camera, &views))?;
+    let view = Some(ShadowView { camera, gbuffer: &views });
     let lighting = LightingSettings { env: [0.2; 3], ..LightingSettings::default() };
     let mut point: Option<Vec<[f32; 4]>> = None;
     let mut measured = Vec::new();
@@ -118,12 +123,16 @@ pub fn run(
         // Maps: warm up (which also grows the tile lists once if they overflow), then time.
         let mut maps_ms = Vec::new();
         let mut steps = Vec::new();
+        let mut tiles = 0.0;
         if let Some(maps) = maps.as_mut() {
-            super::rays::warm_up(|| passes.render_shadow_maps(scene, maps).map(|_| ()))?;
+            super::rays::warm_up(|| passes.render_shadow_maps(scene, maps, view).map(|_| ()))?;
             for _ in 0..repeats.max(1) {
-                steps = passes.render_shadow_maps(scene, maps)?;
+                steps = passes.render_shadow_maps(scene, maps, view)?;
                 maps_ms.push(steps.iter().map(|s| s.1).sum::<f64>());
             }
+            let rendered: u32 = maps.rendered_tiles(ctx)?.iter().sum();
+            let per_layer = settings.map_size.div_ceil(umbra::gpu::layout::SHADOW_TILE).pow(2);
+            tiles = rendered as f64 / (per_layer as f64 * maps.plan.layers.len() as f64);
         }
         let targets = targets(&views, output.view, maps.as_ref());
         let hybrid = HybridSettings {
@@ -159,6 +168,7 @@ pub fn run(
                 rays,
                 maps_ms: if maps_ms.is_empty() { 0.0 } else { super::rays::median(&mut maps_ms) },
                 steps,
+                tiles,
                 lighting_ms: super::rays::median(&mut lighting_ms),
                 rel_mse,
                 differing,
@@ -251,6 +261,7 @@ pub fn to_json(
         "map_size": settings.map_size,
         "cascades": settings.cascades,
         "max_radius": settings.max_radius,
+        "view_marks": settings.view_marks,
         "layers": layers,
         "reference": {
             "kind": reference.kind,
@@ -264,6 +275,7 @@ pub fn to_json(
             "rays": t.rays,
             "maps_ms": t.maps_ms,
             "steps": t.steps.iter().map(|(name, ms)| json!({"step": name, "ms": ms})).collect::<Vec<_>>(),
+            "tiles_rendered": t.tiles,
             "lighting_ms": t.lighting_ms,
             "rel_mse_vs_rt": t.rel_mse,
             "pixels_off_10pct": t.differing,
@@ -294,8 +306,8 @@ pub fn table(doc: &Value) -> String {
     };
     let mut out = format!(
         "{} ({} triangles) at {}×{}, maps {}² ({} layers), {}; reference: {reference}:\n\n\
-         | method | maps ms | lighting ms | maps ÷ shadow rays | rel. MSE vs rt (points) | pixels > 10 % off | rel. MSE vs reference | pixels > 10 % off the reference |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|\n",
+         | method | maps ms | tiles rendered | lighting ms | maps ÷ shadow rays | rel. MSE vs rt (points) | pixels > 10 % off | rel. MSE vs reference | pixels > 10 % off the reference |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         doc["scene"].as_str().unwrap_or("?"),
         doc["triangles"],
         doc["size"][0],
@@ -311,8 +323,12 @@ pub fn table(doc: &Value) -> String {
             other => other.to_string(),
         };
         let ratio = if m["maps_ms"] == 0.0 { "—".to_string() } else { format!("{:.2}", maps / rays_ms) };
+        let tiles = match m["tiles_rendered"].as_f64() {
+            Some(t) if m["maps_ms"] != 0.0 => format!("{:.1} %", 100.0 * t),
+            _ => "—".to_string(),
+        };
         out += &format!(
-            "| {name} | {:.1} | {:.1} | {} | {:.2e} | {:.2} % | {:.2e} | {:.2} % |\n",
+            "| {name} | {:.1} | {tiles} | {:.1} | {} | {:.2e} | {:.2} % | {:.2e} | {:.2} % |\n",
             maps,
             num(&m["lighting_ms"]),
             ratio,

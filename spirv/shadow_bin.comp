@@ -1,13 +1,15 @@
 #version 460
-// Shadow maps, step 1 (`FILL` false) and 3 (`FILL` true), one invocation per scene triangle
+// Shadow maps, step 1 (`FILL` false: one invocation per scene triangle) and 3 (`FILL` true: per
+// large triangle step 1 listed)
 // (`raster_tris`: the BVH holds a split triangle once per piece, each the whole triangle). Only
 // the layer's marked tiles (`tile_marks`, the ones shadow_tiles.comp lists) are rendered. A
 // triangle whose texel box spans at most SHADOW_DIRECT_SPAN texels a side rasterizes itself in
 // step 1: it loops over its box and keeps the nearest depth of each covered texel of a marked
 // tile in the scratch layer with atomicMin on the float's bits (positive floats order as their
 // bits). A larger one counts itself into every marked tile its box overlaps and does not lie
-// wholly outside of (step 1), then enters itself in their lists and writes its edge functions and
-// depths for shadow_raster.comp (step 3, after shadow_scan.comp's prefix sum).
+// wholly outside of and appends itself to `large_tris` (step 1), then, the fill running over that
+// list alone (an indirect dispatch the appends count), enters itself in their lists and writes its
+// edge functions and depths for shadow_raster.comp (step 3, after shadow_scan.comp's prefix sum).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_bin.glsl"
 
@@ -19,10 +21,19 @@ const bool GGX_WALTER = false;
 #include "shadow_raster.glsl"
 
 void main() {
-    if (gl_GlobalInvocationID.x >= params.tri_count) {
-        return;
+    uint words = SHADOW_DISPATCH_WORDS * (params.list_at / (params.tiles * params.tiles));
+    uint tri;
+    if (FILL) {
+        if (gl_GlobalInvocationID.x >= tile_dispatch[words + 7u]) {
+            return;
+        }
+        tri = large_tris[gl_GlobalInvocationID.x];
+    } else {
+        if (gl_GlobalInvocationID.x >= params.tri_count) {
+            return;
+        }
+        tri = raster_tris[gl_GlobalInvocationID.x];
     }
-    uint tri = raster_tris[gl_GlobalInvocationID.x];
     vec4 a = shadow_vertex(tri, 0u);
     vec4 b = shadow_vertex(tri, 1u);
     vec4 c = shadow_vertex(tri, 2u);
@@ -74,6 +85,7 @@ void main() {
         tile_setup[3u * tri + 2u] = vec4(e2, c.z);
     }
     uvec4 range = box / SHADOW_TILE;
+    bool entered = false;
     for (uint ty = range.y; ty <= range.w; ++ty) {
         for (uint tx = range.x; tx <= range.z; ++tx) {
             uint t = ty * params.tiles + tx;
@@ -94,7 +106,16 @@ void main() {
                 }
             } else {
                 atomicAdd(tile_count[t], 1u);
+                entered = true;
             }
+        }
+    }
+    // Listed for the fill; every 64th entry opens another of its workgroups.
+    if (!FILL && entered) {
+        uint n = atomicAdd(tile_dispatch[words + 7u], 1u);
+        large_tris[n] = tri;
+        if (n % 64u == 0u) {
+            atomicAdd(tile_dispatch[words + 4u], 1u);
         }
     }
 }

@@ -1,8 +1,8 @@
 #version 460
 // Shadow maps, per layer before binning: the marked tiles of the layer's window (all of them
 // when the maps render without a view; shadow_mark.comp's otherwise) listed at `list_at`, and
-// their count as the x of the layer's indirect dispatch (`tile_dispatch`, four words a layer:
-// x, y, z and a pad) that shadow_raster.comp and shadow_moments.comp run over. The list's order
+// their count as the x of the layer's indirect dispatch (`tile_dispatch`, SHADOW_DISPATCH_WORDS
+// a layer: x, y, z and a pad, then the fill's dispatch, whose y and z are set here) that shadow_raster.comp and shadow_moments.comp run over. The list's order
 // depends on the atomics' order, but each tile's workgroup writes only its own texels.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_tiles.glsl"
@@ -14,15 +14,18 @@ void main() {
     uvec2 hi = uvec2(params.window_hi & 0xffffu, params.window_hi >> 16);
     uvec2 tile = gl_GlobalInvocationID.xy + lo;
     uint layer = params.list_at / (params.tiles * params.tiles);
+    uint words = SHADOW_DISPATCH_WORDS * layer;
     if (gl_GlobalInvocationID.xy == uvec2(0u)) {
-        tile_dispatch[4u * layer + 1u] = 1u;
-        tile_dispatch[4u * layer + 2u] = 1u;
+        tile_dispatch[words + 1u] = 1u;
+        tile_dispatch[words + 2u] = 1u;
+        tile_dispatch[words + 5u] = 1u;
+        tile_dispatch[words + 6u] = 1u;
     }
     if (any(greaterThan(tile, hi))) {
         return;
     }
     uint t = tile.y * params.tiles + tile.x;
     if (tile_marks[params.list_at + t] != 0u) {
-        tile_list[params.list_at + atomicAdd(tile_dispatch[4u * layer], 1u)] = t;
+        tile_list[params.list_at + atomicAdd(tile_dispatch[words], 1u)] = t;
     }
 }

@@ -81,11 +81,13 @@ fn mixed_scene(sun: Light) -> Scene {
 /// the depth of the first surface a ray from the light through the texel's centre meets in the
 /// BVH (the reference), within 1e-4 of the depth plus 1e-5 of the layer's range; where they
 /// differ, a ray 1e-3 texel away must agree (the centre lies on an edge: ties may go either
-/// way) or the ray's triangle is within 3° of edge-on, and such texels are under 0.5 %. Three scenes: textured.glb (large triangles: the tiled
-/// path), a floor, a box and an icosphere (small triangles too: each rasterizes itself), and a
-/// steep slope with a triangle floating 2 cm above part of it (the raster step's depth cull:
-/// the slope covers whole tiles and bounds their depth, and the triangle above it, farther than
-/// the slope at a tile's near corner but nearer at its far one, must survive the cull).
+/// way) or the ray's triangle is within 3° of edge-on, and such texels are under 0.5 %. Four
+/// scenes: textured.glb (large triangles: the tiled path), a floor, a box and an icosphere (small
+/// triangles too: each rasterizes itself), a steep slope with a triangle floating 2 cm above part
+/// of it (the raster step's depth cull: the slope covers whole tiles and bounds their depth, and
+/// the triangle above it, farther than the slope at a tile's near corner but nearer at its far
+/// one, must survive the cull), and a staircase of 96 long thin triangles (the fill's work list
+/// spans workgroups: a fill dispatch of half the workgroups it needs fails it).
 #[test]
 fn rasterized_depth_matches_rays_through_the_bvh() {
     let gpu = Gpu::new();
@@ -107,7 +109,16 @@ fn rasterized_depth_matches_rays_through_the_bvh() {
         mixed.lights.clone(),
         camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO),
     );
-    for scene in [textured, mixed, stacked] {
+    // 48 steps of 5 cm, each a long strip of two triangles: more large triangles than a workgroup
+    // of the fill (64), every one seen from the lights.
+    let steps: Vec<_> = (0..48)
+        .map(|i| {
+            let centre = Vec3::new(-1.175 + 0.05 * i as f32, 0.02 * i as f32, 0.0);
+            quad(centre, Vec3::new(0.025, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0))
+        })
+        .collect();
+    let stairs = build("stairs", &steps, mixed.lights.clone(), camera(Vec3::new(0.0, 2.0, 3.5), Vec3::ZERO));
+    for scene in [textured, mixed, stacked, stairs] {
         let arrays = SceneArrays::new(&scene).unwrap();
         let gpu_scene = GpuScene::from_arrays(&gpu, &arrays).unwrap();
         let (plan, depth) = hard_maps(&gpu, &gpu_scene, &scene, 96, 2);

@@ -1107,6 +1107,10 @@ gpu_constants! {
     SHADOW_TILE: uint = 16;
     /// The most cascades of a directional light.
     SHADOW_MAX_CASCADES: uint = 8;
+    /// Words a layer in the shadow maps' indirect dispatches: 0–2 the rendered tiles' (one
+    /// workgroup a tile), 3 a pad, 4–6 the fill's over the large triangles the count step listed
+    /// (64 a workgroup), 7 their count.
+    SHADOW_DISPATCH_WORDS: uint = 8;
     /// The largest box (texels a side) a triangle rasterizes itself in: smaller ones loop over
     /// their own texels, larger ones go through the tiles.
     SHADOW_DIRECT_SPAN: uint = 16;
@@ -1805,6 +1809,12 @@ kernels! {
             tile_setup: readwrite buffer [vec4],
             /// Per layer and tile, nonzero where the tile is rendered.
             tile_marks: readonly buffer [uint],
+            /// The layer's large triangles that enter some rendered tile's list (the count step
+            /// appends them, the fill runs over them).
+            large_tris: readwrite buffer [uint],
+            /// Per layer [`SHADOW_DISPATCH_WORDS`] words: the fill's indirect dispatch and the
+            /// large triangles' count.
+            tile_dispatch: readwrite buffer [uint],
         }
     }
 
@@ -1834,7 +1844,8 @@ kernels! {
             tile_marks: readonly buffer [uint],
             /// Per layer, its rendered tiles (row-major tile indices).
             tile_list: readwrite buffer [uint],
-            /// Per layer four words: the rendered tiles, 1, 1 (a `VkDispatchIndirectCommand`), a pad.
+            /// Per layer [`SHADOW_DISPATCH_WORDS`] words: the rendered tiles, 1, 1 (a
+            /// `VkDispatchIndirectCommand`), a pad, then the fill's dispatch (its y and z set here).
             tile_dispatch: readwrite buffer [uint],
         }
     }

@@ -8,9 +8,11 @@
 //! slice's bounding sphere and its centre snapped to whole texels so the maps do not shimmer as
 //! the camera turns or moves). Per layer five kernels run: `shadow_tiles` lists the tiles
 //! (16×16 texels) to render, `shadow_bin` counts each triangle into the listed tiles its
-//! light-space box overlaps, `shadow_scan` turns the counts into list offsets, `shadow_bin` again
-//! fills the lists, and `shadow_raster` runs one workgroup per listed tile, one invocation per
-//! texel, over the tile's list:
+//! light-space box overlaps (a small triangle rasterizes itself there; a large one that entered a
+//! tile is listed for the fill), `shadow_scan` turns the counts into list offsets, `shadow_bin`
+//! again, over the listed large triangles alone (an indirect dispatch), fills the lists, and
+//! `shadow_raster` runs one workgroup per listed tile, one invocation per texel, over the tile's
+//! list:
 //! watertight homogeneous edge functions with a tie rule, alpha cut-outs as in the traversal, the
 //! nearest linear depth stored. [`ShadowMethod::Moments`] adds their four moments, box-filtered.
 //!
@@ -38,8 +40,9 @@ use crate::gpu::kernels::{
 };
 use crate::gpu::layout::{
     GpuCamera, GpuLight, GpuShadowLayer, ShadowMarkParams, ShadowMomentParams, ShadowRasterParams,
-    ShadowStats, SHADOW_HEADER_TEXELS, SHADOW_LAYER_TEXELS, SHADOW_LIGHT_CASCADES, SHADOW_LIGHT_CUBE,
-    SHADOW_LIGHT_SINGLE, SHADOW_MAX_CASCADES, SHADOW_ORTHOGRAPHIC, SHADOW_PERSPECTIVE, SHADOW_TILE,
+    ShadowStats, SHADOW_DISPATCH_WORDS, SHADOW_HEADER_TEXELS, SHADOW_LAYER_TEXELS, SHADOW_LIGHT_CASCADES,
+    SHADOW_LIGHT_CUBE, SHADOW_LIGHT_SINGLE, SHADOW_MAX_CASCADES, SHADOW_ORTHOGRAPHIC, SHADOW_PERSPECTIVE,
+    SHADOW_TILE,
 };
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
@@ -483,6 +486,8 @@ pub struct ShadowMaps {
     /// The BVH positions to rasterize ([`GpuScene::unique_triangles`]).
     raster_tris: Buffer,
     raster_count: u32,
+    /// One layer's large triangles that enter a rendered tile (the fill's work list).
+    large_tris: Buffer,
     /// The large triangles' edge functions and depths (three `vec4` each).
     setup: TexelBuffer,
     stats: Buffer,
@@ -491,7 +496,8 @@ pub struct ShadowMaps {
     marks: Buffer,
     /// Per layer, the rendered tiles.
     tile_list: Buffer,
-    /// Per layer, the indirect dispatch over its rendered tiles (four words).
+    /// Per layer, the indirect dispatches over its rendered tiles and its large triangles
+    /// ([`SHADOW_DISPATCH_WORDS`] words).
     dispatch: Buffer,
 }
 
@@ -569,6 +575,13 @@ impl ShadowMaps {
                 raw::BufferUsageFlags::STORAGE_BUFFER,
             )?,
             raster_count: unique.len() as u32,
+            large_tris: Buffer::new(
+                ctx,
+                "shadow large triangles",
+                4 * unique.len().max(1) as u64,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
             setup: TexelBuffer::new(
                 ctx,
                 "shadow triangle set-ups",
@@ -584,7 +597,7 @@ impl ShadowMaps {
             dispatch: Buffer::new(
                 ctx,
                 "shadow tile dispatches",
-                16 * layers.max(1),
+                4 * SHADOW_DISPATCH_WORDS as u64 * layers.max(1),
                 storage | raw::BufferUsageFlags::INDIRECT_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::GpuOnly,
             )?,
@@ -642,7 +655,8 @@ impl ShadowMaps {
     /// Per layer, the tiles ([`SHADOW_TILE`]² texels) the last submitted rendering rendered (read
     /// back; submits a copy); texels of the others are undefined.
     pub fn rendered_tiles(&self, ctx: &Context) -> Result<Vec<u32>> {
-        Ok(self.dispatch.read::<[u32; 4]>(ctx)?.iter().map(|d| d[0]).collect())
+        let words: Vec<u32> = self.dispatch.read(ctx)?;
+        Ok(words.chunks(SHADOW_DISPATCH_WORDS as usize).map(|d| d[0]).collect())
     }
 
     /// Reads every layer's depth back (tests and dumps), row-major per layer.
@@ -784,6 +798,8 @@ impl ShadowPass {
             shadow_scratch: &maps.scratch,
             tile_setup: &maps.setup.buffer,
             tile_marks: &maps.marks,
+            large_tris: &maps.large_tris,
+            tile_dispatch: &maps.dispatch,
         };
         let listing = shadow_tiles::Resources {
             tile_marks: &maps.marks,
@@ -812,8 +828,11 @@ impl ShadowPass {
                 barrier::compute_to_indirect(ctx, cmd);
                 Ok(())
             })?;
+            let dispatch_at = 4 * (SHADOW_DISPATCH_WORDS * i as u32) as u64;
             step("shadow_bin", &mut || {
-                self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])
+                self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])?;
+                barrier::compute_to_indirect(ctx, cmd);
+                Ok(())
             })?;
             let scan = shadow_scan::Resources {
                 tile_count: &maps.tile_count,
@@ -822,7 +841,10 @@ impl ShadowPass {
             };
             step("shadow_scan", &mut || self.scan.record(cmd, &scan, &params, [256, 1, 1], [256, 1, 1]))?;
             step("shadow_fill", &mut || {
-                self.fill.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])
+                self.fill.bind(cmd, &bins)?;
+                self.fill.push_constants(cmd, &params)?;
+                self.fill.dispatch_indirect(cmd, &maps.dispatch, dispatch_at + 16);
+                Ok(())
             })?;
             let raster = shadow_raster::Resources {
                 scene,
@@ -837,7 +859,7 @@ impl ShadowPass {
             step("shadow_raster", &mut || {
                 self.raster.bind(cmd, &raster)?;
                 self.raster.push_constants(cmd, &params)?;
-                self.raster.dispatch_indirect(cmd, &maps.dispatch, 16 * i as u64);
+                self.raster.dispatch_indirect(cmd, &maps.dispatch, dispatch_at);
                 Ok(())
             })?;
         }
@@ -869,7 +891,11 @@ impl ShadowPass {
                     step("shadow_moments", &mut || {
                         self.moments.bind(cmd, &resources)?;
                         self.moments.push_constants(cmd, &params)?;
-                        self.moments.dispatch_indirect(cmd, &maps.dispatch, 16 * i as u64);
+                        self.moments.dispatch_indirect(
+                            cmd,
+                            &maps.dispatch,
+                            4 * (SHADOW_DISPATCH_WORDS * i as u32) as u64,
+                        );
                         Ok(())
                     })?;
                 }

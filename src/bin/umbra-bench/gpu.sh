@@ -80,6 +80,9 @@ step probes "$BIN/umbra-bench" probes --repeats "$REPEATS" "${sponza_args[@]}" -
 # lighting at 1080p in <= 0.2 ms), the denoiser against one sample, ReSTIR against power sampling.
 if [ -n "$SPONZA" ]; then
     step shadows-sponza "$BIN/umbra-bench" shadows "$SPONZA" --size "$SIZE" --map-size 2048 --repeats "$REPEATS" --out "$OUT/shadows-sponza"
+    # The goal's single 2048² sun map, and the cascades' whole windows (what the view marks save).
+    step shadows-sponza-1-cascade "$BIN/umbra-bench" shadows "$SPONZA" --size "$SIZE" --map-size 2048 --cascades 1 --repeats "$REPEATS" --out "$OUT/shadows-sponza-1-cascade"
+    step shadows-sponza-windows "$BIN/umbra-bench" shadows "$SPONZA" --size "$SIZE" --map-size 2048 --no-view-marks --repeats "$REPEATS" --out "$OUT/shadows-sponza-windows"
 fi
 step shadows-spheres "$BIN/umbra-bench" shadows scenes/spheres.glb --size "$SIZE" --map-size 2048 --repeats "$REPEATS" --out "$OUT/shadows-spheres"
 step denoise "$BIN/umbra-bench" denoise --size "$SIZE" --reference-spp 512 --max-spp 64 --repeats "$REPEATS" --out "$OUT/denoise"

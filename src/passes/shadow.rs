@@ -377,7 +377,7 @@ fn perspective(origin: Vec3, axis: Vec3, tan: f32, far: f32, size: u32, guard: u
 /// orthographic layer around the bounding sphere of its slice of the view frustum, centred on a
 /// whole texel; depth measured along the light from the scene's nearest corner. With each, the
 /// tiles that can be read ([`ShadowPlan::windows`]): the box of the slice's eight corners in the
-/// layer, widened by [`ShadowSettings::guard`] and the normal offset.
+/// layer, widened by the method's reach ([`ShadowSettings::reach`]: filter, normal offset, a texel).
 fn cascades(
     direction: Vec3,
     corners: &[Vec3],

@@ -1310,8 +1310,11 @@ impl Passes {
             }
             Ok(())
         })?;
-        let mut pass_ms = shadow_ms;
-        pass_ms.extend(first_timer.read()?.into_iter().chain(timer.read()?).map(|t| (t.name, t.ms)));
+        // In the order they ran: the environment's tables and the G-buffer, the maps, the rest.
+        let named = |t: crate::vk::PassTime| (t.name, t.ms);
+        let mut pass_ms: Vec<(String, f64)> = first_timer.read()?.into_iter().map(named).collect();
+        pass_ms.extend(shadow_ms);
+        pass_ms.extend(timer.read()?.into_iter().map(named));
         Ok(HybridImage {
             size,
             color: output.read(ctx)?,

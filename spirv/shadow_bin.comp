@@ -110,8 +110,11 @@ void main() {
             }
         }
     }
+    if (FILL) {
+        return;
+    }
     // Listed for the fill; every 64th entry opens another of its workgroups.
-    if (!FILL && entered) {
+    if (entered) {
         uint n = atomicAdd(tile_dispatch[words + 7u], 1u);
         large_tris[n] = tri;
         if (n % 64u == 0u) {

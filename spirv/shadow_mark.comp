@@ -19,10 +19,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "camera.glsl"
-
-vec4 texel_of(uint i) {
-    return uintBitsToFloat(imageLoad(shadow_texels, int(i)));
-}
+#include "shadow_layers.glsl"
 
 // The cascade among `count` covering view depth `depth`: the first whose split lies at or beyond
 // it; false beyond the last.
@@ -88,7 +85,7 @@ void main() {
         uint count = min(rec.y, SHADOW_MAX_CASCADES);
         float splits[SHADOW_MAX_CASCADES];
         for (uint j = 0u; j < count; ++j) {
-            splits[j] = texel_of(rec.x + SHADOW_LAYER_TEXELS * j + 5u).z;
+            splits[j] = shadow_header(rec.x + SHADOW_LAYER_TEXELS * j + 5u).z;
         }
         uint first = (rec.x - params.layers_at) / SHADOW_LAYER_TEXELS;
         // The last cascade read, its rows and size.
@@ -114,9 +111,9 @@ void main() {
             }
             if (j != held) {
                 uint at = rec.x + SHADOW_LAYER_TEXELS * j;
-                r0 = texel_of(at);
-                r1 = texel_of(at + 1u);
-                r3 = texel_of(at + 3u);
+                r0 = shadow_header(at);
+                r1 = shadow_header(at + 1u);
+                r3 = shadow_header(at + 3u);
                 size = imageLoad(shadow_texels, int(at + 4u)).y;
                 held = j;
             }

@@ -8,16 +8,13 @@
 // depths, but no pixel reads them: the view's marks reach a filter's radius past what it reads.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_moments.glsl"
+#include "shadow_pack.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
 
-ivec2 unpack_texel(uint packed) {
-    return ivec2(packed & 0xffffu, packed >> 16);
-}
-
 vec4 moments_at(ivec2 q) {
     int size = int(params.size);
-    q = clamp(q, unpack_texel(params.first), unpack_texel(params.last));
+    q = clamp(q, ivec2(shadow_unpack(params.first)), ivec2(shadow_unpack(params.last)));
     int index = int(params.offset) + q.y * size + q.x;
     if (params.direction == 0u) {
         float z = clamp(imageLoad(shadow_depth, index).x / params.depth_far, 0.0, 1.0);
@@ -32,7 +29,7 @@ void main() {
     uint listed = tile_list[params.list_at + gl_WorkGroupID.x];
     ivec2 texel = ivec2(uvec2(listed % tiles, listed / tiles) * SHADOW_TILE + gl_LocalInvocationID.xy);
     int size = int(params.size);
-    if (any(greaterThan(texel, unpack_texel(params.last)))) {
+    if (any(greaterThan(texel, ivec2(shadow_unpack(params.last))))) {
         return;
     }
     int r = int(params.radius);

@@ -6,12 +6,13 @@
 // depends on the atomics' order, but each tile's workgroup writes only its own texels.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_tiles.glsl"
+#include "shadow_pack.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 void main() {
-    uvec2 lo = uvec2(params.window_lo & 0xffffu, params.window_lo >> 16);
-    uvec2 hi = uvec2(params.window_hi & 0xffffu, params.window_hi >> 16);
+    uvec2 lo = shadow_unpack(params.window_lo);
+    uvec2 hi = shadow_unpack(params.window_hi);
     uvec2 tile = gl_GlobalInvocationID.xy + lo;
     uint layer = params.list_at / (params.tiles * params.tiles);
     uint words = SHADOW_DISPATCH_WORDS * layer;

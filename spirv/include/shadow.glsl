@@ -13,37 +13,7 @@
 #ifndef UMBRA_SHADOW_GLSL
 #define UMBRA_SHADOW_GLSL
 
-struct ShadowLayer {
-    vec4 row0;
-    vec4 row1;
-    vec4 row2;
-    vec4 row3;
-    uint offset;
-    uint size;
-    uint kind;
-    float texel_world;
-    float depth_far;
-    float split;
-};
-
-vec4 shadow_header(uint i) { return uintBitsToFloat(imageLoad(shadow_texels, int(i))); }
-
-ShadowLayer shadow_layer(uint first) {
-    ShadowLayer l;
-    l.row0 = shadow_header(first);
-    l.row1 = shadow_header(first + 1u);
-    l.row2 = shadow_header(first + 2u);
-    l.row3 = shadow_header(first + 3u);
-    uvec4 info = imageLoad(shadow_texels, int(first + 4u));
-    vec4 more = shadow_header(first + 5u);
-    l.offset = info.x;
-    l.size = info.y;
-    l.kind = info.z;
-    l.texel_world = more.x;
-    l.depth_far = more.y;
-    l.split = more.z;
-    return l;
-}
+#include "shadow_layers.glsl"
 
 float shadow_map_depth(ShadowLayer l, ivec2 q) {
     q = clamp(q, ivec2(0), ivec2(int(l.size) - 1));

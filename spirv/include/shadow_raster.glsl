@@ -18,6 +18,8 @@
 #ifndef UMBRA_SHADOW_RASTER_GLSL
 #define UMBRA_SHADOW_RASTER_GLSL
 
+#include "shadow_pack.glsl"
+
 // Vertex k of BVH triangle `tri` in the layer's homogeneous texel space.
 vec4 shadow_vertex(uint tri, uint k) {
     vec4 p = vec4(bvh_tri_v(tri, k).xyz, 1.0);
@@ -41,9 +43,8 @@ bool shadow_texel_box(vec4 v0, vec4 v1, vec4 v2, out uvec4 box, out bool bounded
     }
     bounded = !any(out_w);
     // The layer's window (the tiles rendered): the box never leaves it.
-    uvec2 w_lo = uvec2(params.window_lo & 0xffffu, params.window_lo >> 16) * SHADOW_TILE;
-    uvec2 w_hi = min((uvec2(params.window_hi & 0xffffu, params.window_hi >> 16) + 1u) * SHADOW_TILE,
-                     uvec2(params.size)) - 1u;
+    uvec2 w_lo = shadow_unpack(params.window_lo) * SHADOW_TILE;
+    uvec2 w_hi = min((shadow_unpack(params.window_hi) + 1u) * SHADOW_TILE, uvec2(params.size)) - 1u;
     box = uvec4(w_lo, w_hi);
     if (bounded) {
         // Texel centres x + 0.5 within the projected box, a texel wider each side against the

@@ -501,6 +501,18 @@ pub struct ShadowMaps {
     dispatch: Buffer,
 }
 
+/// Two 16-bit coordinates as one push-constant word, x | y << 16 (`shadow_pack.glsl`'s
+/// `shadow_unpack`).
+fn pack_pair(x: u32, y: u32) -> u32 {
+    x | y << 16
+}
+
+/// Byte offset of layer `layer`'s indirect dispatches in [`ShadowMaps`]' dispatch buffer
+/// ([`SHADOW_DISPATCH_WORDS`] words a layer: the tiles' first, the fill's 16 bytes on).
+fn dispatch_offset(layer: usize) -> u64 {
+    4 * SHADOW_DISPATCH_WORDS as u64 * layer as u64
+}
+
 /// The view shadow maps are rendered for: with [`ShadowSettings::view_marks`] each directional
 /// cascade renders only the tiles the G-buffer's pixels read. The G-buffer must hold this
 /// camera's view when the maps' recording runs.
@@ -817,8 +829,8 @@ impl ShadowPass {
                 tri_count,
                 offset: layer.offset,
                 capacity: maps.capacity,
-                window_lo: window[0] | window[1] << 16,
-                window_hi: window[2] | window[3] << 16,
+                window_lo: pack_pair(window[0], window[1]),
+                window_hi: pack_pair(window[2], window[3]),
                 list_at: i as u32 * tiles * tiles,
             };
             // The window's tiles.
@@ -828,7 +840,7 @@ impl ShadowPass {
                 barrier::compute_to_indirect(ctx, cmd);
                 Ok(())
             })?;
-            let dispatch_at = 4 * (SHADOW_DISPATCH_WORDS * i as u32) as u64;
+            let dispatch_at = dispatch_offset(i);
             step("shadow_bin", &mut || {
                 self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])?;
                 barrier::compute_to_indirect(ctx, cmd);
@@ -884,18 +896,14 @@ impl ShadowPass {
                         radius: maps.settings.moment_blur,
                         direction,
                         depth_far: layer.depth_far,
-                        first: first[0] | first[1] << 16,
-                        last: (first[0] + span[0] - 1) | (first[1] + span[1] - 1) << 16,
+                        first: pack_pair(first[0], first[1]),
+                        last: pack_pair(first[0] + span[0] - 1, first[1] + span[1] - 1),
                         list_at: i as u32 * tiles * tiles,
                     };
                     step("shadow_moments", &mut || {
                         self.moments.bind(cmd, &resources)?;
                         self.moments.push_constants(cmd, &params)?;
-                        self.moments.dispatch_indirect(
-                            cmd,
-                            &maps.dispatch,
-                            4 * (SHADOW_DISPATCH_WORDS * i as u32) as u64,
-                        );
+                        self.moments.dispatch_indirect(cmd, &maps.dispatch, dispatch_offset(i));
                         Ok(())
                     })?;
                 }

@@ -11,10 +11,9 @@
 //! light-space box overlaps (a small triangle rasterizes itself there; a large one that entered a
 //! tile is listed for the fill), `shadow_scan` turns the counts into list offsets, `shadow_bin`
 //! again, over the listed large triangles alone (an indirect dispatch), fills the lists, and
-//! `shadow_raster` runs one workgroup per listed tile, one invocation per texel, over the tile's
-//! list:
-//! watertight homogeneous edge functions with a tie rule, alpha cut-outs as in the traversal, the
-//! nearest linear depth stored. [`ShadowMethod::Moments`] adds their four moments, box-filtered.
+//! `shadow_raster` runs one workgroup per listed tile, one invocation per 2 × 2 texels, over the
+//! tile's list: watertight homogeneous edge functions with a tie rule, alpha cut-outs as in the
+//! traversal, the nearest linear depth stored. [`ShadowMethod::Moments`] adds their four moments, box-filtered.
 //!
 //! The lighting pass (`deferred.comp`, `shadow.glsl`) then reads them with the chosen filter
 //! instead of casting a shadow ray per punctual light; emissive triangles and the environment

@@ -43,16 +43,22 @@ void main() {
         return;
     }
     bool direct = bounded && all(lessThan(box.zw - box.xy, uvec2(SHADOW_DIRECT_SPAN)));
+    // A direct triangle's box spans at most 2 × 2 tiles: bit (x ≠ first column) | (y ≠ first
+    // row) << 1 set where that tile is marked (read once here, not per texel: on llvmpipe a
+    // storage-buffer read is a loop over the lanes).
+    uint marked = 0u;
+    uvec2 first_tile = box.xy / SHADOW_TILE;
     if (direct) {
         if (FILL) {
             return;
         }
-        // The box spans at most 2 × 2 tiles: none marked, nothing to do.
-        uvec4 range = box / SHADOW_TILE;
-        uint row0 = params.list_at + range.y * params.tiles;
-        uint row1 = params.list_at + range.w * params.tiles;
-        if ((tile_marks[row0 + range.x] | tile_marks[row0 + range.z] | tile_marks[row1 + range.x]
-             | tile_marks[row1 + range.z]) == 0u) {
+        uvec2 last_tile = box.zw / SHADOW_TILE;
+        uint row0 = params.list_at + first_tile.y * params.tiles;
+        uint row1 = params.list_at + last_tile.y * params.tiles;
+        marked = uint(tile_marks[row0 + first_tile.x] != 0u) | uint(tile_marks[row0 + last_tile.x] != 0u) << 1u
+            | uint(tile_marks[row1 + first_tile.x] != 0u) << 2u | uint(tile_marks[row1 + last_tile.x] != 0u) << 3u;
+        // None marked: nothing to do.
+        if (marked == 0u) {
             return;
         }
     }
@@ -67,7 +73,8 @@ void main() {
         for (uint y = box.y; y <= box.w; ++y) {
             for (uint x = box.x; x <= box.z; ++x) {
                 // Only listed tiles' texels: shadow_raster.comp merges and resets just those.
-                if (tile_marks[params.list_at + (y / SHADOW_TILE) * params.tiles + x / SHADOW_TILE] == 0u) {
+                uint corner = uint(x / SHADOW_TILE != first_tile.x) | uint(y / SHADOW_TILE != first_tile.y) << 1u;
+                if (((marked >> corner) & 1u) == 0u) {
                     continue;
                 }
                 float depth;

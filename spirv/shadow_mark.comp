@@ -13,8 +13,8 @@
 // point's cascade is the count of splits below its depth (no loop over an array indexed per
 // lane); the cascades some lane of the subgroup needs are visited one at a time, their rows read
 // once (a loop, which llvmpipe leaves when no lane needs more, where an if's body runs for every
-// lane); and where the subgroup's tiles in a cascade fit in a box of at most UNION_ROUNDS tiles
-// a lane, the lanes mark that box together, a store each a round, instead of each lane looping
+// lane); and where the subgroup's tiles in a cascade fit in a box of at most `rounds` tiles a
+// lane, the lanes mark that box together, a store each a round, instead of each lane looping
 // over its own points' tiles (a storage-buffer access is a loop over the SIMD lanes there). The
 // box is a superset of the tiles the points need; a subgroup whose box is larger (its pixels far
 // apart in the map: a depth edge) marks point by point. Caching the cascades in shared memory
@@ -42,10 +42,6 @@ bool tile_range(vec4 r0, vec4 r1, vec4 r3, uint size, vec3 p, out uvec2 t0, out 
     t1 = uvec2(clamp(floor(uv + params.reach), vec2(0.0), vec2(edge))) / SHADOW_TILE;
     return w > 0.0 && !any(isnan(uv));
 }
-
-// A subgroup marks the box around its tiles in a cascade together where the box holds at most
-// this many tiles a lane (PCSS's reach makes a point's own range 3 × 3 tiles or more).
-const uint UNION_ROUNDS = 4u;
 
 // Marks tile (x, y) of the layer whose tiles start at `at`.
 void mark(uint at, uint x, uint y) {
@@ -124,7 +120,8 @@ void main() {
                 }
             }
             uint tiles_at = (first + j) * params.tiles * params.tiles;
-            // The subgroup's union: where it is at most UNION_ROUNDS tiles a lane, the lanes
+            // The subgroup's union: where it is at most params.rounds tiles a lane (4 by
+            // default: PCSS's reach makes a point's own range 3 × 3 tiles or more), the lanes
             // mark it together (a store each a round, a superset of the tiles their points
             // need); otherwise each lane marks its points' own tiles.
             uvec2 all_lo = subgroupMin(lo);
@@ -132,7 +129,7 @@ void main() {
             if (all(lessThanEqual(all_lo, all_hi))) {
                 uvec2 extent = all_hi - all_lo + 1u;
                 uint area = extent.x * extent.y;
-                if (area <= UNION_ROUNDS * gl_SubgroupSize) {
+                if (area <= params.rounds * gl_SubgroupSize) {
                     for (uint i = gl_SubgroupInvocationID; i < area; i += gl_SubgroupSize) {
                         mark(tiles_at, all_lo.x + i % extent.x, all_lo.y + i / extent.x);
                     }

@@ -659,8 +659,9 @@ gpu_structs! {
         tiles: uint,
         /// Texels around a pixel's point marked (the filters' reach).
         reach: float,
-        /// Padding.
-        pad0: uint,
+        /// Tiles a lane a subgroup's box may hold to be marked together
+        /// ([`crate::passes::shadow::ShadowSettings::mark_rounds`]).
+        rounds: uint,
         /// Padding.
         pad1: uint,
     }

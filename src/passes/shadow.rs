@@ -153,6 +153,12 @@ pub struct ShadowSettings {
     /// within the filters' reach; the rest is left undefined. Off: the window
     /// ([`ShadowSettings::cascade_windows`]).
     pub view_marks: bool,
+    /// With view marks: a subgroup of the marking kernel whose tiles in a cascade fit a box of
+    /// at most this many tiles a lane marks the box together (a store per lane a round, a
+    /// superset of the tiles its pixels read); otherwise, and everywhere at 0, each lane marks
+    /// its pixels' own tiles. Both render what the view reads; this trades tiles rendered
+    /// against the marking's time (BENCHMARKS.md History, 2026-12-04, third session).
+    pub mark_rounds: u32,
 }
 
 impl Default for ShadowSettings {
@@ -174,6 +180,7 @@ impl Default for ShadowSettings {
             sized_rays: false,
             cascade_windows: true,
             view_marks: true,
+            mark_rounds: 4,
         }
     }
 }
@@ -781,6 +788,7 @@ impl ShadowPass {
                 layers_at: SHADOW_HEADER_TEXELS + maps.plan.lights.len() as u32,
                 tiles,
                 reach: maps.settings.reach(),
+                rounds: maps.settings.mark_rounds,
                 ..Default::default()
             };
             let resources = shadow_mark::Resources {

@@ -78,12 +78,9 @@ void main() {
         // Each point's cascade at its view depth a little nearer and a little farther: the count
         // of splits below it (the splits ascend, so this is the first cascade whose split lies
         // at or beyond it); `count`: beyond the last, or no point.
-        uvec4 near = uvec4(count);
-        uvec4 far = uvec4(count);
         vec4 d = vec4(depths[0], depths[1], depths[2], depths[3]);
-        bvec4 some = greaterThan(d, vec4(0.0));
-        near = mix(near, uvec4(0u), some);
-        far = near;
+        uvec4 near = mix(uvec4(count), uvec4(0u), greaterThan(d, vec4(0.0)));
+        uvec4 far = near;
         for (uint j = 0u; j < count; ++j) {
             float split = shadow_header(rec.x + SHADOW_LAYER_TEXELS * j + 5u).z;
             near += uvec4(lessThan(vec4(split), d * (1.0 - 1e-5)));

@@ -13,7 +13,8 @@
 //! again, over the listed large triangles alone (an indirect dispatch), fills the lists, and
 //! `shadow_raster` runs one workgroup per listed tile, one invocation per 2 × 2 texels, over the
 //! tile's list: watertight homogeneous edge functions with a tie rule, alpha cut-outs as in the
-//! traversal, the nearest linear depth stored. [`ShadowMethod::Moments`] adds their four moments, box-filtered.
+//! traversal, the nearest linear depth stored. [`ShadowMethod::Moments`] adds their four moments,
+//! box-filtered.
 //!
 //! The lighting pass (`deferred.comp`, `shadow.glsl`) then reads them with the chosen filter
 //! instead of casting a shadow ray per punctual light; emissive triangles and the environment

@@ -7,11 +7,12 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#include "environment.glsl"
 #include "ibl.glsl"
 
 vec3 parent(uint k, uvec2 xy, uvec2 size) {
     uint i = xy.y * size.x + xy.x;
-    return k == 0u ? env_texels[i].rgb : chain[chain_offset(k, params.src_size) + i].rgb;
+    return k == 0u ? env_value(i).rgb : chain[chain_offset(k, params.src_size) + i].rgb;
 }
 
 void main() {

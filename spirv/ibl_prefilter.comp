@@ -17,8 +17,8 @@ vec3 chain_bilinear(uint k, vec2 uv) {
     vec4 w;
     equirect_taps(uv, size, idx, w);
     if (k == 0u) {
-        return w.x * env_texels[idx.x].rgb + w.y * env_texels[idx.y].rgb + w.z * env_texels[idx.z].rgb +
-               w.w * env_texels[idx.w].rgb;
+        return w.x * env_value(idx.x).rgb + w.y * env_value(idx.y).rgb + w.z * env_value(idx.z).rgb +
+               w.w * env_value(idx.w).rgb;
     }
     uint o = chain_offset(k, params.src_size);
     return w.x * chain[o + idx.x].rgb + w.y * chain[o + idx.y].rgb + w.z * chain[o + idx.z].rgb +

@@ -30,7 +30,7 @@ void main() {
             float p1 = (float(x + 1u) / float(size.x) - 0.5) * 2.0 * PI;
             float cell[9];
             sh9_cell(t0, t1, p0, p1, cell);
-            vec3 l = env_texels[y * size.x + x].rgb;
+            vec3 l = env_value(y * size.x + x).rgb;
             for (uint k = 0u; k < 9u; ++k) {
                 c[k] += l * cell[k];
             }

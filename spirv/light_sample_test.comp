@@ -53,7 +53,8 @@ void main() {
     vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
     if (mode == 0u) {
         float pdf;
-        vec3 d = env_sample(u, size, pdf);
+        vec3 radiance;
+        vec3 d = env_sample(u, size, pdf, radiance);
         results[i] = vec4(d, pdf);
     } else if (mode == 1u) {
         vec3 d = directions[i].xyz;

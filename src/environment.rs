@@ -25,13 +25,85 @@ pub struct EnvironmentMap {
 pub struct EnvironmentDistribution {
     /// Per texel: the density over the unit (u, v) square of picking a point in it.
     pub pdf_uv: Vec<f32>,
-    /// Inclusive CDF over rows (length `height`, last = 1).
-    pub marginal_cdf: Vec<f32>,
-    /// Inclusive CDF over each row's texels (row-major, each row ending at 1).
-    pub conditional_cdf: Vec<f32>,
+    /// Walker's alias table over the rows (length `height`), each row picked by its share of
+    /// the map's weight.
+    pub rows: Vec<AliasEntry>,
+    /// An alias table within each row (row-major, `width` entries a row), each texel picked by
+    /// its share of the row's weight (uniformly in a row of no weight, which `rows` never picks
+    /// unless the whole map has none).
+    pub columns: Vec<AliasEntry>,
     /// The map's mean luminance over the sphere of directions (each texel weighted by its solid
     /// angle, ∝ sin θ).
     pub mean_luminance: f32,
+}
+
+/// One entry of an alias table (Walker 1977; Vose 1991's construction): a uniform pick of entry
+/// i keeps i with probability `keep` and takes `alias` otherwise, so entry i is drawn with
+/// probability (keep_i + Σ over the entries j whose alias is i of (1 − keep_j)) / n.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AliasEntry {
+    /// The probability of keeping this entry, in [0, 1].
+    pub keep: f32,
+    /// The entry taken otherwise.
+    pub alias: u32,
+}
+
+impl AliasEntry {
+    /// The entry as an RG32UI texel: `keep`'s bits, then `alias` (`environment.glsl` reads it).
+    pub fn texel(self) -> [u32; 2] {
+        [self.keep.to_bits(), self.alias]
+    }
+}
+
+/// The alias table drawing index i with probability weights[i] / Σ weights: O(1) per sample (a
+/// uniform entry and one comparison), where a CDF's binary search takes log2(n) dependent reads.
+/// Weights must be finite and non-negative; all zero (or none) draws uniformly.
+pub fn alias_table(weights: &[f64]) -> Vec<AliasEntry> {
+    let n = weights.len();
+    let total: f64 = weights.iter().sum();
+    if n == 0 {
+        return Vec::new();
+    }
+    let uniform = !(total > 0.0);
+    // Each entry's probability times n: the table's columns hold 1 each.
+    let mut scaled: Vec<f64> =
+        weights.iter().map(|&w| if uniform { 1.0 } else { w / total * n as f64 }).collect();
+    let mut table = vec![AliasEntry { keep: 1.0, alias: 0 }; n];
+    for (i, e) in table.iter_mut().enumerate() {
+        e.alias = i as u32;
+    }
+    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
+    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+        small.pop();
+        table[s] = AliasEntry { keep: scaled[s] as f32, alias: l as u32 };
+        scaled[l] -= 1.0 - scaled[s];
+        if scaled[l] < 1.0 {
+            large.pop();
+            small.push(l);
+        }
+    }
+    // What is left holds 1 up to rounding; an entry of no weight left over (rounding ran the
+    // other list out first) must still never be drawn: it takes the heaviest entry always.
+    let heaviest = (0..n).max_by(|&a, &b| weights[a].total_cmp(&weights[b])).unwrap_or(0);
+    for i in small.into_iter().chain(large) {
+        table[i] = if !uniform && weights[i] <= 0.0 {
+            AliasEntry { keep: 0.0, alias: heaviest as u32 }
+        } else {
+            AliasEntry { keep: 1.0, alias: i as u32 }
+        };
+    }
+    table
+}
+
+/// The probability with which `table` draws each index (for tests and checks).
+pub fn alias_probabilities(table: &[AliasEntry]) -> Vec<f64> {
+    let n = table.len() as f64;
+    let mut p = vec![0.0; table.len()];
+    for (i, e) in table.iter().enumerate() {
+        p[i] += e.keep as f64 / n;
+        p[e.alias as usize] += (1.0 - e.keep as f64) / n;
+    }
+    p
 }
 
 /// The largest map umbra loads (texels); larger ones are refused with a clear error.
@@ -124,24 +196,52 @@ impl EnvironmentMap {
         let mean_luminance = if solid_angle > 0.0 { (total / solid_angle) as f32 } else { 0.0 };
         let weight = if total > 0.0 { weight } else { vec![1.0; w * h] };
         let total: f64 = if total > 0.0 { total } else { (w * h) as f64 };
-        let mut conditional_cdf = vec![0.0f32; w * h];
-        let mut marginal_cdf = vec![0.0f32; h];
-        let mut running_rows = 0.0;
-        for y in 0..h {
-            let row = &weight[y * w..(y + 1) * w];
-            let row_sum: f64 = row.iter().sum();
-            let mut running = 0.0;
-            for (x, &v) in row.iter().enumerate() {
-                running += if row_sum > 0.0 { v } else { 1.0 };
-                conditional_cdf[y * w + x] =
-                    (running / if row_sum > 0.0 { row_sum } else { w as f64 }) as f32;
-            }
-            conditional_cdf[y * w + w - 1] = 1.0;
-            running_rows += row_sum;
-            marginal_cdf[y] = (running_rows / total) as f32;
-        }
-        marginal_cdf[h - 1] = 1.0;
+        let row_sums: Vec<f64> = weight.chunks(w).map(|row| row.iter().sum()).collect();
+        let rows = alias_table(&row_sums);
+        let columns = weight.chunks(w).flat_map(alias_table).collect();
         let pdf_uv = weight.iter().map(|&v| (v / total * (w * h) as f64) as f32).collect();
-        EnvironmentDistribution { pdf_uv, marginal_cdf, conditional_cdf, mean_luminance }
+        EnvironmentDistribution { pdf_uv, rows, columns, mean_luminance }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The table draws each index with its weight's share (to f32 rounding of the keep
+    /// probabilities), never one of no weight, and uniformly when every weight is 0.
+    #[test]
+    fn alias_table_draws_each_index_by_its_weight() {
+        let cases: [&[f64]; 5] = [
+            &[1.0, 2.0, 3.0, 4.0],
+            &[0.0, 5.0, 0.0, 0.0, 1e-9, 3.0],
+            &[7.0],
+            &[0.0, 0.0, 0.0],
+            &[1e30, 1.0, 1e-30, 0.0, 2.5e29, 1.0, 1.0, 1.0, 1.0],
+        ];
+        for weights in cases {
+            let table = alias_table(weights);
+            let total: f64 = weights.iter().sum();
+            let p = alias_probabilities(&table);
+            for (i, (&w, &pi)) in weights.iter().zip(&p).enumerate() {
+                let expected = if total > 0.0 { w / total } else { 1.0 / weights.len() as f64 };
+                assert!((pi - expected).abs() <= 1e-7, "{weights:?}: index {i} drawn with {pi}, not {expected}");
+                if total > 0.0 && w == 0.0 {
+                    assert_eq!(pi, 0.0, "{weights:?}: index {i} has no weight but is drawn");
+                }
+            }
+        }
+        // A map's tables: row by row and texel by texel within the row, the product is pdf_uv.
+        let texels: Vec<[f32; 3]> = (0..24).map(|i| [(i % 5) as f32, (i % 3) as f32 * 0.5, 0.0]).collect();
+        let map = EnvironmentMap::from_texels("test", 6, 4, texels).unwrap();
+        let d = map.distribution();
+        let rows = alias_probabilities(&d.rows);
+        for y in 0..4 {
+            let row = alias_probabilities(&d.columns[y * 6..(y + 1) * 6]);
+            for x in 0..6 {
+                let p_uv = rows[y] * row[x] * 24.0;
+                assert!((p_uv - d.pdf_uv[y * 6 + x] as f64).abs() < 1e-5, "texel ({x}, {y}): {p_uv}");
+            }
+        }
     }
 }

@@ -314,7 +314,7 @@ fn layout_check_detects_one_sided_changes() {
 }
 
 /// Two buffers of one type swapped on one side (the path tracer's `accum` and `moment`, the
-/// scene's `env_marginal` and `env_conditional`), a texel buffer's format changed, a kernel's own
+/// scene's `light_texels` and `punctual_texels`), a texel buffer's format changed, a kernel's own
 /// binding moved: each is reported.
 #[test]
 fn interface_check_detects_swapped_bindings() {
@@ -331,7 +331,7 @@ fn interface_check_detects_swapped_bindings() {
     let interface = &kernels::pathtrace::INTERFACE;
     assert!(check_interface(&pathtrace, interface, &interface.numbered_bindings()).is_empty());
     for (a, b) in
-        [("accum", "moment"), ("env_marginal", "env_conditional"), ("aov_albedo", "aov_normal_depth")]
+        [("accum", "moment"), ("light_texels", "punctual_texels"), ("aov_albedo", "aov_normal_depth")]
     {
         let errors = check_interface(&pathtrace, interface, &swapped(interface, a, b));
         assert!(

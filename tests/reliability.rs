@@ -9,12 +9,12 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 use umbra::environment::EnvironmentMap;
-use umbra::gpu::scene::{GpuScene, SceneArrays};
+use umbra::gpu::scene::{check_environment_limits, GpuScene, SceneArrays};
 
 use umbra::passes::ao::AoSettings;
 use umbra::passes::pathtrace::{PathTarget, PathTracePass};
 use umbra::render::{hybrid, path_trace, HybridSettings, PathSettings};
-use umbra::scene::{Material, Sampler, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
+use umbra::scene::{Sampler, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
 
 use umbra::gpu::kernels::{spin_test, test_buffer};
 use umbra::gpu::layout::BufferTestParams;
@@ -52,7 +52,7 @@ fn warnings_naming(name: &str) -> Vec<String> {
 }
 
 /// NaN, ±Inf and negative texels become 0 with one warning that counts them; the other texels
-/// and the sampling tables are untouched by them (finite, a valid CDF).
+/// and the sampling tables are untouched by them (finite, valid alias tables).
 #[test]
 fn environment_nan_inf_and_negative_texels_are_zeroed_with_one_warning() {
     warnings_naming("");
@@ -73,13 +73,10 @@ fn environment_nan_inf_and_negative_texels_are_zeroed_with_one_warning() {
         }
     }
     let table = map.distribution();
-    assert!(table
-        .pdf_uv
-        .iter()
-        .chain(&table.marginal_cdf)
-        .chain(&table.conditional_cdf)
-        .all(|v| v.is_finite()));
-    assert_eq!(table.marginal_cdf.last(), Some(&1.0));
+    assert!(table.pdf_uv.iter().all(|v| v.is_finite()));
+    assert!(table.rows.iter().chain(&table.columns).all(|e| (0.0..=1.0).contains(&e.keep)));
+    assert!(table.rows.iter().all(|e| (e.alias as usize) < h));
+    assert!(table.columns.iter().all(|e| (e.alias as usize) < w));
     // A map with nothing valid left is black, and samples uniformly rather than dividing by 0.
     let all_nan = EnvironmentMap::from_texels("all-nan-sky", 4, 2, vec![[f32::NAN; 3]; 8]).unwrap();
     assert!(all_nan.texels.iter().flatten().all(|&v| v == 0.0));
@@ -131,7 +128,8 @@ fn texel_bytes(buffer: &str) -> Option<u64> {
         | "scene materials"
         | "scene lights"
         | "scene punctual lights" => Some(16),
-        "scene texels" => Some(8),
+        "scene texels" | "environment alias" => Some(8),
+        "environment texels" => Some(16),
         _ => None,
     }
 }
@@ -226,24 +224,27 @@ fn scene_buffer_sizes_are_checked_against_the_device_limit() {
     arrays.check_limits(&scene.name, &info).expect("no scene buffer is a storage buffer");
 }
 
-/// Just over the real device's limit, through the real upload: an environment map a row larger
-/// than `maxStorageBufferRange` (128 MiB on lavapipe) holds is one clear error before anything is
-/// allocated, and no validation message. Textures are a texel buffer of R32UI, whose real limit
-/// (`maxTexelBufferElements` × 4 bytes: 512 MiB on lavapipe) is too much to allocate in a test:
-/// the lowered-limit test above checks them.
+/// An environment map's two texel buffers against a lowered `maxTexelBufferElements`: each fits
+/// at its exact size and is one clear error naming the map and the buffer a texel below, before
+/// anything is allocated. (The real limit, 2^27 texels on lavapipe, is beyond the largest map
+/// umbra loads, `environment::MAX_TEXELS`.)
 #[test]
-fn scenes_over_the_device_buffer_limit_are_one_clear_error() {
+fn environment_maps_over_the_device_buffer_limit_are_one_clear_error() {
     let gpu = Gpu::new();
-    let limit = gpu.info().max_storage_buffer_range;
-    if limit > 512 << 20 {
-        eprintln!("skipped: the device binds {limit} bytes per buffer; too much to allocate in a test");
-        return;
+    let (w, h) = (64, 32);
+    let map = EnvironmentMap::from_texels("huge-sky.exr", w, h, vec![[0.5; 3]; w * h]).unwrap();
+    // Texels: w·h of them; the alias tables: a row's entry and a texel's each.
+    for (kind, texels) in [("environment texels", w * h), ("environment alias", w * h + h)] {
+        let mut info = gpu.info().clone();
+        info.max_texel_buffer_elements = texels as u32 - 1;
+        let limit = info.max_texel_buffer_elements as u64 * texel_bytes(kind).unwrap();
+        assert_too_large(check_environment_limits(&map, &info), "huge-sky.exr", kind, limit);
+        info.max_texel_buffer_elements += 1;
+        let message = check_environment_limits(&map, &info).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(!message.contains(&format!("its {kind} need")), "{kind} fits exactly: {message}");
     }
     let mut device_scene = GpuScene::upload(&gpu, &Scene::cornell_box()).unwrap();
-    let (w, h) = (4096, (limit / (4096 * 16) + 1) as usize);
-    let map = EnvironmentMap::from_texels("huge-sky.exr", w, h, vec![[0.5; 3]; w * h]).unwrap();
-    assert_too_large(device_scene.set_environment(&gpu, &map), "huge-sky.exr", "environment texels", limit);
-    let _ = Material::default();
+    device_scene.set_environment(&gpu, &map).unwrap();
 }
 
 /// The pass marker: a submission that fails (here by fault injection, as a lost device or an

@@ -242,11 +242,13 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (!found) {
         if (HAS_ENV_MAP) {
             float w = 1.0;
+            // The texel's radiance and density in one read.
+            vec4 texel = env_value(env_texel(env_uv(dir), params.env_size));
             // (The map's next-event estimation is on where it is picked at all.)
             if (params.env_pick > 0.0 && path.prev_pdf > 0.0) {
-                w = bsdf_hit_weight(path.prev_pdf, env_pdf(dir, params.env_size) * params.env_pick);
+                w = bsdf_hit_weight(path.prev_pdf, env_direction_pdf(texel.w, dir) * params.env_pick);
             }
-            vec3 c = throughput * env_radiance(dir, params.env_size) * params.env * w;
+            vec3 c = throughput * texel.rgb * params.env * w;
             path.radiance += c;
             path.specular += specular_part(path, c);
             path.nonfinite |= nonfinite_bit(c, NONFINITE_ENVIRONMENT);
@@ -411,8 +413,8 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             if (HAS_ENV_MAP) {
                 if (pick_env) {
                     vec4 ue = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
-                    wi = env_sample(ue, params.env_size, pdf);
-                    l_in = env_radiance(wi, params.env_size) * params.env;
+                    wi = env_sample(ue, params.env_size, pdf, l_in);
+                    l_in *= params.env;
                     pdf *= params.env_pick;
                     sampled = pdf > 0.0;
                 }

@@ -1266,12 +1266,12 @@ scene_bindings! {
     light_texels: readonly texels rgba32ui,
     /// Punctual lights ([`GpuLight`]), four RGBA32UI texels each.
     punctual_texels: readonly texels rgba32ui,
-    /// Environment texels: rgb radiance, density over (u, v).
-    env_texels: readonly buffer [vec4],
-    /// The environment's row CDF.
-    env_marginal: readonly buffer [float],
-    /// The environment's per-row CDFs.
-    env_conditional: readonly buffer [float],
+    /// Environment texels as RGBA32UI (float bits): rgb radiance, density over (u, v).
+    env_texels: readonly texels rgba32ui,
+    /// The environment's alias tables ([`crate::environment::AliasEntry`], RG32UI: the keep
+    /// probability's bits, the alias): the rows' (one entry a row), then each row's (one a
+    /// texel).
+    env_alias: readonly texels rg32ui,
 }
 
 kernels! {

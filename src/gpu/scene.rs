@@ -11,7 +11,7 @@ use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Material, Scene, Texture, TextureRef};
-use crate::vk::{raw, Buffer, Context, DeviceInfo, TexelBuffer};
+use crate::vk::{raw, Context, DeviceInfo, TexelBuffer};
 use glam::Vec3;
 
 /// Storage buffers for one scene.
@@ -38,12 +38,11 @@ pub struct GpuScene {
     pub punctual_lights: Vec<GpuLight>,
     /// The geometry's bounding box (min, max), from the BVH's root.
     pub bounds: [[f32; 3]; 2],
-    /// Environment texels: rgb radiance, density over (u, v) (a dummy texel when there is none).
-    pub env_texels: Buffer,
-    /// Environment row CDF.
-    pub env_marginal: Buffer,
-    /// Environment per-row CDFs.
-    pub env_conditional: Buffer,
+    /// Environment texels as RGBA32UI texels: rgb radiance, density over (u, v) (a dummy texel
+    /// when there is none).
+    pub env_texels: TexelBuffer,
+    /// The environment's alias tables as RG32UI texels: the rows', then each row's.
+    pub env_alias: TexelBuffer,
     /// `GpuTexture`s as RGBA32UI texels (two each).
     pub textures: TexelBuffer,
     /// `scene_texels`, RG32UI texels (`texture.glsl` reads them with `imageLoad`): the sRGB
@@ -210,21 +209,29 @@ pub fn scene_boxes(scene: &Scene) -> Result<Vec<[Vec3; 2]>> {
 fn remedy(buffer: &str) -> &'static str {
     match buffer {
         "scene texels" => "use smaller or fewer textures",
-        "environment texels" => "downsample the environment map",
+        "environment texels" | "environment alias" => "downsample the environment map",
         _ => "split the scene or simplify its meshes",
     }
 }
 
 /// The largest size `device` binds for `buffer`, and the limit's name: the BVH's two buffers and
-/// the triangles, vertices, materials and lights are storage texel buffers of 16-byte texels,
-/// the scene texels one of 8-byte texels, every other one a storage buffer.
+/// the triangles, vertices, materials, lights and environment texels are storage texel buffers
+/// of 16-byte texels, the scene texels and the environment's alias tables ones of 8-byte texels,
+/// every other one a storage buffer.
 fn limit(buffer: &str, device: &DeviceInfo) -> (u64, &'static str, &'static str) {
     if buffer.starts_with("bvh ")
-        || ["scene triangles", "scene vertices", "scene materials", "scene lights", "scene punctual lights"]
-            .contains(&buffer)
+        || [
+            "scene triangles",
+            "scene vertices",
+            "scene materials",
+            "scene lights",
+            "scene punctual lights",
+            "environment texels",
+        ]
+        .contains(&buffer)
     {
         (device.max_texel_buffer_elements as u64 * 16, "texel", "maxTexelBufferElements × 16 bytes")
-    } else if buffer == "scene texels" {
+    } else if buffer == "scene texels" || buffer == "environment alias" {
         (device.max_texel_buffer_elements as u64 * 8, "texel", "maxTexelBufferElements × 8 bytes")
     } else {
         (device.max_storage_buffer_range, "storage", "maxStorageBufferRange")
@@ -250,6 +257,15 @@ fn fits(name: &str, buffers: &[(&'static str, u64)], device: &DeviceInfo) -> Res
         }
     }
     Ok(())
+}
+
+/// Checks that `device` binds `map`'s two texel buffers ([`GpuScene::set_environment`] calls it
+/// before anything is allocated; a test can pass a [`DeviceInfo`] with a lowered limit): its
+/// texels (RGBA32UI) and its alias tables (RG32UI, a row's entry and a texel's each), at most
+/// `maxTexelBufferElements` each. One error naming the map, the buffer and both sizes.
+pub fn check_environment_limits(map: &EnvironmentMap, device: &DeviceInfo) -> Result<()> {
+    let count = (map.width * map.height) as u64;
+    fits(&map.name, &[("environment texels", count * 16), ("environment alias", (count + map.height as u64) * 8)], device)
 }
 
 /// Everything of a scene's GPU layout but its BVH: what changes when materials or lights do.
@@ -534,8 +550,7 @@ impl GpuScene {
             light_texels: &self.lights,
             punctual_texels: &self.punctual,
             env_texels: &self.env_texels,
-            env_marginal: &self.env_marginal,
-            env_conditional: &self.env_conditional,
+            env_alias: &self.env_alias,
         }
     }
 
@@ -561,16 +576,13 @@ impl GpuScene {
     /// Lights the scene with an environment map (replacing any previous one), uploading it
     /// with its importance-sampling tables.
     pub fn set_environment(&mut self, ctx: &Context, map: &EnvironmentMap) -> Result<()> {
-        let texel_bytes = (map.width * map.height * std::mem::size_of::<[f32; 4]>()) as u64;
-        fits(&map.name, &[("environment texels", texel_bytes)], ctx.info())?;
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        check_environment_limits(map, ctx.info())?;
         let table = map.distribution();
         let texels: Vec<[f32; 4]> =
             map.texels.iter().zip(&table.pdf_uv).map(|(t, &pdf)| [t[0], t[1], t[2], pdf]).collect();
-        self.env_texels = Buffer::upload(ctx, "environment texels", &texels, usage)?;
-        self.env_marginal = Buffer::upload(ctx, "environment marginal cdf", &table.marginal_cdf, usage)?;
-        self.env_conditional =
-            Buffer::upload(ctx, "environment conditional cdf", &table.conditional_cdf, usage)?;
+        let alias: Vec<[u32; 2]> = table.rows.iter().chain(&table.columns).map(|e| e.texel()).collect();
+        self.env_texels = upload_rgba32ui(ctx, "environment texels", &texels)?;
+        self.env_alias = TexelBuffer::upload(ctx, "environment alias", &alias, raw::Format::R32G32_UINT, 8)?;
         self.env_size = Some((map.width as u32, map.height as u32));
         self.env_luminance = table.mean_luminance;
         Ok(())
@@ -586,7 +598,6 @@ impl GpuScene {
 
     /// Uploads arrays already laid out (tests keep them to compare against).
     pub fn from_arrays(ctx: &Context, arrays: &SceneArrays) -> Result<Self> {
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         // The alpha bits with_bvh wrote into the BVH triangles.
         let alpha_modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
         Ok(Self {
@@ -617,9 +628,8 @@ impl GpuScene {
             has_dispersion: disperses(&arrays.materials),
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
-            env_texels: Buffer::upload(ctx, "environment texels", &[[0.0f32; 4]], usage)?,
-            env_marginal: Buffer::upload(ctx, "environment marginal cdf", &[1.0f32], usage)?,
-            env_conditional: Buffer::upload(ctx, "environment conditional cdf", &[1.0f32], usage)?,
+            env_texels: upload_rgba32ui(ctx, "environment texels", &[[0.0f32; 4]])?,
+            env_alias: TexelBuffer::upload(ctx, "environment alias", &[[0u32; 2]], raw::Format::R32G32_UINT, 8)?,
             env_size: None,
             env_luminance: 0.0,
             bvh_stats: arrays.bvh.stats.clone(),

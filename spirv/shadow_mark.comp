@@ -8,19 +8,28 @@
 // cascade picked as shadow.glsl's shadow_pick_layer picks it; within a relative 1e-5 of a split
 // both cascades are marked, as two kernels' arithmetic may round the view depth apart.
 //
-// One invocation marks a 2 × 2 block of pixels. Written for llvmpipe's code generation, which a
-// profile of this kernel (scripts/jit-profile.py) showed paying most for lane-by-lane work: a
-// point's cascade is the count of splits below its depth (no loop over an array indexed per
-// lane); the cascades some lane of the subgroup needs are visited one at a time, their rows read
-// once (a loop, which llvmpipe leaves when no lane needs more, where an if's body runs for every
-// lane); and where the subgroup's tiles in a cascade fit in a box of at most `rounds` tiles a
-// lane, the lanes mark that box together, a store each a round, instead of each lane looping
-// over its own points' tiles (a storage-buffer access is a loop over the SIMD lanes there). The
-// box is a superset of the tiles the points need; a subgroup whose box is larger (its pixels far
-// apart in the map: a depth edge) marks point by point. Caching the cascades in shared memory
-// behind barriers measured 4× slower. Every mark is the same plain store of 1, made only where
-// the tile reads 0 (a store to a line other cores share would take it from them): the races
-// between pixels are benign.
+// One invocation marks for a block of SHADOW_MARK_BLOCK² pixels, from their view depths' range
+// alone: at one view depth a pixel's point is affine in its image position, and linear in the
+// depth along its ray, so every point of the block within a depth range lies in the hull of the
+// 8 points its corner pixels' rays reach at the range's ends, and a layer's projection (a
+// directional light's is affine) keeps it in the box of their projections. A block's depth range
+// is cut to each cascade's (widened by 2e-5 against the splits' rounding), so a block across a
+// split marks each cascade's part. Most blocks lie on one surface and their box is the tiles
+// their points need, or a few more; a block across a depth edge (its range long: a box of more
+// than `box_limit` tiles) marks point by point instead, as does one whose projection is not
+// affine.
+//
+// Written for llvmpipe's code generation, which a profile of this kernel (scripts/jit-profile.py)
+// showed paying most for lane-by-lane work: a block's cascades are the counts of splits below its
+// depths (no loop over an array indexed per lane); the cascades some lane of the subgroup needs
+// are visited one at a time, their rows read once (a loop, which llvmpipe leaves when no lane
+// needs more, where an if's body runs for every lane); and where the subgroup's boxes in a
+// cascade fit in a box of at most `rounds` tiles a lane, the lanes mark that box together, a
+// store each a round, instead of each lane looping over its own box (a storage-buffer access
+// is a loop over the SIMD lanes there). Caching the cascades in shared memory behind barriers
+// measured 4× slower. Every mark is the same plain store of 1, made only where the tile reads 0
+// (a store to a line other cores share would take it from them): the races between pixels are
+// benign.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_EXT_control_flow_attributes : require
@@ -31,16 +40,28 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "camera.glsl"
 #include "shadow_layers.glsl"
 
-// The tile range (t0, t1, inclusive) within `reach` texels of p in a layer with rows r0, r1, r3
-// and `size` texels a side; false where p does not project into it.
-bool tile_range(vec4 r0, vec4 r1, vec4 r3, uint size, vec3 p, out uvec2 t0, out uvec2 t1) {
+const uint BLOCK = SHADOW_MARK_BLOCK;
+
+// The tile range (t0, t1, inclusive) within `reach` texels of the layer positions lo..hi in a
+// layer of `size` texels a side.
+void tile_box(vec2 lo, vec2 hi, uint size, out uvec2 t0, out uvec2 t1) {
+    float edge = float(size) - 1.0;
+    t0 = uvec2(clamp(floor(lo - params.reach), vec2(0.0), vec2(edge))) / SHADOW_TILE;
+    t1 = uvec2(clamp(floor(hi + params.reach), vec2(0.0), vec2(edge))) / SHADOW_TILE;
+}
+
+// Point p's layer position in a layer with rows r0, r1, r3; false where p does not project.
+bool project(vec4 r0, vec4 r1, vec4 r3, vec3 p, out vec2 uv) {
     vec4 p1 = vec4(p, 1.0);
     float w = dot(r3, p1);
-    vec2 uv = vec2(dot(r0, p1), dot(r1, p1)) / w;
-    float edge = float(size) - 1.0;
-    t0 = uvec2(clamp(floor(uv - params.reach), vec2(0.0), vec2(edge))) / SHADOW_TILE;
-    t1 = uvec2(clamp(floor(uv + params.reach), vec2(0.0), vec2(edge))) / SHADOW_TILE;
+    uv = vec2(dot(r0, p1), dot(r1, p1)) / w;
     return w > 0.0 && !any(isnan(uv));
+}
+
+// The world point at view depth `depth` on the ray through image position `pos`.
+vec3 view_point(vec2 pos, float depth) {
+    return camera_point(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
+                        params.camera.orthographic != 0u, pos, params.size, depth);
 }
 
 // Marks tile (x, y) of the layer whose tiles start at `at`.
@@ -51,48 +72,51 @@ void mark(uint at, uint x, uint y) {
     }
 }
 
+// The G-buffer's view depth at the block's pixel q (0: no point, or outside the image).
+float block_depth(uvec2 base, uint q) {
+    uvec2 pixel = base + uvec2(q % BLOCK, q / BLOCK);
+    return all(lessThan(pixel, params.size)) ? imageLoad(gb_depth, ivec2(pixel)).x : 0.0;
+}
+
+// The count of a light's `count` splits (from texel `at`) below depth d: the cascade d falls in.
+uint cascade_at(uint at, uint count, float d) {
+    uint c = 0u;
+    for (uint j = 0u; j < count; ++j) {
+        c += uint(shadow_header(at + SHADOW_LAYER_TEXELS * j + 5u).z < d);
+    }
+    return c;
+}
+
 void main() {
-    // The block's points and view depths (0: no point).
-    vec3 points[4];
-    float depths[4];
-    [[unroll]] for (uint q = 0u; q < 4u; ++q) {
-        ivec2 pixel = ivec2(gl_GlobalInvocationID.xy * 2u + uvec2(q & 1u, q >> 1u));
-        float depth = all(lessThan(uvec2(pixel), params.size)) ? imageLoad(gb_depth, pixel).x : 0.0;
-        depths[q] = 0.0;
+    uvec2 base = gl_GlobalInvocationID.xy * BLOCK;
+    // The block's range of view depths over its points.
+    float dmin = 3.0e38;
+    float dmax = 0.0;
+    [[unroll]] for (uint q = 0u; q < BLOCK * BLOCK; ++q) {
+        float depth = block_depth(base, q);
         if (depth > 0.0) {
-            vec3 origin;
-            vec3 dir;
-            camera_ray(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-                       params.camera.orthographic != 0u, vec2(pixel) + 0.5, params.size, origin, dir);
-            points[q] = origin + dir * (depth / dot(dir, params.camera.forward));
-            // (Positive: the point lies in front of the camera.)
-            depths[q] = max(dot(points[q] - params.camera.origin, params.camera.forward), 1e-30);
+            dmin = min(dmin, depth);
+            dmax = max(dmax, depth);
         }
     }
+    bool any_point = dmax > 0.0;
+    // The block's corner pixels' image positions.
+    vec2 c0 = vec2(base) + 0.5;
+    vec2 c1 = c0 + float(BLOCK - 1u);
     for (uint k = 0u; k < params.lights; ++k) {
         uvec4 rec = imageLoad(shadow_texels, int(SHADOW_HEADER_TEXELS + k));
         if (rec.z != SHADOW_LIGHT_CASCADES) {
             continue;
         }
         uint count = min(rec.y, SHADOW_MAX_CASCADES);
-        // Each point's cascade at its view depth a little nearer and a little farther: the count
-        // of splits below it (the splits ascend, so this is the first cascade whose split lies
-        // at or beyond it); `count`: beyond the last, or no point.
-        vec4 d = vec4(depths[0], depths[1], depths[2], depths[3]);
-        uvec4 near = mix(uvec4(count), uvec4(0u), greaterThan(d, vec4(0.0)));
-        uvec4 far = near;
-        for (uint j = 0u; j < count; ++j) {
-            float split = shadow_header(rec.x + SHADOW_LAYER_TEXELS * j + 5u).z;
-            near += uvec4(lessThan(vec4(split), d * (1.0 - 1e-5)));
-            far += uvec4(lessThan(vec4(split), d * (1.0 + 1e-5)));
-        }
+        // The block's cascades: from its nearest depth a little nearer to its farthest a little
+        // farther (`count`: beyond the last).
+        uint near = any_point ? cascade_at(rec.x, count, dmin * (1.0 - 1e-5)) : count;
+        uint far = any_point ? min(cascade_at(rec.x, count, dmax * (1.0 + 1e-5)), count - 1u) : 0u;
+        uint mine = near <= far ? ((2u << far) - (1u << near)) : 0u;
         // The cascades some lane of the subgroup needs, one at a time (a loop, which llvmpipe
         // leaves when no lane is left in it, not an if, whose body it runs for every lane).
-        uint needed = 0u;
-        [[unroll]] for (uint q = 0u; q < 4u; ++q) {
-            needed |= ((1u << near[q]) | (1u << far[q])) & ((1u << count) - 1u);
-        }
-        needed = subgroupOr(needed);
+        uint needed = subgroupOr(mine);
         uint first = (rec.x - params.layers_at) / SHADOW_LAYER_TEXELS;
         while (needed != 0u) {
             uint j = findLSB(needed);
@@ -102,27 +126,35 @@ void main() {
             vec4 r1 = shadow_header(at + 1u);
             vec4 r3 = shadow_header(at + 3u);
             uint size = imageLoad(shadow_texels, int(at + 4u)).y;
-            // This lane's tiles in cascade j: per point, and their union.
-            uvec2 t0[4];
-            uvec2 t1[4];
-            bool in_j[4];
-            uvec2 lo = uvec2(0xffffu);
-            uvec2 hi = uvec2(0u);
-            [[unroll]] for (uint q = 0u; q < 4u; ++q) {
-                in_j[q] = (near[q] == j || far[q] == j)
-                    && tile_range(r0, r1, r3, size, points[q], t0[q], t1[q]);
-                if (in_j[q]) {
-                    lo = min(lo, t0[q]);
-                    hi = max(hi, t1[q]);
-                }
+            // The block's depths in cascade j (its splits widened by 2e-5), and the box of the
+            // hull's 8 corners there.
+            float lo_j = j > 0u ? shadow_header(at - SHADOW_LAYER_TEXELS + 5u).z / (1.0 + 2e-5) : 0.0;
+            float hi_j = shadow_header(at + 5u).z / (1.0 - 2e-5);
+            float d0 = max(dmin, lo_j);
+            float d1 = min(dmax, hi_j);
+            bool in_j = (mine & (1u << j)) != 0u && d0 <= d1;
+            vec2 lo = vec2(3.0e38);
+            vec2 hi = vec2(-3.0e38);
+            bool affine = true;
+            [[unroll]] for (uint c = 0u; c < 8u; ++c) {
+                vec2 pos = vec2((c & 1u) != 0u ? c1.x : c0.x, (c & 2u) != 0u ? c1.y : c0.y);
+                vec2 uv;
+                affine = project(r0, r1, r3, view_point(pos, (c & 4u) != 0u ? d1 : d0), uv) && affine;
+                lo = min(lo, uv);
+                hi = max(hi, uv);
             }
+            uvec2 t0;
+            uvec2 t1;
+            tile_box(lo, hi, size, t0, t1);
+            uvec2 own = t1 - t0 + 1u;
+            // Lanes whose box is small join the subgroup's box, or mark their own where the
+            // subgroup's is too large; the others mark point by point.
+            bool boxed = in_j && affine && own.x * own.y <= params.box_limit;
+            bool pointwise = in_j && !boxed;
             uint tiles_at = (first + j) * params.tiles * params.tiles;
-            // The subgroup's union: where it is at most params.rounds tiles a lane (4 by
-            // default: PCSS's reach makes a point's own range 3 × 3 tiles or more), the lanes
-            // mark it together (a store each a round, a superset of the tiles their points
-            // need); otherwise each lane marks its points' own tiles.
-            uvec2 all_lo = subgroupMin(lo);
-            uvec2 all_hi = subgroupMax(hi);
+            uvec2 all_lo = subgroupMin(boxed ? t0 : uvec2(0xffffu));
+            uvec2 all_hi = subgroupMax(boxed ? t1 : uvec2(0u));
+            uint own_area = 0u;
             if (all(lessThanEqual(all_lo, all_hi))) {
                 uvec2 extent = all_hi - all_lo + 1u;
                 uint area = extent.x * extent.y;
@@ -130,13 +162,31 @@ void main() {
                     for (uint i = gl_SubgroupInvocationID; i < area; i += gl_SubgroupSize) {
                         mark(tiles_at, all_lo.x + i % extent.x, all_lo.y + i / extent.x);
                     }
-                } else {
-                    [[unroll]] for (uint q = 0u; q < 4u; ++q) {
-                        if (in_j[q]) {
-                            for (uint y = t0[q].y; y <= t1[q].y; ++y) {
-                                for (uint x = t0[q].x; x <= t1[q].x; ++x) {
-                                    mark(tiles_at, x, y);
-                                }
+                } else if (boxed) {
+                    own_area = own.x * own.y;
+                }
+            }
+            for (uint i = 0u; i < own_area; ++i) {
+                mark(tiles_at, t0.x + i % own.x, t0.y + i / own.x);
+            }
+            // Point by point: each of the block's points in cascade j marks its own tiles.
+            for (uint q = 0u; pointwise && q < BLOCK * BLOCK; ++q) {
+                float depth = block_depth(base, q);
+                if (depth > 0.0) {
+                    vec2 pos = vec2(base + uvec2(q % BLOCK, q / BLOCK)) + 0.5;
+                    vec3 p = view_point(pos, depth);
+                    // (Positive: the point lies in front of the camera.)
+                    float d = max(dot(p - params.camera.origin, params.camera.forward), 1e-30);
+                    uint pn = cascade_at(rec.x, count, d * (1.0 - 1e-5));
+                    uint pf = cascade_at(rec.x, count, d * (1.0 + 1e-5));
+                    vec2 uv;
+                    if ((pn == j || pf == j) && project(r0, r1, r3, p, uv)) {
+                        uvec2 u0;
+                        uvec2 u1;
+                        tile_box(uv, uv, size, u0, u1);
+                        for (uint y = u0.y; y <= u1.y; ++y) {
+                            for (uint x = u0.x; x <= u1.x; ++x) {
+                                mark(tiles_at, x, y);
                             }
                         }
                     }

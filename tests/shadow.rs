@@ -608,10 +608,12 @@ fn cascades_render_only_what_the_view_reads() {
             let settings = HybridSettings { size, ao: None, shadows, ..Default::default() };
             umbra::render::hybrid(&gpu, &gpu_scene, &stage.camera, &settings).unwrap().color
         };
-        // The marks made point by point alone (no subgroup box), as a depth edge makes them.
-        let apart = ShadowSettings { mark_rounds: 0, ..marked };
+        // The marks made point by point alone (no box), as a block across a depth edge makes
+        // them, and by each block's box alone (no subgroup box).
+        let apart = ShadowSettings { mark_box: 0, ..marked };
+        let boxes = ShadowSettings { mark_rounds: 0, ..marked };
         let (a, b, c) = (render(marked), render(windowed), render(whole));
-        let d = render(apart);
+        let (d, e) = (render(apart), render(boxes));
         let differ = |x: &[[f32; 4]]| x.iter().zip(&c).filter(|(x, c)| x != c).count();
         let shadowed = c.iter().filter(|p| p[1] < 0.5 * c.iter().map(|q| q[1]).fold(0.0, f32::max)).count();
         eprintln!(
@@ -630,6 +632,7 @@ fn cascades_render_only_what_the_view_reads() {
         assert_eq!(differ(&b), 0, "{}: the windowed maps shade differently", method.name());
         assert_eq!(differ(&a), 0, "{}: the marked maps shade differently", method.name());
         assert_eq!(differ(&d), 0, "{}: the maps marked point by point shade differently", method.name());
+        assert_eq!(differ(&e), 0, "{}: the maps marked block by block shade differently", method.name());
     }
 }
 

@@ -662,8 +662,9 @@ gpu_structs! {
         /// Tiles a lane a subgroup's box may hold to be marked together
         /// ([`crate::passes::shadow::ShadowSettings::mark_rounds`]).
         rounds: uint,
-        /// Padding.
-        pad1: uint,
+        /// Tiles a block's box may hold; beyond, and at 0, point by point
+        /// ([`crate::passes::shadow::ShadowSettings::mark_box`]).
+        box_limit: uint,
     }
 
     /// The probe volume's grid, the first [`PROBE_HEADER_TEXELS`] texels of `probe_texels`
@@ -1108,6 +1109,8 @@ gpu_constants! {
     SHADOW_TILE: uint = 16;
     /// The most cascades of a directional light.
     SHADOW_MAX_CASCADES: uint = 8;
+    /// Side in pixels of the block of G-buffer pixels one `shadow_mark` invocation marks for.
+    SHADOW_MARK_BLOCK: uint = 4;
     /// Words a layer in the shadow maps' indirect dispatches: 0–2 the rendered tiles' (one
     /// workgroup a tile), 3 a pad, 4–6 the fill's over the large triangles the count step listed
     /// (64 a workgroup), 7 their count.

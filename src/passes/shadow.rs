@@ -42,7 +42,7 @@ use crate::gpu::layout::{
     GpuCamera, GpuLight, GpuShadowLayer, ShadowMarkParams, ShadowMomentParams, ShadowRasterParams,
     ShadowStats, SHADOW_DISPATCH_WORDS, SHADOW_HEADER_TEXELS, SHADOW_LAYER_TEXELS, SHADOW_LIGHT_CASCADES,
     SHADOW_LIGHT_CUBE, SHADOW_LIGHT_SINGLE, SHADOW_MAX_CASCADES, SHADOW_ORTHOGRAPHIC, SHADOW_PERSPECTIVE,
-    SHADOW_TILE,
+    SHADOW_MARK_BLOCK, SHADOW_TILE,
 };
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
@@ -154,12 +154,17 @@ pub struct ShadowSettings {
     /// within the filters' reach; the rest is left undefined. Off: the window
     /// ([`ShadowSettings::cascade_windows`]).
     pub view_marks: bool,
-    /// With view marks: a subgroup of the marking kernel whose tiles in a cascade fit a box of
-    /// at most this many tiles a lane marks the box together (a store per lane a round, a
-    /// superset of the tiles its pixels read); otherwise, and everywhere at 0, each lane marks
-    /// its pixels' own tiles. Both render what the view reads; this trades tiles rendered
-    /// against the marking's time (BENCHMARKS.md History, 2026-12-04, third session).
+    /// With view marks: the marking kernel's lanes each take a block of pixels and mark the
+    /// box of tiles their points can reach (from the block's depth range); a subgroup whose
+    /// boxes in a cascade fit a box of at most this many tiles a lane marks that box together
+    /// (a store per lane a round, a superset of the tiles its pixels read), otherwise, and
+    /// everywhere at 0, each lane its own box. All render what the view reads; this trades tiles
+    /// rendered against the marking's time (BENCHMARKS.md History, 2026-12-04, third and fourth
+    /// sessions).
     pub mark_rounds: u32,
+    /// With view marks: the most tiles a block's box may hold; a block whose box is larger (its
+    /// pixels across a depth edge), and every block at 0, marks each pixel's own tiles instead.
+    pub mark_box: u32,
 }
 
 impl Default for ShadowSettings {
@@ -182,6 +187,7 @@ impl Default for ShadowSettings {
             cascade_windows: true,
             view_marks: true,
             mark_rounds: 4,
+            mark_box: 16,
         }
     }
 }
@@ -790,6 +796,7 @@ impl ShadowPass {
                 tiles,
                 reach: maps.settings.reach(),
                 rounds: maps.settings.mark_rounds,
+                box_limit: maps.settings.mark_box,
                 ..Default::default()
             };
             let resources = shadow_mark::Resources {
@@ -798,12 +805,12 @@ impl ShadowPass {
                 tile_marks: &maps.marks,
             };
             step("shadow_mark", &mut || {
-                // An invocation per 2 × 2 pixels.
+                // An invocation per block of pixels.
                 self.mark.record(
                     cmd,
                     &resources,
                     &params,
-                    [size.0.div_ceil(2), size.1.div_ceil(2), 1],
+                    [size.0.div_ceil(SHADOW_MARK_BLOCK), size.1.div_ceil(SHADOW_MARK_BLOCK), 1],
                     [8, 8, 1],
                 )
             })?;

@@ -225,7 +225,10 @@ mod tests {
             let p = alias_probabilities(&table);
             for (i, (&w, &pi)) in weights.iter().zip(&p).enumerate() {
                 let expected = if total > 0.0 { w / total } else { 1.0 / weights.len() as f64 };
-                assert!((pi - expected).abs() <= 1e-7, "{weights:?}: index {i} drawn with {pi}, not {expected}");
+                assert!(
+                    (pi - expected).abs() <= 1e-7,
+                    "{weights:?}: index {i} drawn with {pi}, not {expected}"
+                );
                 if total > 0.0 && w == 0.0 {
                     assert_eq!(pi, 0.0, "{weights:?}: index {i} has no weight but is drawn");
                 }

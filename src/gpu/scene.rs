@@ -265,7 +265,11 @@ fn fits(name: &str, buffers: &[(&'static str, u64)], device: &DeviceInfo) -> Res
 /// `maxTexelBufferElements` each. One error naming the map, the buffer and both sizes.
 pub fn check_environment_limits(map: &EnvironmentMap, device: &DeviceInfo) -> Result<()> {
     let count = (map.width * map.height) as u64;
-    fits(&map.name, &[("environment texels", count * 16), ("environment alias", (count + map.height as u64) * 8)], device)
+    fits(
+        &map.name,
+        &[("environment texels", count * 16), ("environment alias", (count + map.height as u64) * 8)],
+        device,
+    )
 }
 
 /// Everything of a scene's GPU layout but its BVH: what changes when materials or lights do.
@@ -629,7 +633,13 @@ impl GpuScene {
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: upload_rgba32ui(ctx, "environment texels", &[[0.0f32; 4]])?,
-            env_alias: TexelBuffer::upload(ctx, "environment alias", &[[0u32; 2]], raw::Format::R32G32_UINT, 8)?,
+            env_alias: TexelBuffer::upload(
+                ctx,
+                "environment alias",
+                &[[0u32; 2]],
+                raw::Format::R32G32_UINT,
+                8,
+            )?,
             env_size: None,
             env_luminance: 0.0,
             bvh_stats: arrays.bvh.stats.clone(),

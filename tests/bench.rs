@@ -259,6 +259,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["suite", "--table", "docs/bench/suite.json"],
     &["suite", "--table", "docs/bench/suite-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-sponza.json"],
+    &["shadows", "--table", "docs/bench/shadows-sponza-one.json"],
     &["shadows", "--table", "docs/bench/shadows-spheres.json"],
     &["mis", "--table", "docs/bench/mis.json"],
     &["probes", "--table", "docs/bench/probes.json"],

@@ -305,7 +305,7 @@ pub fn table(doc: &Value) -> String {
         _ => "ray-traced shadows of the point lights".to_string(),
     };
     let mut out = format!(
-        "{} ({} triangles) at {}×{}, maps {}² ({} layers), {}; reference: {reference}:\n\n\
+        "{} ({} triangles) at {}×{}, maps {}² ({} layer{}), {}; reference: {reference}:\n\n\
          | method | maps ms | tiles rendered | lighting ms | maps ÷ shadow rays | rel. MSE vs rt (points) | pixels > 10 % off | rel. MSE vs reference | pixels > 10 % off the reference |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         doc["scene"].as_str().unwrap_or("?"),
@@ -314,6 +314,7 @@ pub fn table(doc: &Value) -> String {
         doc["size"][1],
         doc["map_size"],
         doc["layers"],
+        if doc["layers"] == 1 { "" } else { "s" },
         doc["device"].as_str().unwrap_or("?"),
     );
     for m in &methods {

@@ -113,7 +113,7 @@ void main() {
         // farther (`count`: beyond the last).
         uint near = any_point ? cascade_at(rec.x, count, dmin * (1.0 - 1e-5)) : count;
         uint far = any_point ? min(cascade_at(rec.x, count, dmax * (1.0 + 1e-5)), count - 1u) : 0u;
-        uint mine = near <= far ? ((2u << far) - (1u << near)) : 0u;
+        uint mine = near <= far ? ((2u << far) - (1u << near)) & ((1u << count) - 1u) : 0u;
         // The cascades some lane of the subgroup needs, one at a time (a loop, which llvmpipe
         // leaves when no lane is left in it, not an if, whose body it runs for every lane).
         uint needed = subgroupOr(mine);

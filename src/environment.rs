@@ -55,7 +55,7 @@ impl AliasEntry {
     }
 }
 
-/// The alias table drawing index i with probability weights[i] / Σ weights: O(1) per sample (a
+/// The alias table drawing index i with probability `weights[i] / Σ weights`: O(1) per sample (a
 /// uniform entry and one comparison), where a CDF's binary search takes log2(n) dependent reads.
 /// Weights must be finite and non-negative; all zero (or none) draws uniformly.
 pub fn alias_table(weights: &[f64]) -> Vec<AliasEntry> {

@@ -820,14 +820,15 @@ impl LoadedScene {
         }
         let stats = &gpu_scene.bvh_stats;
         log::info!(
-            "{}: {} triangles, {} emissive; BVH {:.1} ms, {} references, {} nodes, SAH {:.2}",
+            "{}: {} triangles, {} emissive; BVH {:.1} ms, {} references, {} nodes, SAH {:.2}, stack depth {}",
             self.scene.name,
             stats.triangles,
             gpu_scene.light_count,
             stats.build_ms,
             stats.references,
             stats.nodes,
-            stats.sah_cost
+            stats.sah_cost,
+            gpu_scene.bvh.stack_depth
         );
         Ok(gpu_scene)
     }

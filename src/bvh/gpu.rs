@@ -21,6 +21,10 @@ pub struct GpuBvh {
     /// Whether the BVH holds implicit shapes (procedural primitives): the trace kernel must then
     /// be specialised for them ([`RayTracer::with_implicit`]).
     pub implicit: bool,
+    /// The most entries a walk's stack holds ([`GpuBvhNode::stack_depth`]; `umbra render` logs
+    /// it): what a stack in registers would need to hold (BENCHMARKS.md, History 2026-12-04,
+    /// fourth session).
+    pub stack_depth: u32,
 }
 
 impl GpuBvh {
@@ -48,6 +52,7 @@ impl GpuBvh {
             nodes: TexelBuffer::upload(ctx, "bvh nodes", &nodes, RGBA32UI, 16)?,
             tris: TexelBuffer::upload(ctx, "bvh triangles", &tris, RGBA32UI, 16)?,
             implicit: bvh.procedurals > 0,
+            stack_depth: GpuBvhNode::stack_depth(&nodes),
         })
     }
 
@@ -237,6 +242,25 @@ impl GpuBvhNode {
     /// Child `c`'s index: an inner child's node, a leaf's first triangle.
     pub fn index(&self, c: usize) -> u32 {
         self.child[c] >> 4
+    }
+
+    /// The most entries the traversal's stack (`bvh.glsl`) holds in a walk of `nodes` from node
+    /// 0: a visit with two or more inner children hit pushes one entry, which stays while the walk
+    /// is below its node, so this is the most nodes with two or more inner children on a path
+    /// from the root (0 for an empty BVH).
+    pub fn stack_depth(nodes: &[GpuBvhNode]) -> u32 {
+        fn depth(nodes: &[GpuBvhNode], i: usize) -> u32 {
+            let node = &nodes[i];
+            let inner: Vec<usize> =
+                (0..4).filter(|&c| node.count(c) == 0).map(|c| node.index(c) as usize).collect();
+            let below = inner.iter().map(|&c| depth(nodes, c)).max().unwrap_or(0);
+            below + u32::from(inner.len() >= 2)
+        }
+        if nodes.is_empty() {
+            0
+        } else {
+            depth(nodes, 0)
+        }
     }
 
     /// Child `c`'s box as the traversal sees it (to the nearest float64 of its exact planes), or
@@ -536,5 +560,35 @@ impl TraceHit {
             tri: self.tri,
             bary: [self.u, self.v],
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A node whose children are `words` (`index << 4 | count`; absent ones NONE).
+    fn node(words: [u32; 4]) -> GpuBvhNode {
+        GpuBvhNode { child: words, ..bytemuck::Zeroable::zeroed() }
+    }
+
+    /// Only nodes with two or more inner children push, and the deepest path's pushes count.
+    #[test]
+    fn stack_depth_counts_the_pushes_on_the_deepest_path() {
+        let none = GpuBvhNode::NONE;
+        let inner = |i: u32| i << 4;
+        let leaf = 1;
+        // 0: inner 1, inner 2; 1: inner 3, inner 4, leaf; 2: leaf; 3: inner 5 alone; 4, 5: leaves.
+        let nodes = [
+            node([inner(1), inner(2), none, none]),
+            node([inner(3), inner(4), leaf, none]),
+            node([leaf, none, none, none]),
+            node([inner(5), leaf, none, none]),
+            node([leaf, leaf, none, none]),
+            node([leaf, none, none, none]),
+        ];
+        assert_eq!(GpuBvhNode::stack_depth(&nodes), 2);
+        assert_eq!(GpuBvhNode::stack_depth(&nodes[2..3]), 0);
+        assert_eq!(GpuBvhNode::stack_depth(&[]), 0);
     }
 }

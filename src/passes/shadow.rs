@@ -25,7 +25,9 @@
 //! box its slice of the view makes in the layer, widened by the filters' reach, since no pixel of
 //! that view reads the rest ([`ShadowSettings::cascade_windows`]). Maps rendered for a view
 //! ([`ShadowView`], after its G-buffer) go further, as virtual shadow maps do: `shadow_mark`
-//! marks the tiles each pixel's lookup reaches, `shadow_tiles` lists a layer's marked tiles, and
+//! marks the tiles the pixels' lookups reach (a superset: per block of 4 × 4 pixels, the box its
+//! depth range can reach; [`ShadowSettings::mark_box`]), `shadow_tiles` lists a layer's marked
+//! tiles, and
 //! binning, rasterizing and the moments' filter visit only those (indirect dispatches over the
 //! list; [`ShadowSettings::view_marks`]). Both measured in BENCHMARKS.md History, "cascade windows
 //! and view marks".

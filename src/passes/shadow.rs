@@ -27,10 +27,9 @@
 //! ([`ShadowView`], after its G-buffer) go further, as virtual shadow maps do: `shadow_mark`
 //! marks the tiles the pixels' lookups reach (a superset: per block of 4 × 4 pixels, the box its
 //! depth range can reach; [`ShadowSettings::mark_box`]), `shadow_tiles` lists a layer's marked
-//! tiles, and
-//! binning, rasterizing and the moments' filter visit only those (indirect dispatches over the
-//! list; [`ShadowSettings::view_marks`]). Both measured in BENCHMARKS.md History, "cascade windows
-//! and view marks".
+//! tiles, and binning, rasterizing and the moments' filter visit only those (indirect dispatches
+//! over the list; [`ShadowSettings::view_marks`]). Both measured in BENCHMARKS.md History,
+//! "cascade windows and view marks".
 //!
 //! The maps depend on the lights and the geometry, and for directional lights on the camera:
 //! [`ShadowPlan::new`] places the layers (a moved light or camera needs a new plan, so new

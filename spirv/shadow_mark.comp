@@ -78,11 +78,12 @@ float block_depth(uvec2 base, uint q) {
     return all(lessThan(pixel, params.size)) ? imageLoad(gb_depth, ivec2(pixel)).x : 0.0;
 }
 
-// The count of a light's `count` splits (from texel `at`) below depth d: the cascade d falls in.
-uint cascade_at(uint at, uint count, float d) {
-    uint c = 0u;
+// The counts of a light's `count` splits (from texel `at`) below depths d.x and d.y: the cascades
+// they fall in, each split read once.
+uvec2 cascades_at(uint at, uint count, vec2 d) {
+    uvec2 c = uvec2(0u);
     for (uint j = 0u; j < count; ++j) {
-        c += uint(shadow_header(at + SHADOW_LAYER_TEXELS * j + 5u).z < d);
+        c += uvec2(lessThan(vec2(shadow_header(at + SHADOW_LAYER_TEXELS * j + 5u).z), d));
     }
     return c;
 }
@@ -111,8 +112,9 @@ void main() {
         uint count = min(rec.y, SHADOW_MAX_CASCADES);
         // The block's cascades: from its nearest depth a little nearer to its farthest a little
         // farther (`count`: beyond the last).
-        uint near = any_point ? cascade_at(rec.x, count, dmin * (1.0 - 1e-5)) : count;
-        uint far = any_point ? min(cascade_at(rec.x, count, dmax * (1.0 + 1e-5)), count - 1u) : 0u;
+        uvec2 range = cascades_at(rec.x, count, vec2(dmin * (1.0 - 1e-5), dmax * (1.0 + 1e-5)));
+        uint near = any_point ? range.x : count;
+        uint far = any_point ? min(range.y, count - 1u) : 0u;
         uint mine = near <= far ? ((2u << far) - (1u << near)) & ((1u << count) - 1u) : 0u;
         // The cascades some lane of the subgroup needs, one at a time (a loop, which llvmpipe
         // leaves when no lane is left in it, not an if, whose body it runs for every lane).
@@ -177,10 +179,9 @@ void main() {
                     vec3 p = view_point(pos, depth);
                     // (Positive: the point lies in front of the camera.)
                     float d = max(dot(p - params.camera.origin, params.camera.forward), 1e-30);
-                    uint pn = cascade_at(rec.x, count, d * (1.0 - 1e-5));
-                    uint pf = cascade_at(rec.x, count, d * (1.0 + 1e-5));
+                    uvec2 cd = cascades_at(rec.x, count, d * vec2(1.0 - 1e-5, 1.0 + 1e-5));
                     vec2 uv;
-                    if ((pn == j || pf == j) && project(r0, r1, r3, p, uv)) {
+                    if (any(equal(cd, uvec2(j))) && project(r0, r1, r3, p, uv)) {
                         uvec2 u0;
                         uvec2 u1;
                         tile_box(uv, uv, size, u0, u1);

@@ -64,14 +64,11 @@ pub fn alias_table(weights: &[f64]) -> Vec<AliasEntry> {
     if n == 0 {
         return Vec::new();
     }
-    let uniform = !(total > 0.0);
+    let uniform = total.is_nan() || total <= 0.0;
     // Each entry's probability times n: the table's columns hold 1 each.
     let mut scaled: Vec<f64> =
         weights.iter().map(|&w| if uniform { 1.0 } else { w / total * n as f64 }).collect();
-    let mut table = vec![AliasEntry { keep: 1.0, alias: 0 }; n];
-    for (i, e) in table.iter_mut().enumerate() {
-        e.alias = i as u32;
-    }
+    let mut table: Vec<AliasEntry> = (0..n as u32).map(|i| AliasEntry { keep: 1.0, alias: i }).collect();
     let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
     while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
         small.pop();
@@ -84,10 +81,10 @@ pub fn alias_table(weights: &[f64]) -> Vec<AliasEntry> {
     }
     // What is left holds 1 up to rounding; an entry of no weight left over (rounding ran the
     // other list out first) must still never be drawn: it takes the heaviest entry always.
-    let heaviest = (0..n).max_by(|&a, &b| weights[a].total_cmp(&weights[b])).unwrap_or(0);
+    let heaviest = || (0..n).max_by(|&a, &b| weights[a].total_cmp(&weights[b])).unwrap_or(0) as u32;
     for i in small.into_iter().chain(large) {
         table[i] = if !uniform && weights[i] <= 0.0 {
-            AliasEntry { keep: 0.0, alias: heaviest as u32 }
+            AliasEntry { keep: 0.0, alias: heaviest() }
         } else {
             AliasEntry { keep: 1.0, alias: i as u32 }
         };

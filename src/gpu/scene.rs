@@ -586,7 +586,7 @@ impl GpuScene {
             map.texels.iter().zip(&table.pdf_uv).map(|(t, &pdf)| [t[0], t[1], t[2], pdf]).collect();
         let alias: Vec<[u32; 2]> = table.rows.iter().chain(&table.columns).map(|e| e.texel()).collect();
         self.env_texels = upload_rgba32ui(ctx, "environment texels", &texels)?;
-        self.env_alias = TexelBuffer::upload(ctx, "environment alias", &alias, raw::Format::R32G32_UINT, 8)?;
+        self.env_alias = upload_rg32ui(ctx, "environment alias", &alias)?;
         self.env_size = Some((map.width as u32, map.height as u32));
         self.env_luminance = table.mean_luminance;
         Ok(())
@@ -617,7 +617,7 @@ impl GpuScene {
             punctual_lights: arrays.punctual.clone(),
             bounds: arrays.bvh.nodes.first().map_or([[0.0; 3]; 2], |n| [n.aabb_min, n.aabb_max]),
             textures: upload_rgba32ui(ctx, "scene textures", &arrays.textures)?,
-            texels: upload_texels(ctx, &arrays.texels)?,
+            texels: upload_rg32ui(ctx, "scene texels", &arrays.texels)?,
             texture_count: arrays.textures.len() as u32,
             texture_slots: texture_slots(&arrays.materials),
             has_transmission: transmits(&arrays.materials),
@@ -633,13 +633,7 @@ impl GpuScene {
             has_implicit: arrays.bvh.procedurals > 0,
             has_parallax: parallax(&arrays.materials),
             env_texels: upload_rgba32ui(ctx, "environment texels", &[[0.0f32; 4]])?,
-            env_alias: TexelBuffer::upload(
-                ctx,
-                "environment alias",
-                &[[0u32; 2]],
-                raw::Format::R32G32_UINT,
-                8,
-            )?,
+            env_alias: upload_rg32ui(ctx, "environment alias", &[[0u32; 2]])?,
             env_size: None,
             env_luminance: 0.0,
             bvh_stats: arrays.bvh.stats.clone(),
@@ -678,7 +672,7 @@ impl GpuScene {
         self.punctual_count = arrays.punctual.len() as u32;
         self.punctual_lights = arrays.punctual.clone();
         self.textures = upload_rgba32ui(ctx, "scene textures", &arrays.textures)?;
-        self.texels = upload_texels(ctx, &arrays.texels)?;
+        self.texels = upload_rg32ui(ctx, "scene texels", &arrays.texels)?;
         self.texture_count = arrays.textures.len() as u32;
         self.texture_slots = texture_slots(&arrays.materials);
         self.has_transmission = transmits(&arrays.materials);
@@ -728,9 +722,10 @@ pub fn texel_unorm16(code: u8, srgb: bool) -> u32 {
     (linear * 65535.0 + 0.5) as u32
 }
 
-/// Uploads the scene texels as a storage texel buffer of RG32UI texels.
-fn upload_texels(ctx: &Context, texels: &[[u32; 2]]) -> Result<TexelBuffer> {
-    TexelBuffer::upload(ctx, "scene texels", texels, raw::Format::R32G32_UINT, 8)
+/// Uploads `items` as a storage texel buffer of RG32UI texels (the scene texels, the
+/// environment's alias tables).
+fn upload_rg32ui(ctx: &Context, name: &str, items: &[[u32; 2]]) -> Result<TexelBuffer> {
+    TexelBuffer::upload(ctx, name, items, raw::Format::R32G32_UINT, 8)
 }
 
 /// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits (0 opaque,

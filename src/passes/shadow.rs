@@ -798,7 +798,6 @@ impl ShadowPass {
                 reach: maps.settings.reach(),
                 rounds: maps.settings.mark_rounds,
                 box_limit: maps.settings.mark_box,
-                ..Default::default()
             };
             let resources = shadow_mark::Resources {
                 gb_depth: &view.gbuffer.depth,

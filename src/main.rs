@@ -987,7 +987,8 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
 
 /// Builds the BVH and uploads `loaded` while `prepare` makes pipelines on a thread (up to a
 /// second each on lavapipe) from the features the loaded scene has; the passes for the uploaded
-/// scene (made again if its features differ: `tests/scene.rs` checks that they do not).
+/// scene (made again if its features differ: `tests/scene.rs` checks that they do not, but for
+/// a BVH deeper than the registers' stack, known only once built).
 fn upload_alongside(
     ctx: &Context,
     loaded: &LoadedScene,
@@ -1010,7 +1011,19 @@ fn upload_alongside(
         stages.lap("pipelines (the rest)");
         Ok(gpu_scene)
     })?;
-    if passes.features() != gpu_scene.features() {
+    let features = gpu_scene.features();
+    if !features.shallow_bvh
+        && passes.features() == (umbra::gpu::SceneFeatures { shallow_bvh: true, ..features })
+    {
+        // Assumed before the build: a deeper BVH is walked with the stack in memory.
+        log::info!(
+            "the BVH's walk holds {} stack entries, more than the registers' {}: making the pipelines again",
+            gpu_scene.bvh.stack_depth,
+            umbra::gpu::kernel::BVH_REGISTERS
+        );
+        return Ok((Passes::new(ctx, &gpu_scene), gpu_scene));
+    }
+    if passes.features() != features {
         log::warn!(
             "the features read before the upload, {:?}, differ from the upload's, {:?}: making the pipelines again",
             passes.features(),

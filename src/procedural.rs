@@ -1,6 +1,6 @@
 //! Procedural triangle sets for tests and the benchmark: a closed icosphere (shared vertices are
 //! bit-identical, so edges and vertices are exactly shared), a displaced terrain of any size, and
-//! random soups; plus a small deterministic random number generator.
+//! random soups and nested clusters; plus a small deterministic random number generator.
 
 use glam::Vec3;
 use std::collections::HashMap;
@@ -186,6 +186,23 @@ pub fn random_soup(count: usize, lo: Vec3, hi: Vec3, max_edge: f32, seed: u64) -
                 a + rng.on_sphere() * rng.range(0.0, max_edge),
                 a + rng.on_sphere() * rng.range(0.0, max_edge),
             ]
+        })
+        .collect()
+}
+
+/// `levels` clusters of `per_level` random small triangles, cluster k at `ratio`^k from the
+/// origin along +x and `ratio`^k in size: every coordinate scales with its cluster, so rays near
+/// any cluster are as well conditioned as near the first. A SAH BVH over them nests cluster in
+/// cluster, a walk deeper than a balanced tree of the same size could be, and a ray from the
+/// origin along +x meets every level's cluster and the rest beyond it: it holds one stack entry
+/// per level.
+pub fn nested_clusters(levels: usize, per_level: usize, ratio: f32, seed: u64) -> Vec<[Vec3; 3]> {
+    let mut rng = Rng::new(seed);
+    (0..levels)
+        .flat_map(|k| std::iter::repeat_n(ratio.powi(k as i32), per_level))
+        .map(|s| {
+            let a = Vec3::X * s + rng.in_box(Vec3::splat(-0.2 * s), Vec3::splat(0.2 * s));
+            [a, a + rng.on_sphere() * (0.03 * s), a + rng.on_sphere() * (0.03 * s)]
         })
         .collect()
 }

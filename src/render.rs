@@ -371,10 +371,12 @@ impl Passes {
     }
 
     /// Refuses a scene whose features differ from the pipelines' (its textures, lights or
-    /// transmission would be silently ignored, or paid for without being there).
+    /// transmission would be silently ignored, or paid for without being there), but for a
+    /// shallow BVH under pipelines made for deep ones (the stack in memory walks any BVH).
     fn check(&self, scene: &GpuScene) -> Result<()> {
         let features = scene.features();
-        if features != self.features {
+        let deep = SceneFeatures { shallow_bvh: false, ..features };
+        if features != self.features && deep != self.features {
             return Err(Error::Invalid(format!(
                 "the passes were built for a scene with {:?}, this one has {features:?}: build new passes",
                 self.features

@@ -5,6 +5,7 @@ mod common;
 
 use common::Gpu;
 use glam::Vec3;
+use std::path::Path;
 use umbra::bvh::gpu::{GpuBvh, GpuBvhNode, Query, RayTracer};
 use umbra::bvh::reference::{same_hit, Reference};
 use umbra::bvh::{BuildOptions, Bvh, Hit, Ray};
@@ -400,6 +401,150 @@ fn empty_single_and_degenerate_scenes_behave() {
     // Non-finite input is refused, naming the triangle.
     let err = Bvh::build(&[tri, [Vec3::NAN, Vec3::ZERO, Vec3::ONE]]).unwrap_err();
     assert!(err.to_string().contains("triangle 1"), "{err}");
+}
+
+/// The most stack entries the walk of `nodes` from `node` holds along `dir` from the origin when
+/// it finds no hit (a hit culls boxes beyond it): at a node, the inner children the ray meets
+/// (exact boxes) are visited nearest first, and while the walk is below one of them but the last,
+/// the node's entry holds the others. `GpuBvhNode::stack_depth` bounds this over every ray.
+fn entries_along(nodes: &[GpuBvhNode], node: usize, dir: glam::DVec3) -> u32 {
+    let entry = |(lo, hi): ([f64; 3], [f64; 3])| {
+        let (mut near, mut far) = (0.0f64, f64::INFINITY);
+        for a in 0..3 {
+            if dir[a] == 0.0 {
+                if lo[a] > 0.0 || hi[a] < 0.0 {
+                    return None;
+                }
+                continue;
+            }
+            let (t0, t1) = (lo[a] / dir[a], hi[a] / dir[a]);
+            near = near.max(t0.min(t1));
+            far = far.min(t0.max(t1));
+        }
+        (near <= far).then_some(near)
+    };
+    let n = &nodes[node];
+    let mut met: Vec<(f64, usize)> = (0..4)
+        .filter(|&c| n.count(c) == 0)
+        .filter_map(|c| entry(n.child_box(c).unwrap()).map(|t| (t, n.index(c) as usize)))
+        .collect();
+    met.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let last = met.len().saturating_sub(1);
+    met.iter()
+        .enumerate()
+        .map(|(i, &(_, c))| entries_along(nodes, c, dir) + u32::from(i < last))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Nested clusters (`procedural::nested_clusters`, ratio 0.6, 8, 16 or 32 triangles per level:
+/// the first in that order) whose walk holds at most `depth` stack entries
+/// (`GpuBvhNode::stack_depth`) and whose walks along some of `directions` (rays from the origin)
+/// hold that many: the count of levels and the triangles.
+fn nested_clusters_of_depth(depth: u32, directions: &[Vec3]) -> (usize, Vec<[Vec3; 3]>) {
+    [8, 16, 32]
+        .into_iter()
+        .flat_map(|per_level| {
+            (1..64).map(move |levels| (levels, umbra::procedural::nested_clusters(levels, per_level, 0.6, 1)))
+        })
+        .find(|(_, triangles)| {
+            let nodes = GpuBvhNode::from_bvh(&Bvh::build(triangles).unwrap()).unwrap();
+            GpuBvhNode::stack_depth(&nodes) == depth
+                && directions.iter().any(|d| entries_along(&nodes, 0, d.as_dvec3()) == depth)
+        })
+        .expect("nested clusters of that depth")
+}
+
+/// Directions from the origin into the nested clusters (slopes up to 0.25 off +x, the clusters'
+/// extent), mostly between their triangles: walks that find no hit, so hold every entry.
+fn into_the_clusters(count: usize, seed: u64) -> Vec<Vec3> {
+    let mut rng = Rng::new(seed);
+    (0..count).map(|_| Vec3::new(1.0, rng.range(-0.25, 0.25), rng.range(-0.25, 0.25))).collect()
+}
+
+/// Both walks of `bvh.glsl`: a BVH whose walk holds at most `BVH_REGISTERS` stack entries is
+/// traced with the stack in registers, a deeper one with the stack in memory (`RayTracer` picks
+/// by `GpuBvh::stack_depth`, as `SceneFeatures::shallow_bvh` does for the renderer). Nested
+/// clusters whose walk holds `BVH_REGISTERS` entries (every register used), and four more, must
+/// match brute force. Broken builds fail it: the last register never written (47 rays), the
+/// registers used for the deeper BVH (10,073 rays).
+#[test]
+fn walks_deeper_and_shallower_than_the_register_stack_match_brute_force() {
+    use umbra::gpu::layout::BVH_REGISTERS;
+    let gpu = Gpu::new();
+    let tracer = RayTracer::new(&gpu).unwrap();
+    let directions = into_the_clusters(20_000, 5);
+    for (want, deep) in [(BVH_REGISTERS, false), (BVH_REGISTERS + 4, true)] {
+        let (levels, triangles) = nested_clusters_of_depth(want, &directions);
+        let device_bvh = GpuBvh::upload(&gpu, &Bvh::build(&triangles).unwrap()).unwrap();
+        let depth = device_bvh.stack_depth;
+        assert_eq!(depth > BVH_REGISTERS, deep, "{levels} levels: stack depth {depth}");
+        // Rays from the origin, at each triangle and into the clusters (some of which hold
+        // `want` entries). Only from the origin: every coordinate is as well conditioned for them
+        // as the first cluster's, where a ray from elsewhere that passes by the origin meets
+        // clusters below its rounding (triangles degenerate in its frame).
+        let mut rng = Rng::new(levels as u64);
+        let from_origin = |dir| Ray { origin: Vec3::ZERO, dir, tmin: 0.0, tmax: f32::INFINITY };
+        let rays: Vec<Ray> = (0..20)
+            .flat_map(|_| triangles.iter())
+            .map(|t| from_origin(point_on(t, &mut rng)))
+            .chain(directions.iter().map(|&d| from_origin(d)))
+            .collect();
+        let name = format!("nested clusters, {levels} levels, stack depth {depth}");
+        let hits = check_scene(&gpu, &tracer, &name, &triangles, &rays);
+        assert!(hits >= triangles.len(), "{name}: only {hits} hits");
+    }
+}
+
+/// The renderer's kernels walk a shallow BVH with the stack in registers (`shallow_bvh`), and
+/// passes made for deep BVHs walk any with the stack in memory: the two give the very same path
+/// traced and hybrid images (G-buffer, ray-traced AO and shadows, lighting), to the bit, on the
+/// sphere grid and on nested clusters whose walk fills every register, seen from the origin.
+#[test]
+fn register_and_memory_walks_render_the_same_images() {
+    use umbra::gpu::layout::BVH_REGISTERS;
+    use umbra::gpu::scene::GpuScene;
+    use umbra::gpu::SceneFeatures;
+    use umbra::passes::ao::AoSettings;
+    use umbra::render::{HybridSettings, Passes, PathSettings};
+    use umbra::scene::{LightKind, Scene};
+    let gpu = Gpu::new();
+    let spheres = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.glb")).unwrap();
+    // Primary rays from the origin (no near plane to speak of) into the clusters, one per pixel.
+    let size = (64, 64);
+    let camera = umbra::scene::Camera {
+        yfov: 2.0 * 0.25f32.atan(),
+        znear: 1e-12,
+        ..common::camera(Vec3::ZERO, Vec3::X)
+    };
+    let directions: Vec<Vec3> = (0..size.0 * size.1)
+        .map(|i| {
+            let (x, y) = ((i % size.0) as f32 + 0.5, (i / size.0) as f32 + 0.5);
+            Vec3::new(1.0, 0.25 - 0.5 * y / size.1 as f32, 0.25 - 0.5 * x / size.0 as f32)
+        })
+        .collect();
+    let (_, nested) = nested_clusters_of_depth(BVH_REGISTERS, &directions);
+    let bulb = common::light(LightKind::Point, Vec3::new(0.3, 0.4, 0.2), Vec3::ZERO, 2.0);
+    let nested = common::build("nested clusters", &[nested], vec![bulb], camera);
+    for scene in [spheres, nested] {
+        let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
+        let camera = scene.camera(None).unwrap();
+        let features = gpu_scene.features();
+        let depth = gpu_scene.bvh.stack_depth;
+        assert!(features.shallow_bvh && depth >= 8, "{}: stack depth {depth}", scene.name);
+        let registers = Passes::new(&gpu, &gpu_scene);
+        let memory = Passes::with_features(&gpu, SceneFeatures { shallow_bvh: false, ..features });
+        let path = PathSettings { size, spp: 4, seed: 3, ..PathSettings::default() };
+        let hybrid = HybridSettings { size, ao: Some(AoSettings::default()), ..Default::default() };
+        let [a, b] =
+            [&registers, &memory].map(|p| p.path_trace(&gpu_scene, &camera, &path, |_, _| {}).unwrap());
+        let lit = a.mean.iter().filter(|p| p[0] > 0.0).count();
+        assert!(lit > a.mean.len() / 10, "{}: {lit} pixels lit", scene.name);
+        let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert!(bits(&a.mean) == bits(&b.mean), "{}: the path tracer's images differ", scene.name);
+        let [a, b] = [&registers, &memory].map(|p| p.hybrid(&gpu_scene, &camera, &hybrid).unwrap());
+        assert!(bits(&a.color) == bits(&b.color), "{}: the hybrid images differ", scene.name);
+    }
 }
 
 /// Property test: random soups of many sizes and spreads (including all-identical triangles

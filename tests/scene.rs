@@ -1812,6 +1812,9 @@ fn feature_scenes() -> Vec<Scene> {
     let shape = json!({"sphere": {"radius": 0.5}, "material": 0});
     implicit.implicits.push(umbra::scene::implicit::from_json("ball", &shape, Mat4::IDENTITY, 1).unwrap());
     scenes.push(implicit);
+    // A BVH deeper than the traversal's register stack (no `shallow_bvh`).
+    let nested = umbra::procedural::nested_clusters(40, 16, 0.6, 1);
+    scenes.push(common::build("nested clusters", &[nested], vec![], camera));
     scenes
 }
 
@@ -1819,11 +1822,12 @@ fn feature_scenes() -> Vec<Scene> {
 /// tracer's pipeline on while the scene uploads) equals `SceneFeatures::of` of the uploaded scene
 /// on every scene at hand: scenes/ (generated and Khronos), the generated test squares, scenes
 /// built in code for the edge cases, and every Khronos model in the shared assets; with and
-/// without an environment map. Every feature is on in some scene and off in another, so a
+/// without an environment map. All but `shallow_bvh`, assumed before the BVH is built: a scene
+/// whose BVH is deeper has its pipelines made again (the deep ones are named). Every feature is on in some scene and off in another, so a
 /// feature computed wrongly either way fails.
 #[test]
 fn features_before_the_upload_are_the_uploads() {
-    use umbra::gpu::kernel::SCENE_FEATURES;
+    use umbra::gpu::kernel::{BVH_REGISTERS, SCENE_FEATURES};
     use umbra::gpu::scene::GpuScene;
     use umbra::gpu::SceneFeatures;
     let gpu = common::Gpu::new();
@@ -1878,9 +1882,18 @@ fn features_before_the_upload_are_the_uploads() {
             uploaded.set_environment(&gpu, &map).unwrap();
         }
         let early = SceneFeatures::of_scene(scene, env);
-        assert_eq!(early, uploaded.features(), "{}", scene.name);
+        let features = uploaded.features();
+        // But `shallow_bvh`, which only the BVH built tells: assumed, and true for the BVH's
+        // stack depth.
+        assert!(early.shallow_bvh, "{}", scene.name);
+        let depth = uploaded.bvh.stack_depth;
+        assert_eq!(features.shallow_bvh, depth <= BVH_REGISTERS, "{}: stack depth {depth}", scene.name);
+        if !features.shallow_bvh {
+            eprintln!("{}: a BVH deeper than the register stack ({depth} entries)", scene.name);
+        }
+        assert_eq!(SceneFeatures { shallow_bvh: features.shallow_bvh, ..early }, features, "{}", scene.name);
         for (k, name) in SCENE_FEATURES.iter().enumerate() {
-            let value = early.get(name).unwrap();
+            let value = features.get(name).unwrap();
             on[k] |= value;
             off[k] |= !value;
         }

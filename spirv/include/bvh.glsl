@@ -264,15 +264,19 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
 
 // After visit `v`, moves `node` into its nearest inner child (the others pushed as one entry), or
 // else to the next child of the entry on top of the stack (written back with the rest, or
-// popped); `more` is false when the walk is over. One stack word is stored, at a slot chosen per
-// lane, by every lane: on SIMD CPUs (llvmpipe) a store under a divergent condition, and each
-// extra store, costs a per-lane branch that mispredicts.
+// popped); `more` is false when the walk is over. The stack is the including walk's
+// (bvh_walk.glsl): BVH_STACK_GET(i) reads entry i, BVH_STACK_SET(i, value, write) stores value
+// there if `write`, which a stack in memory ignores: one stack word is stored, at a slot chosen
+// per lane, by every lane (on SIMD CPUs, llvmpipe, a store under a divergent condition, and each
+// extra store, costs a per-lane branch that mispredicts). A descent into a lone inner child
+// writes nothing, and a pop writes the slot it frees, so a stack of `stack_depth` entries
+// (GpuBvhNode::stack_depth) is never written past.
 #define BVH_ADVANCE(v, more)                                                                     \
     {                                                                                            \
-        uint top_ = stack[max(sp, 1u) - 1u];                                                     \
+        uint top_ = BVH_STACK_GET(max(sp, 1u) - 1u);                                             \
         uint rest_ = (top_ & 0xffffff00u) | ((((top_ >> 6u) & 3u) - 1u) << 6u) | ((top_ & 15u) << 2u); \
         bool descend_ = v.inner > 0u;                                                            \
-        stack[min(descend_ ? sp : sp - 1u, BVH_MAX_DEPTH - 1u)] = descend_ ? v.entry : rest_;    \
+        BVH_STACK_SET(descend_ ? sp : sp - 1u, descend_ ? v.entry : rest_, descend_ ? v.inner > 1u : sp > 0u); \
         more = descend_ || sp > 0u;                                                              \
         if (descend_) {                                                                          \
             node = v.nearest;                                                                    \
@@ -283,82 +287,64 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
         }                                                                                        \
     }
 
-// Front-to-back walk with t in (tmin, tmax); any_hit stops at the first hit found on an opaque
-// triangle (alpha-tested ones are kept as the nearest candidate instead, see bvh_trace). The
-// closest hit is the nearest, and of equally near ones (a ray through a shared edge) the one
-// first in the input, so the answer does not depend on the order of the walk (the BVH's layout,
-// its width, the CPU or the GPU): the brute-force reference keeps the lowest index too.
-// Each iteration visits two nodes, then tests the triangles of the leaf children both hit. On a
-// SIMD CPU (llvmpipe) every iteration runs the triangle loop's body at least once, whether or not
-// any lane has a leaf (in Sponza most visits have none), so two visits per loop halve those empty
-// runs: +20-30 % rays/s there (BENCHMARKS.md; three visits gained nothing more). The second
-// visit's culling does not see the first's triangles yet, which costs a few extra visits and
-// never a wrong answer. Everything per child is written out for constant child indices
-// (registers, not memory).
-bool bvh_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
-    hit = Hit(tmax, 0xffffffffu, vec2(0.0));
-    BvhRay r = bvh_ray(origin, dir);
-    uint stack[BVH_MAX_DEPTH];
-    uint sp = 0u;
-    uint node = 0u;
-    bool found = false;
-    uint hit_order = 0xffffffffu;
-    while (true) {
-        BvhVisit a = bvh_visit(r, node, tmin, tmax);
-        bool more;
-        BVH_ADVANCE(a, more);
-        // When the walk ended with the first visit, the second (of the same node) is void.
-        BvhVisit b = bvh_visit(r, node, tmin, tmax);
-        if (more) {
-            BVH_ADVANCE(b, more);
-        } else {
-            b.end = uvec4(0u);
-        }
-        uint from_b = a.end.w;
-        for (uint k = 0u; k < from_b + b.end.w; ++k) {
-            bool in_a = k < from_b;
-            uint j = in_a ? k : k - from_b;
-            uvec4 f = in_a ? a.first : b.first;
-            uvec4 e = in_a ? a.end : b.end;
-            uint i = j < e.x ? f.x + j : (j < e.y ? f.y + (j - e.x) : (j < e.z ? f.z + (j - e.y) : f.w + (j - e.z)));
-            float t;
-            vec2 bary;
-            uint order;
-            uint alpha;
-            // After a hit, one equally near with a lower input index replaces it.
-            float limit = found ? bvh_next_up(tmax) : tmax;
-            if (bvh_intersect(r, i, tmin, limit, t, bary, order, alpha) && (t < tmax || order < hit_order)) {
-                found = true;
-                tmax = t;
-                hit_order = order;
-                hit = Hit(t, i, bary);
-                if (any_hit && alpha == 0u) {
-                    return true;
-                }
-            }
-            // A procedural primitive (an implicit shape's box; v2.w its program, 0 for a
-            // triangle, whose test above never hits it): marched within the box. Compiled out of
-            // kernels not specialised for implicit shapes (HAS_IMPLICIT).
-            if (HAS_IMPLICIT) {
-                uint program = floatBitsToUint(bvh_tri_v(i, 2u).w);
-                float ts;
-                vec2 n_oct;
-                if (program != 0u && implicit_intersect(i, program, origin, dir, r.inv_dir, tmin, tmax, ts, n_oct)) {
-                    found = true;
-                    tmax = ts;
-                    hit_order = floatBitsToUint(bvh_tri_v(i, 0u).w);
-                    hit = Hit(ts, i, n_oct);
-                    if (any_hit) {
-                        return true;
-                    }
-                }
-            }
-        }
-        if (!more) {
-            break;
-        }
+// The walk over a stack of BVH_REGISTERS entries in registers (each read a tree of selects, each
+// write a select per entry), for a BVH whose walk never holds more (the scene feature
+// `shallow_bvh`: GpuBvhNode::stack_depth at most BVH_REGISTERS), and over BVH_MAX_DEPTH entries
+// in memory for any other. On llvmpipe a dynamically indexed array is a loop over the SIMD lanes
+// per access, 12-19 % of the path tracer's time (BENCHMARKS.md History: the registers took 0.72-0.95
+// times its time); a GPU keeps either in registers or its local memory.
+#define BVH_WALK bvh_walk_registers
+#define BVH_STACK_DECL \
+    uint s0_ = 0u, s1_ = 0u, s2_ = 0u, s3_ = 0u, s4_ = 0u, s5_ = 0u, s6_ = 0u, s7_ = 0u, s8_ = 0u, s9_ = 0u, s10_ = 0u, s11_ = 0u, s12_ = 0u, s13_ = 0u, s14_ = 0u, s15_ = 0u;
+#define BVH_SEL2(i, a, b) ((i & 1u) != 0u ? b : a)
+#define BVH_SEL4(i, a, b, c, d) ((i & 2u) != 0u ? BVH_SEL2(i, c, d) : BVH_SEL2(i, a, b))
+#define BVH_SEL8(i, a, b, c, d, e, f, g, h) \
+    ((i & 4u) != 0u ? BVH_SEL4(i, e, f, g, h) : BVH_SEL4(i, a, b, c, d))
+#define BVH_STACK_GET(i) bvh_reg_get(i, s0_, s1_, s2_, s3_, s4_, s5_, s6_, s7_, s8_, s9_, s10_, s11_, s12_, s13_, s14_, s15_)
+#define BVH_STACK_SET(i, value, write)                                                            \
+    {                                                                                            \
+        uint at_ = i;                                                                            \
+        uint value_ = value;                                                                     \
+        bool put_ = write;                                                                       \
+        s0_ = put_ && at_ == 0u ? value_ : s0_;                                              \
+        s1_ = put_ && at_ == 1u ? value_ : s1_;                                              \
+        s2_ = put_ && at_ == 2u ? value_ : s2_;                                              \
+        s3_ = put_ && at_ == 3u ? value_ : s3_;                                              \
+        s4_ = put_ && at_ == 4u ? value_ : s4_;                                              \
+        s5_ = put_ && at_ == 5u ? value_ : s5_;                                              \
+        s6_ = put_ && at_ == 6u ? value_ : s6_;                                              \
+        s7_ = put_ && at_ == 7u ? value_ : s7_;                                              \
+        s8_ = put_ && at_ == 8u ? value_ : s8_;                                              \
+        s9_ = put_ && at_ == 9u ? value_ : s9_;                                              \
+        s10_ = put_ && at_ == 10u ? value_ : s10_;                                           \
+        s11_ = put_ && at_ == 11u ? value_ : s11_;                                           \
+        s12_ = put_ && at_ == 12u ? value_ : s12_;                                           \
+        s13_ = put_ && at_ == 13u ? value_ : s13_;                                           \
+        s14_ = put_ && at_ == 14u ? value_ : s14_;                                           \
+        s15_ = put_ && at_ == 15u ? value_ : s15_;                                           \
     }
-    return found;
+uint bvh_reg_get(uint i, uint s0, uint s1, uint s2, uint s3, uint s4, uint s5, uint s6, uint s7, uint s8,
+                 uint s9, uint s10, uint s11, uint s12, uint s13, uint s14, uint s15) {
+    return (i & 8u) != 0u ? BVH_SEL8(i, s8, s9, s10, s11, s12, s13, s14, s15)
+                          : BVH_SEL8(i, s0, s1, s2, s3, s4, s5, s6, s7);
+}
+#include "bvh_walk.glsl"
+#undef BVH_WALK
+#undef BVH_STACK_DECL
+#undef BVH_STACK_GET
+#undef BVH_STACK_SET
+
+#define BVH_WALK bvh_walk_memory
+#define BVH_STACK_DECL uint stack_[BVH_MAX_DEPTH];
+#define BVH_STACK_GET(i) stack_[i]
+#define BVH_STACK_SET(i, value, write) stack_[min(i, BVH_MAX_DEPTH - 1u)] = value;
+#include "bvh_walk.glsl"
+
+bool bvh_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
+    if (HAS_SHALLOW_BVH) {
+        return bvh_walk_registers(origin, dir, tmin, tmax, any_hit, hit);
+    }
+    return bvh_walk_memory(origin, dir, tmin, tmax, any_hit, hit);
 }
 
 // The walk, and where the scene has alpha-tested triangles (UMBRA_ALPHA_TEST and HAS_ALPHA),

@@ -4,9 +4,10 @@
 use super::traverse::next_up;
 use super::{Bvh, BvhNode, BvhTri};
 use crate::error::{Error, Result};
+use crate::gpu::kernel::SceneFeatures;
 use crate::gpu::kernels::trace;
 pub use crate::gpu::layout::GpuBvhNode;
-use crate::gpu::layout::{TraceHit, TraceParams, TraceRay};
+use crate::gpu::layout::{TraceHit, TraceParams, TraceRay, BVH_REGISTERS};
 use crate::gpu::Pipeline;
 use crate::vk::{raw, Buffer, Context, Descriptor, MemoryLocation, TexelBuffer};
 use rayon::prelude::*;
@@ -458,27 +459,31 @@ pub enum Query {
     Any,
 }
 
-/// `trace.comp` specialised for both queries.
+/// `trace.comp` specialised for both queries and both walks: a BVH whose walk holds at most
+/// [`BVH_REGISTERS`] stack entries is traced with the stack in registers (`shallow_bvh`), any
+/// other with the stack in memory.
 pub struct RayTracer {
-    closest: Pipeline<trace::Kernel>,
-    any: Pipeline<trace::Kernel>,
+    /// Index: 2 × any-hit + shallow.
+    pipelines: [Pipeline<trace::Kernel>; 4],
 }
 
 /// Workgroup size of `trace.comp`.
 const LOCAL: u32 = 64;
 
 impl RayTracer {
-    /// Builds both pipelines, for BVHs of triangles only (implicit shapes compiled out: they are
+    /// Builds the pipelines, for BVHs of triangles only (implicit shapes compiled out: they are
     /// never hit).
     pub fn new(ctx: &Context) -> Result<Self> {
         Self::with_implicit(ctx, false)
     }
 
-    /// Builds both pipelines; `implicit`: ray-march the BVH's implicit shapes.
+    /// Builds the pipelines; `implicit`: ray-march the BVH's implicit shapes.
     pub fn with_implicit(ctx: &Context, implicit: bool) -> Result<Self> {
-        let features = crate::gpu::kernel::SceneFeatures { implicit, ..Default::default() };
-        let make = |trace_any| Pipeline::new(ctx, &trace::Spec { trace_any }, Some(&features));
-        Ok(Self { closest: make(false)?, any: make(true)? })
+        let make = |index: usize| {
+            let features = SceneFeatures { implicit, shallow_bvh: index & 1 == 1, ..Default::default() };
+            Pipeline::new(ctx, &trace::Spec { trace_any: index >= 2 }, Some(&features))
+        };
+        Ok(Self { pipelines: [make(0)?, make(1)?, make(2)?, make(3)?] })
     }
 
     /// Records a trace of `batch`'s rays into its hits. Never submits.
@@ -489,10 +494,8 @@ impl RayTracer {
         bvh: &GpuBvh,
         batch: &RayBatch,
     ) -> Result<()> {
-        let pipeline = match query {
-            Query::Closest => &self.closest,
-            Query::Any => &self.any,
-        };
+        let shallow = bvh.stack_depth <= BVH_REGISTERS;
+        let pipeline = &self.pipelines[2 * (query == Query::Any) as usize + shallow as usize];
         pipeline.record(
             cmd,
             &trace::Resources { bvh, rays: &batch.rays, hits: &batch.hits },

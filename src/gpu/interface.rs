@@ -39,7 +39,7 @@
 /// plain `false` there. A kernel specialised on `textures` is on every texture slot's feature too
 /// ([`TEXTURE_SLOT_FEATURES`]; build.rs refuses one that is not): a slot no material fills costs
 /// no lookup.
-pub const SCENE_FEATURES: [&str; 29] = [
+pub const SCENE_FEATURES: [&str; 30] = [
     "textures",
     "alpha",
     "lights",
@@ -69,6 +69,7 @@ pub const SCENE_FEATURES: [&str; 29] = [
     "diffuse_transmission_map",
     "thickness_map",
     "dispersion",
+    "shallow_bvh",
 ];
 
 /// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
@@ -981,6 +982,10 @@ gpu_structs! {
 }
 
 gpu_constants! {
+    /// The traversal's stack entries held in registers (`bvh.glsl`): a scene whose walk never
+    /// holds more ([`crate::bvh::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and
+    /// its kernels walk with that stack instead of one in memory.
+    BVH_REGISTERS: uint = 16;
     /// `GpuMaterial::flags.x`: the material is double-sided.
     MATERIAL_DOUBLE_SIDED: uint = 1;
     /// `GpuMaterial::flags.x`: `KHR_materials_volume` with a thickness: transmission refracts
@@ -1280,7 +1285,7 @@ scene_bindings! {
 kernels! {
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: PathParams,
         spec: {
             beckmann: bool = false,
@@ -1328,7 +1333,7 @@ kernels! {
     /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
     /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
     kernel wavefront {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion],
+        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: WaveParams,
         spec: {
             beckmann: bool = false,
@@ -1538,7 +1543,7 @@ kernels! {
 
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
         push: GBufferParams,
         spec: {},
         bindings: {
@@ -1562,7 +1567,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion],
+        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: DeferredParams,
         spec: {
             beckmann: bool = false,
@@ -1623,7 +1628,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1654,7 +1659,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy],
+        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
         push: RestirParams,
         spec: {
             beckmann: bool = false,
@@ -1697,7 +1702,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
+        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
         push: AoParams,
         spec: {},
         bindings: {
@@ -1912,7 +1917,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
         push: LightmapParams,
         spec: { occlusion: bool = false },
         bindings: {
@@ -1934,7 +1939,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
+        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
         push: ProbeUpdateParams,
         spec: {},
         bindings: {
@@ -1967,7 +1972,7 @@ kernels! {
     }
     /// Rays through the BVH (tests and the ray-throughput benchmark).
     kernel trace {
-        scene: bvh [implicit],
+        scene: bvh [implicit, shallow_bvh],
         push: TraceParams,
         spec: { trace_any: bool = false },
         bindings: {

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc};
 use std::marker::PhantomData;
 
-pub use super::layout::{FIRST_KERNEL_SPEC_ID, SCENE_FEATURES, TEXTURE_SLOT_FEATURES};
+pub use super::layout::{BVH_REGISTERS, FIRST_KERNEL_SPEC_ID, SCENE_FEATURES, TEXTURE_SLOT_FEATURES};
 
 /// How a binding is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -169,6 +169,9 @@ pub struct SceneFeatures {
     pub diffuse_transmission: bool,
     /// Some transmitting volume disperses (`KHR_materials_dispersion`).
     pub dispersion: bool,
+    /// The BVH's walk never holds more than [`BVH_REGISTERS`] stack entries
+    /// ([`crate::bvh::GpuBvhNode::stack_depth`]): the kernels keep the stack in registers.
+    pub shallow_bvh: bool,
 }
 
 impl SceneFeatures {
@@ -192,6 +195,7 @@ impl SceneFeatures {
             anisotropy: scene.has_anisotropy,
             diffuse_transmission: scene.has_diffuse_transmission,
             dispersion: scene.has_dispersion,
+            shallow_bvh: scene.bvh.stack_depth <= BVH_REGISTERS,
         }
     }
 
@@ -214,6 +218,7 @@ impl SceneFeatures {
             "anisotropy" => self.anisotropy,
             "diffuse_transmission" => self.diffuse_transmission,
             "dispersion" => self.dispersion,
+            "shallow_bvh" => self.shallow_bvh,
             _ => {
                 let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
                 self.texture_slots & slots != 0

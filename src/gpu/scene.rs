@@ -507,7 +507,9 @@ impl SceneFeatures {
     /// uploaded, so that the pipelines specialised on them can be created meanwhile. The
     /// materials' features come from `gpu_material` as the upload's do; the rest from the
     /// scene's lists the upload's arrays are made from (tests/scene.rs checks that the two agree
-    /// on every scene at hand).
+    /// on every scene at hand). All but `shallow_bvh`, which only the built BVH tells: it is
+    /// assumed (every scene at hand has a shallow BVH, Sponza's walk holds 12 entries), and a
+    /// scene whose BVH is deeper gets passes made again for its features, as any mismatch does.
     pub fn of_scene(scene: &Scene, env_map: bool) -> Self {
         let materials: Vec<GpuMaterial> = scene
             .materials
@@ -535,6 +537,7 @@ impl SceneFeatures {
             anisotropy: anisotropic(&materials),
             diffuse_transmission: diffusely_transmits(&materials),
             dispersion: disperses(&materials),
+            shallow_bvh: true,
         }
     }
 }

@@ -983,7 +983,7 @@ gpu_structs! {
 
 gpu_constants! {
     /// The traversal's stack entries held in registers (`bvh.glsl`): a scene whose walk never
-    /// holds more ([`crate::bvh::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and
+    /// holds more ([`crate::bvh::gpu::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and
     /// its kernels walk with that stack instead of one in memory.
     BVH_REGISTERS: uint = 16;
     /// `GpuMaterial::flags.x`: the material is double-sided.

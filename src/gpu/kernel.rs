@@ -170,7 +170,7 @@ pub struct SceneFeatures {
     /// Some transmitting volume disperses (`KHR_materials_dispersion`).
     pub dispersion: bool,
     /// The BVH's walk never holds more than [`BVH_REGISTERS`] stack entries
-    /// ([`crate::bvh::GpuBvhNode::stack_depth`]): the kernels keep the stack in registers.
+    /// ([`crate::bvh::gpu::GpuBvhNode::stack_depth`]): the kernels keep the stack in registers.
     pub shallow_bvh: bool,
 }
 

@@ -265,79 +265,90 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
 // After visit `v`, moves `node` into its nearest inner child (the others pushed as one entry), or
 // else to the next child of the entry on top of the stack (written back with the rest, or
 // popped); `more` is false when the walk is over. The stack is the including walk's
-// (bvh_walk.glsl): BVH_STACK_GET(i) reads entry i, BVH_STACK_SET(i, value, write) stores value
-// there if `write`, which a stack in memory ignores: one stack word is stored, at a slot chosen
-// per lane, by every lane (on SIMD CPUs, llvmpipe, a store under a divergent condition, and each
-// extra store, costs a per-lane branch that mispredicts). A descent into a lone inner child
-// writes nothing, and a pop writes the slot it frees, so a stack of `stack_depth` entries
-// (GpuBvhNode::stack_depth) is never written past.
+// (bvh_walk.glsl): BVH_STACK_TOP is its top entry (anything when it is empty), and
+// BVH_STACK_UPDATE(descend, push, pop, entry, rest) pushes `entry` if `push`, pops if `pop`, and
+// otherwise, when the walk ascends (not `descend`) from a stack of one or more entries, writes
+// `rest` over the top one.
 #define BVH_ADVANCE(v, more)                                                                     \
     {                                                                                            \
-        uint top_ = BVH_STACK_GET(max(sp, 1u) - 1u);                                             \
+        uint top_ = BVH_STACK_TOP;                                                               \
         uint rest_ = (top_ & 0xffffff00u) | ((((top_ >> 6u) & 3u) - 1u) << 6u) | ((top_ & 15u) << 2u); \
         bool descend_ = v.inner > 0u;                                                            \
-        BVH_STACK_SET(descend_ ? sp : sp - 1u, descend_ ? v.entry : rest_, descend_ ? v.inner > 1u : sp > 0u); \
+        bool push_ = v.inner > 1u;                                                               \
+        bool pop_ = !descend_ && sp > 0u && ((top_ >> 6u) & 3u) == 1u;                           \
+        BVH_STACK_UPDATE(descend_, push_, pop_, v.entry, rest_);                                 \
         more = descend_ || sp > 0u;                                                              \
         if (descend_) {                                                                          \
             node = v.nearest;                                                                    \
-            sp += v.inner > 1u ? 1u : 0u;                                                        \
+            sp += push_ ? 1u : 0u;                                                               \
         } else if (sp > 0u) {                                                                    \
             node = (top_ >> 8u) + ((top_ >> 4u) & 3u);                                           \
-            sp -= ((top_ >> 6u) & 3u) == 1u ? 1u : 0u;                                           \
+            sp -= pop_ ? 1u : 0u;                                                                \
         }                                                                                        \
     }
 
-// The walk over a stack of BVH_REGISTERS entries in registers (each read a tree of selects, each
-// write a select per entry), for a BVH whose walk never holds more (the scene feature
-// `shallow_bvh`: GpuBvhNode::stack_depth at most BVH_REGISTERS), and over BVH_MAX_DEPTH entries
-// in memory for any other. On llvmpipe a dynamically indexed array is a loop over the SIMD lanes
-// per access, 12-19 % of the path tracer's time (BENCHMARKS.md History: the registers took 0.72-0.95
-// times its time); a GPU keeps either in registers or its local memory.
+// The walk over a stack of BVH_REGISTERS entries in registers, for a BVH whose walk never holds
+// more (the scene feature `shallow_bvh`: GpuBvhNode::stack_depth at most BVH_REGISTERS), and over
+// BVH_MAX_DEPTH entries in memory for any other. On llvmpipe a dynamically indexed array is a loop
+// over the SIMD lanes per access, 12-19 % of the path tracer's time (BENCHMARKS.md History: the
+// registers took 0.66-1.00 times its time); a GPU keeps either in registers or its local memory.
+// The registers are a shift register, s0_ the top: a push moves every entry one down, a pop one
+// up (a select per register each), so no access is indexed.
 #define BVH_WALK bvh_walk_registers
 #define BVH_STACK_DECL \
     uint s0_ = 0u, s1_ = 0u, s2_ = 0u, s3_ = 0u, s4_ = 0u, s5_ = 0u, s6_ = 0u, s7_ = 0u, s8_ = 0u, s9_ = 0u, s10_ = 0u, s11_ = 0u, s12_ = 0u, s13_ = 0u, s14_ = 0u, s15_ = 0u;
-#define BVH_SEL2(i, a, b) ((i & 1u) != 0u ? b : a)
-#define BVH_SEL4(i, a, b, c, d) ((i & 2u) != 0u ? BVH_SEL2(i, c, d) : BVH_SEL2(i, a, b))
-#define BVH_SEL8(i, a, b, c, d, e, f, g, h) \
-    ((i & 4u) != 0u ? BVH_SEL4(i, e, f, g, h) : BVH_SEL4(i, a, b, c, d))
-#define BVH_STACK_GET(i) bvh_reg_get(i, s0_, s1_, s2_, s3_, s4_, s5_, s6_, s7_, s8_, s9_, s10_, s11_, s12_, s13_, s14_, s15_)
-#define BVH_STACK_SET(i, value, write)                                                            \
+#define BVH_STACK_TOP s0_
+#define BVH_STACK_UPDATE(descend, push, pop, entry, rest)                                        \
     {                                                                                            \
-        uint at_ = i;                                                                            \
-        uint value_ = value;                                                                     \
-        bool put_ = write;                                                                       \
-        s0_ = put_ && at_ == 0u ? value_ : s0_;                                              \
-        s1_ = put_ && at_ == 1u ? value_ : s1_;                                              \
-        s2_ = put_ && at_ == 2u ? value_ : s2_;                                              \
-        s3_ = put_ && at_ == 3u ? value_ : s3_;                                              \
-        s4_ = put_ && at_ == 4u ? value_ : s4_;                                              \
-        s5_ = put_ && at_ == 5u ? value_ : s5_;                                              \
-        s6_ = put_ && at_ == 6u ? value_ : s6_;                                              \
-        s7_ = put_ && at_ == 7u ? value_ : s7_;                                              \
-        s8_ = put_ && at_ == 8u ? value_ : s8_;                                              \
-        s9_ = put_ && at_ == 9u ? value_ : s9_;                                              \
-        s10_ = put_ && at_ == 10u ? value_ : s10_;                                           \
-        s11_ = put_ && at_ == 11u ? value_ : s11_;                                           \
-        s12_ = put_ && at_ == 12u ? value_ : s12_;                                           \
-        s13_ = put_ && at_ == 13u ? value_ : s13_;                                           \
-        s14_ = put_ && at_ == 14u ? value_ : s14_;                                           \
-        s15_ = put_ && at_ == 15u ? value_ : s15_;                                           \
+        bool up_ = pop;                                                                          \
+        bool down_ = descend && push;                                                            \
+        s0_ = up_ ? s1_ : s0_;                                                                   \
+        s1_ = up_ ? s2_ : s1_;                                                               \
+        s2_ = up_ ? s3_ : s2_;                                                               \
+        s3_ = up_ ? s4_ : s3_;                                                               \
+        s4_ = up_ ? s5_ : s4_;                                                               \
+        s5_ = up_ ? s6_ : s5_;                                                               \
+        s6_ = up_ ? s7_ : s6_;                                                               \
+        s7_ = up_ ? s8_ : s7_;                                                               \
+        s8_ = up_ ? s9_ : s8_;                                                               \
+        s9_ = up_ ? s10_ : s9_;                                                              \
+        s10_ = up_ ? s11_ : s10_;                                                            \
+        s11_ = up_ ? s12_ : s11_;                                                            \
+        s12_ = up_ ? s13_ : s12_;                                                            \
+        s13_ = up_ ? s14_ : s13_;                                                            \
+        s14_ = up_ ? s15_ : s14_;                                                            \
+        s15_ = down_ ? s14_ : s15_;                                                          \
+        s14_ = down_ ? s13_ : s14_;                                                          \
+        s13_ = down_ ? s12_ : s13_;                                                          \
+        s12_ = down_ ? s11_ : s12_;                                                          \
+        s11_ = down_ ? s10_ : s11_;                                                          \
+        s10_ = down_ ? s9_ : s10_;                                                           \
+        s9_ = down_ ? s8_ : s9_;                                                             \
+        s8_ = down_ ? s7_ : s8_;                                                             \
+        s7_ = down_ ? s6_ : s7_;                                                             \
+        s6_ = down_ ? s5_ : s6_;                                                             \
+        s5_ = down_ ? s4_ : s5_;                                                             \
+        s4_ = down_ ? s3_ : s4_;                                                             \
+        s3_ = down_ ? s2_ : s3_;                                                             \
+        s2_ = down_ ? s1_ : s2_;                                                             \
+        s1_ = down_ ? s0_ : s1_;                                                             \
+        s0_ = down_ ? entry : (!descend && sp > 0u && !up_ ? rest : s0_);                        \
     }
-uint bvh_reg_get(uint i, uint s0, uint s1, uint s2, uint s3, uint s4, uint s5, uint s6, uint s7, uint s8,
-                 uint s9, uint s10, uint s11, uint s12, uint s13, uint s14, uint s15) {
-    return (i & 8u) != 0u ? BVH_SEL8(i, s8, s9, s10, s11, s12, s13, s14, s15)
-                          : BVH_SEL8(i, s0, s1, s2, s3, s4, s5, s6, s7);
-}
 #include "bvh_walk.glsl"
 #undef BVH_WALK
 #undef BVH_STACK_DECL
-#undef BVH_STACK_GET
-#undef BVH_STACK_SET
+#undef BVH_STACK_TOP
+#undef BVH_STACK_UPDATE
 
+// In memory, one stack word is stored, at a slot chosen per lane, by every lane (on SIMD CPUs,
+// llvmpipe, a store under a divergent condition, and each extra store, costs a per-lane branch
+// that mispredicts): the pushed entry, or the rest over the top one (a popped one's slot is
+// free). A descent into a lone inner child writes the free slot above the top.
 #define BVH_WALK bvh_walk_memory
 #define BVH_STACK_DECL uint stack_[BVH_MAX_DEPTH];
-#define BVH_STACK_GET(i) stack_[i]
-#define BVH_STACK_SET(i, value, write) stack_[min(i, BVH_MAX_DEPTH - 1u)] = value;
+#define BVH_STACK_TOP stack_[max(sp, 1u) - 1u]
+#define BVH_STACK_UPDATE(descend, push, pop, entry, rest) \
+    stack_[min(descend ? sp : sp - 1u, BVH_MAX_DEPTH - 1u)] = descend ? entry : rest;
 #include "bvh_walk.glsl"
 
 bool bvh_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {

@@ -1,5 +1,5 @@
 // The body of the BVH walk (bvh.glsl), included once per stack: BVH_WALK names the function,
-// BVH_STACK_DECL declares its stack, BVH_STACK_GET and BVH_STACK_SET read and write it
+// BVH_STACK_DECL declares its stack, BVH_STACK_TOP and BVH_STACK_UPDATE read and change it
 // (BVH_ADVANCE).
 // Front-to-back walk with t in (tmin, tmax); any_hit stops at the first hit found on an opaque
 // triangle (alpha-tested ones are kept as the nearest candidate instead, see bvh_trace). The

@@ -15,7 +15,7 @@ Mitsuba: a warmed-up render), give the time each needs for equal error. Writes p
 Both print their table with `umbra-bench peers --table FILE` (also `peers.py table FILE`), the one
 printer of these tables, which tests/bench.rs checks against BENCHMARKS.md without Python.
 
-    pip install embreex mitsuba numpy    # Mitsuba's llvm variant also needs apt's libllvm19
+    pip install embreex mitsuba numpy pillow   # Mitsuba's llvm variant also needs apt's libllvm19; pillow decodes textures
     python3 src/bin/umbra-bench/peers.py rays --bench target/release/umbra-bench \
         --gltf ../shared/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb --size 512x512
     python3 src/bin/umbra-bench/peers.py path --umbra target/release/umbra scenes/cornell-box.glb

@@ -300,39 +300,37 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
 #define BVH_STACK_TOP s0_
 #define BVH_STACK_UPDATE(descend, push, pop, entry, rest)                                        \
     {                                                                                            \
-        bool up_ = pop;                                                                          \
-        bool down_ = descend && push;                                                            \
-        s0_ = up_ ? s1_ : s0_;                                                                   \
-        s1_ = up_ ? s2_ : s1_;                                                               \
-        s2_ = up_ ? s3_ : s2_;                                                               \
-        s3_ = up_ ? s4_ : s3_;                                                               \
-        s4_ = up_ ? s5_ : s4_;                                                               \
-        s5_ = up_ ? s6_ : s5_;                                                               \
-        s6_ = up_ ? s7_ : s6_;                                                               \
-        s7_ = up_ ? s8_ : s7_;                                                               \
-        s8_ = up_ ? s9_ : s8_;                                                               \
-        s9_ = up_ ? s10_ : s9_;                                                              \
-        s10_ = up_ ? s11_ : s10_;                                                            \
-        s11_ = up_ ? s12_ : s11_;                                                            \
-        s12_ = up_ ? s13_ : s12_;                                                            \
-        s13_ = up_ ? s14_ : s13_;                                                            \
-        s14_ = up_ ? s15_ : s14_;                                                            \
-        s15_ = down_ ? s14_ : s15_;                                                          \
-        s14_ = down_ ? s13_ : s14_;                                                          \
-        s13_ = down_ ? s12_ : s13_;                                                          \
-        s12_ = down_ ? s11_ : s12_;                                                          \
-        s11_ = down_ ? s10_ : s11_;                                                          \
-        s10_ = down_ ? s9_ : s10_;                                                           \
-        s9_ = down_ ? s8_ : s9_;                                                             \
-        s8_ = down_ ? s7_ : s8_;                                                             \
-        s7_ = down_ ? s6_ : s7_;                                                             \
-        s6_ = down_ ? s5_ : s6_;                                                             \
-        s5_ = down_ ? s4_ : s5_;                                                             \
-        s4_ = down_ ? s3_ : s4_;                                                             \
-        s3_ = down_ ? s2_ : s3_;                                                             \
-        s2_ = down_ ? s1_ : s2_;                                                             \
-        s1_ = down_ ? s0_ : s1_;                                                             \
-        s0_ = down_ ? entry : (!descend && sp > 0u && !up_ ? rest : s0_);                        \
+        s0_ = (pop) ? s1_ : s0_;                                                                 \
+        s1_ = (pop) ? s2_ : s1_;                                                                 \
+        s2_ = (pop) ? s3_ : s2_;                                                                 \
+        s3_ = (pop) ? s4_ : s3_;                                                                 \
+        s4_ = (pop) ? s5_ : s4_;                                                                 \
+        s5_ = (pop) ? s6_ : s5_;                                                                 \
+        s6_ = (pop) ? s7_ : s6_;                                                                 \
+        s7_ = (pop) ? s8_ : s7_;                                                                 \
+        s8_ = (pop) ? s9_ : s8_;                                                                 \
+        s9_ = (pop) ? s10_ : s9_;                                                                \
+        s10_ = (pop) ? s11_ : s10_;                                                              \
+        s11_ = (pop) ? s12_ : s11_;                                                              \
+        s12_ = (pop) ? s13_ : s12_;                                                              \
+        s13_ = (pop) ? s14_ : s13_;                                                              \
+        s14_ = (pop) ? s15_ : s14_;                                                              \
+        s15_ = (push) ? s14_ : s15_;                                                             \
+        s14_ = (push) ? s13_ : s14_;                                                             \
+        s13_ = (push) ? s12_ : s13_;                                                             \
+        s12_ = (push) ? s11_ : s12_;                                                             \
+        s11_ = (push) ? s10_ : s11_;                                                             \
+        s10_ = (push) ? s9_ : s10_;                                                              \
+        s9_ = (push) ? s8_ : s9_;                                                                \
+        s8_ = (push) ? s7_ : s8_;                                                                \
+        s7_ = (push) ? s6_ : s7_;                                                                \
+        s6_ = (push) ? s5_ : s6_;                                                                \
+        s5_ = (push) ? s4_ : s5_;                                                                \
+        s4_ = (push) ? s3_ : s4_;                                                                \
+        s3_ = (push) ? s2_ : s3_;                                                                \
+        s2_ = (push) ? s1_ : s2_;                                                                \
+        s1_ = (push) ? s0_ : s1_;                                                                \
+        s0_ = (push) ? (entry) : (!(descend) && sp > 0u && !(pop) ? (rest) : s0_);             \
     }
 #include "bvh_walk.glsl"
 #undef BVH_WALK
@@ -348,7 +346,7 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
 #define BVH_STACK_DECL uint stack_[BVH_MAX_DEPTH];
 #define BVH_STACK_TOP stack_[max(sp, 1u) - 1u]
 #define BVH_STACK_UPDATE(descend, push, pop, entry, rest) \
-    stack_[min(descend ? sp : sp - 1u, BVH_MAX_DEPTH - 1u)] = descend ? entry : rest;
+    stack_[min((descend) ? sp : sp - 1u, BVH_MAX_DEPTH - 1u)] = (descend) ? (entry) : (rest);
 #include "bvh_walk.glsl"
 
 bool bvh_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {

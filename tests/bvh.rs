@@ -547,6 +547,91 @@ fn register_and_memory_walks_render_the_same_images() {
     }
 }
 
+/// Alpha-masked triangles opaque wherever a ray can hit them lose their alpha test, and ones
+/// transparent everywhere are never hit (`ALPHA_NEVER_HIT`): classified from their texels at the
+/// upload. On Khronos' TransmissionTest, whose masked triangles fall in all three classes, the
+/// path-traced and hybrid images equal those of the same scene with every masked triangle
+/// tested, to the bit.
+#[test]
+fn alpha_classes_render_the_images_of_the_alpha_test() {
+    use umbra::gpu::layout::ALPHA_NEVER_HIT;
+    use umbra::gpu::scene::{GpuScene, SceneArrays};
+    use umbra::passes::ao::AoSettings;
+    use umbra::render::{HybridSettings, Passes, PathSettings};
+    use umbra::scene::{AlphaMode, Scene};
+    let assets = std::env::var_os("UMBRA_ASSETS")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets"));
+    let path = assets.join("gltf/TransmissionTest/glTF-Binary/TransmissionTest.glb");
+    if !path.exists() && std::env::var_os("UMBRA_SKIP_SHARED_ASSETS").is_some() {
+        return;
+    }
+    let scene = Scene::load(&path).unwrap();
+    let gpu = Gpu::new();
+    let classified = SceneArrays::new(&scene).unwrap();
+    let mut tested = SceneArrays::new(&scene).unwrap();
+    let mut classes = [0usize; 3]; // opaque, never hit, tested
+    for tri in tested.bvh.tris.iter_mut() {
+        let input = tri.v0[3].to_bits() as usize;
+        let Some(&m) = scene.triangle_material.get(input) else { continue };
+        if scene.materials[m as usize].alpha_mode != AlphaMode::Mask {
+            continue;
+        }
+        classes[match tri.v1[3].to_bits() {
+            0 => 0,
+            ALPHA_NEVER_HIT => 1,
+            _ => 2,
+        }] += 1;
+        tri.v1[3] = f32::from_bits(1);
+    }
+    assert!(classes.iter().all(|&n| n > 1000), "opaque, never hit, tested: {classes:?}");
+    let [classified, tested] = [&classified, &tested].map(|a| GpuScene::from_arrays(&gpu, a).unwrap());
+    let camera = scene.camera(None).unwrap();
+    let passes = Passes::new(&gpu, &classified);
+    let path = PathSettings { size: (64, 48), spp: 4, seed: 5, ..PathSettings::default() };
+    let hybrid = HybridSettings { size: (64, 48), ao: Some(AoSettings::default()), ..Default::default() };
+    let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let [a, b] = [&classified, &tested].map(|s| passes.path_trace(s, &camera, &path, |_, _| {}).unwrap());
+    let differ = a.mean.iter().zip(&b.mean).filter(|(p, q)| bits(&[**p]) != bits(&[**q])).count();
+    assert_eq!(differ, 0, "the path tracer's images differ in {differ} pixels");
+    let [a, b] = [&classified, &tested].map(|s| passes.hybrid(s, &camera, &hybrid).unwrap());
+    assert!(bits(&a.color) == bits(&b.color), "the hybrid images differ");
+}
+
+/// The alpha classes' bound on a masked quad (cutoff 0.9) whose texture transform maps it onto
+/// texels 0.4 to 1.8 of a 4-texel row, bilinear: every texel it covers is opaque, but a lookup at
+/// 1.8 blends in texel 2 (alpha 0.7 there), so it keeps its test; all-opaque texels make it
+/// opaque (no test), all-transparent ones never hit. Nearest filtering reaches no further, and
+/// the class must not depend on which.
+#[test]
+fn alpha_classes_bound_what_a_lookup_reads() {
+    use umbra::gpu::layout::ALPHA_NEVER_HIT;
+    use umbra::gpu::scene::SceneArrays;
+    use umbra::scene::{AlphaMode, Filter, Material};
+    for (texels, want) in [
+        ([[255, 255, 255, 255], [255, 255, 255, 255], [255, 255, 255, 0], [255, 255, 255, 0]], 1),
+        ([[255, 255, 255, 255]; 4], 0),
+        ([[255, 255, 255, 0]; 4], ALPHA_NEVER_HIT),
+    ] {
+        for filter in [Filter::Linear, Filter::Nearest] {
+            let mut texture = common::row_texture("alpha", &texels);
+            texture.sampler.mag_filter = filter;
+            let mut reference = common::quad::slot().unwrap();
+            reference.transform = [[0.35, 0.0, 0.1], [0.0, 1.0, 0.0]];
+            let material = Material {
+                base_color_texture: Some(reference),
+                alpha_mode: AlphaMode::Mask,
+                alpha_cutoff: 0.9,
+                ..Default::default()
+            };
+            let scene = common::quad::scene("masked quad", material, Some(texture), 0.0);
+            let arrays = SceneArrays::new(&scene).unwrap();
+            let modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
+            assert!(modes.iter().all(|&m| m == want), "{texels:?}, {filter:?}: {modes:?}, not {want}");
+        }
+    }
+}
+
 /// Property test: random soups of many sizes and spreads (including all-identical triangles
 /// and huge next to tiny ones) give valid BVHs: every triangle reachable from the root exactly
 /// once, child boxes inside parents, triangles inside leaves, depth bounded.

@@ -45,7 +45,12 @@ bool BVH_WALK(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out H
             uint alpha;
             // After a hit, one equally near with a lower input index replaces it.
             float limit = found ? bvh_next_up(tmax) : tmax;
-            if (bvh_intersect(r, i, tmin, limit, t, bary, order, alpha) && (t < tmax || order < hit_order)) {
+            bool hits = bvh_intersect(r, i, tmin, limit, t, bary, order, alpha);
+            // A triangle transparent wherever it can be hit is never hit (alpha-tested scenes).
+            if (HAS_ALPHA) {
+                hits = hits && alpha != ALPHA_NEVER_HIT;
+            }
+            if (hits && (t < tmax || order < hit_order)) {
                 found = true;
                 tmax = t;
                 hit_order = order;

@@ -184,7 +184,8 @@ gpu_structs! {
     }
 
     /// A triangle in BVH order: three vertices, and in `v0[3]` the bits of its index in the
-    /// input; `v1[3]` holds its alpha mode bits (0 opaque, 1 mask, 2 blend) for the traversal.
+    /// input; `v1[3]` holds its alpha mode bits (0 opaque, 1 mask, 2 blend, [`ALPHA_NEVER_HIT`]) for
+    /// the traversal.
     struct BvhTri {
         /// First vertex; `w` holds the input index as `f32` bits.
         v0: vec4,
@@ -982,6 +983,10 @@ gpu_structs! {
 }
 
 gpu_constants! {
+    /// A triangle's alpha bits (`BvhTri::v1[3]`; 0 opaque, 1 mask, 2 blend) when its alpha is
+    /// below the cutoff wherever a ray can hit it: the walk never hits it (`GpuScene`'s upload
+    /// classifies each alpha-tested triangle from its texels).
+    ALPHA_NEVER_HIT: uint = 3;
     /// The traversal's stack entries held in registers (`bvh.glsl`): a scene whose walk never
     /// holds more ([`crate::bvh::gpu::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and
     /// its kernels walk with that stack instead of one in memory.

@@ -4,7 +4,7 @@
 use super::kernel::SceneFeatures;
 use super::layout::{
     GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources, TexTransforms,
-    MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
+    ALPHA_NEVER_HIT, MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
 };
 use crate::bvh::gpu::GpuBvh;
 use crate::bvh::{Bvh, BvhStats};
@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Material, Scene, Texture, TextureRef};
 use crate::vk::{raw, Context, DeviceInfo, TexelBuffer};
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// Storage buffers for one scene.
 pub struct GpuScene {
@@ -519,8 +520,9 @@ impl SceneFeatures {
         let slots = texture_slots(&materials);
         Self {
             textures: slots != 0,
-            // Every triangle is in the BVH (implicit shapes are never alpha-tested).
-            alpha: scene.triangle_material.iter().any(|&m| alpha_bits(scene, m) != 0),
+            // Every triangle is in the BVH (implicit shapes are never alpha-tested), with its
+            // alpha bits as classified.
+            alpha: (0..scene.triangles.len()).into_par_iter().any(|t| triangle_alpha(scene, t) != 0),
             lights: !scene.emissive.triangles.is_empty(),
             punctual: !scene.lights.is_empty(),
             env_map,
@@ -731,13 +733,100 @@ fn upload_rg32ui(ctx: &Context, name: &str, items: &[[u32; 2]]) -> Result<TexelB
     TexelBuffer::upload(ctx, name, items, raw::Format::R32G32_UINT, 8)
 }
 
-/// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits (0 opaque,
-/// 1 mask, 2 blend).
+/// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits
+/// ([`triangle_alpha`]).
 fn alpha_modes(scene: &Scene, prim_order: &[u32]) -> Vec<u32> {
-    prim_order
-        .iter()
-        .map(|&p| scene.triangle_material.get(p as usize).map_or(0, |&m| alpha_bits(scene, m)))
-        .collect()
+    prim_order.par_iter().map(|&p| triangle_alpha(scene, p as usize)).collect()
+}
+
+/// The traversal's alpha bits of triangle `t` (scene order): 0 opaque, 1 mask, 2 blend as its
+/// material's alpha mode, but 0 for a masked triangle whose alpha is above the cutoff wherever a
+/// ray can hit it, and [`ALPHA_NEVER_HIT`] for a masked or blended one whose alpha is below the
+/// cutoff (blend: zero) everywhere, which the walk then never hits: the coarse form of opacity
+/// micromaps. `bvh_alpha_opaque` (shading.glsl) multiplies the base colour factor's alpha, the
+/// base colour texture's at the hit (level 0, its sampler's wrap and filter) and the vertex
+/// colours' (8-bit, interpolated); bounded here by the factor, the texels a lookup within the
+/// triangle's UVs can read (their box widened by one texel, wrapped as the sampler wraps) and the
+/// three vertices' colours, with a margin of 1e-4 on the cutoff for the lookups' rounding. A
+/// blended triangle keeps its test unless it is transparent: alpha 1 passes the stochastic test
+/// but for a rounding of the filter's weights.
+fn triangle_alpha(scene: &Scene, t: usize) -> u32 {
+    const MARGIN: f32 = 1e-4;
+    let Some(&m) = scene.triangle_material.get(t) else { return 0 };
+    let bits = alpha_bits(scene, m);
+    let (Some(material), Some(tri)) = (scene.materials.get(m as usize), scene.triangles.get(t)) else {
+        return bits;
+    };
+    if bits == 0 {
+        return 0;
+    }
+    let factor = material.base_color_factor[3];
+    let colour =
+        |v: u32| (pack_color(scene.colors.get(v as usize).copied().unwrap_or(WHITE)) >> 24) as f32 / 255.0;
+    let colours = tri.map(colour);
+    let mut lo = factor * colours.iter().copied().fold(f32::INFINITY, f32::min);
+    let mut hi = factor * colours.iter().copied().fold(0.0f32, f32::max);
+    if let Some((r, texture)) = used_texture(scene, material.base_color_texture.as_ref()) {
+        let Some((a, b)) = texel_alpha_range(scene, tri, r, texture) else { return bits };
+        lo *= a;
+        hi *= b;
+    }
+    match bits {
+        1 if lo > material.alpha_cutoff + MARGIN => 0,
+        1 if hi < material.alpha_cutoff - MARGIN => ALPHA_NEVER_HIT,
+        2 if hi <= 0.0 => ALPHA_NEVER_HIT,
+        _ => bits,
+    }
+}
+
+/// The least and greatest alpha (0 to 1) of the texels of `texture` a lookup at a point of
+/// triangle `tri` can read (`None` when its UVs are not finite or span too many copies to scan).
+fn texel_alpha_range(scene: &Scene, tri: &[u32; 3], r: &TextureRef, texture: &Texture) -> Option<(f32, f32)> {
+    let uvs = if r.tex_coord == 1 { &scene.uv1 } else { &scene.uv0 };
+    let (w, h) = (texture.width as i64, texture.height as i64);
+    let t = r.transform;
+    let mut bounds = [[f64::INFINITY, f64::NEG_INFINITY]; 2];
+    for &v in tri {
+        let [u, v] = uvs.get(v as usize).copied().unwrap_or([0.0; 2]);
+        let st = [t[0][0] * u + t[0][1] * v + t[0][2], t[1][0] * u + t[1][1] * v + t[1][2]];
+        for (axis, &x) in st.iter().enumerate() {
+            let x = x as f64 * [w, h][axis] as f64;
+            bounds[axis] = [bounds[axis][0].min(x), bounds[axis][1].max(x)];
+        }
+    }
+    // Texel k covers [k, k + 1); a bilinear lookup at x reads floor(x - 1/2) and the next.
+    let span = |[lo, hi]: [f64; 2], size: i64| -> Option<(i64, i64)> {
+        (lo.is_finite() && hi.is_finite() && hi - lo < 4.0 * size as f64 + 4.0)
+            .then(|| (lo.floor() as i64 - 1, hi.floor() as i64 + 1))
+    };
+    let (x0, x1) = span(bounds[0], w)?;
+    let (y0, y1) = span(bounds[1], h)?;
+    let wrap = |k: i64, size: i64, mode: crate::scene::Wrap| match mode {
+        crate::scene::Wrap::Repeat => k.rem_euclid(size),
+        crate::scene::Wrap::ClampToEdge => k.clamp(0, size - 1),
+        crate::scene::Wrap::MirroredRepeat => {
+            let m = k.rem_euclid(2 * size);
+            if m < size {
+                m
+            } else {
+                2 * size - 1 - m
+            }
+        }
+    };
+    if (x1 - x0 + 1).min(2 * w + 1) * (y1 - y0 + 1).min(2 * h + 1) > 1 << 22 {
+        return None;
+    }
+    let (mut lo, mut hi) = (u8::MAX, u8::MIN);
+    let columns: Vec<i64> = (x0..=x1.min(x0 + 2 * w)).map(|x| wrap(x, w, texture.sampler.wrap_s)).collect();
+    for y in y0..=y1.min(y0 + 2 * h) {
+        let row = wrap(y, h, texture.sampler.wrap_t);
+        for &x in &columns {
+            let a = *texture.rgba8.get(((row * w + x) * 4 + 3) as usize)?;
+            lo = lo.min(a);
+            hi = hi.max(a);
+        }
+    }
+    Some((lo as f32 / 255.0, hi as f32 / 255.0))
 }
 
 /// The traversal's alpha bits of material `material` (0 opaque, 1 mask, 2 blend).

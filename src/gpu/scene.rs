@@ -780,10 +780,14 @@ fn triangle_alpha(scene: &Scene, t: usize) -> u32 {
 }
 
 /// The least and greatest alpha (0 to 1) of the texels of `texture` a lookup at a point of
-/// triangle `tri` can read (`None` when its UVs are not finite or span too many copies to scan).
+/// triangle `tri` can read (`None` for a texture without texels, or UVs not finite or spanning
+/// more texels than are worth scanning).
 fn texel_alpha_range(scene: &Scene, tri: &[u32; 3], r: &TextureRef, texture: &Texture) -> Option<(f32, f32)> {
     let uvs = if r.tex_coord == 1 { &scene.uv1 } else { &scene.uv0 };
     let (w, h) = (texture.width as i64, texture.height as i64);
+    if w == 0 || h == 0 {
+        return None;
+    }
     let t = r.transform;
     let mut bounds = [[f64::INFINITY, f64::NEG_INFINITY]; 2];
     for &v in tri {

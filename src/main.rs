@@ -1012,23 +1012,20 @@ fn upload_alongside(
         Ok(gpu_scene)
     })?;
     let features = gpu_scene.features();
-    if !features.shallow_bvh
-        && passes.features() == (umbra::gpu::SceneFeatures { shallow_bvh: true, ..features })
-    {
-        // Assumed before the build: a deeper BVH is walked with the stack in memory.
-        log::info!(
-            "the BVH's walk holds {} stack entries, more than the registers' {}: making the pipelines again",
-            gpu_scene.bvh.stack_depth,
-            umbra::gpu::kernel::BVH_REGISTERS
-        );
-        return Ok((Passes::new(ctx, &gpu_scene), gpu_scene));
-    }
     if passes.features() != features {
-        log::warn!(
-            "the features read before the upload, {:?}, differ from the upload's, {:?}: making the pipelines again",
-            passes.features(),
-            gpu_scene.features()
-        );
+        if passes.features() == (umbra::gpu::SceneFeatures { shallow_bvh: true, ..features }) {
+            // Assumed before the build: a deeper BVH is walked with the stack in memory.
+            log::info!(
+                "the BVH's walk holds {} stack entries, more than the registers' {}: making the pipelines again",
+                gpu_scene.bvh.stack_depth,
+                umbra::gpu::kernel::BVH_REGISTERS
+            );
+        } else {
+            log::warn!(
+                "the features read before the upload, {:?}, differ from the upload's, {features:?}: making the pipelines again",
+                passes.features()
+            );
+        }
         return Ok((Passes::new(ctx, &gpu_scene), gpu_scene));
     }
     Ok((passes, gpu_scene))

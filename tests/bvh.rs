@@ -559,10 +559,7 @@ fn alpha_classes_render_the_images_of_the_alpha_test() {
     use umbra::passes::ao::AoSettings;
     use umbra::render::{HybridSettings, Passes, PathSettings};
     use umbra::scene::{AlphaMode, Scene};
-    let assets = std::env::var_os("UMBRA_ASSETS")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets"));
-    let path = assets.join("gltf/TransmissionTest/glTF-Binary/TransmissionTest.glb");
+    let path = common::assets().join("gltf/TransmissionTest/glTF-Binary/TransmissionTest.glb");
     if !path.exists() && std::env::var_os("UMBRA_SKIP_SHARED_ASSETS").is_some() {
         return;
     }

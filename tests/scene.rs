@@ -1099,10 +1099,7 @@ fn pointer_mut<'v>(value: &'v mut Value, path: &[String]) -> &'v mut Value {
 #[test]
 fn shared_asset_scenes_load_with_their_known_counts() {
     // UMBRA_ASSETS names the assets folder; by default the checkout's sibling shared/assets.
-    let assets = std::env::var_os("UMBRA_ASSETS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets"))
-        .join("gltf");
+    let assets = common::assets().join("gltf");
     // Absent, the test fails (a checkout without the assets must say so, not pass quietly),
     // unless UMBRA_SKIP_SHARED_ASSETS=1 asks to skip it.
     if !assets.exists() {
@@ -1846,10 +1843,7 @@ fn features_before_the_upload_are_the_uploads() {
     );
     scenes.extend(feature_scenes());
     let mut files: Vec<PathBuf> = Vec::new();
-    let assets = std::env::var_os("UMBRA_ASSETS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets"))
-        .join("gltf");
+    let assets = common::assets().join("gltf");
     for dir in [scenes_dir().join("khronos"), assets.clone()] {
         gltf_files(&dir, &mut files);
     }

@@ -29,6 +29,12 @@ pub struct GpuBvh {
 }
 
 impl GpuBvh {
+    /// Whether every walk of this BVH holds at most [`BVH_REGISTERS`] stack entries, so that
+    /// the kernels keep the stack in registers (the scene feature `shallow_bvh`).
+    pub fn shallow(&self) -> bool {
+        self.stack_depth <= BVH_REGISTERS
+    }
+
     /// Uploads `bvh` through staging buffers. Fails for more than [`GpuBvhNode::MAX_NODES`] nodes
     /// or as [`GpuBvhNode::from_bvh`] does.
     pub fn upload(ctx: &Context, bvh: &Bvh) -> Result<Self> {
@@ -494,8 +500,7 @@ impl RayTracer {
         bvh: &GpuBvh,
         batch: &RayBatch,
     ) -> Result<()> {
-        let shallow = bvh.stack_depth <= BVH_REGISTERS;
-        let pipeline = &self.pipelines[2 * (query == Query::Any) as usize + shallow as usize];
+        let pipeline = &self.pipelines[2 * (query == Query::Any) as usize + bvh.shallow() as usize];
         pipeline.record(
             cmd,
             &trace::Resources { bvh, rays: &batch.rays, hits: &batch.hits },

@@ -195,7 +195,7 @@ impl SceneFeatures {
             anisotropy: scene.has_anisotropy,
             diffuse_transmission: scene.has_diffuse_transmission,
             dispersion: scene.has_dispersion,
-            shallow_bvh: scene.bvh.stack_depth <= BVH_REGISTERS,
+            shallow_bvh: scene.bvh.shallow(),
         }
     }
 

@@ -649,7 +649,9 @@ impl GpuScene {
 
     /// Re-uploads what shading reads (materials, textures, vertex attributes, the emissive and
     /// punctual lights) from `scene`, keeping the BVH: for materials or lights changed after
-    /// loading. The geometry must be the same (same triangles and positions). Replaces buffers, so
+    /// loading. The geometry must be the same (same triangles and positions), and so must each
+    /// triangle's alpha bits in the BVH (its material's alpha mode and, for an alpha-tested one,
+    /// its class from the texels: a new alpha factor or texture may move it). Replaces buffers, so
     /// no command buffer using this scene may be pending (wait for the host's frame fence first).
     pub fn update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         if scene.triangles.len() != self.bvh_stats.triangles {
@@ -662,7 +664,7 @@ impl GpuScene {
         }
         if alpha_modes(scene, &self.prim_order) != self.alpha_modes {
             return Err(Error::Invalid(format!(
-                "scene '{}' changes a material's alpha mode (opaque, mask, blend): that needs a new upload",
+                "scene '{}' changes a material's alpha mode (opaque, mask, blend) or an alpha-tested triangle's class (opaque or transparent wherever it can be hit): that needs a new upload",
                 scene.name
             )));
         }

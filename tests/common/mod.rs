@@ -49,6 +49,13 @@ impl Drop for Gpu {
     }
 }
 
+/// The shared assets folder: UMBRA_ASSETS, by default the checkout's sibling shared/assets.
+pub fn assets() -> std::path::PathBuf {
+    std::env::var_os("UMBRA_ASSETS")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets"))
+}
+
 /// Runs one of umbra's binaries with `UMBRA_VALIDATION=1` and asserts that it succeeded and
 /// logged no error (validation messages are logged as errors); returns its stderr.
 pub fn run_validated(command: &mut std::process::Command) -> String {

@@ -820,10 +820,11 @@ impl LoadedScene {
         }
         let stats = &gpu_scene.bvh_stats;
         log::info!(
-            "{}: {} triangles, {} emissive; BVH {:.1} ms, {} references, {} nodes, SAH {:.2}, stack depth {}",
+            "{}: {} triangles, {} emissive, {} never hit; BVH {:.1} ms, {} references, {} nodes, SAH {:.2}, stack depth {}",
             self.scene.name,
             stats.triangles,
             gpu_scene.light_count,
+            stats.left_out,
             stats.build_ms,
             stats.references,
             stats.nodes,

@@ -548,10 +548,10 @@ fn register_and_memory_walks_render_the_same_images() {
 }
 
 /// Alpha-masked triangles opaque wherever a ray can hit them lose their alpha test, and ones
-/// transparent everywhere are never hit (`ALPHA_NEVER_HIT`): classified from their texels at the
-/// upload. On Khronos' TransmissionTest, whose masked triangles fall in all three classes, the
-/// path-traced and hybrid images equal those of the same scene with every masked triangle
-/// tested, to the bit.
+/// transparent everywhere are never hit: classified from their texels at the upload, and left
+/// out of the BVH. On Khronos' TransmissionTest, whose masked triangles fall in all three
+/// classes, the path-traced and hybrid images equal those of the same scene with every triangle
+/// in the BVH and every masked one tested, to the bit.
 #[test]
 fn alpha_classes_render_the_images_of_the_alpha_test() {
     use umbra::gpu::layout::ALPHA_NEVER_HIT;
@@ -566,7 +566,8 @@ fn alpha_classes_render_the_images_of_the_alpha_test() {
     let scene = Scene::load(&path).unwrap();
     let gpu = Gpu::new();
     let classified = SceneArrays::new(&scene).unwrap();
-    let mut tested = SceneArrays::new(&scene).unwrap();
+    let every = umbra::bvh::Bvh::build(&scene.triangle_soup()).unwrap();
+    let mut tested = SceneArrays::with_bvh(&scene, every);
     let mut classes = [0usize; 3]; // opaque, never hit, tested
     for tri in tested.bvh.tris.iter_mut() {
         let input = tri.v0[3].to_bits() as usize;
@@ -582,6 +583,8 @@ fn alpha_classes_render_the_images_of_the_alpha_test() {
         tri.v1[3] = f32::from_bits(1);
     }
     assert!(classes.iter().all(|&n| n > 1000), "opaque, never hit, tested: {classes:?}");
+    assert_eq!(classified.bvh.stats.left_out, classes[1], "the never-hit triangles are left out");
+    assert_eq!(classified.bvh.validate(), Ok(()));
     let [classified, tested] = [&classified, &tested].map(|a| GpuScene::from_arrays(&gpu, a).unwrap());
     let camera = scene.camera(None).unwrap();
     let passes = Passes::new(&gpu, &classified);
@@ -605,6 +608,7 @@ fn alpha_classes_bound_what_a_lookup_reads() {
     use umbra::gpu::layout::ALPHA_NEVER_HIT;
     use umbra::gpu::scene::SceneArrays;
     use umbra::scene::{AlphaMode, Filter, Material};
+    let gpu = Gpu::new();
     for (texels, want) in [
         ([[255, 255, 255, 255], [255, 255, 255, 255], [255, 255, 255, 0], [255, 255, 255, 0]], 1),
         ([[255, 255, 255, 255]; 4], 0),
@@ -623,9 +627,49 @@ fn alpha_classes_bound_what_a_lookup_reads() {
             };
             let scene = common::quad::scene("masked quad", material, Some(texture), 0.0);
             let arrays = SceneArrays::new(&scene).unwrap();
+            // Never-hit triangles are left out of the BVH; the others carry their class.
+            let classes: Vec<u32> = arrays.alpha.iter().map(|a| a.unwrap_or(ALPHA_NEVER_HIT)).collect();
+            assert!(classes.len() == 2 && classes.iter().all(|&m| m == want), "{texels:?}, {filter:?}: {classes:?}, not {want}");
             let modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
-            assert!(modes.iter().all(|&m| m == want), "{texels:?}, {filter:?}: {modes:?}, not {want}");
+            let held = if want == ALPHA_NEVER_HIT { 0 } else { 2 };
+            assert!(modes.len() == held && modes.iter().all(|&m| m == want), "{filter:?}: the BVH holds {modes:?}");
+            assert_eq!(arrays.bvh.stats.left_out, 2 - held);
+            if want == ALPHA_NEVER_HIT && filter == Filter::Linear {
+                // The BVH of no triangles: both renderers see the sky alone, in every pixel.
+                for (mode, image) in common::quad::MODES.iter().zip(common::quad::renders(&gpu, &scene, 0.5)) {
+                    assert!(image.iter().all(|p| common::quad::same(p, &[0.5, 0.5, 0.5, 1.0])), "{mode}: {:?}", image[0]);
+                }
+            }
         }
+    }
+}
+
+/// A scene update that would move a triangle into or out of the BVH (a transparent masked quad
+/// made opaque by its cutoff) or change its class is refused; one that keeps every class (a new
+/// base colour) is taken.
+#[test]
+fn updates_that_move_an_alpha_class_are_refused() {
+    use umbra::gpu::scene::GpuScene;
+    use umbra::scene::{AlphaMode, Material};
+    let gpu = Gpu::new();
+    let material = Material {
+        base_color_texture: common::quad::slot(),
+        alpha_mode: AlphaMode::Mask,
+        alpha_cutoff: 0.5,
+        ..Default::default()
+    };
+    let texture = common::row_texture("alpha", &[[255, 255, 255, 0], [255, 255, 255, 100]]);
+    let transparent = common::quad::scene("masked quad", material, Some(texture), 0.0);
+    let mut gpu_scene = GpuScene::upload(&gpu, &transparent).unwrap();
+    assert_eq!(gpu_scene.bvh_stats.left_out, 2);
+    let mut recoloured = transparent.clone();
+    recoloured.materials[0].base_color_factor = [0.2, 0.4, 0.6, 1.0];
+    gpu_scene.update(&gpu, &recoloured).unwrap();
+    for (cutoff, class) in [(0.0, "opaque"), (0.2, "tested")] {
+        let mut changed = transparent.clone();
+        changed.materials[0].alpha_cutoff = cutoff;
+        let err = gpu_scene.update(&gpu, &changed).err().unwrap_or_else(|| panic!("{class}: taken")).to_string();
+        assert!(err.contains("needs a new upload"), "{class}: {err}");
     }
 }
 
@@ -668,6 +712,21 @@ fn random_soups_build_valid_bvhs() {
             split += split_triangles_are_covered(&bvh, &mut rng)
                 .unwrap_or_else(|e| panic!("case {case} (n {n}): {e}"));
             gpu_layout_is_valid(&bvh).unwrap_or_else(|e| panic!("case {case} (n {n}): GPU layout: {e}"));
+        }
+        // Built over every third triangle and renumbered: the input's indices, the rest counted
+        // as left out, and validation still finds a triangle dropped from a leaf.
+        let kept: Vec<u32> = (0..triangles.len() as u32).filter(|t| t % 3 == 1).collect();
+        let subset: Vec<[Vec3; 3]> = kept.iter().map(|&t| triangles[t as usize]).collect();
+        let mut bvh = Bvh::build(&subset).unwrap();
+        bvh.renumber(&kept, triangles.len());
+        bvh.validate().unwrap_or_else(|e| panic!("case {case} (n {n}), renumbered: {e}"));
+        assert_eq!((bvh.stats.triangles, bvh.stats.left_out), (triangles.len(), triangles.len() - kept.len()));
+        for (t, &input) in bvh.tris.iter().zip(&bvh.prim_order) {
+            assert!(input % 3 == 1 && t.input_index() == input && t.vertices() == triangles[input as usize]);
+        }
+        if bvh.stats.left_out > 0 {
+            bvh.stats.left_out -= 1;
+            assert!(bvh.validate().is_err(), "case {case}: a left-out triangle passed for a missing one");
         }
     }
     assert!(split > 0, "no case split a triangle: the pieces' coverage went untested");

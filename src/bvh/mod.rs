@@ -91,8 +91,10 @@ impl BvhTri {
 /// Numbers that describe a built BVH.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BvhStats {
-    /// Triangles.
+    /// Triangles: the input's, those [`Bvh::renumber`] tells of among them.
     pub triangles: usize,
+    /// Input triangles the build was not given ([`Bvh::renumber`]): in no leaf, never hit.
+    pub left_out: usize,
     /// Triangle references in the leaves: the triangles plus the extra pieces of the ones split
     /// by [`BuildOptions::presplit`].
     pub references: usize,
@@ -120,7 +122,8 @@ pub struct Bvh {
     /// Triangles in leaf order: a triangle split by [`BuildOptions::presplit`] appears once
     /// per piece, in the leaves of those pieces.
     pub tris: Vec<BvhTri>,
-    /// `prim_order[i]` is the input index of `tris[i]`; every input index appears at least once.
+    /// `prim_order[i]` is the input index of `tris[i]`; every input index appears at least once,
+    /// but for the `stats.left_out` triangles a [`Bvh::renumber`]ed build was not given.
     pub prim_order: Vec<u32>,
     /// Build statistics.
     pub stats: BvhStats,
@@ -194,6 +197,26 @@ impl Bvh {
         }
     }
 
+    /// Gives a BVH built over some of a larger input's triangles (`kept[i]`: the larger input's
+    /// index of triangle i, ascending; the procedural primitives after them) the larger input's
+    /// indices: in `prim_order`, in each triangle's input index (the tie rule's order, which
+    /// `kept` being ascending keeps) and in `stats`, which then counts `total` triangles of which
+    /// `total - kept.len()` left out. So a scene can leave out triangles no ray may hit (alpha
+    /// classes, `crate::gpu::scene`) and still name every slot by its scene triangle.
+    pub fn renumber(&mut self, kept: &[u32], total: usize) {
+        debug_assert!(kept.windows(2).all(|w| w[0] < w[1]) && kept.last().is_none_or(|&k| (k as usize) < total));
+        let built = kept.len() as u32;
+        let to_input = |i: u32| if i < built { kept[i as usize] } else { total as u32 + (i - built) };
+        for p in &mut self.prim_order {
+            *p = to_input(*p);
+        }
+        for t in &mut self.tris {
+            t.v0[3] = f32::from_bits(to_input(t.input_index()));
+        }
+        self.stats.left_out += total - kept.len();
+        self.stats.triangles = total;
+    }
+
     /// The BVH of no triangles: every ray misses.
     pub fn empty() -> Self {
         let root = BvhNode { aabb_min: [f32::MAX; 3], left_first: 0, aabb_max: [-f32::MAX; 3], tri_count: 0 };
@@ -224,7 +247,13 @@ impl Bvh {
     pub fn validate(&self) -> Result<(), String> {
         if self.is_empty() {
             return match self.nodes.as_slice() {
-                [root] if root.tri_count == 0 && root.aabb_min[0] > root.aabb_max[0] => Ok(()),
+                [root] if root.tri_count == 0 && root.aabb_min[0] > root.aabb_max[0] => {
+                    if self.stats.triangles + self.procedurals == self.stats.left_out {
+                        Ok(())
+                    } else {
+                        Err(format!("an empty BVH of {} inputs left out {}", self.stats.triangles, self.stats.left_out))
+                    }
+                }
                 _ => Err("an empty BVH must be a single inverted root".into()),
             };
         }
@@ -235,8 +264,13 @@ impl Bvh {
         for &p in &self.prim_order {
             *pieces.get_mut(p as usize).ok_or(format!("input index {p} out of range"))? += 1;
         }
-        if let Some(p) = pieces.iter().position(|&k| k == 0) {
-            return Err(format!("input triangle {p} is in no leaf"));
+        let absent = pieces.iter().filter(|&&k| k == 0).count();
+        if absent != self.stats.left_out {
+            let p = pieces.iter().position(|&k| k == 0).unwrap_or(0);
+            return Err(format!(
+                "{absent} input triangles are in no leaf (the first {p}), {} were left out",
+                self.stats.left_out
+            ));
         }
         let mut stack = vec![(0usize, 0usize)];
         while let Some((index, depth)) = stack.pop() {

@@ -985,7 +985,8 @@ gpu_structs! {
 gpu_constants! {
     /// A triangle's alpha bits (`BvhTri::v1[3]`; 0 opaque, 1 mask, 2 blend) when its alpha is
     /// below the cutoff wherever a ray can hit it: the walk never hits it (`GpuScene`'s upload
-    /// classifies each alpha-tested triangle from its texels).
+    /// classifies each alpha-tested triangle from its texels and leaves such triangles out of
+    /// the BVH, but for lights, whose table names their BVH slots).
     ALPHA_NEVER_HIT: uint = 3;
     /// The traversal's stack entries held in registers (`bvh.glsl`): a scene whose walk never
     /// holds more ([`crate::bvh::gpu::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and

@@ -100,8 +100,9 @@ pub struct GpuScene {
     pub bvh_stats: BvhStats,
     /// `prim_order[i]`: the scene triangle at BVH position i (kept for [`GpuScene::update`]).
     prim_order: Vec<u32>,
-    /// Each triangle's alpha bits in BVH order, as uploaded in the BVH (kept for `update`).
-    alpha_modes: Vec<u32>,
+    /// Each scene triangle's alpha bits, `None` where the BVH leaves it out ([`bvh_alpha`];
+    /// kept for `update`).
+    alpha: Vec<Option<u32>>,
 }
 
 /// The host-side arrays [`GpuScene`] uploads (also what tests inspect).
@@ -126,14 +127,29 @@ pub struct SceneArrays {
     pub texels: Vec<[u32; 2]>,
     /// The emissive triangles' total power (`EmissiveTable::total_power`).
     pub emissive_power: f32,
+    /// Each scene triangle's alpha bits in the BVH, `None` for one left out of it as never hit.
+    pub alpha: Vec<Option<u32>>,
 }
 
 impl SceneArrays {
     /// Builds the BVH and lays the scene out for the GPU.
+    /// Triangles no ray may hit ([`bvh_alpha`]: transparent wherever they can be hit) are left
+    /// out of it.
     pub fn new(scene: &Scene) -> Result<Self> {
         let boxes = scene_boxes(scene)?;
-        let bvh = Bvh::build_mixed(&scene.triangle_soup(), &boxes, &crate::bvh::BuildOptions::default())?;
-        Ok(Self::with_bvh(scene, bvh))
+        let alpha = bvh_alpha(scene);
+        let soup = scene.triangle_soup();
+        let options = crate::bvh::BuildOptions::default();
+        let kept: Vec<u32> = (0..soup.len() as u32).filter(|&t| alpha[t as usize].is_some()).collect();
+        let bvh = if kept.len() == soup.len() {
+            Bvh::build_mixed(&soup, &boxes, &options)?
+        } else {
+            let built: Vec<[Vec3; 3]> = kept.iter().map(|&t| soup[t as usize]).collect();
+            let mut bvh = Bvh::build_mixed(&built, &boxes, &options)?;
+            bvh.renumber(&kept, soup.len());
+            bvh
+        };
+        Ok(Self::with_alpha(scene, bvh, &alpha))
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
@@ -167,15 +183,23 @@ impl SceneArrays {
 
     /// Lays the scene out for the GPU around a BVH already built for its triangles (and its
     /// implicit shapes' boxes, [`scene_boxes`], after them).
-    pub fn with_bvh(scene: &Scene, mut bvh: Bvh) -> Self {
+    pub fn with_bvh(scene: &Scene, bvh: Bvh) -> Self {
+        Self::with_alpha(scene, bvh, &bvh_alpha(scene))
+    }
+
+    /// [`Self::with_bvh`] with each scene triangle's alpha bits ([`bvh_alpha`]) known.
+    fn with_alpha(scene: &Scene, mut bvh: Bvh, alpha: &[Option<u32>]) -> Self {
         if bvh.procedurals > 0 {
             let programs: Vec<Vec<[u32; 4]>> = scene.implicits.iter().map(super::implicit::program).collect();
             bvh.attach_implicit(&programs);
         }
         // The traversal's alpha test reads each triangle's alpha mode from v1.w (bits: 0 opaque,
         // 1 mask, 2 blend), so opaque triangles never pay for it.
-        for (tri, mode) in bvh.tris.iter_mut().zip(alpha_modes(scene, &bvh.prim_order)) {
-            tri.v1[3] = f32::from_bits(mode);
+        // A triangle the scene would leave out but this BVH holds is never hit; an implicit
+        // shape's slot (past the triangles) is opaque.
+        for (tri, &input) in bvh.tris.iter_mut().zip(&bvh.prim_order) {
+            let bits = alpha.get(input as usize).map_or(0, |a| a.unwrap_or(ALPHA_NEVER_HIT));
+            tri.v1[3] = f32::from_bits(bits);
         }
         let shading = ShadingArrays::new(scene, &bvh.prim_order);
         let ShadingArrays {
@@ -188,7 +212,8 @@ impl SceneArrays {
             texels,
             emissive_power,
         } = shading;
-        Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels, emissive_power }
+        let alpha = alpha.to_vec();
+        Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels, emissive_power, alpha }
     }
 }
 
@@ -520,9 +545,9 @@ impl SceneFeatures {
         let slots = texture_slots(&materials);
         Self {
             textures: slots != 0,
-            // Every triangle is in the BVH (implicit shapes are never alpha-tested), with its
-            // alpha bits as classified.
-            alpha: (0..scene.triangles.len()).into_par_iter().any(|t| triangle_alpha(scene, t) != 0),
+            // The BVH's triangles with their alpha bits as classified (implicit shapes are never
+            // alpha-tested).
+            alpha: bvh_alpha(scene).iter().any(|a| a.is_some_and(|bits| bits != 0)),
             lights: !scene.emissive.triangles.is_empty(),
             punctual: !scene.lights.is_empty(),
             env_map,
@@ -607,8 +632,6 @@ impl GpuScene {
 
     /// Uploads arrays already laid out (tests keep them to compare against).
     pub fn from_arrays(ctx: &Context, arrays: &SceneArrays) -> Result<Self> {
-        // The alpha bits with_bvh wrote into the BVH triangles.
-        let alpha_modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
         Ok(Self {
             bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
             triangles: upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?,
@@ -626,7 +649,8 @@ impl GpuScene {
             texture_count: arrays.textures.len() as u32,
             texture_slots: texture_slots(&arrays.materials),
             has_transmission: transmits(&arrays.materials),
-            has_alpha: alpha_modes.iter().any(|&m| m != 0),
+            // The alpha bits with_bvh wrote into the BVH triangles.
+            has_alpha: arrays.bvh.tris.iter().any(|t| t.v1[3].to_bits() != 0),
             has_colors: colored(&arrays.vertices),
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: coated(&arrays.materials),
@@ -643,7 +667,7 @@ impl GpuScene {
             env_luminance: 0.0,
             bvh_stats: arrays.bvh.stats.clone(),
             prim_order: arrays.bvh.prim_order.clone(),
-            alpha_modes,
+            alpha: arrays.alpha.clone(),
         })
     }
 
@@ -651,7 +675,8 @@ impl GpuScene {
     /// punctual lights) from `scene`, keeping the BVH: for materials or lights changed after
     /// loading. The geometry must be the same (same triangles and positions), and so must each
     /// triangle's alpha bits in the BVH (its material's alpha mode and, for an alpha-tested one,
-    /// its class from the texels: a new alpha factor or texture may move it). Replaces buffers, so
+    /// its class from the texels: a new alpha factor or texture may move it, and a triangle
+    /// transparent everywhere is not in the BVH at all, unless it is a light). Replaces buffers, so
     /// no command buffer using this scene may be pending (wait for the host's frame fence first).
     pub fn update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         if scene.triangles.len() != self.bvh_stats.triangles {
@@ -662,9 +687,9 @@ impl GpuScene {
                 self.bvh_stats.triangles
             )));
         }
-        if alpha_modes(scene, &self.prim_order) != self.alpha_modes {
+        if bvh_alpha(scene) != self.alpha {
             return Err(Error::Invalid(format!(
-                "scene '{}' changes a material's alpha mode (opaque, mask, blend) or an alpha-tested triangle's class (opaque or transparent wherever it can be hit): that needs a new upload",
+                "scene '{}' changes a material's alpha mode (opaque, mask, blend), an alpha-tested triangle's class (opaque or transparent wherever it can be hit) or whether a transparent one is a light: that needs a new upload",
                 scene.name
             )));
         }
@@ -735,10 +760,23 @@ fn upload_rg32ui(ctx: &Context, name: &str, items: &[[u32; 2]]) -> Result<TexelB
     TexelBuffer::upload(ctx, name, items, raw::Format::R32G32_UINT, 8)
 }
 
-/// Each triangle's alpha mode in BVH order (`prim_order`) as the traversal's bits
-/// ([`triangle_alpha`]).
-fn alpha_modes(scene: &Scene, prim_order: &[u32]) -> Vec<u32> {
-    prim_order.par_iter().map(|&p| triangle_alpha(scene, p as usize)).collect()
+/// Each scene triangle's alpha bits in the BVH ([`triangle_alpha`]), or `None` for one the BVH
+/// leaves out: never hit ([`ALPHA_NEVER_HIT`]) and not a light (the emissive table names its
+/// triangles' BVH slots; a never-hit light keeps its slot and the walk rejects it).
+pub(crate) fn bvh_alpha(scene: &Scene) -> Vec<Option<u32>> {
+    let mut emissive = vec![false; scene.triangles.len()];
+    for &t in &scene.emissive.triangles {
+        if let Some(e) = emissive.get_mut(t as usize) {
+            *e = true;
+        }
+    }
+    (0..scene.triangles.len())
+        .into_par_iter()
+        .map(|t| {
+            let bits = triangle_alpha(scene, t);
+            (bits != ALPHA_NEVER_HIT || emissive[t]).then_some(bits)
+        })
+        .collect()
 }
 
 /// The traversal's alpha bits of triangle `t` (scene order): 0 opaque, 1 mask, 2 blend as its

@@ -634,9 +634,10 @@ fn bench_camera(scene: &umbra::scene::Scene) -> umbra::scene::Camera {
 }
 
 /// A glTF file's triangles, lit by a point light just under the top of the bounds, seen from
-/// [`bench_camera`].
+/// [`bench_camera`]. Only the geometry counts here, so absent image files are warned about and
+/// left out, as in `umbra-bench paths`.
 fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
-    let scene = umbra::scene::Scene::load(path)?;
+    let (_, scene) = load_path_scene(path)?;
     let (lo, hi) = scene.bounds();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
     let camera = bench_camera(&scene);
@@ -922,7 +923,7 @@ fn run(cli: Cli) -> Result<()> {
                     integrators: integrator.iter().map(|i| i.integrator()).collect(),
                 };
                 let scenes =
-                    if scenes.is_empty() { default_path_scenes(&assets)? } else { load_gltf(&scenes)? };
+                    if scenes.is_empty() { default_path_scenes(&assets)? } else { named_path_scenes(&scenes)? };
                 let rows = paths::run(&ctx, &scenes, &settings)?;
                 let doc = paths::to_json(&ctx.info().name, &settings, &rows);
                 print!("{}", paths::table(&doc));
@@ -1423,19 +1424,29 @@ fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::s
         }
         Err(e) => log::warn!("{}: {e}; the sample models are left out", assets.display()),
     }
-    // Sample models whose image files are absent render with their factors alone (a warning
-    // each); one that does not load at all is left out with its error.
-    let options = umbra::scene::LoadOptions { missing_textures: umbra::scene::MissingTextures::Warn };
+    // One that does not load at all is left out with its error.
     let mut scenes = vec![("cornell-box (embedded)".to_string(), umbra::scene::Scene::cornell_box())];
     for path in files {
-        let name =
-            path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-        match umbra::scene::Scene::load_with(&path, &options) {
-            Ok(scene) => scenes.push((name, scene)),
+        match load_path_scene(&path) {
+            Ok(scene) => scenes.push(scene),
             Err(e) => log::warn!("{e}; left out"),
         }
     }
     Ok(scenes)
+}
+
+/// `umbra-bench paths`'s scenes named on the command line, loaded as the default set's are (so
+/// one row of its table can be measured alone); one that does not load is an error.
+fn named_path_scenes(files: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
+    files.iter().map(|path| load_path_scene(path)).collect()
+}
+
+/// A scene of `umbra-bench paths`, keyed by its file name. A sample model whose image files are
+/// absent renders with its factors alone (a warning each).
+fn load_path_scene(path: &std::path::Path) -> Result<(String, umbra::scene::Scene)> {
+    let options = umbra::scene::LoadOptions { missing_textures: umbra::scene::MissingTextures::Warn };
+    let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+    Ok((name, umbra::scene::Scene::load_with(path, &options)?))
 }
 
 /// An earlier run's JSON (for `--table`).

@@ -1435,10 +1435,17 @@ fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::s
     Ok(scenes)
 }
 
-/// `umbra-bench paths`'s scenes named on the command line, loaded as the default set's are (so
-/// one row of its table can be measured alone); one that does not load is an error.
+/// `umbra-bench paths`'s scenes named on the command line, each keyed by its file stem and
+/// loaded as the default set's are (so one row of its table can be measured alone); one that
+/// does not load is an error.
 fn named_path_scenes(files: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
-    files.iter().map(|path| load_path_scene(path)).collect()
+    files
+        .iter()
+        .map(|path| {
+            let (name, scene) = load_path_scene(path)?;
+            Ok((path.file_stem().map_or(name, |s| s.to_string_lossy().into_owned()), scene))
+        })
+        .collect()
 }
 
 /// A scene of `umbra-bench paths`, keyed by its file name. A sample model whose image files are

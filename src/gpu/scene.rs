@@ -133,7 +133,7 @@ pub struct SceneArrays {
 
 impl SceneArrays {
     /// Builds the BVH and lays the scene out for the GPU.
-    /// Triangles no ray may hit ([`bvh_alpha`]: transparent wherever they can be hit) are left
+    /// Triangles no ray may hit (transparent wherever they can be hit: their alpha classes) are left
     /// out of it.
     pub fn new(scene: &Scene) -> Result<Self> {
         let boxes = scene_boxes(scene)?;

@@ -629,15 +629,26 @@ fn alpha_classes_bound_what_a_lookup_reads() {
             let arrays = SceneArrays::new(&scene).unwrap();
             // Never-hit triangles are left out of the BVH; the others carry their class.
             let classes: Vec<u32> = arrays.alpha.iter().map(|a| a.unwrap_or(ALPHA_NEVER_HIT)).collect();
-            assert!(classes.len() == 2 && classes.iter().all(|&m| m == want), "{texels:?}, {filter:?}: {classes:?}, not {want}");
+            assert!(
+                classes.len() == 2 && classes.iter().all(|&m| m == want),
+                "{texels:?}, {filter:?}: {classes:?}, not {want}"
+            );
             let modes: Vec<u32> = arrays.bvh.tris.iter().map(|t| t.v1[3].to_bits()).collect();
             let held = if want == ALPHA_NEVER_HIT { 0 } else { 2 };
-            assert!(modes.len() == held && modes.iter().all(|&m| m == want), "{filter:?}: the BVH holds {modes:?}");
+            assert!(
+                modes.len() == held && modes.iter().all(|&m| m == want),
+                "{filter:?}: the BVH holds {modes:?}"
+            );
             assert_eq!(arrays.bvh.stats.left_out, 2 - held);
             if want == ALPHA_NEVER_HIT && filter == Filter::Linear {
                 // The BVH of no triangles: both renderers see the sky alone, in every pixel.
-                for (mode, image) in common::quad::MODES.iter().zip(common::quad::renders(&gpu, &scene, 0.5)) {
-                    assert!(image.iter().all(|p| common::quad::same(p, &[0.5, 0.5, 0.5, 1.0])), "{mode}: {:?}", image[0]);
+                for (mode, image) in common::quad::MODES.iter().zip(common::quad::renders(&gpu, &scene, 0.5))
+                {
+                    assert!(
+                        image.iter().all(|p| common::quad::same(p, &[0.5, 0.5, 0.5, 1.0])),
+                        "{mode}: {:?}",
+                        image[0]
+                    );
                 }
             }
         }
@@ -668,7 +679,8 @@ fn updates_that_move_an_alpha_class_are_refused() {
     for (cutoff, class) in [(0.0, "opaque"), (0.2, "tested")] {
         let mut changed = transparent.clone();
         changed.materials[0].alpha_cutoff = cutoff;
-        let err = gpu_scene.update(&gpu, &changed).err().unwrap_or_else(|| panic!("{class}: taken")).to_string();
+        let err =
+            gpu_scene.update(&gpu, &changed).err().unwrap_or_else(|| panic!("{class}: taken")).to_string();
         assert!(err.contains("needs a new upload"), "{class}: {err}");
     }
 }
@@ -720,7 +732,10 @@ fn random_soups_build_valid_bvhs() {
         let mut bvh = Bvh::build(&subset).unwrap();
         bvh.renumber(&kept, triangles.len());
         bvh.validate().unwrap_or_else(|e| panic!("case {case} (n {n}), renumbered: {e}"));
-        assert_eq!((bvh.stats.triangles, bvh.stats.left_out), (triangles.len(), triangles.len() - kept.len()));
+        assert_eq!(
+            (bvh.stats.triangles, bvh.stats.left_out),
+            (triangles.len(), triangles.len() - kept.len())
+        );
         for (t, &input) in bvh.tris.iter().zip(&bvh.prim_order) {
             assert!(input % 3 == 1 && t.input_index() == input && t.vertices() == triangles[input as usize]);
         }

@@ -91,7 +91,8 @@ impl BvhTri {
 /// Numbers that describe a built BVH.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BvhStats {
-    /// Triangles: the input's, those [`Bvh::renumber`] tells of among them.
+    /// Triangles of the input (after [`Bvh::renumber`], of the larger input, the left-out ones
+    /// among them).
     pub triangles: usize,
     /// Input triangles the build was not given ([`Bvh::renumber`]): in no leaf, never hit.
     pub left_out: usize,
@@ -204,7 +205,9 @@ impl Bvh {
     /// `total - kept.len()` left out. So a scene can leave out triangles no ray may hit (alpha
     /// classes, `crate::gpu::scene`) and still name every slot by its scene triangle.
     pub fn renumber(&mut self, kept: &[u32], total: usize) {
-        debug_assert!(kept.windows(2).all(|w| w[0] < w[1]) && kept.last().is_none_or(|&k| (k as usize) < total));
+        debug_assert!(
+            kept.windows(2).all(|w| w[0] < w[1]) && kept.last().is_none_or(|&k| (k as usize) < total)
+        );
         let built = kept.len() as u32;
         let to_input = |i: u32| if i < built { kept[i as usize] } else { total as u32 + (i - built) };
         for p in &mut self.prim_order {
@@ -251,7 +254,10 @@ impl Bvh {
                     if self.stats.triangles + self.procedurals == self.stats.left_out {
                         Ok(())
                     } else {
-                        Err(format!("an empty BVH of {} inputs left out {}", self.stats.triangles, self.stats.left_out))
+                        Err(format!(
+                            "an empty BVH of {} inputs left out {}",
+                            self.stats.triangles, self.stats.left_out
+                        ))
                     }
                 }
                 _ => Err("an empty BVH must be a single inverted root".into()),

@@ -132,9 +132,8 @@ pub struct SceneArrays {
 }
 
 impl SceneArrays {
-    /// Builds the BVH and lays the scene out for the GPU.
-    /// Triangles no ray may hit (transparent wherever they can be hit: their alpha classes) are left
-    /// out of it.
+    /// Builds the BVH and lays the scene out for the GPU. Triangles no ray may hit (transparent
+    /// wherever they can be hit: their alpha classes) are left out of the BVH.
     pub fn new(scene: &Scene) -> Result<Self> {
         let boxes = scene_boxes(scene)?;
         let alpha = bvh_alpha(scene);
@@ -213,7 +212,18 @@ impl SceneArrays {
             emissive_power,
         } = shading;
         let alpha = alpha.to_vec();
-        Self { bvh, triangles, vertices, materials, lights, punctual, textures, texels, emissive_power, alpha }
+        Self {
+            bvh,
+            triangles,
+            vertices,
+            materials,
+            lights,
+            punctual,
+            textures,
+            texels,
+            emissive_power,
+            alpha,
+        }
     }
 }
 

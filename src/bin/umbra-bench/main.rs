@@ -922,8 +922,11 @@ fn run(cli: Cli) -> Result<()> {
                     env_map: env,
                     integrators: integrator.iter().map(|i| i.integrator()).collect(),
                 };
-                let scenes =
-                    if scenes.is_empty() { default_path_scenes(&assets)? } else { named_path_scenes(&scenes)? };
+                let scenes = if scenes.is_empty() {
+                    default_path_scenes(&assets)?
+                } else {
+                    named_path_scenes(&scenes)?
+                };
                 let rows = paths::run(&ctx, &scenes, &settings)?;
                 let doc = paths::to_json(&ctx.info().name, &settings, &rows);
                 print!("{}", paths::table(&doc));
@@ -1452,7 +1455,8 @@ fn named_path_scenes(files: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Sce
 /// absent renders with its factors alone (a warning each).
 fn load_path_scene(path: &std::path::Path) -> Result<(String, umbra::scene::Scene)> {
     let options = umbra::scene::LoadOptions { missing_textures: umbra::scene::MissingTextures::Warn };
-    let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let name =
+        path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     Ok((name, umbra::scene::Scene::load_with(path, &options)?))
 }
 

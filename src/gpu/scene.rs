@@ -148,7 +148,7 @@ impl SceneArrays {
             bvh.renumber(&kept, soup.len());
             bvh
         };
-        Ok(Self::with_alpha(scene, bvh, &alpha))
+        Ok(Self::with_alpha(scene, bvh, alpha))
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
@@ -183,19 +183,19 @@ impl SceneArrays {
     /// Lays the scene out for the GPU around a BVH already built for its triangles (and its
     /// implicit shapes' boxes, [`scene_boxes`], after them).
     pub fn with_bvh(scene: &Scene, bvh: Bvh) -> Self {
-        Self::with_alpha(scene, bvh, &bvh_alpha(scene))
+        Self::with_alpha(scene, bvh, bvh_alpha(scene))
     }
 
     /// [`Self::with_bvh`] with each scene triangle's alpha bits ([`bvh_alpha`]) known.
-    fn with_alpha(scene: &Scene, mut bvh: Bvh, alpha: &[Option<u32>]) -> Self {
+    fn with_alpha(scene: &Scene, mut bvh: Bvh, alpha: Vec<Option<u32>>) -> Self {
         if bvh.procedurals > 0 {
             let programs: Vec<Vec<[u32; 4]>> = scene.implicits.iter().map(super::implicit::program).collect();
             bvh.attach_implicit(&programs);
         }
-        // The traversal's alpha test reads each triangle's alpha mode from v1.w (bits: 0 opaque,
-        // 1 mask, 2 blend), so opaque triangles never pay for it.
-        // A triangle the scene would leave out but this BVH holds is never hit; an implicit
-        // shape's slot (past the triangles) is opaque.
+        // The traversal's alpha test reads each triangle's alpha bits from v1.w (0 opaque, 1 mask,
+        // 2 blend, ALPHA_NEVER_HIT), so opaque triangles never pay for it. A triangle the scene
+        // would leave out but this BVH holds is never hit; an implicit shape's slot (past the
+        // triangles) is opaque.
         for (tri, &input) in bvh.tris.iter_mut().zip(&bvh.prim_order) {
             let bits = alpha.get(input as usize).map_or(0, |a| a.unwrap_or(ALPHA_NEVER_HIT));
             tri.v1[3] = f32::from_bits(bits);
@@ -211,7 +211,6 @@ impl SceneArrays {
             texels,
             emissive_power,
         } = shading;
-        let alpha = alpha.to_vec();
         Self {
             bvh,
             triangles,

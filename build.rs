@@ -339,6 +339,15 @@ fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> 
             }
         }
     }
+    if k.scene != "none" {
+        if k.features.contains(&"shallow_bvh") {
+            out.push_str(&format!(
+                "layout(constant_id = {BVH_STACK_SPEC_ID}) const uint BVH_STACK = BVH_REGISTERS;\n"
+            ));
+        } else {
+            out.push_str("const uint BVH_STACK = BVH_REGISTERS;  // not specialised in this kernel\n");
+        }
+    }
     if let Some(f) = k.features.iter().find(|f| !SCENE_FEATURES.contains(f)) {
         return Err(format!("kernel {}: unknown scene feature '{f}'", k.name));
     }

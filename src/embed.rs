@@ -73,7 +73,7 @@
 //!   pending (after the host's frame fence).
 
 use crate::error::Result;
-use crate::gpu::scene::GpuScene;
+use crate::gpu::scene::{GpuScene, SceneBvh};
 use crate::gpu::SceneFeatures;
 use crate::passes::ao::AoSettings;
 use crate::passes::deferred::{LightingInputs, LightingSettings};
@@ -106,12 +106,14 @@ pub struct Renderer {
 
 impl Renderer {
     /// Builds the BVH, uploads the scene, precomputes its image-based lighting and creates every
-    /// pipeline (on threads while the scene uploads: [`Passes::prepare_every`]).
+    /// pipeline (on threads while the scene uploads, once the BVH is built:
+    /// [`Passes::prepare_every`]).
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
-        let passes = Passes::with_features(ctx, SceneFeatures::of_scene(scene, false));
+        let bvh = SceneBvh::build(scene)?;
+        let passes = Passes::with_features(ctx, SceneFeatures::of_scene(scene, &bvh, false));
         let uploaded = std::thread::scope(|s| {
             let path = s.spawn(|| passes.prepare_every(PathOptions::default()));
-            let uploaded = GpuScene::upload(ctx, scene);
+            let uploaded = GpuScene::upload_with(ctx, scene, bvh);
             let prepared = path.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
             prepared.and(uploaded)
         })?;

@@ -5,7 +5,7 @@ mod cli;
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
-use umbra::gpu::scene::GpuScene;
+use umbra::gpu::scene::{GpuScene, SceneBvh};
 use umbra::passes::deferred::{DirectLight, LightingSettings};
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
 use umbra::passes::restir::RestirSettings;
@@ -814,7 +814,12 @@ impl SceneArgs {
 impl LoadedScene {
     /// Builds the BVH and uploads the scene and its environment map.
     fn upload(&self, ctx: &Context) -> Result<GpuScene> {
-        let mut gpu_scene = GpuScene::upload(ctx, &self.scene)?;
+        self.upload_with(ctx, SceneBvh::build(&self.scene)?)
+    }
+
+    /// Uploads the scene around its BVH, and its environment map.
+    fn upload_with(&self, ctx: &Context, bvh: SceneBvh) -> Result<GpuScene> {
+        let mut gpu_scene = GpuScene::upload_with(ctx, &self.scene, bvh)?;
         if let Some(map) = &self.env_map {
             gpu_scene.set_environment(ctx, map)?;
         }
@@ -834,9 +839,10 @@ impl LoadedScene {
         Ok(gpu_scene)
     }
 
-    /// The features the uploaded scene will have (known before the upload).
-    fn features(&self) -> umbra::gpu::SceneFeatures {
-        umbra::gpu::SceneFeatures::of_scene(&self.scene, self.env_map.is_some())
+    /// The features the uploaded scene will have (known once its BVH is built, before the
+    /// upload).
+    fn features(&self, bvh: &SceneBvh) -> umbra::gpu::SceneFeatures {
+        umbra::gpu::SceneFeatures::of_scene(&self.scene, bvh, self.env_map.is_some())
     }
 
     /// The hash a bake of this scene and environment records.
@@ -986,17 +992,19 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
     }
 }
 
-/// Builds the BVH and uploads `loaded` while `prepare` makes pipelines on a thread (up to a
-/// second each on lavapipe) from the features the loaded scene has; the passes for the uploaded
-/// scene (made again if its features differ: `tests/scene.rs` checks that they do not, but for
-/// a BVH deeper than the registers' stack, known only once built).
+/// Builds the BVH, then uploads the rest of `loaded` while `prepare` makes pipelines on a thread
+/// (up to a second each on lavapipe) for the features the scene has (the BVH tells its stack
+/// depth, which the kernels' walk is specialised on); the passes for the uploaded scene (made again
+/// if its features differ: `tests/scene.rs` checks that they do not).
 fn upload_alongside(
     ctx: &Context,
     loaded: &LoadedScene,
     stages: &mut Stages,
     prepare: impl FnOnce(&Passes) -> umbra::Result<()> + Send,
 ) -> Result<(Passes, GpuScene)> {
-    let passes = Passes::with_features(ctx, loaded.features());
+    let bvh = SceneBvh::build(&loaded.scene)?;
+    stages.lap("BVH");
+    let passes = Passes::with_features(ctx, loaded.features(&bvh));
     let gpu_scene = std::thread::scope(|s| -> Result<_> {
         let pipelines = s.spawn(|| {
             let clock = std::time::Instant::now();
@@ -1004,8 +1012,8 @@ fn upload_alongside(
             log::debug!("pipelines made alongside in {:.1} ms", clock.elapsed().as_secs_f64() * 1e3);
             prepared
         });
-        let gpu_scene = loaded.upload(ctx);
-        stages.lap("BVH and upload");
+        let gpu_scene = loaded.upload_with(ctx, bvh);
+        stages.lap("upload");
         let prepared = pipelines.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
         let gpu_scene = gpu_scene?;
         prepared?;
@@ -1014,19 +1022,10 @@ fn upload_alongside(
     })?;
     let features = gpu_scene.features();
     if passes.features() != features {
-        if passes.features() == (umbra::gpu::SceneFeatures { shallow_bvh: true, ..features }) {
-            // Assumed before the build: a deeper BVH is walked with the stack in memory.
-            log::info!(
-                "the BVH's walk holds {} stack entries, more than the registers' {}: making the pipelines again",
-                gpu_scene.bvh.stack_depth,
-                umbra::gpu::kernel::BVH_REGISTERS
-            );
-        } else {
-            log::warn!(
-                "the features read before the upload, {:?}, differ from the upload's, {features:?}: making the pipelines again",
-                passes.features()
-            );
-        }
+        log::warn!(
+            "the features read before the upload, {:?}, differ from the upload's, {features:?}: making the pipelines again",
+            passes.features()
+        );
         return Ok((Passes::new(ctx, &gpu_scene), gpu_scene));
     }
     Ok((passes, gpu_scene))

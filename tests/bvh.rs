@@ -463,22 +463,22 @@ fn into_the_clusters(count: usize, seed: u64) -> Vec<Vec3> {
 }
 
 /// Both walks of `bvh.glsl`: a BVH whose walk holds at most `BVH_REGISTERS` stack entries is
-/// traced with the stack in registers, a deeper one with the stack in memory (`RayTracer` picks
-/// by `GpuBvh::stack_depth`, as `SceneFeatures::shallow_bvh` does for the renderer). Nested
-/// clusters whose walk holds `BVH_REGISTERS` entries (every register used), and four more, must
-/// match brute force. Broken builds fail it: the last register never written (47 rays), the
-/// registers used for the deeper BVH (10,073 rays).
+/// traced with a stack of as many registers as it holds, a deeper one with the stack in memory
+/// (`RayTracer` picks by `GpuBvh::register_stack`, as `SceneFeatures::bvh_stack` does for the
+/// renderer). Nested clusters whose walks hold 3, 9 and `BVH_REGISTERS` entries (every register
+/// used), and four more, must match brute force.
 #[test]
 fn walks_deeper_and_shallower_than_the_register_stack_match_brute_force() {
     use umbra::gpu::layout::BVH_REGISTERS;
     let gpu = Gpu::new();
     let tracer = RayTracer::new(&gpu).unwrap();
     let directions = into_the_clusters(20_000, 5);
-    for (want, deep) in [(BVH_REGISTERS, false), (BVH_REGISTERS + 4, true)] {
+    for (want, deep) in [(3, false), (9, false), (BVH_REGISTERS, false), (BVH_REGISTERS + 4, true)] {
         let (levels, triangles) = nested_clusters_of_depth(want, &directions);
         let device_bvh = GpuBvh::upload(&gpu, &Bvh::build(&triangles).unwrap()).unwrap();
         let depth = device_bvh.stack_depth;
         assert_eq!(depth > BVH_REGISTERS, deep, "{levels} levels: stack depth {depth}");
+        assert_eq!(device_bvh.register_stack(), if deep { 0 } else { want }, "{levels} levels");
         // Rays from the origin, at each triangle and into the clusters (some of which hold
         // `want` entries). Only from the origin: every coordinate is as well conditioned for them
         // as the first cluster's, where a ray from elsewhere that passes by the origin meets
@@ -496,10 +496,11 @@ fn walks_deeper_and_shallower_than_the_register_stack_match_brute_force() {
     }
 }
 
-/// The renderer's kernels walk a shallow BVH with the stack in registers (`shallow_bvh`), and
-/// passes made for deep BVHs walk any with the stack in memory: the two give the very same path
-/// traced and hybrid images (G-buffer, ray-traced AO and shadows, lighting), to the bit, on the
-/// sphere grid and on nested clusters whose walk fills every register, seen from the origin.
+/// The renderer's kernels walk a shallow BVH with a stack of as many registers as its walk holds
+/// (`SceneFeatures::bvh_stack`); passes made for a deeper register stack, or for deep BVHs (the
+/// stack in memory), walk it too: the three give the very same path traced and hybrid images
+/// (G-buffer, ray-traced AO and shadows, lighting), to the bit, on the sphere grid and on nested
+/// clusters whose walks fill 3 and every register, seen from the origin.
 #[test]
 fn register_and_memory_walks_render_the_same_images() {
     use umbra::gpu::layout::BVH_REGISTERS;
@@ -523,28 +524,66 @@ fn register_and_memory_walks_render_the_same_images() {
             Vec3::new(1.0, 0.25 - 0.5 * y / size.1 as f32, 0.25 - 0.5 * x / size.0 as f32)
         })
         .collect();
-    let (_, nested) = nested_clusters_of_depth(BVH_REGISTERS, &directions);
     let bulb = common::light(LightKind::Point, Vec3::new(0.3, 0.4, 0.2), Vec3::ZERO, 2.0);
-    let nested = common::build("nested clusters", &[nested], vec![bulb], camera);
-    for scene in [spheres, nested] {
+    // Each with its walk's stack depth and the share of its pixels lit at least (so that no
+    // comparison is of black images): the three levels of the shallow clusters fill less of the
+    // view.
+    let mut scenes = vec![(spheres, 8, 10)];
+    for (depth, lit) in [(3, 50), (BVH_REGISTERS, 10)] {
+        let (_, nested) = nested_clusters_of_depth(depth, &directions);
+        scenes.push((common::build("nested clusters", &[nested], vec![bulb.clone()], camera), depth, lit));
+    }
+    for (scene, depth, lit_share) in scenes {
         let gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
         let camera = scene.camera(None).unwrap();
         let features = gpu_scene.features();
-        let depth = gpu_scene.bvh.stack_depth;
-        assert!(features.shallow_bvh && depth >= 8, "{}: stack depth {depth}", scene.name);
-        let registers = Passes::new(&gpu, &gpu_scene);
-        let memory = Passes::with_features(&gpu, SceneFeatures { shallow_bvh: false, ..features });
+        assert_eq!(features.bvh_stack, depth, "{}", scene.name);
+        let exact = Passes::new(&gpu, &gpu_scene);
+        let all = Passes::with_features(&gpu, SceneFeatures { bvh_stack: BVH_REGISTERS, ..features });
+        let memory = Passes::with_features(&gpu, SceneFeatures { bvh_stack: 0, ..features });
         let path = PathSettings { size, spp: 4, seed: 3, ..PathSettings::default() };
         let hybrid = HybridSettings { size, ao: Some(AoSettings::default()), ..Default::default() };
-        let [a, b] =
-            [&registers, &memory].map(|p| p.path_trace(&gpu_scene, &camera, &path, |_, _| {}).unwrap());
+        let [a, b, c] =
+            [&exact, &all, &memory].map(|p| p.path_trace(&gpu_scene, &camera, &path, |_, _| {}).unwrap());
         let lit = a.mean.iter().filter(|p| p[0] > 0.0).count();
-        assert!(lit > a.mean.len() / 10, "{}: {lit} pixels lit", scene.name);
+        assert!(lit > a.mean.len() / lit_share, "{}: {lit} pixels lit", scene.name);
         let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert!(bits(&a.mean) == bits(&b.mean), "{}: the path tracer's images differ", scene.name);
-        let [a, b] = [&registers, &memory].map(|p| p.hybrid(&gpu_scene, &camera, &hybrid).unwrap());
-        assert!(bits(&a.color) == bits(&b.color), "{}: the hybrid images differ", scene.name);
+        assert!(
+            bits(&a.mean) == bits(&b.mean),
+            "{}: the path tracer's images differ (all registers)",
+            scene.name
+        );
+        assert!(bits(&a.mean) == bits(&c.mean), "{}: the path tracer's images differ (memory)", scene.name);
+        let [a, b, c] = [&exact, &all, &memory].map(|p| p.hybrid(&gpu_scene, &camera, &hybrid).unwrap());
+        assert!(bits(&a.color) == bits(&b.color), "{}: the hybrid images differ (all registers)", scene.name);
+        assert!(bits(&a.color) == bits(&c.color), "{}: the hybrid images differ (memory)", scene.name);
     }
+}
+
+/// Passes render a scene whose walk their register stack holds, or any under a stack in memory,
+/// and refuse one whose walk needs more registers than they have (`SceneFeatures::render`).
+#[test]
+fn passes_refuse_a_bvh_deeper_than_their_register_stack() {
+    use umbra::gpu::scene::GpuScene;
+    use umbra::gpu::SceneFeatures;
+    use umbra::render::{Passes, PathSettings};
+    use umbra::scene::Scene;
+    let gpu = Gpu::new();
+    let spheres = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.glb")).unwrap();
+    let gpu_scene = GpuScene::upload(&gpu, &spheres).unwrap();
+    let camera = spheres.camera(None).unwrap();
+    let features = gpu_scene.features();
+    let path = PathSettings { size: (8, 8), spp: 1, ..PathSettings::default() };
+    for (stack, fits) in [(features.bvh_stack - 1, false), (features.bvh_stack, true), (0, true)] {
+        assert_eq!(
+            SceneFeatures { bvh_stack: stack, ..features }.render(&features),
+            fits,
+            "{stack} registers"
+        );
+    }
+    let short = Passes::with_features(&gpu, SceneFeatures { bvh_stack: features.bvh_stack - 1, ..features });
+    let err = short.path_trace(&gpu_scene, &camera, &path, |_, _| {}).err().expect("refused");
+    assert!(err.to_string().contains("build new passes"), "{err}");
 }
 
 /// Alpha-masked triangles opaque wherever a ray can hit them lose their alpha test, and ones
@@ -587,7 +626,10 @@ fn alpha_classes_render_the_images_of_the_alpha_test() {
     assert_eq!(classified.bvh.validate(), Ok(()));
     let [classified, tested] = [&classified, &tested].map(|a| GpuScene::from_arrays(&gpu, a).unwrap());
     let camera = scene.camera(None).unwrap();
-    let passes = Passes::new(&gpu, &classified);
+    // Passes whose register stack holds both BVHs' walks.
+    let stack = classified.features().bvh_stack.max(tested.features().bvh_stack);
+    let passes =
+        Passes::with_features(&gpu, umbra::gpu::SceneFeatures { bvh_stack: stack, ..classified.features() });
     let path = PathSettings { size: (64, 48), spp: 4, seed: 5, ..PathSettings::default() };
     let hybrid = HybridSettings { size: (64, 48), ao: Some(AoSettings::default()), ..Default::default() };
     let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();

@@ -238,6 +238,10 @@ fn check_interface(
         .filter(|(_, f)| interface.features.contains(f))
         .map(|(i, f)| (i as u16, format!("HAS_{}", f.to_uppercase())))
         .collect();
+    // The register stack's entries, in kernels that walk with them.
+    if interface.features.contains(&"shallow_bvh") {
+        spec.push((umbra::gpu::kernel::BVH_STACK_SPEC_ID as u16, "BVH_STACK".to_string()));
+    }
     for (i, s) in interface.spec.iter().enumerate() {
         spec.push(((FIRST_KERNEL_SPEC_ID as usize + i) as u16, s.name.to_uppercase()));
     }

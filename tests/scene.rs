@@ -1815,17 +1815,18 @@ fn feature_scenes() -> Vec<Scene> {
     scenes
 }
 
-/// `SceneFeatures::of_scene` (from the scene as loaded, which `umbra render` specialises the path
-/// tracer's pipeline on while the scene uploads) equals `SceneFeatures::of` of the uploaded scene
-/// on every scene at hand: scenes/ (generated and Khronos), the generated test squares, scenes
-/// built in code for the edge cases, and every Khronos model in the shared assets; with and
-/// without an environment map. All but `shallow_bvh`, assumed before the BVH is built: a scene
-/// whose BVH is deeper has its pipelines made again (the deep ones are named). Every feature is on in some scene and off in another, so a
-/// feature computed wrongly either way fails.
+/// `SceneFeatures::of_scene` (from the scene as loaded and its BVH, which `umbra render`
+/// specialises the path tracer's pipeline on while the rest of the scene uploads) equals
+/// `SceneFeatures::of` of the uploaded scene on every scene at hand: scenes/ (generated and
+/// Khronos), the generated test squares, scenes built in code for the edge cases, and every
+/// Khronos model in the shared assets; with and without an environment map. The register stack
+/// is the uploaded BVH's stack depth (at least 1), or 0 beyond `BVH_REGISTERS` (the deep BVHs are
+/// named). Every feature is on in some scene and off in another, so a feature computed wrongly
+/// either way fails.
 #[test]
 fn features_before_the_upload_are_the_uploads() {
     use umbra::gpu::kernel::{BVH_REGISTERS, SCENE_FEATURES};
-    use umbra::gpu::scene::GpuScene;
+    use umbra::gpu::scene::{GpuScene, SceneBvh};
     use umbra::gpu::SceneFeatures;
     let gpu = common::Gpu::new();
     let mut scenes: Vec<Scene> =
@@ -1871,21 +1872,21 @@ fn features_before_the_upload_are_the_uploads() {
     let mut off = vec![false; SCENE_FEATURES.len()];
     for (i, scene) in scenes.iter().enumerate() {
         let env = i % 2 == 1;
-        let mut uploaded = GpuScene::upload(&gpu, scene).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+        let bvh = SceneBvh::build(scene).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+        let early = SceneFeatures::of_scene(scene, &bvh, env);
+        let mut uploaded =
+            GpuScene::upload_with(&gpu, scene, bvh).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
         if env {
             uploaded.set_environment(&gpu, &map).unwrap();
         }
-        let early = SceneFeatures::of_scene(scene, env);
         let features = uploaded.features();
-        // But `shallow_bvh`, which only the BVH built tells: assumed, and true for the BVH's
-        // stack depth.
-        assert!(early.shallow_bvh, "{}", scene.name);
         let depth = uploaded.bvh.stack_depth;
-        assert_eq!(features.shallow_bvh, depth <= BVH_REGISTERS, "{}: stack depth {depth}", scene.name);
-        if !features.shallow_bvh {
+        let stack = if depth > BVH_REGISTERS { 0 } else { depth.max(1) };
+        assert_eq!(features.bvh_stack, stack, "{}: stack depth {depth}", scene.name);
+        if depth > BVH_REGISTERS {
             eprintln!("{}: a BVH deeper than the register stack ({depth} entries)", scene.name);
         }
-        assert_eq!(SceneFeatures { shallow_bvh: features.shallow_bvh, ..early }, features, "{}", scene.name);
+        assert_eq!(early, features, "{}", scene.name);
         for (k, name) in SCENE_FEATURES.iter().enumerate() {
             let value = features.get(name).unwrap();
             on[k] |= value;

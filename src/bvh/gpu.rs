@@ -11,6 +11,7 @@ use crate::gpu::layout::{TraceHit, TraceParams, TraceRay, BVH_REGISTERS};
 use crate::gpu::Pipeline;
 use crate::vk::{raw, Buffer, Context, Descriptor, MemoryLocation, TexelBuffer};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// The node and triangle lists of a [`Bvh`], uploaded once: every kernel binds the BVH as two
 /// read-only storage texel buffers of RGBA32UI (bindings 0 and 1, see `bvh.glsl`).
@@ -32,7 +33,15 @@ impl GpuBvh {
     /// Whether every walk of this BVH holds at most [`BVH_REGISTERS`] stack entries, so that
     /// the kernels keep the stack in registers (the scene feature `shallow_bvh`).
     pub fn shallow(&self) -> bool {
-        self.stack_depth <= BVH_REGISTERS
+        self.register_stack() != 0
+    }
+
+    /// The entries of the kernels' register stack for this BVH ([`SceneFeatures::bvh_stack`]):
+    /// its stack depth, at least 1, or 0 when that is more than [`BVH_REGISTERS`] (the stack in
+    /// memory). A push or pop moves every register (`bvh.glsl`), so the walk carries no more than
+    /// it fills: 0.94-0.96 of a small scene's time against 16 (BENCHMARKS.md History).
+    pub fn register_stack(&self) -> u32 {
+        register_stack(self.stack_depth)
     }
 
     /// Uploads `bvh` through staging buffers. Fails for more than [`GpuBvhNode::MAX_NODES`] nodes
@@ -456,6 +465,17 @@ fn round_down(x: f64) -> f32 {
     -round_up(-x)
 }
 
+/// The entries of the kernels' register stack for a BVH whose walk holds at most `stack_depth`
+/// ([`GpuBvh::register_stack`]): that, at least 1, or 0 (the stack in memory) beyond
+/// [`BVH_REGISTERS`].
+pub fn register_stack(stack_depth: u32) -> u32 {
+    if stack_depth <= BVH_REGISTERS {
+        stack_depth.max(1)
+    } else {
+        0
+    }
+}
+
 /// Which query `trace.comp` answers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Query {
@@ -465,13 +485,19 @@ pub enum Query {
     Any,
 }
 
-/// `trace.comp` specialised for both queries and both walks: a BVH whose walk holds at most
-/// [`BVH_REGISTERS`] stack entries is traced with the stack in registers (`shallow_bvh`), any
-/// other with the stack in memory.
+/// `trace.comp` specialised for both queries and every walk: a BVH whose walk holds at most
+/// [`BVH_REGISTERS`] stack entries is traced with a stack of as many registers
+/// ([`GpuBvh::register_stack`]), any other with the stack in memory. Each pipeline is made on
+/// its first use.
 pub struct RayTracer {
-    /// Index: 2 × any-hit + shallow.
-    pipelines: [Pipeline<trace::Kernel>; 4],
+    /// Index: (BVH_REGISTERS + 1) × any-hit + the register stack's entries (0: in memory).
+    pipelines: [OnceLock<Pipeline<trace::Kernel>>; 2 * STACKS],
+    implicit: bool,
+    ctx: Context,
 }
+
+/// The register stacks a kernel may walk with, and the stack in memory.
+const STACKS: usize = BVH_REGISTERS as usize + 1;
 
 /// Workgroup size of `trace.comp`.
 const LOCAL: u32 = 64;
@@ -483,13 +509,26 @@ impl RayTracer {
         Self::with_implicit(ctx, false)
     }
 
-    /// Builds the pipelines; `implicit`: ray-march the BVH's implicit shapes.
+    /// Builds the pipelines of both queries for the deepest register stack (the others when a
+    /// BVH needs them); `implicit`: ray-march the BVH's implicit shapes.
     pub fn with_implicit(ctx: &Context, implicit: bool) -> Result<Self> {
-        let make = |index: usize| {
-            let features = SceneFeatures { implicit, shallow_bvh: index & 1 == 1, ..Default::default() };
-            Pipeline::new(ctx, &trace::Spec { trace_any: index >= 2 }, Some(&features))
-        };
-        Ok(Self { pipelines: [make(0)?, make(1)?, make(2)?, make(3)?] })
+        let tracer = Self { pipelines: std::array::from_fn(|_| OnceLock::new()), implicit, ctx: ctx.clone() };
+        for query in [Query::Closest, Query::Any] {
+            tracer.pipeline(query, BVH_REGISTERS)?;
+        }
+        Ok(tracer)
+    }
+
+    /// The pipeline for `query` with a register stack of `entries` (0: the stack in memory).
+    fn pipeline(&self, query: Query, entries: u32) -> Result<&Pipeline<trace::Kernel>> {
+        let any = query == Query::Any;
+        let cell = &self.pipelines[STACKS * any as usize + entries as usize];
+        if let Some(pipeline) = cell.get() {
+            return Ok(pipeline);
+        }
+        let features = SceneFeatures { implicit: self.implicit, bvh_stack: entries, ..Default::default() };
+        let pipeline = Pipeline::new(&self.ctx, &trace::Spec { trace_any: any }, Some(&features))?;
+        Ok(cell.get_or_init(|| pipeline))
     }
 
     /// Records a trace of `batch`'s rays into its hits. Never submits.
@@ -500,8 +539,7 @@ impl RayTracer {
         bvh: &GpuBvh,
         batch: &RayBatch,
     ) -> Result<()> {
-        let pipeline = &self.pipelines[2 * (query == Query::Any) as usize + bvh.shallow() as usize];
-        pipeline.record(
+        self.pipeline(query, bvh.register_stack())?.record(
             cmd,
             &trace::Resources { bvh, rays: &batch.rays, hits: &batch.hits },
             &TraceParams { count: batch.count, ..Default::default() },

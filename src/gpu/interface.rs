@@ -93,6 +93,13 @@ pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 13] = [
     ("thickness_map", 1 << 19),
 ];
 
+/// The specialization-constant id of `BVH_STACK` in kernels specialised on `shallow_bvh`: the
+/// entries of the walk's register stack, the BVH's stack depth
+/// ([`crate::bvh::gpu::GpuBvhNode::stack_depth`], at least 1), so that a shallow BVH's walk moves
+/// no more registers than it fills (`bvh.glsl`). A plain constant, [`BVH_REGISTERS`], in the
+/// other kernels that trace.
+pub const BVH_STACK_SPEC_ID: u32 = 31;
+
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
 /// others follow in order (room left for scene features to come).
 pub const FIRST_KERNEL_SPEC_ID: u32 = 32;
@@ -988,9 +995,10 @@ gpu_constants! {
     /// classifies each alpha-tested triangle from its texels and leaves such triangles out of
     /// the BVH, but for lights, whose table names their BVH slots).
     ALPHA_NEVER_HIT: uint = 3;
-    /// The traversal's stack entries held in registers (`bvh.glsl`): a scene whose walk never
+    /// The most traversal stack entries held in registers (`bvh.glsl`): a scene whose walk never
     /// holds more ([`crate::bvh::gpu::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and
-    /// its kernels walk with that stack instead of one in memory.
+    /// its kernels walk with as many registers as its walk holds (`BVH_STACK`) instead of a stack
+    /// in memory.
     BVH_REGISTERS: uint = 16;
     /// `GpuMaterial::flags.x`: the material is double-sided.
     MATERIAL_DOUBLE_SIDED: uint = 1;

@@ -8,7 +8,9 @@ use crate::error::{Error, Result};
 use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc};
 use std::marker::PhantomData;
 
-pub use super::layout::{BVH_REGISTERS, FIRST_KERNEL_SPEC_ID, SCENE_FEATURES, TEXTURE_SLOT_FEATURES};
+pub use super::layout::{
+    BVH_REGISTERS, BVH_STACK_SPEC_ID, FIRST_KERNEL_SPEC_ID, SCENE_FEATURES, TEXTURE_SLOT_FEATURES,
+};
 
 /// How a binding is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -169,9 +171,11 @@ pub struct SceneFeatures {
     pub diffuse_transmission: bool,
     /// Some transmitting volume disperses (`KHR_materials_dispersion`).
     pub dispersion: bool,
-    /// The BVH's walk never holds more than [`BVH_REGISTERS`] stack entries
-    /// ([`crate::bvh::gpu::GpuBvhNode::stack_depth`]): the kernels keep the stack in registers.
-    pub shallow_bvh: bool,
+    /// The entries of the walk's stack in registers: the BVH's stack depth
+    /// ([`crate::bvh::gpu::GpuBvhNode::stack_depth`], at least 1) where it is at most
+    /// [`BVH_REGISTERS`] (the feature `shallow_bvh`; `BVH_STACK` in `bvh.glsl`), else 0: the
+    /// walk keeps its stack in memory. [`GpuBvh::register_stack`](crate::bvh::gpu::GpuBvh::register_stack).
+    pub bvh_stack: u32,
 }
 
 impl SceneFeatures {
@@ -195,8 +199,16 @@ impl SceneFeatures {
             anisotropy: scene.has_anisotropy,
             diffuse_transmission: scene.has_diffuse_transmission,
             dispersion: scene.has_dispersion,
-            shallow_bvh: scene.bvh.shallow(),
+            bvh_stack: scene.bvh.register_stack(),
         }
+    }
+
+    /// Whether kernels specialised on these features render a scene with `scene`'s: the same
+    /// features, but for a register stack at least as deep as the scene's walk needs or a stack in
+    /// memory, which walks any BVH.
+    pub fn render(&self, scene: &SceneFeatures) -> bool {
+        let holds = self.bvh_stack == 0 || (scene.bvh_stack != 0 && scene.bvh_stack <= self.bvh_stack);
+        holds && SceneFeatures { bvh_stack: 0, ..*self } == SceneFeatures { bvh_stack: 0, ..*scene }
     }
 
     /// Feature `name` of [`SCENE_FEATURES`].
@@ -218,7 +230,7 @@ impl SceneFeatures {
             "anisotropy" => self.anisotropy,
             "diffuse_transmission" => self.diffuse_transmission,
             "dispersion" => self.dispersion,
-            "shallow_bvh" => self.shallow_bvh,
+            "shallow_bvh" => self.bvh_stack != 0,
             _ => {
                 let (_, slots) = TEXTURE_SLOT_FEATURES.iter().find(|(f, _)| *f == name)?;
                 self.texture_slots & slots != 0
@@ -293,6 +305,12 @@ impl<K: Kernel> Pipeline<K> {
                 ))
             })?;
             specialization.push((id, value as u32));
+        }
+        // The register stack's entries, where the kernel walks the BVH with them (any value for
+        // a deep BVH, whose walk keeps its stack in memory).
+        if interface.features.contains(&"shallow_bvh") {
+            let entries = features.map_or(0, |f| f.bvh_stack);
+            specialization.push((BVH_STACK_SPEC_ID, if entries == 0 { BVH_REGISTERS } else { entries }));
         }
         for (i, value) in spec.values().into_iter().enumerate() {
             specialization.push((FIRST_KERNEL_SPEC_ID + i as u32, value));

@@ -6,7 +6,7 @@ use super::layout::{
     GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources, TexTransforms,
     ALPHA_NEVER_HIT, MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
 };
-use crate::bvh::gpu::GpuBvh;
+use crate::bvh::gpu::{register_stack, GpuBvh, GpuBvhNode};
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
@@ -131,10 +131,21 @@ pub struct SceneArrays {
     pub alpha: Vec<Option<u32>>,
 }
 
-impl SceneArrays {
-    /// Builds the BVH and lays the scene out for the GPU. Triangles no ray may hit (transparent
-    /// wherever they can be hit: their alpha classes) are left out of the BVH.
-    pub fn new(scene: &Scene) -> Result<Self> {
+/// A scene's BVH, built ahead of the rest of its upload ([`GpuScene::upload_with`]), with what
+/// only it tells of the kernels' features ([`SceneFeatures::of_scene`]): each triangle's alpha
+/// class and the walk's stack depth. `umbra render` and [`crate::embed::Renderer`] build it
+/// first, then make the pipelines while the rest (textures, the upload) runs.
+pub struct SceneBvh {
+    bvh: Bvh,
+    /// Each scene triangle's alpha bits in the BVH, `None` for one left out of it as never hit.
+    alpha: Vec<Option<u32>>,
+    stack_depth: u32,
+}
+
+impl SceneBvh {
+    /// Builds the BVH of `scene`'s triangles and implicit shapes. Triangles no ray may hit
+    /// (transparent wherever they can be hit: their alpha classes) are left out of it.
+    pub fn build(scene: &Scene) -> Result<Self> {
         let boxes = scene_boxes(scene)?;
         let alpha = bvh_alpha(scene);
         let soup = scene.triangle_soup();
@@ -148,7 +159,26 @@ impl SceneArrays {
             bvh.renumber(&kept, soup.len());
             bvh
         };
-        Ok(Self::with_alpha(scene, bvh, alpha))
+        let stack_depth = GpuBvhNode::stack_depth(&GpuBvhNode::from_bvh(&bvh)?);
+        Ok(Self { bvh, alpha, stack_depth })
+    }
+
+    /// The most entries the walk's stack holds ([`GpuBvhNode::stack_depth`] of its GPU layout).
+    pub fn stack_depth(&self) -> u32 {
+        self.stack_depth
+    }
+}
+
+impl SceneArrays {
+    /// Builds the BVH and lays the scene out for the GPU ([`SceneBvh::build`], then
+    /// [`SceneArrays::with_scene_bvh`]).
+    pub fn new(scene: &Scene) -> Result<Self> {
+        Ok(Self::with_scene_bvh(scene, SceneBvh::build(scene)?))
+    }
+
+    /// Lays the scene out for the GPU around its BVH.
+    pub fn with_scene_bvh(scene: &Scene, bvh: SceneBvh) -> Self {
+        Self::with_alpha(scene, bvh.bvh, bvh.alpha)
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
@@ -542,10 +572,9 @@ impl SceneFeatures {
     /// uploaded, so that the pipelines specialised on them can be created meanwhile. The
     /// materials' features come from `gpu_material` as the upload's do; the rest from the
     /// scene's lists the upload's arrays are made from (tests/scene.rs checks that the two agree
-    /// on every scene at hand). All but `shallow_bvh`, which only the built BVH tells: it is
-    /// assumed (every scene at hand has a shallow BVH, Sponza's walk holds 12 entries), and a
-    /// scene whose BVH is deeper gets passes made again for its features, as any mismatch does.
-    pub fn of_scene(scene: &Scene, env_map: bool) -> Self {
+    /// on every scene at hand); the alpha classes and the register stack from `bvh`, the BVH
+    /// built for the upload.
+    pub fn of_scene(scene: &Scene, bvh: &SceneBvh, env_map: bool) -> Self {
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
@@ -556,7 +585,7 @@ impl SceneFeatures {
             textures: slots != 0,
             // The BVH's triangles with their alpha bits as classified (implicit shapes are never
             // alpha-tested).
-            alpha: bvh_alpha(scene).iter().any(|a| a.is_some_and(|bits| bits != 0)),
+            alpha: bvh.alpha.iter().any(|a| a.is_some_and(|bits| bits != 0)),
             lights: !scene.emissive.triangles.is_empty(),
             punctual: !scene.lights.is_empty(),
             env_map,
@@ -573,7 +602,7 @@ impl SceneFeatures {
             anisotropy: anisotropic(&materials),
             diffuse_transmission: diffusely_transmits(&materials),
             dispersion: disperses(&materials),
-            shallow_bvh: true,
+            bvh_stack: register_stack(bvh.stack_depth),
         }
     }
 }
@@ -634,7 +663,12 @@ impl GpuScene {
     /// Builds the BVH and uploads everything.
     /// A scene too large for the device's storage buffers is one [`Error::Scene`] naming it.
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<Self> {
-        let arrays = SceneArrays::new(scene)?;
+        Self::upload_with(ctx, scene, SceneBvh::build(scene)?)
+    }
+
+    /// [`GpuScene::upload`] around a BVH already built for `scene`.
+    pub fn upload_with(ctx: &Context, scene: &Scene, bvh: SceneBvh) -> Result<Self> {
+        let arrays = SceneArrays::with_scene_bvh(scene, bvh);
         arrays.check_limits(&scene.name, ctx.info())?;
         Self::from_arrays(ctx, &arrays)
     }

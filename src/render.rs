@@ -373,10 +373,10 @@ impl Passes {
     /// Refuses a scene whose features differ from the pipelines' (its textures, lights or
     /// transmission would be silently ignored, or paid for without being there), but for a
     /// shallower BVH than the pipelines' register stack holds, or any under pipelines made for
-    /// deep ones (the stack in memory walks any BVH): [`SceneFeatures::render`].
+    /// deep ones (the stack in memory walks any BVH): [`SceneFeatures::renders`].
     fn check(&self, scene: &GpuScene) -> Result<()> {
         let features = scene.features();
-        if !self.features.render(&features) {
+        if !self.features.renders(&features) {
             return Err(Error::Invalid(format!(
                 "the passes were built for a scene with {:?}, this one has {features:?}: build new passes",
                 self.features

@@ -561,7 +561,7 @@ fn register_and_memory_walks_render_the_same_images() {
 }
 
 /// Passes render a scene whose walk their register stack holds, or any under a stack in memory,
-/// and refuse one whose walk needs more registers than they have (`SceneFeatures::render`).
+/// and refuse one whose walk needs more registers than they have (`SceneFeatures::renders`).
 #[test]
 fn passes_refuse_a_bvh_deeper_than_their_register_stack() {
     use umbra::gpu::scene::GpuScene;
@@ -576,13 +576,15 @@ fn passes_refuse_a_bvh_deeper_than_their_register_stack() {
     let path = PathSettings { size: (8, 8), spp: 1, ..PathSettings::default() };
     for (stack, fits) in [(features.bvh_stack - 1, false), (features.bvh_stack, true), (0, true)] {
         assert_eq!(
-            SceneFeatures { bvh_stack: stack, ..features }.render(&features),
+            SceneFeatures { bvh_stack: stack, ..features }.renders(&features),
             fits,
             "{stack} registers"
         );
     }
     let short = Passes::with_features(&gpu, SceneFeatures { bvh_stack: features.bvh_stack - 1, ..features });
-    let err = short.path_trace(&gpu_scene, &camera, &path, |_, _| {}).err().expect("refused");
+    let Err(err) = short.path_trace(&gpu_scene, &camera, &path, |_, _| {}) else {
+        panic!("passes with a register short rendered the sphere grid");
+    };
     assert!(err.to_string().contains("build new passes"), "{err}");
 }
 

@@ -206,7 +206,7 @@ impl SceneFeatures {
     /// Whether kernels specialised on these features render a scene with `scene`'s: the same
     /// features, but for a register stack at least as deep as the scene's walk needs or a stack in
     /// memory, which walks any BVH.
-    pub fn render(&self, scene: &SceneFeatures) -> bool {
+    pub fn renders(&self, scene: &SceneFeatures) -> bool {
         let holds = self.bvh_stack == 0 || (scene.bvh_stack != 0 && scene.bvh_stack <= self.bvh_stack);
         holds && SceneFeatures { bvh_stack: 0, ..*self } == SceneFeatures { bvh_stack: 0, ..*scene }
     }

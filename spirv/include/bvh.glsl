@@ -287,6 +287,11 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
         }                                                                                        \
     }
 
+// Whether register k of the stack is one the walk uses (k < BVH_STACK). A function of k, not the
+// comparison written out: on two constants that would be an OpSpecConstantOp, which naga's SPIR-V
+// reader rejects; the driver folds the call once the constant is set.
+bool bvh_register(uint k) { return k < BVH_STACK; }
+
 // The walk over a stack of BVH_STACK entries in registers, for a BVH whose walk never holds more
 // (the scene feature `shallow_bvh`: GpuBvhNode::stack_depth at most BVH_REGISTERS; BVH_STACK, a
 // specialization constant, is that depth), and over BVH_MAX_DEPTH entries in memory for any
@@ -296,48 +301,43 @@ BvhVisit bvh_visit(BvhRay r, uint node, float tmin, float tmax) {
 // the top: a push moves every entry one down, a pop one up (a select per register each), so no
 // access is indexed. Registers at or past BVH_STACK are never written: the driver folds their
 // selects away once the constant is set, so a push or pop costs what the BVH's depth needs (a
-// Cornell box's walk holds one entry; 16 registers cost it 5 %, BENCHMARKS.md History).
-// Whether register k of the stack is one the walk uses (k < BVH_STACK). A function of k, not the
-// comparison written out: on two constants that would be an OpSpecConstantOp, which naga's SPIR-V
-// reader rejects; the driver folds the call once the constant is set.
-bool bvh_register(uint k) { return k < BVH_STACK; }
-
+// Cornell box's walk holds one entry; 16 registers cost it 6 %, BENCHMARKS.md History).
 #define BVH_WALK bvh_walk_registers
 #define BVH_STACK_DECL \
     uint s0_ = 0u, s1_ = 0u, s2_ = 0u, s3_ = 0u, s4_ = 0u, s5_ = 0u, s6_ = 0u, s7_ = 0u, s8_ = 0u, s9_ = 0u, s10_ = 0u, s11_ = 0u, s12_ = 0u, s13_ = 0u, s14_ = 0u, s15_ = 0u;
 #define BVH_STACK_TOP s0_
 #define BVH_STACK_UPDATE(descend, push, pop, entry, rest)                          \
     {                                                                              \
-        s0_ = bvh_register(1u) && (pop) ? s1_ : s0_;                                 \
-        s1_ = bvh_register(2u) && (pop) ? s2_ : s1_;                                 \
-        s2_ = bvh_register(3u) && (pop) ? s3_ : s2_;                                 \
-        s3_ = bvh_register(4u) && (pop) ? s4_ : s3_;                                 \
-        s4_ = bvh_register(5u) && (pop) ? s5_ : s4_;                                 \
-        s5_ = bvh_register(6u) && (pop) ? s6_ : s5_;                                 \
-        s6_ = bvh_register(7u) && (pop) ? s7_ : s6_;                                 \
-        s7_ = bvh_register(8u) && (pop) ? s8_ : s7_;                                 \
-        s8_ = bvh_register(9u) && (pop) ? s9_ : s8_;                                 \
-        s9_ = bvh_register(10u) && (pop) ? s10_ : s9_;                               \
-        s10_ = bvh_register(11u) && (pop) ? s11_ : s10_;                             \
-        s11_ = bvh_register(12u) && (pop) ? s12_ : s11_;                             \
-        s12_ = bvh_register(13u) && (pop) ? s13_ : s12_;                             \
-        s13_ = bvh_register(14u) && (pop) ? s14_ : s13_;                             \
-        s14_ = bvh_register(15u) && (pop) ? s15_ : s14_;                             \
-        s15_ = bvh_register(15u) && (push) ? s14_ : s15_;                            \
-        s14_ = bvh_register(14u) && (push) ? s13_ : s14_;                            \
-        s13_ = bvh_register(13u) && (push) ? s12_ : s13_;                            \
-        s12_ = bvh_register(12u) && (push) ? s11_ : s12_;                            \
-        s11_ = bvh_register(11u) && (push) ? s10_ : s11_;                            \
-        s10_ = bvh_register(10u) && (push) ? s9_ : s10_;                             \
-        s9_ = bvh_register(9u) && (push) ? s8_ : s9_;                                \
-        s8_ = bvh_register(8u) && (push) ? s7_ : s8_;                                \
-        s7_ = bvh_register(7u) && (push) ? s6_ : s7_;                                \
-        s6_ = bvh_register(6u) && (push) ? s5_ : s6_;                                \
-        s5_ = bvh_register(5u) && (push) ? s4_ : s5_;                                \
-        s4_ = bvh_register(4u) && (push) ? s3_ : s4_;                                \
-        s3_ = bvh_register(3u) && (push) ? s2_ : s3_;                                \
-        s2_ = bvh_register(2u) && (push) ? s1_ : s2_;                                \
-        s1_ = bvh_register(1u) && (push) ? s0_ : s1_;                                \
+        s0_ = bvh_register(1u) && (pop) ? s1_ : s0_;                               \
+        s1_ = bvh_register(2u) && (pop) ? s2_ : s1_;                               \
+        s2_ = bvh_register(3u) && (pop) ? s3_ : s2_;                               \
+        s3_ = bvh_register(4u) && (pop) ? s4_ : s3_;                               \
+        s4_ = bvh_register(5u) && (pop) ? s5_ : s4_;                               \
+        s5_ = bvh_register(6u) && (pop) ? s6_ : s5_;                               \
+        s6_ = bvh_register(7u) && (pop) ? s7_ : s6_;                               \
+        s7_ = bvh_register(8u) && (pop) ? s8_ : s7_;                               \
+        s8_ = bvh_register(9u) && (pop) ? s9_ : s8_;                               \
+        s9_ = bvh_register(10u) && (pop) ? s10_ : s9_;                             \
+        s10_ = bvh_register(11u) && (pop) ? s11_ : s10_;                           \
+        s11_ = bvh_register(12u) && (pop) ? s12_ : s11_;                           \
+        s12_ = bvh_register(13u) && (pop) ? s13_ : s12_;                           \
+        s13_ = bvh_register(14u) && (pop) ? s14_ : s13_;                           \
+        s14_ = bvh_register(15u) && (pop) ? s15_ : s14_;                           \
+        s15_ = bvh_register(15u) && (push) ? s14_ : s15_;                          \
+        s14_ = bvh_register(14u) && (push) ? s13_ : s14_;                          \
+        s13_ = bvh_register(13u) && (push) ? s12_ : s13_;                          \
+        s12_ = bvh_register(12u) && (push) ? s11_ : s12_;                          \
+        s11_ = bvh_register(11u) && (push) ? s10_ : s11_;                          \
+        s10_ = bvh_register(10u) && (push) ? s9_ : s10_;                           \
+        s9_ = bvh_register(9u) && (push) ? s8_ : s9_;                              \
+        s8_ = bvh_register(8u) && (push) ? s7_ : s8_;                              \
+        s7_ = bvh_register(7u) && (push) ? s6_ : s7_;                              \
+        s6_ = bvh_register(6u) && (push) ? s5_ : s6_;                              \
+        s5_ = bvh_register(5u) && (push) ? s4_ : s5_;                              \
+        s4_ = bvh_register(4u) && (push) ? s3_ : s4_;                              \
+        s3_ = bvh_register(3u) && (push) ? s2_ : s3_;                              \
+        s2_ = bvh_register(2u) && (push) ? s1_ : s2_;                              \
+        s1_ = bvh_register(1u) && (push) ? s0_ : s1_;                              \
         s0_ = (push) ? (entry) : (!(descend) && sp > 0u && !(pop) ? (rest) : s0_); \
     }
 #include "bvh_walk.glsl"

@@ -30,12 +30,6 @@ pub struct GpuBvh {
 }
 
 impl GpuBvh {
-    /// Whether every walk of this BVH holds at most [`BVH_REGISTERS`] stack entries, so that
-    /// the kernels keep the stack in registers (the scene feature `shallow_bvh`).
-    pub fn shallow(&self) -> bool {
-        self.register_stack() != 0
-    }
-
     /// The entries of the kernels' register stack for this BVH ([`SceneFeatures::bvh_stack`]):
     /// its stack depth, at least 1, or 0 when that is more than [`BVH_REGISTERS`] (the stack in
     /// memory). A push or pop moves every register (`bvh.glsl`), so the walk carries no more than
@@ -47,8 +41,12 @@ impl GpuBvh {
     /// Uploads `bvh` through staging buffers. Fails for more than [`GpuBvhNode::MAX_NODES`] nodes
     /// or as [`GpuBvhNode::from_bvh`] does.
     pub fn upload(ctx: &Context, bvh: &Bvh) -> Result<Self> {
+        Self::upload_nodes(ctx, bvh, GpuBvhNode::from_bvh(bvh)?)
+    }
+
+    /// [`GpuBvh::upload`] with `bvh`'s GPU layout already made ([`GpuBvhNode::from_bvh`]).
+    pub fn upload_nodes(ctx: &Context, bvh: &Bvh, nodes: Vec<GpuBvhNode>) -> Result<Self> {
         const RGBA32UI: raw::Format = raw::Format::R32G32B32A32_UINT;
-        let nodes = GpuBvhNode::from_bvh(bvh)?;
         if nodes.len() > GpuBvhNode::MAX_NODES {
             return Err(Error::Invalid(format!(
                 "the BVH of {} triangles has {} 4-wide nodes; the traversal addresses at most {}",

@@ -139,46 +139,47 @@ pub struct SceneBvh {
     bvh: Bvh,
     /// Each scene triangle's alpha bits in the BVH, `None` for one left out of it as never hit.
     alpha: Vec<Option<u32>>,
+    /// Its GPU layout, which tells the stack depth and is uploaded as it is.
+    nodes: Vec<GpuBvhNode>,
     stack_depth: u32,
 }
 
 impl SceneBvh {
-    /// Builds the BVH of `scene`'s triangles and implicit shapes. Triangles no ray may hit
-    /// (transparent wherever they can be hit: their alpha classes) are left out of it.
+    /// Builds the BVH of `scene`'s triangles and implicit shapes and its GPU layout. Triangles no
+    /// ray may hit (transparent wherever they can be hit: their alpha classes) are left out of it.
     pub fn build(scene: &Scene) -> Result<Self> {
-        let boxes = scene_boxes(scene)?;
-        let alpha = bvh_alpha(scene);
-        let soup = scene.triangle_soup();
-        let options = crate::bvh::BuildOptions::default();
-        let kept: Vec<u32> = (0..soup.len() as u32).filter(|&t| alpha[t as usize].is_some()).collect();
-        let bvh = if kept.len() == soup.len() {
-            Bvh::build_mixed(&soup, &boxes, &options)?
-        } else {
-            let built: Vec<[Vec3; 3]> = kept.iter().map(|&t| soup[t as usize]).collect();
-            let mut bvh = Bvh::build_mixed(&built, &boxes, &options)?;
-            bvh.renumber(&kept, soup.len());
-            bvh
-        };
-        let stack_depth = GpuBvhNode::stack_depth(&GpuBvhNode::from_bvh(&bvh)?);
-        Ok(Self { bvh, alpha, stack_depth })
-    }
-
-    /// The most entries the walk's stack holds ([`GpuBvhNode::stack_depth`] of its GPU layout).
-    pub fn stack_depth(&self) -> u32 {
-        self.stack_depth
+        let (bvh, alpha) = build_scene_bvh(scene)?;
+        let nodes = GpuBvhNode::from_bvh(&bvh)?;
+        let stack_depth = GpuBvhNode::stack_depth(&nodes);
+        Ok(Self { bvh, alpha, nodes, stack_depth })
     }
 }
 
-impl SceneArrays {
-    /// Builds the BVH and lays the scene out for the GPU ([`SceneBvh::build`], then
-    /// [`SceneArrays::with_scene_bvh`]).
-    pub fn new(scene: &Scene) -> Result<Self> {
-        Ok(Self::with_scene_bvh(scene, SceneBvh::build(scene)?))
-    }
+/// The BVH of `scene`'s triangles but those no ray may hit, and each scene triangle's alpha
+/// class ([`bvh_alpha`]).
+fn build_scene_bvh(scene: &Scene) -> Result<(Bvh, Vec<Option<u32>>)> {
+    let boxes = scene_boxes(scene)?;
+    let alpha = bvh_alpha(scene);
+    let soup = scene.triangle_soup();
+    let options = crate::bvh::BuildOptions::default();
+    let kept: Vec<u32> = (0..soup.len() as u32).filter(|&t| alpha[t as usize].is_some()).collect();
+    let bvh = if kept.len() == soup.len() {
+        Bvh::build_mixed(&soup, &boxes, &options)?
+    } else {
+        let built: Vec<[Vec3; 3]> = kept.iter().map(|&t| soup[t as usize]).collect();
+        let mut bvh = Bvh::build_mixed(&built, &boxes, &options)?;
+        bvh.renumber(&kept, soup.len());
+        bvh
+    };
+    Ok((bvh, alpha))
+}
 
-    /// Lays the scene out for the GPU around its BVH.
-    pub fn with_scene_bvh(scene: &Scene, bvh: SceneBvh) -> Self {
-        Self::with_alpha(scene, bvh.bvh, bvh.alpha)
+impl SceneArrays {
+    /// Builds the BVH and lays the scene out for the GPU. Triangles no ray may hit (transparent
+    /// wherever they can be hit: their alpha classes) are left out of the BVH.
+    pub fn new(scene: &Scene) -> Result<Self> {
+        let (bvh, alpha) = build_scene_bvh(scene)?;
+        Ok(Self::with_alpha(scene, bvh, alpha))
     }
 
     /// The name and size in bytes of each buffer [`GpuScene::from_arrays`] uploads (the BVH's
@@ -231,26 +232,16 @@ impl SceneArrays {
             tri.v1[3] = f32::from_bits(bits);
         }
         let shading = ShadingArrays::new(scene, &bvh.prim_order);
-        let ShadingArrays {
-            triangles,
-            vertices,
-            materials,
-            lights,
-            punctual,
-            textures,
-            texels,
-            emissive_power,
-        } = shading;
         Self {
             bvh,
-            triangles,
-            vertices,
-            materials,
-            lights,
-            punctual,
-            textures,
-            texels,
-            emissive_power,
+            triangles: shading.triangles,
+            vertices: shading.vertices,
+            materials: shading.materials,
+            lights: shading.lights,
+            punctual: shading.punctual,
+            textures: shading.textures,
+            texels: shading.texels,
+            emissive_power: shading.emissive_power,
             alpha,
         }
     }
@@ -666,17 +657,25 @@ impl GpuScene {
         Self::upload_with(ctx, scene, SceneBvh::build(scene)?)
     }
 
-    /// [`GpuScene::upload`] around a BVH already built for `scene`.
+    /// [`GpuScene::upload`] around a BVH already built for `scene` (its GPU layout uploaded as
+    /// it is).
     pub fn upload_with(ctx: &Context, scene: &Scene, bvh: SceneBvh) -> Result<Self> {
-        let arrays = SceneArrays::with_scene_bvh(scene, bvh);
+        let SceneBvh { bvh, alpha, nodes, .. } = bvh;
+        let arrays = SceneArrays::with_alpha(scene, bvh, alpha);
         arrays.check_limits(&scene.name, ctx.info())?;
-        Self::from_arrays(ctx, &arrays)
+        let bvh = GpuBvh::upload_nodes(ctx, &arrays.bvh, nodes)?;
+        Self::with_gpu_bvh(ctx, &arrays, bvh)
     }
 
     /// Uploads arrays already laid out (tests keep them to compare against).
     pub fn from_arrays(ctx: &Context, arrays: &SceneArrays) -> Result<Self> {
+        Self::with_gpu_bvh(ctx, arrays, GpuBvh::upload(ctx, &arrays.bvh)?)
+    }
+
+    /// Uploads `arrays` around their BVH already uploaded.
+    fn with_gpu_bvh(ctx: &Context, arrays: &SceneArrays, bvh: GpuBvh) -> Result<Self> {
         Ok(Self {
-            bvh: GpuBvh::upload(ctx, &arrays.bvh)?,
+            bvh,
             triangles: upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?,
             vertices: upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?,
             materials: upload_rgba32ui(ctx, "scene materials", &material_texels(&arrays.materials))?,

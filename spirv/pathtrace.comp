@@ -6,10 +6,36 @@
 // occlusion maps (glTF occlusionTexture) are not read: the paths trace the occlusion they stand
 // in for (the hybrid renderer applies them to its image-based light).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "kernel/pathtrace.glsl"
 #include "pixel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
+
+// COUNT_LANES (a diagnostic: PathTarget::with_lane_counts): how busy the SIMD lanes are in the
+// BVH walks. Every walk-loop iteration counts; per trace, the iterations of the subgroup's
+// active lanes are summed and their largest (what the group ran: a loop runs until its slowest
+// lane is done) counted once, closest-hit and any-hit traces apart (x, y and z, w), into
+// PathStats at the end.
+uint walk_iterations = 0u;
+uvec4 lane_counts = uvec4(0u);
+#define BVH_ITERATION    \
+    if (COUNT_LANES) {   \
+        ++walk_iterations; \
+    }
+
+// Counts a trace whose walks began at `walk_iterations` = `before` (any_hit: a shadow ray's).
+void count_trace(uint before, bool any_hit) {
+    if (COUNT_LANES) {
+        uint lanes = subgroupAdd(walk_iterations - before);
+        uint group = subgroupMax(walk_iterations - before);
+        // One lane of the active ones (subgroupElect, which naga's SPIR-V reader lacks).
+        if (gl_SubgroupInvocationID == subgroupBroadcastFirst(gl_SubgroupInvocationID)) {
+            lane_counts += any_hit ? uvec4(0u, 0u, lanes, group) : uvec4(lanes, group, 0u, 0u);
+        }
+    }
+}
 
 #include "random.glsl"
 #include "camera.glsl"
@@ -21,7 +47,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 // A light sample's shadow ray, traced at once.
 void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, vec3 c_spec, uint bit) {
-    if (!bvh_any(origin, d, 0.0, tmax)) {
+    uint before = walk_iterations;
+    bool blocked = bvh_any(origin, d, 0.0, tmax);
+    count_trace(before, true);
+    if (!blocked) {
         path.radiance += c;
         path.specular += c_spec;
         path.nonfinite |= nonfinite_bit(c, bit);
@@ -32,7 +61,9 @@ void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, vec3 
 bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albedo, inout vec4 normal_depth,
                inout vec3 emitted_first) {
     Hit hit;
+    uint before = walk_iterations;
     bool found = bvh_closest(path.origin, path.dir, 0.0, BVH_INF, hit);
+    count_trace(before, false);
     return path_shade(path, found, hit, pixel, sample_index, albedo, normal_depth, emitted_first);
 }
 
@@ -131,5 +162,13 @@ void main() {
     barrier();
     if (gl_LocalInvocationIndex == 0u) {
         count_segments(group_segments);
+    }
+    if (COUNT_LANES) {
+        if (any(notEqual(lane_counts, uvec4(0u)))) {
+            atomicAdd(stats.walk_lanes_closest, lane_counts.x);
+            atomicAdd(stats.walk_groups_closest, lane_counts.y);
+            atomicAdd(stats.walk_lanes_any, lane_counts.z);
+            atomicAdd(stats.walk_groups_any, lane_counts.w);
+        }
     }
 }

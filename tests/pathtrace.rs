@@ -6,11 +6,11 @@ mod common;
 use common::Gpu;
 use glam::Vec3;
 use std::path::Path;
-use umbra::gpu::layout::GpuCamera;
+use umbra::gpu::layout::{GpuCamera, PathStats};
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::pathtrace::Microfacet;
+use umbra::passes::pathtrace::{Microfacet, PathTarget};
 use umbra::procedural::{icosphere, Mesh};
-use umbra::render::{path_trace, PathImage, PathSettings};
+use umbra::render::{path_trace, Passes, PathImage, PathSettings};
 use umbra::scene::{Camera, Material, Scene};
 
 /// A scene from meshes, one material per mesh, with flat (face) normals, or with `smooth` the
@@ -1411,4 +1411,69 @@ fn sampled_punctual_lights_match_evaluating_each() {
             "channel {c}: sampled lights differ by {diff} (z = {z}) of {total}"
         );
     }
+}
+
+/// Renders `spp` samples of `scene` from its first camera into `target` (settings otherwise
+/// `PathSettings::default()`'s at the target's size) and returns the target's counters.
+fn render_into(gpu: &Gpu, scene: &Scene, target: &PathTarget, spp: u32) -> PathStats {
+    let device_scene = GpuScene::upload(gpu, scene).unwrap();
+    let passes = Passes::new(gpu, &device_scene);
+    let camera = scene.camera(None).unwrap();
+    let settings = PathSettings { size: target.size, spp, ..PathSettings::default() };
+    gpu.submit(|cmd| passes.record_path_samples(cmd, &device_scene, &camera, target, &settings, 0, spp))
+        .unwrap();
+    target.stats.read::<PathStats>(gpu).unwrap()[0]
+}
+
+/// The megakernel's lane counts (`PathTarget::with_lane_counts`, the diagnostic behind
+/// `umbra-bench paths --lanes`): they leave the render bit for bit as it was; where every lane's
+/// walks take as many iterations (an unlit plane filling the view: every path one segment, its
+/// walk one iteration) every lane of every group counts, and the lanes' count is the segments'; where
+/// walks differ (the Cornell box) groups wait for their slowest lane, and shadow rays, which only
+/// some lanes trace at a time, keep fewer lanes busy than the segments' rays.
+#[test]
+fn lane_counts_leave_the_render_alone_and_see_idle_lanes() {
+    let gpu = Gpu::new();
+    let subgroup = gpu.info().subgroup_size;
+    let size = (16, 16);
+
+    let unlit = Material { unlit: true, ..Material::default() };
+    let plane = scene_of(&[(&floor_quad(100.0), unlit, false)], looking_down(1.0, 1.0));
+    let stats = render_into(&gpu, &plane, &PathTarget::new(&gpu, size).unwrap().with_lane_counts(), 4);
+    assert_eq!(stats.segments(), 16 * 16 * 4, "every path ends on the unlit plane");
+    assert_eq!(stats.walk_lanes_closest as u64, stats.segments(), "one walk-loop iteration per segment");
+    assert_eq!(stats.busy_lanes(false, subgroup), Some(1.0), "{stats:?}");
+    assert_eq!(stats.busy_lanes(true, subgroup), None, "no light: no shadow rays");
+    // 14 columns: a subgroup is a 4 × 2 block of a workgroup's 8 × 8 pixels (pixel.glsl), so the
+    // blocks over columns 12..16 have 2 of their 4 columns in the image and the others idle:
+    // 24 full blocks and 8 half ones, 224 of 256 lanes busy.
+    if subgroup == 8 {
+        let narrow = PathTarget::new(&gpu, (14, 16)).unwrap().with_lane_counts();
+        let stats = render_into(&gpu, &plane, &narrow, 4);
+        assert_eq!(stats.busy_lanes(false, subgroup), Some(224.0 / 256.0), "{stats:?}");
+    }
+
+    let cornell = Scene::cornell_box();
+    let plain = PathTarget::new(&gpu, size).unwrap();
+    let counting = PathTarget::new(&gpu, size).unwrap().with_lane_counts();
+    let without = render_into(&gpu, &cornell, &plain, 4);
+    let with = render_into(&gpu, &cornell, &counting, 4);
+    assert_eq!(without.walk_groups_closest, 0, "a plain target counts nothing");
+    assert_eq!(with.segments(), without.segments());
+    for (a, b) in [
+        (&plain.accum, &counting.accum),
+        (&plain.moment, &counting.moment),
+        (&plain.albedo, &counting.albedo),
+    ] {
+        let (a, b) = (a.read::<[f32; 4]>(&gpu).unwrap(), b.read::<[f32; 4]>(&gpu).unwrap());
+        assert!(
+            a.iter().zip(&b).all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits)),
+            "the counts changed the render"
+        );
+    }
+    let closest = with.busy_lanes(false, subgroup).unwrap();
+    let any = with.busy_lanes(true, subgroup).expect("the ceiling light's shadow rays");
+    assert!(with.walk_lanes_closest as u64 >= with.segments(), "{with:?}");
+    assert!(closest > 0.2 && closest < 0.95, "closest-hit walks: {closest}");
+    assert!(any > 0.0 && any < closest, "any-hit walks: {any} against {closest}");
 }

@@ -21,6 +21,11 @@
 #define UMBRA_BVH_GLSL
 
 #define BVH_MAX_DEPTH 64u
+// Run at the start of every walk-loop iteration: a kernel that counts them (pathtrace.comp)
+// defines it before including this file.
+#ifndef BVH_ITERATION
+#define BVH_ITERATION
+#endif
 const float BVH_DIR_EPS = 1e-20;
 const float BVH_SLAB_ROBUST = 1.0 + 1.0 / 1048576.0;
 const float BVH_INF = uintBitsToFloat(0x7f800000u);

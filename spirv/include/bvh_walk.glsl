@@ -22,6 +22,7 @@ bool BVH_WALK(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out H
     bool found = false;
     uint hit_order = 0xffffffffu;
     while (true) {
+        BVH_ITERATION
         BvhVisit a = bvh_visit(r, node, tmin, tmax);
         bool more;
         BVH_ADVANCE(a, more);

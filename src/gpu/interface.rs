@@ -461,6 +461,17 @@ gpu_structs! {
         /// reached the surface or left the shape's box: each was taken as a miss (grazing rays
         /// along a silhouette, mostly). 0 in scenes without implicit shapes.
         marches_exhausted: uint,
+        /// A target with lane counts ([`crate::passes::pathtrace::PathTarget::with_lane_counts`],
+        /// the megakernel): the closest-hit traces' walk-loop iterations, each active lane's
+        /// summed (modulo 2^32).
+        walk_lanes_closest: uint,
+        /// The same traces' iterations as their SIMD groups ran them: per trace and subgroup,
+        /// its slowest active lane's (the loop runs until that lane is done).
+        walk_groups_closest: uint,
+        /// `walk_lanes_closest` for the any-hit traces (shadow rays).
+        walk_lanes_any: uint,
+        /// `walk_groups_closest` for the any-hit traces.
+        walk_groups_any: uint,
         /// Padding.
         pad0: uint,
         /// Padding.
@@ -1311,7 +1322,8 @@ kernels! {
             split_lobes: bool = false,
             ris: bool = false,
             ris_temporal: bool = false,
-            ris_spatial: bool = false
+            ris_spatial: bool = false,
+            count_lanes: bool = false
         },
         bindings: {
             /// Running mean rgb, sample count (vec4 per pixel).

@@ -551,4 +551,17 @@ impl PathStats {
     pub fn segments(&self) -> u64 {
         (self.segments_hi as u64) << 32 | self.segments_lo as u64
     }
+
+    /// With lane counts ([`crate::passes::pathtrace::PathTarget::with_lane_counts`]), the share
+    /// of the SIMD lanes that the BVH walks of the closest-hit traces (`any_hit` false) or of the
+    /// any-hit traces (shadow rays) kept busy: the lanes' walk-loop iterations over the groups'
+    /// times `subgroup_size`. `None` where no such trace was counted.
+    pub fn busy_lanes(&self, any_hit: bool, subgroup_size: u32) -> Option<f64> {
+        let (lanes, groups) = if any_hit {
+            (self.walk_lanes_any, self.walk_groups_any)
+        } else {
+            (self.walk_lanes_closest, self.walk_groups_closest)
+        };
+        (groups > 0).then(|| lanes as f64 / (groups as f64 * subgroup_size as f64))
+    }
 }

@@ -476,6 +476,9 @@ pub struct PathTarget {
     /// this one's, swapped between dispatches), made at the first render with reuse into this
     /// target.
     pub ris_reservoirs: std::sync::OnceLock<[Buffer; 2]>,
+    /// Whether the megakernel counts how busy its SIMD lanes are in the BVH walks, into
+    /// [`PathStats`]' `walk_*` counters (a diagnostic: [`PathTarget::with_lane_counts`]).
+    pub lane_counts: bool,
 }
 
 /// A path target's split of the radiance by the lobes it left the first hit through (the
@@ -521,7 +524,15 @@ impl PathTarget {
             lobe_split: None,
             wave: std::sync::OnceLock::new(),
             ris_reservoirs: std::sync::OnceLock::new(),
+            lane_counts: false,
         })
+    }
+
+    /// This target, its renders by the megakernel counting the BVH walks' busy SIMD lanes
+    /// ([`PathStats::busy_lanes`]) through a pipeline of their own that also runs subgroup
+    /// reductions per trace: the same image, more slowly. The wavefront integrator does not count.
+    pub fn with_lane_counts(self) -> Self {
+        Self { lane_counts: true, ..self }
     }
 
     /// [`PathTarget::new`] with the buffers of the lobe split ([`LobeSplit`]; two more vec4s
@@ -588,7 +599,8 @@ impl PathTarget {
 pub struct PathTracePass {
     /// The kernel, and the kernel specialised for the lobe split, each made at its first use
     /// (a record into a target without or with the split), or by [`PathTracePass::prepare`].
-    pipelines: [std::sync::OnceLock<Pipeline<pathtrace::Kernel>>; 2],
+    /// By lobe split, then by lane counts ([`PathTarget::lane_counts`]).
+    pipelines: [std::sync::OnceLock<Pipeline<pathtrace::Kernel>>; 4],
     options: PathOptions,
 }
 
@@ -618,7 +630,7 @@ impl PathTracePass {
         scene: &GpuScene,
         lobe_split: bool,
     ) -> Result<&Pipeline<pathtrace::Kernel>> {
-        self.prepare_for(ctx, &scene.features(), lobe_split)
+        self.variant(ctx, &scene.features(), lobe_split, false)
     }
 
     /// [`PathTracePass::prepare`] for a scene with `features`, before it is uploaded.
@@ -628,7 +640,18 @@ impl PathTracePass {
         features: &SceneFeatures,
         lobe_split: bool,
     ) -> Result<&Pipeline<pathtrace::Kernel>> {
-        let cell = &self.pipelines[lobe_split as usize];
+        self.variant(ctx, features, lobe_split, false)
+    }
+
+    /// The pipeline for `features`, the lobe split and the lane counts.
+    fn variant(
+        &self,
+        ctx: &Context,
+        features: &SceneFeatures,
+        lobe_split: bool,
+        lane_counts: bool,
+    ) -> Result<&Pipeline<pathtrace::Kernel>> {
+        let cell = &self.pipelines[lobe_split as usize + 2 * lane_counts as usize];
         if let Some(pipeline) = cell.get() {
             return Ok(pipeline);
         }
@@ -640,6 +663,7 @@ impl PathTracePass {
                 ris: self.options.ris,
                 ris_temporal: self.options.ris_reuse.spec().0,
                 ris_spatial: self.options.ris_reuse.spec().1,
+                count_lanes: lane_counts,
                 ..Default::default()
             }
         );
@@ -756,7 +780,8 @@ impl PathTracePass {
                 DirectSampling::MAX_CANDIDATES
             )));
         }
-        let pipeline = self.prepare(ctx, scene, target.lobe_split.is_some())?;
+        let pipeline =
+            self.variant(ctx, &scene.features(), target.lobe_split.is_some(), target.lane_counts)?;
         let end = params.sample_index + params.sample_count;
         let mut dispatch = *params;
         while dispatch.sample_index < end {

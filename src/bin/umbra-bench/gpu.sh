@@ -66,12 +66,12 @@ step pathtrace-spheres "$BIN/umbra" render scenes/spheres.glb --size "$SIZE" --s
 step pathtrace-cornell-wavefront "$BIN/umbra" render --size "$SIZE" --spp 64 --integrator wavefront -o "$OUT/pathtrace-cornell-wavefront.png"
 step pathtrace-spheres-wavefront "$BIN/umbra" render scenes/spheres.glb --size "$SIZE" --spp 64 --integrator wavefront -o "$OUT/pathtrace-spheres-wavefront.png"
 # The path tracer's throughput (samples and segments per second, warm) on every sample model,
-# megakernel and wavefront in turn.
+# megakernel and wavefront in turn, and how busy the megakernel's walks keep a warp's lanes.
 assets=()
 for dir in shared ../shared; do
     if [ -d "$dir/assets/gltf" ]; then assets=(--assets "$dir/assets/gltf"); fi
 done
-step paths "$BIN/umbra-bench" paths --size "$SIZE" --repeats 5 --integrator megakernel,wavefront "${assets[@]}" --out "$OUT/paths"
+step paths "$BIN/umbra-bench" paths --size "$SIZE" --repeats 5 --integrator megakernel,wavefront --lanes "${assets[@]}" --out "$OUT/paths"
 step suite "$BIN/umbra-bench" suite ${SUITE_ARGS:-} --out "$OUT/suite"
 sponza_args=()
 if [ -n "$SPONZA" ]; then sponza_args=(--sponza "$SPONZA"); fi

@@ -399,6 +399,10 @@ enum Command {
         /// first's; the others are compared with it).
         #[arg(long, value_enum, value_delimiter = ',', default_value = "megakernel")]
         integrator: Vec<IntegratorArg>,
+        /// Also count how busy the SIMD lanes are in the megakernel's BVH walks (one more
+        /// untimed submission per scene, through a pipeline of its own).
+        #[arg(long)]
+        lanes: bool,
         /// Where to write paths.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
@@ -906,6 +910,7 @@ fn run(cli: Cli) -> Result<()> {
             env_color,
             env,
             integrator,
+            lanes,
             out,
             table,
         } => match table {
@@ -921,6 +926,7 @@ fn run(cli: Cli) -> Result<()> {
                     env: env_color,
                     env_map: env,
                     integrators: integrator.iter().map(|i| i.integrator()).collect(),
+                    lanes,
                 };
                 let scenes = if scenes.is_empty() {
                     default_path_scenes(&assets)?
@@ -928,7 +934,7 @@ fn run(cli: Cli) -> Result<()> {
                     named_path_scenes(&scenes)?
                 };
                 let rows = paths::run(&ctx, &scenes, &settings)?;
-                let doc = paths::to_json(&ctx.info().name, &settings, &rows);
+                let doc = paths::to_json(&ctx.info().name, ctx.info().subgroup_size, &settings, &rows);
                 print!("{}", paths::table(&doc));
                 write_json(&out, "paths.json", &doc)?;
             }

@@ -33,6 +33,9 @@ pub struct PathsSettings {
     pub env_map: Option<PathBuf>,
     /// The integrators timed, each scene with each in turn (A/B in the same minutes).
     pub integrators: Vec<Integrator>,
+    /// Also count, in one more untimed submission per scene, how busy the SIMD lanes are in
+    /// the megakernel's BVH walks ([`PathTarget::with_lane_counts`]).
+    pub lanes: bool,
 }
 
 /// One scene's throughput.
@@ -47,6 +50,10 @@ pub struct PathRow {
     pub median_ms: f64,
     /// Path segments traced per sample (over the warm-up and the timed submissions).
     pub segments_per_sample: f64,
+    /// With [`PathsSettings::lanes`], the megakernel's: the share of the SIMD lanes its
+    /// closest-hit and its any-hit traces' walks keep busy ([`PathStats::busy_lanes`]; `None`
+    /// where it traced none of the kind).
+    pub busy_lanes: Option<[Option<f64>; 2]>,
 }
 
 /// Times `settings.spp` samples per pixel of each scene, `settings.repeats` times after a
@@ -95,12 +102,24 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
             }
             let stats: Vec<PathStats> = target.stats.read(ctx)?;
             let samples = settings.size.0 as f64 * settings.size.1 as f64 * submitted as f64;
+            let busy_lanes = if settings.lanes && integrator == Integrator::Megakernel {
+                let counting = PathTarget::new(ctx, settings.size)?.with_lane_counts();
+                ctx.submit(|cmd| {
+                    passes.record_path_samples(cmd, &gpu_scene, &camera, &counting, &path, 0, spp)
+                })?;
+                let stats: Vec<PathStats> = counting.stats.read(ctx)?;
+                let subgroup = ctx.info().subgroup_size;
+                Some([stats[0].busy_lanes(false, subgroup), stats[0].busy_lanes(true, subgroup)])
+            } else {
+                None
+            };
             rows.push(PathRow {
                 scene: name.clone(),
                 integrator,
                 triangles: gpu_scene.bvh_stats.triangles,
                 median_ms: super::rays::median(&mut ms),
                 segments_per_sample: stats[0].segments() as f64 / samples,
+                busy_lanes,
             });
         }
     }
@@ -109,7 +128,7 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
 
 /// The run as JSON: settings, the conditions ([`super::add_conditions`]), then per scene its
 /// time, samples and segments per second.
-pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Value {
+pub fn to_json(device: &str, subgroup_size: u32, settings: &PathsSettings, rows: &[PathRow]) -> Value {
     let samples = settings.size.0 as f64 * settings.size.1 as f64 * settings.spp as f64;
     let mut doc = json!({
         "device": device,
@@ -120,16 +139,26 @@ pub fn to_json(device: &str, settings: &PathsSettings, rows: &[PathRow]) -> Valu
         "rr_depth": settings.rr_depth,
         "env": settings.env,
         "env_map": settings.env_map.as_ref().map(|p| p.display().to_string()),
-        "scenes": rows.iter().map(|r| json!({
-            "scene": r.scene,
-            "integrator": r.integrator.name(),
-            "triangles": r.triangles,
-            "median_ms": r.median_ms,
-            "msamples_per_s": samples / (r.median_ms * 1e3),
-            "segments_per_sample": r.segments_per_sample,
-            "msegments_per_s": samples * r.segments_per_sample / (r.median_ms * 1e3),
-        })).collect::<Vec<_>>(),
+        "scenes": rows.iter().map(|r| {
+            let mut row = json!({
+                "scene": r.scene,
+                "integrator": r.integrator.name(),
+                "triangles": r.triangles,
+                "median_ms": r.median_ms,
+                "msamples_per_s": samples / (r.median_ms * 1e3),
+                "segments_per_sample": r.segments_per_sample,
+                "msegments_per_s": samples * r.segments_per_sample / (r.median_ms * 1e3),
+            });
+            if let Some([closest, any]) = r.busy_lanes {
+                row["busy_lanes_closest"] = json!(closest);
+                row["busy_lanes_any"] = json!(any);
+            }
+            row
+        }).collect::<Vec<_>>(),
     });
+    if settings.lanes {
+        doc["subgroup_size"] = json!(subgroup_size);
+    }
     super::add_conditions(&mut doc);
     doc
 }
@@ -175,6 +204,24 @@ pub fn table(doc: &Value) -> String {
         );
     }
     out += &format!("\nMedian of the set: {median:.3} Msamples/s.\n");
+    let counted: Vec<&Value> = scenes.iter().filter(|s| s.get("busy_lanes_closest").is_some()).collect();
+    if !counted.is_empty() {
+        let share = |v: &Value| v.as_f64().map_or("—".to_string(), |f| format!("{:.0} %", 100.0 * f));
+        out += &format!(
+            "\nThe SIMD lanes the walks keep busy (`--lanes`: walk-loop iterations of the lanes over \
+             those of their {}-lane groups, one more submission of the megakernel per scene):\n\n\
+             | scene | closest-hit traces | any-hit traces (shadow rays) |\n|---|---:|---:|\n",
+            doc["subgroup_size"]
+        );
+        for s in counted {
+            out += &format!(
+                "| {} | {} | {} |\n",
+                s["scene"].as_str().unwrap_or("?"),
+                share(&s["busy_lanes_closest"]),
+                share(&s["busy_lanes_any"]),
+            );
+        }
+    }
     let others: Vec<&Value> = all.iter().filter(|s| integrator(s) != first).collect();
     if !others.is_empty() {
         out += &format!(

@@ -25,6 +25,15 @@ uvec4 lane_counts = uvec4(0u);
         ++walk_iterations; \
     }
 
+// Adds n to a two-word count of PathStats (low word, high word), carrying into the high word.
+#define ADD_COUNT(count, n)                       \
+    {                                             \
+        uint old_ = atomicAdd(count[0], n);       \
+        if (old_ + (n) < old_) {                  \
+            atomicAdd(count[1], 1u);              \
+        }                                         \
+    }
+
 // Counts a trace whose walks began at `walk_iterations` = `before` (any_hit: a shadow ray's).
 void count_trace(uint before, bool any_hit) {
     if (COUNT_LANES) {
@@ -165,10 +174,10 @@ void main() {
     }
     if (COUNT_LANES) {
         if (any(notEqual(lane_counts, uvec4(0u)))) {
-            atomicAdd(stats.walk_lanes_closest, lane_counts.x);
-            atomicAdd(stats.walk_groups_closest, lane_counts.y);
-            atomicAdd(stats.walk_lanes_any, lane_counts.z);
-            atomicAdd(stats.walk_groups_any, lane_counts.w);
+            ADD_COUNT(stats.walk_lanes_closest, lane_counts.x);
+            ADD_COUNT(stats.walk_groups_closest, lane_counts.y);
+            ADD_COUNT(stats.walk_lanes_any, lane_counts.z);
+            ADD_COUNT(stats.walk_groups_any, lane_counts.w);
         }
     }
 }

@@ -1441,7 +1441,7 @@ fn lane_counts_leave_the_render_alone_and_see_idle_lanes() {
     let plane = scene_of(&[(&floor_quad(100.0), unlit, false)], looking_down(1.0, 1.0));
     let stats = render_into(&gpu, &plane, &PathTarget::new(&gpu, size).unwrap().with_lane_counts(), 4);
     assert_eq!(stats.segments(), 16 * 16 * 4, "every path ends on the unlit plane");
-    assert_eq!(stats.walk_lanes_closest as u64, stats.segments(), "one walk-loop iteration per segment");
+    assert_eq!(stats.walk_counts()[0], stats.segments(), "one walk-loop iteration per segment");
     assert_eq!(stats.busy_lanes(false, subgroup), Some(1.0), "{stats:?}");
     assert_eq!(stats.busy_lanes(true, subgroup), None, "no light: no shadow rays");
     // 14 columns: a subgroup is a 4 × 2 block of a workgroup's 8 × 8 pixels (pixel.glsl), so the
@@ -1458,7 +1458,7 @@ fn lane_counts_leave_the_render_alone_and_see_idle_lanes() {
     let counting = PathTarget::new(&gpu, size).unwrap().with_lane_counts();
     let without = render_into(&gpu, &cornell, &plain, 4);
     let with = render_into(&gpu, &cornell, &counting, 4);
-    assert_eq!(without.walk_groups_closest, 0, "a plain target counts nothing");
+    assert_eq!(without.walk_counts(), [0; 4], "a plain target counts nothing");
     assert_eq!(with.segments(), without.segments());
     for (a, b) in [
         (&plain.accum, &counting.accum),
@@ -1473,7 +1473,7 @@ fn lane_counts_leave_the_render_alone_and_see_idle_lanes() {
     }
     let closest = with.busy_lanes(false, subgroup).unwrap();
     let any = with.busy_lanes(true, subgroup).expect("the ceiling light's shadow rays");
-    assert!(with.walk_lanes_closest as u64 >= with.segments(), "{with:?}");
+    assert!(with.walk_counts()[0] >= with.segments(), "{with:?}");
     assert!(closest > 0.2 && closest < 0.95, "closest-hit walks: {closest}");
     assert!(any > 0.0 && any < closest, "any-hit walks: {any} against {closest}");
 }

@@ -462,16 +462,16 @@ gpu_structs! {
         /// along a silhouette, mostly). 0 in scenes without implicit shapes.
         marches_exhausted: uint,
         /// A target with lane counts ([`crate::passes::pathtrace::PathTarget::with_lane_counts`],
-        /// the megakernel): the closest-hit traces' walk-loop iterations, each active lane's
-        /// summed (modulo 2^32).
-        walk_lanes_closest: uint,
+        /// the megakernel), each count in two words (low, high; [`PathStats::walk_counts`]
+        /// joins them): the closest-hit traces' walk-loop iterations, each active lane's summed.
+        walk_lanes_closest: [uint; 2],
         /// The same traces' iterations as their SIMD groups ran them: per trace and subgroup,
         /// its slowest active lane's (the loop runs until that lane is done).
-        walk_groups_closest: uint,
+        walk_groups_closest: [uint; 2],
         /// `walk_lanes_closest` for the any-hit traces (shadow rays).
-        walk_lanes_any: uint,
+        walk_lanes_any: [uint; 2],
         /// `walk_groups_closest` for the any-hit traces.
-        walk_groups_any: uint,
+        walk_groups_any: [uint; 2],
         /// Padding.
         pad0: uint,
         /// Padding.

@@ -557,11 +557,15 @@ impl PathStats {
     /// any-hit traces (shadow rays) kept busy: the lanes' walk-loop iterations over the groups'
     /// times `subgroup_size`. `None` where no such trace was counted.
     pub fn busy_lanes(&self, any_hit: bool, subgroup_size: u32) -> Option<f64> {
-        let (lanes, groups) = if any_hit {
-            (self.walk_lanes_any, self.walk_groups_any)
-        } else {
-            (self.walk_lanes_closest, self.walk_groups_closest)
-        };
+        let [lanes_closest, groups_closest, lanes_any, groups_any] = self.walk_counts();
+        let (lanes, groups) = if any_hit { (lanes_any, groups_any) } else { (lanes_closest, groups_closest) };
         (groups > 0).then(|| lanes as f64 / (groups as f64 * subgroup_size as f64))
+    }
+
+    /// The lane counts, both words of each joined: the closest-hit traces' lane and group
+    /// iterations, then the any-hit traces'.
+    pub fn walk_counts(&self) -> [u64; 4] {
+        [self.walk_lanes_closest, self.walk_groups_closest, self.walk_lanes_any, self.walk_groups_any]
+            .map(|[lo, hi]| (hi as u64) << 32 | lo as u64)
     }
 }

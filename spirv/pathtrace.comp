@@ -25,15 +25,6 @@ uvec4 lane_counts = uvec4(0u);
         ++walk_iterations; \
     }
 
-// Adds n to a two-word count of PathStats (low word, high word), carrying into the high word.
-#define ADD_COUNT(count, n)                       \
-    {                                             \
-        uint old_ = atomicAdd(count[0], n);       \
-        if (old_ + (n) < old_) {                  \
-            atomicAdd(count[1], 1u);              \
-        }                                         \
-    }
-
 // Counts a trace whose walks began at `walk_iterations` = `before` (any_hit: a shadow ray's).
 void count_trace(uint before, bool any_hit) {
     if (COUNT_LANES) {
@@ -174,10 +165,10 @@ void main() {
     }
     if (COUNT_LANES) {
         if (any(notEqual(lane_counts, uvec4(0u)))) {
-            ADD_COUNT(stats.walk_lanes_closest, lane_counts.x);
-            ADD_COUNT(stats.walk_groups_closest, lane_counts.y);
-            ADD_COUNT(stats.walk_lanes_any, lane_counts.z);
-            ADD_COUNT(stats.walk_groups_any, lane_counts.w);
+            PATH_ADD_COUNT(stats.walk_lanes_closest[0], stats.walk_lanes_closest[1], lane_counts.x);
+            PATH_ADD_COUNT(stats.walk_groups_closest[0], stats.walk_groups_closest[1], lane_counts.y);
+            PATH_ADD_COUNT(stats.walk_lanes_any[0], stats.walk_lanes_any[1], lane_counts.z);
+            PATH_ADD_COUNT(stats.walk_groups_any[0], stats.walk_groups_any[1], lane_counts.w);
         }
     }
 }

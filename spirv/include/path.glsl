@@ -586,13 +586,21 @@ void accumulate_split(uint index, uint count, vec4 sum_specular, vec4 sum_split,
     aov_split[index] = fold_mean(fresh ? vec4(0.0) : aov_split[index], sum_split, count, n_samples);
 }
 
-// Adds n path segments to the counters' 64-bit count, two words (an add that wraps the low
-// word carries one into the high word); one call per workgroup.
-void count_segments(uint n) {
-    uint old = atomicAdd(stats.segments_lo, n);
-    if (old + n < old) {
-        atomicAdd(stats.segments_hi, 1u);
+// Adds n to a 64-bit count of the counters (`stats`) kept in two words, `lo` and `hi`: an add
+// that wraps the low word carries one into the high word. A macro, since a buffer's member is
+// no function argument in GLSL.
+#define PATH_ADD_COUNT(lo, hi, n)            \
+    {                                        \
+        uint n_ = (n);                       \
+        uint old_ = atomicAdd(lo, n_);       \
+        if (old_ + n_ < old_) {              \
+            atomicAdd(hi, 1u);               \
+        }                                    \
     }
+
+// Adds n path segments to the counters' segment count; one call per workgroup.
+void count_segments(uint n) {
+    PATH_ADD_COUNT(stats.segments_lo, stats.segments_hi, n);
 }
 
 // The implicit-shape marches this invocation cut short, into the counters.

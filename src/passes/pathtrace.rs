@@ -597,9 +597,9 @@ impl PathTarget {
 
 /// `pathtrace.comp`, specialised for one scene's features and the chosen sampling.
 pub struct PathTracePass {
-    /// The kernel, and the kernel specialised for the lobe split, each made at its first use
-    /// (a record into a target without or with the split), or by [`PathTracePass::prepare`].
-    /// By lobe split, then by lane counts ([`PathTarget::lane_counts`]).
+    /// The kernel specialised with or without the lobe split and with or without lane counts
+    /// (index: lobe split + 2 × lane counts), each made at its first use (a record into a target
+    /// with or without them), or by [`PathTracePass::prepare`].
     pipelines: [std::sync::OnceLock<Pipeline<pathtrace::Kernel>>; 4],
     options: PathOptions,
 }

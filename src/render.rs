@@ -313,8 +313,10 @@ pub struct Passes {
     features: SceneFeatures,
     gbuffer: OnceLock<GBufferPass>,
     /// One per shadow method, with or without probes, lightmaps, ReSTIR: index
-    /// 8 [`ShadowMethod::index`] + 4 restir + 2 lightmaps + probes.
-    deferred: [OnceLock<DeferredPass>; 48],
+    /// 8 [`ShadowMethod::index`] + 4 restir + 2 lightmaps + probes. The slot tables live on the
+    /// heap: inline they made `Passes` about 250 KB, and a host's thread that moved one by value
+    /// through a few calls overflowed a 2 MB stack.
+    deferred: Box<[OnceLock<DeferredPass>]>,
     /// ReSTIR's kernels: index 2 unbiased + temporal.
     restir: [OnceLock<RestirPass>; 4],
     shadow: OnceLock<ShadowPass>,
@@ -325,12 +327,17 @@ pub struct Passes {
     rtao: OnceLock<RtaoPass>,
     tonemap: OnceLock<TonemapPass>,
     /// One per [`PathOptions`], index [`PathOptions::index`].
-    path: [OnceLock<PathTracePass>; PathOptions::COUNT],
+    path: Box<[OnceLock<PathTracePass>]>,
     /// The wavefront path tracer's stages, one set per [`PathOptions`].
-    wavefront: [OnceLock<WavefrontPass>; PathOptions::COUNT],
+    wavefront: Box<[OnceLock<WavefrontPass>]>,
     resolve: OnceLock<ResolvePass>,
     denoise: OnceLock<DenoisePass>,
     temporal: OnceLock<TemporalPass>,
+}
+
+/// `n` empty pipeline slots.
+fn slots<T>(n: usize) -> Box<[OnceLock<T>]> {
+    (0..n).map(|_| OnceLock::new()).collect()
 }
 
 impl Passes {
@@ -348,7 +355,7 @@ impl Passes {
             ctx: ctx.clone(),
             features,
             gbuffer: OnceLock::new(),
-            deferred: std::array::from_fn(|_| OnceLock::new()),
+            deferred: slots(48),
             restir: Default::default(),
             shadow: OnceLock::new(),
             probe: OnceLock::new(),
@@ -357,8 +364,8 @@ impl Passes {
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
             tonemap: OnceLock::new(),
-            path: std::array::from_fn(|_| OnceLock::new()),
-            wavefront: std::array::from_fn(|_| OnceLock::new()),
+            path: slots(PathOptions::COUNT),
+            wavefront: slots(PathOptions::COUNT),
             resolve: OnceLock::new(),
             denoise: OnceLock::new(),
             temporal: OnceLock::new(),

@@ -226,3 +226,25 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
     let err = passes.hybrid(&textured, &camera, &settings).unwrap_err().to_string();
     assert!(err.contains("build new passes"), "{err}");
 }
+
+/// A host may make umbra's renderer on a thread of its own, whose stack is smaller than the main
+/// thread's 8 MiB (Rust's spawned threads get 2 MiB). `Renderer::new` on the Cornell box, on a
+/// 1 MiB stack: the pipeline slot tables used to be inline in `Passes` (about 250 KB), and
+/// `Renderer::new` and the calls it moved them through took about 1.2 MB of stack between them,
+/// which overflowed a 2 MiB test thread once other frames were added.
+#[test]
+fn a_renderer_is_made_on_a_thread_with_a_small_stack() {
+    use umbra::embed::Renderer;
+    use umbra::scene::Scene;
+    let gpu = common::Gpu::new();
+    let scene = Scene::cornell_box();
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(1 << 20)
+            .spawn_scoped(s, || Renderer::new(&gpu, &scene).map(|_| ()))
+            .unwrap()
+            .join()
+            .expect("the renderer's thread panicked")
+            .unwrap();
+    });
+}

@@ -609,18 +609,22 @@ fn alpha_classes_render_the_images_of_the_alpha_test() {
     let classified = SceneArrays::new(&scene).unwrap();
     let every = umbra::bvh::Bvh::build(&scene.triangle_soup()).unwrap();
     let mut tested = SceneArrays::with_bvh(&scene, every);
+    // Input triangles by class (a triangle split into several references counted once).
     let mut classes = [0usize; 3]; // opaque, never hit, tested
+    let mut counted = vec![false; scene.triangles.len()];
     for tri in tested.bvh.tris.iter_mut() {
         let input = tri.v0[3].to_bits() as usize;
         let Some(&m) = scene.triangle_material.get(input) else { continue };
         if scene.materials[m as usize].alpha_mode != AlphaMode::Mask {
             continue;
         }
-        classes[match tri.v1[3].to_bits() {
-            0 => 0,
-            ALPHA_NEVER_HIT => 1,
-            _ => 2,
-        }] += 1;
+        if !std::mem::replace(&mut counted[input], true) {
+            classes[match tri.v1[3].to_bits() {
+                0 => 0,
+                ALPHA_NEVER_HIT => 1,
+                _ => 2,
+            }] += 1;
+        }
         tri.v1[3] = f32::from_bits(1);
     }
     assert!(classes.iter().all(|&n| n > 1000), "opaque, never hit, tested: {classes:?}");
@@ -747,10 +751,14 @@ fn random_soups_build_valid_bvhs() {
         if case % 7 == 0 {
             triangles.push([Vec3::splat(-1e4), Vec3::new(1e4, -1e4, 0.0), Vec3::new(0.0, 1e4, 1e4)]);
         }
-        for full_sweep in [false, true] {
-            let options = BuildOptions { full_sweep, ..Default::default() };
+        for (full_sweep, spatial) in [(false, None), (true, None), (false, Some(0.0)), (false, Some(1.0))] {
+            let defaults = BuildOptions::default();
+            let options =
+                BuildOptions { full_sweep, spatial: spatial.unwrap_or(defaults.spatial), ..defaults };
             let bvh = Bvh::build_with(&triangles, &options).unwrap();
-            bvh.validate().unwrap_or_else(|e| panic!("case {case} (n {n}, sweep {full_sweep}): {e}"));
+            bvh.validate().unwrap_or_else(|e| {
+                panic!("case {case} (n {n}, sweep {full_sweep}, spatial {spatial:?}): {e}")
+            });
             assert_eq!(bvh.stats.triangles, triangles.len());
             assert_eq!(bvh.stats.references, bvh.tris.len());
             // Every input triangle once, or once per piece when pre-split.
@@ -789,6 +797,62 @@ fn random_soups_build_valid_bvhs() {
         }
     }
     assert!(split > 0, "no case split a triangle: the pieces' coverage went untested");
+}
+
+/// Spatial splits (SBVH) on their own, early split clipping off: long thin triangles across a
+/// cloud of small ones are cut at the build's planes, so the tree costs less by the SAH, the extra
+/// references stay within the budget, every piece's leaf box covers its part of the triangle,
+/// and the GPU walk of that tree finds what brute force finds.
+#[test]
+fn spatial_splits_cut_long_triangles_and_keep_every_piece_covered() {
+    let mut slivers = random_soup(3000, Vec3::splat(-2.0), Vec3::splat(2.0), 0.05, 31);
+    let mut rng = Rng::new(32);
+    for _ in 0..150 {
+        let (a, b) = (
+            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
+            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
+        );
+        slivers.push([a, b, (a + b) * 0.5 + rng.on_sphere() * 0.05]);
+    }
+    let plain = BuildOptions { presplit: 0.0, spatial: 0.0, ..Default::default() };
+    let unsplit = Bvh::build_with(&slivers, &plain).unwrap().stats;
+    assert_eq!(unsplit.references, slivers.len());
+    for budget in [0.02, 0.5] {
+        let options = BuildOptions { spatial: budget, ..plain.clone() };
+        let bvh = Bvh::build_with(&slivers, &options).unwrap();
+        let s = &bvh.stats;
+        eprintln!("budget {budget}: {s:?}; without spatial splits {unsplit:?}");
+        assert!(s.references > slivers.len(), "budget {budget}: no reference was split: {s:?}");
+        assert!(
+            s.references <= slivers.len() + (slivers.len() as f64 * budget as f64) as usize,
+            "budget {budget}: {} references for {} triangles",
+            s.references,
+            slivers.len()
+        );
+        assert!(
+            s.sah_cost < unsplit.sah_cost,
+            "budget {budget}: SAH {} against {}",
+            s.sah_cost,
+            unsplit.sah_cost
+        );
+        bvh.validate().unwrap_or_else(|e| panic!("budget {budget}: {e}"));
+        let split =
+            split_triangles_are_covered(&bvh, &mut rng).unwrap_or_else(|e| panic!("budget {budget}: {e}"));
+        assert!(split > 0);
+        gpu_layout_is_valid(&bvh).unwrap_or_else(|e| panic!("budget {budget}: GPU layout: {e}"));
+    }
+    let gpu = Gpu::new();
+    let tracer = RayTracer::new(&gpu).unwrap();
+    let options = BuildOptions { spatial: 0.5, ..plain };
+    let hits = check_scene_with(
+        &gpu,
+        &tracer,
+        "slivers, spatial splits",
+        &slivers,
+        &rays(&slivers, RAYS, 33),
+        &options,
+    );
+    assert!(hits > RAYS / 4, "only {hits} hits");
 }
 
 /// Every point of a triangle split into pieces (its vertices, edge points and random inner

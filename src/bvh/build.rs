@@ -1,5 +1,6 @@
-//! Top-down SAH build: binned (the default) or full sweep (the quality reference), parallel over
-//! subtrees with `rayon`, then flattened depth-first into sibling pairs.
+//! Top-down SAH build: binned (the default) or full sweep (the quality reference), over triangle
+//! references that early split clipping and spatial splits may add, parallel over subtrees with
+//! `rayon`, then flattened depth-first into sibling pairs.
 
 use super::{Bvh, BvhNode, BvhStats, BvhTri, MAX_DEPTH};
 use glam::{Vec3, Vec3A};
@@ -27,6 +28,13 @@ pub struct BuildOptions {
     /// `1/presplit` share of the triangles is large enough (Markov's inequality), so the extra
     /// references stay bounded. 0 disables it.
     pub presplit: f32,
+    /// Spatial splits (Stich, Friedrich and Dietrich 2009, "SBVH"): where the best object
+    /// split's two boxes overlap by more than [`SPATIAL_OVERLAP`] of the root's area, the build
+    /// also bins the node's triangles clipped into slabs along each axis and may split them at a
+    /// plane, a triangle that crosses it becoming a reference on each side (unless keeping it
+    /// whole on one side is cheaper). The extra references are bounded by this share of the
+    /// input's references (0.5: at most half as many again); 0 disables it.
+    pub spatial: f32,
 }
 
 impl Default for BuildOptions {
@@ -38,6 +46,7 @@ impl Default for BuildOptions {
             intersection_cost: 1.0,
             full_sweep: false,
             presplit: 8.0,
+            spatial: 0.5,
         }
     }
 }
@@ -98,8 +107,11 @@ struct Split {
 }
 
 enum SplitKind {
-    /// Binned: left takes bins `0..bin` of `bin_of`.
-    Bin { bin: usize, binning: Binning },
+    /// Binned: left takes bins `0..bin` of `bin_of`; `boxes` are the two sides' bounds.
+    Bin { bin: usize, binning: Binning, boxes: [Aabb; 2] },
+    /// Spatial: references below `plane` on the axis go left, above it right, and those that
+    /// cross it are clipped into a piece on each side (or kept whole on one side).
+    Spatial { plane: f32 },
     /// Sweep: left takes the first `count` primitives in the centroid order that the sweep
     /// left in its `sorted` output.
     Sorted { count: usize },
@@ -133,6 +145,11 @@ impl Binning {
     /// as floats: for a whole number `bin`, `floor(b) < bin` exactly when `b < bin`).
     fn below(&self, c2: Vec3A, axis: usize, bin: usize) -> bool {
         (c2[axis] - self.origin[axis]) * self.scale[axis] < bin as f32
+    }
+
+    /// Where bin `bin` begins on `axis` (for bins over points rather than doubled centroids).
+    fn plane(&self, axis: usize, bin: usize) -> f32 {
+        self.origin[axis] + bin as f32 / self.scale[axis]
     }
 }
 
@@ -176,12 +193,80 @@ impl Bins {
     }
 }
 
+/// Per-axis slab boxes of clipped references, and how many references enter and leave each.
+struct SpatialBins {
+    boxes: [[Aabb; MAX_BINS]; 3],
+    entry: [[u32; MAX_BINS]; 3],
+    exit: [[u32; MAX_BINS]; 3],
+}
+
+impl SpatialBins {
+    fn new() -> Self {
+        Self { boxes: [[Aabb::EMPTY; MAX_BINS]; 3], entry: [[0; MAX_BINS]; 3], exit: [[0; MAX_BINS]; 3] }
+    }
+
+    /// Bins `refs` (of input primitives `order`) over the node's box (`binning`'s bins are
+    /// slabs of it): a reference inside one slab as it is, one that crosses slabs clipped at
+    /// each plane between them.
+    fn add(mut self, builder: &Builder, binning: &Binning, refs: &[PrimRef], order: &[u32]) -> Self {
+        for (r, &prim) in refs.iter().zip(order) {
+            let (first, last) = (binning.bins_of(r.min), binning.bins_of(r.max));
+            let mut source = None;
+            for axis in 0..3 {
+                let (b0, b1) = (first[axis], last[axis]);
+                self.entry[axis][b0] += 1;
+                self.exit[axis][b1] += 1;
+                if b0 == b1 {
+                    self.boxes[axis][b0].grow(&r.aabb());
+                    continue;
+                }
+                let source = source.get_or_insert_with(|| builder.clip_source(prim));
+                let mut rest = Some(*r);
+                for bin in b0..b1 {
+                    let Some(piece) = rest else { break };
+                    let [below, above] =
+                        Builder::split_reference(source, &piece, axis, binning.plane(axis, bin + 1));
+                    if let Some(b) = below {
+                        self.boxes[axis][bin].grow(&b);
+                    }
+                    rest = above.map(|a| PrimRef { min: a.min, max: a.max });
+                }
+                if let Some(piece) = rest {
+                    self.boxes[axis][b1].grow(&piece.aabb());
+                }
+            }
+        }
+        self
+    }
+
+    fn merge(mut self, other: Self) -> Self {
+        for axis in 0..3 {
+            for bin in 0..MAX_BINS {
+                self.boxes[axis][bin].grow(&other.boxes[axis][bin]);
+                self.entry[axis][bin] += other.entry[axis][bin];
+                self.exit[axis][bin] += other.exit[axis][bin];
+            }
+        }
+        self
+    }
+}
+
 /// Nodes with at least this many primitives bin in parallel chunks.
 const PARALLEL_BINNING: usize = 1 << 16;
 
 struct Builder<'a> {
     options: &'a BuildOptions,
+    /// The input, for clipping triangles at spatial split planes (references past its end are
+    /// procedural boxes).
+    triangles: &'a [[Vec3; 3]],
+    /// Half the root's surface area.
+    root_area: f32,
 }
+
+/// A node tries spatial splits when its best object split's children overlap by more than this
+/// share of the root's surface area (the paper's α, 1e-5 there: on Dabrovic Sponza 1e-3 gave the
+/// same rays and path-tracing times for half the build time, BENCHMARKS.md).
+pub const SPATIAL_OVERLAP: f32 = 1e-3;
 
 pub(super) fn build(triangles: &[[Vec3; 3]], boxes: &[[Vec3; 2]], options: &BuildOptions) -> Bvh {
     let start = Instant::now();
@@ -194,16 +279,26 @@ pub(super) fn build(triangles: &[[Vec3; 3]], boxes: &[[Vec3; 2]], options: &Buil
     let first_box = triangles.len() as u32;
     refs.extend(boxes.iter().map(|b| PrimRef { min: b[0].into(), max: b[1].into() }));
     order.extend((0..boxes.len() as u32).map(|k| first_box + k));
-    let builder =
-        Builder { options: &BuildOptions { bins: options.bins.clamp(2, MAX_BINS), ..options.clone() } };
     let (bounds, centroids) = bounds_of(&refs);
+    let builder = Builder {
+        options: &BuildOptions { bins: options.bins.clamp(2, MAX_BINS), ..options.clone() },
+        triangles,
+        root_area: bounds.half_area(),
+    };
+    // Room for the references that spatial splits add: a subtree has a capacity of c
+    // references (c ≥ the m it holds), c places in `refs` and `order` and 2(c - 1) child slots,
+    // and shares its spare room among its children in proportion to their references.
+    let count = refs.len();
+    let capacity = count + (count as f64 * options.spatial.max(0.0) as f64) as usize;
+    refs.resize(capacity, PrimRef { min: Vec3A::ZERO, max: Vec3A::ZERO });
+    order.resize(capacity, 0);
     let prepared = start.elapsed();
-    // Every subtree over m primitives gets 2(m - 1) child slots; the root's start at 2.
-    let mut slots: Vec<BvhNode> = bytemuck::zeroed_vec(2 * refs.len());
+    // The root's child slots start at 2.
+    let mut slots: Vec<BvhNode> = bytemuck::zeroed_vec(2 * capacity);
     let (head, child_slots) = slots.split_at_mut(2);
-    head[0] = builder.node(&mut refs, &mut order, 0, bounds, centroids, 0, child_slots, 2);
+    head[0] = builder.node(&mut refs, &mut order, count, 0, bounds, centroids, 0, child_slots, 2);
     let built = start.elapsed();
-    let nodes = compact(&slots);
+    let (nodes, order) = compact(&slots, &order);
     drop(slots);
     let flattened = start.elapsed();
     let tris = order
@@ -362,15 +457,17 @@ fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
 }
 
 impl Builder<'_> {
-    /// Builds the subtree over `refs`/`order` (whose first element is primitive `first` of the
-    /// final order), given their bounds and centroid bounds, and returns its root. Descendants go
-    /// into `slots` (at absolute index `base`): this node's children first, then the left
-    /// subtree's 2(m_left - 1) slots, then the right's.
+    /// Builds the subtree over the first `count` of `refs`/`order` and returns its root. The
+    /// slices are the subtree's capacity (see `build`); position `i` of them is position
+    /// `first + i` of the build's (gapped) order. Descendants go into `slots` (at absolute index
+    /// `base`, 2(capacity - 1) of them): this node's children first, then the left subtree's
+    /// slots, then the right's.
     #[allow(clippy::too_many_arguments)]
     fn node(
         &self,
         refs: &mut [PrimRef],
         order: &mut [u32],
+        count: usize,
         first: usize,
         bounds: Aabb,
         centroids: Aabb,
@@ -378,7 +475,7 @@ impl Builder<'_> {
         slots: &mut [BvhNode],
         base: usize,
     ) -> BvhNode {
-        let count = refs.len();
+        let capacity = refs.len();
         let leaf = node_of(&bounds, first as u32, count as u32);
         if count == 1 || depth + 1 >= MAX_DEPTH {
             return leaf;
@@ -393,56 +490,89 @@ impl Builder<'_> {
             sorted_large.resize(if self.options.full_sweep { count } else { 0 }, 0);
             &mut sorted_large[..]
         };
-        let split = if self.options.full_sweep || count <= SMALL {
-            best_sweep(refs, sorted, self.options.intersection_cost)
+        let live = &refs[..count];
+        let object = if self.options.full_sweep || count <= SMALL {
+            best_sweep(live, sorted, self.options.intersection_cost)
         } else {
-            self.best_binned(refs, &centroids)
+            self.best_binned(live, &centroids)
         };
-        let split_cost = split.as_ref().map_or(f32::INFINITY, |s| {
+        // A spatial split where the object split's sides overlap enough and there is room for
+        // more references (not in nodes small enough for the exact sweep).
+        let sides = match &object {
+            _ if count <= SMALL || capacity == count => None,
+            Some(Split { kind: SplitKind::Bin { boxes, .. }, .. }) => Some(*boxes),
+            Some(Split { kind: SplitKind::Sorted { count: left }, .. }) => {
+                let side = |keys: &[u64]| {
+                    keys.iter().fold(Aabb::EMPTY, |mut b, &k| {
+                        b.grow(&live[position_of(k)].aabb());
+                        b
+                    })
+                };
+                Some([side(&sorted[..*left]), side(&sorted[*left..])])
+            }
+            _ => None,
+        };
+        let spatial = sides.and_then(|[l, r]| {
+            let overlap = Aabb { min: l.min.max(r.min), max: l.max.min(r.max) };
+            (overlap.half_area() > SPATIAL_OVERLAP * self.root_area)
+                .then(|| self.best_spatial(live, &order[..count], &bounds))
+                .flatten()
+                .filter(|s| object.as_ref().is_some_and(|o| s.cost < o.cost))
+        });
+        let split_cost = spatial.as_ref().or(object.as_ref()).map_or(f32::INFINITY, |s| {
             self.options.traversal_cost + s.cost / bounds.half_area().max(f32::MIN_POSITIVE)
         });
         if count <= self.options.max_leaf_size && leaf_cost <= split_cost {
             return leaf;
         }
-        let (left_count, child_bounds) = match &split {
-            Some(split) => partition(refs, order, split, sorted),
-            // All centroids coincide: any split is as good as any other.
-            None => (count / 2, None),
+        let spatial = match &spatial {
+            Some(Split { axis, kind: SplitKind::Spatial { plane }, .. }) => {
+                self.partition_spatial(refs, order, count, *axis, *plane)
+            }
+            _ => None,
         };
-        let (left_count, child_bounds) = if left_count == 0 || left_count == count {
-            (count / 2, None)
-        } else {
-            (left_count, child_bounds)
+        let (left_count, right_count, child_bounds) = match spatial {
+            Some((left_count, right_count)) => (left_count, right_count, None),
+            // The object split (also where the spatial one would leave a side empty).
+            None => {
+                let (left_count, child_bounds) = match &object {
+                    Some(split) => partition(&mut refs[..count], &mut order[..count], split, sorted),
+                    // All centroids coincide: any split is as good as any other.
+                    None => (count / 2, None),
+                };
+                let (left_count, child_bounds) = if left_count == 0 || left_count == count {
+                    (count / 2, None)
+                } else {
+                    (left_count, child_bounds)
+                };
+                (left_count, count - left_count, child_bounds)
+            }
         };
-        let (left_refs, right_refs) = refs.split_at_mut(left_count);
-        let (left_order, right_order) = order.split_at_mut(left_count);
-        let [(lb, lc), (rb, rc)] =
-            child_bounds.unwrap_or_else(|| [bounds_of(left_refs), bounds_of(right_refs)]);
+        // The spare room, shared in proportion; the right side's references move to the start
+        // of its share (a spatial partition has put them there already).
+        let left_capacity = left_share(capacity, left_count, right_count);
+        if spatial.is_none() && left_capacity > left_count {
+            refs.copy_within(left_count..count, left_capacity);
+            order.copy_within(left_count..count, left_capacity);
+        }
+        let (left_refs, right_refs) = refs.split_at_mut(left_capacity);
+        let (left_order, right_order) = order.split_at_mut(left_capacity);
+        let [(lb, lc), (rb, rc)] = child_bounds
+            .unwrap_or_else(|| [bounds_of(&left_refs[..left_count]), bounds_of(&right_refs[..right_count])]);
         let (pair, rest) = slots.split_at_mut(2);
-        let (left_slots, right_slots) = rest.split_at_mut(2 * (left_count - 1));
-        let (left_base, right_base) = (base + 2, base + 2 + 2 * (left_count - 1));
-        let right_first = first + left_count;
+        let (left_slots, right_slots) = rest.split_at_mut(2 * (left_capacity - 1));
+        let (left_base, right_base) = (base + 2, base + 2 + 2 * (left_capacity - 1));
+        let right_first = first + left_capacity;
+        let mut left = move |slots| {
+            self.node(left_refs, left_order, left_count, first, lb, lc, depth + 1, slots, left_base)
+        };
+        let mut right = move |slots| {
+            self.node(right_refs, right_order, right_count, right_first, rb, rc, depth + 1, slots, right_base)
+        };
         let (l, r) = if count >= PARALLEL_THRESHOLD {
-            rayon::join(
-                || self.node(left_refs, left_order, first, lb, lc, depth + 1, left_slots, left_base),
-                || {
-                    self.node(
-                        right_refs,
-                        right_order,
-                        right_first,
-                        rb,
-                        rc,
-                        depth + 1,
-                        right_slots,
-                        right_base,
-                    )
-                },
-            )
+            rayon::join(move || left(left_slots), move || right(right_slots))
         } else {
-            (
-                self.node(left_refs, left_order, first, lb, lc, depth + 1, left_slots, left_base),
-                self.node(right_refs, right_order, right_first, rb, rc, depth + 1, right_slots, right_base),
-            )
+            (left(left_slots), right(right_slots))
         };
         pair[0] = l;
         pair[1] = r;
@@ -451,6 +581,8 @@ impl Builder<'_> {
 
     /// The cheapest binned split over all three axes, or `None` when the centroids do not
     /// spread on any axis.
+    // Out of line, so that its locals stay off the stack frame `node` keeps through its recursion.
+    #[inline(never)]
     fn best_binned(&self, refs: &[PrimRef], centroids: &Aabb) -> Option<Split> {
         let n_bins = self.options.bins;
         let extent = centroids.max - centroids.min;
@@ -468,7 +600,7 @@ impl Builder<'_> {
             Bins::new().add(&binning, refs)
         };
         let mut best: Option<Split> = None;
-        let mut right_area = [0.0f32; MAX_BINS];
+        let mut right_box = [Aabb::EMPTY; MAX_BINS];
         let mut right_count = [0u32; MAX_BINS];
         for axis in 0..3 {
             if extent[axis] <= 0.0 {
@@ -479,7 +611,7 @@ impl Builder<'_> {
             for bin in (1..n_bins).rev() {
                 acc.grow(&Aabb { min: bins.min[axis][bin], max: bins.max[axis][bin] });
                 n += bins.count[axis][bin];
-                right_area[bin] = acc.half_area();
+                right_box[bin] = acc;
                 right_count[bin] = n;
             }
             let mut acc = Aabb::EMPTY;
@@ -491,13 +623,216 @@ impl Builder<'_> {
                     continue;
                 }
                 let cost = self.options.intersection_cost
-                    * (acc.half_area() * n as f32 + right_area[bin] * right_count[bin] as f32);
+                    * (acc.half_area() * n as f32 + right_box[bin].half_area() * right_count[bin] as f32);
                 if best.as_ref().is_none_or(|b| cost < b.cost) {
-                    best = Some(Split { axis, cost, kind: SplitKind::Bin { bin, binning } });
+                    let boxes = [acc, right_box[bin]];
+                    best = Some(Split { axis, cost, kind: SplitKind::Bin { bin, binning, boxes } });
                 }
             }
         }
         best
+    }
+
+    /// The triangle of input primitive `prim` and the padding its clip points need (`None`
+    /// for a procedural box).
+    fn clip_source(&self, prim: u32) -> Option<([Vec3A; 3], Vec3A)> {
+        self.triangles.get(prim as usize).map(|t| {
+            let v = t.map(Vec3A::from);
+            // The crossing points are within a few ulps of the triangle's magnitude of true
+            // points of it, as in `clip_pieces`.
+            (v, v[0].abs().max(v[1].abs()).max(v[2].abs()) * (64.0 * f32::EPSILON))
+        })
+    }
+
+    /// Splits reference `r` at `plane` on `axis`: the boxes of the parts of its triangle
+    /// (`source`, from [`Self::clip_source`]) below and above the plane, each within `r`'s box;
+    /// `None` for a side the triangle does not reach inside that box. A procedural box is cut
+    /// in two.
+    fn split_reference(
+        source: &Option<([Vec3A; 3], Vec3A)>,
+        r: &PrimRef,
+        axis: usize,
+        plane: f32,
+    ) -> [Option<Aabb>; 2] {
+        let (mut below, mut above) = (Aabb::EMPTY, Aabb::EMPTY);
+        let pad = match source {
+            Some((v, pad)) => {
+                for k in 0..3 {
+                    let (p, q) = (v[k], v[(k + 1) % 3]);
+                    if p[axis] <= plane {
+                        below.grow_point(p);
+                    }
+                    if p[axis] >= plane {
+                        above.grow_point(p);
+                    }
+                    if (p[axis] < plane && q[axis] > plane) || (p[axis] > plane && q[axis] < plane) {
+                        let mut x = p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis]));
+                        x[axis] = plane;
+                        below.grow_point(x);
+                        above.grow_point(x);
+                    }
+                }
+                *pad
+            }
+            None => {
+                below = r.aabb();
+                above = r.aabb();
+                below.max[axis] = plane;
+                above.min[axis] = plane;
+                Vec3A::ZERO
+            }
+        };
+        [below, above].map(|b| {
+            let clipped = Aabb { min: (b.min - pad).max(r.min), max: (b.max + pad).min(r.max) };
+            clipped.min.cmple(clipped.max).all().then_some(clipped)
+        })
+    }
+
+    /// The cheapest spatial split over all three axes: the node's box cut into equal slabs,
+    /// each reference's triangle clipped into the slabs it crosses, a reference counted as
+    /// entering its first slab and leaving its last (the paper's chopped binning).
+    // Out of line, so that its locals stay off the stack frame `node` keeps through its recursion.
+    #[inline(never)]
+    fn best_spatial(&self, refs: &[PrimRef], order: &[u32], bounds: &Aabb) -> Option<Split> {
+        let n_bins = self.options.bins;
+        let extent = bounds.max - bounds.min;
+        let scale = Vec3A::select(
+            extent.cmpgt(Vec3A::ZERO),
+            Vec3A::splat(n_bins as f32 * (1.0 - f32::EPSILON)) / extent,
+            Vec3A::ZERO,
+        );
+        let binning = Binning { origin: bounds.min, scale, bins: n_bins };
+        let bins = if refs.len() >= PARALLEL_BINNING {
+            refs.par_chunks(PARALLEL_BINNING / 4)
+                .zip(order.par_chunks(PARALLEL_BINNING / 4))
+                .map(|(r, o)| SpatialBins::new().add(self, &binning, r, o))
+                .reduce(SpatialBins::new, SpatialBins::merge)
+        } else {
+            SpatialBins::new().add(self, &binning, refs, order)
+        };
+        let mut best: Option<Split> = None;
+        let mut right_area = [0.0f32; MAX_BINS];
+        let mut right_count = [0u32; MAX_BINS];
+        for axis in 0..3 {
+            if extent[axis] <= 0.0 {
+                continue;
+            }
+            let (mut acc, mut n) = (Aabb::EMPTY, 0);
+            for bin in (1..n_bins).rev() {
+                acc.grow(&bins.boxes[axis][bin]);
+                n += bins.exit[axis][bin];
+                right_area[bin] = acc.half_area();
+                right_count[bin] = n;
+            }
+            let (mut acc, mut n) = (Aabb::EMPTY, 0);
+            for bin in 1..n_bins {
+                acc.grow(&bins.boxes[axis][bin - 1]);
+                n += bins.entry[axis][bin - 1];
+                if n == 0 || right_count[bin] == 0 {
+                    continue;
+                }
+                let cost = self.options.intersection_cost
+                    * (acc.half_area() * n as f32 + right_area[bin] * right_count[bin] as f32);
+                if best.as_ref().is_none_or(|b| cost < b.cost) {
+                    let plane = binning.plane(axis, bin);
+                    best = Some(Split { axis, cost, kind: SplitKind::Spatial { plane } });
+                }
+            }
+        }
+        best
+    }
+
+    /// Partitions the first `count` references by a spatial split at `plane` on `axis`, the
+    /// left side to the front of `refs`/`order` and the right side to the start of its share
+    /// of the spare room (as `node` shares it). A reference that crosses the plane is split in
+    /// two, or kept whole on one side where that costs less (the paper's reference unsplitting).
+    /// Returns the two sides' sizes, or `None` (nothing moved) when a side would be empty or
+    /// the references outgrow the room.
+    // Out of line, so that its locals stay off the stack frame `node` keeps through its recursion.
+    #[inline(never)]
+    fn partition_spatial(
+        &self,
+        refs: &mut [PrimRef],
+        order: &mut [u32],
+        count: usize,
+        axis: usize,
+        plane: f32,
+    ) -> Option<(usize, usize)> {
+        let (mut left, mut right, mut crossing) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut left_box, mut right_box) = (Aabb::EMPTY, Aabb::EMPTY);
+        for (r, &prim) in refs[..count].iter().zip(&order[..count]) {
+            if r.max[axis] <= plane {
+                left_box.grow(&r.aabb());
+                left.push((*r, prim));
+            } else if r.min[axis] >= plane {
+                right_box.grow(&r.aabb());
+                right.push((*r, prim));
+            } else {
+                crossing.push((*r, prim));
+            }
+        }
+        // Counts as if every crossing reference were split.
+        let (mut n_left, mut n_right) =
+            ((left.len() + crossing.len()) as f32, (right.len() + crossing.len()) as f32);
+        for (r, prim) in crossing {
+            let whole = r.aabb();
+            let source = self.clip_source(prim);
+            match Self::split_reference(&source, &r, axis, plane) {
+                [Some(below), Some(above)] => {
+                    let grown = |side: &Aabb, b: &Aabb| {
+                        let mut g = *side;
+                        g.grow(b);
+                        g.half_area()
+                    };
+                    let split = grown(&left_box, &below) * n_left + grown(&right_box, &above) * n_right;
+                    let all_left =
+                        grown(&left_box, &whole) * n_left + right_box.half_area() * (n_right - 1.0);
+                    let all_right =
+                        left_box.half_area() * (n_left - 1.0) + grown(&right_box, &whole) * n_right;
+                    // A procedural box is kept whole (its pieces would share one shape's hits);
+                    // keeping a reference whole never takes the last one from the other side.
+                    let procedural = source.is_none();
+                    let keep_left = all_left < split && all_left <= all_right && n_right > 1.0;
+                    let keep_right = all_right < split && n_left > 1.0;
+                    if keep_left || (procedural && all_left <= all_right) {
+                        left_box.grow(&whole);
+                        left.push((r, prim));
+                        n_right -= 1.0;
+                    } else if keep_right || procedural {
+                        right_box.grow(&whole);
+                        right.push((r, prim));
+                        n_left -= 1.0;
+                    } else {
+                        left_box.grow(&below);
+                        right_box.grow(&above);
+                        left.push((PrimRef { min: below.min, max: below.max }, prim));
+                        right.push((PrimRef { min: above.min, max: above.max }, prim));
+                    }
+                }
+                [Some(_), None] => {
+                    left_box.grow(&whole);
+                    left.push((r, prim));
+                    n_right -= 1.0;
+                }
+                _ => {
+                    right_box.grow(&whole);
+                    right.push((r, prim));
+                    n_left -= 1.0;
+                }
+            }
+        }
+        let (left_count, right_count) = (left.len(), right.len());
+        if left_count == 0 || right_count == 0 || left_count + right_count > refs.len() {
+            return None;
+        }
+        let left_capacity = left_share(refs.len(), left_count, right_count);
+        for (k, (r, prim)) in left.into_iter().enumerate() {
+            (refs[k], order[k]) = (r, prim);
+        }
+        for (k, (r, prim)) in right.into_iter().enumerate() {
+            (refs[left_capacity + k], order[left_capacity + k]) = (r, prim);
+        }
+        Some((left_count, right_count))
     }
 }
 
@@ -579,7 +914,7 @@ fn partition(
     sorted: &[u64],
 ) -> (usize, Option<[(Aabb, Aabb); 2]>) {
     match &split.kind {
-        SplitKind::Bin { bin, binning } => {
+        SplitKind::Bin { bin, binning, .. } => {
             // The four boxes live in locals (registers): indexing an array of sides by the
             // side chained every primitive's update through memory.
             let (mut left_box, mut left_centroids) = (Aabb::EMPTY, Aabb::EMPTY);
@@ -601,6 +936,7 @@ fn partition(
             }
             (left, Some([(left_box, left_centroids), (right_box, right_centroids)]))
         }
+        SplitKind::Spatial { .. } => unreachable!("spatial splits partition in `partition_spatial`"),
         SplitKind::Sorted { count } => {
             // Apply the sweep's order (no second sort: the partition is the order the sweep
             // evaluated, ties included).
@@ -624,6 +960,13 @@ fn partition(
     }
 }
 
+/// The capacity (see `build`) of a node's left child: its references and its share of the
+/// node's spare room, in proportion to its references.
+fn left_share(capacity: usize, left_count: usize, right_count: usize) -> usize {
+    let spare = capacity - left_count - right_count;
+    left_count + (spare as u64 * left_count as u64 / (left_count + right_count) as u64) as usize
+}
+
 fn node_of(bounds: &Aabb, left_first: u32, tri_count: u32) -> BvhNode {
     BvhNode {
         aabb_min: Vec3::from(bounds.min).into(),
@@ -634,14 +977,20 @@ fn node_of(bounds: &Aabb, left_first: u32, tri_count: u32) -> BvhNode {
 }
 
 /// Copies the tree out of its slots (which have gaps where leaves held several primitives)
-/// depth-first, each pair of children allocated at the end, at even indices.
-fn compact(slots: &[BvhNode]) -> Vec<BvhNode> {
+/// depth-first, each pair of children allocated at the end, at even indices, and the leaves'
+/// references out of `order` (which has gaps where spatial splits had room to spare) in the
+/// same order.
+fn compact(slots: &[BvhNode], order: &[u32]) -> (Vec<BvhNode>, Vec<u32>) {
     let mut nodes = Vec::with_capacity(slots.len());
+    let mut leaf_order = Vec::with_capacity(order.len());
     nodes.extend_from_slice(&slots[..2]);
     let mut stack = vec![0usize];
     while let Some(index) = stack.pop() {
         let node = nodes[index];
         if node.is_leaf() {
+            let from = node.left_first as usize;
+            nodes[index].left_first = leaf_order.len() as u32;
+            leaf_order.extend_from_slice(&order[from..from + node.tri_count as usize]);
             continue;
         }
         let from = node.left_first as usize;
@@ -650,7 +999,7 @@ fn compact(slots: &[BvhNode]) -> Vec<BvhNode> {
         nodes[index].left_first = to as u32;
         stack.extend([to + 1, to]);
     }
-    nodes
+    (nodes, leaf_order)
 }
 
 fn stats(bvh: &Bvh, options: &BuildOptions, triangles: usize) -> BvhStats {

@@ -1,5 +1,6 @@
-//! The bounding volume hierarchy: a binned-SAH build on the CPU (parallel with `rayon`), flattened
-//! depth-first into 32-byte nodes, with the triangles reordered to match the leaves.
+//! The bounding volume hierarchy: a binned-SAH build on the CPU (parallel with `rayon`) with
+//! split triangle references (early split clipping and spatial splits, [`BuildOptions`]),
+//! flattened depth-first into 32-byte nodes, with the triangles reordered to match the leaves.
 //!
 //! Layout (tinybvh's `BVHNode`): node 0 is the root, node 1 is unused so that every pair of
 //! siblings starts at an even index and shares one 64-byte cache line. An interior node has
@@ -20,7 +21,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::mem::size_of;
 
-pub use build::BuildOptions;
+pub use build::{BuildOptions, SPATIAL_OVERLAP};
 pub use traverse::{Hit, Ray};
 
 /// The deepest a BVH may be; the traversal stack holds this many entries.
@@ -97,7 +98,7 @@ pub struct BvhStats {
     /// Input triangles the build was not given ([`Bvh::renumber`]): in no leaf, never hit.
     pub left_out: usize,
     /// Triangle references in the leaves: the triangles plus the extra pieces of the ones split
-    /// by [`BuildOptions::presplit`].
+    /// by [`BuildOptions::presplit`] and [`BuildOptions::spatial`].
     pub references: usize,
     /// Nodes in use (the unused slot 1 not counted).
     pub nodes: usize,
@@ -120,8 +121,8 @@ pub struct BvhStats {
 pub struct Bvh {
     /// Nodes, root first (see the module docs for the layout).
     pub nodes: Vec<BvhNode>,
-    /// Triangles in leaf order: a triangle split by [`BuildOptions::presplit`] appears once
-    /// per piece, in the leaves of those pieces.
+    /// Triangles in leaf order: a triangle split by [`BuildOptions::presplit`] or
+    /// [`BuildOptions::spatial`] appears once per piece, in the leaves of those pieces.
     pub tris: Vec<BvhTri>,
     /// `prim_order[i]` is the input index of `tris[i]`; every input index appears at least once,
     /// but for the `stats.left_out` triangles a [`Bvh::renumber`]ed build was not given.

@@ -29,7 +29,8 @@ pub struct BuildOptions {
     /// references stay bounded. 0 disables it.
     pub presplit: f32,
     /// Spatial splits (Stich, Friedrich and Dietrich 2009, "SBVH"): where the best object
-    /// split's two boxes overlap by more than [`SPATIAL_OVERLAP`] of the root's area, the build
+    /// split's two boxes overlap by more than [`SPATIAL_OVERLAP`] of the root's area (and
+    /// [`SPATIAL_NODE_OVERLAP`] of the node's), the build
     /// also bins the node's triangles clipped into slabs along each axis and may split them at a
     /// plane, a triangle that crosses it becoming a reference on each side (unless keeping it
     /// whole on one side is cheaper). The extra references are bounded by this share of the
@@ -132,6 +133,17 @@ struct Binning {
 }
 
 impl Binning {
+    /// `bins` equal bins per axis over the box `min`..`max` (one bin on an axis without extent).
+    fn new(min: Vec3A, max: Vec3A, bins: usize) -> Self {
+        let extent = max - min;
+        let scale = Vec3A::select(
+            extent.cmpgt(Vec3A::ZERO),
+            Vec3A::splat(bins as f32 * (1.0 - f32::EPSILON)) / extent,
+            Vec3A::ZERO,
+        );
+        Self { origin: min, scale, bins }
+    }
+
     /// The bin of `c2` on each axis. Clamped to the last bin as a float and converted to `i32`
     /// with all three lanes at once: a saturating `f32 as usize` per axis costs several
     /// instructions each (`c2 - origin` is never negative, so the result is never below 0).
@@ -267,6 +279,13 @@ struct Builder<'a> {
 /// share of the root's surface area (the paper's α, 1e-5 there: on Dabrovic Sponza 1e-3 gave the
 /// same rays and path-tracing times for half the build time, BENCHMARKS.md).
 pub const SPATIAL_OVERLAP: f32 = 1e-3;
+
+/// … and by more than this share of the node's own surface area. Not in the paper: without it
+/// a terrain's top nodes, whose sides overlap in thin slabs that span the terrain's height, bin
+/// every reference spatially for nothing (its SAH cost did not move) and its build took about
+/// 1.6× the time of one without spatial splits; with it 1.15–1.3×, and Dabrovic Sponza keeps its
+/// SAH cost within 0.3 % (BENCHMARKS.md).
+pub const SPATIAL_NODE_OVERLAP: f32 = 0.2;
 
 pub(super) fn build(triangles: &[[Vec3; 3]], boxes: &[[Vec3; 2]], options: &BuildOptions) -> Bvh {
     let start = Instant::now();
@@ -514,10 +533,12 @@ impl Builder<'_> {
         };
         let spatial = sides.and_then(|[l, r]| {
             let overlap = Aabb { min: l.min.max(r.min), max: l.max.min(r.max) };
-            (overlap.half_area() > SPATIAL_OVERLAP * self.root_area)
-                .then(|| self.best_spatial(live, &order[..count], &bounds))
-                .flatten()
-                .filter(|s| object.as_ref().is_some_and(|o| s.cost < o.cost))
+            let overlap = overlap.half_area();
+            (overlap > SPATIAL_OVERLAP * self.root_area
+                && overlap > SPATIAL_NODE_OVERLAP * bounds.half_area())
+            .then(|| self.best_spatial(live, &order[..count], &bounds))
+            .flatten()
+            .filter(|s| object.as_ref().is_some_and(|o| s.cost < o.cost))
         });
         let split_cost = spatial.as_ref().or(object.as_ref()).map_or(f32::INFINITY, |s| {
             self.options.traversal_cost + s.cost / bounds.half_area().max(f32::MIN_POSITIVE)
@@ -585,13 +606,7 @@ impl Builder<'_> {
     #[inline(never)]
     fn best_binned(&self, refs: &[PrimRef], centroids: &Aabb) -> Option<Split> {
         let n_bins = self.options.bins;
-        let extent = centroids.max - centroids.min;
-        let scale = Vec3A::select(
-            extent.cmpgt(Vec3A::ZERO),
-            Vec3A::splat(n_bins as f32 * (1.0 - f32::EPSILON)) / extent,
-            Vec3A::ZERO,
-        );
-        let binning = Binning { origin: centroids.min, scale, bins: n_bins };
+        let binning = Binning::new(centroids.min, centroids.max, n_bins);
         let bins = if refs.len() >= PARALLEL_BINNING {
             refs.par_chunks(PARALLEL_BINNING / 4)
                 .map(|chunk| Bins::new().add(&binning, chunk))
@@ -600,35 +615,19 @@ impl Builder<'_> {
             Bins::new().add(&binning, refs)
         };
         let mut best: Option<Split> = None;
-        let mut right_box = [Aabb::EMPTY; MAX_BINS];
-        let mut right_count = [0u32; MAX_BINS];
-        for axis in 0..3 {
-            if extent[axis] <= 0.0 {
-                continue;
-            }
-            let mut acc = Aabb::EMPTY;
-            let mut n = 0;
-            for bin in (1..n_bins).rev() {
-                acc.grow(&Aabb { min: bins.min[axis][bin], max: bins.max[axis][bin] });
-                n += bins.count[axis][bin];
-                right_box[bin] = acc;
-                right_count[bin] = n;
-            }
-            let mut acc = Aabb::EMPTY;
-            let mut n = 0;
-            for bin in 1..n_bins {
-                acc.grow(&Aabb { min: bins.min[axis][bin - 1], max: bins.max[axis][bin - 1] });
-                n += bins.count[axis][bin - 1];
-                if n == 0 || right_count[bin] == 0 {
-                    continue;
-                }
-                let cost = self.options.intersection_cost
-                    * (acc.half_area() * n as f32 + right_box[bin].half_area() * right_count[bin] as f32);
-                if best.as_ref().is_none_or(|b| cost < b.cost) {
-                    let boxes = [acc, right_box[bin]];
-                    best = Some(Split { axis, cost, kind: SplitKind::Bin { bin, binning, boxes } });
-                }
-            }
+        for axis in (0..3).filter(|&a| centroids.max[a] > centroids.min[a]) {
+            sweep_bins(
+                n_bins,
+                self.options.intersection_cost,
+                |b| Aabb { min: bins.min[axis][b], max: bins.max[axis][b] },
+                |b| bins.count[axis][b],
+                |b| bins.count[axis][b],
+                |bin, cost, boxes| {
+                    if best.as_ref().is_none_or(|b| cost < b.cost) {
+                        best = Some(Split { axis, cost, kind: SplitKind::Bin { bin, binning, boxes } });
+                    }
+                },
+            );
         }
         best
     }
@@ -695,13 +694,7 @@ impl Builder<'_> {
     #[inline(never)]
     fn best_spatial(&self, refs: &[PrimRef], order: &[u32], bounds: &Aabb) -> Option<Split> {
         let n_bins = self.options.bins;
-        let extent = bounds.max - bounds.min;
-        let scale = Vec3A::select(
-            extent.cmpgt(Vec3A::ZERO),
-            Vec3A::splat(n_bins as f32 * (1.0 - f32::EPSILON)) / extent,
-            Vec3A::ZERO,
-        );
-        let binning = Binning { origin: bounds.min, scale, bins: n_bins };
+        let binning = Binning::new(bounds.min, bounds.max, n_bins);
         let bins = if refs.len() >= PARALLEL_BINNING {
             refs.par_chunks(PARALLEL_BINNING / 4)
                 .zip(order.par_chunks(PARALLEL_BINNING / 4))
@@ -711,33 +704,20 @@ impl Builder<'_> {
             SpatialBins::new().add(self, &binning, refs, order)
         };
         let mut best: Option<Split> = None;
-        let mut right_area = [0.0f32; MAX_BINS];
-        let mut right_count = [0u32; MAX_BINS];
-        for axis in 0..3 {
-            if extent[axis] <= 0.0 {
-                continue;
-            }
-            let (mut acc, mut n) = (Aabb::EMPTY, 0);
-            for bin in (1..n_bins).rev() {
-                acc.grow(&bins.boxes[axis][bin]);
-                n += bins.exit[axis][bin];
-                right_area[bin] = acc.half_area();
-                right_count[bin] = n;
-            }
-            let (mut acc, mut n) = (Aabb::EMPTY, 0);
-            for bin in 1..n_bins {
-                acc.grow(&bins.boxes[axis][bin - 1]);
-                n += bins.entry[axis][bin - 1];
-                if n == 0 || right_count[bin] == 0 {
-                    continue;
-                }
-                let cost = self.options.intersection_cost
-                    * (acc.half_area() * n as f32 + right_area[bin] * right_count[bin] as f32);
-                if best.as_ref().is_none_or(|b| cost < b.cost) {
-                    let plane = binning.plane(axis, bin);
-                    best = Some(Split { axis, cost, kind: SplitKind::Spatial { plane } });
-                }
-            }
+        for axis in (0..3).filter(|&a| bounds.max[a] > bounds.min[a]) {
+            sweep_bins(
+                n_bins,
+                self.options.intersection_cost,
+                |b| bins.boxes[axis][b],
+                |b| bins.entry[axis][b],
+                |b| bins.exit[axis][b],
+                |bin, cost, _| {
+                    if best.as_ref().is_none_or(|b| cost < b.cost) {
+                        let plane = binning.plane(axis, bin);
+                        best = Some(Split { axis, cost, kind: SplitKind::Spatial { plane } });
+                    }
+                },
+            );
         }
         best
     }
@@ -833,6 +813,41 @@ impl Builder<'_> {
             (refs[left_capacity + k], order[left_capacity + k]) = (r, prim);
         }
         Some((left_count, right_count))
+    }
+}
+
+/// The SAH cost (unnormalised, as [`Split`]'s) of each boundary `bin` between one axis's bins
+/// `0..bin` and `bin..n_bins` with references on both sides, handed to `each` with the two sides'
+/// boxes. Bin `b`'s box is `boxes(b)`; it holds `left(b)` references counted on a left side and
+/// `right(b)` on a right side (the same for object bins; those that enter it and those that
+/// leave it for spatial slabs).
+fn sweep_bins(
+    n_bins: usize,
+    intersection_cost: f32,
+    boxes: impl Fn(usize) -> Aabb,
+    left: impl Fn(usize) -> u32,
+    right: impl Fn(usize) -> u32,
+    mut each: impl FnMut(usize, f32, [Aabb; 2]),
+) {
+    let mut right_box = [Aabb::EMPTY; MAX_BINS];
+    let mut right_count = [0u32; MAX_BINS];
+    let (mut acc, mut n) = (Aabb::EMPTY, 0);
+    for bin in (1..n_bins).rev() {
+        acc.grow(&boxes(bin));
+        n += right(bin);
+        right_box[bin] = acc;
+        right_count[bin] = n;
+    }
+    let (mut acc, mut n) = (Aabb::EMPTY, 0);
+    for bin in 1..n_bins {
+        acc.grow(&boxes(bin - 1));
+        n += left(bin - 1);
+        if n == 0 || right_count[bin] == 0 {
+            continue;
+        }
+        let cost = intersection_cost
+            * (acc.half_area() * n as f32 + right_box[bin].half_area() * right_count[bin] as f32);
+        each(bin, cost, [acc, right_box[bin]]);
     }
 }
 

@@ -21,7 +21,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::mem::size_of;
 
-pub use build::{BuildOptions, SPATIAL_OVERLAP};
+pub use build::{BuildOptions, SPATIAL_NODE_OVERLAP, SPATIAL_OVERLAP};
 pub use traverse::{Hit, Ray};
 
 /// The deepest a BVH may be; the traversal stack holds this many entries.

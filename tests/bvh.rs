@@ -145,6 +145,21 @@ fn check_scene_with(
     hits
 }
 
+/// `small` triangles of edge 0.05 in the box ±2 (`random_soup` with `soup_seed`), then `long`
+/// slivers across it (0.05 wide, between random points drawn with `seed`).
+fn slivers_in_a_cloud(small: usize, long: usize, soup_seed: u64, seed: u64) -> Vec<[Vec3; 3]> {
+    let mut slivers = random_soup(small, Vec3::splat(-2.0), Vec3::splat(2.0), 0.05, soup_seed);
+    let mut rng = Rng::new(seed);
+    for _ in 0..long {
+        let (a, b) = (
+            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
+            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
+        );
+        slivers.push([a, b, (a + b) * 0.5 + rng.on_sphere() * 0.05]);
+    }
+    slivers
+}
+
 #[test]
 fn gpu_closest_hits_match_brute_force_on_several_scenes() {
     let gpu = Gpu::new();
@@ -159,15 +174,7 @@ fn gpu_closest_hits_match_brute_force_on_several_scenes() {
     assert!(big.len() >= 200_000, "{}", big.len());
     // Long thin triangles across the box among small ones: the case early split clipping is
     // for, so the walk meets pieces of one triangle in several leaves.
-    let mut slivers = random_soup(2000, Vec3::splat(-2.0), Vec3::splat(2.0), 0.05, 8);
-    let mut rng = Rng::new(11);
-    for _ in 0..100 {
-        let (a, b) = (
-            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
-            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
-        );
-        slivers.push([a, b, (a + b) * 0.5 + rng.on_sphere() * 0.05]);
-    }
+    let slivers = slivers_in_a_cloud(2000, 100, 8, 11);
     let split = Bvh::build(&slivers).unwrap().stats;
     assert!(split.references > split.triangles + 100, "{split:?}");
     let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
@@ -805,15 +812,8 @@ fn random_soups_build_valid_bvhs() {
 /// and the GPU walk of that tree finds what brute force finds.
 #[test]
 fn spatial_splits_cut_long_triangles_and_keep_every_piece_covered() {
-    let mut slivers = random_soup(3000, Vec3::splat(-2.0), Vec3::splat(2.0), 0.05, 31);
-    let mut rng = Rng::new(32);
-    for _ in 0..150 {
-        let (a, b) = (
-            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
-            rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
-        );
-        slivers.push([a, b, (a + b) * 0.5 + rng.on_sphere() * 0.05]);
-    }
+    let slivers = slivers_in_a_cloud(3000, 150, 31, 32);
+    let mut rng = Rng::new(34);
     let plain = BuildOptions { presplit: 0.0, spatial: 0.0, ..Default::default() };
     let unsplit = Bvh::build_with(&slivers, &plain).unwrap().stats;
     assert_eq!(unsplit.references, slivers.len());

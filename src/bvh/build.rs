@@ -99,6 +99,12 @@ impl PrimRef {
     }
 }
 
+impl From<Aabb> for PrimRef {
+    fn from(b: Aabb) -> Self {
+        Self { min: b.min, max: b.max }
+    }
+}
+
 /// A chosen split, with its unnormalised cost `area(L)·n(L) + area(R)·n(R)` (times the
 /// intersection cost).
 struct Split {
@@ -241,7 +247,7 @@ impl SpatialBins {
                     if let Some(b) = below {
                         self.boxes[axis][bin].grow(&b);
                     }
-                    rest = above.map(|a| PrimRef { min: a.min, max: a.max });
+                    rest = above.map(PrimRef::from);
                 }
                 if let Some(piece) = rest {
                     self.boxes[axis][b1].grow(&piece.aabb());
@@ -432,9 +438,7 @@ fn clip_pieces(
                 len += 1;
             }
             if inside(p) != inside(q) {
-                let mut x = p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis]));
-                x[axis] = plane;
-                buffer[len] = x;
+                buffer[len] = crossing(p, q, axis, plane);
                 len += 1;
             }
         }
@@ -444,12 +448,25 @@ fn clip_pieces(
         let part = &buffer[..len];
         let mut bounds = Aabb::EMPTY;
         part.iter().for_each(|&v| bounds.grow_point(v));
-        // Each level's clip points are within a few ulps of the triangle's magnitude of true
-        // points of it (errors add up over the levels): 64 ulps cover all eight levels.
-        let pad = whole.min.abs().max(whole.max.abs()) * (64.0 * f32::EPSILON);
+        let pad = clip_pad(whole.min.abs().max(whole.max.abs()));
         let next = PrimRef { min: (bounds.min - pad).max(whole.min), max: (bounds.max + pad).min(whole.max) };
         clip_pieces(part, next, whole, threshold, depth + 1, out);
     }
+}
+
+/// Where the edge `p`→`q`, which crosses `plane` on `axis`, meets it: exactly on the plane. Two
+/// clips that compute a crossing from the same edge in the same direction share it bit for bit.
+fn crossing(p: Vec3A, q: Vec3A, axis: usize, plane: f32) -> Vec3A {
+    let mut x = p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis]));
+    x[axis] = plane;
+    x
+}
+
+/// The padding of a box of clip points of a triangle whose coordinates reach `magnitude`: each
+/// level's clip points are within a few ulps of that magnitude of true points of the triangle
+/// (errors add up over the levels), and 64 ulps cover all of `clip_pieces`' eight levels.
+fn clip_pad(magnitude: Vec3A) -> Vec3A {
+    magnitude * (64.0 * f32::EPSILON)
 }
 
 /// The box of the primitives and the box of their (doubled) centroids.
@@ -546,13 +563,14 @@ impl Builder<'_> {
         if count <= self.options.max_leaf_size && leaf_cost <= split_cost {
             return leaf;
         }
-        let spatial = match &spatial {
+        // The two sides' sizes where the spatial split partitioned the references.
+        let spatially = match &spatial {
             Some(Split { axis, kind: SplitKind::Spatial { plane }, .. }) => {
                 self.partition_spatial(refs, order, count, *axis, *plane)
             }
             _ => None,
         };
-        let (left_count, right_count, child_bounds) = match spatial {
+        let (left_count, right_count, child_bounds) = match spatially {
             Some((left_count, right_count)) => (left_count, right_count, None),
             // The object split (also where the spatial one would leave a side empty).
             None => {
@@ -572,7 +590,7 @@ impl Builder<'_> {
         // The spare room, shared in proportion; the right side's references move to the start
         // of its share (a spatial partition has put them there already).
         let left_capacity = left_share(capacity, left_count, right_count);
-        if spatial.is_none() && left_capacity > left_count {
+        if spatially.is_none() && left_capacity > left_count {
             refs.copy_within(left_count..count, left_capacity);
             order.copy_within(left_count..count, left_capacity);
         }
@@ -637,9 +655,7 @@ impl Builder<'_> {
     fn clip_source(&self, prim: u32) -> Option<([Vec3A; 3], Vec3A)> {
         self.triangles.get(prim as usize).map(|t| {
             let v = t.map(Vec3A::from);
-            // The crossing points are within a few ulps of the triangle's magnitude of true
-            // points of it, as in `clip_pieces`.
-            (v, v[0].abs().max(v[1].abs()).max(v[2].abs()) * (64.0 * f32::EPSILON))
+            (v, clip_pad(v[0].abs().max(v[1].abs()).max(v[2].abs())))
         })
     }
 
@@ -665,8 +681,7 @@ impl Builder<'_> {
                         above.grow_point(p);
                     }
                     if (p[axis] < plane && q[axis] > plane) || (p[axis] > plane && q[axis] < plane) {
-                        let mut x = p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis]));
-                        x[axis] = plane;
+                        let x = crossing(p, q, axis, plane);
                         below.grow_point(x);
                         above.grow_point(x);
                     }
@@ -785,8 +800,8 @@ impl Builder<'_> {
                     } else {
                         left_box.grow(&below);
                         right_box.grow(&above);
-                        left.push((PrimRef { min: below.min, max: below.max }, prim));
-                        right.push((PrimRef { min: above.min, max: above.max }, prim));
+                        left.push((below.into(), prim));
+                        right.push((above.into(), prim));
                     }
                 }
                 [Some(_), None] => {

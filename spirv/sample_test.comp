@@ -4,7 +4,8 @@
 // and 1); mode 2 evaluates bsdf_eval for tests/brdf.rs; mode 3 the dielectric's bsdf_eval and
 // bsdf_pdf at given directions, for tests/sampling.rs's check that it samples wherever it
 // scatters; mode 4 the thin-film Fresnel of KHR_materials_iridescence (tests/iridescence.rs);
-// mode 5 bsdf_sample's weights (the white furnace, tests/anisotropy.rs).
+// mode 5 bsdf_sample's weights (the white furnace, tests/anisotropy.rs); modes 6 and 7 the path
+// tracer's numbers (random.glsl's qmc4, tests/sampling.rs).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/sample_test.glsl"
 
@@ -252,6 +253,13 @@ void main() {
         vec4 c = directions[2u * i];
         vec3 f0 = directions[2u * i + 1u].rgb;
         results[i] = vec4(iridescent_fresnel(c.z, c.y, f0, c.x), 0.0);
+        return;
+    }
+    if (params.mode == 6u || params.mode == 7u) {
+        // The path tracer's numbers (random.glsl's qmc4): mode 6 sample i of pixel (kind, 0),
+        // mode 7 sample 5 of pixel (i, kind); stream 2.
+        results[i] = params.mode == 6u ? qmc4(uvec2(params.kind, 0u), i, 2u, params.seed)
+                                       : qmc4(uvec2(i, params.kind), 5u, 2u, params.seed);
         return;
     }
     if (params.mode == 5u) {

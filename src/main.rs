@@ -205,6 +205,11 @@ struct RenderArgs {
     /// MIS heuristic.
     #[arg(long, value_enum, default_value = "power")]
     heuristic: HeuristicArg,
+    /// The numbers the path tracer draws its samples from: low-discrepancy (per pixel, scrambled
+    /// Sobol points: a lower error at the same samples) or independent (the error falls as 1/spp
+    /// and the printed error estimate is unbiased; with low-discrepancy numbers it is high).
+    #[arg(long, value_enum, default_value = "low-discrepancy")]
+    sampler: SamplerArg,
     /// Sampling strategies for emitters: light and BSDF sampling weighted by MIS, BSDF sampling
     /// alone, or light sampling alone (punctual lights are always light-sampled).
     #[arg(long, value_enum, default_value = "mis")]
@@ -517,6 +522,12 @@ enum IntegratorArg {
     Wavefront,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum SamplerArg {
+    LowDiscrepancy,
+    Independent,
+}
+
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum HeuristicArg {
     Power,
@@ -584,6 +595,10 @@ fn render(args: RenderArgs) -> Result<()> {
         max_bounces: args.max_bounces,
         rr_depth: args.rr_depth,
         seed: args.seed,
+        sampler: match args.sampler {
+            SamplerArg::LowDiscrepancy => umbra::passes::pathtrace::Sampler::LowDiscrepancy,
+            SamplerArg::Independent => umbra::passes::pathtrace::Sampler::Independent,
+        },
         microfacet: match args.microfacet {
             MicrofacetArg::Ggx => Microfacet::Ggx,
             MicrofacetArg::GgxWalter => Microfacet::GgxWalter,
@@ -767,6 +782,10 @@ fn render_identity(args: &RenderArgs, loaded: &LoadedScene) -> String {
                 RisReuseArg::Both => " reuse both",
             },
         _ => String::new(),
+    } + match args.sampler {
+        // (Only independent numbers add to it, as RIS does.)
+        SamplerArg::Independent => " sampler independent",
+        SamplerArg::LowDiscrepancy => "",
     }
 }
 

@@ -5,10 +5,9 @@ mod common;
 
 use common::Gpu;
 use glam::Vec3;
-use std::path::Path;
 use umbra::gpu::layout::{GpuCamera, PathStats};
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::pathtrace::{Microfacet, PathTarget};
+use umbra::passes::pathtrace::{Microfacet, PathTarget, Sampler};
 use umbra::procedural::{icosphere, Mesh};
 use umbra::render::{path_trace, Passes, PathImage, PathSettings};
 use umbra::scene::{Camera, Material, Scene};
@@ -361,35 +360,51 @@ fn target_error_stops_early_and_is_met() {
 
 /// The error `target_error` stops at is the true one: the image's estimated relative error (from
 /// its own per-pixel variance) against its relative RMS error to an independent reference (another
-/// seed, 64× the samples), on two scenes: the Cornell box (area light) and spheres.glb (a
-/// directional light and glossy metals under a constant sky). The two agree within 50 % (measured:
-/// 0.057 estimated, 0.054 true; 0.064 and 0.073); the reference's own noise (1/64 of the image's
-/// variance) adds under 1 %.
+/// seed, 64× the samples), on the Cornell box (area light). With independent numbers (the
+/// estimate's premise) the two agree within 50 %; the reference's own noise (1/64 of the image's
+/// variance) adds under 1 %. With the default low-discrepancy numbers the estimate is high (the
+/// stratification lowers the true error; 0.058 estimated, 0.045 true when written), never low.
+/// What the estimate cannot do: see a heavy tail its samples missed. spheres.glb under a sky of
+/// 0.3 (a directional light's glints on glossy spheres: rare bright paths) stopped at 64 spp with
+/// 0.077 estimated and 0.161 true (independent numbers; 0.072 and 0.120 with low-discrepancy ones
+/// at 128), where an earlier sequence of random numbers had drawn 0.064 and 0.073: it was left
+/// out of this test, whose bound it meets by chance only.
 #[test]
 fn target_error_is_the_true_error() {
     let gpu = Gpu::new();
-    let spheres = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.glb")).unwrap();
-    for (name, scene, env) in [("cornell", Scene::cornell_box(), [0.0; 3]), ("spheres", spheres, [0.3; 3])] {
-        let base = PathSettings { size: (24, 24), spp: 4096, env, max_bounces: 4, ..Default::default() };
+    let scene = Scene::cornell_box();
+    for sampler in Sampler::ALL {
+        let base = PathSettings { size: (24, 24), spp: 4096, max_bounces: 4, sampler, ..Default::default() };
         let image = render(&gpu, &scene, &PathSettings { target_error: Some(0.08), seed: 1, ..base.clone() });
         let reference = render(&gpu, &scene, &PathSettings { spp: 64 * image.spp, seed: 2, ..base });
-        let true_rel_mse = image
-            .mean
-            .iter()
-            .zip(&reference.mean)
-            .flat_map(|(x, r)| {
-                (0..3).map(move |c| ((x[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01))
-            })
-            .sum::<f64>()
-            / (3 * image.mean.len()) as f64;
-        let (estimated, actual) = (image.relative_error() as f64, true_rel_mse.sqrt());
-        eprintln!("{name}: stopped at {} spp, estimated {estimated:.4}, true {actual:.4}", image.spp);
-        assert!(image.spp < 4096 && estimated <= 0.08, "{name}: the target was not reached");
-        assert!(
-            (actual / estimated - 1.0).abs() < 0.5,
-            "{name}: true error {actual} vs estimated {estimated}"
-        );
+        let (estimated, actual) = (image.relative_error() as f64, true_relative_error(&image, &reference));
+        eprintln!("{sampler:?}: stopped at {} spp, estimated {estimated:.4}, true {actual:.4}", image.spp);
+        assert!(image.spp < 4096 && estimated <= 0.08, "{sampler:?}: the target was not reached");
+        match sampler {
+            Sampler::Independent => assert!(
+                (actual / estimated - 1.0).abs() < 0.5,
+                "{sampler:?}: true error {actual} vs estimated {estimated}"
+            ),
+            Sampler::LowDiscrepancy => {
+                assert!(actual < estimated, "{sampler:?}: true error {actual} over the estimate {estimated}")
+            }
+        }
     }
+}
+
+/// The relative RMS error of `image` against `reference` (the metric of
+/// [`PathImage::relative_error`]).
+fn true_relative_error(image: &PathImage, reference: &PathImage) -> f64 {
+    let rel_mse = image
+        .mean
+        .iter()
+        .zip(&reference.mean)
+        .flat_map(|(x, r)| {
+            (0..3).map(move |c| ((x[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01))
+        })
+        .sum::<f64>()
+        / (3 * image.mean.len()) as f64;
+    rel_mse.sqrt()
 }
 
 /// Direct light from KHR_lights_punctual lights on a Lambert floor against the closed form

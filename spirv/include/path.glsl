@@ -107,12 +107,22 @@ vec3 specular_part(Path path, vec3 c) {
     return vec3(0.0);
 }
 
+// The numbers of sample `sample_index` of `pixel` for `stream` (random.glsl): low-discrepancy
+// (qmc4, whose pairs are (y, z) and (x, w): a use's 2D sample sits in y and z) unless the render
+// asks for independent ones (LOW_DISCREPANCY, a specialization constant: PathOptions::sampler).
+vec4 path_rand4(uvec2 pixel, uint sample_index, uint stream, uint seed) {
+    if (LOW_DISCREPANCY) {
+        return qmc4(pixel, sample_index, stream, seed);
+    }
+    return rand4(pixel, sample_index, stream, seed);
+}
+
 // Sample `sample_index` of `pixel` (of the whole image) through `camera`: its camera ray.
 Path camera_path(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, uvec2 image_size, uvec2 pixel,
                  uint sample_index) {
-    vec4 jitter = rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), params.seed);
+    vec4 jitter = path_rand4(pixel, sample_index, rng_stream(0u, RNG_CAMERA), params.seed);
     Path path;
-    camera_ray(eye, forward, right, up, orthographic, vec2(pixel) + jitter.xy, image_size, path.origin, path.dir);
+    camera_ray(eye, forward, right, up, orthographic, vec2(pixel) + jitter.yz, image_size, path.origin, path.dir);
     path.radiance = vec3(0.0);
     path.throughput = vec3(1.0);
     path.prev_pdf = 0.0;
@@ -190,12 +200,12 @@ void path_ris(inout Path path, ShadePoint sp, Hit hit, vec3 throughput, uvec2 pi
     uint m = params.ris_candidates;
     Reservoir r = reservoir_empty();
     for (uint k = 0u; k < m; ++k) {
-        vec4 u = rand4(pixel, sample_index, rng_stream(ris_depth(depth) + k, RNG_RIS_CANDIDATE), seed);
+        vec4 u = path_rand4(pixel, sample_index, rng_stream(ris_depth(depth) + k, RNG_RIS_CANDIDATE), seed);
         vec2 bary;
         float pdf;
         uint id = restir_candidate(u, RIS_FLAT, bary, pdf);
         if (pdf > 0.0) {
-            float pick = rand4(pixel, sample_index, rng_stream(ris_depth(depth) + k, RNG_RIS_PICK), seed).x;
+            float pick = path_rand4(pixel, sample_index, rng_stream(ris_depth(depth) + k, RNG_RIS_PICK), seed).x;
             reservoir_add(r, id, bary, restir_target(sp, id, bary) / pdf, pick);
         }
     }
@@ -334,7 +344,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             float dispersion = material_dispersion(material);
             if (dispersion > 0.0 && s.transmission > 0.0) {
                 if (path.channel == 0u) {
-                    float u = rand4(pixel, sample_index, rng_stream(depth, RNG_DISPERSION), seed).x;
+                    float u = path_rand4(pixel, sample_index, rng_stream(depth, RNG_DISPERSION), seed).x;
                     path.channel = 1u + min(uint(u * 3.0), 2u);
                     throughput *= 3.0 * vec3(equal(uvec3(path.channel), uvec3(1u, 2u, 3u)));
                 }
@@ -401,7 +411,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     }
     if (LIGHT_SAMPLING) {
         if (tri_nee || env_nee) {
-            vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
+            vec4 u = path_rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
             bool pick_env = u.w < params.env_pick;
             vec3 wi = vec3(0.0, 0.0, 1.0);
             vec3 target = vec3(0.0);
@@ -412,7 +422,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             // runs an if-body for every lane whichever lanes take it.
             if (HAS_ENV_MAP) {
                 if (pick_env) {
-                    vec4 ue = rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed);
+                    vec4 ue = path_rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed).yxzw;
                     wi = env_sample(ue, params.env_size, pdf, l_in);
                     l_in *= params.env;
                     pdf *= params.env_pick;
@@ -446,7 +456,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     // shadow ray per light evaluated (all of them up to PUNCTUAL_ALL, else PUNCTUAL_ALL picked by
     // power, stratified by u: punctual_direct's estimator, each light's term added on its own).
     if (HAS_PUNCTUAL) {
-        float u = rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
+        float u = path_rand4(pixel, sample_index, rng_stream(depth, RNG_PUNCTUAL), seed).x;
         uint count = ris_here ? 0u : params.punctual_count;
         for (uint j = 0u; j < min(count, PUNCTUAL_ALL); ++j) {
             float weight;
@@ -469,7 +479,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     }
 
     // Continue the path by sampling the BSDF.
-    vec4 u = rand4(pixel, sample_index, rng_stream(depth, RNG_BSDF), seed);
+    vec4 u = path_rand4(pixel, sample_index, rng_stream(depth, RNG_BSDF), seed);
     vec3 wi_local;
     vec3 weight;
     float pdf;

@@ -886,7 +886,8 @@ gpu_structs! {
         alpha: float,
         /// 0 sample, 1 evaluate the pdf, 2 evaluate the BSDF of opaque surfaces (tests/brdf.rs),
         /// 3 the BSDF and its pdf at given directions, 4 the thin-film Fresnel
-        /// (tests/iridescence.rs), 5 sample weights (the white furnace).
+        /// (tests/iridescence.rs), 5 sample weights (the white furnace), 6 and 7 the path
+        /// tracer's numbers over one pixel's samples and across pixels (tests/sampling.rs).
         mode: uint,
         /// Number of samples or directions.
         count: uint,
@@ -1319,6 +1320,7 @@ kernels! {
             unweighted_bsdf_hits: bool = false,
             light_sampling: bool = true,
             bsdf_hits: bool = true,
+            low_discrepancy: bool = true,
             split_lobes: bool = false,
             ris: bool = false,
             ris_temporal: bool = false,
@@ -1368,6 +1370,7 @@ kernels! {
             unweighted_bsdf_hits: bool = false,
             light_sampling: bool = true,
             bsdf_hits: bool = true,
+            low_discrepancy: bool = true,
             wf_camera_rays: bool = false,
             wf_extend: bool = false,
             wf_shade: bool = false,

@@ -222,7 +222,7 @@ def with_camera(path, work):
     return str(out)
 
 
-def mitsuba_scene(path, size, max_depth, rr_depth, work, env=None):
+def mitsuba_scene(path, size, max_depth, rr_depth, work, env=None, sampler="independent"):
     """The glTF scene as a Mitsuba 3 scene with Mitsuba's own plugins (the peer's speed, not a
     literal copy of the glTF BRDF): meshes in world space (with normals and UVs where the
     material has textures), metallic-roughness as `diffuse` (metallic 0, roughness 1: the glTF
@@ -231,8 +231,8 @@ def mitsuba_scene(path, size, max_depth, rr_depth, work, env=None):
     linear here), emission as an area emitter, the first camera, a box filter; `env` =
     (equirectangular map, strength) as Mitsuba's `envmap` turned by half a turn about +Y, so that
     directions meet the texels umbra gives them (Mitsuba's u is umbra's − 1/2, as
-    tests/reference/mitsuba_refs.py found). Meshes, materials, cameras and TRS/matrix nodes
-    only."""
+    tests/reference/mitsuba_refs.py found); `sampler` Mitsuba's sampler plugin. Meshes,
+    materials, cameras and TRS/matrix nodes only."""
     import mitsuba as mi
     doc, blob = read_glb(path)
     scene = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth, "rr_depth": rr_depth}}
@@ -317,7 +317,7 @@ def mitsuba_scene(path, size, max_depth, rr_depth, work, env=None):
         "type": "perspective", "fov_axis": "y", "fov": float(np.degrees(cam["perspective"]["yfov"])),
         "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=(origin + forward).tolist(), up=up.tolist()),
         "film": {"type": "hdrfilm", "width": size[0], "height": size[1], "rfilter": {"type": "box"}, "pixel_format": "rgb"},
-        "sampler": {"type": "independent"},
+        "sampler": {"type": sampler},
     }
     return mi.load_dict(scene)
 
@@ -368,7 +368,7 @@ def path(args):
     spps = [int(v) for v in args.spp.split(",")]
     args.scene = with_camera(args.scene, out)
     env = (args.env, args.env_strength) if args.env else None
-    scene = mitsuba_scene(args.scene, size, args.max_bounces + 1, args.rr_depth + 1, out, env)
+    scene = mitsuba_scene(args.scene, size, args.max_bounces + 1, args.rr_depth + 1, out, env, args.mitsuba_sampler)
     print(f"references: {args.reference_spp} spp each", flush=True)
     references = {"umbra": umbra_render(args, args.reference_spp, 99, out)[0],
                   "mitsuba": mitsuba_render(scene, args.reference_spp, 99)[0]}
@@ -388,8 +388,8 @@ def path(args):
               f"umbra needs {row['ratio']:.2f}x Mitsuba's time for equal error", flush=True)
         rows.append(row)
     doc = {"scene": args.scene, "env": args.env, "size": size, "max_bounces": args.max_bounces, "rr_depth": args.rr_depth,
-           "reference_spp": args.reference_spp, "references_rel_mse": between,
-           "renderers": {"umbra": "umbra render (GPU timestamps)", "mitsuba": f"Mitsuba {mi.__version__} llvm_ad_rgb path, {dr.thread_count()} threads (wall)"},
+           "reference_spp": args.reference_spp, "references_rel_mse": between, "mitsuba_sampler": args.mitsuba_sampler,
+           "renderers": {"umbra": "umbra render (GPU timestamps)", "mitsuba": f"Mitsuba {mi.__version__} llvm_ad_rgb path, {args.mitsuba_sampler} sampler, {dr.thread_count()} threads (wall)"},
            "rows": rows}
     (out / "path.json").write_text(json.dumps(doc, indent=2))
     print(f"wrote {out / 'path.json'}")
@@ -417,6 +417,8 @@ def main():
     p.add_argument("--rr-depth", type=int, default=5, help="Russian roulette from this many bounces, both")
     p.add_argument("--env", help="an equirectangular environment map (EXR) lighting the scene in both")
     p.add_argument("--env-strength", type=float, default=1.0, help="its multiplier")
+    p.add_argument("--mitsuba-sampler", default="independent",
+                   help="Mitsuba's sampler: independent (its default) or a stratified one (ldsampler, multijitter, ...)")
     p.add_argument("--out", default="out/bench/peers", help="where to write path.json")
     t = commands.add_parser("table", help="print the Markdown table of a peers.json or path.json (umbra-bench peers --table)")
     t.add_argument("json")

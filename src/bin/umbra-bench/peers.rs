@@ -70,8 +70,13 @@ fn path_table(doc: &Value) -> String {
         Value::String(s) if s.is_empty() => String::new(),
         env => format!(" under {}", file_name(env)),
     };
+    // Mitsuba's sampler, where the run names one (runs before it used `independent`).
+    let sampler = match &doc["mitsuba_sampler"] {
+        Value::String(s) => format!(", Mitsuba's {s} sampler"),
+        _ => String::new(),
+    };
     let mut out = format!(
-        "| {}{lit} {}×{}, {} bounces | umbra ms | umbra rel. MSE | Mitsuba ms | Mitsuba rel. MSE \
+        "| {}{lit} {}×{}, {} bounces{sampler} | umbra ms | umbra rel. MSE | Mitsuba ms | Mitsuba rel. MSE \
          | umbra / Mitsuba time at equal error |\n|---:|---:|---:|---:|---:|---:|\n",
         file_name(&doc["scene"]),
         text(&doc["size"][0]),

@@ -267,6 +267,8 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["peers", "--table", "docs/bench/peers.json"],
     &["peers", "--table", "docs/bench/path.json"],
     &["peers", "--table", "docs/bench/path-helmet.json"],
+    &["peers", "--table", "docs/bench/path-ldsampler.json"],
+    &["peers", "--table", "docs/bench/path-helmet-ldsampler.json"],
     &["implicit", "--table", "docs/bench/implicit.json"],
     &["restir", "--table", "docs/bench/restir.json"],
     &["restir-pt", "--table", "docs/bench/restir-pt.json"],

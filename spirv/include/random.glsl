@@ -122,4 +122,12 @@ vec4 qmc4(uvec2 pixel, uint sample_index, uint stream, uint seed) {
     return vec4(b.x, a.x, a.y, b.y);
 }
 
+// A number u in [lo, hi), the share of [0, 1) a choice took, stretched back over [0, 1) (not below
+// 0 nor up to 1 whatever the rounding): one number makes the choice and then samples within it,
+// so a low-discrepancy pair (qmc4) stays stratified within every choice (a choice by another
+// number would hand each a random subset of the pair's points).
+float stretch(float u, float lo, float hi) {
+    return clamp((u - lo) / (hi - lo), 0.0, 0.99999994);
+}
+
 #endif

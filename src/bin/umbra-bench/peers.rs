@@ -72,7 +72,7 @@ fn path_table(doc: &Value) -> String {
     };
     // Mitsuba's sampler, where the run names one (runs before it used `independent`).
     let sampler = match &doc["mitsuba_sampler"] {
-        Value::String(s) => format!(", Mitsuba's {s} sampler"),
+        Value::String(s) => format!(", Mitsuba's sampler: {s}"),
         _ => String::new(),
     };
     let mut out = format!(

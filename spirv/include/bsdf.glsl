@@ -694,9 +694,13 @@ bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out f
         coat_lobe = u.x < q;
     }
     if (coat_lobe) {
+        // Reflected in the coat's frame: a sample must lie above the coat and the shading frame
+        // both, where coat_pdf counts it (with a tilted coat normal the two differ; a half
+        // vector can reflect o below the coat where wi.z is still positive).
         vec3 o = to_coat(s, wo);
-        wi = from_coat(s, reflect(-o, micro_sample(o, s.coat_alpha, u.yz)));
-        sampled = o.z > 0.0 && wi.z > 0.0;
+        vec3 i = reflect(-o, micro_sample(o, s.coat_alpha, u.yz));
+        wi = from_coat(s, i);
+        sampled = o.z > 0.0 && i.z > 0.0 && wi.z > 0.0;
     } else {
         if (s.coat > 0.0) {
             // The rest of u.x, stretched back over [0, 1).

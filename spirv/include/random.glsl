@@ -62,7 +62,8 @@ vec4 rand4(uvec2 pixel, uint sample_index, uint stream, uint seed) {
 // other streams' and pixels' (their own scrambles: a pixel's error stays white noise). The two
 // pairs of a stream are shuffled apart (padding), so they stratify each on its own. Component
 // layout: (y, z) is one pair (the 2D sample: a BSDF direction, a point on a triangle), (x, w) the
-// other (a lobe or light pick and Russian roulette).
+// other (the BSDF's lobe choice and Russian roulette; the triangle's pick and the choice between
+// the environment and the emitters).
 
 // Base-2 Owen scrambling of a bit-reversed integer (its lowest bit the first binary digit): each
 // bit flipped by a hash of the bits below it, the Laine-Karras permutation with Vegdahl's
@@ -120,14 +121,6 @@ vec4 qmc4(uvec2 pixel, uint sample_index, uint stream, uint seed) {
     vec2 a = sobol2(reversed, uvec3(h.x, h.y, hash_u32(h.y)));
     vec2 b = sobol2(reversed, uvec3(h.z, h.w, hash_u32(h.w)));
     return vec4(b.x, a.x, a.y, b.y);
-}
-
-// A number u in [lo, hi), the share of [0, 1) a choice took, stretched back over [0, 1) (not below
-// 0 nor up to 1 whatever the rounding): one number makes the choice and then samples within it,
-// so a low-discrepancy pair (qmc4) stays stratified within every choice (a choice by another
-// number would hand each a random subset of the pair's points).
-float stretch(float u, float lo, float hi) {
-    return clamp((u - lo) / (hi - lo), 0.0, 0.99999994);
 }
 
 #endif

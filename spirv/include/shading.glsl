@@ -1010,17 +1010,14 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
     return punctual_vec(k, 2u).rgb * attenuation;
 }
 
-// A point on the emissive triangles as seen from p: one of `count` by power (u.y), a uniform
-// point on it (u.y stretched back over [0, 1) within the triangle's share of the power, and u.z:
-// the point keeps the stratification of low-discrepancy numbers on every triangle; u.x unused).
-// True when it emits towards p; then gives the direction wi (unit, world) and the point, the
-// emitted radiance and the solid-angle pdf of the sample. Visibility is the caller's
-// (light_reaches to the point).
+// A point on the emissive triangles as seen from p: one of `count` by power (u.x), a uniform
+// point on it (u.yz). True when it emits towards p; then gives the direction wi (unit, world) and
+// the point, the emitted radiance and the solid-angle pdf of the sample. Visibility is the
+// caller's (light_reaches to the point).
 bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out vec3 l_emit, out float light_pdf) {
-    uint k = pick_light(u.y, count);
+    uint k = pick_light(u.x, count);
     uint ltri = light_tri(k);
-    vec3 cdf_pmf = light_cdf_pmf_area(k);
-    vec2 lb = sample_triangle(vec2(stretch(u.y, cdf_pmf.x - cdf_pmf.y, cdf_pmf.x), u.z));
+    vec2 lb = sample_triangle(u.yz);
     lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u) + lb.y * tri_vertex(ltri, 2u);
     vec3 ln = normalize(tri_normal(ltri));
     vec3 to_light = lp - p;
@@ -1028,7 +1025,7 @@ bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out ve
     wi = to_light * inversesqrt(dist2);
     l_emit = emitted(ltri, lb, ln, -wi);
     float cos_l = abs(dot(ln, wi));
-    light_pdf = cdf_pmf.y / cdf_pmf.z * dist2 / cos_l;
+    light_pdf = light_cdf_pmf_area(k).y / light_cdf_pmf_area(k).z * dist2 / cos_l;
     return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0;
 }
 

@@ -522,7 +522,7 @@ enum IntegratorArg {
     Wavefront,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, clap::ValueEnum)]
 enum SamplerArg {
     LowDiscrepancy,
     Independent,

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::Gpu;
+use common::{relative_mse, Gpu};
 use glam::Vec3;
 use umbra::gpu::layout::{GpuCamera, PathStats};
 use umbra::gpu::scene::GpuScene;
@@ -377,7 +377,8 @@ fn target_error_is_the_true_error() {
         let base = PathSettings { size: (24, 24), spp: 4096, max_bounces: 4, sampler, ..Default::default() };
         let image = render(&gpu, &scene, &PathSettings { target_error: Some(0.08), seed: 1, ..base.clone() });
         let reference = render(&gpu, &scene, &PathSettings { spp: 64 * image.spp, seed: 2, ..base });
-        let (estimated, actual) = (image.relative_error() as f64, true_relative_error(&image, &reference));
+        let (estimated, actual) =
+            (image.relative_error() as f64, relative_mse(&image.mean, &reference.mean).sqrt());
         eprintln!("{sampler:?}: stopped at {} spp, estimated {estimated:.4}, true {actual:.4}", image.spp);
         assert!(image.spp < 4096 && estimated <= 0.08, "{sampler:?}: the target was not reached");
         match sampler {
@@ -390,21 +391,6 @@ fn target_error_is_the_true_error() {
             }
         }
     }
-}
-
-/// The relative RMS error of `image` against `reference` (the metric of
-/// [`PathImage::relative_error`]).
-fn true_relative_error(image: &PathImage, reference: &PathImage) -> f64 {
-    let rel_mse = image
-        .mean
-        .iter()
-        .zip(&reference.mean)
-        .flat_map(|(x, r)| {
-            (0..3).map(move |c| ((x[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01))
-        })
-        .sum::<f64>()
-        / (3 * image.mean.len()) as f64;
-    rel_mse.sqrt()
 }
 
 /// Direct light from KHR_lights_punctual lights on a Lambert floor against the closed form

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{baked_probes, build_with, camera, cuboid, inside_out_sphere, light, quad, Gpu};
+use common::{baked_probes, build_with, camera, cuboid, inside_out_sphere, light, quad, relative_mse, Gpu};
 use glam::Vec3;
 use umbra::gpu::layout::PROBE_ACTIVE;
 use umbra::gpu::scene::GpuScene;
@@ -12,19 +12,6 @@ use umbra::passes::deferred::{LightingInputs, LightingSettings};
 use umbra::passes::probes::{ProbeGrid, ProbeSettings, ProbeVolume, IRRADIANCE_MAP_TEXELS};
 use umbra::render::{HybridSettings, Passes, PathSettings};
 use umbra::scene::{LightKind, Material, Scene};
-
-/// Relative MSE of `image` against `reference`: mean over pixels and channels of
-/// (x − r)² / (r² + 0.01).
-fn relative_mse(image: &[[f32; 4]], reference: &[[f32; 4]]) -> f64 {
-    let sum: f64 = image
-        .iter()
-        .zip(reference)
-        .flat_map(|(a, r)| {
-            (0..3).map(move |c| (a[c] as f64 - r[c] as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01))
-        })
-        .sum();
-    sum / (3 * image.len()) as f64
-}
 
 /// The goal on the Cornell box, whose hybrid render lacks all indirect light: against a
 /// converged path-traced reference, baked probes cut the hybrid's relative MSE at least 5×

@@ -554,9 +554,6 @@ fn a_wrong_pdf_is_rejected() {
     }
 }
 
-// ---------------------------------------------------------------------------------------------
-// Light sampling: the environment map and the emissive triangles, through
-// `spirv/light_sample_test.comp` (the renderer's environment.glsl and shading.glsl).
 /// Four numbers per sample of the path tracer (`random.glsl`'s `qmc4`, sample_test's modes 6
 /// and 7): mode 6 the first `count` samples of pixel (`pixel`, 0) in one stream, mode 7 sample 5
 /// of pixels (0, `pixel`) to (`count` − 1, `pixel`).
@@ -657,6 +654,9 @@ fn the_path_tracers_numbers_are_uniform_across_pixels_and_pairs_independent() {
     assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
 }
 
+// ---------------------------------------------------------------------------------------------
+// Light sampling: the environment map and the emissive triangles, through
+// `spirv/light_sample_test.comp` (the renderer's environment.glsl and shading.glsl).
 /// The light-sampling cases (environment, light pick, point on a triangle, emissive solid angle)
 /// form their own family: significance 0.01 with a Šidák correction over these four.
 fn light_alpha() -> f64 {

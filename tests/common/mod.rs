@@ -434,8 +434,9 @@ pub fn z_outliers(
     (compared, outliers, worst)
 }
 
-/// Relative MSE of an RGBA image against an RGB reference: the mean over pixels and channels of (x − ref)² / (ref² + 0.01).
-pub fn relative_mse(image: &[[f32; 4]], reference: &[[f32; 3]]) -> f64 {
+/// Relative MSE of an RGBA image against an RGB or RGBA reference: the mean over pixels and the
+/// three colour channels of (x − ref)² / (ref² + 0.01).
+pub fn relative_mse<const N: usize>(image: &[[f32; 4]], reference: &[[f32; N]]) -> f64 {
     let sum: f64 = image
         .iter()
         .zip(reference)

@@ -9,6 +9,7 @@
 //   4 sample_emissive from the point  -> (world direction, pdf; 0 when it fails)
 //   5 the MIS light pdf pathtrace.comp gives a BSDF ray from the point along directions[i]
 //     -> (direction, pdf; 0 when the ray hits nothing that emits towards the point)
+//   6 mode 4 with sample reuse (SAMPLE_REUSE: the triangle picked by u.y, stretched back)
 // Variant 1 (`variant`) makes modes 1 and 5 report a deliberately wrong pdf.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/light_sample_test.glsl"
@@ -17,6 +18,7 @@ layout(local_size_x = 64) in;
 
 const bool BECKMANN = false;
 const bool GGX_WALTER = false;
+#define SAMPLE_REUSE (params.mode == 6u)
 
 #include "random.glsl"
 #include "environment.glsl"
@@ -69,7 +71,7 @@ void main() {
         results[i] = vec4(float(k), light_cdf_pmf_area(k).y, float(light_tri(k)), 0.0);
     } else if (mode == 3u) {
         results[i] = vec4(sample_triangle(u.xy), 0.0, 0.0);
-    } else if (mode == 4u) {
+    } else if (mode == 4u || mode == 6u) {
         vec3 p = params.point;
         vec3 n = params.normal;
         vec3 t;

@@ -5,11 +5,14 @@
 // bsdf_pdf at given directions, for tests/sampling.rs's check that it samples wherever it
 // scatters; mode 4 the thin-film Fresnel of KHR_materials_iridescence (tests/iridescence.rs);
 // mode 5 bsdf_sample's weights (the white furnace, tests/anisotropy.rs); modes 6 and 7 the path
-// tracer's numbers (random.glsl's qmc4, tests/sampling.rs).
+// tracer's numbers (random.glsl's qmc4, tests/sampling.rs); mode 8 is mode 0 with sample reuse
+// (SAMPLE_REUSE: bsdf_sample's lobe chosen by u.y, stretched back).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/sample_test.glsl"
 
 layout(local_size_x = 64) in;
+
+#define SAMPLE_REUSE (params.mode == 8u)
 
 #include "random.glsl"
 #include "bsdf.glsl"
@@ -279,7 +282,7 @@ void main() {
         results[i] = vec4(bsdf_eval(s, wo, wi), bsdf_pdf(s, wo, wi));
         return;
     }
-    if (params.mode == 0u) {
+    if (params.mode == 0u || params.mode == 8u) {
         vec4 u = rand4(uvec2(i, 0u), 0u, 0u, params.seed);
         vec3 wi;
         if (params.kind == 11u) {

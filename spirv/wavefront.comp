@@ -25,6 +25,9 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+// Low-discrepancy numbers take sample reuse: a choice and the chosen option's sample from one
+// number (bsdf.glsl).
+#define SAMPLE_REUSE LOW_DISCREPANCY
 #include "random.glsl"
 #include "camera.glsl"
 #include "environment.glsl"

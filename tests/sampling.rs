@@ -208,16 +208,27 @@ fn cell_of(d: Vec3) -> usize {
     t * PHI_CELLS + p
 }
 
-/// The chi-square p-value of `sampler`'s samples against its (possibly deliberately wrong) pdf,
-/// and the pdf's total mass over the sphere.
+/// How `bsdf_sample` spends its numbers: a lobe by u.x and its direction by (u.y, u.z), or (sample
+/// reuse, the path tracer's with low-discrepancy numbers) a lobe by u.y, whose share of it,
+/// stretched back over [0, 1), replaces u.y for the direction: sample_test's mode 0 or mode 8.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Numbers {
+    Fresh,
+    Reused,
+}
+
+/// The chi-square p-value of `sampler`'s samples (drawn with `numbers`) against its (possibly
+/// deliberately wrong) pdf, and the pdf's total mass over the sphere.
 fn chi_square(
     gpu: &Gpu,
     kernel: &Kernel,
     sampler: Sampler,
+    numbers: Numbers,
     pdf_alpha_scale: f32,
     count: u32,
 ) -> (f64, f64, usize, f64) {
-    let samples = kernel.run(gpu, sampler, 1.0, 0, &[], count);
+    let mode = if numbers == Numbers::Reused { 8 } else { 0 };
+    let samples = kernel.run(gpu, sampler, 1.0, mode, &[], count);
     // Samples the code reports with pdf 0 are failures it discards (half vectors sampled from
     // D(h) cos θh can face away from wo): they form one more cell, expected to hold the pdf's
     // missing mass.
@@ -424,7 +435,7 @@ fn samplers_match_their_pdfs() {
     let alpha = 1.0 - 0.99f64.powf(1.0 / cases.len() as f64);
     let mut failures = Vec::new();
     for case in &cases {
-        let (p, chi2, dof, mass) = chi_square(&gpu, &kernel, *case, 1.0, SAMPLES);
+        let (p, chi2, dof, mass) = chi_square(&gpu, &kernel, *case, Numbers::Fresh, 1.0, SAMPLES);
         eprintln!("{case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.4}, pdf mass {mass:.4}");
         if p < alpha {
             failures.push(format!("{case:?}: p = {p} < {alpha}"));
@@ -435,6 +446,51 @@ fn samplers_match_their_pdfs() {
         }
     }
     assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
+}
+
+/// Sample reuse keeps `bsdf_sample`'s density: every case of [`samplers_match_their_pdfs`] that
+/// chooses among lobes (the dielectric's, coated, sheened, iridescent, anisotropic and diffusely
+/// transmitting cases) again with the lobe chosen by u.y and u.y's share stretched back as the
+/// direction's first number (`SAMPLE_REUSE`), at the same significance per case (0.01, Šidák over
+/// that test's cases). A stretch off its lobe's interval (its start or its width) puts the
+/// directions elsewhere than the pdf: with the coat's stretch missing (u.y left as it was), the
+/// coated cases fail. The reused numbers must also give other directions than fresh ones (the
+/// reuse is live).
+#[test]
+fn sample_reuse_keeps_the_bsdf_pdfs() {
+    let gpu = Gpu::new();
+    let kernel = Kernel::new(&gpu);
+    let alpha = 1.0 - 0.99f64.powf(1.0 / cases().len() as f64);
+    let lobed: Vec<Sampler> = cases()
+        .into_iter()
+        .filter(|c| {
+            matches!(
+                c,
+                Sampler::Dielectric { .. }
+                    | Sampler::Anisotropic { .. }
+                    | Sampler::DiffuseTransmission { .. }
+            )
+        })
+        .collect();
+    let mut failures = Vec::new();
+    for case in &lobed {
+        let (p, chi2, dof, _) = chi_square(&gpu, &kernel, *case, Numbers::Reused, 1.0, SAMPLES);
+        eprintln!("reused {case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.4}");
+        if p < alpha {
+            failures.push(format!("{case:?}: p = {p} < {alpha}"));
+        }
+    }
+    assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
+    let case = Sampler::Dielectric {
+        microfacet: Microfacet::Ggx,
+        kind: Dielectric::Coated,
+        alpha: 0.5,
+        theta_degrees: 30.0,
+    };
+    let fresh = kernel.run(&gpu, case, 1.0, 0, &[], 4096);
+    let reused = kernel.run(&gpu, case, 1.0, 8, &[], 4096);
+    let same = fresh.iter().zip(&reused).filter(|(a, b)| a == b).count();
+    assert!(same < 4096 / 2, "{same} of 4096 directions the same with and without reuse");
 }
 
 /// The tilted clear coat (its normal 28° from the shading normal), α 0.5, wo at 60°, under both GGX
@@ -451,7 +507,7 @@ fn the_tilted_coat_samples_only_where_its_pdf_is() {
     for microfacet in [Microfacet::GgxWalter, Microfacet::Ggx] {
         let case =
             Sampler::Dielectric { microfacet, kind: Dielectric::CoatTilted, alpha: 0.5, theta_degrees: 60.0 };
-        let (p, chi2, dof, mass) = chi_square(&gpu, &kernel, case, 1.0, 10 * SAMPLES);
+        let (p, chi2, dof, mass) = chi_square(&gpu, &kernel, case, Numbers::Fresh, 1.0, 10 * SAMPLES);
         eprintln!("{case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.3e}, pdf mass {mass:.4}");
         assert!(p >= alpha, "{case:?}: p = {p} < {alpha}");
     }
@@ -548,7 +604,7 @@ fn a_wrong_pdf_is_rejected() {
             theta_degrees: 30.0,
         },
     ] {
-        let (p, chi2, dof, _) = chi_square(&gpu, &kernel, case, 1.1, SAMPLES);
+        let (p, chi2, dof, _) = chi_square(&gpu, &kernel, case, Numbers::Fresh, 1.1, SAMPLES);
         eprintln!("wrong pdf {case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.2e}");
         assert!(p < alpha, "{case:?}: a 10 % wrong alpha in the pdf was not rejected (p = {p})");
     }
@@ -657,10 +713,11 @@ fn the_path_tracers_numbers_are_uniform_across_pixels_and_pairs_independent() {
 // ---------------------------------------------------------------------------------------------
 // Light sampling: the environment map and the emissive triangles, through
 // `spirv/light_sample_test.comp` (the renderer's environment.glsl and shading.glsl).
-/// The light-sampling cases (environment, light pick, point on a triangle, emissive solid angle)
-/// form their own family: significance 0.01 with a Šidák correction over these four.
+/// The light-sampling cases (environment, light pick, point on a triangle, emissive solid angle
+/// with fresh and with reused numbers) form their own family: significance 0.01 with a Šidák
+/// correction over these five.
 fn light_alpha() -> f64 {
-    1.0 - 0.99f64.powf(1.0 / 4.0)
+    1.0 - 0.99f64.powf(1.0 / 5.0)
 }
 
 /// The emissive triangles of the light test scene, as seen from the shading point at the origin
@@ -958,12 +1015,18 @@ fn triangle_sampling_is_uniform() {
 /// true pdf, which is constant in area measure). Returns (p, chi2, dof, mass, the largest
 /// relative difference between a sample's pdf and the MIS pdf in its direction, the fraction of
 /// samples whose direction the MIS ray misses).
-fn emissive_chi_square(gpu: &Gpu, kernel: &LightKernel, variant: u32) -> (f64, f64, usize, f64, f64, f64) {
+fn emissive_chi_square(
+    gpu: &Gpu,
+    kernel: &LightKernel,
+    numbers: Numbers,
+    variant: u32,
+) -> (f64, f64, usize, f64, f64, f64) {
     const K: usize = 8;
     let scene = light_scene();
     let lights = scene.triangles.len();
     let samples = 1u32 << 19;
-    let drawn = kernel.run(gpu, LightRun { mode: 4, variant: 0, count: samples }, &[]);
+    let mode = if numbers == Numbers::Reused { 6 } else { 4 };
+    let drawn = kernel.run(gpu, LightRun { mode, variant: 0, count: samples }, &[]);
     let mut observed = vec![0.0f64; lights * 2 * K * K];
     for d in &drawn {
         assert!(d[3].is_finite() && d[3] > 0.0, "sample_emissive failed or gave a bad pdf: {d:?}");
@@ -1019,23 +1082,31 @@ fn emissive_chi_square(gpu: &Gpu, kernel: &LightKernel, variant: u32) -> (f64, f
 
 /// Next-event estimation on emissive triangles (`sample_emissive`: pick by power, uniform point,
 /// solid-angle pdf pmf / area × r² / cos) draws directions with the density the path tracer's MIS
-/// assigns them (`triangles[t].light_pmf / area × t² / |cos|` at a BSDF ray's hit), and a MIS pdf
-/// that forgets the cosine at the light is rejected.
+/// assigns them (`triangles[t].light_pmf / area × t² / |cos|` at a BSDF ray's hit), with fresh
+/// numbers and with sample reuse (the triangle picked by u.y, its share stretched back as the
+/// point's first number: a stretch off the triangle's interval of the CDF makes the points
+/// non-uniform on it, which the sub-triangle cells see), and a MIS pdf that forgets the cosine at
+/// the light is rejected.
 #[test]
 fn emissive_sampling_matches_the_mis_light_pdf() {
     let gpu = Gpu::new();
     let kernel = LightKernel::new(&gpu, None);
     let alpha = light_alpha();
-    let (p, chi2, dof, mass, mismatch, misses) = emissive_chi_square(&gpu, &kernel, 0);
-    eprintln!(
-        "sample_emissive vs MIS pdf: chi2 {chi2:.1}, dof {dof}, p {p:.4}, mass {mass:.6}, \
-         largest NEE/MIS pdf difference {mismatch:.2e}, MIS rays missing the light {misses:.1e}"
-    );
-    assert!((mass - 1.0).abs() < 1e-3, "the MIS light pdf integrates to {mass}");
-    assert!(mismatch < 1e-3, "NEE and MIS disagree on a sample's pdf by {mismatch}");
-    assert!(misses < 1e-3, "{misses} of the NEE directions miss their light when traced");
-    assert!(p >= alpha, "sample_emissive does not follow the MIS light pdf: p = {p} < {alpha}");
-    let (p, chi2, dof, mass, ..) = emissive_chi_square(&gpu, &kernel, 1);
+    for numbers in [Numbers::Fresh, Numbers::Reused] {
+        let (p, chi2, dof, mass, mismatch, misses) = emissive_chi_square(&gpu, &kernel, numbers, 0);
+        eprintln!(
+            "sample_emissive ({numbers:?} numbers) vs MIS pdf: chi2 {chi2:.1}, dof {dof}, p {p:.4}, \
+             mass {mass:.6}, largest NEE/MIS pdf difference {mismatch:.2e}, MIS rays missing the light {misses:.1e}"
+        );
+        assert!((mass - 1.0).abs() < 1e-3, "the MIS light pdf integrates to {mass}");
+        assert!(mismatch < 1e-3, "NEE and MIS disagree on a sample's pdf by {mismatch}");
+        assert!(misses < 1e-3, "{misses} of the NEE directions miss their light when traced");
+        assert!(
+            p >= alpha,
+            "sample_emissive ({numbers:?} numbers) does not follow the MIS light pdf: p = {p} < {alpha}"
+        );
+    }
+    let (p, chi2, dof, mass, ..) = emissive_chi_square(&gpu, &kernel, Numbers::Fresh, 1);
     eprintln!("sample_emissive vs a MIS pdf without the cosine: chi2 {chi2:.1}, dof {dof}, p {p:.2e}, mass {mass:.4}");
     assert!(p < alpha, "a MIS pdf without the light's cosine was not rejected (p = {p})");
 }

@@ -83,9 +83,21 @@
 // sampled from GGX's visible normals (Heitz 2018) or, with `const bool GGX_WALTER` (also the
 // kernel's), from D(h) cos(theta_h) as Walter et al. 2007 do, for reflection and transmission
 // alike; Beckmann always samples D(h) cos(theta_h). The BSDF itself is the same either way.
+//
+// bsdf_sample picks a lobe with one number and samples the lobe's direction with two others
+// (u.x; u.yz), unless the including kernel defines SAMPLE_REUSE true (the path tracer, for its
+// low-discrepancy numbers): then u.y picks the lobe and the lobe's share of it, stretched back
+// over [0, 1) (random.glsl's stretch), is the direction's first number, so each lobe's
+// directions keep the stratification of the (u.y, u.z) pair (Mitsuba's sample reuse). The same
+// density either way.
 #ifndef UMBRA_BSDF_GLSL
 #define UMBRA_BSDF_GLSL
 
+#ifndef SAMPLE_REUSE
+#define SAMPLE_REUSE false
+#endif
+
+#include "random.glsl"
 #include "sampling.glsl"
 #include "sheen_albedo.glsl"
 
@@ -650,13 +662,20 @@ float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
 }
 
 // A direction from the base's lobes, picked by u.x; false when it leaves its lobe's side of the
-// surface (or cannot refract).
+// surface (or cannot refract). With SAMPLE_REUSE the lobe's share of u.x, stretched, replaces u.y.
 bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
     vec4 p = lobe_probabilities(s, wo);
     // KHR_materials_diffuse_transmission's lobe: the last share of u.x.
     bool diffuse_through = false;
     if (s.diffuse_transmission > 0.0) {
         diffuse_through = u.x >= p.x + p.y + p.z;
+    }
+    if (SAMPLE_REUSE) {
+        bool reflects = u.x < p.x;
+        bool refracts = !reflects && u.x < p.x + p.y;
+        float lo = reflects ? 0.0 : (refracts ? p.x : (diffuse_through ? p.x + p.y + p.z : p.x + p.y));
+        float share = reflects ? p.x : (refracts ? p.y : (diffuse_through ? p.w : p.z));
+        u.y = stretch(u.x, lo, share);
     }
     if (u.x < p.x) {
         vec3 h = spec_sample(s, wo, u.yz);
@@ -686,6 +705,10 @@ bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
 bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out float pdf) {
     weight = vec3(0.0);
     pdf = 0.0;
+    if (SAMPLE_REUSE) {
+        // The lobe chosen by u.y, each lobe's share of it stretched back as its sample's u.y.
+        u.x = u.y;
+    }
     bool sampled;
     float q = 0.0;
     bool coat_lobe = false;
@@ -694,6 +717,9 @@ bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out f
         coat_lobe = u.x < q;
     }
     if (coat_lobe) {
+        if (SAMPLE_REUSE) {
+            u.y = stretch(u.x, 0.0, q);
+        }
         // Reflected in the coat's frame: a sample must lie above the coat and the shading frame
         // both, where coat_pdf counts it (with a tilted coat normal the two differ; a half
         // vector can reflect o below the coat where wi.z is still positive).
@@ -704,14 +730,17 @@ bool bsdf_sample(Surface s, vec3 wo, vec3 u, out vec3 wi, out vec3 weight, out f
     } else {
         if (s.coat > 0.0) {
             // The rest of u.x, stretched back over [0, 1).
-            u.x = min((u.x - q) / (1.0 - q), 0.99999994);
+            u.x = stretch(u.x, q, 1.0 - q);
         }
         bool sheen_lobe = false;
         if (max3(s.sheen) > 0.0) {
             float qs = sheen_probability(s, wo);
             sheen_lobe = u.x < qs;
+            if (SAMPLE_REUSE && sheen_lobe) {
+                u.y = stretch(u.x, 0.0, qs);
+            }
             if (!sheen_lobe) {
-                u.x = min((u.x - qs) / (1.0 - qs), 0.99999994);
+                u.x = stretch(u.x, qs, 1.0 - qs);
             }
         }
         if (sheen_lobe) {

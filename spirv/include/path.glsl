@@ -412,7 +412,15 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (LIGHT_SAMPLING) {
         if (tri_nee || env_nee) {
             vec4 u = path_rand4(pixel, sample_index, rng_stream(depth, RNG_EMISSIVE_NEE), seed);
-            bool pick_env = u.w < params.env_pick;
+            // With sample reuse the map or the emitters are picked by u.y, whose share, stretched
+            // back, is the chosen light's first number (the pair (u.y, u.z) then stratifies each
+            // light's samples: bsdf.glsl); otherwise by u.w, the map's sample from a stream of
+            // its own.
+            bool pick_env = (SAMPLE_REUSE ? u.y : u.w) < params.env_pick;
+            if (SAMPLE_REUSE) {
+                u.y = pick_env ? stretch(u.y, 0.0, params.env_pick)
+                               : stretch(u.y, params.env_pick, 1.0 - params.env_pick);
+            }
             vec3 wi = vec3(0.0, 0.0, 1.0);
             vec3 target = vec3(0.0);
             vec3 l_in = vec3(0.0);  // the sampled light's radiance towards p
@@ -422,7 +430,8 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
             // runs an if-body for every lane whichever lanes take it.
             if (HAS_ENV_MAP) {
                 if (pick_env) {
-                    vec4 ue = path_rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed).yxzw;
+                    // env_sample's 2D point is (x, z), its alias tables' keep tests y and w.
+                    vec4 ue = SAMPLE_REUSE ? u.yxzw : path_rand4(pixel, sample_index, rng_stream(depth, RNG_ENV_NEE), seed).yxzw;
                     wi = env_sample(ue, params.env_size, pdf, l_in);
                     l_in *= params.env;
                     pdf *= params.env_pick;

@@ -25,9 +25,11 @@ uvec4 pcg4d(uvec4 v) {
 // numbers unchanged.
 const uint RNG_STREAMS_PER_BOUNCE = 8u;
 const uint RNG_CAMERA = 0u;        // pixel jitter (xy), at depth 0
-const uint RNG_EMISSIVE_NEE = 1u;  // emissive triangle by power (x), point on it (yz)
-const uint RNG_BSDF = 2u;          // BSDF sample (xyz), Russian roulette (w)
-const uint RNG_ENV_NEE = 3u;       // environment map sample
+// With sample reuse (bsdf.glsl's SAMPLE_REUSE) a choice takes the number its option's sample
+// starts from: the light (map or emitters), the emissive triangle and the BSDF's lobe by y.
+const uint RNG_EMISSIVE_NEE = 1u;  // emissive triangle by power (x), point on it (yz), map or triangles (w)
+const uint RNG_BSDF = 2u;          // BSDF lobe (x), direction (yz), Russian roulette (w)
+const uint RNG_ENV_NEE = 3u;       // environment map sample (without sample reuse)
 const uint RNG_PUNCTUAL = 4u;      // punctual light pick (x)
 const uint RNG_DISPERSION = 5u;    // colour channel through a dispersive volume (x)
 // RIS (path.glsl's path_ris) at bounce `depth`: candidate k draws its light sample from stream
@@ -101,6 +103,15 @@ vec2 sobol2(uint reversed, uvec3 seeds) {
     uint x = bitfieldReverse(owen_reversed(i, seeds.y));
     uint y = bitfieldReverse(owen_reversed(sobol1_digits(i), seeds.z));
     return vec2(uvec2(x, y) >> 8u) * (1.0 / 16777216.0);
+}
+
+// The part of u in [lo, lo + share), stretched back over [0, 1): after a choice by u, a number
+// for the chosen option's own sample (sample reuse). A low-discrepancy number keeps its
+// stratification so (an elementary interval of a net, stretched, is a net's again); it spends
+// log2(1 / share) of its 24 bits, and on independent numbers it would multiply pcg4d's weakest
+// bits by 1 / share (SAMPLE_REUSE: only the path tracer's low-discrepancy numbers take it).
+float stretch(float u, float lo, float share) {
+    return clamp((u - lo) / share, 0.0, 0.99999994);
 }
 
 // An integer hash (Wellons' lowbias32): a second seed from one of pcg4d's.

@@ -1011,11 +1011,18 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
 }
 
 // A point on the emissive triangles as seen from p: one of `count` by power (u.x), a uniform
-// point on it (u.yz). True when it emits towards p; then gives the direction wi (unit, world) and
-// the point, the emitted radiance and the solid-angle pdf of the sample. Visibility is the
-// caller's (light_reaches to the point).
+// point on it (u.yz); with SAMPLE_REUSE (bsdf.glsl) the triangle is picked by u.y, whose share
+// of the triangle, stretched, replaces u.y. True when it emits towards p; then gives the
+// direction wi (unit, world) and the point, the emitted radiance and the solid-angle pdf of the
+// sample. Visibility is the caller's (light_reaches to the point).
 bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out vec3 l_emit, out float light_pdf) {
-    uint k = pick_light(u.x, count);
+    uint k = pick_light(SAMPLE_REUSE ? u.y : u.x, count);
+    vec3 cdf_pmf_area = light_cdf_pmf_area(k);
+    if (SAMPLE_REUSE) {
+        // The interval of u.y that picked k exactly: from the CDF, not its pmf (rounded apart).
+        float lo = k > 0u ? light_cdf_pmf_area(k - 1u).x : 0.0;
+        u.y = stretch(u.y, lo, cdf_pmf_area.x - lo);
+    }
     uint ltri = light_tri(k);
     vec2 lb = sample_triangle(u.yz);
     lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u) + lb.y * tri_vertex(ltri, 2u);
@@ -1025,7 +1032,7 @@ bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out ve
     wi = to_light * inversesqrt(dist2);
     l_emit = emitted(ltri, lb, ln, -wi);
     float cos_l = abs(dot(ln, wi));
-    light_pdf = light_cdf_pmf_area(k).y / light_cdf_pmf_area(k).z * dist2 / cos_l;
+    light_pdf = cdf_pmf_area.y / cdf_pmf_area.z * dist2 / cos_l;
     return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0;
 }
 

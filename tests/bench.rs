@@ -257,7 +257,6 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["paths", "--table", "docs/bench/paths.json"],
     &["pipelines", "--table", "docs/bench/pipelines.json"],
     &["suite", "--table", "docs/bench/suite.json"],
-    &["suite", "--table", "docs/bench/suite-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-sponza.json"],
     &["shadows", "--table", "docs/bench/shadows-sponza-one.json"],
     &["shadows", "--table", "docs/bench/shadows-spheres.json"],

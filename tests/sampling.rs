@@ -433,19 +433,31 @@ fn samplers_match_their_pdfs() {
     let kernel = Kernel::new(&gpu);
     let cases = cases();
     let alpha = 1.0 - 0.99f64.powf(1.0 / cases.len() as f64);
+    let failures = chi_square_failures(&gpu, &kernel, &cases, Numbers::Fresh, alpha);
+    assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
+}
+
+/// Each of `cases` drawn with `numbers` through the chi-square: the cases whose p-value falls
+/// below `alpha` or whose pdf integrates to more than 1 over the sphere (up to quadrature error).
+fn chi_square_failures(
+    gpu: &Gpu,
+    kernel: &Kernel,
+    cases: &[Sampler],
+    numbers: Numbers,
+    alpha: f64,
+) -> Vec<String> {
     let mut failures = Vec::new();
-    for case in &cases {
-        let (p, chi2, dof, mass) = chi_square(&gpu, &kernel, *case, Numbers::Fresh, 1.0, SAMPLES);
-        eprintln!("{case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.4}, pdf mass {mass:.4}");
+    for case in cases {
+        let (p, chi2, dof, mass) = chi_square(gpu, kernel, *case, numbers, 1.0, SAMPLES);
+        eprintln!("{case:?} ({numbers:?} numbers): chi2 {chi2:.1}, dof {dof}, p {p:.4}, pdf mass {mass:.4}");
         if p < alpha {
             failures.push(format!("{case:?}: p = {p} < {alpha}"));
         }
-        // The pdf integrates to at most 1 over the sphere (up to quadrature error).
         if mass > 1.01 {
             failures.push(format!("{case:?}: pdf mass {mass}"));
         }
     }
-    assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
+    failures
 }
 
 /// Sample reuse keeps `bsdf_sample`'s density: every case of [`samplers_match_their_pdfs`] that
@@ -472,14 +484,7 @@ fn sample_reuse_keeps_the_bsdf_pdfs() {
             )
         })
         .collect();
-    let mut failures = Vec::new();
-    for case in &lobed {
-        let (p, chi2, dof, _) = chi_square(&gpu, &kernel, *case, Numbers::Reused, 1.0, SAMPLES);
-        eprintln!("reused {case:?}: chi2 {chi2:.1}, dof {dof}, p {p:.4}");
-        if p < alpha {
-            failures.push(format!("{case:?}: p = {p} < {alpha}"));
-        }
-    }
+    let failures = chi_square_failures(&gpu, &kernel, &lobed, Numbers::Reused, alpha);
     assert!(failures.is_empty(), "significance {alpha} per case:\n{}", failures.join("\n"));
     let case = Sampler::Dielectric {
         microfacet: Microfacet::Ggx,

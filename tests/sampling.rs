@@ -472,8 +472,9 @@ fn chi_square_failures(
 fn sample_reuse_keeps_the_bsdf_pdfs() {
     let gpu = Gpu::new();
     let kernel = Kernel::new(&gpu);
-    let alpha = 1.0 - 0.99f64.powf(1.0 / cases().len() as f64);
-    let lobed: Vec<Sampler> = cases()
+    let cases = cases();
+    let alpha = 1.0 - 0.99f64.powf(1.0 / cases.len() as f64);
+    let lobed: Vec<Sampler> = cases
         .into_iter()
         .filter(|c| {
             matches!(

@@ -665,22 +665,23 @@ float bsdf_pdf(Surface s, vec3 wo, vec3 wi) {
 // surface (or cannot refract). With SAMPLE_REUSE the lobe's share of u.x, stretched, replaces u.y.
 bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
     vec4 p = lobe_probabilities(s, wo);
-    // KHR_materials_diffuse_transmission's lobe: the last share of u.x.
+    // The lobes' shares of u.x in order: specular reflection, transmission, diffuse, and
+    // KHR_materials_diffuse_transmission's lobe last.
+    bool reflects = u.x < p.x;
+    bool refracts = !reflects && u.x < p.x + p.y;
     bool diffuse_through = false;
     if (s.diffuse_transmission > 0.0) {
         diffuse_through = u.x >= p.x + p.y + p.z;
     }
     if (SAMPLE_REUSE) {
-        bool reflects = u.x < p.x;
-        bool refracts = !reflects && u.x < p.x + p.y;
         float lo = reflects ? 0.0 : (refracts ? p.x : (diffuse_through ? p.x + p.y + p.z : p.x + p.y));
         float share = reflects ? p.x : (refracts ? p.y : (diffuse_through ? p.w : p.z));
         u.y = stretch(u.x, lo, share);
     }
-    if (u.x < p.x) {
+    if (reflects) {
         vec3 h = spec_sample(s, wo, u.yz);
         wi = reflect(-wo, h);
-    } else if (u.x < p.x + p.y) {
+    } else if (refracts) {
         vec3 h = spec_sample(s, wo, u.yz);
         if (s.thin) {
             wi = reflect(-wo, h);
@@ -697,7 +698,7 @@ bool bsdf_sample_base(Surface s, vec3 wo, vec3 u, out vec3 wi) {
             wi.z = -wi.z;
         }
     }
-    return !(wi.z == 0.0 || (wi.z < 0.0 && !(u.x >= p.x && u.x < p.x + p.y) && !diffuse_through));
+    return !(wi.z == 0.0 || (wi.z < 0.0 && !refracts && !diffuse_through));
 }
 
 // Samples wi; weight = f |cos| / pdf. False when the sample leaves its lobe's side of the surface

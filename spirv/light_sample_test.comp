@@ -10,7 +10,7 @@
 //   5 the MIS light pdf pathtrace.comp gives a BSDF ray from the point along directions[i]
 //     -> (direction, pdf; 0 when the ray hits nothing that emits towards the point)
 //   6 mode 4 with sample reuse (SAMPLE_REUSE: the triangle picked by u.y, stretched back)
-// Variant 1 (`variant`) makes modes 1 and 5 report a deliberately wrong pdf.
+// Variants 1 and 2 (`variant`) make modes 1 and 5 report a deliberately wrong pdf (2: mode 5 only).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/light_sample_test.glsl"
 
@@ -19,6 +19,7 @@ layout(local_size_x = 64) in;
 const bool BECKMANN = false;
 const bool GGX_WALTER = false;
 #define SAMPLE_REUSE (params.mode == 6u)
+#define EMITTER_SOLID_ANGLE SOLID_ANGLE_EMITTERS
 
 #include "random.glsl"
 #include "environment.glsl"
@@ -40,8 +41,12 @@ float mis_light_pdf(vec3 p, vec3 n, vec3 dir) {
     if (!any(greaterThan(emitted(tri, hit.bary, ng, wo), vec3(0.0)))) {
         return 0.0;
     }
-    float light_pdf = emissive_pdf(tri, area, hit.t, ng, wo);
-    // The wrong variant forgets the cosine at the light (an area density scaled by distance²).
+    float light_pdf = emissive_pdf(tri, area, origin, hit.t, ng, wo);
+    // The wrong variants: 1 forgets the cosine at the light (an area density scaled by
+    // distance²), 2 gives the area-sampling density wherever the light is sampled by solid angle.
+    if (params.variant == 2u) {
+        return tri_light_pmf(tri) / area * hit.t * hit.t / abs(dot(ng, wo));
+    }
     return params.variant == 1u ? light_pdf * abs(dot(ng, wo)) : light_pdf;
 }
 

@@ -40,6 +40,7 @@ void count_trace(uint before, bool any_hit) {
 // Low-discrepancy numbers take sample reuse: a choice and the chosen option's sample from one
 // number (bsdf.glsl).
 #define SAMPLE_REUSE LOW_DISCREPANCY
+#define EMITTER_SOLID_ANGLE SOLID_ANGLE_EMITTERS
 #include "random.glsl"
 #include "camera.glsl"
 #include "environment.glsl"

@@ -28,6 +28,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // Low-discrepancy numbers take sample reuse: a choice and the chosen option's sample from one
 // number (bsdf.glsl).
 #define SAMPLE_REUSE LOW_DISCREPANCY
+#define EMITTER_SOLID_ANGLE SOLID_ANGLE_EMITTERS
 #include "random.glsl"
 #include "camera.glsl"
 #include "environment.glsl"

@@ -41,7 +41,9 @@ mod common;
 use common::{gamma_q, Gpu};
 use std::path::{Path, PathBuf};
 use umbra::gpu::scene::GpuScene;
-use umbra::passes::pathtrace::{Heuristic, Microfacet, PathOptions, RisReuse, Sampler, Strategy};
+use umbra::passes::pathtrace::{
+    EmitterSampling, Heuristic, Microfacet, PathOptions, RisReuse, Sampler, Strategy,
+};
 use umbra::render::{path_trace, PathImage, PathSettings};
 use umbra::scene::Scene;
 
@@ -127,7 +129,8 @@ struct Estimator {
 /// Every estimator compared with the references besides the defaults: per scene with an area
 /// light or an environment map, each microfacet sampling of its distribution (GGX: visible
 /// normals and Walter's D(h) cos θh) × {MIS with the power and the balance heuristic, BSDF
-/// sampling alone, light sampling alone} (the heuristic only matters to MIS), but for two
+/// sampling alone, light sampling alone} (the heuristic only matters to MIS), and in the Cornell
+/// box emissive points sampled by solid angle (`EmitterSampling::SolidAngle`), but for two
 /// exclusions, measured (tests/reference/README.md, "Estimators"):
 /// - under the sky (spheres-sky, spheres-sky-beckmann), either strategy alone: BSDF sampling
 ///   finds the sun (one texel: 56 % of the sky's power on 0.02 % of the sphere) in a few of a
@@ -160,6 +163,7 @@ fn estimators() -> Vec<Estimator> {
                     ris: false,
                     ris_reuse: RisReuse::Off,
                     sampler: Sampler::default(),
+                    emitter_sampling: EmitterSampling::Area,
                 };
                 if options == default_options(case) {
                     continue; // the scene's own test
@@ -172,6 +176,10 @@ fn estimators() -> Vec<Estimator> {
             }
         }
     }
+    // Emissive points by solid angle where a triangle subtends at least 0.2 sr (the walls and
+    // ceiling next to the Cornell box's light), with MIS as the default.
+    let options = PathOptions { emitter_sampling: EmitterSampling::SolidAngle, ..default_options(&CORNELL) };
+    out.push(Estimator { case: &CORNELL, options, spp: CORNELL.spp, pixel_test: true });
     out
 }
 

@@ -296,7 +296,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     if (any(greaterThan(le, vec3(0.0)))) {
         float w = 1.0;
         if (HAS_LIGHTS && path.prev_pdf > 0.0) {
-            float emissive = emissive_pdf(tri, area, hit.t, ng, wo);
+            float emissive = emissive_pdf(tri, area, path.origin, hit.t, ng, wo);
             w = bsdf_hit_weight(path.prev_pdf, emissive * (1.0 - params.env_pick));
             if (RIS) {
                 // Reached from a vertex whose RIS covered every emissive triangle of the table:

@@ -45,6 +45,54 @@ vec2 sample_triangle(vec2 u) {
     return vec2(1.0 - s, u.y * s);
 }
 
+// ---- Spherical triangles: a triangle's solid angle, and directions uniform within it ----
+
+// Solid angle of the spherical triangle with unit corners a, b, c (Van Oosterom and Strackee
+// 1983: tan(Ω / 2) = |a·(b×c)| / (1 + a·b + b·c + c·a)).
+float spherical_triangle_area(vec3 a, vec3 b, vec3 c) {
+    return abs(2.0 * atan(dot(a, cross(b, c)), 1.0 + dot(a, b) + dot(a, c) + dot(b, c)));
+}
+
+// A direction uniform in solid angle within the spherical triangle with unit corners a, b, c and
+// solid angle omega (spherical_triangle_area's), after Arvo (1995): u.x picks the sub-triangle
+// (a, b, c') of solid angle u.x Ω, c' on the arc from a to c; u.y the point on the arc from b
+// to c' (cos θ to b uniform). A smooth map of the unit square, so stratified numbers stay
+// stratified. Arvo's construction reads the angle α at a as its cosine and sine (from the
+// planes' normals) and Ω as given, never as a sum of angles from inverse trigonometry: GPU
+// drivers approximate asin and acos (llvmpipe to about 1e-3), and a total that errs by a few
+// thousandths of a small Ω leaves a sliver along the edge bc that no sample reaches. The caller
+// keeps it to triangles whose solid angle is neither tiny nor near a hemisphere (SPHERICAL_MIN,
+// SPHERICAL_MAX), where its arithmetic holds.
+vec3 sample_spherical_triangle(vec3 a, vec3 b, vec3 c, float omega, vec2 u) {
+    vec3 n_ab = normalize(cross(a, b));
+    vec3 n_ac = normalize(cross(a, c));
+    float cos_alpha = dot(n_ab, n_ac);
+    float sin_alpha = length(cross(n_ab, n_ac));
+    float area = u.x * omega;
+    float sin_area = sin(area);
+    float cos_area = cos(area);
+    // s and t: the sine and cosine of the sub-triangle's area less α.
+    float s = sin_area * cos_alpha - cos_area * sin_alpha;
+    float t = cos_area * cos_alpha + sin_area * sin_alpha;
+    float p = t - cos_alpha;
+    float q = s + sin_alpha * dot(a, b);
+    // The cosine of the arc from a to c'.
+    float cos_ac = ((q * t - p * s) * cos_alpha - q) / ((q * s + p * t) * sin_alpha);
+    cos_ac = clamp(cos_ac, -1.0, 1.0);
+    vec3 cp = cos_ac * a + sqrt(max(0.0, 1.0 - cos_ac * cos_ac)) * normalize(c - dot(c, a) * a);
+    float cos_theta = 1.0 - u.y * (1.0 - dot(cp, b));
+    float sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    return cos_theta * b + sin_theta * normalize(cp - dot(cp, b) * b);
+}
+
+// The solid angles within which a triangle is sampled by solid angle: above SPHERICAL_MIN, a
+// triangle over 8° across, where its 1/r² and cosine vary enough across it that area sampling's
+// variance is worth removing (below, a point uniform on it is nearly uniform in solid angle, and
+// the spherical triangle's arithmetic loses precision well before pbrt-v4's 3e-4); below
+// SPHERICAL_MAX, away from a hemisphere, where the arc construction holds.
+const float SPHERICAL_MIN = 0.2;
+const float SPHERICAL_MAX = 6.22;
+
 // ---- GGX (Trowbridge-Reitz), isotropic, alpha = roughness^2 ----
 
 // D(h) = a^2 / (pi (sin^2 + a^2 cos^2)^2), with sin^2 as h.x^2 + h.y^2: the textbook

@@ -1010,11 +1010,44 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
     return punctual_vec(k, 2u).rgb * attenuation;
 }
 
-// A point on the emissive triangles as seen from p: one of `count` by power (u.x), a uniform
-// point on it (u.yz); with SAMPLE_REUSE (bsdf.glsl) the triangle is picked by u.y, whose share
-// of the triangle, stretched, replaces u.y. True when it emits towards p; then gives the
-// direction wi (unit, world) and the point, the emitted radiance and the solid-angle pdf of the
-// sample. Visibility is the caller's (light_reaches to the point).
+// Whether emissive_point may sample a triangle by solid angle (EmitterSampling::SolidAngle): a
+// kernel that asks for it defines EMITTER_SOLID_ANGLE before including this file (the path
+// tracers, from a specialization constant), the others sample by area alone. On llvmpipe the
+// solid-angle code runs for every SIMD lane of every light sample once it is compiled in.
+#ifndef EMITTER_SOLID_ANGLE
+#define EMITTER_SOLID_ANGLE false
+#endif
+
+// The solid angle Ω of the emissive triangle with corners v0, v1, v2 (area `area`, half the length
+// of cross(v1 - v0, v2 - v0)) as seen from p where emissive_point samples it by solid angle, else 0
+// (sampled by area): where its area over the squared distance to v0 (about Ω, and cheap) and Ω
+// itself are at least SPHERICAL_MIN, and Ω is at most SPHERICAL_MAX. Only near triangles pay for
+// Ω's arithmetic (three normalisations, an atan) and for reading v1 and v2 at a BSDF ray's hit
+// (emissive_pdf), and only there does solid-angle sampling lower the variance much.
+float emissive_solid_angle(vec3 p, vec3 v0, uint tri, float area) {
+    float omega = 0.0;
+    // (The constant as the condition itself: its negation would be an OpSpecConstantOp, which
+    // naga's SPIR-V reader rejects.)
+    if (EMITTER_SOLID_ANGLE) {
+        vec3 d = v0 - p;
+        if (area >= SPHERICAL_MIN * dot(d, d)) {
+            omega = spherical_triangle_area(normalize(d), normalize(tri_vertex(tri, 1u) - p),
+                                            normalize(tri_vertex(tri, 2u) - p));
+        }
+    }
+    return omega >= SPHERICAL_MIN && omega <= SPHERICAL_MAX ? omega : 0.0;
+}
+
+// A point on the emissive triangles as seen from p: one of `count` by power (u.x), then a point
+// on it (u.yz): uniform in the solid angle it subtends at p where that is neither tiny nor near a
+// hemisphere (sample_spherical_triangle; pdf pmf / Ω), else uniform on its area (pdf pmf / area
+// × r² / cos at the light). Sampling by solid angle takes the light's 1/r² and cosine out of the
+// estimate, which area sampling leaves in: far less variance at points near a large emitter
+// (pbrt-v4's triangle sampling, without its warp by the receiver's cosine). With SAMPLE_REUSE
+// (bsdf.glsl) the triangle is picked by u.y, whose share of the triangle, stretched, replaces
+// u.y. True when it emits towards p; then gives the direction wi (unit, world) and the point, the
+// emitted radiance and the solid-angle pdf of the sample. Visibility is the caller's
+// (light_reaches to the point).
 bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out vec3 l_emit, out float light_pdf) {
     uint k = pick_light(SAMPLE_REUSE ? u.y : u.x, count);
     vec3 cdf_pmf_area = light_cdf_pmf_area(k);
@@ -1024,16 +1057,34 @@ bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out ve
         u.y = stretch(u.y, lo, cdf_pmf_area.x - lo);
     }
     uint ltri = light_tri(k);
+    vec3 v0 = tri_vertex(ltri, 0u);
+    vec3 v1 = tri_vertex(ltri, 1u);
+    vec3 v2 = tri_vertex(ltri, 2u);
+    vec3 e1 = v1 - v0;
+    vec3 e2 = v2 - v0;
+    vec3 ln = cross(e1, e2);
+    float omega = emissive_solid_angle(p, v0, ltri, 0.5 * length(ln));
+    ln = normalize(ln);
+    bool spherical = omega > 0.0;
     vec2 lb = sample_triangle(u.yz);
-    lp = (1.0 - lb.x - lb.y) * tri_vertex(ltri, 0u) + lb.x * tri_vertex(ltri, 1u) + lb.y * tri_vertex(ltri, 2u);
-    vec3 ln = normalize(tri_normal(ltri));
+    if (spherical) {
+        // The sampled direction's barycentrics on the triangle (a ray from p along w), clamped
+        // onto it against rounding.
+        vec3 w = sample_spherical_triangle(normalize(v0 - p), normalize(v1 - p), normalize(v2 - p), omega, u.yz);
+        vec3 s1 = cross(w, e2);
+        vec3 o = p - v0;
+        float inv = 1.0 / dot(s1, e1);
+        lb = clamp(vec2(dot(o, s1), dot(w, cross(o, e1))) * inv, 0.0, 1.0);
+        lb /= max(1.0, lb.x + lb.y);
+    }
+    lp = (1.0 - lb.x - lb.y) * v0 + lb.x * v1 + lb.y * v2;
     vec3 to_light = lp - p;
     float dist2 = dot(to_light, to_light);
     wi = to_light * inversesqrt(dist2);
     l_emit = emitted(ltri, lb, ln, -wi);
     float cos_l = abs(dot(ln, wi));
-    light_pdf = cdf_pmf_area.y / cdf_pmf_area.z * dist2 / cos_l;
-    return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0;
+    light_pdf = spherical ? cdf_pmf_area.y / omega : cdf_pmf_area.y / cdf_pmf_area.z * dist2 / cos_l;
+    return any(greaterThan(l_emit, vec3(0.0))) && cos_l > 0.0 && light_pdf > 0.0;
 }
 
 // Next-event estimation on the emissive triangles (emissive_point) with its shadow ray. True
@@ -1047,11 +1098,14 @@ bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, ve
         && light_reaches(p, ng, t, b, n, transmits, wi, true, lp, wi_local);
 }
 
-// The solid-angle density with which sample_emissive picks the point a ray hits at distance
-// `dist` on emissive triangle `tri` (area `area`, unit normal ng), arriving from direction wo
-// (unit, towards the ray's origin): what MIS weighs emission found by BSDF sampling against.
-float emissive_pdf(uint tri, float area, float dist, vec3 ng, vec3 wo) {
-    return tri_light_pmf(tri) / area * dist * dist / abs(dot(ng, wo));
+// The solid-angle density with which sample_emissive from `origin` picks the point a ray from
+// there hits at distance `dist` on emissive triangle `tri` (area `area`, half the length of
+// tri_normal, as emissive_point computes it; unit normal ng), arriving
+// from direction wo (unit, towards the origin): what MIS weighs emission found by BSDF sampling
+// against. By solid angle or by area as emissive_point chose from there.
+float emissive_pdf(uint tri, float area, vec3 origin, float dist, vec3 ng, vec3 wo) {
+    float omega = emissive_solid_angle(origin, tri_vertex(tri, 0u), tri, area);
+    return omega > 0.0 ? tri_light_pmf(tri) / omega : tri_light_pmf(tri) / area * dist * dist / abs(dot(ng, wo));
 }
 
 // Whether light sampling at a surface covers the side below it too (a transmitting material, or

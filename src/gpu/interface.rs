@@ -1321,6 +1321,7 @@ kernels! {
             light_sampling: bool = true,
             bsdf_hits: bool = true,
             low_discrepancy: bool = true,
+            solid_angle_emitters: bool = false,
             split_lobes: bool = false,
             ris: bool = false,
             ris_temporal: bool = false,
@@ -1371,6 +1372,7 @@ kernels! {
             light_sampling: bool = true,
             bsdf_hits: bool = true,
             low_discrepancy: bool = true,
+            solid_angle_emitters: bool = false,
             wf_camera_rays: bool = false,
             wf_extend: bool = false,
             wf_shade: bool = false,
@@ -2080,7 +2082,9 @@ kernels! {
     test_kernel light_sample_test {
         scene: full [],
         push: LightTestParams,
-        spec: {},
+        spec: {
+            solid_angle_emitters: bool = false
+        },
         bindings: {
             /// Directions at which to evaluate pdfs.
             directions: readonly buffer [vec4],

@@ -1018,18 +1018,18 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
 #define EMITTER_SOLID_ANGLE false
 #endif
 
-// The solid angle Ω of the emissive triangle with corners v0, v1, v2 (area `area`, half the length
-// of cross(v1 - v0, v2 - v0)) as seen from p where emissive_point samples it by solid angle, else 0
-// (sampled by area): where its area over the squared distance to v0 (about Ω, and cheap) and Ω
+// The solid angle Ω of emissive triangle `tri` (corners v0, v1, v2; area `area`, half the length
+// of cross(v1 - v0, v2 - v0)) as seen from p where emissive_point samples it by solid angle, else
+// 0 (sampled by area): where its area over the squared distance to v0 (about Ω, and cheap) and Ω
 // itself are at least SPHERICAL_MIN, and Ω is at most SPHERICAL_MAX. Only near triangles pay for
-// Ω's arithmetic (three normalisations, an atan) and for reading v1 and v2 at a BSDF ray's hit
-// (emissive_pdf), and only there does solid-angle sampling lower the variance much.
-float emissive_solid_angle(vec3 p, vec3 v0, uint tri, float area) {
+// Ω's arithmetic (three normalisations, an atan), and only there does solid-angle sampling lower
+// the variance much; kernels without EMITTER_SOLID_ANGLE read nothing here.
+float emissive_solid_angle(vec3 p, uint tri, float area) {
     float omega = 0.0;
     // (The constant as the condition itself: its negation would be an OpSpecConstantOp, which
     // naga's SPIR-V reader rejects.)
     if (EMITTER_SOLID_ANGLE) {
-        vec3 d = v0 - p;
+        vec3 d = tri_vertex(tri, 0u) - p;
         if (area >= SPHERICAL_MIN * dot(d, d)) {
             omega = spherical_triangle_area(normalize(d), normalize(tri_vertex(tri, 1u) - p),
                                             normalize(tri_vertex(tri, 2u) - p));
@@ -1063,7 +1063,7 @@ bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out ve
     vec3 e1 = v1 - v0;
     vec3 e2 = v2 - v0;
     vec3 ln = cross(e1, e2);
-    float omega = emissive_solid_angle(p, v0, ltri, 0.5 * length(ln));
+    float omega = emissive_solid_angle(p, ltri, 0.5 * length(ln));
     ln = normalize(ln);
     bool spherical = omega > 0.0;
     vec2 lb = sample_triangle(u.yz);
@@ -1100,11 +1100,11 @@ bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, ve
 
 // The solid-angle density with which sample_emissive from `origin` picks the point a ray from
 // there hits at distance `dist` on emissive triangle `tri` (area `area`, half the length of
-// tri_normal, as emissive_point computes it; unit normal ng), arriving
-// from direction wo (unit, towards the origin): what MIS weighs emission found by BSDF sampling
-// against. By solid angle or by area as emissive_point chose from there.
+// tri_normal, as emissive_point computes it; unit normal ng), arriving from direction wo (unit,
+// towards the origin): what MIS weighs emission found by BSDF sampling against. By solid angle
+// or by area as emissive_point chooses from there.
 float emissive_pdf(uint tri, float area, vec3 origin, float dist, vec3 ng, vec3 wo) {
-    float omega = emissive_solid_angle(origin, tri_vertex(tri, 0u), tri, area);
+    float omega = emissive_solid_angle(origin, tri, area);
     return omega > 0.0 ? tri_light_pmf(tri) / omega : tri_light_pmf(tri) / area * dist * dist / abs(dot(ng, wo));
 }
 

@@ -215,7 +215,7 @@ pub enum EmitterSampling {
     /// Uniform in the solid angle the triangle subtends where that is at least 0.2 sr (Arvo
     /// 1995, pbrt-v4's triangle sampling; pdf pmf / Ω), by area elsewhere. Next to a large
     /// emitter it takes the 1/r² and cosine out (a floor 0.15 under a 2×2 emitter: 2.8× less
-    /// time at equal error); on llvmpipe it costs 2-20 % more time on every scene with emitters
+    /// time at equal error); on llvmpipe it costs 2-21 % more time on every scene with emitters
     /// (both branches run for all SIMD lanes), so it is asked for (BENCHMARKS.md, History).
     SolidAngle,
 }

@@ -303,7 +303,7 @@ fn one_sided_emitter() -> Scene {
     use umbra::scene::Material;
     let floor = Material { metallic: 0.0, roughness: 1.0, ..Default::default() };
     let emitter = Material { emissive: [4.0; 3], base_color_factor: [0.0, 0.0, 0.0, 1.0], ..floor.clone() };
-    let scene = build_with(
+    build_with(
         "one-sided emitter",
         &[
             (quad(Vec3::ZERO, Vec3::X * 2.0, -Vec3::Z * 2.0), floor),
@@ -311,8 +311,7 @@ fn one_sided_emitter() -> Scene {
         ],
         Vec::new(),
         camera(Vec3::new(0.4, 2.2, 1.8), Vec3::ZERO),
-    );
-    scene
+    )
 }
 
 /// A one-sided emissive quad standing on a floor, facing +x, seen from above: the floor on its

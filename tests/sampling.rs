@@ -946,6 +946,12 @@ fn sub_triangle_centroid(cell: usize, k: usize) -> Option<(f64, f64)> {
     valid.then(|| ((i as f64 + offset) / k as f64, (j as f64 + offset) / k as f64))
 }
 
+/// The solid angle of the spherical triangle with unit corners a, b, c (Van Oosterom and
+/// Strackee, as `spherical_triangle_area` in spirv/include/sampling.glsl), in f64.
+fn solid_angle(a: glam::DVec3, b: glam::DVec3, c: glam::DVec3) -> f64 {
+    (2.0 * a.dot(b.cross(c)).atan2(1.0 + a.dot(b) + a.dot(c) + b.dot(c))).abs()
+}
+
 /// The corners (b1, b2) of sub-triangle `cell` (as [`sub_triangle`] numbers them; a used one).
 fn sub_triangle_corners(cell: usize, k: usize) -> [(f64, f64); 3] {
     let (i, j, upper) = ((cell / 2 / k) as f64, (cell / 2 % k) as f64, cell % 2 == 1);
@@ -1089,7 +1095,7 @@ fn emissive_chi_square(
         .filter(|(_, b)| b[3] > 0.0)
         .map(|(a, b)| ((a[3] - b[3]) / a[3]).abs() as f64)
         .fold(0.0, f64::max);
-    // Expected: the MIS pdf at each cell's centroid, to area measure.
+    // Expected: the MIS pdf at each cell's centroid times the cell's solid angle.
     let mut points = Vec::new();
     let mut solid_angles = Vec::new();
     let mut cells = Vec::new();
@@ -1101,8 +1107,7 @@ fn emissive_chi_square(
                 points.push([w.x as f32, w.y as f32, w.z as f32, 0.0]);
                 let [ca, cb, cc] = sub_triangle_corners(cell, K)
                     .map(|(u, v)| ((1.0 - u - v) * a + u * b + v * c).normalize());
-                let omega = 2.0 * ca.dot(cb.cross(cc)).atan2(1.0 + ca.dot(cb) + ca.dot(cc) + cb.dot(cc));
-                solid_angles.push(omega.abs());
+                solid_angles.push(solid_angle(ca, cb, cc));
                 cells.push(t * 2 * K * K + cell);
             }
         }
@@ -1118,6 +1123,32 @@ fn emissive_chi_square(
     }
     let (p, chi2, dof) = pooled_chi_square(&observed, &expected, samples as f64);
     (p, chi2, dof, mass, mismatch, misses)
+}
+
+/// [`emissive_chi_square`] with fresh and with reused numbers (`what` names the case): the MIS
+/// light pdf integrates to 1 over the lights, agrees with each sample's NEE pdf, is found again
+/// by tracing the sample's direction, and the directions follow it at [`light_alpha`].
+fn assert_emissive_follows_the_mis_pdf(
+    gpu: &Gpu,
+    kernel: &LightKernel,
+    scene: &umbra::scene::Scene,
+    what: &str,
+) {
+    let alpha = light_alpha();
+    for numbers in [Numbers::Fresh, Numbers::Reused] {
+        let (p, chi2, dof, mass, mismatch, misses) = emissive_chi_square(gpu, kernel, scene, numbers, 0);
+        eprintln!(
+            "sample_emissive ({what}, {numbers:?} numbers) vs MIS pdf: chi2 {chi2:.1}, dof {dof}, p {p:.4}, \
+             mass {mass:.6}, largest NEE/MIS pdf difference {mismatch:.2e}, MIS rays missing the light {misses:.1e}"
+        );
+        assert!((mass - 1.0).abs() < 1e-3, "{what}: the MIS light pdf integrates to {mass}");
+        assert!(mismatch < 1e-3, "{what}: NEE and MIS disagree on a sample's pdf by {mismatch}");
+        assert!(misses < 1e-3, "{what}: {misses} of the NEE directions miss their light when traced");
+        assert!(
+            p >= alpha,
+            "sample_emissive ({what}, {numbers:?} numbers) does not follow the MIS light pdf: p = {p} < {alpha}"
+        );
+    }
 }
 
 /// Next-event estimation on emissive triangles (`sample_emissive`: pick by power, then a point
@@ -1138,7 +1169,7 @@ fn emissive_sampling_matches_the_mis_light_pdf() {
     for (k, (corners, _)) in LIGHT_TRIANGLES.iter().enumerate() {
         let v = corners.map(|v| Vec3::from(v).as_dvec3());
         let [a, b, c] = v.map(|v| v.normalize());
-        let omega = (2.0 * a.dot(b.cross(c)).atan2(1.0 + a.dot(b) + a.dot(c) + b.dot(c))).abs();
+        let omega = solid_angle(a, b, c);
         let near = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length() / v[0].length_squared();
         let clear = |x: f64| !(SPHERICAL_MIN / 1.2..SPHERICAL_MIN * 1.2).contains(&x);
         let by_solid_angle = near >= SPHERICAL_MIN && omega >= SPHERICAL_MIN;
@@ -1152,21 +1183,7 @@ fn emissive_sampling_matches_the_mis_light_pdf() {
     let alpha = light_alpha();
     for emitters in EmitterSampling::ALL {
         let kernel = LightKernel::with_scene(&gpu, None, &scene, emitters);
-        for numbers in [Numbers::Fresh, Numbers::Reused] {
-            let (p, chi2, dof, mass, mismatch, misses) =
-                emissive_chi_square(&gpu, &kernel, &scene, numbers, 0);
-            eprintln!(
-                "sample_emissive ({emitters:?}, {numbers:?} numbers) vs MIS pdf: chi2 {chi2:.1}, dof {dof}, p {p:.4}, \
-                 mass {mass:.6}, largest NEE/MIS pdf difference {mismatch:.2e}, MIS rays missing the light {misses:.1e}"
-            );
-            assert!((mass - 1.0).abs() < 1e-3, "the MIS light pdf integrates to {mass}");
-            assert!(mismatch < 1e-3, "NEE and MIS disagree on a sample's pdf by {mismatch}");
-            assert!(misses < 1e-3, "{misses} of the NEE directions miss their light when traced");
-            assert!(
-                p >= alpha,
-                "sample_emissive ({emitters:?}, {numbers:?} numbers) does not follow the MIS light pdf: p = {p} < {alpha}"
-            );
-        }
+        assert_emissive_follows_the_mis_pdf(&gpu, &kernel, &scene, &format!("{emitters:?}"));
         let mut wrong = vec![(1, "without the light's cosine")];
         if emitters == EmitterSampling::SolidAngle {
             wrong.push((2, "by area where sampled by solid angle"));
@@ -1182,6 +1199,9 @@ fn emissive_sampling_matches_the_mis_light_pdf() {
     }
 }
 
+/// A triangle 0.1 above the origin, subtending 5.6 sr there: area sampling's failure case.
+const HUGE_EMITTER: LightTriangle = ([[-1.0, 0.1, -1.0], [1.5, 0.1, -0.5], [-0.5, 0.1, 1.5]], 1.0);
+
 /// Light sampling next to a huge emitter (the failure case of area sampling: its 1/r² and cosine
 /// swing across the triangle), from the origin (normal +Y): a triangle 0.1 above it, subtending
 /// 5.6 sr; and one standing on the origin's horizon (as the light of Khronos' CornellBox-Original
@@ -1189,29 +1209,14 @@ fn emissive_sampling_matches_the_mis_light_pdf() {
 /// MIS light pdf as the far lights' do, and the area-sampling density is rejected.
 #[test]
 fn emissive_sampling_next_to_a_huge_emitter() {
-    let scenes: [&[LightTriangle]; 2] = [
-        &[([[-1.0, 0.1, -1.0], [1.5, 0.1, -0.5], [-0.5, 0.1, 1.5]], 1.0)],
-        &[([[-0.3, 0.002, -0.2], [-0.3, 0.8, -0.6], [-0.3, 0.002, -1.0]], 4.0)],
-    ];
+    let scenes: [&[LightTriangle]; 2] =
+        [&[HUGE_EMITTER], &[([[-0.3, 0.002, -0.2], [-0.3, 0.8, -0.6], [-0.3, 0.002, -1.0]], 4.0)]];
     let gpu = Gpu::new();
     let alpha = light_alpha();
     for lights in scenes {
         let scene = scene_of_lights(lights);
         let kernel = LightKernel::with_scene(&gpu, None, &scene, EmitterSampling::SolidAngle);
-        for numbers in [Numbers::Fresh, Numbers::Reused] {
-            let (p, chi2, dof, mass, mismatch, misses) =
-                emissive_chi_square(&gpu, &kernel, &scene, numbers, 0);
-            eprintln!(
-                "sample_emissive by a huge emitter ({numbers:?} numbers) vs MIS pdf: chi2 {chi2:.1}, dof {dof}, p {p:.4}, \
-                 mass {mass:.6}, largest NEE/MIS pdf difference {mismatch:.2e}, MIS rays missing the light {misses:.1e}"
-            );
-            assert!((mass - 1.0).abs() < 1e-3, "the MIS light pdf integrates to {mass}");
-            assert!(mismatch < 1e-3, "NEE and MIS disagree on a sample's pdf by {mismatch}");
-            assert!(
-                p >= alpha,
-                "sample_emissive by a huge emitter does not follow the MIS light pdf: p = {p} < {alpha}"
-            );
-        }
+        assert_emissive_follows_the_mis_pdf(&gpu, &kernel, &scene, "by a huge emitter");
         let (p, ..) = emissive_chi_square(&gpu, &kernel, &scene, Numbers::Fresh, 2);
         assert!(
             p < alpha,
@@ -1227,9 +1232,8 @@ fn emissive_sampling_next_to_a_huge_emitter() {
 /// only with cos θ (measured: 5.6 and 0.47).
 #[test]
 fn solid_angle_sampling_quiets_a_huge_emitter() {
-    let lights = [([[-1.0f32, 0.1, -1.0], [1.5, 0.1, -0.5], [-0.5, 0.1, 1.5]], 1.0f32)];
     let gpu = Gpu::new();
-    let scene = scene_of_lights(&lights);
+    let scene = scene_of_lights(&[HUGE_EMITTER]);
     let samples = 1u32 << 19;
     let moments = EmitterSampling::ALL.map(|emitters| {
         let kernel = LightKernel::with_scene(&gpu, None, &scene, emitters);

@@ -1018,21 +1018,26 @@ vec3 punctual_incident(uint k, vec3 p, out vec3 wi, out bool to_point, out vec3 
 #define EMITTER_SOLID_ANGLE false
 #endif
 
-// The solid angle Ω of emissive triangle `tri` (corners v0, v1, v2; area `area`, half the length
+// The solid angle Ω of the emissive triangle with corners v0, v1, v2 (area `area`, half the length
 // of cross(v1 - v0, v2 - v0)) as seen from p where emissive_point samples it by solid angle, else
-// 0 (sampled by area): where its area over the squared distance to v0 (about Ω, and cheap) and Ω
-// itself are at least SPHERICAL_MIN, and Ω is at most SPHERICAL_MAX. Only near triangles pay for
-// Ω's arithmetic (three normalisations, an atan), and only there does solid-angle sampling lower
-// the variance much; kernels without EMITTER_SOLID_ANGLE read nothing here.
-float emissive_solid_angle(vec3 p, uint tri, float area) {
+// 0 (sampled by area), with the unit directions a, b, c from p to the corners: where its area
+// over the squared distance to v0 (about Ω, and cheap) and Ω itself are at least SPHERICAL_MIN,
+// and Ω is at most SPHERICAL_MAX. Only near triangles pay for Ω's arithmetic (three
+// normalisations, an atan), and only there does solid-angle sampling lower the variance much.
+float emissive_solid_angle(vec3 p, vec3 v0, vec3 v1, vec3 v2, float area, out vec3 a, out vec3 b, out vec3 c) {
     float omega = 0.0;
+    a = vec3(0.0);
+    b = vec3(0.0);
+    c = vec3(0.0);
     // (The constant as the condition itself: its negation would be an OpSpecConstantOp, which
     // naga's SPIR-V reader rejects.)
     if (EMITTER_SOLID_ANGLE) {
-        vec3 d = tri_vertex(tri, 0u) - p;
+        vec3 d = v0 - p;
         if (area >= SPHERICAL_MIN * dot(d, d)) {
-            omega = spherical_triangle_area(normalize(d), normalize(tri_vertex(tri, 1u) - p),
-                                            normalize(tri_vertex(tri, 2u) - p));
+            a = normalize(d);
+            b = normalize(v1 - p);
+            c = normalize(v2 - p);
+            omega = spherical_triangle_area(a, b, c);
         }
     }
     return omega >= SPHERICAL_MIN && omega <= SPHERICAL_MAX ? omega : 0.0;
@@ -1063,14 +1068,17 @@ bool emissive_point(vec3 p, vec3 u, uint count, out vec3 wi, out vec3 lp, out ve
     vec3 e1 = v1 - v0;
     vec3 e2 = v2 - v0;
     vec3 ln = cross(e1, e2);
-    float omega = emissive_solid_angle(p, ltri, 0.5 * length(ln));
+    vec3 a;
+    vec3 b;
+    vec3 c;
+    float omega = emissive_solid_angle(p, v0, v1, v2, 0.5 * length(ln), a, b, c);
     ln = normalize(ln);
     bool spherical = omega > 0.0;
     vec2 lb = sample_triangle(u.yz);
     if (spherical) {
         // The sampled direction's barycentrics on the triangle (a ray from p along w), clamped
         // onto it against rounding.
-        vec3 w = sample_spherical_triangle(normalize(v0 - p), normalize(v1 - p), normalize(v2 - p), omega, u.yz);
+        vec3 w = sample_spherical_triangle(a, b, c, omega, u.yz);
         vec3 s1 = cross(w, e2);
         vec3 o = p - v0;
         float inv = 1.0 / dot(s1, e1);
@@ -1104,7 +1112,15 @@ bool sample_emissive(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, bool transmits, ve
 // towards the origin): what MIS weighs emission found by BSDF sampling against. By solid angle
 // or by area as emissive_point chooses from there.
 float emissive_pdf(uint tri, float area, vec3 origin, float dist, vec3 ng, vec3 wo) {
-    float omega = emissive_solid_angle(origin, tri, area);
+    float omega = 0.0;
+    // Kernels without EMITTER_SOLID_ANGLE read no corners here.
+    if (EMITTER_SOLID_ANGLE) {
+        vec3 a;
+        vec3 b;
+        vec3 c;
+        omega = emissive_solid_angle(origin, tri_vertex(tri, 0u), tri_vertex(tri, 1u), tri_vertex(tri, 2u), area, a,
+                                     b, c);
+    }
     return omega > 0.0 ? tri_light_pmf(tri) / omega : tri_light_pmf(tri) / area * dist * dist / abs(dot(ng, wo));
 }
 

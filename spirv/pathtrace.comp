@@ -61,20 +61,71 @@ void path_shadow(inout Path path, vec3 origin, vec3 d, float tmax, vec3 c, vec3 
     }
 }
 
-// Traces `path`'s ray and shades what it finds (path_shade). False when the path ends there.
-bool path_step(inout Path path, uvec2 pixel, uint sample_index, inout vec4 albedo, inout vec4 normal_depth,
-               inout vec3 emitted_first) {
-    Hit hit;
+// Traces `path`'s ray: its closest hit into `hit`, false where it leaves the scene.
+bool path_trace(Path path, out Hit hit) {
     uint before = walk_iterations;
     bool found = bvh_closest(path.origin, path.dir, 0.0, BVH_INF, hit);
     count_trace(before, false);
-    return path_shade(path, found, hit, pixel, sample_index, albedo, normal_depth, emitted_first);
+    return found;
 }
 
 // Sample `sample_index` of `pixel` (of the whole image): its camera ray.
 Path camera_path_of(uvec2 pixel, uint sample_index) {
     return camera_path(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
                        params.camera.orthographic != 0u, uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
+}
+
+// One pixel's samples of a dispatch: the path in flight and the sums of the finished ones.
+struct PixelSamples {
+    Path path;
+    uint j;  // the path's sample, counted from params.sample_index
+    // The sample's first hit: its base colour (the environment's colour, alpha 0, for a miss),
+    // normal and distance, and what it emits; summed over the samples but for the normal and
+    // distance, kept from the first sample of the render.
+    vec4 albedo;
+    vec4 normal_depth;
+    vec3 emitted_first;
+    vec4 first_normal_depth;
+    vec4 sum_albedo;
+    vec3 sum_emitted;
+    vec3 sum;   // of the finite samples
+    vec3 sum2;  // of their squares
+    // SPLIT_LOBES: the sums of the specular part and its divisor, and of the luminances squared
+    // of the two parts divided by their divisors (split_sample).
+    vec4 sum_specular;
+    vec4 sum_split;
+};
+
+// Starts sample ps.j of `pixel`: its camera ray.
+void start_sample(inout PixelSamples ps, uvec2 pixel) {
+    ps.path = camera_path_of(pixel, params.sample_index + ps.j);
+    ps.albedo = vec4(params.env, 0.0);
+    ps.normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
+    ps.emitted_first = vec3(0.0);
+}
+
+// Folds the finished path into the sums and starts the pixel's next sample; false when the
+// dispatch's samples of the pixel are done.
+bool next_sample(inout PixelSamples ps, uvec2 pixel) {
+    vec3 radiance = ps.path.radiance;
+    finite_sample(radiance, ps.emitted_first, ps.path.nonfinite);
+    if (SPLIT_LOBES) {
+        split_sample(ps.path.specular, ps.path.metallic, radiance, ps.emitted_first, ps.albedo, ps.sum_specular,
+                     ps.sum_split);
+    }
+    ps.sum += radiance;
+    ps.sum2 += radiance * radiance;
+    ps.sum_albedo += ps.albedo;
+    ps.sum_emitted += ps.emitted_first;
+    if (ps.j == 0u) {
+        ps.first_normal_depth = ps.normal_depth;
+    }
+    ++ps.j;
+    if (ps.j >= params.sample_count) {
+        return false;
+    }
+    start_sample(ps, pixel);
+    return true;
 }
 
 // Samples params.sample_index .. + params.sample_count of one pixel of the region (its random
@@ -85,67 +136,77 @@ Path camera_path_of(uvec2 pixel, uint sample_index) {
 // its group ends: the group then idles once per dispatch, not once per sample. Sample k draws the
 // numbers of sample k whichever dispatch and lane trace it, so the paths are those of one sample
 // per dispatch.
+// A ray that leaves the scene ends its path with an environment lookup alone, and its lane can
+// trace its pixel's next camera ray before the group shades (the inner loop): the shading, which
+// a SIMD CPU (llvmpipe) runs for every lane of the group whichever lanes have a hit, is then
+// spent on fewer lanes that have none (in an open scene most segments escape). A walk that only
+// the missed lanes need costs the group a walk for fewer rays, so the group walks again only
+// while at least half of its lanes still sampling missed; the others shade their miss now and
+// walk with the group's next segments. Which lanes walk when changes no path.
 // Returns the path segments it traced.
 uint trace_pixel(uvec2 region_pixel) {
     uint index = region_pixel.y * params.size.x + region_pixel.x;
     uvec2 pixel = region_pixel + uvec2(params.camera.region & 0xffffu, params.camera.region >> 16);
-    uint first = params.sample_index;
     uint count = params.sample_count;
 
-    // Per sample: the first hit's base colour (the environment's colour, alpha 0, for a miss),
-    // normal and distance, and what it emits; summed over the samples but for the normal and
-    // distance, kept from the first sample of the render.
-    vec4 albedo = vec4(params.env, 0.0);
-    vec4 normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
-    vec3 emitted_first = vec3(0.0);
-    vec4 first_normal_depth = normal_depth;
-    vec4 sum_albedo = vec4(0.0);
-    vec3 sum_emitted = vec3(0.0);
-    vec3 sum = vec3(0.0);   // of the finite samples
-    vec3 sum2 = vec3(0.0);  // of their squares
-    // SPLIT_LOBES: the sums of the specular part and its divisor, and of the luminances squared
-    // of the two parts divided by their divisors (split_sample).
-    vec4 sum_specular = vec4(0.0);
-    vec4 sum_split = vec4(0.0);
-    uint j = 0u;
+    PixelSamples ps;
+    ps.j = 0u;
+    ps.first_normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
+    ps.sum_albedo = vec4(0.0);
+    ps.sum_emitted = vec3(0.0);
+    ps.sum = vec3(0.0);
+    ps.sum2 = vec3(0.0);
+    ps.sum_specular = vec4(0.0);
+    ps.sum_split = vec4(0.0);
     uint segments = 0u;
     if (ris_reuses()) {
         // One sample per dispatch (the host's): this index's reservoir, none unless path_ris
         // makes one.
         ris_reuse_clear(index);
     }
-    Path path = camera_path_of(pixel, first);
+    start_sample(ps, pixel);
+    // `ended`: the path in flight has ended and waits for next_sample; `found`: it has a hit to
+    // shade.
+    bool ended = false;
+    bool more = true;
     while (true) {
-        ++segments;
-        if (path_step(path, pixel, first + j, albedo, normal_depth, emitted_first)) {
-            continue;
-        }
-        vec3 radiance = path.radiance;
-        finite_sample(radiance, emitted_first, path.nonfinite);
-        if (SPLIT_LOBES) {
-            split_sample(path.specular, path.metallic, radiance, emitted_first, albedo, sum_specular, sum_split);
-        }
-        sum += radiance;
-        sum2 += radiance * radiance;
-        sum_albedo += albedo;
-        sum_emitted += emitted_first;
-        if (j == 0u) {
-            first_normal_depth = normal_depth;
-        }
-        ++j;
-        if (j >= count) {
+        Hit hit;
+        bool found = false;
+        bool again;
+        do {
+            if (more && !found) {
+                if (ended) {
+                    more = next_sample(ps, pixel);
+                }
+                if (more) {
+                    ++segments;
+                    found = path_trace(ps.path, hit);
+                    if (!found) {
+                        path_shade(ps.path, false, hit, pixel, params.sample_index + ps.j, ps.albedo,
+                                   ps.normal_depth, ps.emitted_first);
+                    }
+                    ended = !found;
+                }
+            }
+            // The group's lanes still sampling without a hit (low half) and with one (high half).
+            uint lanes = subgroupAdd(more ? (found ? 0x10000u : 1u) : 0u);
+            uint missed = lanes & 0xffffu;
+            again = missed > 0u && 2u * missed >= missed + (lanes >> 16);
+        } while (again);
+        if (!more) {
             break;
         }
-        path = camera_path_of(pixel, first + j);
-        albedo = vec4(params.env, 0.0);
-        normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
-        emitted_first = vec3(0.0);
+        if (found) {
+            ended = !path_shade(ps.path, true, hit, pixel, params.sample_index + ps.j, ps.albedo, ps.normal_depth,
+                                ps.emitted_first);
+        }
     }
 
     float n_samples;
-    bool fresh = accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted, first_normal_depth, n_samples);
+    bool fresh = accumulate_samples(index, count, ps.sum, ps.sum2, ps.sum_albedo, ps.sum_emitted,
+                                    ps.first_normal_depth, n_samples);
     if (SPLIT_LOBES) {
-        accumulate_split(index, count, sum_specular, sum_split, fresh, n_samples);
+        accumulate_split(index, count, ps.sum_specular, ps.sum_split, fresh, n_samples);
     }
     return segments;
 }

@@ -141,8 +141,9 @@ bool next_sample(inout PixelSamples ps, uvec2 pixel) {
 // a SIMD CPU (llvmpipe) runs for every lane of the group whichever lanes have a hit, is then
 // spent on fewer lanes that have none (in an open scene most segments escape). A walk that only
 // the missed lanes need costs the group a walk for fewer rays, so the group walks again only
-// while at least half of its lanes still sampling missed; the others shade their miss now and
-// walk with the group's next segments. Which lanes walk when changes no path.
+// while at least half of its lanes still sampling missed; below that, the lanes that missed wait
+// through the shading and walk their next rays with the group's next segments. Which lanes walk
+// when changes no path.
 // Returns the path segments it traced.
 uint trace_pixel(uvec2 region_pixel) {
     uint index = region_pixel.y * params.size.x + region_pixel.x;

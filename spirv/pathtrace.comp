@@ -86,14 +86,7 @@ struct PixelSamples {
     vec4 normal_depth;
     vec3 emitted_first;
     vec4 first_normal_depth;
-    vec4 sum_albedo;
-    vec3 sum_emitted;
-    vec3 sum;   // of the finite samples
-    vec3 sum2;  // of their squares
-    // SPLIT_LOBES: the sums of the specular part and its divisor, and of the luminances squared
-    // of the two parts divided by their divisors (split_sample).
-    vec4 sum_specular;
-    vec4 sum_split;
+    SampleSums sums;
 };
 
 // Starts sample ps.j of `pixel`: its camera ray.
@@ -107,16 +100,8 @@ void start_sample(inout PixelSamples ps, uvec2 pixel) {
 // Folds the finished path into the sums and starts the pixel's next sample; false when the
 // dispatch's samples of the pixel are done.
 bool next_sample(inout PixelSamples ps, uvec2 pixel) {
-    vec3 radiance = ps.path.radiance;
-    finite_sample(radiance, ps.emitted_first, ps.path.nonfinite);
-    if (SPLIT_LOBES) {
-        split_sample(ps.path.specular, ps.path.metallic, radiance, ps.emitted_first, ps.albedo, ps.sum_specular,
-                     ps.sum_split);
-    }
-    ps.sum += radiance;
-    ps.sum2 += radiance * radiance;
-    ps.sum_albedo += ps.albedo;
-    ps.sum_emitted += ps.emitted_first;
+    fold_sample(ps.sums, ps.path.radiance, ps.emitted_first, ps.path.nonfinite, ps.albedo, ps.path.specular,
+                ps.path.metallic);
     if (ps.j == 0u) {
         ps.first_normal_depth = ps.normal_depth;
     }
@@ -148,17 +133,11 @@ bool next_sample(inout PixelSamples ps, uvec2 pixel) {
 uint trace_pixel(uvec2 region_pixel) {
     uint index = region_pixel.y * params.size.x + region_pixel.x;
     uvec2 pixel = region_pixel + uvec2(params.camera.region & 0xffffu, params.camera.region >> 16);
-    uint count = params.sample_count;
 
     PixelSamples ps;
     ps.j = 0u;
     ps.first_normal_depth = vec4(0.0, 0.0, 0.0, BVH_INF);
-    ps.sum_albedo = vec4(0.0);
-    ps.sum_emitted = vec3(0.0);
-    ps.sum = vec3(0.0);
-    ps.sum2 = vec3(0.0);
-    ps.sum_specular = vec4(0.0);
-    ps.sum_split = vec4(0.0);
+    ps.sums = no_samples();
     uint segments = 0u;
     if (ris_reuses()) {
         // One sample per dispatch (the host's): this index's reservoir, none unless path_ris
@@ -203,12 +182,7 @@ uint trace_pixel(uvec2 region_pixel) {
         }
     }
 
-    float n_samples;
-    bool fresh = accumulate_samples(index, count, ps.sum, ps.sum2, ps.sum_albedo, ps.sum_emitted,
-                                    ps.first_normal_depth, n_samples);
-    if (SPLIT_LOBES) {
-        accumulate_split(index, count, ps.sum_specular, ps.sum_split, fresh, n_samples);
-    }
+    accumulate_sums(index, params.sample_count, ps.sums, ps.first_normal_depth);
     return segments;
 }
 

@@ -311,34 +311,20 @@ void accumulate() {
     uint wave_index = region_pixel.y * params.size.x + region_pixel.x;
     uint index = wave_index + params.first_row * params.size.x;  // in the accumulation buffers
     uint count = params.sample_count;
-    vec4 sum_albedo = vec4(0.0);
-    vec3 sum_emitted = vec3(0.0);
-    vec3 sum = vec3(0.0);
-    vec3 sum2 = vec3(0.0);
-    vec4 sum_specular = vec4(0.0);
-    vec4 sum_split = vec4(0.0);
+    SampleSums sums = no_samples();
     for (uint j = 0u; j < count; ++j) {
         uint path = j * pixels + wave_index;
         uvec4 r = load_field(F_RADIANCE, path);
-        vec3 radiance = uintBitsToFloat(r.rgb);
-        vec3 emitted_first = load_fieldf(F_EMITTED, path).rgb;
-        vec4 albedo = load_fieldf(F_ALBEDO, path);
-        finite_sample(radiance, emitted_first, r.w);
+        vec3 specular = vec3(0.0);
+        float metallic = 0.0;
         if (SPLIT_LOBES) {
-            split_sample(load_fieldf(F_SPECULAR, path).rgb, load_fieldf(F_SPLIT, path).w, radiance, emitted_first,
-                         albedo, sum_specular, sum_split);
+            specular = load_fieldf(F_SPECULAR, path).rgb;
+            metallic = load_fieldf(F_SPLIT, path).w;
         }
-        sum += radiance;
-        sum2 += radiance * radiance;
-        sum_albedo += albedo;
-        sum_emitted += emitted_first;
+        fold_sample(sums, uintBitsToFloat(r.rgb), load_fieldf(F_EMITTED, path).rgb, r.w, load_fieldf(F_ALBEDO, path),
+                    specular, metallic);
     }
-    float n_samples;
-    bool fresh = accumulate_samples(index, count, sum, sum2, sum_albedo, sum_emitted,
-                                    load_fieldf(F_NORMAL, wave_index), n_samples);
-    if (SPLIT_LOBES) {
-        accumulate_split(index, count, sum_specular, sum_split, fresh, n_samples);
-    }
+    accumulate_sums(index, count, sums, load_fieldf(F_NORMAL, wave_index));
 }
 
 void main() {

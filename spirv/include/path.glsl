@@ -605,6 +605,48 @@ void accumulate_split(uint index, uint count, vec4 sum_specular, vec4 sum_split,
     aov_split[index] = fold_mean(fresh ? vec4(0.0) : aov_split[index], sum_split, count, n_samples);
 }
 
+// The sums of one pixel's finished samples in a dispatch, both path tracers' (fold_sample).
+struct SampleSums {
+    vec3 radiance;   // of the finite samples
+    vec3 radiance2;  // of their squares
+    vec4 albedo;     // of the first hits' base colours
+    vec3 emitted;    // of the first hits' emission
+    // SPLIT_LOBES: split_sample's sums of the specular part and its divisor, and of the
+    // luminances squared of the two parts divided by their divisors.
+    vec4 specular;
+    vec4 split;
+};
+
+SampleSums no_samples() {
+    return SampleSums(vec3(0.0), vec3(0.0), vec4(0.0), vec3(0.0), vec4(0.0), vec4(0.0));
+}
+
+// Folds a finished sample into `sums`: its radiance (finite_sample's), its first hit's base
+// colour and emission, and (SPLIT_LOBES) its specular part and the first hit's metalness
+// (split_sample's).
+void fold_sample(inout SampleSums sums, vec3 radiance, vec3 emitted_first, uint nonfinite, vec4 albedo,
+                 vec3 specular, float metallic) {
+    finite_sample(radiance, emitted_first, nonfinite);
+    if (SPLIT_LOBES) {
+        split_sample(specular, metallic, radiance, emitted_first, albedo, sums.specular, sums.split);
+    }
+    sums.radiance += radiance;
+    sums.radiance2 += radiance * radiance;
+    sums.albedo += albedo;
+    sums.emitted += emitted_first;
+}
+
+// Folds `count` more samples of pixel `index` (their `sums`; the render's first sample's first
+// hit `first_normal_depth`) into its running means (accumulate_samples, accumulate_split).
+void accumulate_sums(uint index, uint count, SampleSums sums, vec4 first_normal_depth) {
+    float n_samples;
+    bool fresh = accumulate_samples(index, count, sums.radiance, sums.radiance2, sums.albedo, sums.emitted,
+                                    first_normal_depth, n_samples);
+    if (SPLIT_LOBES) {
+        accumulate_split(index, count, sums.specular, sums.split, fresh, n_samples);
+    }
+}
+
 // Adds n to a 64-bit count of the counters (`stats`) kept in two words, `lo` and `hi`: an add
 // that wraps the low word carries one into the high word. A macro, since a buffer's member is
 // no function argument in GLSL.

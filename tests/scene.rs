@@ -1098,21 +1098,9 @@ fn pointer_mut<'v>(value: &'v mut Value, path: &[String]) -> &'v mut Value {
 
 #[test]
 fn shared_asset_scenes_load_with_their_known_counts() {
-    // UMBRA_ASSETS names the assets folder; by default the checkout's sibling shared/assets.
-    let assets = common::assets().join("gltf");
-    // Absent, the test fails (a checkout without the assets must say so, not pass quietly),
-    // unless UMBRA_SKIP_SHARED_ASSETS=1 asks to skip it.
-    if !assets.exists() {
-        if std::env::var_os("UMBRA_SKIP_SHARED_ASSETS").is_some() {
-            eprintln!("note: {} is absent; skipped (UMBRA_SKIP_SHARED_ASSETS)", assets.display());
-            return;
-        }
-        panic!(
-            "{} is absent: put the shared assets there, name them with UMBRA_ASSETS, or set \
-             UMBRA_SKIP_SHARED_ASSETS=1 to skip this test",
-            assets.display()
-        );
-    }
+    let Some(assets) = common::external_gltf("shared_asset_scenes_load_with_their_known_counts") else {
+        return;
+    };
     let helmet = load(&assets.join("DamagedHelmet/DamagedHelmet.glb"));
     assert_eq!((helmet.stats().triangles, helmet.textures.len()), (15_452, 5));
     assert_eq!(helmet.tangents.len(), helmet.positions.len());
@@ -1844,15 +1832,9 @@ fn features_before_the_upload_are_the_uploads() {
     );
     scenes.extend(feature_scenes());
     let mut files: Vec<PathBuf> = Vec::new();
-    let assets = common::assets().join("gltf");
-    for dir in [scenes_dir().join("khronos"), assets.clone()] {
-        gltf_files(&dir, &mut files);
-    }
-    if !assets.exists() && std::env::var_os("UMBRA_SKIP_SHARED_ASSETS").is_none() {
-        panic!(
-            "{} is absent: set UMBRA_ASSETS, or UMBRA_SKIP_SHARED_ASSETS=1 to skip its models",
-            assets.display()
-        );
+    gltf_files(&scenes_dir().join("khronos"), &mut files);
+    if let Some(assets) = common::external_gltf("features_before_the_upload_are_the_uploads") {
+        gltf_files(&assets, &mut files);
     }
     // Some of the shared models lack image files: their slots stay empty as in `umbra render
     // --missing-textures warn`, which is what the features must see.

@@ -49,11 +49,28 @@ impl Drop for Gpu {
     }
 }
 
-/// The shared assets folder: UMBRA_ASSETS, by default the checkout's sibling shared/assets.
-pub fn assets() -> std::path::PathBuf {
-    std::env::var_os("UMBRA_ASSETS")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets"))
+/// The external asset collection (larger Khronos models, Sponza, HDR maps) that `UMBRA_ASSETS`
+/// names, with its `gltf/` folder; `None` when unset, and the tests over it then skip with a note
+/// (a clone alone passes `cargo test`). Set to a folder without `gltf/`, it panics: a wrong path
+/// must not pass as "no assets". `.ci/run` names `../shared/assets` when it exists.
+pub fn external_assets() -> Option<std::path::PathBuf> {
+    let dir = std::path::PathBuf::from(std::env::var_os("UMBRA_ASSETS")?);
+    assert!(
+        dir.join("gltf").is_dir(),
+        "UMBRA_ASSETS={} has no gltf/ folder: name the assets folder (e.g. ../shared/assets), or unset \
+         UMBRA_ASSETS to skip the tests over it",
+        dir.display()
+    );
+    Some(dir)
+}
+
+/// [`external_assets`]' `gltf/` folder, or `None` after printing that `test` is skipped.
+pub fn external_gltf(test: &str) -> Option<std::path::PathBuf> {
+    let dir = external_assets().map(|d| d.join("gltf"));
+    if dir.is_none() {
+        eprintln!("note: {test}: UMBRA_ASSETS is unset; the external models are left out");
+    }
+    dir
 }
 
 /// Runs one of umbra's binaries with `UMBRA_VALIDATION=1` and asserts that it succeeded and

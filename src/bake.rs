@@ -6,9 +6,10 @@
 //! environment radiance it was baked under (the lighting's constant colour, or the map's
 //! multiplier); [`load_probes`] refuses a file whose hash or environment differ from the ones
 //! asked for, and any file that is not a complete bake, with an [`Error::Bake`] naming the file
-//! and the problem. Nothing in a file can make it panic or allocate more than the file's size.
+//! and the problem. A checksum over the whole file tells damage ("corrupt") from a bake of
+//! another scene. Nothing in a file can make it panic or allocate more than the file's size.
 //!
-//! # Format, version 1
+//! # Format, version 2
 //!
 //! Little-endian throughout; `f32` is IEEE 754 binary32, bit for bit as the GPU held it. A
 //! 96-byte header:
@@ -16,7 +17,7 @@
 //! | offset | type       | field |
 //! |-------:|------------|-------|
 //! | 0      | `[u8; 8]`  | magic, the ASCII bytes `UMBRAPRB` |
-//! | 8      | `u32`      | format version: 1 |
+//! | 8      | `u32`      | format version: 2 |
 //! | 12     | `u64`      | scene hash ([`scene_hash`]) |
 //! | 20     | `[f32; 3]` | grid origin: position of probe (0, 0, 0) ([`ProbeGrid::origin`]) |
 //! | 32     | `[f32; 3]` | grid spacing per axis ([`ProbeGrid::spacing`]) |
@@ -39,9 +40,11 @@
 //! | 96 + 16 N              | `[f32; 4]` × [`IRRADIANCE_MAP_TEXELS`] × N | octahedral irradiance maps with their borders (rgb, a unused) |
 //! | 96 + 16 N (1 + 64)     | `[f32; 4]` × [`DISTANCE_MAP_TEXELS`] × N   | octahedral distance maps with their borders (mean, mean square, unused ×2) |
 //!
-//! The file is exactly 96 + N × [`PROBE_BYTES`] bytes long. The settings' spacing is not
-//! stored (it only places a new grid): a loaded volume's is the grid's smallest spacing. A
-//! reader of another version refuses the file rather than guess.
+//! and last, at 96 + N × [`PROBE_BYTES`], a `u32`: the CRC-32 (IEEE 802.3, as zlib and PNG
+//! compute it) of every byte before it. The file is exactly 96 + N × [`PROBE_BYTES`] + 4 bytes
+//! long. The settings' spacing is not stored (it only places a new grid): a loaded volume's is
+//! the grid's smallest spacing. A reader of another version refuses the file rather than guess
+//! (version 1 was the same without the checksum).
 
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
@@ -55,9 +58,11 @@ use std::path::Path;
 /// The first eight bytes of every bake.
 pub const MAGIC: [u8; 8] = *b"UMBRAPRB";
 /// The format version this umbra writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// Bytes before the probes' data.
 pub const HEADER_BYTES: usize = 96;
+/// Bytes of the checksum after the probes' data.
+pub const CHECKSUM_BYTES: usize = 4;
 /// Bytes of one probe's state and maps.
 pub const PROBE_BYTES: usize = 16 * (1 + IRRADIANCE_MAP_TEXELS as usize + DISTANCE_MAP_TEXELS as usize);
 
@@ -122,7 +127,7 @@ impl ProbeBake {
     /// The file's bytes (the format in the [module documentation](self)).
     pub fn to_bytes(&self) -> Vec<u8> {
         let count = self.states.len();
-        let mut out = Vec::with_capacity(HEADER_BYTES + count * PROBE_BYTES);
+        let mut out = Vec::with_capacity(HEADER_BYTES + count * PROBE_BYTES + CHECKSUM_BYTES);
         let u32s = |out: &mut Vec<u8>, v: &[u32]| v.iter().for_each(|x| out.extend(x.to_le_bytes()));
         let f32s = |out: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|x| out.extend(x.to_le_bytes()));
         let s = &self.settings;
@@ -141,6 +146,8 @@ impl ProbeBake {
         u32s(&mut out, self.states.as_flattened());
         f32s(&mut out, self.irradiance.as_flattened());
         f32s(&mut out, self.distance.as_flattened());
+        let checksum = crc32fast::hash(&out);
+        out.extend(checksum.to_le_bytes());
         out
     }
 
@@ -185,6 +192,33 @@ impl ProbeBake {
             }
             Some(Ok(header)) => header,
         };
+        let count: u64 = grid.counts.iter().map(|&n| n as u64).product();
+        // The checksum first: damage anywhere is "corrupt", whatever field it lands in.
+        let expected = (count <= ProbeSettings::MAX_PROBES as u64)
+            .then(|| HEADER_BYTES + count as usize * PROBE_BYTES + CHECKSUM_BYTES);
+        let (body, stored) = bytes.split_at(bytes.len().max(HEADER_BYTES + CHECKSUM_BYTES) - CHECKSUM_BYTES);
+        let computed = crc32fast::hash(body);
+        if stored.len() != CHECKSUM_BYTES || u32::from_le_bytes(stored.try_into().unwrap()) != computed {
+            return Err(bad(match expected {
+                Some(expected) if bytes.len() < expected => format!(
+                    "truncated or corrupt: {} bytes, but a bake of {count} probes ({:?}) is {expected}, \
+                     and the checksum does not match: bake again",
+                    bytes.len(),
+                    grid.counts
+                ),
+                Some(expected) if bytes.len() > expected => format!(
+                    "trailing data or corrupt: {} bytes, but a bake of {count} probes ({:?}) is \
+                     {expected}, and the checksum does not match: bake again",
+                    bytes.len(),
+                    grid.counts
+                ),
+                _ => format!(
+                    "corrupt: the checksum does not match (stored {:08x}, computed {computed:08x}): the \
+                     file was damaged after it was written; bake again",
+                    u32::from_le_bytes(stored.try_into().unwrap_or([0; 4]))
+                ),
+            }));
+        }
         let (rays, visibility, normal_bias, view_bias, bounces, sweeps, hysteresis) = settings;
         if !(grid.origin.iter().all(|v| v.is_finite())
             && grid.spacing.iter().all(|s| s.is_finite() && *s > 0.0))
@@ -194,7 +228,6 @@ impl ProbeBake {
                 grid.origin, grid.spacing
             )));
         }
-        let count: u64 = grid.counts.iter().map(|&n| n as u64).product();
         if count == 0 || count > ProbeSettings::MAX_PROBES as u64 {
             return Err(bad(format!(
                 "a grid of {:?} probes: damaged (1 to {} probes in all)",
@@ -220,7 +253,7 @@ impl ProbeBake {
         };
         settings.validate().map_err(|e| bad(format!("damaged settings: {e}")))?;
         let count = count as usize;
-        let expected = HEADER_BYTES + count * PROBE_BYTES;
+        let expected = HEADER_BYTES + count * PROBE_BYTES + CHECKSUM_BYTES;
         if bytes.len() != expected {
             let problem = if bytes.len() < expected { "truncated" } else { "trailing data" };
             return Err(bad(format!(
@@ -313,7 +346,7 @@ pub fn save_probes(
     environment: [f32; 3],
 ) -> Result<()> {
     let bytes = ProbeBake::read(ctx, volume, scene_hash, environment)?.to_bytes();
-    std::fs::write(path, bytes).map_err(|source| Error::Io { path: path.to_path_buf(), source })
+    crate::atomic::write(path, &bytes)
 }
 
 /// Loads the bake at `path` onto the GPU, after checking that it is a whole bake made for the
@@ -325,7 +358,7 @@ pub fn load_probes(
     scene_hash: u64,
     environment: [f32; 3],
 ) -> Result<ProbeVolume> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let bake = ProbeBake::from_bytes(path, &bytes)?;
     bake.check(path, scene_hash, environment)?;
     bake.upload(ctx)
@@ -368,9 +401,11 @@ mod tests {
     fn bytes_round_trip_bit_for_bit() {
         let b = bake();
         let bytes = b.to_bytes();
-        assert_eq!(bytes.len(), HEADER_BYTES + 12 * PROBE_BYTES);
+        assert_eq!(bytes.len(), HEADER_BYTES + 12 * PROBE_BYTES + CHECKSUM_BYTES);
         assert_eq!(&bytes[..8], b"UMBRAPRB");
-        assert_eq!(bytes[8..12], 1u32.to_le_bytes());
+        assert_eq!(bytes[8..12], 2u32.to_le_bytes());
+        let (body, checksum) = bytes.split_at(bytes.len() - 4);
+        assert_eq!(checksum, crc32fast::hash(body).to_le_bytes(), "the CRC-32 of all before it, last");
         assert_eq!(bytes[12..20], 0x0123_4567_89ab_cdefu64.to_le_bytes());
         assert_eq!(bytes[44..48], 3u32.to_le_bytes(), "counts at offset 44");
         assert_eq!(bytes[84..88], 0.1f32.to_le_bytes(), "environment at offset 84");
@@ -400,11 +435,19 @@ mod tests {
         other[..8].copy_from_slice(b"UMBRAPRC");
         assert!(error(&other).contains("does not start with UMBRAPRB"));
         let mut newer = bytes.clone();
-        newer[8..12].copy_from_slice(&2u32.to_le_bytes());
-        assert!(error(&newer).contains("version 2; this umbra reads version 1"));
+        newer[8..12].copy_from_slice(&3u32.to_le_bytes());
+        assert!(error(&newer).contains("version 3; this umbra reads version 2"));
+        let mut older = bytes.clone();
+        older[8..12].copy_from_slice(&1u32.to_le_bytes());
+        assert!(error(&older).contains("version 1; this umbra reads version 2: bake again"));
+        // A field patched and the checksum sealed again, as a wrong writer would: each field's
+        // own check names it.
         let patch = |offset: usize, value: [u8; 4]| {
             let mut b = bytes.clone();
             b[offset..offset + 4].copy_from_slice(&value);
+            let n = b.len() - CHECKSUM_BYTES;
+            let checksum = crc32fast::hash(&b[..n]);
+            b[n..].copy_from_slice(&checksum.to_le_bytes());
             error(&b)
         };
         // Counts whose product overflows u32 and sizes that would allocate terabytes: refused
@@ -417,6 +460,22 @@ mod tests {
         assert!(patch(88, (-1.0f32).to_le_bytes()).contains("environment"));
         // A grid of more probes than the file holds.
         assert!(patch(44, 4u32.to_le_bytes()).contains("truncated"));
+    }
+
+    /// One flipped bit anywhere past the magic and version is "corrupt" (in the counts, whose
+    /// file length then disagrees, "truncated or corrupt" / "trailing data or corrupt"), never
+    /// a bake of another scene, a damaged field or a bake that loads.
+    #[test]
+    fn every_flipped_bit_is_corrupt() {
+        let bytes = bake().to_bytes();
+        for offset in 12..bytes.len() {
+            for bit in [0, 3, 7] {
+                let mut b = bytes.clone();
+                b[offset] ^= 1 << bit;
+                let message = error(&b);
+                assert!(message.contains("corrupt"), "byte {offset} bit {bit}: {message}");
+            }
+        }
     }
 
     #[test]

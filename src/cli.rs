@@ -41,6 +41,44 @@ pub fn parse_exr(s: &str) -> Result<std::path::PathBuf, String> {
     parse_output(s, &["exr"], ".exr")
 }
 
+/// A probe bake output path (`.probes`): never a scene's or an image's name.
+#[allow(dead_code)] // one binary uses it
+pub fn parse_probes_file(s: &str) -> Result<std::path::PathBuf, String> {
+    parse_output(s, &["probes"], ".probes")
+}
+
+/// Refuses, before any work, outputs that name an input or another output, or that cannot be
+/// written (a missing folder, a directory, a read-only file): `umbra::atomic`'s checks over the
+/// flags given (`(flag, path)`; `None` where a flag is absent).
+#[allow(dead_code)] // one binary uses it
+pub fn check_outputs(
+    outputs: &[(&str, Option<&std::path::Path>)],
+    inputs: &[(&str, Option<&std::path::Path>)],
+) -> umbra::Result<()> {
+    fn given<'a>(v: &[(&'a str, Option<&'a std::path::Path>)]) -> Vec<(&'a str, &'a std::path::Path)> {
+        v.iter().filter_map(|&(what, path)| Some((what, path?))).collect()
+    }
+    let outputs = given(outputs);
+    umbra::atomic::check_distinct(&outputs, &given(inputs))?;
+    outputs.iter().try_for_each(|(_, path)| umbra::atomic::check_output(path))
+}
+
+/// The ids of the arguments given on the command line (not defaults) of a subcommand's matches.
+#[allow(dead_code)] // one binary uses it
+pub fn given_flags(matches: &clap::ArgMatches) -> Vec<String> {
+    matches
+        .ids()
+        .filter(|id| matches.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine))
+        .map(|id| id.to_string())
+        .collect()
+}
+
+/// The flag of an argument id: `--shadow-map-size` for `shadow_map_size`.
+#[allow(dead_code)] // one binary uses it
+pub fn flag(id: &str) -> String {
+    format!("--{}", id.replace('_', "-"))
+}
+
 /// What a render writes: the PNG `output` names, or none when it names an EXR; the EXR of
 /// `exr`, or else of `output` when that names one.
 pub fn outputs(

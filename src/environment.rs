@@ -111,9 +111,8 @@ impl EnvironmentMap {
     /// NaN, infinite and negative texels are replaced by 0 with one warning that counts them.
     pub fn load(path: &Path) -> Result<Self> {
         let bad = |message: String| Error::Scene { path: path.to_path_buf(), message };
-        let is_exr = std::fs::read(path)
-            .map_err(|source| Error::Io { path: path.to_path_buf(), source })?
-            .starts_with(&[0x76, 0x2f, 0x31, 0x01]);
+        let is_exr =
+            std::fs::read(path).map_err(|e| Error::io(path, e))?.starts_with(&crate::output::EXR_MAGIC);
         let (width, height, texels) = if is_exr {
             let (w, h, channels) = crate::output::read_exr_channels(path)?;
             let find = |n: &str| channels.iter().find(|c| c.0 == n).map(|c| &c.1);
@@ -124,9 +123,9 @@ impl EnvironmentMap {
             (w, h, (0..w * h).map(|i| [r[i], g[i], b[i]]).collect::<Vec<_>>())
         } else {
             let decoded = image::ImageReader::open(path)
-                .map_err(|source| Error::Io { path: path.to_path_buf(), source })?
+                .map_err(|e| Error::io(path, e))?
                 .with_guessed_format()
-                .map_err(|source| Error::Io { path: path.to_path_buf(), source })?
+                .map_err(|e| Error::io(path, e))?
                 .decode()
                 .map_err(|e| bad(format!("not a readable EXR or Radiance HDR image: {e}")))?
                 .into_rgb32f();

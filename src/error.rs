@@ -47,13 +47,14 @@ pub enum Error {
     /// A request outside what umbra or the device allows.
     #[error("{0}")]
     Invalid(String),
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    /// A file could not be read or written. The message holds the OS's reason once ("not a
+    /// directory", "Permission denied"), so the error has no separate source.
+    #[error("{path}: {}", crate::atomic::io_message(.error))]
     Io {
         /// The file.
         path: std::path::PathBuf,
         /// The OS error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A scene or environment file is malformed, breaks the glTF rules, or needs what umbra lacks.
     #[error("{path}: {message}")]
@@ -89,6 +90,13 @@ pub enum Error {
         /// The pass the GPU was running, from the breadcrumb (as in [`Error::Vulkan`]).
         pass: Option<String>,
     },
+}
+
+impl Error {
+    /// [`Error::Io`] for `path`.
+    pub fn io(path: &std::path::Path, error: std::io::Error) -> Self {
+        Error::Io { path: path.to_path_buf(), error }
+    }
 }
 
 fn pass_hint(pass: &Option<String>) -> String {

@@ -4,6 +4,7 @@
 //! ([`vk::Context::from_host`]). Passes record into a caller's command buffer and never submit.
 #![warn(missing_docs)]
 
+pub mod atomic;
 pub mod bake;
 pub mod bvh;
 pub mod color;

@@ -156,8 +156,9 @@ struct BakeArgs {
     probe: ProbeArgs,
     #[command(flatten)]
     lightmap: LightmapArgs,
-    /// The probe bake file to write (umbra's probe format, see the `umbra::bake` docs).
-    #[arg(short, long)]
+    /// The probe bake file to write, NAME.probes (umbra's probe format, see the `umbra::bake`
+    /// docs).
+    #[arg(short, long, value_parser = cli::parse_probes_file)]
     output: Option<PathBuf>,
     /// Also bake lightmaps over TEXCOORD_1 into this folder: lightmap-<material>.exr, layers
     /// `emitters` (direct light of the emissive triangles) and `ambient` (the environment and
@@ -180,9 +181,10 @@ struct RenderArgs {
     /// Rendering method.
     #[arg(long, value_enum, default_value = "pathtrace")]
     mode: Mode,
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 64)]
-    spp: u32,
+    /// Samples per pixel (64 by default); with --sample-range, the whole render's, of which the
+    /// part traces its range.
+    #[arg(long)]
+    spp: Option<u32>,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
     size: (u32, u32),
@@ -235,10 +237,10 @@ struct RenderArgs {
     /// Path tracing with --denoise: à-trous iterations (1 to 8; taps 1, 2, 4, ... pixels apart).
     #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
     denoise_iterations: u32,
-    /// Path tracer: trace only samples A..B of the sequence (instead of --spp), exactly those a
-    /// whole render traces there: one part of a render split across processes or machines,
-    /// joined by `umbra merge`.
-    #[arg(long, value_parser = cli::parse_sample_range, value_name = "A..B", conflicts_with_all = ["spp", "target_error"])]
+    /// Path tracer: trace only samples A..B of the whole render's --spp N (B at most N), exactly
+    /// those a whole render traces there: one part of a render split across processes or
+    /// machines, joined by `umbra merge`, which checks that the parts hold all N.
+    #[arg(long, value_parser = cli::parse_sample_range, value_name = "A..B", requires = "spp", conflicts_with = "target_error")]
     sample_range: Option<(u32, u32)>,
     /// Path tracer: render only the W×H pixels from column X, row Y of the --size image, each as
     /// the whole image has it (one part for `umbra merge`).
@@ -312,8 +314,9 @@ struct RenderArgs {
     pcf_radius: f32,
     /// Hybrid shadow maps: the largest filter radius in texels, PCSS's blocker search and
     /// penumbra (a wider penumbra is cut to it); also the guard band of cube faces and spot maps.
-    #[arg(long, default_value_t = ShadowSettings::default().max_radius, value_parser = cli::parse_positive)]
-    shadow_max_radius: f32,
+    /// Default 16, at most an eighth of --shadow-map-size.
+    #[arg(long, value_parser = cli::parse_positive)]
+    shadow_max_radius: Option<f32>,
     /// Hybrid, rt shadows: shadow punctual lights as sized lights (a sphere of --light-radius, a
     /// cone of --sun-angle) with --shadow-rays rays each, the unoccluded fraction (soft shadows,
     /// what pcss approximates); without it rt shadows points, as the path tracer's lights are.
@@ -379,6 +382,11 @@ struct MergeArgs {
     /// Also a tonemapped PNG of the merged image.
     #[arg(long, value_parser = cli::parse_png)]
     png: Option<PathBuf>,
+    /// Write what the parts hold even where they are not the whole render (samples or pixels of
+    /// its plan missing: a lost part), with a warning naming what is missing; without it such a
+    /// merge is refused.
+    #[arg(long)]
+    allow_partial: bool,
     /// Denoise the merged render as `umbra render --denoise` denoises one (parts rendered with
     /// --denoise carry the lobe split it filters apart): the PNG and the EXR's main layer are
     /// denoised, the EXR keeps the merged estimate as layer `noisy`.
@@ -397,12 +405,23 @@ struct MergeArgs {
 
 fn merge(args: MergeArgs) -> Result<()> {
     use umbra::merge::PathExr;
+    let parts: Vec<(&str, Option<&std::path::Path>)> =
+        args.inputs.iter().map(|p| ("the part", Some(p.as_path()))).collect();
+    cli::check_outputs(&[("-o", Some(&args.output)), ("--png", args.png.as_deref())], &parts)?;
     let parts = args
         .inputs
         .iter()
         .map(|path| Ok((path.clone(), PathExr::read(path)?)))
         .collect::<Result<Vec<_>>>()?;
-    let mut merged = umbra::merge::merge(&parts)?;
+    let mut merged = if args.allow_partial {
+        let (merged, missing) = umbra::merge::merge_partial(&parts)?;
+        for what in &missing {
+            log::warn!("--allow-partial: the merge lacks {what}");
+        }
+        merged
+    } else {
+        umbra::merge::merge(&parts)?
+    };
     if args.denoise {
         let settings = DenoiseSettings { iterations: args.denoise_iterations, ..Default::default() };
         settings.validate()?;
@@ -422,12 +441,8 @@ fn merge(args: MergeArgs) -> Result<()> {
     merged.write(&args.output)?;
     let r = merged.region;
     println!(
-        "merged {} parts: {}x{} pixels from ({}, {}) of {}x{}, {} spp; wrote {}",
+        "merged {} parts: {r} of {}x{}, {} spp; wrote {}",
         parts.len(),
-        r.size.0,
-        r.size.1,
-        r.origin.0,
-        r.origin.1,
         merged.image.0,
         merged.image.1,
         merged.spp(),
@@ -437,8 +452,7 @@ fn merge(args: MergeArgs) -> Result<()> {
         let shown = merged.denoised.as_ref().unwrap_or(&merged.mean);
         let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
         let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
-        umbra::output::write_png(png, r.size.0, r.size.1, &display)
-            .with_context(|| format!("writing {}", png.display()))?;
+        umbra::output::write_png(png, r.size.0, r.size.1, &display)?;
         println!("wrote {}", png.display());
     }
     Ok(())
@@ -587,7 +601,25 @@ fn render(args: RenderArgs) -> Result<()> {
             "--sample-range and --tile apply to --mode pathtrace (its parts merge with umbra merge)"
         );
     }
+    if let (Some((a, b)), Some(n)) = (args.sample_range, args.spp) {
+        if b > n {
+            anyhow::bail!(
+                "--sample-range {a}..{b} reaches past the render's --spp {n}: a part traces samples of \
+                 the whole render's 0..{n}"
+            );
+        }
+    }
     shadow_settings(&args).validate()?;
+    let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
+    let probes_file = match &args.probes {
+        Some(ProbesArg::File(path)) => Some(path.as_path()),
+        _ => None,
+    };
+    let label = if png.is_some() { "--exr" } else { "-o" };
+    cli::check_outputs(
+        &[("-o", png.as_deref()), (label, exr.as_deref())],
+        &[args.scene.inputs().as_slice(), &[("--probes", probes_file)]].concat(),
+    )?;
     let mut stages = Stages::start();
     let mut loaded = args.scene.load()?;
     stages.lap("load");
@@ -597,7 +629,8 @@ fn render(args: RenderArgs) -> Result<()> {
     let camera = loaded.scene.camera(args.camera)?;
     let ctx = Context::new(&ContextDesc::default())?;
     stages.lap("device");
-    let (first_sample, spp) = args.sample_range.map_or((0, args.spp), |(a, b)| (a, b - a));
+    let planned_spp = args.spp.unwrap_or(64);
+    let (first_sample, spp) = args.sample_range.map_or((0, planned_spp), |(a, b)| (a, b - a));
     let settings = umbra::render::PathSettings {
         size: args.tile.map_or(args.size, |t| (t[2], t[3])),
         spp,
@@ -723,15 +756,16 @@ fn render(args: RenderArgs) -> Result<()> {
     };
     let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
     let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
-    let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
     if let Some(png) = png {
-        umbra::output::write_png(&png, w, h, &display)
-            .with_context(|| format!("writing {}", png.display()))?;
+        umbra::output::write_png(&png, w, h, &display)?;
         println!("wrote {}", png.display());
     }
     stages.lap("PNG");
     if let Some(path) = &exr {
         let mut exr = umbra::merge::PathExr::new(&image, &settings, render_identity(&args, &loaded));
+        if args.sample_range.is_some() {
+            exr.planned_spp = Some(planned_spp);
+        }
         if args.denoise {
             exr.denoised = Some(shown.iter().map(|p| [p[0], p[1], p[2]]).collect());
         }
@@ -815,6 +849,11 @@ struct LoadedScene {
 }
 
 impl SceneArgs {
+    /// The files read: the scene and the environment map, where given.
+    fn inputs(&self) -> [(&'static str, Option<&std::path::Path>); 2] {
+        [("the scene", self.scene.as_deref()), ("--env", self.env.as_deref())]
+    }
+
     /// Loads the scene (or the embedded Cornell box) and the environment map.
     fn load(&self) -> Result<LoadedScene> {
         let scene = match &self.scene {
@@ -935,6 +974,10 @@ fn bake(args: BakeArgs) -> Result<()> {
     }
     let settings = args.probe.settings();
     settings.validate()?;
+    cli::check_outputs(&[("-o", args.output.as_deref())], &args.scene.inputs())?;
+    for dir in [&args.lightmaps, &args.ao_maps].into_iter().flatten() {
+        umbra::atomic::create_dir(dir)?;
+    }
     let mut loaded = args.scene.load()?;
     if args.lightmap.unwrap {
         umbra::passes::lightmap::unwrap_triangles(&mut loaded.scene, args.lightmap.lightmap_size);
@@ -1022,7 +1065,9 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
         slope_bias: args.shadow_slope_bias,
         normal_bias: args.shadow_normal_bias,
         pcf_radius: args.pcf_radius,
-        max_radius: args.shadow_max_radius,
+        max_radius: args
+            .shadow_max_radius
+            .unwrap_or(ShadowSettings::default_max_radius(args.shadow_map_size)),
         light_radius: args.light_radius,
         sun_angle: args.sun_angle.to_radians(),
         sized_rays: args.rt_light_size,
@@ -1154,7 +1199,7 @@ fn render_hybrid(
     let bytes: Vec<u8> = image.display.iter().flatten().copied().collect();
     let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
     if let Some(png) = png {
-        umbra::output::write_png(&png, w, h, &bytes).with_context(|| format!("writing {}", png.display()))?;
+        umbra::output::write_png(&png, w, h, &bytes)?;
         println!("wrote {}", png.display());
     }
     if let Some(path) = &exr {
@@ -1232,7 +1277,7 @@ fn render_ao(
         .collect();
     let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
     if let Some(png) = png {
-        umbra::output::write_png(&png, w, h, &bytes).with_context(|| format!("writing {}", png.display()))?;
+        umbra::output::write_png(&png, w, h, &bytes)?;
         println!("wrote {}", png.display());
     }
     if let Some(path) = exr {
@@ -1253,13 +1298,98 @@ fn render_ao(
 }
 
 fn main() {
-    cli::main(|| run(Cli::parse()));
+    cli::main(|| {
+        use clap::{CommandFactory, FromArgMatches};
+        let matches = Cli::command().get_matches();
+        let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+        let given = matches.subcommand().map(|(_, m)| cli::given_flags(m)).unwrap_or_default();
+        run(cli, &given)
+    });
 }
 
-fn run(cli: Cli) -> Result<()> {
+/// The render flags given that cannot apply to the render asked for, each with what it needs
+/// (`--mode hybrid`, `--lightmaps`, ...): refused, never ignored. A flag's default never blocks
+/// (only flags given on the command line are checked).
+fn inapplicable_render_flags(args: &RenderArgs, given: &[String]) -> Vec<String> {
+    let (pathtrace, hybrid) = (args.mode == Mode::Pathtrace, args.mode == Mode::Hybrid);
+    let maps = hybrid && args.shadows != ShadowsArg::Rt;
+    let ssao = hybrid && !args.no_ao;
+    given
+        .iter()
+        .filter_map(|id| {
+            let (applies, needs) = match id.as_str() {
+                "spp" | "max_bounces" | "rr_depth" | "microfacet" | "heuristic" | "sampler"
+                | "emitter_sampling" | "strategy" | "integrator" | "target_error" | "denoise"
+                | "denoise_iterations" | "sample_range" | "tile" => (pathtrace, "--mode pathtrace"),
+                "ris_candidates" => {
+                    (pathtrace && args.direct == DirectArg::Ris, "--mode pathtrace --direct ris")
+                }
+                "exposure" | "tonemap" => (
+                    pathtrace || hybrid,
+                    "--mode pathtrace or hybrid (ao and rtao write the occlusion itself)",
+                ),
+                "shadow_rays" | "no_ao" | "no_ibl" | "shadows" | "probes" | "lightmaps" | "rt_light_size" => {
+                    (hybrid, "--mode hybrid")
+                }
+                "restir_candidates" | "restir_neighbours" | "restir_radius" | "restir_frames"
+                | "restir_no_temporal" | "restir_unbiased" => {
+                    (hybrid && args.direct == DirectArg::Restir, "--mode hybrid --direct restir")
+                }
+                "shadow_map_size" | "shadow_bias" | "shadow_slope_bias" | "shadow_normal_bias"
+                | "pcf_radius" | "shadow_max_radius" | "cascades" | "cascade_split" => {
+                    (maps, "--mode hybrid with shadow maps (--shadows hard|pcf|pcss|moments)")
+                }
+                "light_radius" | "sun_angle" => (
+                    hybrid && (args.shadows == ShadowsArg::Pcss || args.rt_light_size),
+                    "--mode hybrid with sized lights (--shadows pcss, or --rt-light-size)",
+                ),
+                "lightmap_size" | "lightmap_samples" | "unwrap" => (args.lightmaps, "--lightmaps (hybrid)"),
+                "ao_samples" | "ao_radius" => (
+                    ssao || matches!(args.mode, Mode::Ao | Mode::Rtao),
+                    "--mode ao or rtao, or hybrid's SSAO",
+                ),
+                "ao_no_blur" => {
+                    (ssao || args.mode == Mode::Ao, "--mode ao, or hybrid's SSAO (rtao never blurs)")
+                }
+                _ => (true, ""),
+            };
+            (!applies).then(|| format!("{} applies to {needs}", cli::flag(id)))
+        })
+        .collect()
+}
+
+fn run(cli: Cli, given: &[String]) -> Result<()> {
     match cli.command {
-        Command::Render(args) => render(args)?,
-        Command::Bake(args) => bake(args)?,
+        Command::Render(args) => {
+            let refused = inapplicable_render_flags(&args, given);
+            if !refused.is_empty() {
+                anyhow::bail!("{}: such a flag would be ignored", refused.join("; "));
+            }
+            render(args)?
+        }
+        Command::Bake(args) => {
+            let mut refused = Vec::new();
+            for id in given {
+                let (applies, needs) = match id.as_str() {
+                    "probe_spacing" | "probe_rays" | "probe_sweeps" | "probe_bounces" => {
+                        (args.output.is_some(), "a probe bake (-o FILE.probes)")
+                    }
+                    "lightmap_size" | "lightmap_samples" | "unwrap" => (
+                        args.lightmaps.is_some() || args.ao_maps.is_some(),
+                        "--lightmaps DIR or --ao-maps DIR",
+                    ),
+                    "occlusion_radius" => (args.ao_maps.is_some(), "--ao-maps DIR"),
+                    _ => (true, ""),
+                };
+                if !applies {
+                    refused.push(format!("{} applies to {needs}", cli::flag(id)));
+                }
+            }
+            if !refused.is_empty() {
+                anyhow::bail!("{}: such a flag would be ignored", refused.join("; "));
+            }
+            bake(args)?
+        }
         Command::Merge(args) => merge(args)?,
         Command::Info => {
             for (name, ty) in Context::list_devices()? {
@@ -1276,6 +1406,7 @@ fn run(cli: Cli) -> Result<()> {
             );
         }
         Command::Pattern { size: (w, h), output, exr } => {
+            cli::check_outputs(&[("-o", Some(&output)), ("--exr", exr.as_deref())], &[])?;
             let ctx = Context::new(&ContextDesc::default())?;
             let image = Image::storage_2d(&ctx, "pattern", w, h, raw::Format::R32G32B32A32_SFLOAT)?;
             use umbra::gpu::kernels::test_pattern;
@@ -1304,8 +1435,7 @@ fn run(cli: Cli) -> Result<()> {
                 let (x, y, hsh) = (p[0] / w as f32, p[1] / h as f32, p[3] / 65535.0);
                 p.copy_from_slice(&[x, y, hsh, 1.0]);
             }
-            umbra::output::write_png(&output, w, h, &umbra::color::to_srgb8(&rgba, 1.0))
-                .with_context(|| format!("writing {}", output.display()))?;
+            umbra::output::write_png(&output, w, h, &umbra::color::to_srgb8(&rgba, 1.0))?;
             if let Some(path) = exr {
                 umbra::output::write_exr(
                     &path,

@@ -7,6 +7,12 @@
 //! the region and an identity of the render in its header; [`merge`] weighs the parts' means
 //! and moments by their sample counts and places the regions, which gives the render one process
 //! would have made (equal to float rounding: the parts' sums round in another order).
+//!
+//! Each part also records the whole render's plan: the image (`image`) and the samples per pixel
+//! of the whole render (`spp`). [`merge`] refuses a merge that leaves any of the plan out (a
+//! lost array task: samples 48..64 missing, or the top tile), naming what is missing;
+//! [`merge_partial`] joins what there is and says what is missing, for a merge that asks for
+//! exactly that (`umbra merge --allow-partial`).
 
 use crate::error::{Error, Result};
 use crate::output::{read_exr, write_exr_with, Layer};
@@ -22,6 +28,13 @@ pub struct Region {
     pub origin: (u32, u32),
     /// Width and height.
     pub size: (u32, u32),
+}
+
+/// "the 15x30 pixels from (25, 0)".
+impl std::fmt::Display for Region {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "the {}x{} pixels from ({}, {})", self.size.0, self.size.1, self.origin.0, self.origin.1)
+    }
 }
 
 impl Region {
@@ -45,10 +58,12 @@ impl Region {
 /// the first sample), with `--denoise` the main layer denoised and the mean as `noisy` and the
 /// lobe split's layers `specular` and `split` (RGBA: [`LobeSplitImage`]'s means, which a merge
 /// weighs by sample counts as the mean, so the merged render denoises as one render), and one
-/// header attribute, `umbra.part`, of four lines: `samples A..B[,C..D…]` (the sample ranges),
-/// `image WxH` (the whole image), `region X,Y,WxH` and `render …` (what must agree between parts:
-/// scene, lighting, camera and every setting but the samples and the region). One attribute, so
-/// that the header's bytes do not depend on the order a hash map lists several in.
+/// header attribute, `umbra.part`, of five lines: `samples A..B[,C..D…]` (the sample ranges),
+/// `spp N` (the whole render's samples per pixel, 0..N), `image WxH` (the whole image), `region
+/// X,Y,WxH` and `render …` (what must agree between parts: scene, lighting, camera and every
+/// setting but the samples and the region). One attribute, so that the header's bytes do not
+/// depend on the order a hash map lists several in. A file without the `spp` line (from an umbra
+/// before it) merges only partially.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathExr {
     /// Width and height of the whole image.
@@ -57,6 +72,9 @@ pub struct PathExr {
     pub region: Region,
     /// Its samples of the sequence, sorted, disjoint and not touching.
     pub samples: Vec<Range<u32>>,
+    /// The whole render's samples per pixel (samples `0..N`, of which the parts hold some);
+    /// `None` in a file written before parts recorded it.
+    pub planned_spp: Option<u32>,
     /// The render's identity (equal in every part of one render).
     pub render: String,
     /// Mean radiance per pixel of the region, row-major.
@@ -92,7 +110,8 @@ const RGBA: [&str; 4] = ["R", "G", "B", "A"];
 
 impl PathExr {
     /// The EXR of `image`, rendered with `settings`; `render` names what else identifies the
-    /// render (scene, lighting, camera).
+    /// render (scene, lighting, camera). Its plan ([`PathExr::planned_spp`]) is the samples up to
+    /// its last: set it for a part of a render of more samples.
     pub fn new(image: &PathImage, settings: &PathSettings, render: String) -> Self {
         let rgb = |v: &Vec<[f32; 4]>| v.iter().map(|p| [p[0], p[1], p[2]]).collect();
         let (image_size, origin) = match settings.tile {
@@ -103,6 +122,7 @@ impl PathExr {
             image: image_size,
             region: Region { origin, size: image.size },
             samples: std::iter::once(settings.first_sample..settings.first_sample + image.spp).collect(),
+            planned_spp: Some(settings.first_sample + image.spp),
             render,
             mean: rgb(&image.mean),
             moment: rgb(&image.moment),
@@ -207,8 +227,9 @@ impl PathExr {
             &[(
                 PART_ATTRIBUTE,
                 format!(
-                    "samples {}\nimage {}x{}\nregion {},{},{}x{}\nrender {}",
+                    "samples {}\n{}image {}x{}\nregion {},{},{}x{}\nrender {}",
                     samples.join(","),
+                    self.planned_spp.map_or(String::new(), |n| format!("spp {n}\n")),
                     self.image.0,
                     self.image.1,
                     r.origin.0,
@@ -270,6 +291,18 @@ impl PathExr {
         let region = parse_region(attribute("region")?).ok_or_else(|| bad("malformed region".into()))?;
         let samples =
             parse_samples(attribute("samples")?).ok_or_else(|| bad("malformed sample ranges".into()))?;
+        let planned_spp = match attribute("spp") {
+            Ok(n) => Some(n.parse::<u32>().map_err(|_| bad(format!("malformed spp '{n}'")))?),
+            Err(_) => None,
+        };
+        if let (Some(n), Some(last)) = (planned_spp, samples.last()) {
+            if last.end > n {
+                return Err(bad(format!(
+                    "samples {} beyond the render's {n} samples per pixel",
+                    describe(&samples)
+                )));
+            }
+        }
         if (exr.width, exr.height) != (region.size.0 as usize, region.size.1 as usize) {
             return Err(bad(format!(
                 "{}x{} pixels but its region is {}x{}",
@@ -283,6 +316,7 @@ impl PathExr {
             image,
             region,
             samples,
+            planned_spp,
             render: attribute("render")?.to_string(),
             // A denoised render keeps its raw estimate in `noisy`: that is what merges.
             mean: if exr.channels.iter().any(|(n, _)| n == "noisy.R") {
@@ -345,6 +379,77 @@ fn describe(samples: &[Range<u32>]) -> String {
     samples.iter().map(|r| format!("{}..{}", r.start, r.end)).collect::<Vec<_>>().join(",")
 }
 
+/// Joins parts of one render (each with the file it came from, for the errors) into the whole
+/// render ([`merge_partial`]); refused, naming the files and what is missing, unless the parts
+/// hold every sample of the render's plan ([`PathExr::planned_spp`]) on every pixel of its image.
+pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
+    let (merged, missing) = merge_partial(parts)?;
+    if missing.is_empty() {
+        return Ok(merged);
+    }
+    let names: Vec<String> = parts.iter().map(|(f, _)| f.display().to_string()).collect();
+    Err(Error::Invalid(format!(
+        "{} {} not the whole render: {} missing (a lost part?); render the missing parts, or merge \
+         with --allow-partial to write what there is",
+        names.join(", "),
+        if names.len() == 1 { "is" } else { "are" },
+        missing.join("; "),
+    )))
+}
+
+/// [`merge`] of what there is: the joined parts, and what the render's plan holds that they do
+/// not ([`PathExr::missing`], empty for a whole render).
+pub fn merge_partial(parts: &[(PathBuf, PathExr)]) -> Result<(PathExr, Vec<String>)> {
+    let merged = join(parts)?;
+    let missing = merged.missing();
+    Ok((merged, missing))
+}
+
+impl PathExr {
+    /// What the render's plan holds that this render lacks, in words: sample ranges of the
+    /// planned `0..N` (or that the plan is unknown), and the rows or columns of the image outside
+    /// its region. Empty for a whole render.
+    pub fn missing(&self) -> Vec<String> {
+        let mut missing = Vec::new();
+        match self.planned_spp {
+            None => missing.push(
+                "the render's total samples (the parts were written by an umbra that did not record \
+                 them)"
+                    .to_string(),
+            ),
+            Some(n) => {
+                let mut gaps = Vec::new();
+                let mut at = 0;
+                for r in self.samples.iter().chain(std::iter::once(&(n..n))) {
+                    if r.start > at {
+                        gaps.push(format!("{at}..{}", r.start));
+                    }
+                    at = at.max(r.end);
+                }
+                if !gaps.is_empty() {
+                    missing.push(format!("samples {} of the render's 0..{n}", gaps.join(", ")));
+                }
+            }
+        }
+        let (r, (w, h)) = (self.region, self.image);
+        let (end_x, end_y) = r.end();
+        let strips = [
+            (r.origin.1 > 0, format!("rows 0..{} (above)", r.origin.1)),
+            (end_y < h, format!("rows {end_y}..{h} (below)")),
+            (r.origin.0 > 0, format!("columns 0..{} (left)", r.origin.0)),
+            (end_x < w, format!("columns {end_x}..{w} (right)")),
+        ];
+        let strips: Vec<String> = strips.into_iter().filter(|s| s.0).map(|s| s.1).collect();
+        if !strips.is_empty() {
+            missing.push(format!(
+                "pixels of the {w}x{h} image outside the parts' region ({r}): {}",
+                strips.join(", ")
+            ));
+        }
+        missing
+    }
+}
+
 /// Joins parts of one render (each with the file it came from, for the errors): parts of the
 /// same region and disjoint sample ranges into one of all their samples (means and second
 /// moments weighted by sample counts, as are the albedo, its coverage, the emission and the lobe
@@ -353,21 +458,27 @@ fn describe(samples: &[Range<u32>]) -> String {
 /// Refused, naming the files: parts of different renders or images, overlapping samples of one
 /// region, overlapping regions, regions with different samples, regions that leave a hole in
 /// their bounding rectangle.
-pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
+fn join(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
     let (first_path, first) = parts.first().ok_or_else(|| Error::Invalid("nothing to merge".into()))?;
     let invalid = |message: String| Err(Error::Invalid(message));
     for (path, part) in &parts[1..] {
-        if part.render != first.render || part.image != first.image {
+        if part.render != first.render || part.image != first.image || part.planned_spp != first.planned_spp {
+            let plan = |p: &PathExr| {
+                format!(
+                    "{}x{}, {} spp",
+                    p.image.0,
+                    p.image.1,
+                    p.planned_spp.map_or("?".into(), |n| n.to_string())
+                )
+            };
             return invalid(format!(
-                "{} and {} are not parts of one render:\n  {} ({}x{})\n  {} ({}x{})",
+                "{} and {} are not parts of one render:\n  {} ({})\n  {} ({})",
                 first_path.display(),
                 path.display(),
                 first.render,
-                first.image.0,
-                first.image.1,
+                plan(first),
                 part.render,
-                part.image.0,
-                part.image.1
+                plan(part)
             ));
         }
     }
@@ -453,7 +564,7 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
         for (b_path, b) in &tiles[i + 1..] {
             if a.region.overlaps(&b.region) {
                 return invalid(format!(
-                    "regions of {} and {} overlap ({:?} and {:?})",
+                    "the regions of {} and {} overlap ({} and {})",
                     a_path.display(),
                     b_path.display(),
                     a.region,
@@ -479,12 +590,8 @@ pub fn merge(parts: &[(PathBuf, PathExr)]) -> Result<PathExr> {
     if tiles.iter().map(|(_, t)| t.region.area()).sum::<u64>() != bounds.area() {
         let names: Vec<String> = tiles.iter().map(|(f, _)| f.display().to_string()).collect();
         return invalid(format!(
-            "the regions of {} leave holes in the rectangle they span ({},{} {}x{}): give every tile",
+            "the regions of {} leave holes in the rectangle they span ({bounds}): give every tile",
             names.join(", "),
-            x0,
-            y0,
-            bounds.size.0,
-            bounds.size.1
         ));
     }
     let pixels = bounds.area() as usize;

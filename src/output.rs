@@ -64,7 +64,11 @@ pub fn write_exr_with(
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels),
     );
-    Image::from_layer(layer).write().to_file(path).map_err(|e| image_error(e.to_string()))
+    // Encoded in memory, then written atomically: the exr crate's own file writer deletes the
+    // target when a write fails.
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer).write().to_buffered(&mut bytes).map_err(|e| image_error(e.to_string()))?;
+    crate::atomic::write(path, bytes.get_ref())
 }
 
 /// One EXR channel: its full name (e.g. `albedo.R`) and its samples, row-major.
@@ -93,14 +97,27 @@ pub struct ExrImage {
 pub fn read_exr(path: &Path) -> Result<ExrImage> {
     use exr::meta::attribute::AttributeValue;
     use exr::prelude::*;
+    let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
+    let image_error = |message: String| crate::Error::Image { path: path.to_path_buf(), message };
+    if !bytes.starts_with(&EXR_MAGIC) {
+        return Err(image_error(format!("not an OpenEXR file{}", file_kind(&bytes))));
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
-        .map_err(|e| crate::Error::Image { path: path.to_path_buf(), message: e.to_string() })?;
+        .from_buffered(std::io::Cursor::new(&bytes))
+        .map_err(|e| {
+            image_error(match e {
+                // The exr crate's word for an unexpected end of the file.
+                exr::error::Error::Invalid(why) if why == "reference to missing bytes" => {
+                    "truncated: the file ends before its image data".into()
+                }
+                e => format!("damaged OpenEXR file: {e}"),
+            })
+        })?;
     let size = image.layer_data.size;
     let channels = image
         .layer_data
@@ -123,15 +140,28 @@ pub fn read_exr(path: &Path) -> Result<ExrImage> {
     Ok(ExrImage { width: size.0, height: size.1, channels, attributes })
 }
 
-/// Writes 8-bit sRGB RGBA as PNG.
+/// The first four bytes of every OpenEXR file.
+pub const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// " (a PNG image)" and the like for a file that is not what was expected, from its first bytes.
+fn file_kind(bytes: &[u8]) -> &'static str {
+    match bytes {
+        [] => " (the file is empty)",
+        [0x89, b'P', b'N', b'G', ..] => " (it is a PNG image)",
+        [0xff, 0xd8, 0xff, ..] => " (it is a JPEG image)",
+        [b'#', b'?', ..] => " (it is a Radiance HDR image)",
+        [b'g', b'l', b'T', b'F', ..] => " (it is a glTF binary)",
+        [b'U', b'M', b'B', b'R', b'A', b'P', b'R', b'B', ..] => " (it is an umbra probe bake)",
+        _ => "",
+    }
+}
+
+/// Writes 8-bit sRGB RGBA as PNG, atomically ([`crate::atomic`]).
 pub fn write_png(path: &Path, width: u32, height: u32, srgb8: &[u8]) -> Result<()> {
-    image::save_buffer_with_format(
-        path,
-        srgb8,
-        width,
-        height,
-        image::ExtendedColorType::Rgba8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| Error::Image { path: path.to_path_buf(), message: e.to_string() })
+    use image::ImageEncoder;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(srgb8, width, height, image::ExtendedColorType::Rgba8)
+        .map_err(|e| Error::Image { path: path.to_path_buf(), message: e.to_string() })?;
+    crate::atomic::write(path, &bytes)
 }

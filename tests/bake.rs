@@ -55,7 +55,10 @@ fn a_saved_bake_loads_bit_for_bit_and_lights_the_same_image() {
     let path = dir.join("cornell.probes");
     let hash = bake::scene_hash(&scene, None);
     save_probes(&gpu, &path, &volume, hash, env).unwrap();
-    assert_eq!(std::fs::metadata(&path).unwrap().len() as usize, HEADER_BYTES + 27 * PROBE_BYTES);
+    assert_eq!(
+        std::fs::metadata(&path).unwrap().len() as usize,
+        HEADER_BYTES + 27 * PROBE_BYTES + bake::CHECKSUM_BYTES
+    );
     let loaded = load_probes(&gpu, &path, hash, env).unwrap();
     assert_eq!((loaded.grid, loaded.settings), (volume.grid, volume.settings));
 
@@ -103,7 +106,24 @@ fn a_saved_bake_loads_bit_for_bit_and_lights_the_same_image() {
     let truncated = dir.join("truncated.probes");
     std::fs::write(&truncated, &bytes[..bytes.len() - 1]).unwrap();
     let message = load_error(&gpu, &truncated, hash, env).to_string();
-    assert!(message.contains("truncated.probes") && message.contains("truncated:"), "{message}");
+    assert!(message.contains("truncated.probes") && message.contains("truncated or corrupt:"), "{message}");
+    // One flipped byte in the first probe's irradiance, and one in the scene hash: corrupt, not
+    // a bake that renders, nor one "baked for another scene".
+    let probes: usize = (0..3)
+        .map(|i| u32::from_le_bytes(bytes[44 + 4 * i..48 + 4 * i].try_into().unwrap()) as usize)
+        .product();
+    let irradiance = umbra::bake::HEADER_BYTES + 16 * probes;
+    for (offset, what) in [(irradiance + 5, "irradiance"), (13, "scene hash")] {
+        let mut damaged = bytes.clone();
+        damaged[offset] ^= 0x40;
+        let path = dir.join("damaged.probes");
+        std::fs::write(&path, &damaged).unwrap();
+        let message = load_error(&gpu, &path, hash, env).to_string();
+        assert!(
+            message.starts_with(&format!("{}: corrupt: the checksum does not match", path.display())),
+            "{what}: {message}"
+        );
+    }
     let foreign = dir.join("cornell-box.glb");
     std::fs::write(
         &foreign,

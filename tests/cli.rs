@@ -99,6 +99,72 @@ fn shadow_settings_out_of_range_are_refused() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// Flags that cannot apply to the work asked for are refused before any work, naming what they
+/// need, never ignored; a default of another method never blocks a valid choice: hard shadow
+/// maps of 32 texels render (PCSS's default search, 16 texels, does not fit a 32² map, and hard
+/// maps have none). A probe spacing that puts the probes outside the scene is refused, naming
+/// its extent.
+#[test]
+fn flags_that_cannot_apply_are_refused() {
+    let dir = std::env::temp_dir().join(format!("umbra-flags-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let (png, probes, maps) = (out("x.png"), out("x.probes"), out("maps"));
+    let cases: [(&[&str], &str); 10] = [
+        (&["render", "--unwrap"], "--unwrap applies to --lightmaps"),
+        (&["render", "--lightmap-size", "0"], "--lightmap-size applies to --lightmaps"),
+        (&["render", "--mode", "hybrid", "--spp", "4"], "--spp applies to --mode pathtrace"),
+        (
+            &["render", "--mode", "hybrid", "--shadow-map-size", "512"],
+            "--shadow-map-size applies to --mode hybrid with shadow maps",
+        ),
+        (
+            &["render", "--mode", "hybrid", "--shadows", "pcf", "--sun-angle", "1"],
+            "--sun-angle applies to --mode hybrid with sized lights",
+        ),
+        (&["render", "--mode", "rtao", "--ao-no-blur"], "--ao-no-blur applies to --mode ao"),
+        (&["render", "--mode", "ao", "--tonemap", "aces"], "--tonemap applies to --mode pathtrace or hybrid"),
+        (
+            &["render", "--mode", "hybrid", "--restir-frames", "2"],
+            "--restir-frames applies to --mode hybrid --direct restir",
+        ),
+        (&["bake", "--ao-maps", &maps, "--probe-spacing", "0.5"], "--probe-spacing applies to a probe bake"),
+        (&["bake", "-o", &probes, "--occlusion-radius", "1"], "--occlusion-radius applies to --ao-maps DIR"),
+    ];
+    for (args, message) in cases {
+        let mut command = umbra();
+        command.args(args);
+        if args[0] == "render" {
+            command.args(["-o", &png]);
+        }
+        let result = command.output().expect("run umbra");
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{args:?} accepted");
+        assert!(stderr.contains(message) && stderr.contains("would be ignored"), "{args:?}: {stderr}");
+    }
+    assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "a refused command wrote");
+    run_validated(
+        umbra()
+            .args([
+                "render",
+                "--mode",
+                "hybrid",
+                "--shadows",
+                "hard",
+                "--shadow-map-size",
+                "32",
+                "--size",
+                "16x16",
+            ])
+            .args(["-o", &png]),
+    );
+    let far = umbra().args(["bake", "--probe-spacing", "1e9", "-o", &probes]).output().expect("run umbra");
+    let stderr = String::from_utf8_lossy(&far.stderr);
+    assert!(!far.status.success() && stderr.contains("fewer than 2 probes across the scene"), "{stderr}");
+    assert!(stderr.contains("longest side"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `--mode hybrid` writes the tonemapped PNG and an EXR with the colour and every G-buffer AOV;
 /// the PNG is the EXR's colour through the default tone curve (the GPU pass and its CPU twin).
 #[test]
@@ -313,7 +379,11 @@ fn bake_then_render_with_the_probes() {
         ["--probe-spacing", "0.2", "--probe-rays", "64", "--probe-sweeps", "2", "--probe-bounces", "1"];
     run_validated(umbra().args(["bake", "-o"]).arg(&bake).args(tiny));
     let size = std::fs::metadata(&bake).expect("the bake was written").len() as usize;
-    assert_eq!(size, umbra::bake::HEADER_BYTES + 27 * umbra::bake::PROBE_BYTES, "3x3x3 probes");
+    assert_eq!(
+        size,
+        umbra::bake::HEADER_BYTES + 27 * umbra::bake::PROBE_BYTES + umbra::bake::CHECKSUM_BYTES,
+        "3x3x3 probes"
+    );
     let render = |name: &str, options: &[&str]| {
         let exr = dir.join(format!("{name}.exr"));
         run_validated(

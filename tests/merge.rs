@@ -63,9 +63,9 @@ fn sample_ranges_merge_into_the_whole_render() {
     let dir = folder("samples");
     let full = render(&dir.join("full.exr"), &["--spp", "8"]);
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
-    let part = render(&a, &["--sample-range", "0..3"]);
-    render(&b, &["--sample-range", "3..8"]);
-    assert_eq!(part.samples, [0..3]);
+    let part = render(&a, &["--spp", "8", "--sample-range", "0..3"]);
+    render(&b, &["--spp", "8", "--sample-range", "3..8"]);
+    assert_eq!((part.samples.clone(), part.planned_spp), (vec![0..3], Some(8)));
     // Parts in either order.
     for order in [[&b, &a], [&a, &b]] {
         let m = merged(&dir.join("m.exr"), &order.map(|p| p.as_path()));
@@ -115,8 +115,8 @@ fn denoised_parts_merge_into_the_whole_denoised_render() {
     let full_path = dir.join("full.exr");
     let full = render(&full_path, &["--spp", "8", "--denoise"]);
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
-    render(&a, &["--sample-range", "0..3", "--denoise"]);
-    render(&b, &["--sample-range", "3..8", "--denoise", "--integrator", "wavefront"]);
+    render(&a, &["--spp", "8", "--sample-range", "0..3", "--denoise"]);
+    render(&b, &["--spp", "8", "--sample-range", "3..8", "--denoise", "--integrator", "wavefront"]);
     let m_path = dir.join("m.exr");
     let stdout = run_validated(umbra().arg("merge").arg(&a).arg(&b).arg("--denoise").arg("-o").arg(&m_path));
     let m = PathExr::read(&m_path).unwrap();
@@ -162,8 +162,8 @@ fn tiles_merge_into_the_whole_render() {
         }
     }
     let (right_a, right_b) = (dir.join("right-a.exr"), dir.join("right-b.exr"));
-    render(&right_a, &["--sample-range", "0..2", "--tile", "25,0,15,30"]);
-    render(&right_b, &["--sample-range", "2..6", "--tile", "25,0,15,30"]);
+    render(&right_a, &["--spp", "6", "--sample-range", "0..2", "--tile", "25,0,15,30"]);
+    render(&right_b, &["--spp", "6", "--sample-range", "2..6", "--tile", "25,0,15,30"]);
     let m = merged(&dir.join("m.exr"), &[&right_a, &left, &right_b]);
     assert_eq!((m.region, m.samples.clone()), (full.region, vec![0..6]));
     assert_close("mean", &m.mean, &full.mean, 8.0);
@@ -186,9 +186,10 @@ fn tiles_merge_into_the_whole_render() {
 fn merge_refuses_parts_of_different_renders() {
     let dir = folder("refused");
     let p = |name: &str| dir.join(name);
-    render(&p("a.exr"), &["--sample-range", "0..2"]);
-    render(&p("overlap.exr"), &["--sample-range", "1..3"]);
-    render(&p("seed.exr"), &["--sample-range", "2..4", "--seed", "7"]);
+    render(&p("a.exr"), &["--spp", "4", "--sample-range", "0..2"]);
+    render(&p("overlap.exr"), &["--spp", "4", "--sample-range", "1..3"]);
+    render(&p("seed.exr"), &["--spp", "4", "--sample-range", "2..4", "--seed", "7"]);
+    render(&p("plan.exr"), &["--spp", "8", "--sample-range", "2..4"]);
     render(&p("t1.exr"), &["--spp", "2", "--tile", "0,0,20,30"]);
     render(&p("t2.exr"), &["--spp", "2", "--tile", "10,0,20,30"]);
     render(&p("t3.exr"), &["--spp", "2", "--tile", "30,0,10,30"]);
@@ -199,9 +200,10 @@ fn merge_refuses_parts_of_different_renders() {
         &[umbra::output::Layer { name: "", channels: &["R", "G", "B"], data: &[0.0; 3] }],
     )
     .unwrap();
-    let cases: [(&str, &[&str], &str); 5] = [
+    let cases: [(&str, &[&str], &str); 6] = [
         ("overlapping samples", &["a.exr", "overlap.exr"], "overlapping sample ranges"),
         ("another seed", &["a.exr", "seed.exr"], "are not parts of one render"),
+        ("another plan", &["a.exr", "plan.exr"], "4 spp"),
         ("overlapping tiles", &["t1.exr", "t2.exr"], "overlap"),
         ("a hole", &["t1.exr", "t3.exr"], "leave holes"),
         ("not umbra's", &["a.exr", "plain.exr"], "no 'umbra.part' attribute"),
@@ -214,13 +216,67 @@ fn merge_refuses_parts_of_different_renders() {
         assert!(stderr.contains(message), "{what}: {stderr}");
         assert!(files.iter().any(|f| stderr.contains(f)), "{what}: no file named: {stderr}");
     }
-    // --sample-range replaces --spp and is the path tracer's.
-    for args in
-        [&["--spp", "4", "--sample-range", "0..2"][..], &["--mode", "hybrid", "--sample-range", "0..2"]]
-    {
+    // --sample-range is a part of the path tracer's --spp, which it needs and may not pass.
+    for args in [
+        &["--sample-range", "0..2"][..],
+        &["--spp", "4", "--sample-range", "2..6"],
+        &["--mode", "hybrid", "--spp", "4", "--sample-range", "0..2"],
+    ] {
         let out =
             umbra().args(["render", "--size", "8x8"]).args(args).arg("-o").arg(p("x.exr")).output().unwrap();
         assert!(!out.status.success(), "{args:?} accepted");
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A lost part is not a whole render: with a sample range or a tile missing, merge refuses,
+/// naming the files and what is missing (samples 2..4 in the middle or at the end, the top or
+/// the left tile), and exits non-zero; `--allow-partial` writes what there is, saying what it
+/// lacks. The merged file keeps the plan, so a partial merge completed later is whole.
+#[test]
+fn merge_refuses_a_lost_part_unless_asked() {
+    let dir = folder("lost");
+    let p = |name: &str| dir.join(name);
+    for (name, range) in [("s0.exr", "0..2"), ("s1.exr", "2..4"), ("s2.exr", "4..6")] {
+        render(&p(name), &["--spp", "6", "--sample-range", range]);
+    }
+    for (name, tile) in [("top.exr", "0,0,40,10"), ("bottom.exr", "0,10,40,20"), ("left.exr", "0,0,10,30")] {
+        render(&p(name), &["--spp", "2", "--tile", tile]);
+    }
+    render(&p("right.exr"), &["--spp", "2", "--tile", "10,0,30,30"]);
+    let cases: [(&[&str], &str); 5] = [
+        (&["s0.exr", "s2.exr"], "samples 2..4 of the render's 0..6"),
+        (&["s0.exr", "s1.exr"], "samples 4..6 of the render's 0..6"),
+        (&["s1.exr", "s2.exr"], "samples 0..2 of the render's 0..6"),
+        (&["bottom.exr"], "rows 0..10 (above)"),
+        (&["right.exr"], "columns 0..10 (left)"),
+    ];
+    for (files, missing) in cases {
+        let paths: Vec<PathBuf> = files.iter().map(|f| p(f)).collect();
+        let parts: Vec<&Path> = paths.iter().map(|p| p.as_path()).collect();
+        let out = merge(&p("m.exr"), &parts);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{files:?}: merged");
+        assert!(stderr.contains(missing) && stderr.contains("missing (a lost part?)"), "{files:?}: {stderr}");
+        assert!(files.iter().all(|f| stderr.contains(f)), "{files:?}: the files not named: {stderr}");
+        assert!(!p("m.exr").exists(), "{files:?}: written");
+        let partial = p("partial.exr");
+        let stderr =
+            run_validated(umbra().arg("merge").args(&parts).arg("--allow-partial").arg("-o").arg(&partial));
+        assert!(stderr.contains("--allow-partial: the merge lacks") && stderr.contains(missing), "{stderr}");
+        std::fs::remove_file(&partial).unwrap();
+    }
+    // A partial merge of two parts, completed by the third: whole, 0..6.
+    run_validated(
+        umbra()
+            .arg("merge")
+            .arg(p("s0.exr"))
+            .arg(p("s2.exr"))
+            .arg("--allow-partial")
+            .arg("-o")
+            .arg(p("ends.exr")),
+    );
+    let whole = merged(&p("m.exr"), &[&p("ends.exr"), &p("s1.exr")]);
+    assert_eq!((whole.samples, whole.planned_spp), (vec![0..6], Some(6)));
     std::fs::remove_dir_all(&dir).ok();
 }

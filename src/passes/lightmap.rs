@@ -275,7 +275,7 @@ impl Lightmaps {
     /// Writes one EXR per map into `dir` (`lightmap-<material>.exr`, layers `emitters` and
     /// `ambient`, channels R, G, B); returns the paths.
     pub fn write_exr(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.to_path_buf(), source: e })?;
+        crate::atomic::create_dir(dir)?;
         let mut paths = Vec::new();
         for (k, m) in self.materials.iter().enumerate() {
             let flat =
@@ -387,7 +387,7 @@ impl OcclusionMaps {
     /// Writes one grey PNG per map into `dir` (`occlusion-<material>.png`, linear values in
     /// 8 bits, as glTF reads an occlusion texture's red channel); returns the paths.
     pub fn write_png(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.to_path_buf(), source: e })?;
+        crate::atomic::create_dir(dir)?;
         let n = (self.size * self.size) as usize;
         let mut paths = Vec::new();
         for (k, m) in self.materials.iter().enumerate() {

@@ -129,7 +129,9 @@ pub struct ProbeGrid {
 impl ProbeGrid {
     /// A grid of cubic cells of side `spacing` (default: the longest side / 8) centred on the
     /// box `bounds`, a probe at each cell's centre (none on the box's faces, where a closed
-    /// room's walls are), at least two per axis (a flat scene gets a layer either side).
+    /// room's walls are), at least two per axis (a flat scene gets a layer either side). A spacing
+    /// that puts fewer than two cells across the box's longest side is refused (it would place
+    /// the probes outside the scene), as is one of more than [`ProbeSettings::MAX_PROBES`] probes.
     pub fn for_bounds(bounds: [[f32; 3]; 2], spacing: Option<f32>) -> Result<Self> {
         let lo = Vec3::from(bounds[0]);
         let hi = Vec3::from(bounds[1]);
@@ -137,6 +139,14 @@ impl ProbeGrid {
         let s = spacing.unwrap_or(extent.max_element() / 8.0);
         if !(s.is_finite() && s > 0.0) {
             return Err(Error::Invalid(format!("probes: no spacing fits a scene of extent {extent}")));
+        }
+        if (extent.max_element() / s).ceil() < 2.0 {
+            return Err(Error::Invalid(format!(
+                "probes: spacing {s} puts fewer than 2 probes across the scene, whose extent is \
+                 {extent} (longest side {}): give a spacing below {}",
+                extent.max_element(),
+                extent.max_element() / 2.0
+            )));
         }
         let counts = (extent / s).ceil().max(Vec3::splat(2.0));
         let total = counts.x as f64 * counts.y as f64 * counts.z as f64;
@@ -443,6 +453,12 @@ mod tests {
         assert_eq!(auto.spacing, [1.0; 3]);
         assert!(ProbeGrid::for_bounds([[0.0; 3], [100.0; 3]], Some(0.1)).is_err());
         assert!(ProbeGrid::for_bounds([[0.0; 3], [0.0; 3]], None).is_err());
+        // One cell across the longest side (the probes 1e9 apart, outside the scene): refused,
+        // naming the extent; two cells are the fewest.
+        let far = ProbeGrid::for_bounds([[0.0; 3], [8.0, 4.0, 1.0]], Some(1e9)).unwrap_err().to_string();
+        assert!(far.contains("fewer than 2 probes") && far.contains("longest side 8"), "{far}");
+        assert!(ProbeGrid::for_bounds([[0.0; 3], [8.0, 4.0, 1.0]], Some(8.0)).is_err());
+        assert_eq!(ProbeGrid::for_bounds([[0.0; 3], [8.0, 4.0, 1.0]], Some(4.0)).unwrap().counts, [2, 2, 2]);
     }
 
     #[test]

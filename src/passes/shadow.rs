@@ -205,6 +205,13 @@ impl ShadowSettings {
     /// The most cascades.
     pub const MAX_CASCADES: u32 = SHADOW_MAX_CASCADES;
 
+    /// The default largest filter radius ([`ShadowSettings::max_radius`]) for maps of `map_size`
+    /// texels: the default's 16, at most an eighth of the map (the most its guard band allows), so
+    /// that on a small map the default of PCSS's search never blocks another method.
+    pub fn default_max_radius(map_size: u32) -> f32 {
+        (map_size as f32 / 8.0).min(Self::default().max_radius)
+    }
+
     /// Checks every setting, naming the one out of range.
     pub fn validate(&self) -> Result<()> {
         let fail = |what: String| Err(Error::Invalid(format!("shadow maps: {what}")));

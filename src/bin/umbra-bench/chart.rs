@@ -2,6 +2,7 @@
 //! series, as SVG and PNG (plotters; text drawn with the embedded DejaVu Sans).
 
 use anyhow::{anyhow, Context as _, Result};
+use image::ImageEncoder as _;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -55,17 +56,20 @@ pub fn write(stem: &Path, chart: &Chart, points: &[ChartPoint]) -> Result<()> {
     // Registering twice is harmless; the font is valid (it is compiled in).
     plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
         .map_err(|_| anyhow!("the embedded font does not load"))?;
+    // Both drawn in memory, then written atomically (umbra::atomic).
     let svg = stem.with_extension("svg");
-    draw(SVGBackend::new(&svg, SIZE).into_drawing_area(), chart, points)
+    let mut text = String::new();
+    draw(SVGBackend::with_string(&mut text, SIZE).into_drawing_area(), chart, points)
         .with_context(|| format!("drawing {}", svg.display()))?;
+    umbra::atomic::write(&svg, text.as_bytes())?;
     let mut pixels = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
     draw(BitMapBackend::with_buffer(&mut pixels, SIZE).into_drawing_area(), chart, points)
         .context("drawing the PNG chart")?;
-    let png = stem.with_extension("png");
-    image::RgbImage::from_raw(SIZE.0, SIZE.1, pixels)
-        .ok_or_else(|| anyhow!("chart buffer size"))?
-        .save(&png)
-        .with_context(|| format!("writing {}", png.display()))?;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&pixels, SIZE.0, SIZE.1, image::ExtendedColorType::Rgb8)
+        .context("encoding the PNG chart")?;
+    umbra::atomic::write(&stem.with_extension("png"), &png)?;
     Ok(())
 }
 

@@ -278,7 +278,7 @@ pub fn write_chart(out: &Path, rows: &[Row]) -> Result<()> {
             error: r.surface_error.max(1e-9),
         })
         .collect();
-    std::fs::create_dir_all(out)?;
+    umbra::atomic::create_dir(out)?;
     chart::write(
         &out.join("implicit"),
         &Chart {

@@ -1083,7 +1083,7 @@ fn run_suite(
     only: &[String],
 ) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
-    std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
+    umbra::atomic::create_dir(&settings.out)?;
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
     if !quick {
         scenes.push(("cornell-point".to_string(), cornell_point_light()));
@@ -1196,10 +1196,9 @@ fn run_suite(
         })).collect::<Vec<_>>(),
     });
     let path = settings.out.join("suite.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
-        .with_context(|| format!("writing {}", path.display()))?;
+    umbra::atomic::write(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     let csv = settings.out.join("suite.csv");
-    std::fs::write(&csv, suite::csv(&results)).with_context(|| format!("writing {}", csv.display()))?;
+    umbra::atomic::write(&csv, suite::csv(&results).as_bytes())?;
     println!("wrote {}, {} and suite-<scene>.svg/.png", path.display(), csv.display());
     Ok(())
 }
@@ -1325,7 +1324,7 @@ fn run_probes(
     lightmap_sizes: &[u32],
 ) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
-    std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
+    umbra::atomic::create_dir(&settings.out)?;
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
     match umbra::scene::Scene::load(sponza) {
         Ok(mut scene) => {
@@ -1366,7 +1365,7 @@ fn run_denoise(
     gltf: &[PathBuf],
 ) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
-    std::fs::create_dir_all(&settings.out).with_context(|| format!("creating {}", settings.out.display()))?;
+    umbra::atomic::create_dir(&settings.out)?;
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
     if !quick {
         for name in ["spheres", "textured"] {
@@ -1474,10 +1473,9 @@ fn read_json(path: &std::path::Path) -> Result<serde_json::Value> {
 
 /// Writes `doc` to `out/name` (creating `out`) and says so.
 fn write_json(out: &std::path::Path, name: &str, doc: &serde_json::Value) -> Result<()> {
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    umbra::atomic::create_dir(out)?;
     let path = out.join(name);
-    std::fs::write(&path, serde_json::to_string_pretty(doc)?)
-        .with_context(|| format!("writing {}", path.display()))?;
+    umbra::atomic::write(&path, serde_json::to_string_pretty(doc)?.as_bytes())?;
     println!("wrote {}", path.display());
     Ok(())
 }

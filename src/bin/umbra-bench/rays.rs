@@ -218,12 +218,11 @@ fn dump(
     bvh: &Bvh,
     kinds: [(&str, &Vec<Ray>, Vec<TraceHit>); 3],
 ) -> Result<()> {
-    use anyhow::Context as _;
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    umbra::atomic::create_dir(dir)?;
     let stem = slug(&scene.name);
     let write = |name: String, bytes: &[u8]| {
         let path = dir.join(name);
-        std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))
+        umbra::atomic::write(&path, bytes)
     };
     let triangles: Vec<f32> =
         scene.triangles.iter().flat_map(|t| t.iter().flat_map(|v| v.to_array())).collect();

@@ -32,7 +32,7 @@
 use super::chart::{self, Chart, ChartPoint};
 use super::num;
 use super::rays::{median, warm_up};
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
 use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
@@ -245,8 +245,7 @@ fn reference(
         / (3.0 * pixels as f64);
     let mut values: Vec<f32> = image.mean.iter().flatten().copied().collect();
     values.push(floor as f32);
-    std::fs::write(&path, bytemuck::cast_slice(&values))
-        .with_context(|| format!("writing {}", path.display()))?;
+    umbra::atomic::write(&path, bytemuck::cast_slice(&values))?;
     Ok((image.mean, floor))
 }
 

@@ -106,7 +106,7 @@ pub fn run(
                 errors[2 + i] = score(["temporal", "temporal_first_iteration"][i], output.read(&ctx)?);
             }
             if let Some(dir) = dump {
-                std::fs::create_dir_all(dir)?;
+                umbra::atomic::create_dir(dir)?;
                 let data: Vec<Vec<f32>> = frames
                     .iter()
                     .map(|(_, image)| image.iter().flat_map(|p| p[..3].to_vec()).collect())

@@ -63,10 +63,11 @@ fn a_kill_or_a_file_size_limit_mid_write_leaves_the_previous_file() {
     let limited = |trap: &str| {
         Command::new("bash")
             .arg("-c")
-            .arg(format!("{trap} ulimit -f 64; exec \"$0\" pattern --size 512x512 -o \"$1\""))
+            .arg(format!("{trap} ulimit -c 0; ulimit -f 64; exec \"$0\" pattern --size 512x512 -o \"$1\""))
             .arg(env!("CARGO_BIN_EXE_umbra"))
             .arg(&png)
-            // The driver's shader cache must not meet the limit first.
+            // (ulimit -c 0: SIGXFSZ dumps core by default, and .ci/run allows cores.) The driver's
+            // shader cache must not meet the limit first.
             .env("MESA_SHADER_CACHE_DISABLE", "true")
             .env("UMBRA_VALIDATION", "1")
             .output()

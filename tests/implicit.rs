@@ -83,6 +83,30 @@ fn the_extension_is_parsed_and_bad_input_named() {
         assert!(err.contains("node 0 ('ball')"), "{err}");
         assert!(err.contains(expected), "{text}: {err}");
     }
+
+    // A subtraction that removes the whole shape renders nothing: loaded with a warning naming
+    // the node (an intersection of parts whose boxes do not meet is refused, above); a box minus
+    // a smaller sphere, a union, and a thin slab warn of nothing.
+    let warnings = |text: &str| Scene::from_glb_bytes("csg.gltf", &gltf_with(text, "")).unwrap().warnings;
+    for empty in [
+        r#"{"subtraction": [{"sphere": {"radius": 0.5}}, {"box": {"halfExtents": [1, 1, 1]}}]}"#,
+        r#"{"subtraction": [{"box": {"halfExtents": [0.5, 0.5, 0.5]}}, {"sphere": {"radius": 1}}]}"#,
+        r#"{"subtraction": [{"sphere": {"radius": 0.5}}, {"sphere": {"radius": 0.6}, "translation": [0.05, 0, 0]}]}"#,
+    ] {
+        let w = warnings(empty);
+        assert!(
+            w.iter().any(|w| w.contains("node 0 ('ball')") && w.contains("empty everywhere")),
+            "{empty}: {w:?}"
+        );
+    }
+    for solid in [
+        r#"{"subtraction": [{"box": {"halfExtents": [1, 1, 1]}}, {"sphere": {"radius": 0.9}}]}"#,
+        r#"{"union": [{"sphere": {"radius": 0.5}}, {"sphere": {"radius": 0.5}, "translation": [3, 0, 0]}]}"#,
+        r#"{"intersection": [{"box": {"halfExtents": [1, 1, 1]}}, {"box": {"halfExtents": [1, 1, 0.001]}}]}"#,
+    ] {
+        let w = warnings(solid);
+        assert!(!w.iter().any(|w| w.contains("empty everywhere")), "{solid}: {w:?}");
+    }
 }
 
 /// A scene of one shape at `world` (no triangles).

@@ -10,6 +10,7 @@ use std::path::Path;
 /// Each top-level module of `src/` (a file or a folder) and its layer.
 const LAYERS: &[(&str, u32)] = &[
     ("error", 0),
+    ("atomic", 0),
     ("kernels", 0),
     ("vk", 0),
     ("procedural", 0),

@@ -458,4 +458,30 @@ fn the_extension_is_read_and_bad_input_named() {
     assert!(scene.materials[0].parallax.is_none(), "parallax kept without its height map");
     assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
     std::fs::remove_dir_all(&dir).ok();
+
+    // A height map on a UV set the mesh lacks is refused (it rendered flat), naming the set and
+    // the primitive; the same map on TEXCOORD_1 loads while the mesh has it.
+    let on_set_1 = json!({ "heightTexture": { "index": 0, "texCoord": 1 }, "scale": 0.1 });
+    load(on_set_1.clone()).expect("TEXCOORD_1 is there");
+    let (mut json, bin) =
+        generate::split_glb(&generate::parallax_square(1.0, 1, 1, &[255], false, Some(on_set_1)));
+    json["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap().remove("TEXCOORD_1");
+    let bytes = generate::glb(&serde_json::to_vec(&json).unwrap(), &bin);
+    let err = Scene::from_glb_bytes("no-uv1.glb", &bytes).unwrap_err().to_string();
+    assert!(err.contains("no-uv1.glb") && err.contains("mesh 0 ('square')"), "{err}");
+    assert!(err.contains("reads TEXCOORD_1, which the primitive does not have"), "{err}");
+
+    // UMBRA_implicit used but not listed in extensionsUsed: loaded, with a warning naming it.
+    let (mut json, bin) =
+        generate::split_glb(&generate::parallax_square(1.0, 1, 1, &[255], false, Some(parallax(0.1, 8, 2))));
+    json.as_object_mut().unwrap().remove("extensionsUsed");
+    let scene =
+        Scene::from_glb_bytes("unlisted.glb", &generate::glb(&serde_json::to_vec(&json).unwrap(), &bin))
+            .expect("an unlisted extension still loads");
+    assert!(scene.materials[0].parallax.is_some());
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("UMBRA_implicit") && w.contains("extensionsUsed")),
+        "{:?}",
+        scene.warnings
+    );
 }

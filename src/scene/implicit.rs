@@ -243,6 +243,27 @@ impl SdfNode {
         }
     }
 
+    /// Whether the shape is empty everywhere, as far as a 33³ grid of points over its box tells:
+    /// its box is empty (an intersection of disjoint parts), or at every point the distance (a
+    /// lower bound of the true one) exceeds half a cell's diagonal, so that balls holding no
+    /// surface cover the box. A shape with any solid part is never called empty; an empty one
+    /// whose field comes closer to 0 than the grid's spacing may pass as not empty.
+    pub fn is_empty(&self) -> bool {
+        let (lo, hi) = self.bounds();
+        if !(lo.is_finite() && hi.is_finite()) {
+            return false;
+        }
+        if lo.cmpgt(hi).any() {
+            return true;
+        }
+        const N: u32 = 32;
+        let step = (hi - lo) / N as f32;
+        let reach = 0.5 * step.length();
+        let grid = (0..=N).flat_map(|i| (0..=N).flat_map(move |j| (0..=N).map(move |k| (i, j, k))));
+        grid.map(|(i, j, k)| lo + step * Vec3::new(i as f32, j as f32, k as f32))
+            .all(|p| self.distance(p) > reach)
+    }
+
     /// The stack depth its postfix program needs.
     pub fn stack_depth(&self) -> usize {
         match self {

@@ -61,6 +61,15 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     scene.warnings.extend(asset.ignored_extensions.clone());
     scene.warnings.extend(posed);
     scene.warnings.extend(frameless);
+    // glTF requires every extension used to be listed; another viewer would drop the shapes.
+    let implicit = !scene.implicits.is_empty() || scene.materials.iter().any(|m| m.parallax.is_some());
+    if implicit && !asset.document.extensions_used().any(|e| e == "UMBRA_implicit") {
+        scene.warnings.push(
+            "UMBRA_implicit is used but not listed in extensionsUsed (glTF requires it): umbra renders \
+             it, other viewers may ignore it silently"
+                .into(),
+        );
+    }
     scene.update_emissive();
     if log::log_enabled!(log::Level::Debug) {
         log::debug!("{name}: {:?}", scene.stats());
@@ -200,6 +209,12 @@ impl<'a> Builder<'a> {
             )));
         }
         let material = self.material_index(material);
+        if root.is_empty() {
+            self.scene.warnings.push(format!(
+                "{label}: UMBRA_implicit: the shape is empty everywhere (its CSG removes all of it): \
+                 nothing renders there"
+            ));
+        }
         let shape = super::ImplicitShape::new(label.clone(), node.index() as u32, material, root, world);
         match shape.world_bounds() {
             Some((lo, hi)) if lo.abs().max(hi.abs()).max_element() <= super::MAX_COORDINATE => {}
@@ -354,6 +369,17 @@ impl<'a> Builder<'a> {
         for primitive in mesh.primitives() {
             if let Some(local) = self.local_primitive(mesh, &primitive, weights, joints.is_some())? {
                 let material = self.material_index(local.material);
+                // A height map on a UV set the primitive lacks would render it flat, silently.
+                if let Some(p) = self.scene.materials[material as usize].parallax {
+                    let set = p.height.tex_coord;
+                    if [local.uv0.is_some(), local.uv1.is_some()].get(set as usize) != Some(&true) {
+                        return Err(self.origin.error(format!(
+                            "{}: its material's parallax height map (UMBRA_implicit) reads TEXCOORD_{set}, \
+                             which the primitive does not have",
+                            super::geometry::label(mesh, &primitive)
+                        )));
+                    }
+                }
                 match joints {
                     Some(joints) => {
                         let posed = skin::pose(&local, joints).map_err(|e| {

@@ -1,5 +1,5 @@
 //! Files written whole or not at all: every file umbra writes (images, probe bakes, lightmaps,
-//! merged renders, benchmark reports) goes through [`write`] or [`write_with`].
+//! merged renders, benchmark reports) goes through [`write()`] or [`write_with`].
 //!
 //! The bytes go to a temporary file beside the target (`.NAME.PID.umbra-tmp`: the same directory,
 //! so that the rename stays on one file system), which is flushed, `fsync`ed and renamed over the
@@ -61,7 +61,7 @@ pub fn write_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> io::Result<(
 
 /// Checks, before any work, that `path` can be written: its directory exists and takes a new
 /// file (probed with a temporary, removed at once), and it is not a directory or a read-only
-/// file. [`write`] checks the same again when it writes.
+/// file. [`write()`] checks the same again when it writes.
 pub fn check_output(path: &Path) -> Result<()> {
     if let Target::Replace { dir, name, .. } = Target::of(path)? {
         let probe = dir.join(temp_name(&name, std::process::id()));

@@ -30,11 +30,13 @@ if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1 '; then
 fi
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json}
 
-# shared/ sits in the checkout on the device machine, beside it here.
+# shared/ sits in the checkout on the device machine, beside it here; umbra-bench's default
+# models (suite's Sponza, paths' and pipelines' sample models) come from UMBRA_ASSETS.
 SPONZA=""
 for dir in shared ../shared; do
     if [ -f "$dir/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb" ]; then
         SPONZA="$dir/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb"
+        export UMBRA_ASSETS="${UMBRA_ASSETS:-$(cd "$dir/assets" && pwd)}"
     fi
 done
 

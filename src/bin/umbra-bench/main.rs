@@ -97,10 +97,11 @@ enum Command {
         /// glTF scenes to run as well (their first camera, or one framing them).
         #[arg(long = "gltf")]
         gltf: Vec<PathBuf>,
-        /// Dabrovic Sponza, lit by a sun along 0.25,-1,0.15 (not in --quick runs; skipped with a
-        /// message when the file is absent).
-        #[arg(long, default_value = "../shared/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb")]
-        sponza: PathBuf,
+        /// Dabrovic Sponza, lit by a sun along 0.25,-1,0.15 (not in --quick runs; default
+        /// $UMBRA_ASSETS/gltf/SponzaDabrovic/sponza_dabrovic.glb; skipped with a message when
+        /// neither names one).
+        #[arg(long)]
+        sponza: Option<PathBuf>,
         /// Run only the scenes of these keys (cornell, cornell-point, spheres, textured,
         /// sponza-sun, a --gltf file's stem); all when absent.
         #[arg(long, value_delimiter = ',')]
@@ -215,9 +216,10 @@ enum Command {
     /// at a sweep of spacings, frame time and error against a converged path-traced reference
     /// (JSON and a Markdown table), on the Cornell box and Dabrovic Sponza under a sun.
     Probes {
-        /// Dabrovic Sponza (skipped with a warning when absent); a sun is added.
-        #[arg(long, default_value = "../shared/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb")]
-        sponza: PathBuf,
+        /// Dabrovic Sponza, a sun added (default $UMBRA_ASSETS/gltf/SponzaDabrovic/
+        /// sponza_dabrovic.glb; skipped with a warning when neither names one).
+        #[arg(long)]
+        sponza: Option<PathBuf>,
         /// More glTF scenes (their first camera, or one framing them).
         #[arg(long = "gltf")]
         gltf: Vec<PathBuf>,
@@ -370,9 +372,9 @@ enum Command {
         /// file of each model under --assets.
         scenes: Vec<PathBuf>,
         /// Sample models for the default set (of each subfolder its .glb, glTF-Binary/*.glb,
-        /// .gltf or glTF/*.gltf, the first found).
-        #[arg(long, default_value = "../shared/assets/gltf")]
-        assets: PathBuf,
+        /// .gltf or glTF/*.gltf, the first found); default $UMBRA_ASSETS/gltf, none without it.
+        #[arg(long)]
+        assets: Option<PathBuf>,
         /// Image size.
         #[arg(long, default_value = "128x128", value_parser = cli::parse_size)]
         size: (u32, u32),
@@ -418,9 +420,9 @@ enum Command {
         /// glTF scenes; when none are given, the embedded Cornell box, scenes/many-lights.glb and
         /// DamagedHelmet under --assets.
         scenes: Vec<PathBuf>,
-        /// Sample models for the default set.
-        #[arg(long, default_value = "../shared/assets/gltf")]
-        assets: PathBuf,
+        /// Sample models for the default set; default $UMBRA_ASSETS/gltf, none without it.
+        #[arg(long)]
+        assets: Option<PathBuf>,
         /// Folded pipelines made per kernel and scene (the median is reported); the unfolded one
         /// is made once.
         #[arg(long, default_value_t = 3)]
@@ -896,7 +898,7 @@ fn run(cli: Cli) -> Result<()> {
                     env: env_color,
                     out,
                 };
-                run_probes(&settings, &sponza, &gltf, &lightmap_sizes)?
+                run_probes(&settings, sponza.as_deref(), &gltf, &lightmap_sizes)?
             }
         },
         Command::Paths {
@@ -929,7 +931,7 @@ fn run(cli: Cli) -> Result<()> {
                     lanes,
                 };
                 let scenes = if scenes.is_empty() {
-                    default_path_scenes(&assets)?
+                    default_path_scenes(external(assets, "").as_deref())?
                 } else {
                     named_path_scenes(&scenes)?
                 };
@@ -945,10 +947,11 @@ fn run(cli: Cli) -> Result<()> {
                 let ctx = Context::new(&ContextDesc::default())?;
                 let scenes = if scenes.is_empty() {
                     let mut set = vec![("cornell-box".to_string(), umbra::scene::Scene::cornell_box())];
-                    set.extend(load_gltf(&[
-                        PathBuf::from("scenes/many-lights.glb"),
-                        assets.join("DamagedHelmet/DamagedHelmet.glb"),
-                    ])?);
+                    set.extend(load_gltf(&[PathBuf::from("scenes/many-lights.glb")])?);
+                    match external(assets, "DamagedHelmet/DamagedHelmet.glb") {
+                        Some(helmet) => set.extend(load_gltf(&[helmet])?),
+                        None => log::warn!("DamagedHelmet left out: give --assets DIR or set UMBRA_ASSETS"),
+                    }
                     set
                 } else {
                     load_gltf(&scenes)?
@@ -1021,7 +1024,7 @@ fn run(cli: Cli) -> Result<()> {
                     out,
                 }
             };
-            run_suite(&settings, quick, &gltf, &sponza, &only)?
+            run_suite(&settings, quick, &gltf, sponza.as_deref(), &only)?
         }
     }
     Ok(())
@@ -1079,7 +1082,7 @@ fn run_suite(
     settings: &suite::SuiteSettings,
     quick: bool,
     gltf: &[PathBuf],
-    sponza: &std::path::Path,
+    sponza: Option<&std::path::Path>,
     only: &[String],
 ) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
@@ -1097,20 +1100,7 @@ fn run_suite(
         }
     }
     if !quick {
-        match umbra::scene::Scene::load(sponza) {
-            Ok(mut scene) => {
-                add_sun(&mut scene, DEFAULT_SUN);
-                let stem =
-                    sponza.file_stem().map_or_else(|| "sponza".into(), |s| s.to_string_lossy().into_owned());
-                scene.name = format!("{stem} under a sun");
-                scenes.push(("sponza-sun".into(), scene));
-            }
-            Err(e) => {
-                eprintln!(
-                    "skipping Sponza under a sun: {e} (../shared/assets is absent on CI; --sponza PATH)"
-                )
-            }
-        }
+        scenes.extend(sponza_under_a_sun(sponza));
     }
     scenes.extend(load_gltf(gltf)?);
     if !only.is_empty() {
@@ -1319,23 +1309,14 @@ fn add_sun(scene: &mut umbra::scene::Scene, direction: [f32; 3]) {
 /// The probes comparison on the Cornell box, Sponza under a sun (when present) and `gltf`.
 fn run_probes(
     settings: &suite::SuiteSettings,
-    sponza: &std::path::Path,
+    sponza: Option<&std::path::Path>,
     gltf: &[PathBuf],
     lightmap_sizes: &[u32],
 ) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
     umbra::atomic::create_dir(&settings.out)?;
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
-    match umbra::scene::Scene::load(sponza) {
-        Ok(mut scene) => {
-            add_sun(&mut scene, DEFAULT_SUN);
-            let stem =
-                sponza.file_stem().map_or_else(|| "sponza".into(), |s| s.to_string_lossy().into_owned());
-            scene.name = format!("{stem} under a sun");
-            scenes.push(("sponza-sun".into(), scene));
-        }
-        Err(e) => log::warn!("skipping Sponza: {e}"),
-    }
+    scenes.extend(sponza_under_a_sun(sponza));
     scenes.extend(load_gltf(gltf)?);
     let mut results = Vec::new();
     for (key, scene) in &scenes {
@@ -1401,10 +1382,37 @@ fn load_gltf(gltf: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
         .collect()
 }
 
+/// `path`, or else `$UMBRA_ASSETS/gltf/<within>` (the external asset collection, as the tests read
+/// it); `None` when neither names one: nothing reads a folder beside the checkout unasked.
+fn external(path: Option<PathBuf>, within: &str) -> Option<PathBuf> {
+    path.or_else(|| std::env::var_os("UMBRA_ASSETS").map(|d| PathBuf::from(d).join("gltf").join(within)))
+}
+
+/// Dabrovic Sponza from `path` (or `$UMBRA_ASSETS`) under the default sun, keyed `sponza-sun`;
+/// left out, saying why, when neither names it or it does not load.
+fn sponza_under_a_sun(path: Option<&std::path::Path>) -> Option<(String, umbra::scene::Scene)> {
+    let Some(path) = external(path.map(PathBuf::from), "SponzaDabrovic/sponza_dabrovic.glb") else {
+        log::warn!("skipping Sponza under a sun: give --sponza PATH or set UMBRA_ASSETS");
+        return None;
+    };
+    match umbra::scene::Scene::load(&path) {
+        Ok(mut scene) => {
+            add_sun(&mut scene, DEFAULT_SUN);
+            let stem = path.file_stem().map_or_else(|| "sponza".into(), |s| s.to_string_lossy().into_owned());
+            scene.name = format!("{stem} under a sun");
+            Some(("sponza-sun".into(), scene))
+        }
+        Err(e) => {
+            log::warn!("skipping Sponza under a sun: {e}");
+            None
+        }
+    }
+}
+
 /// `umbra-bench paths`'s default set: the embedded Cornell box, the repository's scenes/*.glb
 /// and one file of each model folder under `assets` (skipped with a warning when absent): its
 /// first .glb, else its glTF-Binary's, else its first .gltf, else its glTF folder's.
-fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::scene::Scene)>> {
+fn default_path_scenes(assets: Option<&std::path::Path>) -> Result<Vec<(String, umbra::scene::Scene)>> {
     let files_in = |dir: &std::path::Path, ext: &str| -> Vec<PathBuf> {
         let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
             .into_iter()
@@ -1417,8 +1425,9 @@ fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::s
         files
     };
     let mut files = files_in(std::path::Path::new("scenes"), "glb");
-    match std::fs::read_dir(assets) {
-        Ok(entries) => {
+    match assets.map(|dir| (dir, std::fs::read_dir(dir))) {
+        None => log::warn!("no --assets and no UMBRA_ASSETS: the sample models are left out"),
+        Some((_, Ok(entries))) => {
             let mut models: Vec<PathBuf> =
                 entries.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect();
             models.sort();
@@ -1430,7 +1439,7 @@ fn default_path_scenes(assets: &std::path::Path) -> Result<Vec<(String, umbra::s
                 files.extend(found.into_iter().next());
             }
         }
-        Err(e) => log::warn!("{}: {e}; the sample models are left out", assets.display()),
+        Some((dir, Err(e))) => log::warn!("{}: {e}; the sample models are left out", dir.display()),
     }
     // One that does not load at all is left out with its error.
     let mut scenes = vec![("cornell-box (embedded)".to_string(), umbra::scene::Scene::cornell_box())];

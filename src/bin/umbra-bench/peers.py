@@ -61,7 +61,10 @@ def trace(scene, rays, kind):
 
 def rays(args):
     if not args.gltf:
-        args.gltf = ["../shared/assets/gltf/SponzaDabrovic/sponza_dabrovic.glb"]
+        assets = os.environ.get("UMBRA_ASSETS")
+        if not assets:
+            sys.exit("peers.py rays: name the scenes with --gltf, or set UMBRA_ASSETS (Sponza is taken from it)")
+        args.gltf = [str(Path(assets) / "gltf/SponzaDabrovic/sponza_dabrovic.glb")]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 

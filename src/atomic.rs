@@ -51,7 +51,7 @@ pub fn write_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> io::Result<(
             }
             // The rename is durable once the directory is; a file system that cannot sync a
             // directory has still replaced the file whole.
-            if let Ok(d) = File::open(if dir.as_os_str().is_empty() { Path::new(".") } else { &dir }) {
+            if let Ok(d) = File::open(&dir) {
                 let _ = d.sync_all();
             }
             Ok(())
@@ -68,7 +68,7 @@ pub fn check_output(path: &Path) -> Result<()> {
         OpenOptions::new().write(true).create_new(true).open(&probe).map_err(|e| {
             let why = match e.kind() {
                 io::ErrorKind::PermissionDenied | io::ErrorKind::ReadOnlyFilesystem => {
-                    format!("cannot create a file in {}: {}", display_dir(&dir), io_message(&e))
+                    format!("cannot create a file in {}: {}", dir.display(), io_message(&e))
                 }
                 _ => io_message(&e),
             };
@@ -134,7 +134,8 @@ pub(crate) fn io_message(e: &io::Error) -> String {
 enum Target {
     /// An existing file that is not a regular one: written in place.
     InPlace(PathBuf),
-    /// A regular file, existing or not (symbolic links followed): replaced by a rename in `dir`.
+    /// A regular file, existing or not (symbolic links followed): replaced by a rename in `dir`
+    /// (its folder, `.` for a bare name).
     Replace { real: PathBuf, dir: PathBuf, name: std::ffi::OsString },
 }
 
@@ -162,31 +163,24 @@ impl Target {
         let Some(name) = real.file_name().map(|n| n.to_os_string()) else {
             return err(io::ErrorKind::InvalidInput, "names no file");
         };
-        let dir = real.parent().map(Path::to_path_buf).unwrap_or_default();
-        let shown = if dir.as_os_str().is_empty() { Path::new(".") } else { &dir };
-        match std::fs::metadata(shown) {
+        let dir = folder_of(&real).to_path_buf();
+        match std::fs::metadata(&dir) {
             Ok(m) if m.is_dir() => Ok(Target::Replace { real, dir, name }),
             Ok(_) => Err(Error::io(
                 path,
-                io::Error::new(
-                    io::ErrorKind::NotADirectory,
-                    format!("{} is not a directory", shown.display()),
-                ),
+                io::Error::new(io::ErrorKind::NotADirectory, format!("{} is not a directory", dir.display())),
             )),
             Err(e) => Err(Error::io(
                 path,
-                io::Error::new(e.kind(), format!("its folder {}: {}", shown.display(), io_message(&e))),
+                io::Error::new(e.kind(), format!("its folder {}: {}", dir.display(), io_message(&e))),
             )),
         }
     }
 }
 
-fn display_dir(dir: &Path) -> String {
-    if dir.as_os_str().is_empty() {
-        ".".into()
-    } else {
-        dir.display().to_string()
-    }
+/// The folder of `path`: its parent, `.` for a bare name.
+fn folder_of(path: &Path) -> &Path {
+    path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."))
 }
 
 /// `.NAME.PID.umbra-tmp`.
@@ -221,8 +215,7 @@ fn write_temp(
 /// runs (on Linux, read from /proc; elsewhere those a day old).
 fn remove_leftovers(dir: &Path, name: &std::ffi::OsStr) {
     let Some(name) = name.to_str() else { return };
-    let shown = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
-    let Ok(entries) = std::fs::read_dir(shown) else { return };
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
     let prefix = format!(".{name}.");
     let proc = Path::new("/proc/self").exists();
     for entry in entries.flatten() {
@@ -260,7 +253,7 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
     let identity = |p: &Path| -> Option<PathBuf> {
         std::fs::canonicalize(p).ok().or_else(|| {
-            let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            let dir = folder_of(p);
             Some(std::fs::canonicalize(dir).ok()?.join(p.file_name()?))
         })
     };

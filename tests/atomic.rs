@@ -3,26 +3,10 @@
 //! read-only target, a device that is full, a folder that is missing or a file. Each leaves the
 //! previous file byte for byte and no temporary beside it.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use umbra::atomic::{self, InjectedFault};
-
-/// A fresh folder for one test's files.
-fn folder(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("umbra-atomic-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// The names in `dir`, sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
 
 const OLD: &[u8] = b"the user's previous file, which must survive every failed write";
 
@@ -33,14 +17,14 @@ fn new_bytes() -> Vec<u8> {
 #[test]
 fn a_write_replaces_the_file_and_keeps_its_permissions() {
     use std::os::unix::fs::PermissionsExt;
-    let dir = folder("replace");
+    let dir = common::fresh_folder("atomic-replace");
     let path = dir.join("out.png");
     std::fs::write(&path, OLD).unwrap();
     std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o640)).unwrap();
     atomic::write(&path, &new_bytes()).unwrap();
     assert_eq!(std::fs::read(&path).unwrap(), new_bytes());
     assert_eq!(std::fs::metadata(&path).unwrap().permissions().mode() & 0o777, 0o640);
-    assert_eq!(names(&dir), ["out.png"]);
+    assert_eq!(common::file_names(&dir), ["out.png"]);
     // A new file, and a path through a symbolic link: the link's target is replaced, the link kept.
     let fresh = dir.join("fresh.exr");
     atomic::write(&fresh, b"x").unwrap();
@@ -56,7 +40,7 @@ fn a_write_replaces_the_file_and_keeps_its_permissions() {
 /// temporary. The same faults on a file that did not exist leave no file.
 #[test]
 fn every_injected_fault_leaves_the_previous_file() {
-    let dir = folder("faults");
+    let dir = common::fresh_folder("atomic-faults");
     let path = dir.join("render.exr");
     let bytes = new_bytes();
     let faults = [0, 1, 4_095, 65_536, bytes.len() as u64 - 1]
@@ -78,9 +62,9 @@ fn every_injected_fault_leaves_the_previous_file() {
             }
             if existing {
                 assert_eq!(std::fs::read(&path).unwrap(), OLD, "{fault:?}");
-                assert_eq!(names(&dir), ["render.exr"], "{fault:?}");
+                assert_eq!(common::file_names(&dir), ["render.exr"], "{fault:?}");
             } else {
-                assert!(names(&dir).is_empty(), "{fault:?}: {:?}", names(&dir));
+                assert!(common::file_names(&dir).is_empty(), "{fault:?}: {:?}", common::file_names(&dir));
             }
         }
     }
@@ -93,7 +77,7 @@ fn every_injected_fault_leaves_the_previous_file() {
 /// An encoder that fails after writing part of its output: its error, the previous file.
 #[test]
 fn a_failing_encoder_leaves_the_previous_file() {
-    let dir = folder("encoder");
+    let dir = common::fresh_folder("atomic-encoder");
     let path = dir.join("chart.svg");
     std::fs::write(&path, OLD).unwrap();
     let err = atomic::write_with(&path, |w| {
@@ -103,7 +87,7 @@ fn a_failing_encoder_leaves_the_previous_file() {
     .unwrap_err();
     assert_eq!(err.to_string(), format!("{}: the encoder gave up", path.display()));
     assert_eq!(std::fs::read(&path).unwrap(), OLD);
-    assert_eq!(names(&dir), ["chart.svg"]);
+    assert_eq!(common::file_names(&dir), ["chart.svg"]);
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -111,11 +95,9 @@ fn a_failing_encoder_leaves_the_previous_file() {
 /// directory, a missing folder and a file where the folder should be are named in words.
 #[test]
 fn targets_that_cannot_be_replaced_are_named() {
-    use std::os::unix::fs::PermissionsExt;
-    let dir = folder("targets");
+    let dir = common::fresh_folder("atomic-targets");
     let ro = dir.join("ro.exr");
-    std::fs::write(&ro, OLD).unwrap();
-    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o444)).unwrap();
+    common::read_only_file(&ro, OLD);
     for err in [atomic::check_output(&ro).unwrap_err(), atomic::write(&ro, b"new").unwrap_err()] {
         assert!(err.to_string().contains("ro.exr: a read-only file: umbra does not replace it"), "{err}");
     }
@@ -134,7 +116,7 @@ fn targets_that_cannot_be_replaced_are_named() {
     let err = atomic::create_dir(&file).unwrap_err().to_string();
     assert_eq!(err, format!("{}: not a directory", file.display()));
     // The checks leave nothing behind.
-    assert_eq!(names(&dir), ["file", "ro.exr"]);
+    assert_eq!(common::file_names(&dir), ["file", "ro.exr"]);
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -150,7 +132,7 @@ fn a_full_device_is_an_error() {
 /// of a running process (pid 1), and the temporaries of other targets, are kept.
 #[test]
 fn leftovers_of_killed_writers_are_removed() {
-    let dir = folder("leftovers");
+    let dir = common::fresh_folder("atomic-leftovers");
     let path = dir.join("frame.png");
     let dead = dir.join(".frame.png.4000000000.umbra-tmp");
     let running = dir.join(".frame.png.1.umbra-tmp");
@@ -159,7 +141,10 @@ fn leftovers_of_killed_writers_are_removed() {
         std::fs::write(p, b"partial").unwrap();
     }
     atomic::write(&path, b"frame").unwrap();
-    assert_eq!(names(&dir), [".frame.png.1.umbra-tmp", ".other.png.4000000000.umbra-tmp", "frame.png"]);
+    assert_eq!(
+        common::file_names(&dir),
+        [".frame.png.1.umbra-tmp", ".other.png.4000000000.umbra-tmp", "frame.png"]
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -167,7 +152,7 @@ fn leftovers_of_killed_writers_are_removed() {
 /// refused naming both; distinct files pass.
 #[test]
 fn outputs_that_name_an_input_are_refused() {
-    let dir = folder("distinct");
+    let dir = common::fresh_folder("atomic-distinct");
     let scene = dir.join("scene.glb");
     std::fs::write(&scene, b"glTF").unwrap();
     std::os::unix::fs::symlink(&scene, dir.join("soft.glb")).unwrap();

@@ -21,9 +21,7 @@ fn tiny() -> ProbeSettings {
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("umbra-bake-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::fresh_folder(&format!("bake-{name}"))
 }
 
 /// The error of a load that must fail (`ProbeVolume` is not `Debug`).

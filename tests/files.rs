@@ -5,21 +5,13 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn umbra() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_umbra"));
     command.env("UMBRA_VALIDATION", "1");
     command
-}
-
-/// A fresh folder for one test's files.
-fn folder(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("umbra-files-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 fn stderr(out: &Output) -> String {
@@ -37,16 +29,6 @@ fn refused(out: &Output, words: &[&str]) {
     }
 }
 
-/// The names in `dir`, sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 const OLD: &[u8] = b"the user's previous image";
 
 /// `umbra pattern` (a quick GPU render) writing a 512x512 PNG (its blue channel is noise: far over
@@ -57,7 +39,7 @@ const OLD: &[u8] = b"the user's previous image";
 /// run's temporary and writes the PNG.
 #[test]
 fn a_kill_or_a_file_size_limit_mid_write_leaves_the_previous_file() {
-    let dir = folder("limit");
+    let dir = common::fresh_folder("files-limit");
     let png = dir.join("pattern.png");
     std::fs::write(&png, OLD).unwrap();
     let limited = |trap: &str| {
@@ -76,20 +58,20 @@ fn a_kill_or_a_file_size_limit_mid_write_leaves_the_previous_file() {
     let ignored = limited("trap '' XFSZ;");
     refused(&ignored, &["pattern.png: file too large"]);
     assert_eq!(std::fs::read(&png).unwrap(), OLD);
-    assert_eq!(names(&dir), ["pattern.png"]);
+    assert_eq!(common::file_names(&dir), ["pattern.png"]);
 
     let killed = limited("");
     use std::os::unix::process::ExitStatusExt;
     assert_eq!(killed.status.signal(), Some(25), "not killed by SIGXFSZ: {}", stderr(&killed));
     assert_eq!(std::fs::read(&png).unwrap(), OLD);
-    let left = names(&dir);
+    let left = common::file_names(&dir);
     assert!(
         left.len() == 2 && left[0].starts_with(".pattern.png.") && left[0].ends_with(".umbra-tmp"),
         "{left:?}"
     );
 
     common::run_validated(umbra().args(["pattern", "--size", "256x256", "-o"]).arg(&png));
-    assert_eq!(names(&dir), ["pattern.png"], "the killed run's temporary is removed");
+    assert_eq!(common::file_names(&dir), ["pattern.png"], "the killed run's temporary is removed");
     assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -98,8 +80,7 @@ fn a_kill_or_a_file_size_limit_mid_write_leaves_the_previous_file() {
 /// user's file as it was; the read-only and missing-folder cases before any rendering.
 #[test]
 fn unwritable_outputs_are_errors() {
-    use std::os::unix::fs::PermissionsExt;
-    let dir = folder("unwritable");
+    let dir = common::fresh_folder("files-unwritable");
     let tiny = ["--size", "16x16", "--spp", "1"];
     // A full disk: full.png links to /dev/full, which takes no byte.
     let full = dir.join("full.png");
@@ -108,8 +89,7 @@ fn unwritable_outputs_are_errors() {
     refused(&out, &["full.png: no space left on device"]);
     std::fs::remove_file(&full).unwrap();
     let ro = dir.join("ro.exr");
-    std::fs::write(&ro, OLD).unwrap();
-    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o444)).unwrap();
+    common::read_only_file(&ro, OLD);
     let out = umbra().args(["render", "-o"]).arg(&ro).args(tiny).output().unwrap();
     refused(&out, &["ro.exr: a read-only file: umbra does not replace it"]);
     assert!(!stderr(&out).contains("pathtrace:"), "rendered before refusing");
@@ -120,7 +100,7 @@ fn unwritable_outputs_are_errors() {
     let out = umbra().args(["bake", "--lightmaps"]).arg(&ro).output().unwrap();
     refused(&out, &["ro.exr: not a directory"]);
     assert_eq!(stderr(&out).matches("not a directory").count(), 1, "{}", stderr(&out));
-    assert_eq!(names(&dir), ["ro.exr"]);
+    assert_eq!(common::file_names(&dir), ["ro.exr"]);
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -128,7 +108,7 @@ fn unwritable_outputs_are_errors() {
 /// refused naming both, and a bake's output must end in .probes: nothing is overwritten.
 #[test]
 fn outputs_that_name_an_input_are_refused() {
-    let dir = folder("inputs");
+    let dir = common::fresh_folder("files-inputs");
     let scene = dir.join("scene.glb");
     std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.glb"), &scene).unwrap();
     let sky = dir.join("sky.exr");
@@ -184,7 +164,7 @@ fn outputs_that_name_an_input_are_refused() {
 /// part.
 #[test]
 fn merge_names_foreign_and_truncated_files() {
-    let dir = folder("foreign");
+    let dir = common::fresh_folder("files-foreign");
     let part = dir.join("part.exr");
     common::run_validated(
         umbra().args(["render", "--size", "8x8", "--spp", "2", "--sample-range", "0..1", "-o"]).arg(&part),

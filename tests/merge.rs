@@ -18,9 +18,7 @@ fn umbra() -> Command {
 
 /// A fresh folder for one test's files.
 fn folder(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("umbra-merge-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::fresh_folder(&format!("merge-{name}"))
 }
 
 /// `umbra render` of the Cornell box at 40×30 with `extra` arguments, into `out`.

@@ -49,6 +49,31 @@ impl Drop for Gpu {
     }
 }
 
+/// A fresh, empty folder for one test's files: `umbra-<name>-<pid>` in the temporary directory.
+pub fn fresh_folder(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("umbra-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The names of the entries of `dir`, sorted.
+pub fn file_names(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Writes `bytes` to `path` and makes it read-only (mode 0444).
+pub fn read_only_file(path: &std::path::Path, bytes: &[u8]) {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::write(path, bytes).unwrap();
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o444)).unwrap();
+}
+
 /// The external asset collection (larger Khronos models, Sponza, HDR maps) that `UMBRA_ASSETS`
 /// names, with its `gltf/` folder; `None` when unset, and the tests over it then skip with a note
 /// (a clone alone passes `cargo test`). Set to a folder without `gltf/`, it panics: a wrong path

@@ -377,6 +377,24 @@ fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> 
     for (i, b) in scene_part.iter().enumerate() {
         out.push_str(&binding_glsl(k.name, i, b)?);
     }
+    // The walls real GPUs enforce, checked here rather than found by a user's driver.
+    let count = scene_part.len() + k.bindings.len();
+    if count > MAX_KERNEL_BINDINGS as usize {
+        return Err(format!(
+            "kernel {}: {count} bindings ({} of the scene, {} its own), more than the \
+             {MAX_KERNEL_BINDINGS} push descriptors a kernel may take (maxPushDescriptors on most GPUs)",
+            k.name,
+            scene_part.len(),
+            k.bindings.len()
+        ));
+    }
+    if k.spec.len() > KERNEL_SPEC_IDS as usize {
+        return Err(format!(
+            "kernel {}: {} specialization constants of its own, more than its id range's {KERNEL_SPEC_IDS}",
+            k.name,
+            k.spec.len()
+        ));
+    }
     let first = if k.scene == "none" { 0 } else { scene.len() };
     for (i, b) in k.bindings.iter().enumerate() {
         out.push_str(&binding_glsl(k.name, first + i, b)?);

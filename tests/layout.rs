@@ -369,3 +369,22 @@ fn interface_check_detects_swapped_bindings() {
     let other_push = KernelInterface { push_type: "DeferredParams", ..*pt };
     assert!(!check_interface(&pathtrace, &other_push, &pt.numbered_bindings()).is_empty());
 }
+
+/// The walls real GPUs enforce (build.rs and compile-time assertions refuse a kernel past them;
+/// this prints each wall's closest kernel, so a review sees the room left): bindings against
+/// `maxPushDescriptors`, push constants against 128 bytes, own specialization constants against
+/// their id range.
+#[test]
+fn kernels_stay_inside_the_walls_gpus_enforce() {
+    use umbra::gpu::layout::{KERNEL_SPEC_IDS, MAX_KERNEL_BINDINGS, MAX_PUSH_CONSTANT_BYTES};
+    let all = kernels::all();
+    let most =
+        |f: &dyn Fn(&KernelInterface) -> u32| all.iter().map(|k| (f(k), k.name)).max().expect("kernels");
+    let bindings = most(&|k| k.numbered_bindings().len() as u32);
+    let push = most(&|k| k.push_size);
+    let spec = most(&|k| k.spec.len() as u32);
+    eprintln!("bindings: {bindings:?} of {MAX_KERNEL_BINDINGS}; push constants: {push:?} of {MAX_PUSH_CONSTANT_BYTES} bytes; own specialization constants: {spec:?} of {KERNEL_SPEC_IDS}");
+    assert!(
+        bindings.0 <= MAX_KERNEL_BINDINGS && push.0 <= MAX_PUSH_CONSTANT_BYTES && spec.0 <= KERNEL_SPEC_IDS
+    );
+}

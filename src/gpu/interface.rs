@@ -93,16 +93,41 @@ pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 13] = [
     ("thickness_map", 1 << 19),
 ];
 
+// Specialization-constant ids come in named ranges with room to grow, each checked below when
+// umbra is compiled: the scene features `0..FEATURE_SPEC_IDS` (one per `SCENE_FEATURES` entry, its
+// index), scene-wide constants from `BVH_STACK_SPEC_ID` up to `FIRST_KERNEL_SPEC_ID`, then each
+// kernel's own, at most `KERNEL_SPEC_IDS` of them (build.rs refuses a kernel with more).
+
+/// The ids reserved for scene features: [`SCENE_FEATURES`] may grow to this many.
+pub const FEATURE_SPEC_IDS: u32 = 64;
+
 /// The specialization-constant id of `BVH_STACK` in kernels specialised on `shallow_bvh`: the
 /// entries of the walk's register stack, the BVH's stack depth
 /// ([`crate::bvh::gpu::GpuBvhNode::stack_depth`], at least 1), so that a shallow BVH's walk moves
 /// no more registers than it fills (`bvh.glsl`). A plain constant, [`BVH_REGISTERS`], in the
-/// other kernels that trace.
-pub const BVH_STACK_SPEC_ID: u32 = 31;
+/// other kernels that trace. The first of the scene-wide constants' range.
+pub const BVH_STACK_SPEC_ID: u32 = FEATURE_SPEC_IDS;
 
 /// The specialization-constant id of a kernel's first own constant (`spec: {...}` below); the
-/// others follow in order (room left for scene features to come).
-pub const FIRST_KERNEL_SPEC_ID: u32 = 32;
+/// others follow in order. Ids from [`BVH_STACK_SPEC_ID`] up to here are for scene-wide
+/// constants to come.
+pub const FIRST_KERNEL_SPEC_ID: u32 = FEATURE_SPEC_IDS + 32;
+
+/// The most specialization constants of a kernel's own.
+pub const KERNEL_SPEC_IDS: u32 = 64;
+
+/// The most bindings (the scene's and its own) a kernel may declare: umbra binds a kernel's
+/// resources as one push-descriptor set, and `maxPushDescriptors` is 32 on most GPUs
+/// ([`crate::vk::REQUIRED_PUSH_DESCRIPTORS`], which a device must offer). build.rs refuses a kernel
+/// with more.
+pub const MAX_KERNEL_BINDINGS: u32 = 32;
+
+/// The most bytes of push constants a kernel may take: Vulkan's guaranteed
+/// `maxPushConstantsSize`. Checked for every kernel when umbra is compiled (`gpu/layout.rs`).
+pub const MAX_PUSH_CONSTANT_BYTES: u32 = 128;
+
+const _: () = assert!(SCENE_FEATURES.len() as u32 <= FEATURE_SPEC_IDS, "scene features past their id range");
+const _: () = assert!(BVH_STACK_SPEC_ID < FIRST_KERNEL_SPEC_ID, "scene-wide ids past their range");
 
 gpu_structs! {
     /// A pinhole or orthographic camera as every kernel that casts rays from it reads it

@@ -310,6 +310,11 @@ macro_rules! kernels {
                     /// The kernel's push constants.
                     pub type Push = $push;
 
+                    const _: () = assert!(
+                        std::mem::size_of::<$push>() <= MAX_PUSH_CONSTANT_BYTES as usize,
+                        concat!("kernel ", stringify!($kernel), ": push constants over MAX_PUSH_CONSTANT_BYTES")
+                    );
+
                     /// The kernel's own specialization constants (the scene's features come from
                     /// the scene).
                     #[derive(Clone, Copy, Debug, PartialEq)]
@@ -364,6 +369,9 @@ macro_rules! kernels {
 }
 
 include!("interface.rs");
+
+// The kernels' binding wall is the push descriptors a device must offer.
+const _: () = assert!(MAX_KERNEL_BINDINGS == crate::vk::REQUIRED_PUSH_DESCRIPTORS);
 
 /// The Rust type of [`GpuMaterial::tex_transform`]: its 40 rows (two per texture slot). A newtype
 /// because the standard library derives `Default` only for arrays of up to 32 elements.

@@ -49,6 +49,12 @@ pub struct HostDevice {
     pub allocator: Option<Arc<Mutex<Allocator>>>,
 }
 
+/// The push descriptors umbra's kernels may bind (each binds its resources by one push-descriptor
+/// set): `maxPushDescriptors` on most GPUs. The kernels' interface is checked against it when
+/// umbra is built (`src/gpu/interface.rs`, `MAX_KERNEL_BINDINGS`), and a device that offers fewer
+/// is refused when the context is made, not when a kernel first binds past it.
+pub const REQUIRED_PUSH_DESCRIPTORS: u32 = 32;
+
 /// What umbra knows about the chosen device.
 #[derive(Debug, Clone)]
 pub struct DeviceInfo {
@@ -70,6 +76,9 @@ pub struct DeviceInfo {
     pub max_compute_work_group_count: [u32; 3],
     /// Subgroup size (8 on lavapipe, 32 on NVIDIA): never assume one.
     pub subgroup_size: u32,
+    /// The most descriptors one push-descriptor set holds (`maxPushDescriptors`: 32 on most
+    /// GPUs and on lavapipe); at least [`REQUIRED_PUSH_DESCRIPTORS`] on a device umbra runs on.
+    pub max_push_descriptors: u32,
     /// Vulkan API version of the device.
     pub api_version: u32,
 }
@@ -370,6 +379,10 @@ impl Context {
                 instance.destroy_instance(None);
             }
         };
+        if let Err(missing) = check_push_descriptors(info.max_push_descriptors) {
+            cleanup(&device);
+            return Err(Error::Unsupported { device: info.name.clone(), missing });
+        }
         let allocator = match allocator {
             Some(a) => a,
             None => {
@@ -573,6 +586,17 @@ fn create_instance(entry: &ash::Entry, log: Option<&ValidationLog>) -> Result<as
 }
 
 /// The compute queue family of a device that can run umbra, or why it cannot.
+/// A device's `maxPushDescriptors` against [`REQUIRED_PUSH_DESCRIPTORS`].
+fn check_push_descriptors(max: u32) -> Result<(), String> {
+    if max < REQUIRED_PUSH_DESCRIPTORS {
+        return Err(format!(
+            "maxPushDescriptors is {max}, and umbra's kernels push up to {REQUIRED_PUSH_DESCRIPTORS} \
+             descriptors"
+        ));
+    }
+    Ok(())
+}
+
 fn check_device(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<u32, String> {
     // SAFETY: valid instance and physical device.
     unsafe {
@@ -599,6 +623,10 @@ fn check_device(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<u32,
         if f13.synchronization2 == vk::FALSE {
             return Err("synchronization2 missing".into());
         }
+        let mut push = vk::PhysicalDevicePushDescriptorPropertiesKHR::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut push);
+        instance.get_physical_device_properties2(pd, &mut props2);
+        check_push_descriptors(push.max_push_descriptors)?;
         Ok(family)
     }
 }
@@ -656,7 +684,8 @@ fn create_device(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) 
 
 fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    let mut push = vk::PhysicalDevicePushDescriptorPropertiesKHR::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup).push_next(&mut push);
     // SAFETY: valid physical device.
     let families = unsafe {
         instance.get_physical_device_properties2(pd, &mut props2);
@@ -673,6 +702,21 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) ->
         max_image_dimension_2d: p.limits.max_image_dimension2_d,
         max_compute_work_group_count: p.limits.max_compute_work_group_count,
         subgroup_size: subgroup.subgroup_size,
+        max_push_descriptors: push.max_push_descriptors,
         api_version: p.api_version,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A device with fewer push descriptors than umbra's kernels bind is refused, naming both.
+    #[test]
+    fn too_few_push_descriptors_are_refused() {
+        assert_eq!(super::check_push_descriptors(32), Ok(()));
+        assert_eq!(super::check_push_descriptors(64), Ok(()));
+        assert_eq!(
+            super::check_push_descriptors(31),
+            Err("maxPushDescriptors is 31, and umbra's kernels push up to 32 descriptors".into())
+        );
     }
 }

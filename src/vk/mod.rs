@@ -12,7 +12,7 @@ pub mod specialize;
 mod timer;
 
 pub use buffer::{Buffer, TexelBuffer};
-pub use context::{Context, ContextDesc, DeviceInfo, HostDevice, MemoryReport};
+pub use context::{Context, ContextDesc, DeviceInfo, HostDevice, MemoryReport, REQUIRED_PUSH_DESCRIPTORS};
 pub use debug::ValidationLog;
 pub use image::Image;
 pub use pipeline::{ComputePipeline, Descriptor, PipelineDesc};

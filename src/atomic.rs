@@ -63,19 +63,26 @@ pub fn write_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> io::Result<(
 /// file (probed with a temporary, removed at once), and it is not a directory or a read-only
 /// file. [`write()`] checks the same again when it writes.
 pub fn check_output(path: &Path) -> Result<()> {
-    if let Target::Replace { dir, name, .. } = Target::of(path)? {
-        let probe = dir.join(temp_name(&name, std::process::id()));
-        OpenOptions::new().write(true).create_new(true).open(&probe).map_err(|e| {
-            let why = match e.kind() {
-                io::ErrorKind::PermissionDenied | io::ErrorKind::ReadOnlyFilesystem => {
-                    format!("cannot create a file in {}: {}", dir.display(), io_message(&e))
-                }
-                _ => io_message(&e),
-            };
-            Error::Io { path: path.to_path_buf(), error: io::Error::new(e.kind(), why) }
-        })?;
-        let _ = std::fs::remove_file(&probe);
+    match Target::of(path)? {
+        Target::Replace { dir, name, .. } => probe(path, &dir, &name),
+        Target::InPlace(_) => Ok(()),
     }
+}
+
+/// Creates a temporary for `name` in `dir` and removes it: whether `dir` takes new files. An
+/// error names `path`.
+fn probe(path: &Path, dir: &Path, name: &std::ffi::OsStr) -> Result<()> {
+    let probe = dir.join(temp_name(name, std::process::id()));
+    OpenOptions::new().write(true).create_new(true).open(&probe).map_err(|e| {
+        let why = match e.kind() {
+            io::ErrorKind::PermissionDenied | io::ErrorKind::ReadOnlyFilesystem => {
+                format!("cannot create a file in {}: {}", dir.display(), io_message(&e))
+            }
+            _ => io_message(&e),
+        };
+        Error::Io { path: path.to_path_buf(), error: io::Error::new(e.kind(), why) }
+    })?;
+    let _ = std::fs::remove_file(&probe);
     Ok(())
 }
 
@@ -98,13 +105,15 @@ pub fn check_distinct(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Re
     Ok(())
 }
 
-/// Creates the output folder `dir` (and its parents) if it is absent; an existing file there is
-/// "not a directory".
+/// Creates the output folder `dir` (and its parents) if it is absent, and checks that it takes
+/// new files (before any work that would end in writing there); an existing file there is "not a
+/// directory".
 pub fn create_dir(dir: &Path) -> Result<()> {
     if dir.exists() && !dir.is_dir() {
         return Err(Error::io(dir, io::Error::new(io::ErrorKind::NotADirectory, "not a directory")));
     }
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    probe(dir, dir, std::ffi::OsStr::new("umbra-probe"))
 }
 
 /// The OS's message without its error number ("Permission denied", not "Permission denied (os
@@ -186,9 +195,21 @@ fn folder_of(path: &Path) -> &Path {
 /// `.NAME.PID.umbra-tmp`.
 fn temp_name(name: &std::ffi::OsStr, pid: u32) -> std::ffi::OsString {
     let mut temp = std::ffi::OsString::from(".");
-    temp.push(name);
+    temp.push(temp_stem(name));
     temp.push(format!(".{pid}{SUFFIX}"));
     temp
+}
+
+/// The part of a target's name its temporaries carry: the name, cut to 200 bytes so that a
+/// temporary of a long name stays within the 255 bytes a file name may have.
+fn temp_stem(name: &std::ffi::OsStr) -> String {
+    let mut stem = name.to_string_lossy().into_owned();
+    let mut end = stem.len().min(200);
+    while !stem.is_char_boundary(end) {
+        end -= 1;
+    }
+    stem.truncate(end);
+    stem
 }
 
 /// Writes the temporary `temp` for `real`: created new, with `real`'s permissions if it exists,
@@ -214,7 +235,7 @@ fn write_temp(
 /// Removes the temporaries `.NAME.PID.umbra-tmp` of `name` in `dir` whose process no longer
 /// runs (on Linux, read from /proc; elsewhere those a day old).
 fn remove_leftovers(dir: &Path, name: &std::ffi::OsStr) {
-    let Some(name) = name.to_str() else { return };
+    let name = temp_stem(name);
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     let prefix = format!(".{name}.");
     let proc = Path::new("/proc/self").exists();

@@ -175,3 +175,21 @@ fn outputs_that_name_an_input_are_refused() {
     assert!(err.to_string().contains("(another output)"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A target whose name is near the 255-byte limit is written (its temporary carries a shortened
+/// name), and a killed writer's temporary of it is still found and removed.
+#[test]
+fn long_names_are_written() {
+    let dir = common::fresh_folder("atomic-long");
+    let name = format!("{}.png", "é".repeat(124));
+    assert_eq!(name.len(), 252);
+    let path = dir.join(&name);
+    let stem: String = name.chars().take(100).collect();
+    let dead = dir.join(format!(".{stem}.4000000000.umbra-tmp"));
+    std::fs::write(&dead, b"partial").unwrap();
+    atomic::check_output(&path).unwrap();
+    atomic::write(&path, b"long").unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), b"long");
+    assert_eq!(common::file_names(&dir), [name]);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -6,11 +6,11 @@
 #[path = "../tests/support/generate.rs"]
 mod generate;
 
-fn main() -> std::io::Result<()> {
+fn main() -> anyhow::Result<()> {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    std::fs::create_dir_all(&dir)?;
+    umbra::atomic::create_dir(&dir)?;
     for (name, bytes) in generate::all() {
-        std::fs::write(dir.join(name), &bytes)?;
+        umbra::atomic::write(&dir.join(name), &bytes)?;
         println!("scenes/{name}: {} bytes", bytes.len());
     }
     Ok(())

@@ -200,15 +200,10 @@ impl ProbeBake {
         let computed = crc32fast::hash(body);
         if stored.len() != CHECKSUM_BYTES || u32::from_le_bytes(stored.try_into().unwrap()) != computed {
             return Err(bad(match expected {
-                Some(expected) if bytes.len() < expected => format!(
-                    "truncated or corrupt: {} bytes, but a bake of {count} probes ({:?}) is {expected}, \
-                     and the checksum does not match: bake again",
-                    bytes.len(),
-                    grid.counts
-                ),
-                Some(expected) if bytes.len() > expected => format!(
-                    "trailing data or corrupt: {} bytes, but a bake of {count} probes ({:?}) is \
-                     {expected}, and the checksum does not match: bake again",
+                Some(expected) if bytes.len() != expected => format!(
+                    "{} or corrupt: {} bytes, but a bake of {count} probes ({:?}) is {expected}, and the \
+                     checksum does not match: bake again",
+                    if bytes.len() < expected { "truncated" } else { "trailing data" },
                     bytes.len(),
                     grid.counts
                 ),

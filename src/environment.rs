@@ -111,10 +111,11 @@ impl EnvironmentMap {
     /// NaN, infinite and negative texels are replaced by 0 with one warning that counts them.
     pub fn load(path: &Path) -> Result<Self> {
         let bad = |message: String| Error::Scene { path: path.to_path_buf(), message };
-        let is_exr =
-            std::fs::read(path).map_err(|e| Error::io(path, e))?.starts_with(&crate::output::EXR_MAGIC);
-        let (width, height, texels) = if is_exr {
-            let (w, h, channels) = crate::output::read_exr_channels(path)?;
+        // Read once: the first bytes tell EXR from the rest, and either decoder takes the bytes.
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let (width, height, texels) = if bytes.starts_with(&crate::output::EXR_MAGIC) {
+            let exr = crate::output::read_exr_bytes(path, &bytes)?;
+            let (w, h, channels) = (exr.width, exr.height, exr.channels);
             let find = |n: &str| channels.iter().find(|c| c.0 == n).map(|c| &c.1);
             let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) else {
                 let names: Vec<&str> = channels.iter().map(|c| c.0.as_str()).collect();
@@ -122,8 +123,7 @@ impl EnvironmentMap {
             };
             (w, h, (0..w * h).map(|i| [r[i], g[i], b[i]]).collect::<Vec<_>>())
         } else {
-            let decoded = image::ImageReader::open(path)
-                .map_err(|e| Error::io(path, e))?
+            let decoded = image::ImageReader::new(std::io::Cursor::new(&bytes))
                 .with_guessed_format()
                 .map_err(|e| Error::io(path, e))?
                 .decode()

@@ -95,12 +95,16 @@ pub struct ExrImage {
 
 /// Reads a single-part EXR: every channel as `f32`, and its text attributes.
 pub fn read_exr(path: &Path) -> Result<ExrImage> {
+    read_exr_bytes(path, &std::fs::read(path).map_err(|e| Error::io(path, e))?)
+}
+
+/// [`read_exr`] of a file's bytes, already read; `path` names it in errors.
+pub fn read_exr_bytes(path: &Path, bytes: &[u8]) -> Result<ExrImage> {
     use exr::meta::attribute::AttributeValue;
     use exr::prelude::*;
-    let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
     let image_error = |message: String| crate::Error::Image { path: path.to_path_buf(), message };
     if !bytes.starts_with(&EXR_MAGIC) {
-        return Err(image_error(format!("not an OpenEXR file{}", file_kind(&bytes))));
+        return Err(image_error(format!("not an OpenEXR file{}", file_kind(bytes))));
     }
     let image = read()
         .no_deep_data()
@@ -108,7 +112,7 @@ pub fn read_exr(path: &Path) -> Result<ExrImage> {
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_buffered(std::io::Cursor::new(&bytes))
+        .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|e| {
             image_error(match e {
                 // The exr crate's word for an unexpected end of the file.

@@ -125,7 +125,7 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         // KHR_materials_anisotropy: the Khronos Sample Viewer's bent normal (after Filament): the
         // normal turned towards the plane of the view and the anisotropy bitangent (the lobe's
         // narrow axis), by pow4(1 - strength (1 - roughness)); the prefiltered map then looked up
-        // about it at the base roughness (README: its error against the path tracer).
+        // about it at the base roughness (docs/methods.md: its error against the path tracer).
         vec3 t;
         vec3 b;
         basis(n, t, b);

@@ -1258,7 +1258,7 @@ fn white_furnace_sheen_is_the_extensions_layering() {
 ///
 /// The hybrid takes the film's Fresnel at n·v for its whole split-sum lobe, where the path tracer
 /// takes it at each microfacet's v·h: their means per bin and channel differ by at most 0.15 at
-/// n·v < 0.3, 0.06 at 0.3–0.7 and 0.015 above (measured: 0.133, 0.052, 0.008; README "Hybrid:
+/// n·v < 0.3, 0.06 at 0.3–0.7 and 0.015 above (measured: 0.133, 0.052, 0.008; docs/methods.md "Hybrid:
 /// what it approximates"), + z·se. A hybrid that left the film out would be 0.10 off on the
 /// copper sphere at n·v > 0.7.
 #[test]
@@ -1358,7 +1358,7 @@ fn interior_difference(
 /// (b) Under a sky (0.5 sin(elevation)), with and without the bright disc, the environment
 ///     through the bent normal (the Sample Viewer's approximation, the prefiltered map at the
 ///     base's roughness): the sphere's mean luminance against the path tracer's, relative error
-///     within the bounds the README's known approximations state (a regression bound: the
+///     within the bounds docs/methods.md's known approximations state (a regression bound: the
 ///     approximation's error is large, +16 to +38 % on the smooth sky, +150 to +200 % with the
 ///     disc, where the isotropic sphere's split sum is within 6 %).
 #[test]
@@ -1414,7 +1414,7 @@ fn anisotropic_sphere_hybrid_matches_path_tracer() {
         let (h, p, se) = (h / n, p / n, v.sqrt() / n);
         let error = (h - p) / p;
         eprintln!("sky {name}, strength {strength}: hybrid {h:.4}, path {p:.4} ± {se:.4}: relative error {error:+.4}");
-        // The bounds the README states (measured +0.38 / +0.16 smooth, +1.47 / +2.00 with the disc
+        // The bounds docs/methods.md states (measured +0.38 / +0.16 smooth, +1.47 / +2.00 with the disc
         // at strength 0.8 / 0.5; the isotropic split sum's own +0.003 and −0.05).
         let bound = match (*name, strength > 0.0) {
             ("smooth", true) => 0.45,

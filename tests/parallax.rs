@@ -237,7 +237,7 @@ fn grazing_views_need_more_layers() {
         eprintln!("{angle}° from the normal: mean error {:?} m at {layer_counts:?} layers", table[a]);
     }
     // Towards grazing the error grows (at each layer count), as layers rise it shrinks (at each
-    // angle); the levels, measured: see the README.
+    // angle); the levels, measured: see docs/gltf.md.
     for l in 0..3 {
         for a in 1..3 {
             assert!(table[a][l] > table[a - 1][l], "error does not grow towards grazing: {table:?}");

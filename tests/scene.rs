@@ -1011,7 +1011,7 @@ impl XorShift {
 
 /// Random mutations of every committed scene (bytes truncated or overwritten; one JSON number
 /// replaced by an awkward value) load or give an error naming the file: never a panic. The
-/// outcome counts are printed (and kept in the README's reliability section).
+/// outcome counts are printed (and kept in docs/reliability.md).
 #[test]
 fn mutated_files_give_errors_not_panics() {
     let mut rng = XorShift(0x5eed_cafe);

@@ -659,7 +659,7 @@ uint pick_light(float u, uint count) {
 }
 
 
-// Parallax occlusion mapping (a material's UMBRA_implicit `parallax`, README "Parallax occlusion
+// Parallax occlusion mapping (a material's UMBRA_implicit `parallax`, docs/gltf.md "Parallax occlusion
 // mapping"; kernels specialised for it, HAS_PARALLAX). The height map (MATERIAL_SLOT_HEIGHT, R,
 // level 0 with the texture's sampler) places a height field under each triangle: where it reads h
 // the surface lies (1 - h) * scale world units below the triangle's plane, along its geometric

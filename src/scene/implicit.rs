@@ -1,5 +1,5 @@
 //! Implicit surfaces: signed distance functions given on glTF nodes by the vendor extension
-//! `UMBRA_implicit` (schema: `docs/UMBRA_implicit.schema.json`, README "Implicit surfaces").
+//! `UMBRA_implicit` (schema: `docs/UMBRA_implicit.schema.json`, docs/gltf.md "Implicit surfaces").
 //!
 //! A node's shape is a tree of primitives (sphere, box, rounded box, torus, capsule, cylinder,
 //! plane), each with its own translation, rotation and uniform scale, combined by union,

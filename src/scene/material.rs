@@ -36,7 +36,7 @@ pub struct TextureRef {
 }
 
 /// Parallax occlusion mapping of a material (`UMBRA_implicit`'s `parallax` on a glTF material;
-/// README "Parallax occlusion mapping"): a height field under the triangles, ray-marched in their
+/// docs/gltf.md "Parallax occlusion mapping"): a height field under the triangles, ray-marched in their
 /// plane at every hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parallax {
@@ -783,7 +783,7 @@ fn raw_transform(value: Option<&Value>, tex_coord: u32) -> (u32, [[f32; 3]; 2]) 
     (tex_coord, texture_transform(pair("offset", [0.0, 0.0]), rotation, pair("scale", [1.0, 1.0])))
 }
 
-/// Reads `UMBRA_implicit` on a glTF material (its `parallax` object; README "Parallax occlusion
+/// Reads `UMBRA_implicit` on a glTF material (its `parallax` object; docs/gltf.md "Parallax occlusion
 /// mapping", docs/UMBRA_implicit.schema.json), registering the height map in `textures`. Errors
 /// say what is wrong and where in the object; the caller names the file and the material.
 pub(super) fn parse_parallax(

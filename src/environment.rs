@@ -235,10 +235,10 @@ mod tests {
         let map = EnvironmentMap::from_texels("test", 6, 4, texels).unwrap();
         let d = map.distribution();
         let rows = alias_probabilities(&d.rows);
-        for y in 0..4 {
+        for (y, p_row) in rows.iter().enumerate() {
             let row = alias_probabilities(&d.columns[y * 6..(y + 1) * 6]);
-            for x in 0..6 {
-                let p_uv = rows[y] * row[x] * 24.0;
+            for (x, p_column) in row.iter().enumerate() {
+                let p_uv = p_row * p_column * 24.0;
                 assert!((p_uv - d.pdf_uv[y * 6 + x] as f64).abs() < 1e-5, "texel ({x}, {y}): {p_uv}");
             }
         }

@@ -44,6 +44,7 @@ pub fn to_srgb8(rgba: &[f32], exposure: f32) -> Vec<u8> {
 
 /// The tone curve applied after exposure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ToneCurve {
     /// Clamp to [0, 1]: exact for values already in range.
     Clamp,
@@ -53,6 +54,7 @@ pub enum ToneCurve {
     /// Khronos PBR Neutral (2024): colours below 0.76 pass unchanged (bar a small black-level
     /// offset); highlights compress towards white.
     #[default]
+    #[cfg_attr(feature = "cli", value(name = "neutral"))]
     KhronosPbrNeutral,
 }
 

@@ -5,8 +5,12 @@ mod cli;
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
+use umbra::color::ToneCurve;
 use umbra::gpu::scene::{GpuScene, SceneBvh};
 use umbra::passes::deferred::{DirectLight, LightingSettings};
+use umbra::passes::pathtrace::{
+    EmitterSampling, Heuristic, Integrator, Microfacet, RisReuse, Sampler, Strategy,
+};
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
 use umbra::passes::restir::RestirSettings;
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
@@ -63,7 +67,7 @@ struct SceneArgs {
     /// A texture image that cannot be read or decoded: refuse the scene (error), or warn once
     /// per image and render its slots with the material's factors alone (warn).
     #[arg(long, value_enum, default_value = "error")]
-    missing_textures: MissingTexturesArg,
+    missing_textures: umbra::scene::MissingTextures,
 }
 
 /// How the irradiance probes are baked (`bake`, and `render --probes bake`); unset: the
@@ -203,28 +207,28 @@ struct RenderArgs {
     /// Microfacet distribution of the specular lobes and its sampling: GGX from visible normals,
     /// GGX from D(h)·cos θh (Walter et al. 2007), Beckmann.
     #[arg(long, value_enum, default_value = "ggx")]
-    microfacet: MicrofacetArg,
+    microfacet: Microfacet,
     /// MIS heuristic.
     #[arg(long, value_enum, default_value = "power")]
-    heuristic: HeuristicArg,
+    heuristic: Heuristic,
     /// The numbers the path tracer draws its samples from: low-discrepancy (per pixel, scrambled
     /// Sobol points: a lower error at the same samples) or independent (the error falls as 1/spp
     /// and the printed error estimate is unbiased; with low-discrepancy numbers it is high).
     #[arg(long, value_enum, default_value = "low-discrepancy")]
-    sampler: SamplerArg,
+    sampler: Sampler,
     /// Points on emissive triangles for next-event estimation: uniform on the area, or uniform
     /// in the solid angle the triangle subtends where that is at least 0.2 sr (far less noise
     /// next to a large emitter, a few per cent more time on a CPU wherever there are emitters).
     #[arg(long, value_enum, default_value = "area")]
-    emitter_sampling: EmitterSamplingArg,
+    emitter_sampling: EmitterSampling,
     /// Sampling strategies for emitters: light and BSDF sampling weighted by MIS, BSDF sampling
     /// alone, or light sampling alone (punctual lights are always light-sampled).
     #[arg(long, value_enum, default_value = "mis")]
-    strategy: StrategyArg,
+    strategy: Strategy,
     /// How the path tracer lays out its work: one kernel per path (megakernel) or a kernel per
     /// step over queues of paths (wavefront); the same samples either way.
     #[arg(long, value_enum, default_value = "megakernel")]
-    integrator: IntegratorArg,
+    integrator: Integrator,
     /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
     #[arg(long, value_parser = cli::parse_positive)]
     target_error: Option<f32>,
@@ -251,7 +255,7 @@ struct RenderArgs {
     exposure: f32,
     /// Tone curve for the PNG.
     #[arg(long, value_enum, default_value = "neutral")]
-    tonemap: ToneArg,
+    tonemap: ToneCurve,
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles (and, with
     /// --rt-light-size, per punctual light).
     #[arg(long, default_value_t = 4)]
@@ -262,7 +266,7 @@ struct RenderArgs {
     /// Path tracer: at every vertex, one emissive sample by power with MIS and the punctual
     /// lights (power), or one sample resampled from --ris-candidates (ris).
     #[arg(long, value_enum, default_value = "power")]
-    direct: DirectArg,
+    direct: Direct,
     /// Path tracer, --direct ris: candidates resampled at each vertex (at most 512 over a path's
     /// --max-bounces).
     #[arg(long, default_value_t = 8)]
@@ -271,7 +275,7 @@ struct RenderArgs {
     /// pixel's own (samples), neighbouring pixels' (spatial) or both (unbiased combination; one
     /// dispatch per sample).
     #[arg(long, value_enum, default_value = "off")]
-    ris_reuse: RisReuseArg,
+    ris_reuse: RisReuse,
     /// Hybrid, ReSTIR: candidates resampled per pixel and frame.
     #[arg(long, default_value_t = RestirSettings::default().candidates)]
     restir_candidates: u32,
@@ -296,7 +300,7 @@ struct RenderArgs {
     /// nearest texel (hard), percentage-closer filtering (pcf), percentage-closer soft shadows
     /// (pcss) or moment shadow maps (moments).
     #[arg(long, value_enum, default_value = "rt")]
-    shadows: ShadowsArg,
+    shadows: ShadowMethod,
     /// Hybrid shadow maps: width = height of each layer in texels (16 to 2048).
     #[arg(long, default_value_t = ShadowSettings::default().map_size)]
     shadow_map_size: u32,
@@ -400,7 +404,7 @@ struct MergeArgs {
     exposure: f32,
     /// Tone curve for the PNG.
     #[arg(long, value_enum, default_value = "neutral")]
-    tonemap: ToneArg,
+    tonemap: ToneCurve,
 }
 
 fn merge(args: MergeArgs) -> Result<()> {
@@ -451,41 +455,21 @@ fn merge(args: MergeArgs) -> Result<()> {
     if let Some(png) = &args.png {
         let shown = merged.denoised.as_ref().unwrap_or(&merged.mean);
         let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
-        let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
+        let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap);
         umbra::output::write_png(png, r.size.0, r.size.1, &display)?;
         println!("wrote {}", png.display());
     }
     Ok(())
 }
 
+/// `--direct`: one flag over the two modes' light sampling (the path tracer's
+/// [`umbra::passes::pathtrace::DirectSampling`], the hybrid's [`DirectLight`]), whose
+/// library types carry each method's settings.
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-enum DirectArg {
+enum Direct {
     Power,
     Restir,
     Ris,
-}
-
-#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-enum RisReuseArg {
-    Off,
-    Samples,
-    Spatial,
-    Both,
-}
-
-#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-enum ShadowsArg {
-    Rt,
-    Hard,
-    Pcf,
-    Pcss,
-    Moments,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum MissingTexturesArg {
-    Error,
-    Warn,
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -500,77 +484,17 @@ enum Mode {
     Rtao,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum ToneArg {
-    /// Clamp to [0, 1].
-    Clamp,
-    /// Hill's fit of ACES.
-    Aces,
-    /// Khronos PBR Neutral.
-    Neutral,
-}
-
-impl ToneArg {
-    fn curve(self) -> umbra::color::ToneCurve {
-        use umbra::color::ToneCurve;
-        match self {
-            ToneArg::Clamp => ToneCurve::Clamp,
-            ToneArg::Aces => ToneCurve::Aces,
-            ToneArg::Neutral => ToneCurve::KhronosPbrNeutral,
-        }
-    }
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum MicrofacetArg {
-    Ggx,
-    GgxWalter,
-    Beckmann,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum StrategyArg {
-    Mis,
-    Bsdf,
-    Light,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum IntegratorArg {
-    Megakernel,
-    Wavefront,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum EmitterSamplingArg {
-    Area,
-    SolidAngle,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum SamplerArg {
-    LowDiscrepancy,
-    Independent,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum HeuristicArg {
-    Power,
-    Balance,
-}
-
 fn render(args: RenderArgs) -> Result<()> {
-    use umbra::passes::pathtrace::{Heuristic, Microfacet, Strategy};
-    if args.direct == DirectArg::Restir && args.mode != Mode::Hybrid {
+    if args.direct == Direct::Restir && args.mode != Mode::Hybrid {
         anyhow::bail!("--direct restir applies to --mode hybrid (the path tracer's is --direct ris)");
     }
-    if args.direct == DirectArg::Ris && args.mode != Mode::Pathtrace {
+    if args.direct == Direct::Ris && args.mode != Mode::Pathtrace {
         anyhow::bail!("--direct ris applies to --mode pathtrace (the hybrid's is --direct restir)");
     }
-    if args.ris_reuse != RisReuseArg::Off && args.direct != DirectArg::Ris {
+    if args.ris_reuse != RisReuse::Off && args.direct != Direct::Ris {
         anyhow::bail!("--ris-reuse reuses the path tracer's first-hit RIS: it needs --direct ris");
     }
-    if args.shadows != ShadowsArg::Rt && args.mode != Mode::Hybrid {
+    if args.shadows != ShadowMethod::RayTraced && args.mode != Mode::Hybrid {
         anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
     }
     if (args.probes.is_some() || args.lightmaps) && args.mode != Mode::Hybrid {
@@ -639,45 +563,20 @@ fn render(args: RenderArgs) -> Result<()> {
         max_bounces: args.max_bounces,
         rr_depth: args.rr_depth,
         seed: args.seed,
-        sampler: match args.sampler {
-            SamplerArg::LowDiscrepancy => umbra::passes::pathtrace::Sampler::LowDiscrepancy,
-            SamplerArg::Independent => umbra::passes::pathtrace::Sampler::Independent,
-        },
-        emitter_sampling: match args.emitter_sampling {
-            EmitterSamplingArg::Area => umbra::passes::pathtrace::EmitterSampling::Area,
-            EmitterSamplingArg::SolidAngle => umbra::passes::pathtrace::EmitterSampling::SolidAngle,
-        },
-        microfacet: match args.microfacet {
-            MicrofacetArg::Ggx => Microfacet::Ggx,
-            MicrofacetArg::GgxWalter => Microfacet::GgxWalter,
-            MicrofacetArg::Beckmann => Microfacet::Beckmann,
-        },
-        heuristic: match args.heuristic {
-            HeuristicArg::Power => Heuristic::Power,
-            HeuristicArg::Balance => Heuristic::Balance,
-        },
-        strategy: match args.strategy {
-            StrategyArg::Mis => Strategy::Mis,
-            StrategyArg::Bsdf => Strategy::Bsdf,
-            StrategyArg::Light => Strategy::Light,
-        },
+        sampler: args.sampler,
+        emitter_sampling: args.emitter_sampling,
+        microfacet: args.microfacet,
+        heuristic: args.heuristic,
+        strategy: args.strategy,
         direct: match args.direct {
-            DirectArg::Ris => umbra::passes::pathtrace::DirectSampling::Ris(args.ris_candidates),
+            Direct::Ris => umbra::passes::pathtrace::DirectSampling::Ris(args.ris_candidates),
             _ => umbra::passes::pathtrace::DirectSampling::Power,
         },
-        ris_reuse: match args.ris_reuse {
-            RisReuseArg::Off => umbra::passes::pathtrace::RisReuse::Off,
-            RisReuseArg::Samples => umbra::passes::pathtrace::RisReuse::Samples,
-            RisReuseArg::Spatial => umbra::passes::pathtrace::RisReuse::Spatial,
-            RisReuseArg::Both => umbra::passes::pathtrace::RisReuse::Both,
-        },
+        ris_reuse: args.ris_reuse,
         env: args.scene.env_radiance(),
         env_nee: true,
         target_error: args.target_error,
-        integrator: match args.integrator {
-            IntegratorArg::Megakernel => umbra::passes::pathtrace::Integrator::Megakernel,
-            IntegratorArg::Wavefront => umbra::passes::pathtrace::Integrator::Wavefront,
-        },
+        integrator: args.integrator,
         // The denoiser filters the diffuse and specular parts apart (either integrator splits
         // them).
         lobe_split: args.denoise,
@@ -755,7 +654,7 @@ fn render(args: RenderArgs) -> Result<()> {
         image.mean.clone()
     };
     let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
-    let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap.curve());
+    let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap);
     if let Some(png) = png {
         umbra::output::write_png(&png, w, h, &display)?;
         println!("wrote {}", png.display());
@@ -823,22 +722,22 @@ fn render_identity(args: &RenderArgs, loaded: &LoadedScene) -> String {
         name(&args.strategy)
     ) + &match args.direct {
         // (Only RIS adds to it: renders made before it existed merge with today's.)
-        DirectArg::Ris => format!(" direct ris {}", args.ris_candidates)
+        Direct::Ris => format!(" direct ris {}", args.ris_candidates)
             + match args.ris_reuse {
-                RisReuseArg::Off => "",
-                RisReuseArg::Samples => " reuse samples",
-                RisReuseArg::Spatial => " reuse spatial",
-                RisReuseArg::Both => " reuse both",
+                RisReuse::Off => "",
+                RisReuse::Samples => " reuse samples",
+                RisReuse::Spatial => " reuse spatial",
+                RisReuse::Both => " reuse both",
             },
         _ => String::new(),
     } + match args.sampler {
         // (Only independent numbers add to it, as RIS does.)
-        SamplerArg::Independent => " sampler independent",
-        SamplerArg::LowDiscrepancy => "",
+        Sampler::Independent => " sampler independent",
+        Sampler::LowDiscrepancy => "",
     } + match args.emitter_sampling {
         // (The same samples in expectation, not the same numbers: parts must agree.)
-        EmitterSamplingArg::SolidAngle => " emitter-sampling solid-angle",
-        EmitterSamplingArg::Area => "",
+        EmitterSampling::SolidAngle => " emitter-sampling solid-angle",
+        EmitterSampling::Area => "",
     }
 }
 
@@ -858,11 +757,8 @@ impl SceneArgs {
     fn load(&self) -> Result<LoadedScene> {
         let scene = match &self.scene {
             Some(path) => {
-                use umbra::scene::{LoadOptions, MissingTextures};
-                let missing_textures = match self.missing_textures {
-                    MissingTexturesArg::Error => MissingTextures::Error,
-                    MissingTexturesArg::Warn => MissingTextures::Warn,
-                };
+                use umbra::scene::LoadOptions;
+                let missing_textures = self.missing_textures;
                 umbra::scene::Scene::load_with(path, &LoadOptions { missing_textures })?
             }
             None => umbra::scene::Scene::cornell_box(),
@@ -1049,13 +945,7 @@ fn bake_lightmaps(
 
 /// The hybrid's shadow settings from the flags.
 fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
-    let method = match args.shadows {
-        ShadowsArg::Rt => ShadowMethod::RayTraced,
-        ShadowsArg::Hard => ShadowMethod::Hard,
-        ShadowsArg::Pcf => ShadowMethod::Pcf,
-        ShadowsArg::Pcss => ShadowMethod::Pcss,
-        ShadowsArg::Moments => ShadowMethod::Moments,
-    };
+    let method = args.shadows;
     ShadowSettings {
         method,
         map_size: args.shadow_map_size,
@@ -1123,8 +1013,8 @@ fn hybrid_settings(args: &RenderArgs) -> umbra::render::HybridSettings {
             env: args.scene.env_radiance(),
             ibl: !args.no_ibl,
             direct: match args.direct {
-                DirectArg::Power | DirectArg::Ris => DirectLight::Power,
-                DirectArg::Restir => DirectLight::Restir(RestirSettings {
+                Direct::Power | Direct::Ris => DirectLight::Power,
+                Direct::Restir => DirectLight::Restir(RestirSettings {
                     candidates: args.restir_candidates,
                     neighbours: args.restir_neighbours,
                     radius: args.restir_radius,
@@ -1137,7 +1027,7 @@ fn hybrid_settings(args: &RenderArgs) -> umbra::render::HybridSettings {
             ..Default::default()
         },
         exposure: args.exposure,
-        curve: args.tonemap.curve(),
+        curve: args.tonemap,
         ibl: Default::default(),
         ao: (!args.no_ao).then(|| umbra::passes::ao::AoSettings {
             samples: args.ao_samples,
@@ -1312,7 +1202,7 @@ fn main() {
 /// (only flags given on the command line are checked).
 fn inapplicable_render_flags(args: &RenderArgs, given: &[String]) -> Vec<String> {
     let (pathtrace, hybrid) = (args.mode == Mode::Pathtrace, args.mode == Mode::Hybrid);
-    let maps = hybrid && args.shadows != ShadowsArg::Rt;
+    let maps = hybrid && args.shadows != ShadowMethod::RayTraced;
     let ssao = hybrid && !args.no_ao;
     given
         .iter()
@@ -1322,7 +1212,7 @@ fn inapplicable_render_flags(args: &RenderArgs, given: &[String]) -> Vec<String>
                 | "emitter_sampling" | "strategy" | "integrator" | "target_error" | "denoise"
                 | "denoise_iterations" | "sample_range" | "tile" => (pathtrace, "--mode pathtrace"),
                 "ris_candidates" => {
-                    (pathtrace && args.direct == DirectArg::Ris, "--mode pathtrace --direct ris")
+                    (pathtrace && args.direct == Direct::Ris, "--mode pathtrace --direct ris")
                 }
                 "exposure" | "tonemap" => (
                     pathtrace || hybrid,
@@ -1333,14 +1223,14 @@ fn inapplicable_render_flags(args: &RenderArgs, given: &[String]) -> Vec<String>
                 }
                 "restir_candidates" | "restir_neighbours" | "restir_radius" | "restir_frames"
                 | "restir_no_temporal" | "restir_unbiased" => {
-                    (hybrid && args.direct == DirectArg::Restir, "--mode hybrid --direct restir")
+                    (hybrid && args.direct == Direct::Restir, "--mode hybrid --direct restir")
                 }
                 "shadow_map_size" | "shadow_bias" | "shadow_slope_bias" | "shadow_normal_bias"
                 | "pcf_radius" | "shadow_max_radius" | "cascades" | "cascade_split" => {
                     (maps, "--mode hybrid with shadow maps (--shadows hard|pcf|pcss|moments)")
                 }
                 "light_radius" | "sun_angle" => (
-                    hybrid && (args.shadows == ShadowsArg::Pcss || args.rt_light_size),
+                    hybrid && (args.shadows == ShadowMethod::Pcss || args.rt_light_size),
                     "--mode hybrid with sized lights (--shadows pcss, or --rt-light-size)",
                 ),
                 "lightmap_size" | "lightmap_samples" | "unwrap" => (args.lightmaps, "--lightmaps (hybrid)"),

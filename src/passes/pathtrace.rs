@@ -13,12 +13,14 @@ use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation};
 
 /// The microfacet distribution of the specular lobes, and how their half vectors are sampled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Microfacet {
     /// GGX (the glTF specification) with visible-normal sampling (Heitz 2018).
     #[default]
     Ggx,
-    /// The same GGX BSDF with Walter et al. 2007's sampling: half vectors from D(h) cos θh,
-    /// blind to the outgoing direction (for reflection and transmission alike), so some face away
+    /// The same GGX BSDF with Walter et al. 2007's sampling: noisier, the same mean.
+    ///
+    /// Half vectors from D(h) cos θh, blind to the outgoing direction (for reflection and transmission alike), so some face away
     /// from it and are discarded. Noisier than [`Microfacet::Ggx`]; the same mean.
     GgxWalter,
     /// Beckmann with Walter et al.'s half-vector sampling.
@@ -41,6 +43,7 @@ impl Microfacet {
 
 /// How light sampling and BSDF sampling are combined.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Heuristic {
     /// Veach's power heuristic (β = 2).
     #[default]
@@ -51,6 +54,7 @@ pub enum Heuristic {
     /// counts without its MIS weight (light sampling keeps its power-heuristic weight).
     #[cfg(feature = "testing")]
     #[doc(hidden)]
+    #[cfg_attr(feature = "cli", value(skip))]
     UnweightedBsdfHits,
 }
 
@@ -75,9 +79,12 @@ impl Heuristic {
 /// environment map with [`PathSettings::env_nee`] off) by BSDF sampling alone. Camera rays see
 /// emitters directly under every strategy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Strategy {
     /// Light sampling (next-event estimation) and BSDF sampling, weighted by multiple importance
-    /// sampling ([`Heuristic`]).
+    /// sampling.
+    ///
+    /// The weights are the [`Heuristic`]'s.
     #[default]
     Mis,
     /// BSDF sampling alone: emission counts where a BSDF-sampled ray hits it; no next-event
@@ -168,16 +175,19 @@ impl DirectSampling {
 /// samples of one render are correlated across sample indices (each index's reservoirs feed the
 /// next), so a render with reuse cannot be split into sample ranges or tiles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum RisReuse {
     /// No reuse: every sample's RIS from its own candidates.
     #[default]
     Off,
     /// The pixel's own reservoir of the previous sample index (another point of the pixel).
     Samples,
-    /// [`crate::gpu::layout::RIS_REUSE_NEIGHBOURS`] random pixels' reservoirs of the previous
-    /// sample index, within [`crate::gpu::layout::RIS_REUSE_RADIUS`] pixels.
+    /// Random nearby pixels' reservoirs of the previous sample index.
+    ///
+    /// [`crate::gpu::layout::RIS_REUSE_NEIGHBOURS`] pixels within
+    /// [`crate::gpu::layout::RIS_REUSE_RADIUS`] pixels.
     Spatial,
-    /// Both.
+    /// Both: the pixel's own and its neighbours' reservoirs.
     Both,
 }
 
@@ -206,14 +216,18 @@ impl RisReuse {
 
 /// How next-event estimation draws a point on the emissive triangle it picked.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum EmitterSampling {
-    /// Uniform on the triangle's area (pdf pmf / area × r² / cos at the light), Mitsuba's choice:
-    /// the light's 1/r² and cosine stay in the estimate, so a surface near a large emitter is
-    /// noisy.
+    /// Uniform on the triangle's area, Mitsuba's choice.
+    ///
+    /// The pdf is pmf / area × r² / cos at the light: the light's 1/r² and cosine stay in the
+    /// estimate, so a surface near a large emitter is noisy.
     #[default]
     Area,
-    /// Uniform in the solid angle the triangle subtends where that is at least 0.2 sr (Arvo
-    /// 1995, pbrt-v4's triangle sampling; pdf pmf / Ω), by area elsewhere. Next to a large
+    /// Uniform in the solid angle the triangle subtends where that is at least 0.2 sr, by area
+    /// elsewhere.
+    ///
+    /// Arvo 1995, as pbrt-v4 samples triangles; pdf pmf / Ω. Next to a large
     /// emitter it takes the 1/r² and cosine out (a floor 0.15 under a 2×2 emitter: 2.8× less
     /// time at equal error); on llvmpipe it costs 2-21 % more time on every scene with emitters
     /// (both branches run for all SIMD lanes), so it is asked for (BENCHMARKS.md, History).
@@ -227,18 +241,21 @@ impl EmitterSampling {
 
 /// The numbers a path draws its samples from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Sampler {
-    /// Per pixel and use, shuffled and Owen-scrambled 2D Sobol points (`random.glsl`'s `qmc4`,
-    /// after Burley 2020): every pair of numbers a path vertex draws (a BSDF direction, a point on
-    /// a light, the pixel's footprint) is stratified over the pixel's samples, so the error falls
+    /// Shuffled, Owen-scrambled 2D Sobol points per pixel and use (Burley 2020).
+    ///
+    /// `random.glsl`'s `qmc4`: every pair of numbers a path vertex draws (a BSDF direction, a
+    /// point on a light, the pixel's footprint) is stratified over the pixel's samples, so the error falls
     /// faster than 1/spp where the integrand allows (the Cornell box and DamagedHelmet at
     /// 64-256 spp: 0.5-0.6 of independent numbers' relative MSE at the same samples). Each number
     /// is still uniform, and pixels are scrambled independently (the error is white noise).
     #[default]
     LowDiscrepancy,
-    /// Independent numbers (a hash of pixel, sample, bounce and use): the error falls as 1/spp,
-    /// and a pixel's sample variance estimates its error without bias (stratified samples make
-    /// it an over-estimate).
+    /// Independent numbers: the error falls as 1/spp.
+    ///
+    /// A hash of pixel, sample, bounce and use. A pixel's sample variance estimates its error
+    /// without bias (stratified samples make it an over-estimate).
     Independent,
 }
 

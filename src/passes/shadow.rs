@@ -55,17 +55,22 @@ use gpu_allocator::MemoryLocation;
 
 /// How the lighting pass shadows punctual lights.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ShadowMethod {
     /// One shadow ray per light and pixel through the BVH: exact (for a point source).
     #[default]
+    #[cfg_attr(feature = "cli", value(name = "rt"))]
     RayTraced,
     /// A shadow map, the nearest texel compared.
     Hard,
-    /// Percentage-closer filtering: 16 rotated Poisson taps of [`ShadowSettings::pcf_radius`]
-    /// texels, each a bilinear compare.
+    /// Percentage-closer filtering: 16 rotated Poisson taps, each a bilinear compare.
+    ///
+    /// The taps reach [`ShadowSettings::pcf_radius`] texels.
     Pcf,
-    /// Percentage-closer soft shadows (Fernando 2005): a blocker search, the penumbra from the
-    /// light's size ([`ShadowSettings::light_radius`], [`ShadowSettings::sun_angle`]), PCF of it.
+    /// Percentage-closer soft shadows (Fernando 2005): a penumbra from the light's size.
+    ///
+    /// A blocker search, the penumbra from [`ShadowSettings::light_radius`] or
+    /// [`ShadowSettings::sun_angle`], PCF of it.
     Pcss,
     /// Moment shadow maps (Peters and Klein 2015, Hamburger 4MSM), filtered before lookup.
     Moments,

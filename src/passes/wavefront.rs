@@ -19,6 +19,7 @@ use std::sync::OnceLock;
 /// Which integrator traces the path tracer's samples. Both trace the same samples (the same
 /// paths, random numbers and estimator); they differ in how the work is laid out on the device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Integrator {
     /// One kernel: each lane traces its pixel's paths from the camera to their end, a run of
     /// samples per dispatch (`pathtrace.comp`).

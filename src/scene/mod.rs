@@ -138,13 +138,15 @@ pub struct Scene {
 
 /// What to do with a texture image that cannot be read or decoded.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum MissingTextures {
     /// Refuse the scene, naming the image (the default).
     #[default]
     Error,
-    /// Warn once per image and render its slots with the specification's neutral value: the
-    /// material's factors alone, as if the slot had no texture (real-world assets ship with
-    /// missing files).
+    /// Warn once per image and render its slots with the material's factors alone.
+    ///
+    /// That is the specification's neutral value, as if the slot had no texture: real-world
+    /// assets ship with missing files.
     Warn,
 }
 

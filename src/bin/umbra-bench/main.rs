@@ -47,22 +47,6 @@ struct Cli {
     command: Command,
 }
 
-/// `--integrator`'s values.
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum IntegratorArg {
-    Megakernel,
-    Wavefront,
-}
-
-impl IntegratorArg {
-    fn integrator(self) -> umbra::passes::pathtrace::Integrator {
-        match self {
-            IntegratorArg::Megakernel => umbra::passes::pathtrace::Integrator::Megakernel,
-            IntegratorArg::Wavefront => umbra::passes::pathtrace::Integrator::Wavefront,
-        }
-    }
-}
-
 #[derive(Subcommand)]
 enum Command {
     /// Speed against accuracy: every method on each scene, GPU time against error to a converged
@@ -400,7 +384,7 @@ enum Command {
         /// Integrators to time, each scene with each in turn (the table's main part is the
         /// first's; the others are compared with it).
         #[arg(long, value_enum, value_delimiter = ',', default_value = "megakernel")]
-        integrator: Vec<IntegratorArg>,
+        integrator: Vec<umbra::passes::pathtrace::Integrator>,
         /// Also count how busy the SIMD lanes are in the megakernel's BVH walks (one more
         /// untimed submission per scene, through a pipeline of its own).
         #[arg(long)]
@@ -927,7 +911,7 @@ fn run(cli: Cli) -> Result<()> {
                     rr_depth,
                     env: env_color,
                     env_map: env,
-                    integrators: integrator.iter().map(|i| i.integrator()).collect(),
+                    integrators: integrator.clone(),
                     lanes,
                 };
                 let scenes = if scenes.is_empty() {

@@ -11,6 +11,8 @@
 //! (tests/modules.rs keeps it so).
 
 use crate::error::{Error, Result};
+use crate::gpu::cache::Cache;
+use crate::gpu::kernels::deferred;
 use crate::gpu::layout::{GpuCamera, PathStats};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::SceneFeatures;
@@ -317,13 +319,11 @@ pub struct Passes {
     ctx: Context,
     features: SceneFeatures,
     gbuffer: OnceLock<GBufferPass>,
-    /// One per shadow method, with or without probes, lightmaps, ReSTIR: index
-    /// 8 [`ShadowMethod::index`] + 4 restir + 2 lightmaps + probes. The slot tables live on the
-    /// heap: inline they made `Passes` about 250 KB, and a host's thread that moved one by value
-    /// through a few calls overflowed a 2 MB stack.
-    deferred: Box<[OnceLock<DeferredPass>]>,
-    /// ReSTIR's kernels: index 2 unbiased + temporal.
-    restir: [OnceLock<RestirPass>; 4],
+    /// The lighting pass by its kernel's specialization ([`DeferredPass::spec`]: the shadow
+    /// method, probes, lightmaps, ReSTIR, sized lights).
+    deferred: Cache<deferred::Spec, DeferredPass>,
+    /// ReSTIR's kernels by (unbiased, temporal).
+    restir: Cache<(bool, bool), RestirPass>,
     shadow: OnceLock<ShadowPass>,
     probe: OnceLock<ProbePass>,
     lightmap: OnceLock<LightmapPass>,
@@ -331,18 +331,13 @@ pub struct Passes {
     ao_blur: OnceLock<AoBlurPass>,
     rtao: OnceLock<RtaoPass>,
     tonemap: OnceLock<TonemapPass>,
-    /// One per [`PathOptions`], index [`PathOptions::index`].
-    path: Box<[OnceLock<PathTracePass>]>,
-    /// The wavefront path tracer's stages, one set per [`PathOptions`].
-    wavefront: Box<[OnceLock<WavefrontPass>]>,
+    /// The megakernel's pass by the estimator ([`PathOptions`]).
+    path: Cache<PathOptions, PathTracePass>,
+    /// The wavefront path tracer's stages by the estimator.
+    wavefront: Cache<PathOptions, WavefrontPass>,
     resolve: OnceLock<ResolvePass>,
     denoise: OnceLock<DenoisePass>,
     temporal: OnceLock<TemporalPass>,
-}
-
-/// `n` empty pipeline slots.
-fn slots<T>(n: usize) -> Box<[OnceLock<T>]> {
-    (0..n).map(|_| OnceLock::new()).collect()
 }
 
 impl Passes {
@@ -360,8 +355,8 @@ impl Passes {
             ctx: ctx.clone(),
             features,
             gbuffer: OnceLock::new(),
-            deferred: slots(48),
-            restir: Default::default(),
+            deferred: Cache::new(),
+            restir: Cache::new(),
             shadow: OnceLock::new(),
             probe: OnceLock::new(),
             lightmap: OnceLock::new(),
@@ -369,8 +364,8 @@ impl Passes {
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
             tonemap: OnceLock::new(),
-            path: slots(PathOptions::COUNT),
-            wavefront: slots(PathOptions::COUNT),
+            path: Cache::new(),
+            wavefront: Cache::new(),
             resolve: OnceLock::new(),
             denoise: OnceLock::new(),
             temporal: OnceLock::new(),
@@ -409,12 +404,8 @@ impl Passes {
         restir: bool,
         sized: bool,
     ) -> Result<&DeferredPass> {
-        // Sized lights (ray-traced only) take the last eight.
-        let kind = if sized { ShadowMethod::ALL.len() } else { method.index() };
-        let index = 8 * kind + 4 * restir as usize + 2 * lightmaps as usize + probes as usize;
-        built(&self.deferred[index], || {
-            DeferredPass::for_features(&self.ctx, &self.features, method, probes, lightmaps, restir, sized)
-        })
+        let spec = DeferredPass::spec(method, probes, lightmaps, restir, sized)?;
+        self.deferred.get_or_try_init(spec, || DeferredPass::from_spec(&self.ctx, &self.features, spec))
     }
 
     /// Builds the two pipelines of [`Passes::hybrid_with`] that take longest on lavapipe (the
@@ -436,9 +427,8 @@ impl Passes {
 
     fn restir_pass(&self, scene: &GpuScene, settings: &RestirSettings) -> Result<&RestirPass> {
         let (unbiased, temporal) = (settings.unbiased, settings.temporal);
-        built(&self.restir[2 * unbiased as usize + temporal as usize], || {
-            RestirPass::new(&self.ctx, scene, unbiased, temporal)
-        })
+        self.restir
+            .get_or_try_init((unbiased, temporal), || RestirPass::new(&self.ctx, scene, unbiased, temporal))
     }
 
     fn probe_pass(&self, scene: &GpuScene) -> Result<&ProbePass> {
@@ -523,7 +513,7 @@ impl Passes {
     /// The path tracer's pass for `options`, its pipelines built at their first use.
     fn lazy_path_pass(&self, scene: &GpuScene, options: PathOptions) -> Result<&PathTracePass> {
         self.check(scene)?;
-        built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))
+        Ok(self.path.get_or_init(options, || PathTracePass::lazy(options)))
     }
 
     /// The wavefront path tracer's stages for `options`, without the lobe split (built now if
@@ -542,7 +532,7 @@ impl Passes {
 
     /// The wavefront path tracer's pass for `options`, no stage built yet.
     fn wavefront_stages(&self, options: PathOptions) -> &WavefrontPass {
-        self.wavefront[options.index()].get_or_init(|| WavefrontPass::lazy(options))
+        self.wavefront.get_or_init(options, || WavefrontPass::lazy(options))
     }
 
     /// Builds the pipelines [`Passes::path_trace`] with `settings` uses (the megakernel's or the
@@ -561,7 +551,7 @@ impl Passes {
 
     /// The megakernel's pass for `options` with its pipeline for `lobe_split` built.
     pub(crate) fn megakernel(&self, options: PathOptions, lobe_split: bool) -> Result<&PathTracePass> {
-        let pass = built(&self.path[options.index()], || Ok(PathTracePass::lazy(options)))?;
+        let pass = self.path.get_or_init(options, || PathTracePass::lazy(options));
         pass.prepare_for(&self.ctx, &self.features, lobe_split)?;
         Ok(pass)
     }

@@ -444,41 +444,6 @@ fn ris_reuse_carries_over_between_records_and_caps_its_counts() {
     assert!(most == cap, "no reservoir reached the cap {cap} (the most: {most})");
 }
 
-/// Every PathOptions value (reuse among them) has its own pipeline slot below
-/// PathOptions::COUNT. Fails if the index leaves out a field.
-#[test]
-fn path_options_have_distinct_slots() {
-    use umbra::passes::pathtrace::{EmitterSampling, Heuristic, Microfacet, PathOptions};
-    let mut seen = std::collections::HashSet::new();
-    for microfacet in Microfacet::ALL {
-        for heuristic in [Heuristic::Power, Heuristic::Balance, Heuristic::UnweightedBsdfHits] {
-            for strategy in Strategy::ALL {
-                for ris in [false, true] {
-                    for ris_reuse in RisReuse::ALL {
-                        for (sampler, emitter_sampling) in
-                            Sampler::ALL.into_iter().flat_map(|s| EmitterSampling::ALL.map(|e| (s, e)))
-                        {
-                            let options = PathOptions {
-                                microfacet,
-                                heuristic,
-                                strategy,
-                                ris,
-                                ris_reuse,
-                                sampler,
-                                emitter_sampling,
-                            };
-                            let index = options.index();
-                            assert!(index < PathOptions::COUNT, "{index}");
-                            assert!(seen.insert(index), "slot {index} twice");
-                        }
-                    }
-                }
-            }
-        }
-    }
-    assert_eq!(seen.len(), PathOptions::COUNT);
-}
-
 /// Bad RIS settings are refused with an error naming the problem: no candidates, too many (at a
 /// vertex, over a path's bounces), the wavefront integrator, BSDF sampling alone; reuse without
 /// RIS, in the wavefront integrator, of a tile, of a sample range not from 0.

@@ -317,7 +317,7 @@ macro_rules! kernels {
 
                     /// The kernel's own specialization constants (the scene's features come from
                     /// the scene).
-                    #[derive(Clone, Copy, Debug, PartialEq)]
+                    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
                     pub struct Spec {
                         $(#[doc = concat!("`", stringify!($spec), "` (upper case in GLSL).")] pub $spec: rust_ty!($sty),)*
                     }

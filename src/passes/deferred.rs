@@ -259,13 +259,25 @@ impl DeferredPass {
         restir: bool,
         sized: bool,
     ) -> Result<Self> {
+        Self::from_spec(ctx, features, Self::spec(method, probes, lightmaps, restir, sized)?)
+    }
+
+    /// The kernel's specialization for the arguments of [`DeferredPass::new`] (what a cache of
+    /// these passes is keyed by); an error for sized lights with shadow maps or ReSTIR.
+    pub fn spec(
+        method: ShadowMethod,
+        probes: bool,
+        lightmaps: bool,
+        restir: bool,
+        sized: bool,
+    ) -> Result<deferred::Spec> {
         if sized && (method.uses_maps() || restir) {
             return Err(Error::Invalid(format!(
                 "shadow rays to sized lights need the '{}' method without ReSTIR",
                 ShadowMethod::RayTraced.name()
             )));
         }
-        let spec = deferred::Spec {
+        Ok(deferred::Spec {
             beckmann: false,
             shadow_maps: method.uses_maps(),
             shadow_pcf: method == ShadowMethod::Pcf,
@@ -275,7 +287,19 @@ impl DeferredPass {
             lightmaps,
             restir,
             shadow_sized: sized,
+        })
+    }
+
+    /// The pass for a [`DeferredPass::spec`] and a scene with `features`.
+    pub fn from_spec(ctx: &Context, features: &SceneFeatures, spec: deferred::Spec) -> Result<Self> {
+        let method = match spec {
+            deferred::Spec { shadow_maps: false, .. } => ShadowMethod::RayTraced,
+            deferred::Spec { shadow_pcf: true, .. } => ShadowMethod::Pcf,
+            deferred::Spec { shadow_pcss: true, .. } => ShadowMethod::Pcss,
+            deferred::Spec { shadow_moments: true, .. } => ShadowMethod::Moments,
+            _ => ShadowMethod::Hard,
         };
+        let deferred::Spec { probes, lightmaps, restir, shadow_sized: sized, .. } = spec;
         let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
         no_ao.write(ctx, &[1.0f32])?;

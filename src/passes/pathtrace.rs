@@ -4,6 +4,7 @@
 pub use super::wavefront::Integrator;
 use super::wavefront::WaveState;
 use crate::error::{Error, Result};
+use crate::gpu::cache::Cache;
 use crate::gpu::kernels::{pathtrace, resolve};
 use crate::gpu::layout::{GpuCamera, GpuPathReservoir, PathParams, PathStats, ResolveParams};
 use crate::gpu::scene::GpuScene;
@@ -12,7 +13,7 @@ use crate::scene::Camera;
 use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation};
 
 /// The microfacet distribution of the specular lobes, and how their half vectors are sampled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Microfacet {
     /// GGX (the glTF specification) with visible-normal sampling (Heitz 2018).
@@ -28,7 +29,7 @@ pub enum Microfacet {
 }
 
 impl Microfacet {
-    /// Every value, in [`PathOptions::index`] order.
+    /// Every value, for tests and benchmarks that try each.
     pub const ALL: [Microfacet; 3] = [Microfacet::Ggx, Microfacet::GgxWalter, Microfacet::Beckmann];
 
     /// The command line's name.
@@ -42,7 +43,7 @@ impl Microfacet {
 }
 
 /// How light sampling and BSDF sampling are combined.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Heuristic {
     /// Veach's power heuristic (β = 2).
@@ -78,7 +79,7 @@ impl Heuristic {
 /// sampling alone, and emission that light sampling cannot find (a constant environment, the
 /// environment map with [`PathSettings::env_nee`] off) by BSDF sampling alone. Camera rays see
 /// emitters directly under every strategy.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Strategy {
     /// Light sampling (next-event estimation) and BSDF sampling, weighted by multiple importance
@@ -96,7 +97,7 @@ pub enum Strategy {
 }
 
 impl Strategy {
-    /// Every value, in [`PathOptions::index`] order.
+    /// Every value, for tests and benchmarks that try each.
     pub const ALL: [Strategy; 3] = [Strategy::Mis, Strategy::Bsdf, Strategy::Light];
 
     /// The command line's name.
@@ -174,7 +175,7 @@ impl DirectSampling {
 /// visibility enters the reuse: the kept sample has the one shadow ray RIS traces anyway. The
 /// samples of one render are correlated across sample indices (each index's reservoirs feed the
 /// next), so a render with reuse cannot be split into sample ranges or tiles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum RisReuse {
     /// No reuse: every sample's RIS from its own candidates.
@@ -192,7 +193,7 @@ pub enum RisReuse {
 }
 
 impl RisReuse {
-    /// Every value, in [`PathOptions::index`] order.
+    /// Every value, for tests and benchmarks that try each.
     pub const ALL: [RisReuse; 4] = [RisReuse::Off, RisReuse::Samples, RisReuse::Spatial, RisReuse::Both];
 
     /// The command line's name.
@@ -215,7 +216,7 @@ impl RisReuse {
 }
 
 /// How next-event estimation draws a point on the emissive triangle it picked.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum EmitterSampling {
     /// Uniform on the triangle's area, Mitsuba's choice.
@@ -240,7 +241,7 @@ impl EmitterSampling {
 }
 
 /// The numbers a path draws its samples from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Sampler {
     /// Shuffled, Owen-scrambled 2D Sobol points per pixel and use (Burley 2020).
@@ -264,8 +265,9 @@ impl Sampler {
     pub const ALL: [Sampler; 2] = [Sampler::LowDiscrepancy, Sampler::Independent];
 }
 
-/// What the path tracer's pipeline is specialised on: the estimator, apart from the scene.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// What the path tracer's pipeline is specialised on: the estimator, apart from the scene (the
+/// key its passes are cached by).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct PathOptions {
     /// Microfacet distribution and its sampling.
     pub microfacet: Microfacet,
@@ -282,29 +284,6 @@ pub struct PathOptions {
     pub sampler: Sampler,
     /// Points on the emissive triangles for next-event estimation.
     pub emitter_sampling: EmitterSampling,
-}
-
-impl PathOptions {
-    /// How many distinct [`PathOptions::index`] values there are.
-    pub const COUNT: usize = 864;
-
-    /// A dense index below [`PathOptions::COUNT`], one per value (a pipeline cache's slot).
-    pub fn index(self) -> usize {
-        let heuristic = match self.heuristic {
-            Heuristic::Power => 0,
-            Heuristic::Balance => 1,
-            #[cfg(feature = "testing")]
-            Heuristic::UnweightedBsdfHits => 2,
-        };
-        (((((self.microfacet as usize * 3 + heuristic) * 3 + self.strategy as usize) * 2
-            + self.ris as usize)
-            * 4
-            + self.ris_reuse as usize)
-            * 2
-            + self.sampler as usize)
-            * 2
-            + self.emitter_sampling as usize
-    }
 }
 
 /// A kernel's `Spec` with the sampling constants of `options` (a [`PathOptions`]), which both
@@ -676,10 +655,10 @@ impl PathTarget {
 
 /// `pathtrace.comp`, specialised for one scene's features and the chosen sampling.
 pub struct PathTracePass {
-    /// The kernel specialised with or without the lobe split and with or without lane counts
-    /// (index: lobe split + 2 × lane counts), each made at its first use (a record into a target
-    /// with or without them), or by [`PathTracePass::prepare`].
-    pipelines: [std::sync::OnceLock<Pipeline<pathtrace::Kernel>>; 4],
+    /// The kernel specialised with or without the lobe split and with or without lane counts,
+    /// each made at its first use (a record into a target with or without them), or by
+    /// [`PathTracePass::prepare`].
+    pipelines: Cache<pathtrace::Spec, Pipeline<pathtrace::Kernel>>,
     options: PathOptions,
 }
 
@@ -698,7 +677,7 @@ impl PathTracePass {
 
     /// The pass for `options` with no pipeline built yet: each is built at its first use.
     pub fn lazy(options: PathOptions) -> Self {
-        Self { pipelines: Default::default(), options }
+        Self { pipelines: Cache::new(), options }
     }
 
     /// The pipeline for `scene`, specialised for the lobe split or not (built now if it was not:
@@ -730,10 +709,6 @@ impl PathTracePass {
         lobe_split: bool,
         lane_counts: bool,
     ) -> Result<&Pipeline<pathtrace::Kernel>> {
-        let cell = &self.pipelines[lobe_split as usize + 2 * lane_counts as usize];
-        if let Some(pipeline) = cell.get() {
-            return Ok(pipeline);
-        }
         let spec = sampling_spec!(
             pathtrace::Spec,
             self.options,
@@ -746,8 +721,7 @@ impl PathTracePass {
                 ..Default::default()
             }
         );
-        let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
-        Ok(cell.get_or_init(|| pipeline))
+        self.pipelines.get_or_try_init(spec, || Pipeline::new(ctx, &spec, Some(features)))
     }
 
     /// Samples per pixel one dispatch traces at most ([`PathTracePass::record`] splits longer

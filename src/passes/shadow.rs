@@ -106,11 +106,6 @@ impl ShadowMethod {
     pub fn uses_maps(self) -> bool {
         self != ShadowMethod::RayTraced
     }
-
-    /// Index in [`ShadowMethod::ALL`].
-    pub fn index(self) -> usize {
-        Self::ALL.iter().position(|&m| m == self).unwrap_or(0)
-    }
 }
 
 /// Shadow-map settings. Biases and radii are in texels of the layer at the receiver, so one

@@ -1,0 +1,413 @@
+//! The second of [`Passes`]' jobs: recording passes and whole frames into a command buffer
+//! (umbra's or a host's). Nothing here submits.
+
+use super::*;
+
+impl Passes {
+    /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.
+    pub fn record_gbuffer(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        target: &GBufferViews,
+    ) -> Result<()> {
+        self.check(scene)?;
+        let params = GBufferPass::params(camera, target.size);
+        self.gbuffer_pass()?.record(&self.ctx, cmd, scene, target, &params)
+    }
+
+    /// Records SSAO of `gbuffer` into `raw_ao` and, when `settings.blur`, its depth-aware blur
+    /// into `blurred` (`R32_SFLOAT`, the G-buffer's size). Returns the view holding the result.
+    pub fn record_ssao(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        raw_ao: raw::ImageView,
+        blurred: raw::ImageView,
+        settings: &AoSettings,
+    ) -> Result<raw::ImageView> {
+        self.record_ssao_timed(cmd, camera, gbuffer, (raw_ao, blurred), settings, None)
+    }
+
+    pub(super) fn record_ssao_timed(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        (raw_ao, blurred): (raw::ImageView, raw::ImageView),
+        settings: &AoSettings,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<raw::ImageView> {
+        settings.validate()?;
+        let size = gbuffer.size;
+        timed(&mut timer, cmd, "ssao", || {
+            self.ssao_pass()?.record(
+                &self.ctx,
+                cmd,
+                gbuffer,
+                raw_ao,
+                &SsaoPass::params(camera, size, settings),
+            )
+        })?;
+        if !settings.blur {
+            return Ok(raw_ao);
+        }
+        timed(&mut timer, cmd, "ao_blur", || {
+            let params = AoBlurPass::params(camera, size);
+            self.blur_pass()?.record(&self.ctx, cmd, gbuffer, raw_ao, blurred, &params)
+        })?;
+        Ok(blurred)
+    }
+
+    /// Records ray-traced AO of `gbuffer` (`settings.samples` rays of length `settings.radius`
+    /// per pixel) into `output` (`R32_SFLOAT`, the G-buffer's size).
+    pub fn record_rtao(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        settings: &AoSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.validate()?;
+        let params = RtaoPass::params(camera, gbuffer.size, settings);
+        self.rtao_pass(scene)?.record(&self.ctx, cmd, scene, gbuffer, output, &params)
+    }
+
+    /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the
+    /// scene's precomputed `ibl` and the optional `inputs` (ambient occlusion, shadow maps
+    /// instead of shadow rays, a probe volume and lightmaps for the diffuse lobe), each recorded
+    /// before.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_lighting(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        ibl: &IblResources,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        inputs: &LightingInputs<'_>,
+        settings: &LightingSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.validate()?;
+        settings.validate_sized_rays(scene.punctual_count)?;
+        let params = DeferredPass::params(scene, camera, gbuffer.size, settings);
+        let method = inputs.shadows.map_or(ShadowMethod::RayTraced, |m| m.settings.method);
+        let (probes, lightmaps, restir) =
+            (inputs.probes.is_some(), inputs.lightmaps.is_some(), inputs.restir.is_some());
+        let sized = settings.sized_lights.is_some();
+        if sized && method.uses_maps() {
+            return Err(Error::Invalid(format!(
+                "sized lights' ray-traced shadows were asked for, but the lighting is given '{}' shadow maps",
+                method.name()
+            )));
+        }
+        self.deferred_pass(method, probes, lightmaps, restir, sized)?
+            .record(&self.ctx, cmd, scene, gbuffer, output, ibl, inputs, &params)
+    }
+
+    /// Records ReSTIR's candidates, temporal and spatial reuse for `gbuffer` (seen by `camera`)
+    /// into `reservoirs`, with the random numbers of `lighting`'s frame and seed; the lighting
+    /// pass then shades them ([`LightingInputs::restir`]). Never submits.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_restir(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        reservoirs: &Reservoirs,
+        settings: &RestirSettings,
+        lighting: &LightingSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        self.restir_pass(scene, settings)?.record(
+            &self.ctx,
+            cmd,
+            scene,
+            camera,
+            gbuffer,
+            reservoirs,
+            settings,
+            lighting.frame,
+            lighting.seed,
+        )
+    }
+
+    /// Records one update of `count` probes of `volume` (from where the last update stopped,
+    /// wrapping): a probe's first [`crate::passes::probes::ProbeSettings::bounces`] updates
+    /// replace its maps, later ones weigh the new estimate at least `blend_min` against the old
+    /// (0: a running mean), under the environment of `settings` (the lighting's). Never submits.
+    pub fn record_probe_update(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        volume: &mut ProbeVolume,
+        count: u32,
+        blend_min: f32,
+        settings: &LightingSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.validate()?;
+        self.probe_pass(scene)?.record(&self.ctx, cmd, scene, volume, count, blend_min, settings.env)
+    }
+
+    /// Places and allocates the shadow maps of `scene`'s punctual lights for `camera` over an
+    /// image of `size` (nothing is recorded: [`Passes::record_shadow_maps`] renders them).
+    pub fn shadow_maps(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        size: (u32, u32),
+        settings: &ShadowSettings,
+    ) -> Result<ShadowMaps> {
+        let plan = ShadowPlan::new(&scene.punctual_lights, scene.bounds, camera, size, settings)?;
+        ShadowMaps::new(&self.ctx, plan, settings, scene)
+    }
+
+    /// Records the rendering of every layer of `maps` (after a light, the geometry or, for
+    /// directional cascades, the camera changed); for a `view` whose G-buffer is recorded before
+    /// (with [`ShadowSettings::view_marks`]: its cascades' tiles that no pixel reads are skipped,
+    /// so the G-buffer must change no more often than the maps are recorded). Never submits.
+    /// After the submission, [`ShadowMaps::check`] says whether the tile lists sufficed.
+    pub fn record_shadow_maps(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        maps: &ShadowMaps,
+        view: Option<ShadowView<'_>>,
+    ) -> Result<()> {
+        self.check(scene)?;
+        self.shadow_pass(scene)?.record(&self.ctx, cmd, scene, maps, view, None)
+    }
+
+    /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`
+    /// (`R8G8B8A8_UNORM`, sRGB-encoded values).
+    pub fn record_tonemap(
+        &self,
+        cmd: raw::CommandBuffer,
+        src: raw::ImageView,
+        dst: raw::ImageView,
+        size: (u32, u32),
+        exposure_stops: f32,
+        curve: ToneCurve,
+    ) -> Result<()> {
+        self.tonemap_pass()?.record(&self.ctx, cmd, src, dst, size, exposure_stops, curve)
+    }
+
+    /// Records one hybrid frame into `targets`: G-buffer, SSAO and its blur (when
+    /// `settings.ao`), deferred lighting with `ibl` × AO, tonemap (when `targets.ldr`), each
+    /// timed under its name when a `timer` is given. The one place the hybrid frame is wired.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_hybrid(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        ibl: &IblResources,
+        camera: &Camera,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.lighting_with_shadows().validate()?;
+        timed(&mut timer, cmd, "gbuffer", || self.record_gbuffer(cmd, scene, camera, targets.gbuffer))?;
+        self.record_hybrid_shading(cmd, scene, ibl, camera, targets, settings, timer)
+    }
+
+    /// [`Passes::record_hybrid`] after its G-buffer, which `targets.gbuffer` already holds
+    /// ([`Passes::record_gbuffer`] of `camera`): for shadow maps rendered for the view between
+    /// the two ([`crate::passes::shadow::ShadowView`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_hybrid_shading(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        ibl: &IblResources,
+        camera: &Camera,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.lighting_with_shadows().validate()?;
+        let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
+            (false, _) => None,
+            (true, Some(maps)) if maps.settings.method == settings.shadows.method => Some(maps),
+            (true, Some(maps)) => {
+                return Err(Error::Invalid(format!(
+                    "the settings shadow by '{}' but the maps given were made for '{}'",
+                    settings.shadows.method.name(),
+                    maps.settings.method.name()
+                )))
+            }
+            (true, None) => {
+                return Err(Error::Invalid(format!(
+                    "the settings shadow by '{}' but no shadow maps were given",
+                    settings.shadows.method.name()
+                )))
+            }
+        };
+        let gbuffer = targets.gbuffer;
+        let ao = match (&settings.ao, targets.ao) {
+            (Some(ao), Some(images)) => {
+                Some(self.record_ssao_timed(cmd, camera, gbuffer, images, ao, timer.as_deref_mut())?)
+            }
+            (Some(_), None) => {
+                return Err(Error::Invalid("the settings ask for SSAO but no AO images were given".into()))
+            }
+            (None, _) => None,
+        };
+        let restir = match (settings.lighting.direct.restir(), targets.reservoirs) {
+            (None, _) => None,
+            (Some(restir), Some(reservoirs)) => {
+                timed(&mut timer, cmd, "restir", || {
+                    self.record_restir(cmd, scene, camera, gbuffer, reservoirs, restir, &settings.lighting)
+                })?;
+                Some(reservoirs)
+            }
+            (Some(_), None) => {
+                return Err(Error::Invalid("the settings ask for ReSTIR but no reservoirs were given".into()))
+            }
+        };
+        timed(&mut timer, cmd, "lighting", || {
+            let inputs =
+                LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
+            let lighting = settings.lighting_with_shadows();
+            self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &lighting)
+        })?;
+        if let Some(ldr) = targets.ldr {
+            timed(&mut timer, cmd, "tonemap", || {
+                self.record_tonemap(cmd, targets.hdr, ldr, gbuffer.size, settings.exposure, settings.curve)
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Records path-traced samples `first .. first + count` of `settings`' render into `target`
+    /// (its samples `settings.first_sample + first ..` of the sequence; `first` 0 records the
+    /// target's clearing first and restarts the running mean). `settings.size` must be the
+    /// target's. With RIS reuse ([`crate::passes::pathtrace::RisReuse`]) the target's reservoirs
+    /// are made at the first such record, and the samples continue from those the last record
+    /// left (`first` 0 clears them too).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_path_samples(
+        &self,
+        cmd: raw::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        target: &PathTarget,
+        settings: &PathSettings,
+        first: u32,
+        count: u32,
+    ) -> Result<()> {
+        if settings.ris_reuse != crate::passes::pathtrace::RisReuse::Off {
+            // (Reuse chains the samples: the settings that cannot be split are refused.)
+            settings.validate()?;
+        }
+        if settings.size != target.size {
+            return Err(Error::Invalid(format!(
+                "path settings are for {:?} but the target is {:?}",
+                settings.size, target.size
+            )));
+        }
+        let mut params = PathTracePass::params(scene, camera, settings);
+        params.sample_index =
+            settings.first_sample.checked_add(first).filter(|s| s.checked_add(count).is_some()).ok_or_else(
+                || {
+                    Error::Invalid(format!(
+                        "samples {first}..+{count} from {} run past the sequence's last index",
+                        settings.first_sample
+                    ))
+                },
+            )?;
+        params.sample_count = count;
+        if first == 0 {
+            target.record_clear(&self.ctx, cmd);
+        }
+        match settings.integrator {
+            Integrator::Megakernel => {
+                self.lazy_path_pass(scene, settings.options())?.record(&self.ctx, cmd, scene, target, &params)
+            }
+            Integrator::Wavefront => self
+                .lazy_wavefront_pass(scene, settings.options())?
+                .record(&self.ctx, cmd, scene, target, settings, &params),
+        }
+    }
+
+    /// Records the copy of `target`'s running mean into `output` (`R32G32B32A32_SFLOAT`, the
+    /// target's size).
+    pub fn record_path_resolve(
+        &self,
+        cmd: raw::CommandBuffer,
+        target: &PathTarget,
+        output: raw::ImageView,
+    ) -> Result<()> {
+        self.resolve_pass()?.record(&self.ctx, cmd, target, output)
+    }
+
+    /// Records the denoiser ([`crate::passes::denoise`]) of `target`'s samples so far into
+    /// `output` (`R32G32B32A32_SFLOAT`, the target's size, `GENERAL` layout) through `images`
+    /// (the target's size, already in `GENERAL` layout).
+    pub fn record_denoise(
+        &self,
+        cmd: raw::CommandBuffer,
+        target: &PathTarget,
+        images: &DenoiseImages,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+    ) -> Result<()> {
+        self.denoise_pass()?.record(&self.ctx, cmd, &DenoiseInputs::from(target), images, output, settings)
+    }
+
+    /// Records the denoiser of `target`'s samples with temporal accumulation
+    /// ([`crate::passes::temporal`]): the frame, seen by `camera`, blended with `history` (which
+    /// then holds it), filtered into `output` (`R32G32B32A32_SFLOAT`, the target's size,
+    /// `GENERAL` layout) through `images`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_denoise_temporal(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        target: &PathTarget,
+        images: &DenoiseImages,
+        history: &mut TemporalHistory,
+        output: raw::ImageView,
+        settings: &DenoiseSettings,
+    ) -> Result<()> {
+        let camera = GpuCamera::new(camera, target.size);
+        let temporal = (self.temporal_pass()?, history, &camera);
+        self.denoise_pass()?.record_temporal(
+            &self.ctx,
+            cmd,
+            &DenoiseInputs::from(target),
+            images,
+            output,
+            settings,
+            temporal,
+        )
+    }
+}
+
+/// Runs `record` between `timer.begin(name)` and `timer.end()` when there is a timer.
+pub(super) fn timed(
+    timer: &mut Option<&mut GpuTimer>,
+    cmd: raw::CommandBuffer,
+    name: &str,
+    record: impl FnOnce() -> Result<()>,
+) -> Result<()> {
+    if let Some(t) = timer.as_deref_mut() {
+        t.begin(cmd, name)?;
+    }
+    record()?;
+    if let Some(t) = timer.as_deref_mut() {
+        t.end(cmd)?;
+    }
+    Ok(())
+}

@@ -73,6 +73,34 @@ pub fn given_flags(matches: &clap::ArgMatches) -> Vec<String> {
         .collect()
 }
 
+/// The ids of the arguments a group of flags (`#[derive(clap::Args)]`) declares.
+#[allow(dead_code)] // one binary uses it
+pub fn arg_ids<T: clap::Args>() -> Vec<String> {
+    T::augment_args(clap::Command::new("group")).get_arguments().map(|a| a.get_id().to_string()).collect()
+}
+
+/// A group of flags: their argument ids, whether they apply to the command as given, and what
+/// they need when they do not.
+#[allow(dead_code)] // one binary uses it
+pub type FlagGroup = (Vec<String>, bool, &'static str);
+
+/// Refuses the flags in `given` (those on the command line: a default never blocks) whose group
+/// does not apply, each with what it needs: a flag that cannot apply is refused, never ignored.
+#[allow(dead_code)] // one binary uses it
+pub fn refuse_inapplicable(given: &[String], groups: &[FlagGroup]) -> anyhow::Result<()> {
+    let refused: Vec<String> = given
+        .iter()
+        .filter_map(|id| {
+            let (_, applies, needs) = groups.iter().find(|(ids, ..)| ids.contains(id))?;
+            (!applies).then(|| format!("{} applies to {needs}", flag(id)))
+        })
+        .collect();
+    if !refused.is_empty() {
+        anyhow::bail!("{}: such a flag would be ignored", refused.join("; "));
+    }
+    Ok(())
+}
+
 /// The flag of an argument id: `--shadow-map-size` for `shadow_map_size`.
 #[allow(dead_code)] // one binary uses it
 pub fn flag(id: &str) -> String {

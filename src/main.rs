@@ -1,411 +1,18 @@
 //! The `umbra` command-line renderer.
 
+mod args;
 mod cli;
 
 use anyhow::{Context as _, Result};
-use clap::{Parser, Subcommand};
-use std::path::PathBuf;
-use umbra::color::ToneCurve;
+use args::*;
 use umbra::gpu::scene::{GpuScene, SceneBvh};
 use umbra::passes::deferred::{DirectLight, LightingSettings};
-use umbra::passes::pathtrace::{
-    EmitterSampling, Heuristic, Integrator, Microfacet, RisReuse, Sampler, Strategy,
-};
+use umbra::passes::pathtrace::{EmitterSampling, RisReuse, Sampler};
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
 use umbra::passes::restir::RestirSettings;
-use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
+use umbra::passes::shadow::ShadowSettings;
 use umbra::render::{DenoiseSettings, Passes};
 use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
-
-#[derive(Parser)]
-#[command(name = "umbra", version, about = "Physically based rendering with Vulkan compute kernels")]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand)]
-enum Command {
-    /// Render a glTF scene (or, without one, the embedded Cornell box).
-    Render(RenderArgs),
-    /// Bake the irradiance probes of a scene (or the embedded Cornell box) to a file, for
-    /// `render --mode hybrid --probes FILE`.
-    Bake(BakeArgs),
-    /// Join path-traced parts of one render (EXRs of `render --sample-range` and/or `--tile`,
-    /// e.g. from an array job) into the render one process would have made.
-    Merge(MergeArgs),
-    /// List the Vulkan devices and the one umbra would use.
-    Info,
-    /// Render the foundation test pattern (a known function of the pixel) to PNG and/or EXR.
-    Pattern {
-        /// Image size as WIDTHxHEIGHT.
-        #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
-        size: (u32, u32),
-        /// PNG output path.
-        #[arg(short, long, default_value = "pattern.png", value_parser = cli::parse_png)]
-        output: PathBuf,
-        /// Optional EXR output path (linear values).
-        #[arg(long, value_parser = cli::parse_exr)]
-        exr: Option<PathBuf>,
-    },
-}
-
-/// The scene and the environment that lights it: what `render` and `bake` share.
-#[derive(clap::Args)]
-struct SceneArgs {
-    /// A .gltf or .glb file; the embedded Cornell box when absent.
-    scene: Option<PathBuf>,
-    /// Equirectangular environment map (EXR or Radiance HDR), importance-sampled.
-    #[arg(long)]
-    env: Option<PathBuf>,
-    /// Multiplier of the environment map.
-    #[arg(long, default_value_t = 1.0, value_parser = cli::parse_non_negative)]
-    env_strength: f32,
-    /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
-    #[arg(long, value_parser = cli::parse_rgb, default_value = "0,0,0")]
-    env_color: [f32; 3],
-    /// A texture image that cannot be read or decoded: refuse the scene (error), or warn once
-    /// per image and render its slots with the material's factors alone (warn).
-    #[arg(long, value_enum, default_value = "error")]
-    missing_textures: umbra::scene::MissingTextures,
-}
-
-/// How the irradiance probes are baked (`bake`, and `render --probes bake`); unset: the
-/// defaults of `ProbeSettings`.
-#[derive(clap::Args)]
-struct ProbeArgs {
-    /// Probes: distance between neighbouring probes, metres (default: the scene's longest side / 8).
-    #[arg(long, value_parser = cli::parse_positive)]
-    probe_spacing: Option<f32>,
-    /// Probes: rays per probe and sweep, a multiple of 64 up to 256 (default 128).
-    #[arg(long)]
-    probe_rays: Option<u32>,
-    /// Probes: sweeps that average after the bounces (default 32).
-    #[arg(long)]
-    probe_sweeps: Option<u32>,
-    /// Probes: sweeps that replace the maps, one bounce of light each (default 6).
-    #[arg(long)]
-    probe_bounces: Option<u32>,
-}
-
-impl ProbeArgs {
-    fn settings(&self) -> ProbeSettings {
-        let d = ProbeSettings::default();
-        ProbeSettings {
-            spacing: self.probe_spacing.or(d.spacing),
-            rays: self.probe_rays.unwrap_or(d.rays),
-            sweeps: self.probe_sweeps.unwrap_or(d.sweeps),
-            bounces: self.probe_bounces.unwrap_or(d.bounces),
-            ..d
-        }
-    }
-
-    /// The flags given, for refusing them where nothing is baked.
-    fn given(&self) -> Vec<&'static str> {
-        let flags = [
-            ("--probe-spacing", self.probe_spacing.is_some()),
-            ("--probe-rays", self.probe_rays.is_some()),
-            ("--probe-sweeps", self.probe_sweeps.is_some()),
-            ("--probe-bounces", self.probe_bounces.is_some()),
-        ];
-        flags.into_iter().filter(|f| f.1).map(|f| f.0).collect()
-    }
-}
-
-/// `--probes`: bake now, or load a file.
-#[derive(Clone)]
-enum ProbesArg {
-    Bake,
-    File(PathBuf),
-}
-
-fn parse_probes(s: &str) -> Result<ProbesArg, String> {
-    match s {
-        "" => Err("expected a bake file, or 'bake'".into()),
-        "bake" => Ok(ProbesArg::Bake),
-        _ => Ok(ProbesArg::File(s.into())),
-    }
-}
-
-/// How lightmaps and occlusion maps are baked (`bake`, and `render --lightmaps bake`).
-#[derive(clap::Args)]
-struct LightmapArgs {
-    /// Lightmaps and occlusion maps: texels a side of each material's map.
-    #[arg(long, default_value_t = 128)]
-    lightmap_size: u32,
-    /// Lightmaps and occlusion maps: samples per texel.
-    #[arg(long, default_value_t = 256)]
-    lightmap_samples: u32,
-    /// Give every triangle its own chart in a new TEXCOORD_1 set (for scenes without one; the
-    /// scene's own set is replaced).
-    #[arg(long)]
-    unwrap: bool,
-}
-
-impl LightmapArgs {
-    fn settings(&self) -> umbra::passes::lightmap::LightmapSettings {
-        umbra::passes::lightmap::LightmapSettings {
-            size: self.lightmap_size,
-            samples: self.lightmap_samples,
-            ..Default::default()
-        }
-    }
-}
-
-#[derive(clap::Args)]
-struct BakeArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
-    #[command(flatten)]
-    probe: ProbeArgs,
-    #[command(flatten)]
-    lightmap: LightmapArgs,
-    /// The probe bake file to write, NAME.probes (umbra's probe format, see the `umbra::bake`
-    /// docs).
-    #[arg(short, long, value_parser = cli::parse_probes_file)]
-    output: Option<PathBuf>,
-    /// Also bake lightmaps over TEXCOORD_1 into this folder: lightmap-<material>.exr, layers
-    /// `emitters` (direct light of the emissive triangles) and `ambient` (the environment and
-    /// reflected light; the bounces beyond the first from the probes when they are baked too).
-    #[arg(long, value_name = "DIR")]
-    lightmaps: Option<PathBuf>,
-    /// Also bake ambient-occlusion maps over TEXCOORD_1 into this folder (occlusion-<material>.png,
-    /// for glTF's occlusionTexture with texCoord 1), with occlusion rays of --occlusion-radius.
-    #[arg(long, alias = "ao", value_name = "DIR")]
-    ao_maps: Option<PathBuf>,
-    /// Occlusion maps: the occlusion rays' length in scene units.
-    #[arg(long, default_value_t = 0.5, value_parser = cli::parse_positive)]
-    occlusion_radius: f32,
-}
-
-#[derive(clap::Args)]
-struct RenderArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
-    /// Rendering method.
-    #[arg(long, value_enum, default_value = "pathtrace")]
-    mode: Mode,
-    /// Samples per pixel (64 by default); with --sample-range, the whole render's, of which the
-    /// part traces its range.
-    #[arg(long)]
-    spp: Option<u32>,
-    /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
-    size: (u32, u32),
-    /// Scattering events per path (1 = direct light only).
-    #[arg(long, default_value_t = 8)]
-    max_bounces: u32,
-    /// Russian roulette starts after this many scattering events.
-    #[arg(long, default_value_t = 3)]
-    rr_depth: u32,
-    /// Seed of the random numbers (same seed and device: identical output).
-    #[arg(long, default_value_t = 0)]
-    seed: u32,
-    /// Which of the file's cameras (0-based; default the first, or one framing the scene).
-    #[arg(long)]
-    camera: Option<usize>,
-    /// Microfacet distribution of the specular lobes and its sampling: GGX from visible normals,
-    /// GGX from D(h)·cos θh (Walter et al. 2007), Beckmann.
-    #[arg(long, value_enum, default_value = "ggx")]
-    microfacet: Microfacet,
-    /// MIS heuristic.
-    #[arg(long, value_enum, default_value = "power")]
-    heuristic: Heuristic,
-    /// The numbers the path tracer draws its samples from: low-discrepancy (per pixel, scrambled
-    /// Sobol points: a lower error at the same samples) or independent (the error falls as 1/spp
-    /// and the printed error estimate is unbiased; with low-discrepancy numbers it is high).
-    #[arg(long, value_enum, default_value = "low-discrepancy")]
-    sampler: Sampler,
-    /// Points on emissive triangles for next-event estimation: uniform on the area, or uniform
-    /// in the solid angle the triangle subtends where that is at least 0.2 sr (far less noise
-    /// next to a large emitter, a few per cent more time on a CPU wherever there are emitters).
-    #[arg(long, value_enum, default_value = "area")]
-    emitter_sampling: EmitterSampling,
-    /// Sampling strategies for emitters: light and BSDF sampling weighted by MIS, BSDF sampling
-    /// alone, or light sampling alone (punctual lights are always light-sampled).
-    #[arg(long, value_enum, default_value = "mis")]
-    strategy: Strategy,
-    /// How the path tracer lays out its work: one kernel per path (megakernel) or a kernel per
-    /// step over queues of paths (wavefront); the same samples either way.
-    #[arg(long, value_enum, default_value = "megakernel")]
-    integrator: Integrator,
-    /// Stop early once the image's estimated relative RMS error is below this (e.g. 0.01).
-    #[arg(long, value_parser = cli::parse_positive)]
-    target_error: Option<f32>,
-    /// Path tracing: denoise the image (edge-avoiding à-trous filter guided by albedo, normal,
-    /// depth and per-pixel variance; the diffuse and specular parts of the radiance filtered
-    /// apart, with either integrator). The PNG and the EXR's main layer are denoised; the EXR
-    /// keeps the raw estimate as layer `noisy`.
-    #[arg(long)]
-    denoise: bool,
-    /// Path tracing with --denoise: à-trous iterations (1 to 8; taps 1, 2, 4, ... pixels apart).
-    #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
-    denoise_iterations: u32,
-    /// Path tracer: trace only samples A..B of the whole render's --spp N (B at most N), exactly
-    /// those a whole render traces there: one part of a render split across processes or
-    /// machines, joined by `umbra merge`, which checks that the parts hold all N.
-    #[arg(long, value_parser = cli::parse_sample_range, value_name = "A..B", requires = "spp", conflicts_with = "target_error")]
-    sample_range: Option<(u32, u32)>,
-    /// Path tracer: render only the W×H pixels from column X, row Y of the --size image, each as
-    /// the whole image has it (one part for `umbra merge`).
-    #[arg(long, value_parser = cli::parse_tile, value_name = "X,Y,W,H")]
-    tile: Option<[u32; 4]>,
-    /// Exposure in stops for the PNG.
-    #[arg(long, default_value_t = 0.0, value_parser = cli::parse_finite)]
-    exposure: f32,
-    /// Tone curve for the PNG.
-    #[arg(long, value_enum, default_value = "neutral")]
-    tonemap: ToneCurve,
-    /// Hybrid: shadow rays (light samples) per pixel for emissive triangles (and, with
-    /// --rt-light-size, per punctual light).
-    #[arg(long, default_value_t = 4)]
-    shadow_rays: u32,
-    /// How direct light (punctual lights, emissive triangles) is sampled. Hybrid: every punctual
-    /// light and --shadow-rays emissive samples by power (power), or ReSTIR DI's one resampled
-    /// sample per pixel, reused over --restir-frames frames and neighbouring pixels (restir).
-    /// Path tracer: at every vertex, one emissive sample by power with MIS and the punctual
-    /// lights (power), or one sample resampled from --ris-candidates (ris).
-    #[arg(long, value_enum, default_value = "power")]
-    direct: Direct,
-    /// Path tracer, --direct ris: candidates resampled at each vertex (at most 512 over a path's
-    /// --max-bounces).
-    #[arg(long, default_value_t = 8)]
-    ris_candidates: u32,
-    /// Path tracer, --direct ris: reuse the previous sample index's first-hit reservoirs, the
-    /// pixel's own (samples), neighbouring pixels' (spatial) or both (unbiased combination; one
-    /// dispatch per sample).
-    #[arg(long, value_enum, default_value = "off")]
-    ris_reuse: RisReuse,
-    /// Hybrid, ReSTIR: candidates resampled per pixel and frame.
-    #[arg(long, default_value_t = RestirSettings::default().candidates)]
-    restir_candidates: u32,
-    /// Hybrid, ReSTIR: spatial neighbours merged per pixel (0 to 8).
-    #[arg(long, default_value_t = RestirSettings::default().neighbours)]
-    restir_neighbours: u32,
-    /// Hybrid, ReSTIR: radius of the spatial neighbourhood, pixels.
-    #[arg(long, default_value_t = RestirSettings::default().radius, value_parser = cli::parse_positive)]
-    restir_radius: f32,
-    /// Hybrid, ReSTIR: frames rendered with the camera still, the last one kept (temporal reuse
-    /// builds on the earlier ones).
-    #[arg(long, default_value_t = RestirSettings::default().frames)]
-    restir_frames: u32,
-    /// Hybrid, ReSTIR: no temporal reuse.
-    #[arg(long)]
-    restir_no_temporal: bool,
-    /// Hybrid, ReSTIR: the unbiased combination (no visibility reuse; normalised by the
-    /// reservoirs that could have produced the sample) instead of the biased one.
-    #[arg(long)]
-    restir_unbiased: bool,
-    /// Hybrid: how punctual lights are shadowed: shadow rays (rt) or a shadow map read with the
-    /// nearest texel (hard), percentage-closer filtering (pcf), percentage-closer soft shadows
-    /// (pcss) or moment shadow maps (moments).
-    #[arg(long, value_enum, default_value = "rt")]
-    shadows: ShadowMethod,
-    /// Hybrid shadow maps: width = height of each layer in texels (16 to 2048).
-    #[arg(long, default_value_t = ShadowSettings::default().map_size)]
-    shadow_map_size: u32,
-    /// Hybrid shadow maps: constant depth bias, in texels.
-    #[arg(long, default_value_t = ShadowSettings::default().depth_bias, value_parser = cli::parse_non_negative)]
-    shadow_bias: f32,
-    /// Hybrid shadow maps: slope-scaled depth bias, in texels per unit of tan(angle to the light).
-    #[arg(long, default_value_t = ShadowSettings::default().slope_bias, value_parser = cli::parse_non_negative)]
-    shadow_slope_bias: f32,
-    /// Hybrid shadow maps: normal offset of the receiver, in texels.
-    #[arg(long, default_value_t = ShadowSettings::default().normal_bias, value_parser = cli::parse_non_negative)]
-    shadow_normal_bias: f32,
-    /// Hybrid shadow maps: PCF filter radius in texels.
-    #[arg(long, default_value_t = ShadowSettings::default().pcf_radius, value_parser = cli::parse_positive)]
-    pcf_radius: f32,
-    /// Hybrid shadow maps: the largest filter radius in texels, PCSS's blocker search and
-    /// penumbra (a wider penumbra is cut to it); also the guard band of cube faces and spot maps.
-    /// Default 16, at most an eighth of --shadow-map-size.
-    #[arg(long, value_parser = cli::parse_positive)]
-    shadow_max_radius: Option<f32>,
-    /// Hybrid, rt shadows: shadow punctual lights as sized lights (a sphere of --light-radius, a
-    /// cone of --sun-angle) with --shadow-rays rays each, the unoccluded fraction (soft shadows,
-    /// what pcss approximates); without it rt shadows points, as the path tracer's lights are.
-    #[arg(long)]
-    rt_light_size: bool,
-    /// Hybrid shadow maps (pcss) and --rt-light-size: radius of point and spot lights, metres.
-    #[arg(long, default_value_t = ShadowSettings::default().light_radius, value_parser = cli::parse_non_negative)]
-    light_radius: f32,
-    /// Hybrid shadow maps (pcss) and --rt-light-size: angular radius of directional lights,
-    /// degrees (the sun: 0.27).
-    #[arg(long, default_value_t = ShadowSettings::default().sun_angle.to_degrees(), value_parser = cli::parse_non_negative)]
-    sun_angle: f32,
-    /// Hybrid shadow maps: cascades of a directional light.
-    #[arg(long, default_value_t = ShadowSettings::default().cascades)]
-    cascades: u32,
-    /// Hybrid shadow maps: cascade split scheme, 0 uniform to 1 logarithmic.
-    #[arg(long, default_value_t = ShadowSettings::default().cascade_split, value_parser = cli::parse_non_negative)]
-    cascade_split: f32,
-    /// Hybrid: indirect diffuse light from irradiance probes: a file from `umbra bake` (for this
-    /// scene and environment), or `bake` to bake them now (with the --probe-* settings).
-    #[arg(long, value_parser = parse_probes, value_name = "FILE|bake")]
-    probes: Option<ProbesArg>,
-    #[command(flatten)]
-    probe: ProbeArgs,
-    /// Hybrid: bake lightmaps now for the materials with TEXCOORD_1 charts (or, with --unwrap,
-    /// every triangle) and light their diffuse lobe with them (over the probes).
-    #[arg(long)]
-    lightmaps: bool,
-    #[command(flatten)]
-    lightmap: LightmapArgs,
-    /// Hybrid: no SSAO (the image-based light is not occluded).
-    #[arg(long)]
-    no_ao: bool,
-    /// Hybrid: no image-based lighting (split-sum specular, SH9 diffuse).
-    #[arg(long)]
-    no_ibl: bool,
-    /// AO modes and hybrid SSAO: kernel directions (ao) or rays (rtao) per pixel.
-    #[arg(long, default_value_t = 16)]
-    ao_samples: u32,
-    /// AO modes and hybrid SSAO: the occlusion radius in scene units (metres).
-    #[arg(long, default_value_t = 0.5, value_parser = cli::parse_positive)]
-    ao_radius: f32,
-    /// AO modes: skip the depth-aware blur (ao blurs by default, rtao never does).
-    #[arg(long)]
-    ao_no_blur: bool,
-    /// PNG output (tonemapped sRGB); a name ending in .exr writes only the EXR (as --exr).
-    #[arg(short, long, default_value = "umbra.png", value_parser = cli::parse_png_or_exr)]
-    output: PathBuf,
-    /// EXR output: linear colour, albedo, normal, depth, emission (at the first hit), variance
-    /// and moment layers (and `noisy` with --denoise).
-    #[arg(long, value_parser = cli::parse_exr)]
-    exr: Option<PathBuf>,
-}
-
-#[derive(clap::Args)]
-struct MergeArgs {
-    /// The parts: EXRs written by `umbra render` (path tracer) of one scene and settings.
-    #[arg(required = true)]
-    inputs: Vec<PathBuf>,
-    /// The merged EXR (the same layers and attributes as a render's, so it merges further).
-    #[arg(short, long, value_parser = cli::parse_exr)]
-    output: PathBuf,
-    /// Also a tonemapped PNG of the merged image.
-    #[arg(long, value_parser = cli::parse_png)]
-    png: Option<PathBuf>,
-    /// Write what the parts hold even where they are not the whole render (samples or pixels of
-    /// its plan missing: a lost part), with a warning naming what is missing; without it such a
-    /// merge is refused.
-    #[arg(long)]
-    allow_partial: bool,
-    /// Denoise the merged render as `umbra render --denoise` denoises one (parts rendered with
-    /// --denoise carry the lobe split it filters apart): the PNG and the EXR's main layer are
-    /// denoised, the EXR keeps the merged estimate as layer `noisy`.
-    #[arg(long)]
-    denoise: bool,
-    /// With --denoise: à-trous iterations (1 to 8).
-    #[arg(long, default_value_t = umbra::render::DenoiseSettings::default().iterations)]
-    denoise_iterations: u32,
-    /// Exposure in stops for the PNG.
-    #[arg(long, default_value_t = 0.0, value_parser = cli::parse_finite)]
-    exposure: f32,
-    /// Tone curve for the PNG.
-    #[arg(long, value_enum, default_value = "neutral")]
-    tonemap: ToneCurve,
-}
 
 fn merge(args: MergeArgs) -> Result<()> {
     use umbra::merge::PathExr;
@@ -462,28 +69,6 @@ fn merge(args: MergeArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--direct`: one flag over the two modes' light sampling (the path tracer's
-/// [`umbra::passes::pathtrace::DirectSampling`], the hybrid's [`DirectLight`]), whose
-/// library types carry each method's settings.
-#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-enum Direct {
-    Power,
-    Restir,
-    Ris,
-}
-
-#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-enum Mode {
-    /// Progressive path tracing (the ground truth).
-    Pathtrace,
-    /// Ray-cast G-buffer, deferred lighting with ray-traced shadows, tonemap (real-time style).
-    Hybrid,
-    /// Screen-space ambient occlusion of the ray-cast G-buffer, blurred (grey image, 1 = open).
-    Ao,
-    /// Ray-traced ambient occlusion (the ground truth for ao).
-    Rtao,
-}
-
 fn render(args: RenderArgs) -> Result<()> {
     if args.direct == Direct::Restir && args.mode != Mode::Hybrid {
         anyhow::bail!("--direct restir applies to --mode hybrid (the path tracer's is --direct ris)");
@@ -491,41 +76,9 @@ fn render(args: RenderArgs) -> Result<()> {
     if args.direct == Direct::Ris && args.mode != Mode::Pathtrace {
         anyhow::bail!("--direct ris applies to --mode pathtrace (the hybrid's is --direct restir)");
     }
-    if args.ris_reuse != RisReuse::Off && args.direct != Direct::Ris {
-        anyhow::bail!("--ris-reuse reuses the path tracer's first-hit RIS: it needs --direct ris");
-    }
-    if args.shadows != ShadowMethod::RayTraced && args.mode != Mode::Hybrid {
-        anyhow::bail!("--shadows applies to --mode hybrid (the path tracer always traces its shadows)");
-    }
-    if (args.probes.is_some() || args.lightmaps) && args.mode != Mode::Hybrid {
-        anyhow::bail!(
-            "--probes and --lightmaps apply to --mode hybrid (the path tracer traces its indirect light)"
-        );
-    }
-    if (args.denoise || args.denoise_iterations != DenoiseSettings::default().iterations)
-        && args.mode != Mode::Pathtrace
-    {
-        anyhow::bail!(
-            "--denoise applies to --mode pathtrace (it filters the path tracer's noise, guided by its \
-             albedo, normal and variance)"
-        );
-    }
-    let denoise = DenoiseSettings { iterations: args.denoise_iterations, ..Default::default() };
+    let denoise = DenoiseSettings { iterations: args.path.denoise_iterations, ..Default::default() };
     denoise.validate()?;
-    let given = args.probe.given();
-    if !given.is_empty() && !matches!(args.probes, Some(ProbesArg::Bake)) {
-        anyhow::bail!(
-            "{} set{} how to bake probes: add --probes bake (a bake file keeps the settings it was made with)",
-            given.join(", "),
-            if given.len() == 1 { "s" } else { "" }
-        );
-    }
-    if (args.sample_range.is_some() || args.tile.is_some()) && args.mode != Mode::Pathtrace {
-        anyhow::bail!(
-            "--sample-range and --tile apply to --mode pathtrace (its parts merge with umbra merge)"
-        );
-    }
-    if let (Some((a, b)), Some(n)) = (args.sample_range, args.spp) {
+    if let (Some((a, b)), Some(n)) = (args.path.sample_range, args.path.spp) {
         if b > n {
             anyhow::bail!(
                 "--sample-range {a}..{b} reaches past the render's --spp {n}: a part traces samples of \
@@ -535,7 +88,7 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     shadow_settings(&args).validate()?;
     let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
-    let probes_file = match &args.probes {
+    let probes_file = match &args.hybrid.probes {
         Some(ProbesArg::File(path)) => Some(path.as_path()),
         _ => None,
     };
@@ -553,33 +106,36 @@ fn render(args: RenderArgs) -> Result<()> {
     let camera = loaded.scene.camera(args.camera)?;
     let ctx = Context::new(&ContextDesc::default())?;
     stages.lap("device");
-    let planned_spp = args.spp.unwrap_or(64);
-    let (first_sample, spp) = args.sample_range.map_or((0, planned_spp), |(a, b)| (a, b - a));
+    let planned_spp = args.path.spp.unwrap_or(64);
+    let (first_sample, spp) = args.path.sample_range.map_or((0, planned_spp), |(a, b)| (a, b - a));
     let settings = umbra::render::PathSettings {
-        size: args.tile.map_or(args.size, |t| (t[2], t[3])),
+        size: args.path.tile.map_or(args.size, |t| (t[2], t[3])),
         spp,
         first_sample,
-        tile: args.tile.map(|t| umbra::passes::pathtrace::Tile { image: args.size, origin: (t[0], t[1]) }),
-        max_bounces: args.max_bounces,
-        rr_depth: args.rr_depth,
+        tile: args
+            .path
+            .tile
+            .map(|t| umbra::passes::pathtrace::Tile { image: args.size, origin: (t[0], t[1]) }),
+        max_bounces: args.path.max_bounces,
+        rr_depth: args.path.rr_depth,
         seed: args.seed,
-        sampler: args.sampler,
-        emitter_sampling: args.emitter_sampling,
-        microfacet: args.microfacet,
-        heuristic: args.heuristic,
-        strategy: args.strategy,
+        sampler: args.path.sampler,
+        emitter_sampling: args.path.emitter_sampling,
+        microfacet: args.path.microfacet,
+        heuristic: args.path.heuristic,
+        strategy: args.path.strategy,
         direct: match args.direct {
-            Direct::Ris => umbra::passes::pathtrace::DirectSampling::Ris(args.ris_candidates),
+            Direct::Ris => umbra::passes::pathtrace::DirectSampling::Ris(args.ris.ris_candidates),
             _ => umbra::passes::pathtrace::DirectSampling::Power,
         },
-        ris_reuse: args.ris_reuse,
+        ris_reuse: args.ris.ris_reuse,
         env: args.scene.env_radiance(),
         env_nee: true,
-        target_error: args.target_error,
-        integrator: args.integrator,
+        target_error: args.path.target_error,
+        integrator: args.path.integrator,
         // The denoiser filters the diffuse and specular parts apart (either integrator splits
         // them).
-        lobe_split: args.denoise,
+        lobe_split: args.path.denoise,
     };
     if matches!(args.mode, Mode::Ao | Mode::Rtao) {
         let gpu_scene = loaded.upload(&ctx)?;
@@ -589,7 +145,7 @@ fn render(args: RenderArgs) -> Result<()> {
     if args.mode == Mode::Hybrid {
         let hybrid = hybrid_settings(&args);
         let (passes, gpu_scene) = upload_alongside(&ctx, &loaded, &mut stages, |passes| {
-            passes.prepare_hybrid(&hybrid, args.probes.is_some(), args.lightmaps)
+            passes.prepare_hybrid(&hybrid, args.hybrid.probes.is_some(), args.hybrid.lightmaps)
         })?;
         return render_hybrid(&ctx, &passes, &loaded, &gpu_scene, &camera, &hybrid, &args);
     }
@@ -633,7 +189,7 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     let (w, h) = settings.size;
     // The image shown: the denoised one with --denoise, else the estimate itself.
-    let shown = if args.denoise {
+    let shown = if args.path.denoise {
         let denoised = umbra::render::denoise(&ctx, &image, &denoise)?;
         let split = match image.lobe_split {
             Some(_) => format!(
@@ -654,7 +210,7 @@ fn render(args: RenderArgs) -> Result<()> {
         image.mean.clone()
     };
     let rgba: Vec<f32> = shown.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
-    let display = umbra::color::to_display8(&rgba, args.exposure.exp2(), args.tonemap);
+    let display = umbra::color::to_display8(&rgba, args.display.exposure.exp2(), args.display.tonemap);
     if let Some(png) = png {
         umbra::output::write_png(&png, w, h, &display)?;
         println!("wrote {}", png.display());
@@ -662,10 +218,10 @@ fn render(args: RenderArgs) -> Result<()> {
     stages.lap("PNG");
     if let Some(path) = &exr {
         let mut exr = umbra::merge::PathExr::new(&image, &settings, render_identity(&args, &loaded));
-        if args.sample_range.is_some() {
+        if args.path.sample_range.is_some() {
             exr.planned_spp = Some(planned_spp);
         }
-        if args.denoise {
+        if args.path.denoise {
             exr.denoised = Some(shown.iter().map(|p| [p[0], p[1], p[2]]).collect());
         }
         exr.write(path)?;
@@ -714,27 +270,27 @@ fn render_identity(args: &RenderArgs, loaded: &LoadedScene) -> String {
         args.camera,
         args.size.0,
         args.size.1,
-        args.max_bounces,
-        args.rr_depth,
+        args.path.max_bounces,
+        args.path.rr_depth,
         args.seed,
-        name(&args.microfacet),
-        name(&args.heuristic),
-        name(&args.strategy)
+        name(&args.path.microfacet),
+        name(&args.path.heuristic),
+        name(&args.path.strategy)
     ) + &match args.direct {
         // (Only RIS adds to it: renders made before it existed merge with today's.)
-        Direct::Ris => format!(" direct ris {}", args.ris_candidates)
-            + match args.ris_reuse {
+        Direct::Ris => format!(" direct ris {}", args.ris.ris_candidates)
+            + match args.ris.ris_reuse {
                 RisReuse::Off => "",
                 RisReuse::Samples => " reuse samples",
                 RisReuse::Spatial => " reuse spatial",
                 RisReuse::Both => " reuse both",
             },
         _ => String::new(),
-    } + match args.sampler {
+    } + match args.path.sampler {
         // (Only independent numbers add to it, as RIS does.)
         Sampler::Independent => " sampler independent",
         Sampler::LowDiscrepancy => "",
-    } + match args.emitter_sampling {
+    } + match args.path.emitter_sampling {
         // (The same samples in expectation, not the same numbers: parts must agree.)
         EmitterSampling::SolidAngle => " emitter-sampling solid-angle",
         EmitterSampling::Area => "",
@@ -945,22 +501,23 @@ fn bake_lightmaps(
 
 /// The hybrid's shadow settings from the flags.
 fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
-    let method = args.shadows;
+    let method = args.hybrid.shadows;
     ShadowSettings {
         method,
-        map_size: args.shadow_map_size,
-        cascades: args.cascades,
-        cascade_split: args.cascade_split,
-        depth_bias: args.shadow_bias,
-        slope_bias: args.shadow_slope_bias,
-        normal_bias: args.shadow_normal_bias,
-        pcf_radius: args.pcf_radius,
+        map_size: args.shadow_map.shadow_map_size,
+        cascades: args.shadow_map.cascades,
+        cascade_split: args.shadow_map.cascade_split,
+        depth_bias: args.shadow_map.shadow_bias,
+        slope_bias: args.shadow_map.shadow_slope_bias,
+        normal_bias: args.shadow_map.shadow_normal_bias,
+        pcf_radius: args.shadow_map.pcf_radius,
         max_radius: args
+            .shadow_map
             .shadow_max_radius
-            .unwrap_or(ShadowSettings::default_max_radius(args.shadow_map_size)),
-        light_radius: args.light_radius,
-        sun_angle: args.sun_angle.to_radians(),
-        sized_rays: args.rt_light_size,
+            .unwrap_or(ShadowSettings::default_max_radius(args.shadow_map.shadow_map_size)),
+        light_radius: args.sized_light.light_radius,
+        sun_angle: args.sized_light.sun_angle.to_radians(),
+        sized_rays: args.hybrid.rt_light_size,
         ..Default::default()
     }
 }
@@ -1008,31 +565,31 @@ fn hybrid_settings(args: &RenderArgs) -> umbra::render::HybridSettings {
     umbra::render::HybridSettings {
         size: args.size,
         lighting: LightingSettings {
-            shadow_rays: args.shadow_rays,
+            shadow_rays: args.hybrid.shadow_rays,
             seed: args.seed,
             env: args.scene.env_radiance(),
-            ibl: !args.no_ibl,
+            ibl: !args.hybrid.no_ibl,
             direct: match args.direct {
                 Direct::Power | Direct::Ris => DirectLight::Power,
                 Direct::Restir => DirectLight::Restir(RestirSettings {
-                    candidates: args.restir_candidates,
-                    neighbours: args.restir_neighbours,
-                    radius: args.restir_radius,
-                    frames: args.restir_frames,
-                    temporal: !args.restir_no_temporal,
-                    unbiased: args.restir_unbiased,
+                    candidates: args.restir.restir_candidates,
+                    neighbours: args.restir.restir_neighbours,
+                    radius: args.restir.restir_radius,
+                    frames: args.restir.restir_frames,
+                    temporal: !args.restir.restir_no_temporal,
+                    unbiased: args.restir.restir_unbiased,
                     ..Default::default()
                 }),
             },
             ..Default::default()
         },
-        exposure: args.exposure,
-        curve: args.tonemap,
+        exposure: args.display.exposure,
+        curve: args.display.tonemap,
         ibl: Default::default(),
-        ao: (!args.no_ao).then(|| umbra::passes::ao::AoSettings {
-            samples: args.ao_samples,
-            radius: args.ao_radius,
-            blur: !args.ao_no_blur,
+        ao: (!args.hybrid.no_ao).then(|| umbra::passes::ao::AoSettings {
+            samples: args.ao.ao_samples,
+            radius: args.ao.ao_radius,
+            blur: !args.ao_blur.ao_no_blur,
             seed: args.seed,
             ..Default::default()
         }),
@@ -1049,7 +606,7 @@ fn render_hybrid(
     settings: &umbra::render::HybridSettings,
     args: &RenderArgs,
 ) -> Result<()> {
-    let probes = match &args.probes {
+    let probes = match &args.hybrid.probes {
         None => None,
         Some(ProbesArg::Bake) => {
             Some(bake_probes(ctx, passes, scene, &args.probe.settings(), &settings.lighting)?)
@@ -1068,7 +625,7 @@ fn render_hybrid(
             Some(volume)
         }
     };
-    let lightmaps = match args.lightmaps {
+    let lightmaps = match args.hybrid.lightmaps {
         false => None,
         true => {
             let maps = bake_lightmaps(
@@ -1146,9 +703,9 @@ fn render_ao(
         _ => (AoMethod::Ssao, "ao"),
     };
     let settings = umbra::passes::ao::AoSettings {
-        samples: args.ao_samples,
-        radius: args.ao_radius,
-        blur: method == AoMethod::Ssao && !args.ao_no_blur,
+        samples: args.ao.ao_samples,
+        radius: args.ao.ao_radius,
+        blur: method == AoMethod::Ssao && !args.ao_blur.ao_no_blur,
         seed: args.seed,
         ..Default::default()
     };
@@ -1197,87 +754,20 @@ fn main() {
     });
 }
 
-/// The render flags given that cannot apply to the render asked for, each with what it needs
-/// (`--mode hybrid`, `--lightmaps`, ...): refused, never ignored. A flag's default never blocks
-/// (only flags given on the command line are checked).
-fn inapplicable_render_flags(args: &RenderArgs, given: &[String]) -> Vec<String> {
-    let (pathtrace, hybrid) = (args.mode == Mode::Pathtrace, args.mode == Mode::Hybrid);
-    let maps = hybrid && args.shadows != ShadowMethod::RayTraced;
-    let ssao = hybrid && !args.no_ao;
-    given
-        .iter()
-        .filter_map(|id| {
-            let (applies, needs) = match id.as_str() {
-                "spp" | "max_bounces" | "rr_depth" | "microfacet" | "heuristic" | "sampler"
-                | "emitter_sampling" | "strategy" | "integrator" | "target_error" | "denoise"
-                | "denoise_iterations" | "sample_range" | "tile" => (pathtrace, "--mode pathtrace"),
-                "ris_candidates" => {
-                    (pathtrace && args.direct == Direct::Ris, "--mode pathtrace --direct ris")
-                }
-                "exposure" | "tonemap" => (
-                    pathtrace || hybrid,
-                    "--mode pathtrace or hybrid (ao and rtao write the occlusion itself)",
-                ),
-                "shadow_rays" | "no_ao" | "no_ibl" | "shadows" | "probes" | "lightmaps" | "rt_light_size" => {
-                    (hybrid, "--mode hybrid")
-                }
-                "restir_candidates" | "restir_neighbours" | "restir_radius" | "restir_frames"
-                | "restir_no_temporal" | "restir_unbiased" => {
-                    (hybrid && args.direct == Direct::Restir, "--mode hybrid --direct restir")
-                }
-                "shadow_map_size" | "shadow_bias" | "shadow_slope_bias" | "shadow_normal_bias"
-                | "pcf_radius" | "shadow_max_radius" | "cascades" | "cascade_split" => {
-                    (maps, "--mode hybrid with shadow maps (--shadows hard|pcf|pcss|moments)")
-                }
-                "light_radius" | "sun_angle" => (
-                    hybrid && (args.shadows == ShadowMethod::Pcss || args.rt_light_size),
-                    "--mode hybrid with sized lights (--shadows pcss, or --rt-light-size)",
-                ),
-                "lightmap_size" | "lightmap_samples" | "unwrap" => (args.lightmaps, "--lightmaps (hybrid)"),
-                "ao_samples" | "ao_radius" => (
-                    ssao || matches!(args.mode, Mode::Ao | Mode::Rtao),
-                    "--mode ao or rtao, or hybrid's SSAO",
-                ),
-                "ao_no_blur" => {
-                    (ssao || args.mode == Mode::Ao, "--mode ao, or hybrid's SSAO (rtao never blurs)")
-                }
-                _ => (true, ""),
-            };
-            (!applies).then(|| format!("{} applies to {needs}", cli::flag(id)))
-        })
-        .collect()
-}
-
 fn run(cli: Cli, given: &[String]) -> Result<()> {
     match cli.command {
         Command::Render(args) => {
-            let refused = inapplicable_render_flags(&args, given);
-            if !refused.is_empty() {
-                anyhow::bail!("{}: such a flag would be ignored", refused.join("; "));
-            }
+            cli::refuse_inapplicable(given, &render_flag_groups(&args))?;
             render(args)?
         }
         Command::Bake(args) => {
-            let mut refused = Vec::new();
-            for id in given {
-                let (applies, needs) = match id.as_str() {
-                    "probe_spacing" | "probe_rays" | "probe_sweeps" | "probe_bounces" => {
-                        (args.output.is_some(), "a probe bake (-o FILE.probes)")
-                    }
-                    "lightmap_size" | "lightmap_samples" | "unwrap" => (
-                        args.lightmaps.is_some() || args.ao_maps.is_some(),
-                        "--lightmaps DIR or --ao-maps DIR",
-                    ),
-                    "occlusion_radius" => (args.ao_maps.is_some(), "--ao-maps DIR"),
-                    _ => (true, ""),
-                };
-                if !applies {
-                    refused.push(format!("{} applies to {needs}", cli::flag(id)));
-                }
-            }
-            if !refused.is_empty() {
-                anyhow::bail!("{}: such a flag would be ignored", refused.join("; "));
-            }
+            let (probes, maps) = (args.output.is_some(), args.lightmaps.is_some() || args.ao_maps.is_some());
+            let groups = [
+                (cli::arg_ids::<ProbeArgs>(), probes, "a probe bake (-o FILE.probes)"),
+                (cli::arg_ids::<LightmapArgs>(), maps, "--lightmaps DIR or --ao-maps DIR"),
+                (vec!["occlusion_radius".into()], args.ao_maps.is_some(), "--ao-maps DIR"),
+            ];
+            cli::refuse_inapplicable(given, &groups)?;
             bake(args)?
         }
         Command::Merge(args) => merge(args)?,

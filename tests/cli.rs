@@ -110,8 +110,16 @@ fn flags_that_cannot_apply_are_refused() {
     std::fs::create_dir_all(&dir).unwrap();
     let out = |name: &str| dir.join(name).to_string_lossy().into_owned();
     let (png, probes, maps) = (out("x.png"), out("x.probes"), out("maps"));
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 12] = [
         (&["render", "--unwrap"], "--unwrap applies to --lightmaps"),
+        (
+            &["render", "--mode", "hybrid", "--probe-rays", "64"],
+            "--probe-rays applies to --mode hybrid --probes bake",
+        ),
+        (
+            &["render", "--mode", "hybrid", "--ris-reuse", "both"],
+            "--ris-reuse applies to --mode pathtrace --direct ris",
+        ),
         (&["render", "--lightmap-size", "0"], "--lightmap-size applies to --lightmaps"),
         (&["render", "--mode", "hybrid", "--spp", "4"], "--spp applies to --mode pathtrace"),
         (

@@ -6,6 +6,10 @@
 //! error: past it, denoising no longer helps. The filter's own GPU time (median of repeats after
 //! a warm-up) is set against one sample's (the accumulated time over the sample count).
 
+// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
+#[allow(unused_imports)]
+use crate::*;
+
 use super::chart::{self, Chart, ChartPoint};
 use super::num;
 use super::rays::{median, warm_up};
@@ -241,4 +245,37 @@ pub fn table(doc: &Value) -> String {
         .collect();
     out += &format!("\nThe references' own noise (relative MSE): {}.\n", floors.join(", "));
     out
+}
+
+pub(crate) fn run_denoise(
+    settings: &suite::SuiteSettings,
+    filter: &umbra::render::DenoiseSettings,
+    quick: bool,
+    gltf: &[PathBuf],
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    umbra::atomic::create_dir(&settings.out)?;
+    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
+    if !quick {
+        for name in ["spheres", "textured"] {
+            let path = PathBuf::from("scenes").join(format!("{name}.glb"));
+            match umbra::scene::Scene::load(&path) {
+                Ok(scene) => scenes.push((name.to_string(), scene)),
+                Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
+            }
+        }
+    }
+    scenes.extend(load_gltf(gltf)?);
+    let mut results = Vec::new();
+    for (key, scene) in &scenes {
+        let camera = bench_camera(scene);
+        results.push(
+            denoise::run_scene(&ctx, key, scene, &camera, settings, filter)
+                .with_context(|| scene.name.clone())?,
+        );
+    }
+    let mut doc = denoise::to_json(&ctx.info().name, settings, filter, &results);
+    add_conditions(&mut doc);
+    print!("{}", denoise::table(&doc));
+    write_json(&settings.out, "denoise.json", &doc)
 }

@@ -24,6 +24,8 @@ mod peers;
 mod pipelines;
 mod probes;
 mod rays;
+mod scenes;
+use scenes::*;
 mod restir;
 mod restir_pt;
 mod shadows;
@@ -581,70 +583,6 @@ fn load_text(doc: &Value) -> String {
     }
 }
 
-/// Generated terrain with a row of spheres on it: `2·n²` + 15,360 triangles.
-fn terrain_scene(name: &str, n: u32) -> RayScene {
-    let size = 100.0;
-    let mut triangles = terrain(n, size, 3).soup();
-    for k in 0..3 {
-        triangles.extend(icosphere(4, Vec3::new(-20.0 + 20.0 * k as f32, 8.0, 0.0), 6.0).soup());
-    }
-    RayScene {
-        name: format!("{name} ({} triangles)", triangles.len()),
-        triangles,
-        eye: Vec3::new(0.0, 30.0, 70.0),
-        target: Vec3::new(0.0, 0.0, -10.0),
-        yfov: 50f32.to_radians(),
-        light: Vec3::new(30.0, 60.0, 20.0),
-    }
-}
-
-/// The file's first perspective camera (the ray benchmark's rays are a pinhole's) or, when it has
-/// none, one inside the bounds looking along their longest horizontal axis (the classic view down
-/// Sponza's atrium; every primary ray hits).
-fn bench_camera(scene: &umbra::scene::Scene) -> umbra::scene::Camera {
-    let (lo, hi) = scene.bounds();
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    match scene.cameras.iter().find(|c| c.orthographic.is_none()) {
-        Some(c) => *c,
-        None => {
-            let (center, extent) = ((lo + hi) * 0.5, hi - lo);
-            let axis = if extent.x >= extent.z { Vec3::X } else { Vec3::Z };
-            let eye = Vec3::new(center.x, lo.y + 0.25 * extent.y, center.z) - axis * 0.35 * extent.dot(axis);
-            umbra::scene::Camera {
-                position: eye.into(),
-                forward: (Vec3::new(center.x, eye.y, center.z) - eye).normalize().into(),
-                up: [0.0, 1.0, 0.0],
-                yfov: 60f32.to_radians(),
-                aspect: None,
-                znear: 0.01,
-                orthographic: None,
-            }
-        }
-    }
-}
-
-/// A glTF file's triangles, lit by a point light just under the top of the bounds, seen from
-/// [`bench_camera`]. Only the geometry counts here, so absent image files are warned about and
-/// left out, as in `umbra-bench paths`.
-fn gltf_scene(path: &std::path::Path) -> Result<RayScene> {
-    let (_, scene) = load_path_scene(path)?;
-    let (lo, hi) = scene.bounds();
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    let camera = bench_camera(&scene);
-    let position = Vec3::from(camera.position);
-    let triangles = scene.triangle_soup();
-    let name =
-        path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-    Ok(RayScene {
-        name: format!("{name} ({} triangles)", triangles.len()),
-        triangles,
-        eye: position,
-        target: position + Vec3::from(camera.forward),
-        yfov: camera.yfov,
-        light: Vec3::new((lo.x + hi.x) * 0.5, hi.y - (hi.y - lo.y) * 0.05, (lo.z + hi.z) * 0.5),
-    })
-}
-
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Rays { table: Some(path), .. } => print!("{}", rays::table(&read_json(&path)?)),
@@ -664,7 +602,7 @@ fn run(cli: Cli) -> Result<()> {
             let device = ctx.info().name.clone();
             let (scenes, settings) = if quick {
                 (
-                    vec![terrain_scene("terrain", 177)],
+                    vec![scenes::terrain_scene("terrain", 177)],
                     RaySettings {
                         size: (128, 128),
                         repeats: 3,
@@ -676,13 +614,13 @@ fn run(cli: Cli) -> Result<()> {
                 )
             } else {
                 (
-                    vec![terrain_scene("terrain", 351), terrain_scene("terrain", 704)],
+                    vec![scenes::terrain_scene("terrain", 351), scenes::terrain_scene("terrain", 704)],
                     RaySettings { size, repeats, builds: 5, sweep, row_order, dump: dump.clone() },
                 )
             };
             let mut scenes = if no_terrain { Vec::new() } else { scenes };
             for path in &gltf {
-                scenes.push(gltf_scene(path)?);
+                scenes.push(scenes::gltf_scene(path)?);
             }
             let mut reports = Vec::new();
             for scene in &scenes {
@@ -697,9 +635,10 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Build { table: Some(path), .. } => print!("{}", build::table(&read_json(&path)?)),
         Command::Build { terrain, gltf, builds, sweep, out, table: None } => {
-            let mut scenes: Vec<RayScene> = terrain.iter().map(|&n| terrain_scene("terrain", n)).collect();
+            let mut scenes: Vec<RayScene> =
+                terrain.iter().map(|&n| scenes::terrain_scene("terrain", n)).collect();
             for path in &gltf {
-                scenes.push(gltf_scene(path)?);
+                scenes.push(scenes::gltf_scene(path)?);
             }
             println!("{} rayon threads", rayon::current_num_threads());
             let mut rows = Vec::new();
@@ -715,7 +654,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", passes::table(&docs)?);
         }
         Command::Passes { scene, size, repeats, shadow_rays, out, table: _ } => {
-            run_passes(scene, size, repeats, shadow_rays, out)?
+            passes::run_passes(scene, size, repeats, shadow_rays, out)?
         }
         Command::Implicit { table: Some(path), .. } => print!("{}", implicit::table(&read_json(&path)?)),
         Command::Implicit { size, spp, repeats, rays, subdivisions, out, table: None } => {
@@ -779,7 +718,7 @@ fn run(cli: Cli) -> Result<()> {
                     view_marks: !no_view_marks,
                     ..Default::default()
                 };
-                run_shadows(scene, size, &settings, sun, repeats, out)?
+                shadows::run_shadows(scene, size, &settings, sun, repeats, out)?
             }
         },
         Command::Denoise {
@@ -832,7 +771,7 @@ fn run(cli: Cli) -> Result<()> {
                     ..Default::default()
                 };
                 filter.validate()?;
-                run_denoise(&settings, &filter, quick, &gltf)?
+                denoise::run_denoise(&settings, &filter, quick, &gltf)?
             }
         },
         Command::Temporal { table: Some(path), .. } => print!("{}", temporal::table(&read_json(&path)?)),
@@ -882,7 +821,7 @@ fn run(cli: Cli) -> Result<()> {
                     env: env_color,
                     out,
                 };
-                run_probes(&settings, sponza.as_deref(), &gltf, &lightmap_sizes)?
+                probes::run_probes(&settings, sponza.as_deref(), &gltf, &lightmap_sizes)?
             }
         },
         Command::Paths {
@@ -915,9 +854,9 @@ fn run(cli: Cli) -> Result<()> {
                     lanes,
                 };
                 let scenes = if scenes.is_empty() {
-                    default_path_scenes(external(assets, "").as_deref())?
+                    scenes::default_path_scenes(scenes::external(assets, "").as_deref())?
                 } else {
-                    named_path_scenes(&scenes)?
+                    scenes::named_path_scenes(&scenes)?
                 };
                 let rows = paths::run(&ctx, &scenes, &settings)?;
                 let doc = paths::to_json(&ctx.info().name, ctx.info().subgroup_size, &settings, &rows);
@@ -931,14 +870,14 @@ fn run(cli: Cli) -> Result<()> {
                 let ctx = Context::new(&ContextDesc::default())?;
                 let scenes = if scenes.is_empty() {
                     let mut set = vec![("cornell-box".to_string(), umbra::scene::Scene::cornell_box())];
-                    set.extend(load_gltf(&[PathBuf::from("scenes/many-lights.glb")])?);
-                    match external(assets, "DamagedHelmet/DamagedHelmet.glb") {
-                        Some(helmet) => set.extend(load_gltf(&[helmet])?),
+                    set.extend(scenes::load_gltf(&[PathBuf::from("scenes/many-lights.glb")])?);
+                    match scenes::external(assets, "DamagedHelmet/DamagedHelmet.glb") {
+                        Some(helmet) => set.extend(scenes::load_gltf(&[helmet])?),
                         None => log::warn!("DamagedHelmet left out: give --assets DIR or set UMBRA_ASSETS"),
                     }
                     set
                 } else {
-                    load_gltf(&scenes)?
+                    scenes::load_gltf(&scenes)?
                 };
                 let rows = pipelines::run(&ctx, &scenes, repeats)?;
                 let doc = pipelines::to_json(&ctx.info().name, repeats, &rows);
@@ -1008,7 +947,7 @@ fn run(cli: Cli) -> Result<()> {
                     out,
                 }
             };
-            run_suite(&settings, quick, &gltf, sponza.as_deref(), &only)?
+            suite::run_suite(&settings, quick, &gltf, sponza.as_deref(), &only)?
         }
     }
     Ok(())
@@ -1022,440 +961,6 @@ pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
     }
     bar.set_message(what.to_string());
     bar
-}
-
-/// The Cornell box with its ceiling lamp replaced by a point light of the same on-axis intensity
-/// (radiance × area) just below the lamp's centre: the shadow maps' test scene (a cube map).
-fn cornell_point_light() -> umbra::scene::Scene {
-    let mut scene = umbra::scene::Scene::cornell_box();
-    scene.name = "Cornell box, point light".into();
-    let (mut area, mut centre, mut radiance) = (0.0f32, Vec3::ZERO, [0.0f32; 3]);
-    for &t in &scene.emissive.triangles {
-        let [a, b, c] = scene.triangles[t as usize].map(|i| Vec3::from(scene.positions[i as usize]));
-        let da = 0.5 * (b - a).cross(c - a).length();
-        area += da;
-        centre += da * (a + b + c) / 3.0;
-        radiance = scene.materials[scene.triangle_material[t as usize] as usize].emissive;
-    }
-    let centre = centre / area.max(1e-12);
-    for &t in &scene.emissive.triangles.clone() {
-        let m = scene.triangle_material[t as usize] as usize;
-        scene.materials[m].emissive = [0.0; 3];
-    }
-    scene.update_emissive();
-    let peak = radiance.iter().copied().fold(1e-12f32, f32::max);
-    scene.lights.push(umbra::scene::Light {
-        name: "lamp".into(),
-        kind: umbra::scene::LightKind::Point,
-        position: (centre - Vec3::Y * 0.01).into(),
-        direction: [0.0, -1.0, 0.0],
-        color: radiance.map(|c| c / peak),
-        intensity: peak * area,
-        range: None,
-        inner_cone_angle: 0.0,
-        outer_cone_angle: std::f32::consts::PI,
-    });
-    scene
-}
-
-/// Samples per pixel of Sponza's reference and most measured in the suite (a path through
-/// Sponza costs about 3× one through the other scenes: this keeps its run to a few minutes).
-const SPONZA_SUITE_SPP: (u32, u32) = (512, 64);
-
-fn run_suite(
-    settings: &suite::SuiteSettings,
-    quick: bool,
-    gltf: &[PathBuf],
-    sponza: Option<&std::path::Path>,
-    only: &[String],
-) -> Result<()> {
-    let ctx = Context::new(&ContextDesc::default())?;
-    umbra::atomic::create_dir(&settings.out)?;
-    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
-    if !quick {
-        scenes.push(("cornell-point".to_string(), cornell_point_light()));
-    }
-    let repo_scenes: &[&str] = if quick { &["spheres"] } else { &["spheres", "textured"] };
-    for name in repo_scenes {
-        let path = PathBuf::from("scenes").join(format!("{name}.glb"));
-        match umbra::scene::Scene::load(&path) {
-            Ok(scene) => scenes.push((name.to_string(), scene)),
-            Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
-        }
-    }
-    if !quick {
-        scenes.extend(sponza_under_a_sun(sponza));
-    }
-    scenes.extend(load_gltf(gltf)?);
-    if !only.is_empty() {
-        scenes.retain(|(key, _)| only.contains(key));
-        if scenes.is_empty() {
-            anyhow::bail!("--only {}: none of the suite's scenes has that key", only.join(","));
-        }
-    }
-    let mut results = Vec::new();
-    for (key, scene) in &scenes {
-        let camera = bench_camera(scene);
-        let capped;
-        let scene_settings = if key == "sponza-sun" {
-            capped = suite::SuiteSettings {
-                reference_spp: settings.reference_spp.min(SPONZA_SUITE_SPP.0),
-                max_spp: settings.max_spp.min(SPONZA_SUITE_SPP.1),
-                ..settings.clone()
-            };
-            &capped
-        } else {
-            settings
-        };
-        let result = suite::run_scene(&ctx, key, scene, &camera, scene_settings)
-            .with_context(|| scene.name.clone())?;
-        println!(
-            "\n{} ({} triangles), reference noise floor {:.2e}:",
-            result.name, result.triangles, result.reference_rel_mse_floor
-        );
-        for p in &result.points {
-            let setting = format!("{}={}", p.unit, p.value);
-            println!(
-                "  {:20} {:16} {:10.3} ms  RMSE {:.4e}  relMSE {:.4e}  FLIP {:.4}",
-                p.method,
-                setting,
-                p.ms,
-                p.rmse,
-                p.rel_mse,
-                p.flip.unwrap_or(f64::NAN)
-            );
-        }
-        println!(
-            "  ambient occlusion vs RTAO reference (noise floor {:.2e}):",
-            result.ao_reference_mse_floor
-        );
-        for p in &result.ao_points {
-            let setting = format!("{}={}", p.unit, p.value);
-            println!("  {:20} {:16} {:10.3} ms  MSE {:.4e}", p.method, setting, p.ms, p.rel_mse);
-        }
-        for (pass, ms) in &result.precompute_ms {
-            println!("  once per scene: {pass} {ms:.3} ms");
-        }
-        results.push(result);
-    }
-    let doc = json!({
-        "device": ctx.info().name,
-        "size": [settings.size.0, settings.size.1],
-        "reference_spp": settings.reference_spp,
-        "repeats": settings.repeats,
-        "scenes": results.iter().map(|r| json!({
-            "scene": r.name,
-            "triangles": r.triangles,
-            "reference_rel_mse_floor": r.reference_rel_mse_floor,
-            "reference_spp": r.reference_spp,
-            "shadow_reference": r.shadow_reference.as_ref().map(|s| json!({
-                "kind": "rt sized", "rays": s.rays, "frames": s.frames,
-                "light_radius": s.light_radius, "sun_angle": s.sun_angle,
-            })),
-            "points": r.points.iter().map(|p| {
-                let mut point = json!({
-                    "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms,
-                    "rmse": p.rmse, "rel_mse": p.rel_mse, "flip": p.flip,
-                });
-                if let Some(shadow) = p.shadow_rel_mse {
-                    point["shadow_rel_mse"] = json!(shadow);
-                }
-                point
-            }).collect::<Vec<_>>(),
-            "ao_reference_mse_floor": r.ao_reference_mse_floor,
-            "ao_points": r.ao_points.iter().map(|p| json!({
-                "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms, "mse": p.rel_mse,
-            })).collect::<Vec<_>>(),
-            "precompute_ms": r.precompute_ms.iter().map(|(pass, ms)| json!({"pass": pass, "ms": ms})).collect::<Vec<_>>(),
-        })).collect::<Vec<_>>(),
-    });
-    let path = settings.out.join("suite.json");
-    umbra::atomic::write(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
-    let csv = settings.out.join("suite.csv");
-    umbra::atomic::write(&csv, suite::csv(&results).as_bytes())?;
-    println!("wrote {}, {} and suite-<scene>.svg/.png", path.display(), csv.display());
-    Ok(())
-}
-
-fn run_passes(
-    scene: Option<PathBuf>,
-    size: (u32, u32),
-    repeats: usize,
-    shadow_rays: u32,
-    out: PathBuf,
-) -> Result<()> {
-    let ctx = Context::new(&ContextDesc::default())?;
-    let loaded = match &scene {
-        Some(path) => umbra::scene::Scene::load(path)?,
-        None => umbra::scene::Scene::cornell_box(),
-    };
-    let camera = bench_camera(&loaded);
-    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
-    let lighting = umbra::passes::deferred::LightingSettings { shadow_rays, ..Default::default() };
-    let timings = passes::run(&ctx, &gpu_scene, &camera, size, repeats, &lighting)?;
-    let pixels = size.0 as f64 * size.1 as f64;
-    println!(
-        "{} ({} triangles) at {}x{} on {}:",
-        loaded.name,
-        gpu_scene.bvh_stats.triangles,
-        size.0,
-        size.1,
-        ctx.info().name
-    );
-    for t in &timings {
-        println!(
-            "  {:18} {:9.3} ms median  {:9.3} ms min  {:9.1} Mpixels/s",
-            t.name,
-            t.median_ms,
-            t.min_ms,
-            pixels / (t.median_ms * 1e3)
-        );
-    }
-    let doc = passes::to_json(
-        &ctx.info().name,
-        &loaded.name,
-        gpu_scene.bvh_stats.triangles,
-        size,
-        repeats,
-        shadow_rays,
-        &timings,
-    );
-    write_json(&out, "passes.json", &doc)
-}
-
-fn run_shadows(
-    scene: Option<PathBuf>,
-    size: (u32, u32),
-    settings: &umbra::passes::shadow::ShadowSettings,
-    sun: Option<[f32; 3]>,
-    repeats: usize,
-    out: PathBuf,
-) -> Result<()> {
-    let ctx = Context::new(&ContextDesc::default())?;
-    let mut loaded = match &scene {
-        Some(path) => umbra::scene::Scene::load(path)?,
-        None => umbra::scene::Scene::cornell_box(),
-    };
-    if sun.is_some() || loaded.lights.is_empty() {
-        add_sun(&mut loaded, sun.unwrap_or(DEFAULT_SUN));
-    }
-    let camera = bench_camera(&loaded);
-    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
-    let layers = umbra::passes::shadow::ShadowPlan::new(
-        &gpu_scene.punctual_lights,
-        gpu_scene.bounds,
-        &camera,
-        size,
-        settings,
-    )?
-    .layers
-    .len();
-    settings.validate()?;
-    let (timings, reference) = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, settings)?;
-    let doc = shadows::to_json(
-        &ctx.info().name,
-        &loaded.name,
-        gpu_scene.bvh_stats.triangles,
-        size,
-        settings,
-        layers,
-        &timings,
-        &reference,
-    );
-    print!("{}", shadows::table(&doc));
-    for t in &timings {
-        let steps: Vec<String> = t.steps.iter().map(|(name, ms)| format!("{name} {ms:.1} ms")).collect();
-        if !steps.is_empty() {
-            println!("  {}: {}", t.method, steps.join(", "));
-        }
-    }
-    write_json(&out, "shadows.json", &doc)
-}
-
-/// The sun the benchmarks add to scenes without punctual lights.
-const DEFAULT_SUN: [f32; 3] = [0.25, -1.0, 0.15];
-
-/// Adds a directional light of 5 lux shining along `direction`.
-fn add_sun(scene: &mut umbra::scene::Scene, direction: [f32; 3]) {
-    scene.lights.push(umbra::scene::Light {
-        name: "sun".into(),
-        kind: umbra::scene::LightKind::Directional,
-        position: [0.0; 3],
-        direction: Vec3::from(direction).normalize().into(),
-        color: [1.0; 3],
-        intensity: 5.0,
-        range: None,
-        inner_cone_angle: 0.0,
-        outer_cone_angle: std::f32::consts::PI,
-    });
-}
-
-/// The probes comparison on the Cornell box, Sponza under a sun (when present) and `gltf`.
-fn run_probes(
-    settings: &suite::SuiteSettings,
-    sponza: Option<&std::path::Path>,
-    gltf: &[PathBuf],
-    lightmap_sizes: &[u32],
-) -> Result<()> {
-    let ctx = Context::new(&ContextDesc::default())?;
-    umbra::atomic::create_dir(&settings.out)?;
-    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
-    scenes.extend(sponza_under_a_sun(sponza));
-    scenes.extend(load_gltf(gltf)?);
-    let mut results = Vec::new();
-    for (key, scene) in &scenes {
-        let camera = bench_camera(scene);
-        results.push(
-            probes::run_scene(
-                &ctx,
-                key,
-                scene,
-                &camera,
-                settings,
-                &settings.probes_per_side,
-                if key == "cornell" { lightmap_sizes } else { &[] },
-            )
-            .with_context(|| scene.name.clone())?,
-        );
-    }
-    let doc = probes::to_json(&ctx.info().name, settings, &results);
-    print!("{}", probes::table(&doc));
-    write_json(&settings.out, "probes.json", &doc)
-}
-
-fn run_denoise(
-    settings: &suite::SuiteSettings,
-    filter: &umbra::render::DenoiseSettings,
-    quick: bool,
-    gltf: &[PathBuf],
-) -> Result<()> {
-    let ctx = Context::new(&ContextDesc::default())?;
-    umbra::atomic::create_dir(&settings.out)?;
-    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
-    if !quick {
-        for name in ["spheres", "textured"] {
-            let path = PathBuf::from("scenes").join(format!("{name}.glb"));
-            match umbra::scene::Scene::load(&path) {
-                Ok(scene) => scenes.push((name.to_string(), scene)),
-                Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
-            }
-        }
-    }
-    scenes.extend(load_gltf(gltf)?);
-    let mut results = Vec::new();
-    for (key, scene) in &scenes {
-        let camera = bench_camera(scene);
-        results.push(
-            denoise::run_scene(&ctx, key, scene, &camera, settings, filter)
-                .with_context(|| scene.name.clone())?,
-        );
-    }
-    let mut doc = denoise::to_json(&ctx.info().name, settings, filter, &results);
-    add_conditions(&mut doc);
-    print!("{}", denoise::table(&doc));
-    write_json(&settings.out, "denoise.json", &doc)
-}
-
-/// The `--gltf` scenes, each keyed by its file stem.
-fn load_gltf(gltf: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
-    gltf.iter()
-        .map(|path| {
-            let key = path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
-            Ok((key, umbra::scene::Scene::load(path)?))
-        })
-        .collect()
-}
-
-/// `path`, or else `$UMBRA_ASSETS/gltf/<within>` (the external asset collection, as the tests read
-/// it); `None` when neither names one: nothing reads a folder beside the checkout unasked.
-fn external(path: Option<PathBuf>, within: &str) -> Option<PathBuf> {
-    path.or_else(|| std::env::var_os("UMBRA_ASSETS").map(|d| PathBuf::from(d).join("gltf").join(within)))
-}
-
-/// Dabrovic Sponza from `path` (or `$UMBRA_ASSETS`) under the default sun, keyed `sponza-sun`;
-/// left out, saying why, when neither names it or it does not load.
-fn sponza_under_a_sun(path: Option<&std::path::Path>) -> Option<(String, umbra::scene::Scene)> {
-    let Some(path) = external(path.map(PathBuf::from), "SponzaDabrovic/sponza_dabrovic.glb") else {
-        log::warn!("skipping Sponza under a sun: give --sponza PATH or set UMBRA_ASSETS");
-        return None;
-    };
-    match umbra::scene::Scene::load(&path) {
-        Ok(mut scene) => {
-            add_sun(&mut scene, DEFAULT_SUN);
-            let stem = path.file_stem().map_or_else(|| "sponza".into(), |s| s.to_string_lossy().into_owned());
-            scene.name = format!("{stem} under a sun");
-            Some(("sponza-sun".into(), scene))
-        }
-        Err(e) => {
-            log::warn!("skipping Sponza under a sun: {e}");
-            None
-        }
-    }
-}
-
-/// `umbra-bench paths`'s default set: the embedded Cornell box, the repository's scenes/*.glb
-/// and one file of each model folder under `assets` (skipped with a warning when absent): its
-/// first .glb, else its glTF-Binary's, else its first .gltf, else its glTF folder's.
-fn default_path_scenes(assets: Option<&std::path::Path>) -> Result<Vec<(String, umbra::scene::Scene)>> {
-    let files_in = |dir: &std::path::Path, ext: &str| -> Vec<PathBuf> {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-            .into_iter()
-            .flatten()
-            .flatten()
-            .map(|e| e.path())
-            .filter(|p| p.extension().is_some_and(|e| e == ext))
-            .collect();
-        files.sort();
-        files
-    };
-    let mut files = files_in(std::path::Path::new("scenes"), "glb");
-    match assets.map(|dir| (dir, std::fs::read_dir(dir))) {
-        None => log::warn!("no --assets and no UMBRA_ASSETS: the sample models are left out"),
-        Some((_, Ok(entries))) => {
-            let mut models: Vec<PathBuf> =
-                entries.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect();
-            models.sort();
-            for model in models {
-                let mut found = files_in(&model, "glb");
-                found.extend(files_in(&model.join("glTF-Binary"), "glb"));
-                found.extend(files_in(&model, "gltf"));
-                found.extend(files_in(&model.join("glTF"), "gltf"));
-                files.extend(found.into_iter().next());
-            }
-        }
-        Some((dir, Err(e))) => log::warn!("{}: {e}; the sample models are left out", dir.display()),
-    }
-    // One that does not load at all is left out with its error.
-    let mut scenes = vec![("cornell-box (embedded)".to_string(), umbra::scene::Scene::cornell_box())];
-    for path in files {
-        match load_path_scene(&path) {
-            Ok(scene) => scenes.push(scene),
-            Err(e) => log::warn!("{e}; left out"),
-        }
-    }
-    Ok(scenes)
-}
-
-/// `umbra-bench paths`'s scenes named on the command line, each keyed by its file stem and
-/// loaded as the default set's are (so one row of its table can be measured alone); one that
-/// does not load is an error.
-fn named_path_scenes(files: &[PathBuf]) -> Result<Vec<(String, umbra::scene::Scene)>> {
-    files
-        .iter()
-        .map(|path| {
-            let (name, scene) = load_path_scene(path)?;
-            Ok((path.file_stem().map_or(name, |s| s.to_string_lossy().into_owned()), scene))
-        })
-        .collect()
-}
-
-/// A scene of `umbra-bench paths`, keyed by its file name. A sample model whose image files are
-/// absent renders with its factors alone (a warning each).
-fn load_path_scene(path: &std::path::Path) -> Result<(String, umbra::scene::Scene)> {
-    let options = umbra::scene::LoadOptions { missing_textures: umbra::scene::MissingTextures::Warn };
-    let name =
-        path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-    Ok((name, umbra::scene::Scene::load_with(path, &options)?))
 }
 
 /// An earlier run's JSON (for `--table`).

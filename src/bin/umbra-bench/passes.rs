@@ -4,6 +4,10 @@
 //! ([`super::rays::warm_up`]),
 //! from GPU timestamps.
 
+// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
+#[allow(unused_imports)]
+use crate::*;
+
 use super::num;
 use anyhow::{bail, Result};
 use serde_json::{json, Value};
@@ -208,4 +212,50 @@ pub fn table(docs: &[Value]) -> Result<String> {
         .collect();
     out += &format!("\nConditions of each run: {}.\n", loads.join("; "));
     Ok(out)
+}
+
+pub(crate) fn run_passes(
+    scene: Option<PathBuf>,
+    size: (u32, u32),
+    repeats: usize,
+    shadow_rays: u32,
+    out: PathBuf,
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    let loaded = match &scene {
+        Some(path) => umbra::scene::Scene::load(path)?,
+        None => umbra::scene::Scene::cornell_box(),
+    };
+    let camera = bench_camera(&loaded);
+    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
+    let lighting = umbra::passes::deferred::LightingSettings { shadow_rays, ..Default::default() };
+    let timings = passes::run(&ctx, &gpu_scene, &camera, size, repeats, &lighting)?;
+    let pixels = size.0 as f64 * size.1 as f64;
+    println!(
+        "{} ({} triangles) at {}x{} on {}:",
+        loaded.name,
+        gpu_scene.bvh_stats.triangles,
+        size.0,
+        size.1,
+        ctx.info().name
+    );
+    for t in &timings {
+        println!(
+            "  {:18} {:9.3} ms median  {:9.3} ms min  {:9.1} Mpixels/s",
+            t.name,
+            t.median_ms,
+            t.min_ms,
+            pixels / (t.median_ms * 1e3)
+        );
+    }
+    let doc = passes::to_json(
+        &ctx.info().name,
+        &loaded.name,
+        gpu_scene.bvh_stats.triangles,
+        size,
+        repeats,
+        shadow_rays,
+        &timings,
+    );
+    write_json(&out, "passes.json", &doc)
 }

@@ -67,7 +67,7 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
         if let Some(map) = &env_map {
             gpu_scene.set_environment(ctx, map)?;
         }
-        let camera = super::bench_camera(scene);
+        let camera = super::scenes::bench_camera(scene);
         let passes = Passes::new(ctx, &gpu_scene);
         for &integrator in &settings.integrators {
             let target = PathTarget::new(ctx, settings.size)?;

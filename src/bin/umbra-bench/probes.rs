@@ -10,6 +10,10 @@
 //! of map sizes, the bounces beyond the first from the 1/8 probe volume, which lights the
 //! unmapped rest).
 
+// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
+#[allow(unused_imports)]
+use crate::*;
+
 use super::num;
 use super::suite::{self, Point, SuiteSettings};
 use anyhow::Result;
@@ -353,4 +357,37 @@ pub fn table(doc: &Value) -> String {
         .collect();
     out += &format!("\nThe references' own noise (relative MSE): {}.\n", floors.join(", "));
     out
+}
+
+/// The probes comparison on the Cornell box, Sponza under a sun (when present) and `gltf`.
+pub(crate) fn run_probes(
+    settings: &suite::SuiteSettings,
+    sponza: Option<&std::path::Path>,
+    gltf: &[PathBuf],
+    lightmap_sizes: &[u32],
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    umbra::atomic::create_dir(&settings.out)?;
+    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
+    scenes.extend(sponza_under_a_sun(sponza));
+    scenes.extend(load_gltf(gltf)?);
+    let mut results = Vec::new();
+    for (key, scene) in &scenes {
+        let camera = bench_camera(scene);
+        results.push(
+            probes::run_scene(
+                &ctx,
+                key,
+                scene,
+                &camera,
+                settings,
+                &settings.probes_per_side,
+                if key == "cornell" { lightmap_sizes } else { &[] },
+            )
+            .with_context(|| scene.name.clone())?,
+        );
+    }
+    let doc = probes::to_json(&ctx.info().name, settings, &results);
+    print!("{}", probes::table(&doc));
+    write_json(&settings.out, "probes.json", &doc)
 }

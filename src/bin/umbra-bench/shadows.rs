@@ -10,6 +10,10 @@
 //! those sized lights with [`REFERENCE_RAYS`] rays per light (the [`Reference`], recorded in the
 //! JSON), and ray-traced sized lights themselves are timed at [`SIZED_RAYS`] rays.
 
+// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
+#[allow(unused_imports)]
+use crate::*;
+
 use super::num;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -343,4 +347,53 @@ pub fn table(doc: &Value) -> String {
         "\nShadow rays alone (lighting with rays less lighting with a hard map): {rays_ms:.1} ms.\n"
     );
     out
+}
+
+pub(crate) fn run_shadows(
+    scene: Option<PathBuf>,
+    size: (u32, u32),
+    settings: &umbra::passes::shadow::ShadowSettings,
+    sun: Option<[f32; 3]>,
+    repeats: usize,
+    out: PathBuf,
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    let mut loaded = match &scene {
+        Some(path) => umbra::scene::Scene::load(path)?,
+        None => umbra::scene::Scene::cornell_box(),
+    };
+    if sun.is_some() || loaded.lights.is_empty() {
+        add_sun(&mut loaded, sun.unwrap_or(DEFAULT_SUN));
+    }
+    let camera = bench_camera(&loaded);
+    let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
+    let layers = umbra::passes::shadow::ShadowPlan::new(
+        &gpu_scene.punctual_lights,
+        gpu_scene.bounds,
+        &camera,
+        size,
+        settings,
+    )?
+    .layers
+    .len();
+    settings.validate()?;
+    let (timings, reference) = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, settings)?;
+    let doc = shadows::to_json(
+        &ctx.info().name,
+        &loaded.name,
+        gpu_scene.bvh_stats.triangles,
+        size,
+        settings,
+        layers,
+        &timings,
+        &reference,
+    );
+    print!("{}", shadows::table(&doc));
+    for t in &timings {
+        let steps: Vec<String> = t.steps.iter().map(|(name, ms)| format!("{name} {ms:.1} ms")).collect();
+        if !steps.is_empty() {
+            println!("  {}: {}", t.method, steps.join(", "));
+        }
+    }
+    write_json(&out, "shadows.json", &doc)
 }

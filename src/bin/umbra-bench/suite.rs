@@ -29,6 +29,10 @@
 //! independent of theirs: with `R` reference samples a method's relative MSE has a floor of
 //! about the path tracer's relative MSE at `R` spp (reported as `reference_rel_mse_floor`).
 
+// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
+#[allow(unused_imports)]
+use crate::*;
+
 use super::chart::{self, Chart, ChartPoint};
 use super::num;
 use super::rays::{median, warm_up};
@@ -723,4 +727,157 @@ pub fn table(doc: &serde_json::Value) -> String {
         out += "\n";
     }
     out
+}
+
+/// The Cornell box with its ceiling lamp replaced by a point light of the same on-axis intensity
+/// (radiance × area) just below the lamp's centre: the shadow maps' test scene (a cube map).
+pub(crate) fn cornell_point_light() -> umbra::scene::Scene {
+    let mut scene = umbra::scene::Scene::cornell_box();
+    scene.name = "Cornell box, point light".into();
+    let (mut area, mut centre, mut radiance) = (0.0f32, Vec3::ZERO, [0.0f32; 3]);
+    for &t in &scene.emissive.triangles {
+        let [a, b, c] = scene.triangles[t as usize].map(|i| Vec3::from(scene.positions[i as usize]));
+        let da = 0.5 * (b - a).cross(c - a).length();
+        area += da;
+        centre += da * (a + b + c) / 3.0;
+        radiance = scene.materials[scene.triangle_material[t as usize] as usize].emissive;
+    }
+    let centre = centre / area.max(1e-12);
+    for &t in &scene.emissive.triangles.clone() {
+        let m = scene.triangle_material[t as usize] as usize;
+        scene.materials[m].emissive = [0.0; 3];
+    }
+    scene.update_emissive();
+    let peak = radiance.iter().copied().fold(1e-12f32, f32::max);
+    scene.lights.push(umbra::scene::Light {
+        name: "lamp".into(),
+        kind: umbra::scene::LightKind::Point,
+        position: (centre - Vec3::Y * 0.01).into(),
+        direction: [0.0, -1.0, 0.0],
+        color: radiance.map(|c| c / peak),
+        intensity: peak * area,
+        range: None,
+        inner_cone_angle: 0.0,
+        outer_cone_angle: std::f32::consts::PI,
+    });
+    scene
+}
+
+/// Samples per pixel of Sponza's reference and most measured in the suite (a path through
+/// Sponza costs about 3× one through the other scenes: this keeps its run to a few minutes).
+pub(crate) const SPONZA_SUITE_SPP: (u32, u32) = (512, 64);
+
+pub(crate) fn run_suite(
+    settings: &suite::SuiteSettings,
+    quick: bool,
+    gltf: &[PathBuf],
+    sponza: Option<&std::path::Path>,
+    only: &[String],
+) -> Result<()> {
+    let ctx = Context::new(&ContextDesc::default())?;
+    umbra::atomic::create_dir(&settings.out)?;
+    let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
+    if !quick {
+        scenes.push(("cornell-point".to_string(), cornell_point_light()));
+    }
+    let repo_scenes: &[&str] = if quick { &["spheres"] } else { &["spheres", "textured"] };
+    for name in repo_scenes {
+        let path = PathBuf::from("scenes").join(format!("{name}.glb"));
+        match umbra::scene::Scene::load(&path) {
+            Ok(scene) => scenes.push((name.to_string(), scene)),
+            Err(e) => log::warn!("skipping {}: {e} (run from the repository root)", path.display()),
+        }
+    }
+    if !quick {
+        scenes.extend(sponza_under_a_sun(sponza));
+    }
+    scenes.extend(load_gltf(gltf)?);
+    if !only.is_empty() {
+        scenes.retain(|(key, _)| only.contains(key));
+        if scenes.is_empty() {
+            anyhow::bail!("--only {}: none of the suite's scenes has that key", only.join(","));
+        }
+    }
+    let mut results = Vec::new();
+    for (key, scene) in &scenes {
+        let camera = bench_camera(scene);
+        let capped;
+        let scene_settings = if key == "sponza-sun" {
+            capped = suite::SuiteSettings {
+                reference_spp: settings.reference_spp.min(SPONZA_SUITE_SPP.0),
+                max_spp: settings.max_spp.min(SPONZA_SUITE_SPP.1),
+                ..settings.clone()
+            };
+            &capped
+        } else {
+            settings
+        };
+        let result = suite::run_scene(&ctx, key, scene, &camera, scene_settings)
+            .with_context(|| scene.name.clone())?;
+        println!(
+            "\n{} ({} triangles), reference noise floor {:.2e}:",
+            result.name, result.triangles, result.reference_rel_mse_floor
+        );
+        for p in &result.points {
+            let setting = format!("{}={}", p.unit, p.value);
+            println!(
+                "  {:20} {:16} {:10.3} ms  RMSE {:.4e}  relMSE {:.4e}  FLIP {:.4}",
+                p.method,
+                setting,
+                p.ms,
+                p.rmse,
+                p.rel_mse,
+                p.flip.unwrap_or(f64::NAN)
+            );
+        }
+        println!(
+            "  ambient occlusion vs RTAO reference (noise floor {:.2e}):",
+            result.ao_reference_mse_floor
+        );
+        for p in &result.ao_points {
+            let setting = format!("{}={}", p.unit, p.value);
+            println!("  {:20} {:16} {:10.3} ms  MSE {:.4e}", p.method, setting, p.ms, p.rel_mse);
+        }
+        for (pass, ms) in &result.precompute_ms {
+            println!("  once per scene: {pass} {ms:.3} ms");
+        }
+        results.push(result);
+    }
+    let doc = json!({
+        "device": ctx.info().name,
+        "size": [settings.size.0, settings.size.1],
+        "reference_spp": settings.reference_spp,
+        "repeats": settings.repeats,
+        "scenes": results.iter().map(|r| json!({
+            "scene": r.name,
+            "triangles": r.triangles,
+            "reference_rel_mse_floor": r.reference_rel_mse_floor,
+            "reference_spp": r.reference_spp,
+            "shadow_reference": r.shadow_reference.as_ref().map(|s| json!({
+                "kind": "rt sized", "rays": s.rays, "frames": s.frames,
+                "light_radius": s.light_radius, "sun_angle": s.sun_angle,
+            })),
+            "points": r.points.iter().map(|p| {
+                let mut point = json!({
+                    "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms,
+                    "rmse": p.rmse, "rel_mse": p.rel_mse, "flip": p.flip,
+                });
+                if let Some(shadow) = p.shadow_rel_mse {
+                    point["shadow_rel_mse"] = json!(shadow);
+                }
+                point
+            }).collect::<Vec<_>>(),
+            "ao_reference_mse_floor": r.ao_reference_mse_floor,
+            "ao_points": r.ao_points.iter().map(|p| json!({
+                "method": p.method, "unit": p.unit, "value": p.value, "gpu_ms": p.ms, "mse": p.rel_mse,
+            })).collect::<Vec<_>>(),
+            "precompute_ms": r.precompute_ms.iter().map(|(pass, ms)| json!({"pass": pass, "ms": ms})).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    });
+    let path = settings.out.join("suite.json");
+    umbra::atomic::write(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
+    let csv = settings.out.join("suite.csv");
+    umbra::atomic::write(&csv, suite::csv(&results).as_bytes())?;
+    println!("wrote {}, {} and suite-<scene>.svg/.png", path.display(), csv.display());
+    Ok(())
 }

@@ -6,9 +6,9 @@ mod common;
 use common::Gpu;
 use glam::Vec3;
 use std::path::Path;
-use umbra::bvh::gpu::{GpuBvh, GpuBvhNode, Query, RayTracer};
 use umbra::bvh::reference::{same_hit, Reference};
 use umbra::bvh::{BuildOptions, Bvh, Hit, Ray};
+use umbra::gpu::bvh::{GpuBvh, GpuBvhNode, Query, RayTracer};
 use umbra::gpu::layout::{TraceHit, TraceRay};
 use umbra::procedural::{icosphere, random_soup, terrain, Mesh, Rng};
 

@@ -13,7 +13,7 @@ mod common;
 use common::Gpu;
 use glam::{Mat4, Quat, Vec3};
 use gltf::json::Value;
-use umbra::bvh::gpu::{GpuBvh, Query, RayTracer};
+use umbra::gpu::bvh::{GpuBvh, Query, RayTracer};
 use umbra::gpu::layout::{TraceHit, TraceRay};
 use umbra::gpu::scene::{GpuScene, SceneArrays};
 use umbra::procedural::{icosphere, Rng};

@@ -67,9 +67,9 @@ fn upward_references(src: &Path) -> Vec<(String, String, String)> {
         let relative = file.strip_prefix(src).unwrap();
         let top = relative.components().next().unwrap().as_os_str().to_string_lossy();
         let module = top.trim_end_matches(".rs").to_string();
-        // The binaries (main.rs, bin/, and cli.rs, which both binaries include) and the crate root
-        // are not library modules.
-        if ["main", "lib", "bin", "cli"].contains(&module.as_str()) {
+        // The binaries (main.rs and its args.rs, bin/, and cli.rs, which both binaries include)
+        // and the crate root are not library modules.
+        if ["main", "args", "lib", "bin", "cli"].contains(&module.as_str()) {
             continue;
         }
         let own =

@@ -13,7 +13,6 @@
 //! validate the GPU hit for hit.
 
 mod build;
-pub mod gpu;
 pub mod reference;
 pub mod traverse;
 
@@ -27,7 +26,7 @@ pub use traverse::{Hit, Ray};
 /// The deepest a BVH may be; the traversal stack holds this many entries.
 pub const MAX_DEPTH: usize = 64;
 
-/// One node of the flattened binary BVH (the CPU side; the GPU reads [`gpu::GpuBvhNode`]s).
+/// One node of the flattened binary BVH (the CPU side; the GPU reads [`crate::gpu::bvh::GpuBvhNode`]s).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {

@@ -103,7 +103,7 @@ pub const FEATURE_SPEC_IDS: u32 = 64;
 
 /// The specialization-constant id of `BVH_STACK` in kernels specialised on `shallow_bvh`: the
 /// entries of the walk's register stack, the BVH's stack depth
-/// ([`crate::bvh::gpu::GpuBvhNode::stack_depth`], at least 1), so that a shallow BVH's walk moves
+/// ([`crate::gpu::bvh::GpuBvhNode::stack_depth`], at least 1), so that a shallow BVH's walk moves
 /// no more registers than it fills (`bvh.glsl`). A plain constant, [`BVH_REGISTERS`], in the
 /// other kernels that trace. The first of the scene-wide constants' range.
 pub const BVH_STACK_SPEC_ID: u32 = FEATURE_SPEC_IDS;
@@ -1033,7 +1033,7 @@ gpu_constants! {
     /// the BVH, but for lights, whose table names their BVH slots).
     ALPHA_NEVER_HIT: uint = 3;
     /// The most traversal stack entries held in registers (`bvh.glsl`): a scene whose walk never
-    /// holds more ([`crate::bvh::gpu::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and
+    /// holds more ([`crate::gpu::bvh::GpuBvhNode::stack_depth`]) has the feature `shallow_bvh`, and
     /// its kernels walk with as many registers as its walk holds (`BVH_STACK`) instead of a stack
     /// in memory.
     BVH_REGISTERS: uint = 16;

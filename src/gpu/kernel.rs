@@ -172,9 +172,9 @@ pub struct SceneFeatures {
     /// Some transmitting volume disperses (`KHR_materials_dispersion`).
     pub dispersion: bool,
     /// The entries of the walk's stack in registers: the BVH's stack depth
-    /// ([`crate::bvh::gpu::GpuBvhNode::stack_depth`], at least 1) where it is at most
+    /// ([`crate::gpu::bvh::GpuBvhNode::stack_depth`], at least 1) where it is at most
     /// [`BVH_REGISTERS`] (the feature `shallow_bvh`; `BVH_STACK` in `bvh.glsl`), else 0: the
-    /// walk keeps its stack in memory. [`GpuBvh::register_stack`](crate::bvh::gpu::GpuBvh::register_stack).
+    /// walk keeps its stack in memory. [`GpuBvh::register_stack`](crate::gpu::bvh::GpuBvh::register_stack).
     pub bvh_stack: u32,
 }
 

@@ -239,7 +239,7 @@ macro_rules! resources_struct {
         /// The resources the kernel binds, by name.
         pub struct Resources<'a> {
             /// The BVH (the first two bindings of the scene's block).
-            pub bvh: &'a crate::bvh::gpu::GpuBvh,
+            pub bvh: &'a crate::gpu::bvh::GpuBvh,
             $($(#[$bmeta])* pub $name: resource_ty!('a $kind),)*
         }
     };

@@ -4,6 +4,7 @@
 //! bindings, push constants and specialization constants Rust and GLSL share; `build.rs`
 //! generates the GLSL side from the same file); [`kernel`] builds and records pipelines from it.
 
+pub mod bvh;
 pub mod cache;
 pub mod implicit;
 pub mod kernel;

@@ -6,10 +6,10 @@ use super::layout::{
     GpuLight, GpuLightTri, GpuMaterial, GpuTexture, GpuTriangle, GpuVertex, SceneResources, TexTransforms,
     ALPHA_NEVER_HIT, MATERIAL_SLOT_HEIGHT, MATERIAL_TEXTURE_SLOTS,
 };
-use crate::bvh::gpu::{register_stack, GpuBvh, GpuBvhNode};
 use crate::bvh::{Bvh, BvhStats};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
+use crate::gpu::bvh::{register_stack, GpuBvh, GpuBvhNode};
 use crate::scene::{AlphaMode, Material, Scene, Texture, TextureRef};
 use crate::vk::{raw, Context, DeviceInfo, TexelBuffer};
 use glam::Vec3;

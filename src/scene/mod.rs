@@ -30,7 +30,7 @@
 //! `.bin` next to the file, `data:` URIs) and decodes images itself.
 
 /// The largest world-space coordinate (in magnitude) a scene may have: the GPU BVH's per-node
-/// grids have 255 steps of at most 2^52 (`bvh::gpu`), about 1.1e18 across, which a scene within
+/// grids have 255 steps of at most 2^52 (`gpu::bvh`), about 1.1e18 across, which a scene within
 /// ±5e17 never exceeds.
 pub const MAX_COORDINATE: f32 = 5e17;
 

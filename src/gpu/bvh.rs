@@ -1,8 +1,8 @@
 //! The BVH on the GPU: its 4-wide layout in two texel buffers, and `trace.comp`, which traces a
 //! buffer of rays (closest or any hit) for the traversal tests and the ray-throughput benchmark.
 
-use super::traverse::next_up;
-use super::{Bvh, BvhNode, BvhTri};
+use crate::bvh::traverse::next_up;
+use crate::bvh::{Bvh, BvhNode, BvhTri};
 use crate::error::{Error, Result};
 use crate::gpu::kernel::SceneFeatures;
 use crate::gpu::kernels::trace;
@@ -590,16 +590,16 @@ impl RayBatch {
     }
 }
 
-impl From<&super::Ray> for TraceRay {
-    fn from(ray: &super::Ray) -> Self {
+impl From<&crate::bvh::Ray> for TraceRay {
+    fn from(ray: &crate::bvh::Ray) -> Self {
         Self { origin_tmin: ray.origin.extend(ray.tmin).into(), dir_tmax: ray.dir.extend(ray.tmax).into() }
     }
 }
 
 impl TraceHit {
-    /// The hit as a [`super::Hit`], `None` for a miss (closest-hit mode only).
-    pub fn hit(&self) -> Option<super::Hit> {
-        (self.tri != TraceHit::MISS).then_some(super::Hit {
+    /// The hit as a [`crate::bvh::Hit`], `None` for a miss (closest-hit mode only).
+    pub fn hit(&self) -> Option<crate::bvh::Hit> {
+        (self.tri != TraceHit::MISS).then_some(crate::bvh::Hit {
             t: self.t,
             tri: self.tri,
             bary: [self.u, self.v],

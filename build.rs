@@ -232,6 +232,8 @@ struct GlslKernel {
     scene: &'static str,
     features: Vec<&'static str>,
     push: &'static str,
+    /// The workgroup size, as written (an expression of `layout.glsl`'s constants).
+    local: [&'static str; 3],
     /// (name, type, default)
     spec: Vec<(&'static str, &'static str, &'static str)>,
     bindings: Vec<GlslBinding>,
@@ -241,6 +243,7 @@ macro_rules! kernels {
     ($($(#[$meta:meta])* $role:ident $kernel:ident {
         scene: $scene:ident $([$($feature:ident),* $(,)?])?,
         push: $push:ty,
+        local: [$lx:expr, $ly:expr, $lz:expr],
         spec: { $($spec:ident : $sty:tt = $sdef:expr),* $(,)? },
         bindings: { $($(#[$bmeta:meta])* $name:ident : $access:ident $kind:ident $arg:tt),* $(,)? }
     })*) => {
@@ -251,6 +254,7 @@ macro_rules! kernels {
                 scene: stringify!($scene),
                 features: vec![$($(stringify!($feature)),*)?],
                 push: stringify!($push),
+                local: [stringify!($lx), stringify!($ly), stringify!($lz)],
                 spec: vec![$((stringify!($spec), stringify!($sty), stringify!($sdef))),*],
                 bindings: vec![$(glsl_binding!($name : $access $kind $arg)),*],
             }),*]
@@ -327,6 +331,16 @@ fn binding_glsl(kernel: &str, number: usize, b: &GlslBinding) -> Result<String, 
 /// `kernel/<name>.glsl`: a kernel's specialization constants, bindings and push constants.
 fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> {
     let mut out = format!("{HEADER}// The interface of {}.comp.\n#include \"layout.glsl\"\n\n", k.name);
+    // The workgroup size, which the kernel declares with `KERNEL_LOCAL_SIZE;` (where it stands
+    // in the kernel's source decides the SPIR-V's id order, so the kernel places it). Sizes of 1
+    // are left out, as GLSL's defaults.
+    let mut size = format!("local_size_x = {}", k.local[0]);
+    for (axis, n) in ["y", "z"].iter().zip(&k.local[1..]) {
+        if *n != "1" {
+            size.push_str(&format!(", local_size_{axis} = {n}"));
+        }
+    }
+    out.push_str(&format!("#define KERNEL_LOCAL_SIZE layout({size}) in\n\n"));
     // Kernels that trace (`full` or `bvh`) see every feature: those they list as specialization
     // constants, the others as `false`.
     if k.scene != "none" {

@@ -1,6 +1,6 @@
 //! Writes umbra's generated test scenes into `scenes/`: `cargo run --example gen_scenes`.
 //!
-//! The generator itself lives in `tests/support/generate.rs`, shared with `tests/scene.rs`, which
+//! The generator itself lives in `tests/support/generate.rs`, shared with `tests/scene/`, which
 //! regenerates the scenes in memory and fails if a committed file differs.
 
 #[path = "../tests/support/generate.rs"]

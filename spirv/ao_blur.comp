@@ -9,7 +9,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/ao_blur.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "camera.glsl"
 

@@ -13,7 +13,7 @@
 #include "kernel/deferred.glsl"
 #include "pixel.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "random.glsl"
 #include "gbuffer.glsl"
@@ -199,7 +199,7 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         // KHR_materials_iridescence: the film's Fresnel taken at n.v for the whole lobe (as the
         // Sample Viewer does), times the lobe's albedo A + B; the diffuse lobe keeps 1 - max3(F)
         // of the mixed Fresnel (C + D: the table's diffuse weighting of a constant F). The path
-        // tracer takes it at each microfacet's v.h (tests/ibl.rs measures the difference).
+        // tracer takes it at each microfacet's v.h (tests/ibl/ measures the difference).
         vec3 film = iridescent_fresnel(s.iridescence_ior, s.iridescence_thickness, s.f0, nv);
         vec3 film_metal = iridescent_fresnel(s.iridescence_ior, s.iridescence_thickness, s.base, nv);
         dielectric_spec = mix(dielectric_spec, film * (table.x + table.y), s.iridescence);
@@ -227,7 +227,7 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
     if (max3(s.sheen) > 0.0) {
         // KHR_materials_sheen: the material scaled by the sheen's albedo scaling at n.v alone
         // (the extension's simplified form), and the sheen's albedo E(n.v) lit by the diffuse
-        // irradiance (its lobe is broad; tests/ibl.rs measures the approximation).
+        // irradiance (its lobe is broad; tests/ibl/ measures the approximation).
         float e = sheen_albedo(nv, s.sheen_roughness);
         result = max(0.0, 1.0 - max3(s.sheen) * e) * result + s.sheen * e * irradiance_over_pi;
     }

@@ -17,7 +17,7 @@
 #include "kernel/denoise_atrous.glsl"
 #include "denoise.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 ivec2 size;
 

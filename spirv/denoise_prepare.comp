@@ -15,7 +15,7 @@
 #include "kernel/denoise_prepare.glsl"
 #include "denoise.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;

@@ -6,7 +6,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/denoise_remodulate.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;

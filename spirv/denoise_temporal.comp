@@ -13,15 +13,15 @@
 // `depth_tolerance` × distance + two pixel footprints of the pixel's tangent plane. No tap
 // counts (a disocclusion, the image's edge, a miss, no history): the pixel starts afresh.
 //
-// Blend: the frame's divisors (what step 1 divided its radiance by: the first hit's albedo, mean
-// of the pixel's samples) and first-hit emission are blended like the colour and written back for
-// the remodulation, and the colour is the blend of the numerators (colour × its divisor) over the
+// Blend: the frame's divisors (what step 1 divided its radiance by: the first hit's albedo, mean of
+// the pixel's samples) and first-hit emission are blended like the colour and written back for the
+// remodulation, and the colour is the blend of the numerators (colour × its divisor) over the
 // blended divisor. The path tracer jitters each sample's first hit inside the pixel, so at a
 // sub-pixel edge (an emitter's rim, a texture's or a wall's edge) a frame's one sample gives a
-// divisor and an emission of one side only; remodulating the accumulated colour by them would
-// give each frame that side's colour (the flicker of the temporal spikes, BENCHMARKS.md History);
-// with a still camera the result is the pooled frames' own (numerator and divisor both the
-// frames' means).
+// divisor and an emission of one side only; remodulating the accumulated colour by them would give
+// each frame that side's colour (the flicker of the temporal spikes, docs/history/2026-12-03.md,
+// seventh session); with a still camera the result is the pooled frames' own (numerator and divisor
+// both the frames' means).
 //
 // n the history's length + 1, α = max(1/n, alpha) for the colour and max(1/n,
 // alpha_moments) for the luminance moments E[l], E[l²] (per part with the lobe split). The sum
@@ -34,7 +34,7 @@
 #include "kernel/denoise_temporal.glsl"
 #include "camera.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
 

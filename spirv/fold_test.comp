@@ -5,7 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/fold_test.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 // Called only on one side of a folded branch: its body is what the folding keeps from the driver.
 uint fold_helper(uint v) {

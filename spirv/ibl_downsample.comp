@@ -5,7 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/ibl_downsample.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "environment.glsl"
 #include "ibl.glsl"

@@ -1,11 +1,11 @@
 #version 460
 // The split-sum BRDF table (ibl.glsl): per entry, a grid of `dst.w` x `dst.w` midpoint samples of
-// GGX visible normals (graded towards the distribution's tail) (specular: f cos / pdf = G1(wi), split by the Schlick factor) and of the
-// cosine hemisphere (diffuse Fresnel weighting).
+// GGX visible normals (graded towards the distribution's tail) (specular: f cos / pdf = G1(wi),
+// split by the Schlick factor) and of the cosine hemisphere (diffuse Fresnel weighting).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/ibl_lut.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "ibl.glsl"
 

@@ -6,7 +6,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/ibl_prefilter.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "environment.glsl"
 #include "ibl.glsl"
@@ -58,7 +58,7 @@ void main() {
         // bilinear read of level k already averages a tent two texels wide (4 texels' area,
         // one level), and the blend between levels half a level more on average. (Krivanek
         // and Colbert's +1 bias blurred a bright disc up to 63 % beyond the GGX integral;
-        // tests/ibl.rs prefiltered_levels_match_brute_force measures this choice.)
+        // tests/ibl/ prefiltered_levels_match_brute_force measures this choice.)
         float lod = 0.5 * log2(1.0 / (float(count) * pdf * texel * sin_theta)) - 1.5;
         lod = clamp(lod, 0.0, float(levels - 1u));
         uint k0 = uint(lod);

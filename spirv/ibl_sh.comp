@@ -8,7 +8,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/ibl_sh.glsl"
 
-layout(local_size_x = 128) in;
+KERNEL_LOCAL_SIZE;
 
 #include "environment.glsl"
 #include "ibl.glsl"

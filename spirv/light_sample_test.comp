@@ -1,7 +1,7 @@
 #version 460
 // Test-only: samples the environment map and the emissive triangles with the renderer's own
 // environment.glsl and shading.glsl, and evaluates the pdfs the path tracer weighs those samples
-// with, for the chi-square tests in tests/sampling.rs. Modes (`mode`):
+// with, for the chi-square tests in tests/sampling/. Modes (`mode`):
 //   0 env_sample                      -> (direction, pdf)
 //   1 env_pdf at directions[i]        -> (direction, pdf)
 //   2 pick_light                      -> (entry, its pmf, its triangle, 0)
@@ -14,7 +14,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/light_sample_test.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 const bool BECKMANN = false;
 const bool GGX_WALTER = false;

@@ -11,7 +11,7 @@
 #include "kernel/pathtrace.glsl"
 #include "pixel.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 // COUNT_LANES (a diagnostic: PathTarget::with_lane_counts): how busy the SIMD lanes are in the
 // BVH walks. Every walk-loop iteration counts; per trace, the iterations of the subgroup's

@@ -1,20 +1,20 @@
 #version 460
-// One update of a range of irradiance probes, second half (src/passes/probes.rs): one workgroup
-// per probe folds the rays probe_trace.comp traced into the probe's octahedral maps. Each
-// invocation owns a texel of the distance map (and the first PROBE_IRRADIANCE_SIDE² also one of
-// the irradiance map), border texels included (probes.glsl: a border texel stands for the
-// interior texel across the edge, so it computes the same value). Irradiance is pi times the
-// cosine-weighted mean of the rays' radiance about the texel's direction (a ratio estimator,
-// exact for constant radiance); distance the mean and mean square of the rays' distances weighed
-// by cos^DISTANCE_SHARPNESS. A probe's first `warmup` updates replace its maps (each adds a bounce
-// of light: the trace reads the volume); later ones blend the new estimate in with weight
-// max(blend_min, 1 / (updates since the last replacement + 1)): a running mean (blend_min 0) or,
-// after its first 1 / blend_min updates, an exponential one (hysteresis 1 - blend_min). A probe with more than PROBE_BACKFACE_LIMIT of its rays on back faces is inside
-// geometry and is switched off.
+// One update of a range of irradiance probes, second half (src/passes/probes.rs): one workgroup per
+// probe folds the rays probe_trace.comp traced into the probe's octahedral maps. Each invocation
+// owns a texel of the distance map (and the first PROBE_IRRADIANCE_SIDE² also one of the irradiance
+// map), border texels included (probes.glsl: a border texel stands for the interior texel across
+// the edge, so it computes the same value). Irradiance is pi times the cosine-weighted mean of the
+// rays' radiance about the texel's direction (a ratio estimator, exact for constant radiance);
+// distance the mean and mean square of the rays' distances weighed by cos^DISTANCE_SHARPNESS. A
+// probe's first `warmup` updates replace its maps (each adds a bounce of light: the trace reads the
+// volume); later ones blend the new estimate in with weight max(blend_min, 1 / (updates since the
+// last replacement + 1)): a running mean (blend_min 0) or, after its first 1 / blend_min updates,
+// an exponential one (hysteresis 1 - blend_min). A probe with more than PROBE_BACKFACE_LIMIT of its
+// rays on back faces is inside geometry and is switched off.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/probe_blend.glsl"
 
-layout(local_size_x = 16, local_size_y = 16) in;
+KERNEL_LOCAL_SIZE;
 
 #include "sampling.glsl"
 #include "gbuffer.glsl"

@@ -9,7 +9,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/probe_trace.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 const bool BECKMANN = false;
 const bool GGX_WALTER = false;

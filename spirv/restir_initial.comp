@@ -8,7 +8,7 @@
 #include "kernel/restir_initial.glsl"
 #include "pixel.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "random.glsl"
 #include "gbuffer.glsl"

@@ -13,7 +13,7 @@
 #include "kernel/rtao.glsl"
 #include "pixel.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 const bool BECKMANN = false;
 const bool GGX_WALTER = false;

@@ -2,22 +2,22 @@
 // Test-only: draws directions with the renderer's own sampling routines (sampling.glsl,
 // bsdf.glsl) and evaluates their pdfs at given directions, for the chi-square tests (modes 0
 // and 1); mode 2 evaluates bsdf_eval for tests/brdf.rs; mode 3 the dielectric's bsdf_eval and
-// bsdf_pdf at given directions, for tests/sampling.rs's check that it samples wherever it
+// bsdf_pdf at given directions, for tests/sampling/'s check that it samples wherever it
 // scatters; mode 4 the thin-film Fresnel of KHR_materials_iridescence (tests/iridescence.rs);
 // mode 5 bsdf_sample's weights (the white furnace, tests/anisotropy.rs); modes 6 and 7 the path
-// tracer's numbers (random.glsl's qmc4, tests/sampling.rs); mode 8 is mode 0 with sample reuse
+// tracer's numbers (random.glsl's qmc4, tests/sampling/); mode 8 is mode 0 with sample reuse
 // (SAMPLE_REUSE: bsdf_sample's lobe chosen by u.y, stretched back).
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/sample_test.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 #define SAMPLE_REUSE (params.mode == 8u)
 
 #include "random.glsl"
 #include "bsdf.glsl"
 
-// The sheen's albedo table: tests/sampling.rs appends its texels to the directions.
+// The sheen's albedo table: tests/sampling/ appends its texels to the directions.
 vec4 sheen_table_texel(uint t) {
     return directions[uint(directions.length()) - SHEEN_TABLE_TEXELS + t];
 }

@@ -35,7 +35,7 @@
 #extension GL_EXT_control_flow_attributes : require
 #include "kernel/shadow_mark.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "camera.glsl"
 #include "shadow_layers.glsl"

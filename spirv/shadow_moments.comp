@@ -10,7 +10,7 @@
 #include "kernel/shadow_moments.glsl"
 #include "shadow_pack.glsl"
 
-layout(local_size_x = 16, local_size_y = 16) in;
+KERNEL_LOCAL_SIZE;
 
 vec4 moments_at(ivec2 q) {
     int size = int(params.size);

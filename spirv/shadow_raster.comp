@@ -24,10 +24,10 @@
 // triangle's set-up (three texel fetches, on llvmpipe a gather each: most of a test's cost)
 // serves QUAD² texel tests. 2 keeps 64 invocations a tile, two warps on a GPU; 4 × 4 (16
 // invocations, half of a 32-wide warp idle) measured 10–30 % faster on lavapipe in one noisy
-// run, 4 × 2 no faster in a quieter one (BENCHMARKS.md History, 2026-12-04, third session).
-const uint QUAD = 2u;
+// run, 4 × 2 no faster in a quieter one (docs/history/2026-12-04.md, third session).
+const uint QUAD = SHADOW_QUAD;
 const uint QUAD_TEXELS = QUAD * QUAD;
-layout(local_size_x = SHADOW_TILE / QUAD, local_size_y = SHADOW_TILE / QUAD) in;
+KERNEL_LOCAL_SIZE;
 
 const uint SHADOW_SURVIVORS = 1024u;
 shared uint tile_bound;

@@ -5,7 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_scan.glsl"
 
-layout(local_size_x = 256) in;
+KERNEL_LOCAL_SIZE;
 
 shared uint runs[256];
 

@@ -1,14 +1,15 @@
 #version 460
-// Shadow maps, per layer before binning: the marked tiles of the layer's window (all of them
-// when the maps render without a view; shadow_mark.comp's otherwise) listed at `list_at`, and
-// their count as the x of the layer's indirect dispatch (`tile_dispatch`, SHADOW_DISPATCH_WORDS
-// a layer: x, y, z and a pad, then the fill's dispatch, whose y and z are set here) that shadow_raster.comp and shadow_moments.comp run over. The list's order
-// depends on the atomics' order, but each tile's workgroup writes only its own texels.
+// Shadow maps, per layer before binning: the marked tiles of the layer's window (all of them when
+// the maps render without a view; shadow_mark.comp's otherwise) listed at `list_at`, and their
+// count as the x of the layer's indirect dispatch (`tile_dispatch`, SHADOW_DISPATCH_WORDS a layer:
+// x, y, z and a pad, then the fill's dispatch, whose y and z are set here) that shadow_raster.comp
+// and shadow_moments.comp run over. The list's order depends on the atomics' order, but each tile's
+// workgroup writes only its own texels.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/shadow_tiles.glsl"
 #include "shadow_pack.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 void main() {
     uvec2 lo = shadow_unpack(params.window_lo);

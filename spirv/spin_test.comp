@@ -14,7 +14,7 @@
 // 2^24 atomic reads per invocation.
 #include "kernel/spin_test.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 void main() {
     uint i = 0u;

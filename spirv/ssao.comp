@@ -15,7 +15,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/ssao.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 #include "random.glsl"
 #include "sampling.glsl"

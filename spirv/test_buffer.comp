@@ -4,7 +4,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/test_buffer.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -4,7 +4,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/test_pattern.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 // Multiplies the hash channel: proves specialization constants reach the kernel.
 

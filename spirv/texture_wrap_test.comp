@@ -6,7 +6,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/texture_wrap_test.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 
 #include "texture.glsl"

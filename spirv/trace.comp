@@ -4,7 +4,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/trace.glsl"
 
-layout(local_size_x = 64) in;
+KERNEL_LOCAL_SIZE;
 
 #include "bvh.glsl"
 

@@ -23,7 +23,7 @@
 #include "kernel/wavefront.glsl"
 #include "pixel.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+KERNEL_LOCAL_SIZE;
 
 // Low-discrepancy numbers take sample reuse: a choice and the chosen option's sample from one
 // number (bsdf.glsl).

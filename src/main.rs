@@ -525,7 +525,7 @@ fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
 /// Builds the BVH, then uploads the rest of `loaded` while `prepare` makes pipelines on a thread
 /// (up to a second each on lavapipe) for the features the scene has (the BVH tells its stack
 /// depth, which the kernels' walk is specialised on); the passes for the uploaded scene (made again
-/// if its features differ: `tests/scene.rs` checks that they do not).
+/// if its features differ: `tests/scene/` checks that they do not).
 fn upload_alongside(
     ctx: &Context,
     loaded: &LoadedScene,
@@ -802,7 +802,6 @@ fn run(cli: Cli, given: &[String]) -> Result<()> {
                     &test_pattern::Resources { out_image: &image.view },
                     &params,
                     [w, h, 1],
-                    [8, 8, 1],
                 )?;
                 timer.end(cmd)
             })?;

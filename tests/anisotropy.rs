@@ -3,8 +3,8 @@
 //! scenes, the direction's conventions (the rotation turns from the tangent towards the
 //! bitangent; the texture's RG is the direction, its B scales the strength) and the surface
 //! without a tangent frame, which renders isotropic. The chi-square test of its sampling is in
-//! tests/sampling.rs (the `Anisotropic` cases), the hybrid against the path tracer in
-//! tests/ibl.rs, the loading in tests/scene.rs.
+//! tests/sampling/ (the `Anisotropic` cases), the hybrid against the path tracer in
+//! tests/ibl/, the loading in tests/scene/.
 
 mod common;
 

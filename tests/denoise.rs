@@ -288,8 +288,9 @@ fn synthetic_split(
 /// with a glossy highlight of 0.5 over both (a dielectric's: not tinted by the base colour).
 /// Divided by the base colour, the highlight on the dark half becomes 25 (the lit surface 1): the
 /// filter of the sum then smears the halves' highlights into each other (the textured scene's
-/// failure, BENCHMARKS.md), while the lobe split divides only the diffuse part by it and keeps the
-/// edge within 2 % in the four columns beside it. Both halves lose most of their noise.
+/// failure, docs/history/2026-12-02.md, "the denoiser's lobe split"), while the lobe split divides
+/// only the diffuse part by it and keeps the edge within 2 % in the four columns beside it. Both
+/// halves lose most of their noise.
 #[test]
 fn the_lobe_split_keeps_a_highlight_off_a_dark_texel() {
     let gpu = Gpu::new();
@@ -412,11 +413,11 @@ fn settings_are_validated() {
     assert!(e.contains("albedo"), "{e}");
 }
 
-/// The embedded Cornell box at 4 spp (48×48, the stored reference's size) against its
-/// 16,384-spp reference, three seeds, with and without the lobe split. The goal is a relative MSE 8× lower; at 128×128
-/// (`umbra-bench denoise`, BENCHMARKS.md) the Cornell box reaches it, but at 48×48 a pixel spans
-/// so much of the box that the filter's bias is larger: 4.1–4.8× was measured here (lavapipe),
-/// and 3× is asserted.
+/// The embedded Cornell box at 4 spp (48×48, the stored reference's size) against its 16,384-spp
+/// reference, three seeds, with and without the lobe split. The goal is a relative MSE 8×
+/// lower; at 128×128 (`umbra-bench denoise`, BENCHMARKS.md; analysis: docs/history/2026-12-05.md)
+/// the Cornell box reaches it, but at 48×48 a pixel spans so much of the box that the filter's bias
+/// is larger: 4.1–4.8× was measured here (lavapipe), and 3× is asserted.
 #[test]
 fn cornell_box_at_4_spp_comes_much_closer_to_the_reference() {
     let gpu = Gpu::new();

@@ -2,8 +2,8 @@
 //! lobe through the back, tinted by its own colour. Its sampling's white furnace and its
 //! directional albedo against the closed form (through `sample_test.comp`'s kind 10), and the
 //! path tracer and the hybrid renderer on a quad lit from behind and under a constant sky against
-//! the closed form. The chi-square test of its sampling is in tests/sampling.rs (the
-//! `DiffuseTransmission` cases), the loading in tests/scene.rs, its textures in
+//! the closed form. The chi-square test of its sampling is in tests/sampling/ (the
+//! `DiffuseTransmission` cases), the loading in tests/scene/, its textures in
 //! tests/layer_textures.rs.
 
 mod common;

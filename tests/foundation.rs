@@ -21,7 +21,7 @@ fn record_pattern(
     params: &PatternParams,
 ) -> umbra::Result<()> {
     let [w, h] = params.size;
-    pipeline.record(cmd, &test_pattern::Resources { out_image: &image.view }, params, [w, h, 1], [8, 8, 1])
+    pipeline.record(cmd, &test_pattern::Resources { out_image: &image.view }, params, [w, h, 1])
 }
 
 /// The CPU twin of `pattern_hash` in test_pattern.comp.
@@ -109,7 +109,7 @@ fn buffers_round_trip_through_staging_and_a_kernel() {
     let params = BufferTestParams { count, add: 17 };
     gpu.submit(|cmd| {
         let resources = test_buffer::Resources { values_in: &src, values_out: &dst };
-        pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
+        pipeline.record(cmd, &resources, &params, [count, 1, 1])
     })
     .unwrap();
     let out: Vec<u32> = dst.read(&gpu).unwrap();
@@ -165,7 +165,7 @@ fn folded_specialization_constants_keep_the_kernels_meaning() {
         let params = BufferTestParams { count, add: 1 << 12 };
         gpu.submit(|cmd| {
             let resources = fold_test::Resources { values_in: &src, values_out: &dst };
-            pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
+            pipeline.record(cmd, &resources, &params, [count, 1, 1])
         })
         .unwrap();
         let out: Vec<u32> = dst.read(&gpu).unwrap();

@@ -256,6 +256,16 @@ fn check_interface(
             errors.push(format!("{name}: specialization constant {f:?} is not in the interface {spec:?}"));
         }
     }
+    // The workgroup size: declared once, in the interface (the kernel places build.rs's
+    // `KERNEL_LOCAL_SIZE`, without which it would be 1 × 1 × 1).
+    for entry in &module.entry_points {
+        if entry.workgroup_size != interface.local {
+            errors.push(format!(
+                "{name}: workgroup size {:?}, the interface declares {:?}",
+                entry.workgroup_size, interface.local
+            ));
+        }
+    }
     errors
 }
 
@@ -368,6 +378,10 @@ fn interface_check_detects_swapped_bindings() {
     // A push-constant struct of another name.
     let other_push = KernelInterface { push_type: "DeferredParams", ..*pt };
     assert!(!check_interface(&pathtrace, &other_push, &pt.numbered_bindings()).is_empty());
+    // Another workgroup size than the compiled kernel's.
+    let other_local = KernelInterface { local: [16, 4, 1], ..*pt };
+    let errors = check_interface(&pathtrace, &other_local, &pt.numbered_bindings());
+    assert!(errors.iter().any(|e| e.contains("workgroup size")), "{errors:?}");
 }
 
 /// The walls real GPUs enforce (build.rs and compile-time assertions refuse a kernel past them;

@@ -2,7 +2,7 @@
 //! rays: the G-buffer's view of squares facing the camera (exactly the pixels the magnification
 //! puts them on, at one depth each), the hybrid's deferred lighting against the path tracer on one
 //! orthographic view. (SSAO: tests/ao.rs; the wavefront integrator: tests/wavefront.rs; the
-//! loader: tests/scene.rs.)
+//! loader: tests/scene/.)
 
 mod common;
 

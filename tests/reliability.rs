@@ -356,14 +356,14 @@ fn hung_submission(wait_fault: Option<raw::Result>) -> Hung {
                 for (k, output) in outputs.iter().enumerate() {
                     let resources = test_buffer::Resources { values_in: &input, values_out: output };
                     let params = BufferTestParams { count: 64, add: k as u32 };
-                    quick.record(cmd, &resources, &params, [64, 1, 1], [64, 1, 1])?;
+                    quick.record(cmd, &resources, &params, [64, 1, 1])?;
                     barrier::compute_to_compute(&gpu, cmd);
                     if k == 0 {
                         // 1024 workgroups of 64: on lavapipe (where an invocation's loops end
                         // after 65535 iterations) ~80 ms each on one core, 40 s on two, if
                         // never released; released, they all end within milliseconds.
                         let resources = spin_test::Resources { spin: &flag };
-                        spin.record(cmd, &resources, &(), [1024 * 64, 1, 1], [64, 1, 1])?;
+                        spin.record(cmd, &resources, &(), [1024 * 64, 1, 1])?;
                         barrier::compute_to_compute(&gpu, cmd);
                     }
                 }

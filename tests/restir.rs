@@ -160,9 +160,9 @@ fn mean_and_variance(xs: &[f64]) -> (f64, f64) {
 /// scenes/many-lights.glb (480 emissive triangles, 136 punctual lights, pillars casting shadows):
 /// its image mean over 32 seeds against power-sampled light sampling's (16 shadow rays) over 32
 /// others: a two-sample z-test, fails above |z| = 3.29 (two-sided, α = 0.001). The biased
-/// combination on the same seeds is reported beside it (its bias is BENCHMARKS.md's). Fails if
-/// the candidates' source density, the reservoirs' count weighting or the 1/Z normalisation is
-/// wrong.
+/// combination on the same seeds is reported beside it (its bias is BENCHMARKS.md's restir table's,
+/// analysed in docs/history/2026-12-02.md). Fails if the candidates' source density, the
+/// reservoirs' count weighting or the 1/Z normalisation is wrong.
 #[test]
 fn unbiased_restir_converges_to_power_sampling() {
     let gpu = Gpu::new();

@@ -61,7 +61,7 @@ fn repeat_and_mirror_wrapping_are_exact() {
             texture_texels: &textures,
             scene_texels: &texels,
         };
-        pipeline.record(cmd, &resources, &BufferTestParams { count, add: 0 }, [count, 1, 1], [64, 1, 1])
+        pipeline.record(cmd, &resources, &BufferTestParams { count, add: 0 }, [count, 1, 1])
     })
     .unwrap();
     let out: Vec<i32> = output.read(&gpu).unwrap();

@@ -409,7 +409,7 @@ vec3 bsdf_eval_base(Surface s, vec3 wo, vec3 wi) {
 // F at the normal is 1 beyond the critical angle, yet microfacets tilted towards wo still refract
 // (a rough boundary's transmission fades over degrees past it: at α 0.1, 37 % of the albedo at
 // 45°, 5 % at 60°), so F is taken 9:1 with Schlick's at the unbent angle there: transmission
-// keeps a probability wherever it can happen (tests/sampling.rs), reflection most of it under
+// keeps a probability wherever it can happen (tests/sampling/), reflection most of it under
 // total internal reflection.
 // The lobes' estimated albedos at wo: specular reflection (x), transmission (y), diffuse (z),
 // diffuse transmission (w, by its colour's luminance).

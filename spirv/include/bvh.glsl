@@ -10,13 +10,13 @@
 // texel buffers of RGBA32UI (`GpuBvhNode`s as four texels each, `BvhTri`s as three):
 //   layout(rgba32ui) uniform readonly uimageBuffer bvh_node_texels;
 //   layout(rgba32ui) uniform readonly uimageBuffer bvh_tri_texels;
-// Texel buffers rather than storage buffers: on llvmpipe (Mesa 22) a storage-buffer load is a
-// loop over the SIMD lanes with a bounds check and a branch per component, a texel read a
-// branch-free gather (BENCHMARKS.md: +25-40 % rays/s); and imageLoad rather than texelFetch,
-// which llvmpipe calls as a function (spilling every live vector register around each call)
-// where it inlines imageLoad (+5-10 %). GPUs read all of them through their caches.
-// Every arithmetic result the watertight test depends on is `precise`, so the compiler cannot
-// contract a*b - c*d into an fma on one side of a shared edge and not on the other.
+// Texel buffers rather than storage buffers: on llvmpipe (Mesa 22) a storage-buffer load is a loop
+// over the SIMD lanes with a bounds check and a branch per component, a texel read a branch-free
+// gather (docs/history/2026-11-30.md, first round: +25-40 % rays/s); and imageLoad rather than
+// texelFetch, which llvmpipe calls as a function (spilling every live vector register around each
+// call) where it inlines imageLoad (+5-10 %). GPUs read all of them through their caches. Every
+// arithmetic result the watertight test depends on is `precise`, so the compiler cannot contract
+// a*b - c*d into an fma on one side of a shared edge and not on the other.
 #ifndef UMBRA_BVH_GLSL
 #define UMBRA_BVH_GLSL
 
@@ -299,14 +299,15 @@ bool bvh_register(uint k) { return k < BVH_STACK; }
 
 // The walk over a stack of BVH_STACK entries in registers, for a BVH whose walk never holds more
 // (the scene feature `shallow_bvh`: GpuBvhNode::stack_depth at most BVH_REGISTERS; BVH_STACK, a
-// specialization constant, is that depth), and over BVH_MAX_DEPTH entries in memory for any
-// other. On llvmpipe a dynamically indexed array is a loop over the SIMD lanes per access, 12-19 %
-// of the path tracer's time (BENCHMARKS.md History: the registers took 0.66-1.00 times its time);
-// a GPU keeps either in registers or its local memory. The registers are a shift register, s0_
-// the top: a push moves every entry one down, a pop one up (a select per register each), so no
-// access is indexed. Registers at or past BVH_STACK are never written: the driver folds their
-// selects away once the constant is set, so a push or pop costs what the BVH's depth needs (a
-// Cornell box's walk holds one entry; 16 registers cost it 6 %, BENCHMARKS.md History).
+// specialization constant, is that depth), and over BVH_MAX_DEPTH entries in memory for any other.
+// On llvmpipe a dynamically indexed array is a loop over the SIMD lanes per access, 12-19 % of the
+// path tracer's time (docs/history/2026-12-04.md, fifth session: the registers took 0.66-1.00 times
+// its time); a GPU keeps either in registers or its local memory. The registers are a shift
+// register, s0_ the top: a push moves every entry one down, a pop one up (a select per register
+// each), so no access is indexed. Registers at or past BVH_STACK are never written: the driver
+// folds their selects away once the constant is set, so a push or pop costs what the BVH's depth
+// needs (a Cornell box's walk holds one entry; 16 registers cost it 6 %,
+// docs/history/2026-12-05.md, seventh session).
 #define BVH_WALK bvh_walk_registers
 #define BVH_STACK_DECL \
     uint s0_ = 0u, s1_ = 0u, s2_ = 0u, s3_ = 0u, s4_ = 0u, s5_ = 0u, s6_ = 0u, s7_ = 0u, s8_ = 0u, s9_ = 0u, s10_ = 0u, s11_ = 0u, s12_ = 0u, s13_ = 0u, s14_ = 0u, s15_ = 0u;
@@ -369,16 +370,16 @@ bool bvh_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out H
     return bvh_walk_memory(origin, dir, tmin, tmax, any_hit, hit);
 }
 
-// The walk, and where the scene has alpha-tested triangles (UMBRA_ALPHA_TEST and HAS_ALPHA),
-// their alpha test: a walk that ends on a hit the test cuts out walks again from just behind it
-// (tmin = its t), until it ends on a surface or finds none. The test (a material read, a
-// texture's bilinear lookup) thus runs once per walk, not inside the walk's triangle loop: a
-// SIMD CPU (llvmpipe) runs every `if` body for all lanes, so there it cost every triangle test
-// the lookup (TransmissionTest's masks made it 3.5x slower; BENCHMARKS.md). An any-hit walk
-// stops at the first opaque triangle and otherwise keeps the nearest alpha-tested candidate, so
-// no opaque occluder before that candidate is skipped. The same hit as one walk testing alpha
-// per triangle, but for triangles exactly as near as a cut-out one, which the next walk (t >
-// tmin strictly) skips.
+// The walk, and where the scene has alpha-tested triangles (UMBRA_ALPHA_TEST and HAS_ALPHA), their
+// alpha test: a walk that ends on a hit the test cuts out walks again from just behind it (tmin =
+// its t), until it ends on a surface or finds none. The test (a material read, a texture's bilinear
+// lookup) thus runs once per walk, not inside the walk's triangle loop: a SIMD CPU (llvmpipe) runs
+// every `if` body for all lanes, so there it cost every triangle test the lookup
+// (TransmissionTest's masks made it 3.5x slower; docs/history/2026-12-02.md, "alpha tests after the
+// walk"). An any-hit walk stops at the first opaque triangle and otherwise keeps the nearest
+// alpha-tested candidate, so no opaque occluder before that candidate is skipped. The same hit as
+// one walk testing alpha per triangle, but for triangles exactly as near as a cut-out one, which
+// the next walk (t > tmin strictly) skips.
 bool bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
 #ifdef UMBRA_ALPHA_TEST
     if (HAS_ALPHA) {

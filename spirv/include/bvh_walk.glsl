@@ -1,17 +1,16 @@
 // The body of the BVH walk (bvh.glsl), included once per stack: BVH_WALK names the function,
 // BVH_STACK_DECL declares its stack, BVH_STACK_TOP and BVH_STACK_UPDATE read and change it
-// (BVH_ADVANCE).
-// Front-to-back walk with t in (tmin, tmax); any_hit stops at the first hit found on an opaque
-// triangle (alpha-tested ones are kept as the nearest candidate instead, see bvh_trace). The
-// closest hit is the nearest, and of equally near ones (a ray through a shared edge) the one
-// first in the input, so the answer does not depend on the order of the walk (the BVH's layout,
-// its width, the CPU or the GPU): the brute-force reference keeps the lowest index too.
-// Each iteration visits two nodes, then tests the triangles of the leaf children both hit. On a
-// SIMD CPU (llvmpipe) every iteration runs the triangle loop's body at least once, whether or not
-// any lane has a leaf (in Sponza most visits have none), so two visits per loop halve those empty
-// runs: +20-30 % rays/s there (BENCHMARKS.md; three visits gained nothing more). The second
-// visit's culling does not see the first's triangles yet, which costs a few extra visits and
-// never a wrong answer. Everything per child is written out for constant child indices
+// (BVH_ADVANCE). Front-to-back walk with t in (tmin, tmax); any_hit stops at the first hit found on
+// an opaque triangle (alpha-tested ones are kept as the nearest candidate instead, see bvh_trace).
+// The closest hit is the nearest, and of equally near ones (a ray through a shared edge) the one
+// first in the input, so the answer does not depend on the order of the walk (the BVH's layout, its
+// width, the CPU or the GPU): the brute-force reference keeps the lowest index too. Each iteration
+// visits two nodes, then tests the triangles of the leaf children both hit. On a SIMD CPU
+// (llvmpipe) every iteration runs the triangle loop's body at least once, whether or not any lane
+// has a leaf (in Sponza most visits have none), so two visits per loop halve those empty runs:
+// +20-30 % rays/s there (docs/history/2026-11-30.md, second round; three visits gained nothing
+// more). The second visit's culling does not see the first's triangles yet, which costs a few extra
+// visits and never a wrong answer. Everything per child is written out for constant child indices
 // (registers, not memory).
 bool BVH_WALK(vec3 origin, vec3 dir, float tmin, float tmax, bool any_hit, out Hit hit) {
     hit = Hit(tmax, 0xffffffffu, vec2(0.0));

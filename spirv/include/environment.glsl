@@ -6,7 +6,7 @@
 //   layout(rgba32ui) uniform readonly uimageBuffer env_texels; // rgb radiance, density over (u, v)
 //   layout(rg32ui) uniform readonly uimageBuffer env_alias;    // alias tables: rows', each row's
 // and passes the map's size. Texel buffers, not storage buffers: on llvmpipe a texel read is one
-// gather, a storage-buffer read a loop over the lanes (BENCHMARKS.md, History 2026-12-04, fourth
+// gather, a storage-buffer read a loop over the lanes (docs/history/2026-12-04.md, fourth
 // session).
 #ifndef UMBRA_ENVIRONMENT_GLSL
 #define UMBRA_ENVIRONMENT_GLSL

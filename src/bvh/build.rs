@@ -283,14 +283,14 @@ struct Builder<'a> {
 
 /// A node tries spatial splits when its best object split's children overlap by more than this
 /// share of the root's surface area (the paper's α, 1e-5 there: on Dabrovic Sponza 1e-3 gave the
-/// same rays and path-tracing times for half the build time, BENCHMARKS.md).
+/// same rays and path-tracing times for half the build time, docs/history/2026-12-05.md, ninth session).
 pub const SPATIAL_OVERLAP: f32 = 1e-3;
 
 /// … and by more than this share of the node's own surface area. Not in the paper: without it
 /// a terrain's top nodes, whose sides overlap in thin slabs that span the terrain's height, bin
 /// every reference spatially for nothing (its SAH cost did not move) and its build took about
 /// 1.6× the time of one without spatial splits; with it 1.15–1.3×, and Dabrovic Sponza keeps its
-/// SAH cost within 0.3 % (BENCHMARKS.md).
+/// SAH cost within 0.3 % (docs/history/2026-12-05.md, ninth session).
 pub const SPATIAL_NODE_OVERLAP: f32 = 0.2;
 
 pub(super) fn build(triangles: &[[Vec3; 3]], boxes: &[[Vec3; 2]], options: &BuildOptions) -> Bvh {

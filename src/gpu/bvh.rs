@@ -24,7 +24,7 @@ pub struct GpuBvh {
     /// be specialised for them ([`RayTracer::with_implicit`]).
     pub implicit: bool,
     /// The most entries a walk's stack holds ([`GpuBvhNode::stack_depth`]; `umbra render` logs
-    /// it): what a stack in registers would need to hold (BENCHMARKS.md, History 2026-12-04,
+    /// it): what a stack in registers would need to hold (docs/history/2026-12-04.md,
     /// fourth session).
     pub stack_depth: u32,
 }
@@ -33,7 +33,7 @@ impl GpuBvh {
     /// The entries of the kernels' register stack for this BVH ([`SceneFeatures::bvh_stack`]):
     /// its stack depth, at least 1, or 0 when that is more than [`BVH_REGISTERS`] (the stack in
     /// memory). A push or pop moves every register (`bvh.glsl`), so the walk carries no more than
-    /// it fills: 0.94-0.96 of a small scene's time against 16 (BENCHMARKS.md History).
+    /// it fills: 0.94-0.96 of a small scene's time against 16 (docs/history/2026-12-05.md, seventh session).
     pub fn register_stack(&self) -> u32 {
         register_stack(self.stack_depth)
     }
@@ -115,7 +115,7 @@ impl GpuBvhNode {
     /// Nodes this close to the root (at most 1,365 of them) get the grid that grows their
     /// children's boxes least among a few (`Grid::fit_least_growth`), the others the one through
     /// their bounds: +2–3 % shadow rays on Sponza for no measurable layout time; for all nodes it
-    /// gained no more and took 3× the time (BENCHMARKS.md).
+    /// gained no more and took 3× the time (docs/history/2026-12-01.md, third round).
     const SEARCH_DEPTH: u32 = 6;
 
     /// The most triangle references a child word addresses (28 bits).
@@ -497,9 +497,6 @@ pub struct RayTracer {
 /// The register stacks a kernel may walk with, and the stack in memory.
 const STACKS: usize = BVH_REGISTERS as usize + 1;
 
-/// Workgroup size of `trace.comp`.
-const LOCAL: u32 = 64;
-
 impl RayTracer {
     /// Builds the pipelines, for BVHs of triangles only (implicit shapes compiled out: they are
     /// never hit).
@@ -542,7 +539,6 @@ impl RayTracer {
             &trace::Resources { bvh, rays: &batch.rays, hits: &batch.hits },
             &TraceParams { count: batch.count, ..Default::default() },
             [batch.count, 1, 1],
-            [LOCAL, 1, 1],
         )
     }
 

@@ -72,11 +72,12 @@ pub const SCENE_FEATURES: [&str; 30] = [
     "shallow_bvh",
 ];
 
-/// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit
-/// k for slot k): some material has a texture in one of them. One feature per slot of the core
+/// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit k
+/// for slot k): some material has a texture in one of them. One feature per slot of the core
 /// material; one per extension's texture group (`KHR_materials_specular`'s two textures share
-/// `specular_map`), whose textures come together in the files seen (BENCHMARKS.md History: a
-/// scene with one of them pays for the others' lookups). The height slot is `parallax`'s.
+/// `specular_map`), whose textures come together in the files seen (docs/history/2026-12-02.md,
+/// fifth session, "the extensions' layer textures": a scene with one of them pays for the others'
+/// lookups). The height slot is `parallax`'s.
 pub const TEXTURE_SLOT_FEATURES: [(&str, u32); 13] = [
     ("base_color_map", 1 << 0),
     ("metal_rough_map", 1 << 1),
@@ -190,15 +191,15 @@ gpu_structs! {
     /// (after Ylitie, Karras and Laine 2017), so one step fetches half the bytes of
     /// full-precision boxes. Node 0 is the root.
     ///
-    /// On each axis a node's grid has planes at `origin + q * step` for q in 0..=255, the first
-    /// and last on the node's bounds (to a float's precision, outward), or, in the top levels, one
-    /// of them and one of a child's planes inside, whichever grows the children's boxes least; a
+    /// On each axis a node's grid has planes at `origin + q * step` for q in 0..=255, the first and
+    /// last on the node's bounds (to a float's precision, outward), or, in the top levels, one of
+    /// them and one of a child's planes inside, whichever grows the children's boxes least; a
     /// child's box is rounded outward to the grid, exactly, so it contains the child's true box.
-    /// The traversal computes a plane's distance as `q * a + b` with `a = step / d` and
-    /// `b = (origin - o) / d` per node, which is off by a small multiple of the node's size in ray
-    /// units; `bvh.glsl` widens every interval by a bound on that. (BENCHMARKS.md: 3 % more node
-    /// visits on Sponza than exact boxes with the camera on its symmetry plane, where the halves'
-    /// boxes meet, 0.5 % off it.)
+    /// The traversal computes a plane's distance as `q * a + b` with `a = step / d` and `b =
+    /// (origin - o) / d` per node, which is off by a small multiple of the node's size in ray
+    /// units; `bvh.glsl` widens every interval by a bound on that. (docs/history/2026-12-01.md,
+    /// third round: 3 % more node visits on Sponza than exact boxes with the camera on its symmetry
+    /// plane, where the halves' boxes meet, 0.5 % off it.)
     struct GpuBvhNode {
         /// The grid's origin (texel 0).
         origin: vec3,
@@ -912,7 +913,7 @@ gpu_structs! {
         /// 0 sample, 1 evaluate the pdf, 2 evaluate the BSDF of opaque surfaces (tests/brdf.rs),
         /// 3 the BSDF and its pdf at given directions, 4 the thin-film Fresnel
         /// (tests/iridescence.rs), 5 sample weights (the white furnace), 6 and 7 the path
-        /// tracer's numbers over one pixel's samples and across pixels (tests/sampling.rs).
+        /// tracer's numbers over one pixel's samples and across pixels (tests/sampling/).
         mode: uint,
         /// Number of samples or directions.
         count: uint,
@@ -1163,6 +1164,9 @@ gpu_constants! {
     SHADOW_LIGHT_CASCADES: uint = 3;
     /// Side of a shadow rasterizer tile in texels (its workgroup is one tile).
     SHADOW_TILE: uint = 16;
+    /// Side of the block of a tile's texels one `shadow_raster` invocation tests (its workgroup
+    /// is `SHADOW_TILE / SHADOW_QUAD` invocations a side).
+    SHADOW_QUAD: uint = 2;
     /// The most cascades of a directional light.
     SHADOW_MAX_CASCADES: uint = 8;
     /// Side in pixels of the block of G-buffer pixels one `shadow_mark` invocation marks for.
@@ -1338,6 +1342,7 @@ kernels! {
     kernel pathtrace {
         scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: PathParams,
+        local: [8, 8, 1],
         spec: {
             beckmann: bool = false,
             ggx_walter: bool = false,
@@ -1389,6 +1394,7 @@ kernels! {
     kernel wavefront {
         scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: WaveParams,
+        local: [8, 8, 1],
         spec: {
             beckmann: bool = false,
             ggx_walter: bool = false,
@@ -1446,6 +1452,7 @@ kernels! {
     kernel resolve {
         scene: none,
         push: ResolveParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// The running mean.
@@ -1461,6 +1468,7 @@ kernels! {
     kernel denoise_prepare {
         scene: none,
         push: DenoiseParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// The running mean rgb, sample count.
@@ -1502,6 +1510,7 @@ kernels! {
     kernel denoise_temporal {
         scene: none,
         push: TemporalParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// This frame's demodulated radiance (diffuse part) and its variance (step 1's).
@@ -1558,6 +1567,7 @@ kernels! {
     kernel denoise_atrous {
         scene: none,
         push: DenoiseParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// Radiance rgb and its variance, from the previous step.
@@ -1579,6 +1589,7 @@ kernels! {
     kernel denoise_remodulate {
         scene: none,
         push: DenoiseParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// The filtered, demodulated radiance (with [`DENOISE_SPLIT`], its diffuse part).
@@ -1601,6 +1612,7 @@ kernels! {
     kernel gbuffer {
         scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
         push: GBufferParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// View-space depth.
@@ -1625,6 +1637,7 @@ kernels! {
     kernel deferred {
         scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: DeferredParams,
+        local: [8, 8, 1],
         spec: {
             beckmann: bool = false,
             shadow_maps: bool = false,
@@ -1686,6 +1699,7 @@ kernels! {
     kernel restir_initial {
         scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
         push: RestirParams,
+        local: [8, 8, 1],
         spec: {
             beckmann: bool = false,
             unbiased: bool = false,
@@ -1717,6 +1731,7 @@ kernels! {
     kernel restir_spatial {
         scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
         push: RestirParams,
+        local: [8, 8, 1],
         spec: {
             beckmann: bool = false,
             unbiased: bool = false
@@ -1745,6 +1760,7 @@ kernels! {
     kernel ssao {
         scene: none,
         push: AoParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// View-space depth.
@@ -1760,6 +1776,7 @@ kernels! {
     kernel rtao {
         scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
         push: AoParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// View-space depth.
@@ -1777,6 +1794,7 @@ kernels! {
     kernel ao_blur {
         scene: none,
         push: AoBlurParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// The AO to blur.
@@ -1794,6 +1812,7 @@ kernels! {
     kernel tonemap {
         scene: none,
         push: TonemapParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// Linear HDR input.
@@ -1807,6 +1826,7 @@ kernels! {
     kernel ibl_lut {
         scene: none,
         push: IblParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// The table.
@@ -1818,6 +1838,7 @@ kernels! {
     kernel ibl_downsample {
         scene: full [],
         push: IblParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// The chain (level 0 is the map itself, not stored).
@@ -1829,6 +1850,7 @@ kernels! {
     kernel ibl_prefilter {
         scene: full [],
         push: IblParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// The box-filtered chain.
@@ -1842,6 +1864,7 @@ kernels! {
     kernel ibl_sh {
         scene: full [],
         push: IblParams,
+        local: [128, 1, 1],
         spec: {},
         bindings: {
             /// The nine coefficients.
@@ -1856,6 +1879,7 @@ kernels! {
     kernel shadow_bin {
         scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ShadowRasterParams,
+        local: [64, 1, 1],
         spec: { fill: bool = false },
         bindings: {
             /// The BVH positions to rasterize, one per scene triangle (the BVH repeats a split
@@ -1888,6 +1912,7 @@ kernels! {
     kernel shadow_mark {
         scene: none,
         push: ShadowMarkParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// View-space depth.
@@ -1903,6 +1928,7 @@ kernels! {
     kernel shadow_tiles {
         scene: none,
         push: ShadowRasterParams,
+        local: [8, 8, 1],
         spec: {},
         bindings: {
             /// Per layer and tile, nonzero where the tile is rendered.
@@ -1919,6 +1945,7 @@ kernels! {
     kernel shadow_scan {
         scene: none,
         push: ShadowRasterParams,
+        local: [256, 1, 1],
         spec: {},
         bindings: {
             /// Triangles per tile (set back to 0 for the fill).
@@ -1935,6 +1962,7 @@ kernels! {
     kernel shadow_raster {
         scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
         push: ShadowRasterParams,
+        local: [SHADOW_TILE / SHADOW_QUAD, SHADOW_TILE / SHADOW_QUAD, 1],
         spec: {},
         bindings: {
             /// Triangles per tile (set back to 0 once read, for the next layer).
@@ -1958,6 +1986,7 @@ kernels! {
     kernel shadow_moments {
         scene: none,
         push: ShadowMomentParams,
+        local: [16, 16, 1],
         spec: {},
         bindings: {
             /// The depth map.
@@ -1975,6 +2004,7 @@ kernels! {
     kernel lightmap_bake {
         scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
         push: LightmapParams,
+        local: [64, 1, 1],
         spec: { occlusion: bool = false },
         bindings: {
             /// Per texel two RGBA32F texels: the world position and 1 where a triangle covers the
@@ -1997,6 +2027,7 @@ kernels! {
     kernel probe_trace {
         scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
         push: ProbeUpdateParams,
+        local: [PROBE_RAY_GROUP, 1, 1],
         spec: {},
         bindings: {
             /// The grid and each probe's state (active, updates since the last replacement,
@@ -2014,6 +2045,7 @@ kernels! {
     kernel probe_blend {
         scene: none,
         push: ProbeUpdateParams,
+        local: [PROBE_DISTANCE_TEXELS + 2, PROBE_DISTANCE_TEXELS + 2, 1],
         spec: {},
         bindings: {
             /// The rays `probe_trace` traced.
@@ -2030,6 +2062,7 @@ kernels! {
     kernel trace {
         scene: bvh [implicit, shallow_bvh],
         push: TraceParams,
+        local: [64, 1, 1],
         spec: { trace_any: bool = false },
         bindings: {
             /// The rays.
@@ -2044,6 +2077,7 @@ kernels! {
     kernel test_pattern {
         scene: none,
         push: PatternParams,
+        local: [8, 8, 1],
         spec: { pattern_multiplier: uint = 1 },
         bindings: {
             /// The image.
@@ -2055,6 +2089,7 @@ kernels! {
     test_kernel test_buffer {
         scene: none,
         push: BufferTestParams,
+        local: [64, 1, 1],
         spec: {},
         bindings: {
             /// Input.
@@ -2070,6 +2105,7 @@ kernels! {
     test_kernel fold_test {
         scene: none,
         push: BufferTestParams,
+        local: [64, 1, 1],
         spec: { flag_a: bool = false, flag_b: bool = true },
         bindings: {
             /// Input.
@@ -2083,6 +2119,7 @@ kernels! {
     test_kernel spin_test {
         scene: none,
         push: (),
+        local: [64, 1, 1],
         spec: { max_iterations: uint = 0x1000000 },
         bindings: {
             /// The shared flags.
@@ -2094,6 +2131,7 @@ kernels! {
     test_kernel sample_test {
         scene: none,
         push: SampleTestParams,
+        local: [64, 1, 1],
         spec: { beckmann: bool = false, ggx_walter: bool = false },
         bindings: {
             /// Directions at which to evaluate pdfs.
@@ -2107,6 +2145,7 @@ kernels! {
     test_kernel light_sample_test {
         scene: full [],
         push: LightTestParams,
+        local: [64, 1, 1],
         spec: {
             solid_angle_emitters: bool = false
         },
@@ -2122,6 +2161,7 @@ kernels! {
     test_kernel texture_wrap_test {
         scene: none,
         push: BufferTestParams,
+        local: [64, 1, 1],
         spec: {},
         bindings: {
             /// (texel coordinate, texture) cases.

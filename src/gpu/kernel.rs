@@ -97,6 +97,8 @@ pub struct KernelInterface {
     pub push_type: &'static str,
     /// Its size in bytes.
     pub push_size: u32,
+    /// Its workgroup size (declared for the GLSL by build.rs).
+    pub local: [u32; 3],
     /// Its own specialization constants, ids from [`FIRST_KERNEL_SPEC_ID`] in order.
     pub spec: &'static [SpecDesc],
 }
@@ -277,6 +279,8 @@ pub trait Kernel {
     type Push: bytemuck::Pod;
     /// Its own specialization constants.
     type Spec: SpecValues + Default;
+    /// Its workgroup size.
+    const LOCAL: [u32; 3];
     /// Its interface.
     const INTERFACE: &'static KernelInterface;
 }
@@ -341,19 +345,18 @@ impl<K: Kernel> Pipeline<K> {
     }
 
     /// Records one dispatch: binds the pipeline, pushes `resources` and `push`, and dispatches
-    /// enough `local`-sized workgroups to cover `size` invocations. The caller records the
-    /// barrier that orders it with what follows.
+    /// enough workgroups of the kernel's size ([`Kernel::LOCAL`]) to cover `size` invocations.
+    /// The caller records the barrier that orders it with what follows.
     pub fn record(
         &self,
         cmd: raw::CommandBuffer,
         resources: &K::Resources<'_>,
         push: &K::Push,
         size: [u32; 3],
-        local: [u32; 3],
     ) -> Result<()> {
         self.bind(cmd, resources)?;
         self.push_constants(cmd, push)?;
-        self.pipeline.dispatch(cmd, size, local)
+        self.dispatch(cmd, size)
     }
 
     /// Binds the pipeline and pushes `resources` (for several dispatches that differ only in
@@ -374,8 +377,9 @@ impl<K: Kernel> Pipeline<K> {
         self.pipeline.dispatch_indirect(cmd, buffer.raw, offset)
     }
 
-    /// Dispatches enough `local`-sized workgroups to cover `size` invocations.
-    pub fn dispatch(&self, cmd: raw::CommandBuffer, size: [u32; 3], local: [u32; 3]) -> Result<()> {
-        self.pipeline.dispatch(cmd, size, local)
+    /// Dispatches enough workgroups of the kernel's size ([`Kernel::LOCAL`]) to cover `size`
+    /// invocations.
+    pub fn dispatch(&self, cmd: raw::CommandBuffer, size: [u32; 3]) -> Result<()> {
+        self.pipeline.dispatch(cmd, size, K::LOCAL)
     }
 }

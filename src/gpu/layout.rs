@@ -279,6 +279,7 @@ macro_rules! kernels {
     ($($(#[$meta:meta])* $role:ident $kernel:ident {
         scene: $scene:ident $([$($feature:ident),* $(,)?])?,
         push: $push:ty,
+        local: [$lx:expr, $ly:expr, $lz:expr],
         spec: { $($spec:ident : $sty:tt = $sdef:expr),* $(,)? },
         bindings: { $($(#[$bmeta:meta])* $name:ident : $access:ident $kind:ident $arg:tt),* $(,)? }
     })*) => {
@@ -309,6 +310,9 @@ macro_rules! kernels {
 
                     /// The kernel's push constants.
                     pub type Push = $push;
+
+                    /// The kernel's workgroup size (build.rs declares it in the GLSL).
+                    pub const LOCAL: [u32; 3] = [$lx, $ly, $lz];
 
                     const _: () = assert!(
                         std::mem::size_of::<$push>() <= MAX_PUSH_CONSTANT_BYTES as usize,
@@ -342,6 +346,7 @@ macro_rules! kernels {
                         bindings: &[$(binding_desc!($name, $access $kind $arg)),*],
                         push_type: stringify!($push),
                         push_size: std::mem::size_of::<$push>() as u32,
+                        local: LOCAL,
                         spec: &[$(SpecDesc { name: stringify!($spec), ty: stringify!($sty) }),*],
                     };
 
@@ -352,6 +357,7 @@ macro_rules! kernels {
                         type Resources<'a> = Resources<'a>;
                         type Push = $push;
                         type Spec = Spec;
+                        const LOCAL: [u32; 3] = LOCAL;
                         const INTERFACE: &'static KernelInterface = &INTERFACE;
                     }
                 }

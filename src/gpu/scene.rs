@@ -562,7 +562,7 @@ impl SceneFeatures {
     /// [`GpuScene::set_environment`] if `env_map`), known before the BVH is built and the scene
     /// uploaded, so that the pipelines specialised on them can be created meanwhile. The
     /// materials' features come from `gpu_material` as the upload's do; the rest from the
-    /// scene's lists the upload's arrays are made from (tests/scene.rs checks that the two agree
+    /// scene's lists the upload's arrays are made from (tests/scene/ checks that the two agree
     /// on every scene at hand); the alpha classes and the register stack from `bvh`, the BVH
     /// built for the upload.
     pub fn of_scene(scene: &Scene, bvh: &SceneBvh, env_map: bool) -> Self {

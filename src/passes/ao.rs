@@ -91,8 +91,6 @@ pub fn ao_params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> Ao
     }
 }
 
-const LOCAL: [u32; 3] = [8, 8, 1];
-
 /// `ssao.comp`: screen-space AO from depth and normals.
 pub struct SsaoPass {
     pipeline: Pipeline<ssao::Kernel>,
@@ -124,7 +122,6 @@ impl SsaoPass {
             &ssao::Resources { gb_depth: &gbuffer.depth, gb_normal: &gbuffer.normal, out_ao: &output },
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
-            LOCAL,
         )?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
@@ -178,7 +175,6 @@ impl AoBlurPass {
             },
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
-            LOCAL,
         )?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
@@ -240,7 +236,7 @@ impl RtaoPass {
             batch.first_ray = first;
             batch.batch_rays = Self::RAYS_PER_DISPATCH.min(rays - first);
             p.push_constants(cmd, &batch)?;
-            p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1], LOCAL)?;
+            p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1])?;
             barrier::compute_to_compute(ctx, cmd);
         }
         Ok(())

@@ -229,9 +229,6 @@ pub struct DeferredPass {
 }
 
 impl DeferredPass {
-    /// Workgroup size of the kernel.
-    pub const LOCAL: [u32; 3] = [8, 8, 1];
-
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
     /// an environment map, unlit materials), for shadows by `method`, for indirect diffuse light from a probe
     /// volume when `probes` and from lightmaps when `lightmaps`, and for direct light from ReSTIR's
@@ -461,7 +458,7 @@ impl DeferredPass {
             lightmap_texels,
             reservoirs,
         };
-        self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1], Self::LOCAL)?;
+        self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

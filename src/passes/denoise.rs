@@ -38,8 +38,9 @@ use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::vk::{barrier, raw, Buffer, Context, Image};
 
 /// The filter's settings. The σ's are SVGF's (σ_l 4, σ_n 128, σ_z 1); the rest were chosen on
-/// `umbra-bench denoise` (BENCHMARKS.md): four iterations of 3×3 taps, the variance not
-/// prefiltered, a spatial variance floor in the first iteration.
+/// `umbra-bench denoise` (BENCHMARKS.md; how the defaults were chosen: docs/history/2026-12-05.md):
+/// four iterations of 3×3 taps, the variance not prefiltered, a spatial variance floor in the first
+/// iteration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoiseSettings {
     /// À-trous iterations, 1 to [`DenoiseSettings::MAX_ITERATIONS`]: iteration i spaces its
@@ -85,7 +86,8 @@ pub struct DenoiseSettings {
     /// À-trous iterations of the specular part, 0 (left unfiltered) to
     /// [`DenoiseSettings::MAX_ITERATIONS`]. Two: at 4 spp (`umbra-bench denoise`, 128²) 0, 2 and 4
     /// left the Cornell box's relative MSE 8.2×, 8.7×, 8.9× below the raw image's, the sphere
-    /// grid's 3.2×, 3.7×, 3.8×, for 0, 2 and 4 more iterations' time (BENCHMARKS.md).
+    /// grid's 3.2×, 3.7×, 3.8×, for 0, 2 and 4 more iterations' time (docs/history/2026-12-02.md,
+    /// "the denoiser's lobe split").
     pub specular_iterations: u32,
 }
 
@@ -283,9 +285,6 @@ pub struct DenoisePass {
 }
 
 impl DenoisePass {
-    /// Workgroup size of the kernels.
-    pub const LOCAL: [u32; 3] = [8, 8, 1];
-
     /// Builds the pipelines.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Self {
@@ -382,7 +381,6 @@ impl DenoisePass {
             },
             &params(0),
             grid,
-            Self::LOCAL,
         )?;
         barrier::compute_to_compute(ctx, cmd);
         // Where the iterations start (the prepared or the accumulated image) and, with the
@@ -422,7 +420,6 @@ impl DenoisePass {
             },
             &params(0),
             grid,
-            Self::LOCAL,
         )?;
         barrier::compute_to_compute(ctx, cmd);
         if let Some((_, history, camera)) = temporal {
@@ -473,7 +470,6 @@ impl DenoisePass {
                 },
                 &p,
                 [size.0, size.1, 1],
-                Self::LOCAL,
             )?;
             barrier::compute_to_compute(ctx, cmd);
             if let Some((_, dst)) = a {

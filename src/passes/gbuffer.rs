@@ -167,9 +167,6 @@ pub struct GBufferPass {
 }
 
 impl GBufferPass {
-    /// Workgroup size of the kernel.
-    pub const LOCAL: [u32; 3] = [8, 8, 1];
-
     /// Builds the pipeline for what `scene` has (textures, alpha-tested materials).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
         Self::for_features(ctx, &scene.features())
@@ -205,7 +202,7 @@ impl GBufferPass {
             gb_layers: &target.layers,
             gb_layers2: &target.layers2,
         };
-        self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1], Self::LOCAL)?;
+        self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

@@ -139,7 +139,7 @@ impl IblResources {
             ..Default::default()
         };
         let lut = ibl_lut::Resources { lut: &self.lut };
-        self.lut_pipeline.record(cmd, &lut, &params, [LUT_SIZE, LUT_SIZE, 1], [8, 8, 1])?;
+        self.lut_pipeline.record(cmd, &lut, &params, [LUT_SIZE, LUT_SIZE, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         end(&mut timer)?;
         let Some(size) = self.env_size else {
@@ -158,7 +158,7 @@ impl IblResources {
         p.bind(cmd, &ibl_downsample::Resources { scene, chain: &self.chain })?;
         for (k, &(w, h)) in chain_level_sizes(size).iter().enumerate().skip(1) {
             p.push_constants(cmd, &IblParams { src_size, src_level: k as u32, ..Default::default() })?;
-            p.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
+            p.dispatch(cmd, [w, h, 1])?;
             barrier::compute_to_compute(ctx, cmd);
         }
         let p = &self.prefilter;
@@ -177,7 +177,7 @@ impl IblResources {
                     ..Default::default()
                 },
             )?;
-            p.dispatch(cmd, [w, h, 1], [8, 8, 1])?;
+            p.dispatch(cmd, [w, h, 1])?;
             offset += w * h;
         }
         barrier::compute_to_compute(ctx, cmd);
@@ -189,7 +189,7 @@ impl IblResources {
         p.bind(cmd, &ibl_sh::Resources { scene, sh: &self.sh })?;
         for first_row in (0..src_size[1].max(1)).step_by(128) {
             p.push_constants(cmd, &IblParams { src_size, first_row, ..Default::default() })?;
-            p.dispatch(cmd, [128, 1, 1], [128, 1, 1])?;
+            p.dispatch(cmd, [128, 1, 1])?;
             barrier::compute_to_compute(ctx, cmd);
         }
         end(&mut timer)

@@ -553,7 +553,7 @@ impl LightmapPass {
                         radius,
                         ..Default::default()
                     };
-                    pipeline.record(cmd, &resources, &params, [count as u32, 1, 1], [64, 1, 1])?;
+                    pipeline.record(cmd, &resources, &params, [count as u32, 1, 1])?;
                     barrier::compute_to_compute(ctx, cmd);
                 }
                 Ok(())

@@ -21,8 +21,9 @@ pub enum Microfacet {
     Ggx,
     /// The same GGX BSDF with Walter et al. 2007's sampling: noisier, the same mean.
     ///
-    /// Half vectors from D(h) cos θh, blind to the outgoing direction (for reflection and transmission alike), so some face away
-    /// from it and are discarded. Noisier than [`Microfacet::Ggx`]; the same mean.
+    /// Half vectors from D(h) cos θh, blind to the outgoing direction (for reflection and
+    /// transmission alike), so some face away from it and are discarded. Noisier than
+    /// [`Microfacet::Ggx`]; the same mean.
     GgxWalter,
     /// Beckmann with Walter et al.'s half-vector sampling.
     Beckmann,
@@ -71,9 +72,9 @@ impl Heuristic {
     }
 }
 
-/// Which sampling strategies find the emitters (emissive triangles and the environment map).
-/// Each is unbiased on its own; they differ in noise (BENCHMARKS.md, "The estimators side by
-/// side").
+/// Which sampling strategies find the emitters (emissive triangles and the environment map). Each
+/// is unbiased on its own; they differ in noise (BENCHMARKS.md and docs/history/2026-12-05.md, "The
+/// estimators side by side").
 ///
 /// Under every strategy, punctual lights (delta lights, which no ray can hit) are found by light
 /// sampling alone, and emission that light sampling cannot find (a constant environment, the
@@ -228,10 +229,10 @@ pub enum EmitterSampling {
     /// Uniform in the solid angle the triangle subtends where that is at least 0.2 sr, by area
     /// elsewhere.
     ///
-    /// Arvo 1995, as pbrt-v4 samples triangles; pdf pmf / Ω. Next to a large
-    /// emitter it takes the 1/r² and cosine out (a floor 0.15 under a 2×2 emitter: 2.8× less
-    /// time at equal error); on llvmpipe it costs 2-21 % more time on every scene with emitters
-    /// (both branches run for all SIMD lanes), so it is asked for (BENCHMARKS.md, History).
+    /// Arvo 1995, as pbrt-v4 samples triangles; pdf pmf / Ω. Next to a large emitter it takes the
+    /// 1/r² and cosine out (a floor 0.15 under a 2×2 emitter: 2.8× less time at equal error); on
+    /// llvmpipe it costs 2-21 % more time on every scene with emitters (both branches run for all
+    /// SIMD lanes), so it is asked for (docs/history/2026-12-05.md, twelfth session).
     SolidAngle,
 }
 
@@ -344,8 +345,8 @@ pub struct PathSettings {
     /// Sample the environment map for next-event estimation (with MIS); off leaves only BSDF
     /// sampling to find it (a check of the two strategies against each other).
     pub env_nee: bool,
-    /// Stop before `spp` once [`crate::render::PathImage::relative_error`] is at most this (checked after each
-    /// batch, from 16 samples per pixel on).
+    /// Stop before `spp` once [`crate::render::PathImage::relative_error`] is at most this (checked
+    /// after each batch, from 16 samples per pixel on).
     pub target_error: Option<f32>,
     /// The render's first sample in the counter-based sequence: it traces samples
     /// `first_sample .. first_sample + spp`, exactly those a render from 0 traces there, so
@@ -663,9 +664,6 @@ pub struct PathTracePass {
 }
 
 impl PathTracePass {
-    /// Workgroup size of the kernel.
-    pub const LOCAL: [u32; 3] = [8, 8, 1];
-
     /// The pipeline for `scene` and `options`: specialised so that what the scene lacks
     /// (emissive triangles, punctual lights, an environment map, textures, transmission, alpha,
     /// vertex colours, unlit materials) and what the options leave out cost nothing.
@@ -727,7 +725,8 @@ impl PathTracePass {
     /// Samples per pixel one dispatch traces at most ([`PathTracePass::record`] splits longer
     /// runs). Lanes whose paths end early start their next sample within the dispatch, so the
     /// longer the run, the less a SIMD group idles (lavapipe, Cornell box, 1 core: 1, 4, 8, 16, 32
-    /// samples per dispatch took 100, 88, 83, 80, 79 % of the time; BENCHMARKS.md).
+    /// samples per dispatch took 100, 88, 83, 80, 79 % of the time; docs/history/2026-12-02.md,
+    /// path regeneration).
     pub const SAMPLES_PER_DISPATCH: u32 = 16;
 
     /// [`PathTracePass::SAMPLES_PER_DISPATCH`] in scenes with implicit shapes: each march takes
@@ -855,7 +854,7 @@ impl PathTracePass {
                 resources.ris_prev = &reservoirs[next ^ 1];
             }
             dispatch.sample_count = most.min(end - dispatch.sample_index);
-            pipeline.record(cmd, &resources, &dispatch, [target.size.0, target.size.1, 1], Self::LOCAL)?;
+            pipeline.record(cmd, &resources, &dispatch, [target.size.0, target.size.1, 1])?;
             barrier::compute_to_compute(ctx, cmd);
             dispatch.sample_index += dispatch.sample_count;
         }
@@ -888,7 +887,6 @@ impl ResolvePass {
             &resolve::Resources { accum: &target.accum, out_color: &output },
             &ResolveParams { size: [target.size.0, target.size.1], ..Default::default() },
             [target.size.0, target.size.1, 1],
-            [8, 8, 1],
         )?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())

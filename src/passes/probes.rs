@@ -420,7 +420,7 @@ impl ProbePass {
                 probe_distance: &volume.distance,
                 probe_rays: &volume.rays,
             };
-            self.trace.record(cmd, &trace, &params, [rays, n, 1], [PROBE_RAY_GROUP, 1, 1])?;
+            self.trace.record(cmd, &trace, &params, [rays, n, 1])?;
             barrier::compute_to_compute(ctx, cmd);
             let blend = probe_blend::Resources {
                 probe_rays: &volume.rays,
@@ -429,7 +429,7 @@ impl ProbePass {
                 probe_distance: &volume.distance,
             };
             let side = PROBE_DISTANCE_TEXELS + 2;
-            self.blend.record(cmd, &blend, &params, [side * n, side, 1], [side, side, 1])?;
+            self.blend.record(cmd, &blend, &params, [side * n, side, 1])?;
             barrier::compute_to_compute(ctx, cmd);
             done += n;
         }

@@ -22,7 +22,8 @@
 //!   reservoirs are normalised by their total count (1/M). Bias: a neighbour's or the history's
 //!   visibility and domain stand in for the pixel's own, so shadows bleed a little across
 //!   edges and where the neighbours' surfaces differ; it darkens or brightens by a few percent
-//!   where visibility changes within the neighbourhood (measured in BENCHMARKS.md).
+//!   where visibility changes within the neighbourhood (measured in BENCHMARKS.md's restir
+//!   table, analysed in docs/history/2026-12-02.md).
 //! - **unbiased**: no visibility before shading (p̂ has none), and merged reservoirs are
 //!   normalised by the counts of only those reservoirs whose surface could have produced the kept
 //!   sample (p̂ > 0 there: the 1/Z of Bitterli et al.'s algorithm 6). Unbiased for a static camera
@@ -53,7 +54,7 @@ pub struct RestirSettings {
     /// Neighbours merged per pixel (0: no spatial reuse).
     pub neighbours: u32,
     /// Radius of the spatial neighbourhood, pixels. Small: neighbours further away see other
-    /// occluders, and the biased combination darkens the more (BENCHMARKS.md: on
+    /// occluders, and the biased combination darkens the more (docs/history/2026-12-02.md, fourth session: on
     /// many-lights.glb at 192², −3 % at 3 pixels, −10 % at 10, −13 % at 30).
     pub radius: f32,
     /// A reused reservoir counts at most this many times `candidates` (the history's weight
@@ -194,9 +195,6 @@ pub struct RestirPass {
 }
 
 impl RestirPass {
-    /// Workgroup size of the kernels.
-    pub const LOCAL: [u32; 3] = [8, 8, 1];
-
     /// The pipelines for `scene`, the combination (`unbiased`) and whether frames reuse their
     /// history (`temporal`).
     pub fn new(ctx: &Context, scene: &GpuScene, unbiased: bool, temporal: bool) -> Result<Self> {
@@ -272,7 +270,7 @@ impl RestirPass {
             history: &reservoirs.frame,
             reservoirs: &reservoirs.initial,
         };
-        self.initial.record(cmd, &initial, &params, [size.0, size.1, 1], Self::LOCAL)?;
+        self.initial.record(cmd, &initial, &params, [size.0, size.1, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         let spatial = restir_spatial::Resources {
             scene,
@@ -285,7 +283,7 @@ impl RestirPass {
             reservoirs_in: &reservoirs.initial,
             reservoirs_out: &reservoirs.frame,
         };
-        self.spatial.record(cmd, &spatial, &params, [size.0, size.1, 1], Self::LOCAL)?;
+        self.spatial.record(cmd, &spatial, &params, [size.0, size.1, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         reservoirs.history.set(Some(gpu_camera));
         Ok(())

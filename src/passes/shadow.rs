@@ -28,7 +28,7 @@
 //! marks the tiles the pixels' lookups reach (a superset: per block of 4 × 4 pixels, the box its
 //! depth range can reach; [`ShadowSettings::mark_box`]), `shadow_tiles` lists a layer's marked
 //! tiles, and binning, rasterizing and the moments' filter visit only those (indirect dispatches
-//! over the list; [`ShadowSettings::view_marks`]). Both measured in BENCHMARKS.md History,
+//! over the list; [`ShadowSettings::view_marks`]). Both measured in docs/history/2026-12-04.md,
 //! "cascade windows and view marks".
 //!
 //! The maps depend on the lights and the geometry, and for directional lights on the camera:
@@ -160,7 +160,7 @@ pub struct ShadowSettings {
     /// boxes in a cascade fit a box of at most this many tiles a lane marks that box together
     /// (a store per lane a round, a superset of the tiles its pixels read), otherwise, and
     /// everywhere at 0, each lane its own box. All render what the view reads; this trades tiles
-    /// rendered against the marking's time (BENCHMARKS.md History, 2026-12-04, third and fourth
+    /// rendered against the marking's time (docs/history/2026-12-04.md, third and fourth
     /// sessions).
     pub mark_rounds: u32,
     /// With view marks: the most tiles a block's box may hold; a block whose box is larger (its
@@ -818,7 +818,6 @@ impl ShadowPass {
                     &resources,
                     &params,
                     [size.0.div_ceil(SHADOW_MARK_BLOCK), size.1.div_ceil(SHADOW_MARK_BLOCK), 1],
-                    [8, 8, 1],
                 )
             })?;
         }
@@ -858,13 +857,13 @@ impl ShadowPass {
             // The window's tiles.
             let span = [window[2] - window[0] + 1, window[3] - window[1] + 1];
             step("shadow_tiles", &mut || {
-                self.tiles.record(cmd, &listing, &params, [span[0], span[1], 1], [8, 8, 1])?;
+                self.tiles.record(cmd, &listing, &params, [span[0], span[1], 1])?;
                 barrier::compute_to_indirect(ctx, cmd);
                 Ok(())
             })?;
             let dispatch_at = dispatch_offset(i);
             step("shadow_bin", &mut || {
-                self.count.record(cmd, &bins, &params, [tri_count, 1, 1], [64, 1, 1])?;
+                self.count.record(cmd, &bins, &params, [tri_count, 1, 1])?;
                 barrier::compute_to_indirect(ctx, cmd);
                 Ok(())
             })?;
@@ -873,7 +872,7 @@ impl ShadowPass {
                 tile_start: &maps.tile_start,
                 stats: &maps.stats,
             };
-            step("shadow_scan", &mut || self.scan.record(cmd, &scan, &params, [256, 1, 1], [256, 1, 1]))?;
+            step("shadow_scan", &mut || self.scan.record(cmd, &scan, &params, [256, 1, 1]))?;
             step("shadow_fill", &mut || {
                 self.fill.bind(cmd, &bins)?;
                 self.fill.push_constants(cmd, &params)?;

@@ -6,19 +6,20 @@
 //! The history ([`TemporalHistory`], two slots the frames alternate between) holds per pixel the
 //! demodulated colour (both parts of the lobe split when the target has it) and its variance, the
 //! first and second moments of each part's luminance, the frame's normal and distance, the
-//! history's length, and what the remodulation multiplies and adds back: each part's divisor
-//! (the first hit's albedo) and the first hit's emission. These are blended like the colour, and
-//! the colour is the blend of the numerators (colour × divisor) over the blended divisor: a frame
-//! of one sample a pixel sees one side of a sub-pixel edge (the path tracer jitters its first
-//! hits), and remodulating with that frame's divisor and emission alone made edge pixels flicker
-//! (an emitter's rim, the spikes of BENCHMARKS.md's temporal table). umbra keeps the previous frame's camera in the history (the host passes
-//! only the frame's camera): each frame's first hits (the ray through the pixel's centre at the
-//! first sample's distance) are projected into it, and the four history pixels around the
-//! projection (bilinear) count when their normal and depth agree (`spirv/denoise_temporal.comp`;
-//! no mesh id: the path target does not record one). The blend weight is max(1/n, α) for the
-//! colour and for the moments, n the history's length (SVGF's α = 0.2). From four frames on,
-//! the variance the à-trous' luminance weight reads is the temporal moments'; before, the
-//! variance carried through the blend with the filter's spatial floor.
+//! history's length, and what the remodulation multiplies and adds back: each part's divisor (the
+//! first hit's albedo) and the first hit's emission. These are blended like the colour, and the
+//! colour is the blend of the numerators (colour × divisor) over the blended divisor: a frame of
+//! one sample a pixel sees one side of a sub-pixel edge (the path tracer jitters its first hits),
+//! and remodulating with that frame's divisor and emission alone made edge pixels flicker (an
+//! emitter's rim, the spikes of BENCHMARKS.md's temporal table; docs/history/2026-12-03.md, "where
+//! the temporal denoiser's spikes lie"). umbra keeps the previous frame's camera in the history
+//! (the host passes only the frame's camera): each frame's first hits (the ray through the pixel's
+//! centre at the first sample's distance) are projected into it, and the four history pixels around
+//! the projection (bilinear) count when their normal and depth agree
+//! (`spirv/denoise_temporal.comp`; no mesh id: the path target does not record one). The blend
+//! weight is max(1/n, α) for the colour and for the moments, n the history's length (SVGF's α =
+//! 0.2). From four frames on, the variance the à-trous' luminance weight reads is the temporal
+//! moments'; before, the variance carried through the blend with the filter's spatial floor.
 //!
 //! What is fed back as the next frame's history is by default the accumulated colour
 //! ([`TemporalFeedback::Accumulated`]: a still camera then converges to the mean of all the
@@ -337,7 +338,6 @@ impl TemporalPass {
             },
             &params,
             [images.size.0, images.size.1, 1],
-            [8, 8, 1],
         )?;
         crate::vk::barrier::compute_to_compute(ctx, cmd);
         Ok(outputs)

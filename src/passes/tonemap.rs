@@ -15,9 +15,6 @@ pub struct TonemapPass {
 }
 
 impl TonemapPass {
-    /// Workgroup size of the kernel.
-    pub const LOCAL: [u32; 3] = [8, 8, 1];
-
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Self { pipeline: Pipeline::plain(ctx)? })
@@ -42,7 +39,6 @@ impl TonemapPass {
             &tonemap::Resources { src: &src, dst: &dst },
             &TonemapParams { size: [w, h], exposure: exposure_stops.exp2(), curve: curve.code() },
             [w, h, 1],
-            Self::LOCAL,
         )?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())

@@ -58,9 +58,6 @@ pub const MAX_BOUNCES: u32 = 1000;
 /// Samples per pixel a wave traces at most.
 const MAX_WAVE_SAMPLES: u32 = 16;
 
-/// The workgroup of every stage (8×8: the queue stages take 64 entries a group).
-const LOCAL: [u32; 3] = [8, 8, 1];
-
 /// The queues and path states of one [`PathTarget`]'s wavefront renders (made at its first).
 pub struct WaveState {
     /// Paths the state holds.
@@ -401,7 +398,7 @@ impl WavefrontPass {
         wave.round = 0;
         wave.first_row = row;
         let [w, rows] = wave.size;
-        stages.camera_rays.record(cmd, resources, wave, [w, rows, wave.sample_count], LOCAL)?;
+        stages.camera_rays.record(cmd, resources, wave, [w, rows, wave.sample_count])?;
         barrier::compute_to_indirect(ctx, cmd);
         for round in 0..=wave.max_bounces {
             wave.round = round;
@@ -418,7 +415,7 @@ impl WavefrontPass {
                 barrier::compute_to_indirect(ctx, cmd);
             }
         }
-        stages.accumulate.record(cmd, resources, wave, [w, rows, 1], LOCAL)?;
+        stages.accumulate.record(cmd, resources, wave, [w, rows, 1])?;
         barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }

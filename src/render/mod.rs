@@ -101,7 +101,7 @@ impl PathImage {
     /// numbers), whose mean varies less, so this over-estimates the error (at 64-256 spp the true
     /// relative MSE of the Cornell box and DamagedHelmet was 0.5-0.6 of independent samples').
     /// Where the error has a heavy tail (rare bright paths a render's samples mostly miss), one
-    /// render's estimate is usually low, with either sampler (tests/pathtrace.rs).
+    /// render's estimate is usually low, with either sampler (tests/pathtrace/).
     pub fn relative_error(&self) -> f32 {
         relative_error(&self.mean, &self.moment, self.spp)
     }

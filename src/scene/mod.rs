@@ -220,7 +220,7 @@ impl Scene {
     pub fn cornell_box() -> Scene {
         // The embedded file is generated and a test loads it, so this cannot fail at run time.
         Scene::from_glb_bytes("cornell-box.glb (embedded)", CORNELL_BOX_GLB)
-            .expect("the embedded Cornell box loads (tests/scene.rs checks it)")
+            .expect("the embedded Cornell box loads (tests/scene/ checks it)")
     }
 
     /// The camera to render with: camera `index` (an error names how many exist when it is out of

@@ -5,7 +5,7 @@
 //! branches its specialization constants made dead, then runs its optimisation loop over the whole
 //! inlined body, at a cost that grows faster than the body. The path tracer's megakernel carries
 //! every material extension, the environment map, RIS and its reuse behind such branches, so a
-//! Cornell box paid for all of them: 25 s of `vkCreateComputePipelines` (BENCHMARKS.md History,
+//! Cornell box paid for all of them: 25 s of `vkCreateComputePipelines` (docs/history/2026-12-03.md,
 //! "the kernels' constants folded before the driver sees them"). Here the untaken side is cut off
 //! from the control-flow graph; blocks no branch reaches are never translated, so what they call
 //! is never inlined.

@@ -387,7 +387,7 @@ pub fn sample_test_rgb(gpu: &Gpu, name: &str, mode: u32, input: &[[f32; 4]], cou
     let params = SampleTestParams { mode, count, ..Default::default() };
     gpu.submit(|cmd| {
         let resources = sample_test::Resources { directions: &directions, results: &results };
-        pipeline.record(cmd, &resources, &params, [count, 1, 1], [64, 1, 1])
+        pipeline.record(cmd, &resources, &params, [count, 1, 1])
     })
     .unwrap();
     let out: Vec<[f32; 4]> = results.read(gpu).unwrap();
@@ -415,7 +415,7 @@ pub fn sample_test_run(
             .unwrap();
     gpu.submit(|cmd| {
         let resources = sample_test::Resources { directions: &directions, results: &results };
-        pipeline.record(cmd, &resources, params, [params.count, 1, 1], [64, 1, 1])
+        pipeline.record(cmd, &resources, params, [params.count, 1, 1])
     })
     .unwrap();
     results.read(gpu).unwrap()

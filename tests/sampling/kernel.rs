@@ -179,7 +179,7 @@ impl Kernel {
                 .unwrap();
         gpu.submit(|cmd| {
             let resources = sample_test::Resources { directions: &input, results: &output };
-            pipeline.record(cmd, &resources, params, [count, 1, 1], [64, 1, 1])
+            pipeline.record(cmd, &resources, params, [count, 1, 1])
         })
         .unwrap();
         output.read(gpu).unwrap()

@@ -125,7 +125,7 @@ impl LightKernel {
         gpu.submit(|cmd| {
             let resources =
                 light_sample_test::Resources { scene: &self.scene, directions: &input, results: &output };
-            self.pipeline.record(cmd, &resources, &params, [run.count, 1, 1], [64, 1, 1])
+            self.pipeline.record(cmd, &resources, &params, [run.count, 1, 1])
         })
         .unwrap();
         output.read(gpu).unwrap()

@@ -1,7 +1,7 @@
 //! The generator of umbra's own test scenes (`scenes/*.glb`), deterministic to the byte.
 //!
 //! One file serves two targets: `examples/gen_scenes.rs` writes the scenes into `scenes/`, and
-//! `tests/scene.rs` regenerates them in memory and requires the committed files to be identical,
+//! `tests/scene/` regenerates them in memory and requires the committed files to be identical,
 //! so the two cannot drift. It builds the glTF JSON with `serde_json` and writes GLB by hand.
 //!
 //! Scenes are in metres, +Y up. Every mesh is checked here to be wound counter-clockwise around

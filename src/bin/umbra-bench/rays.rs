@@ -255,7 +255,7 @@ fn primary_rays(scene: &RayScene, (w, h): (u32, u32), row_order: bool) -> Vec<Ra
     // In 8×8 tiles: with trace.comp's 64-wide workgroups each workgroup is one tile, ordered as
     // the renderer's 8×8 kernels order it (`pixel.glsl`: 8-lane SIMD batches on 4×2 blocks, a
     // 32-lane warp an 8×4 block). Row order (a warp on a 32×1 strip) measured 3.9× slower on
-    // Sponza on an H100 (BENCHMARKS.md).
+    // Sponza on an H100 (docs/history/2026-11-22.md, "NVIDIA H100, first figures").
     let tiles = (w.div_ceil(8), h.div_ceil(8));
     (0..tiles.0 * tiles.1 * 64)
         .map(|i| {

@@ -6,6 +6,7 @@ use crate::cli;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use umbra::color::ToneCurve;
+use umbra::passes::deferred::{DirectLight, LightingSettings};
 use umbra::passes::pathtrace::{
     EmitterSampling, Heuristic, Integrator, Microfacet, RisReuse, Sampler, Strategy,
 };
@@ -217,6 +218,69 @@ pub(crate) struct RenderArgs {
     pub(crate) ao: AoArgs,
     #[command(flatten)]
     pub(crate) ao_blur: AoBlurArgs,
+}
+
+/// The library's settings from the flags: a flag and what it sets sit in this one file.
+impl RenderArgs {
+    /// The hybrid's shadow settings.
+    pub(crate) fn shadow_settings(&self) -> ShadowSettings {
+        let method = self.hybrid.shadows;
+        ShadowSettings {
+            method,
+            map_size: self.shadow_map.shadow_map_size,
+            cascades: self.shadow_map.cascades,
+            cascade_split: self.shadow_map.cascade_split,
+            depth_bias: self.shadow_map.shadow_bias,
+            slope_bias: self.shadow_map.shadow_slope_bias,
+            normal_bias: self.shadow_map.shadow_normal_bias,
+            pcf_radius: self.shadow_map.pcf_radius,
+            max_radius: self
+                .shadow_map
+                .shadow_max_radius
+                .unwrap_or(ShadowSettings::default_max_radius(self.shadow_map.shadow_map_size)),
+            light_radius: self.sized_light.light_radius,
+            sun_angle: self.sized_light.sun_angle.to_radians(),
+            sized_rays: self.hybrid.rt_light_size,
+            ..Default::default()
+        }
+    }
+
+    /// The hybrid's settings.
+    pub(crate) fn hybrid_settings(&self) -> umbra::render::HybridSettings {
+        umbra::render::HybridSettings {
+            size: self.size,
+            lighting: LightingSettings {
+                shadow_rays: self.hybrid.shadow_rays,
+                seed: self.seed,
+                env: self.scene.env_radiance(),
+                ibl: !self.hybrid.no_ibl,
+                direct: match self.direct {
+                    Direct::Power | Direct::Ris => DirectLight::Power,
+                    Direct::Restir => DirectLight::Restir(RestirSettings {
+                        candidates: self.restir.restir_candidates,
+                        neighbours: self.restir.restir_neighbours,
+                        radius: self.restir.restir_radius,
+                        frames: self.restir.restir_frames,
+                        temporal: !self.restir.restir_no_temporal,
+                        unbiased: self.restir.restir_unbiased,
+                        ..Default::default()
+                    }),
+                },
+                ..Default::default()
+            },
+            exposure: self.display.exposure,
+            curve: self.display.tonemap,
+            ibl: Default::default(),
+            ao: (!self.hybrid.no_ao).then(|| umbra::passes::ao::AoSettings {
+                samples: self.ao.ao_samples,
+                radius: self.ao.ao_radius,
+                blur: !self.ao_blur.ao_no_blur,
+                seed: self.seed,
+                ..Default::default()
+            }),
+            shadows: self.shadow_settings(),
+        }
+    }
 }
 
 /// `umbra render`: the path tracer's flags (`--mode pathtrace`).

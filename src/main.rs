@@ -6,11 +6,9 @@ mod cli;
 use anyhow::{Context as _, Result};
 use args::*;
 use umbra::gpu::scene::{GpuScene, SceneBvh};
-use umbra::passes::deferred::{DirectLight, LightingSettings};
+use umbra::passes::deferred::LightingSettings;
 use umbra::passes::pathtrace::{EmitterSampling, RisReuse, Sampler};
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
-use umbra::passes::restir::RestirSettings;
-use umbra::passes::shadow::ShadowSettings;
 use umbra::render::{DenoiseSettings, Passes};
 use umbra::vk::{self, raw, Context, ContextDesc, GpuTimer, Image};
 
@@ -86,7 +84,7 @@ fn render(args: RenderArgs) -> Result<()> {
             );
         }
     }
-    shadow_settings(&args).validate()?;
+    args.shadow_settings().validate()?;
     let (png, exr) = cli::outputs(&args.output, args.exr.as_ref());
     let probes_file = match &args.hybrid.probes {
         Some(ProbesArg::File(path)) => Some(path.as_path()),
@@ -143,7 +141,7 @@ fn render(args: RenderArgs) -> Result<()> {
         return render_ao(&ctx, &gpu_scene, &camera, &args);
     }
     if args.mode == Mode::Hybrid {
-        let hybrid = hybrid_settings(&args);
+        let hybrid = args.hybrid_settings();
         let (passes, gpu_scene) = upload_alongside(&ctx, &loaded, &mut stages, |passes| {
             passes.prepare_hybrid(&hybrid, args.hybrid.probes.is_some(), args.hybrid.lightmaps)
         })?;
@@ -499,29 +497,6 @@ fn bake_lightmaps(
     Ok(maps)
 }
 
-/// The hybrid's shadow settings from the flags.
-fn shadow_settings(args: &RenderArgs) -> ShadowSettings {
-    let method = args.hybrid.shadows;
-    ShadowSettings {
-        method,
-        map_size: args.shadow_map.shadow_map_size,
-        cascades: args.shadow_map.cascades,
-        cascade_split: args.shadow_map.cascade_split,
-        depth_bias: args.shadow_map.shadow_bias,
-        slope_bias: args.shadow_map.shadow_slope_bias,
-        normal_bias: args.shadow_map.shadow_normal_bias,
-        pcf_radius: args.shadow_map.pcf_radius,
-        max_radius: args
-            .shadow_map
-            .shadow_max_radius
-            .unwrap_or(ShadowSettings::default_max_radius(args.shadow_map.shadow_map_size)),
-        light_radius: args.sized_light.light_radius,
-        sun_angle: args.sized_light.sun_angle.to_radians(),
-        sized_rays: args.hybrid.rt_light_size,
-        ..Default::default()
-    }
-}
-
 /// Builds the BVH, then uploads the rest of `loaded` while `prepare` makes pipelines on a thread
 /// (up to a second each on lavapipe) for the features the scene has (the BVH tells its stack
 /// depth, which the kernels' walk is specialised on); the passes for the uploaded scene (made again
@@ -559,42 +534,6 @@ fn upload_alongside(
         return Ok((Passes::new(ctx, &gpu_scene), gpu_scene));
     }
     Ok((passes, gpu_scene))
-}
-
-fn hybrid_settings(args: &RenderArgs) -> umbra::render::HybridSettings {
-    umbra::render::HybridSettings {
-        size: args.size,
-        lighting: LightingSettings {
-            shadow_rays: args.hybrid.shadow_rays,
-            seed: args.seed,
-            env: args.scene.env_radiance(),
-            ibl: !args.hybrid.no_ibl,
-            direct: match args.direct {
-                Direct::Power | Direct::Ris => DirectLight::Power,
-                Direct::Restir => DirectLight::Restir(RestirSettings {
-                    candidates: args.restir.restir_candidates,
-                    neighbours: args.restir.restir_neighbours,
-                    radius: args.restir.restir_radius,
-                    frames: args.restir.restir_frames,
-                    temporal: !args.restir.restir_no_temporal,
-                    unbiased: args.restir.restir_unbiased,
-                    ..Default::default()
-                }),
-            },
-            ..Default::default()
-        },
-        exposure: args.display.exposure,
-        curve: args.display.tonemap,
-        ibl: Default::default(),
-        ao: (!args.hybrid.no_ao).then(|| umbra::passes::ao::AoSettings {
-            samples: args.ao.ao_samples,
-            radius: args.ao.ao_radius,
-            blur: !args.ao_blur.ao_no_blur,
-            seed: args.seed,
-            ..Default::default()
-        }),
-        shadows: shadow_settings(args),
-    }
 }
 
 fn render_hybrid(

@@ -230,44 +230,25 @@ pub struct DeferredPass {
 
 impl DeferredPass {
     /// Builds the pipeline for what `scene` has (textures, emissive triangles, punctual lights,
-    /// an environment map, unlit materials), for shadows by `method`, for indirect diffuse light from a probe
-    /// volume when `probes` and from lightmaps when `lightmaps`, and for direct light from ReSTIR's
-    /// reservoirs when `restir` (else by power sampling), and for shadow rays to sized lights
-    /// ([`LightingSettings::sized_lights`]) when `sized` (with [`ShadowMethod::RayTraced`] only).
-    pub fn new(
-        ctx: &Context,
-        scene: &GpuScene,
-        method: ShadowMethod,
-        probes: bool,
-        lightmaps: bool,
-        restir: bool,
-        sized: bool,
-    ) -> Result<Self> {
-        Self::for_features(ctx, &scene.features(), method, probes, lightmaps, restir, sized)
+    /// an environment map, unlit materials) and for `spec` ([`DeferredPass::spec`]).
+    pub fn new(ctx: &Context, scene: &GpuScene, spec: deferred::Spec) -> Result<Self> {
+        Self::from_spec(ctx, &scene.features(), spec)
     }
 
-    /// [`DeferredPass::new`] for a scene with `features` (before it is uploaded).
-    pub fn for_features(
-        ctx: &Context,
-        features: &SceneFeatures,
-        method: ShadowMethod,
-        probes: bool,
-        lightmaps: bool,
-        restir: bool,
-        sized: bool,
-    ) -> Result<Self> {
-        Self::from_spec(ctx, features, Self::spec(method, probes, lightmaps, restir, sized)?)
-    }
-
-    /// The kernel's specialization for the arguments of [`DeferredPass::new`] (what a cache of
-    /// these passes is keyed by); an error for sized lights with shadow maps or ReSTIR.
+    /// The kernel's specialization (what a cache of these passes is keyed by): from the
+    /// `settings`' own choices (shadow rays to sized lights, [`LightingSettings::sized_lights`];
+    /// a new choice of the kernel is read here), and from what a frame brings: shadows by
+    /// `method`, indirect diffuse light from a probe volume (`probes`) and from lightmaps
+    /// (`lightmaps`), direct light from ReSTIR's reservoirs (`restir`; else by power sampling).
+    /// An error for sized lights with shadow maps or ReSTIR.
     pub fn spec(
+        settings: &LightingSettings,
         method: ShadowMethod,
         probes: bool,
         lightmaps: bool,
         restir: bool,
-        sized: bool,
     ) -> Result<deferred::Spec> {
+        let sized = settings.sized_lights.is_some();
         if sized && (method.uses_maps() || restir) {
             return Err(Error::Invalid(format!(
                 "shadow rays to sized lights need the '{}' method without ReSTIR",

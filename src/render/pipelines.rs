@@ -96,15 +96,16 @@ impl Passes {
         built(&self.gbuffer, || GBufferPass::for_features(&self.ctx, &self.features))
     }
 
+    /// The lighting pass for `settings` and what the frame brings ([`DeferredPass::spec`]).
     pub(super) fn deferred_pass(
         &self,
+        settings: &LightingSettings,
         method: ShadowMethod,
         probes: bool,
         lightmaps: bool,
         restir: bool,
-        sized: bool,
     ) -> Result<&DeferredPass> {
-        let spec = DeferredPass::spec(method, probes, lightmaps, restir, sized)?;
+        let spec = DeferredPass::spec(settings, method, probes, lightmaps, restir)?;
         self.deferred.get_or_try_init(spec, || DeferredPass::from_spec(&self.ctx, &self.features, spec))
     }
 
@@ -114,10 +115,10 @@ impl Passes {
     /// thread while the scene's BVH is built and uploaded, as [`Passes::prepare_path_trace`].
     pub fn prepare_hybrid(&self, settings: &HybridSettings, probes: bool, lightmaps: bool) -> Result<()> {
         let restir = settings.lighting.direct.restir().is_some();
-        let sized = settings.lighting_with_shadows().sized_lights.is_some();
+        let lighting = settings.lighting_with_shadows();
         std::thread::scope(|s| {
             let lighting = s.spawn(|| {
-                self.deferred_pass(settings.shadows.method, probes, lightmaps, restir, sized).map(|_| ())
+                self.deferred_pass(&lighting, settings.shadows.method, probes, lightmaps, restir).map(|_| ())
             });
             let gbuffer = self.gbuffer_pass().map(|_| ());
             let lighting = lighting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
@@ -188,7 +189,15 @@ impl Passes {
             let path = s.spawn(|| self.megakernel(options, false).map(|_| ()));
             let rest = self
                 .gbuffer_pass()
-                .and_then(|_| self.deferred_pass(ShadowMethod::RayTraced, false, false, false, false))
+                .and_then(|_| {
+                    self.deferred_pass(
+                        &LightingSettings::default(),
+                        ShadowMethod::RayTraced,
+                        false,
+                        false,
+                        false,
+                    )
+                })
                 .and_then(|_| self.rtao_stage())
                 .and_then(|_| self.ssao_pass())
                 .and_then(|_| self.blur_pass())

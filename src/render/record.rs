@@ -108,7 +108,7 @@ impl Passes {
                 method.name()
             )));
         }
-        self.deferred_pass(method, probes, lightmaps, restir, sized)?
+        self.deferred_pass(settings, method, probes, lightmaps, restir)?
             .record(&self.ctx, cmd, scene, gbuffer, output, ibl, inputs, &params)
     }
 

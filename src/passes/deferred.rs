@@ -209,21 +209,15 @@ pub enum IblLookup {
 /// `deferred.comp`, specialised for the scene's features and a shadow method.
 pub struct DeferredPass {
     pipeline: Pipeline<deferred::Kernel>,
-    method: ShadowMethod,
+    /// What the pipeline is specialised on ([`DeferredPass::spec`]): the shadow method, and
+    /// whether it reads probes, lightmaps, ReSTIR's reservoirs, and casts rays to sized lights.
+    spec: deferred::Spec,
     /// 1×1 `R32_SFLOAT` of 1.0: the ambient occlusion when the caller has none.
     no_ao: Image,
     /// One-texel stand-ins for the shadow maps' bindings when the lights cast rays.
     no_shadow: [TexelBuffer; 3],
-    /// Whether the pass reads a probe volume.
-    probes: bool,
-    /// Whether the pass reads lightmaps.
-    lightmaps: bool,
     /// One-texel stand-ins for the probe volume's bindings when there is none.
     no_probes: [TexelBuffer; 2],
-    /// Whether the pass shades ReSTIR's reservoirs.
-    restir: bool,
-    /// Whether the pass casts shadow rays to sized lights.
-    sized: bool,
     /// One reservoir standing in for them otherwise.
     no_reservoirs: Buffer,
 }
@@ -270,14 +264,6 @@ impl DeferredPass {
 
     /// The pass for a [`DeferredPass::spec`] and a scene with `features`.
     pub fn from_spec(ctx: &Context, features: &SceneFeatures, spec: deferred::Spec) -> Result<Self> {
-        let method = match spec {
-            deferred::Spec { shadow_maps: false, .. } => ShadowMethod::RayTraced,
-            deferred::Spec { shadow_pcf: true, .. } => ShadowMethod::Pcf,
-            deferred::Spec { shadow_pcss: true, .. } => ShadowMethod::Pcss,
-            deferred::Spec { shadow_moments: true, .. } => ShadowMethod::Moments,
-            _ => ShadowMethod::Hard,
-        };
-        let deferred::Spec { probes, lightmaps, restir, shadow_sized: sized, .. } = spec;
         let pipeline = Pipeline::new(ctx, &spec, Some(features))?;
         let no_ao = Image::storage_2d(ctx, "no ambient occlusion", 1, 1, raw::Format::R32_SFLOAT)?;
         no_ao.write(ctx, &[1.0f32])?;
@@ -299,18 +285,18 @@ impl DeferredPass {
             &[GpuReservoir::default()],
             raw::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-        Ok(Self {
-            pipeline,
-            method,
-            no_ao,
-            no_shadow,
-            probes,
-            lightmaps,
-            no_probes,
-            restir,
-            sized,
-            no_reservoirs,
-        })
+        Ok(Self { pipeline, spec, no_ao, no_shadow, no_probes, no_reservoirs })
+    }
+
+    /// The shadow method the pipeline is specialised for (the inverse of [`DeferredPass::spec`]'s).
+    fn method(&self) -> ShadowMethod {
+        match self.spec {
+            deferred::Spec { shadow_maps: false, .. } => ShadowMethod::RayTraced,
+            deferred::Spec { shadow_pcf: true, .. } => ShadowMethod::Pcf,
+            deferred::Spec { shadow_pcss: true, .. } => ShadowMethod::Pcss,
+            deferred::Spec { shadow_moments: true, .. } => ShadowMethod::Moments,
+            _ => ShadowMethod::Hard,
+        }
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -357,12 +343,12 @@ impl DeferredPass {
     ) -> Result<()> {
         let LightingInputs { ao, shadows, probes, lightmaps, restir } = *inputs;
         let sized = params.light_radius > 0.0 || params.sun_one_minus_cos > 0.0;
-        if sized && !self.sized {
+        if sized && !self.spec.shadow_sized {
             return Err(Error::Invalid(
                 "the lighting pass was built for point lights but was given sized lights".into(),
             ));
         }
-        let reservoirs = match (self.restir, restir) {
+        let reservoirs = match (self.spec.restir, restir) {
             (false, None) => &self.no_reservoirs,
             (true, Some(r)) => {
                 r.check_size(gbuffer.size)?;
@@ -377,7 +363,7 @@ impl DeferredPass {
             }
         };
         let [no_states, no_maps] = &self.no_probes;
-        let lightmap_texels = match (self.lightmaps, lightmaps) {
+        let lightmap_texels = match (self.spec.lightmaps, lightmaps) {
             (false, None) => no_maps,
             (true, Some(l)) => &l.texels,
             (built, _) => {
@@ -388,7 +374,7 @@ impl DeferredPass {
                 )))
             }
         };
-        let (probe_texels, probe_irradiance, probe_distance) = match (self.probes, probes) {
+        let (probe_texels, probe_irradiance, probe_distance) = match (self.spec.probes, probes) {
             (false, None) => (no_states, no_maps, no_maps),
             (true, Some(v)) => (&v.texels, &v.irradiance, &v.distance),
             (built, _) => {
@@ -400,15 +386,16 @@ impl DeferredPass {
             }
         };
         let [no_records, no_depth, no_moments] = &self.no_shadow;
-        let (shadow_texels, shadow_depth, shadow_moments) = match (self.method.uses_maps(), shadows) {
+        let method = self.method();
+        let (shadow_texels, shadow_depth, shadow_moments) = match (method.uses_maps(), shadows) {
             (false, _) => (no_records, no_depth, no_moments),
-            (true, Some(maps)) if maps.settings.method == self.method => {
+            (true, Some(maps)) if maps.settings.method == method => {
                 (&maps.texels, &maps.depth, &maps.moments)
             }
             (true, maps) => {
                 return Err(Error::Invalid(format!(
                     "the lighting pass shadows by '{}' but was given {}",
-                    self.method.name(),
+                    method.name(),
                     maps.map_or("no shadow maps".to_string(), |m| format!(
                         "maps for '{}'",
                         m.settings.method.name()

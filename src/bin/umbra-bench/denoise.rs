@@ -6,19 +6,22 @@
 //! error: past it, denoising no longer helps. The filter's own GPU time (median of repeats after
 //! a warm-up) is set against one sample's (the accumulated time over the sample count).
 
-// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
-#[allow(unused_imports)]
-use crate::*;
-
 use super::chart::{self, Chart, ChartPoint};
 use super::num;
 use super::rays::{median, warm_up};
 use super::suite::{self, SuiteSettings};
+use crate::add_conditions;
+use crate::scenes::bench_camera;
+use crate::scenes::load_gltf;
+use crate::write_json;
+use anyhow::Context as _;
 use anyhow::Result;
 use serde_json::{json, Value};
+use std::path::PathBuf;
 use umbra::embed::Renderer;
 use umbra::render::{DenoiseSettings, PathSettings};
 use umbra::scene::{Camera, Scene};
+use umbra::vk::ContextDesc;
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
 /// One reading: the sample count, and GPU time and relative MSE of the raw and denoised images.
@@ -270,12 +273,11 @@ pub(crate) fn run_denoise(
     for (key, scene) in &scenes {
         let camera = bench_camera(scene);
         results.push(
-            denoise::run_scene(&ctx, key, scene, &camera, settings, filter)
-                .with_context(|| scene.name.clone())?,
+            run_scene(&ctx, key, scene, &camera, settings, filter).with_context(|| scene.name.clone())?,
         );
     }
-    let mut doc = denoise::to_json(&ctx.info().name, settings, filter, &results);
+    let mut doc = to_json(&ctx.info().name, settings, filter, &results);
     add_conditions(&mut doc);
-    print!("{}", denoise::table(&doc));
+    print!("{}", table(&doc));
     write_json(&settings.out, "denoise.json", &doc)
 }

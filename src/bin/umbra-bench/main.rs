@@ -24,22 +24,19 @@ mod peers;
 mod pipelines;
 mod probes;
 mod rays;
-mod scenes;
-use scenes::*;
 mod restir;
 mod restir_pt;
+mod scenes;
 mod shadows;
 mod suite;
 mod temporal;
 
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
-use glam::Vec3;
 use rays::{RayReport, RayScene, RaySettings};
 use serde_json::json;
 use serde_json::Value;
 use std::path::PathBuf;
-use umbra::procedural::{icosphere, terrain};
 use umbra::vk::{Context, ContextDesc};
 
 #[derive(Parser)]

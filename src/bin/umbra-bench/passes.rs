@@ -4,13 +4,12 @@
 //! ([`super::rays::warm_up`]),
 //! from GPU timestamps.
 
-// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
-#[allow(unused_imports)]
-use crate::*;
-
 use super::num;
+use crate::scenes::bench_camera;
+use crate::write_json;
 use anyhow::{bail, Result};
 use serde_json::{json, Value};
+use std::path::PathBuf;
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
@@ -18,6 +17,7 @@ use umbra::passes::gbuffer::GBuffer;
 use umbra::passes::pathtrace::PathTarget;
 use umbra::render::{HybridSettings, HybridTargets, Passes, PathSettings};
 use umbra::scene::Camera;
+use umbra::vk::ContextDesc;
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
 /// A pass's median GPU time.
@@ -229,7 +229,7 @@ pub(crate) fn run_passes(
     let camera = bench_camera(&loaded);
     let gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
     let lighting = umbra::passes::deferred::LightingSettings { shadow_rays, ..Default::default() };
-    let timings = passes::run(&ctx, &gpu_scene, &camera, size, repeats, &lighting)?;
+    let timings = run(&ctx, &gpu_scene, &camera, size, repeats, &lighting)?;
     let pixels = size.0 as f64 * size.1 as f64;
     println!(
         "{} ({} triangles) at {}x{} on {}:",
@@ -248,7 +248,7 @@ pub(crate) fn run_passes(
             pixels / (t.median_ms * 1e3)
         );
     }
-    let doc = passes::to_json(
+    let doc = to_json(
         &ctx.info().name,
         &loaded.name,
         gpu_scene.bvh_stats.triangles,

@@ -10,20 +10,24 @@
 //! of map sizes, the bounces beyond the first from the 1/8 probe volume, which lights the
 //! unmapped rest).
 
-// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
-#[allow(unused_imports)]
-use crate::*;
-
 use super::num;
 use super::suite::{self, Point, SuiteSettings};
+use crate::scenes::bench_camera;
+use crate::scenes::load_gltf;
+use crate::scenes::sponza_under_a_sun;
+use crate::write_json;
+use anyhow::Context as _;
 use anyhow::Result;
 use serde_json::{json, Value};
+use std::path::PathBuf;
 use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::probes::{ProbeSettings, ProbeVolume};
 use umbra::render::HybridSettings;
 use umbra::scene::Camera;
+use umbra::vk::Context;
+use umbra::vk::ContextDesc;
 
 /// The series' name on the charts and in the JSON.
 pub const SERIES: &str = "hybrid + probes";
@@ -375,7 +379,7 @@ pub(crate) fn run_probes(
     for (key, scene) in &scenes {
         let camera = bench_camera(scene);
         results.push(
-            probes::run_scene(
+            run_scene(
                 &ctx,
                 key,
                 scene,
@@ -387,7 +391,7 @@ pub(crate) fn run_probes(
             .with_context(|| scene.name.clone())?,
         );
     }
-    let doc = probes::to_json(&ctx.info().name, settings, &results);
-    print!("{}", probes::table(&doc));
+    let doc = to_json(&ctx.info().name, settings, &results);
+    print!("{}", table(&doc));
     write_json(&settings.out, "probes.json", &doc)
 }

@@ -1,9 +1,11 @@
 //! The scenes the benchmarks run on: the generated terrain, glTF files, Sponza under a sun, the
 //! path tracer's default set, and the camera they are seen from.
 
-// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
-#[allow(unused_imports)]
-use crate::*;
+use crate::rays::RayScene;
+use anyhow::Result;
+use glam::Vec3;
+use std::path::PathBuf;
+use umbra::procedural::{icosphere, terrain};
 
 /// Generated terrain with a row of spheres on it: `2·n²` + 15,360 triangles.
 pub(crate) fn terrain_scene(name: &str, n: u32) -> RayScene {

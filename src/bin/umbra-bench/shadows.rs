@@ -10,13 +10,14 @@
 //! those sized lights with [`REFERENCE_RAYS`] rays per light (the [`Reference`], recorded in the
 //! JSON), and ray-traced sized lights themselves are timed at [`SIZED_RAYS`] rays.
 
-// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
-#[allow(unused_imports)]
-use crate::*;
-
 use super::num;
+use crate::scenes::add_sun;
+use crate::scenes::bench_camera;
+use crate::scenes::DEFAULT_SUN;
+use crate::write_json;
 use anyhow::Result;
 use serde_json::{json, Value};
+use std::path::PathBuf;
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
@@ -24,6 +25,7 @@ use umbra::passes::gbuffer::GBufferViews;
 use umbra::passes::shadow::{ShadowMaps, ShadowMethod, ShadowSettings, ShadowView};
 use umbra::render::{HybridSettings, HybridTargets, Passes};
 use umbra::scene::Camera;
+use umbra::vk::ContextDesc;
 use umbra::vk::{raw, Context, GpuTimer};
 
 /// One method's measurements.
@@ -377,8 +379,8 @@ pub(crate) fn run_shadows(
     .layers
     .len();
     settings.validate()?;
-    let (timings, reference) = shadows::run(&ctx, &gpu_scene, &camera, size, repeats, settings)?;
-    let doc = shadows::to_json(
+    let (timings, reference) = run(&ctx, &gpu_scene, &camera, size, repeats, settings)?;
+    let doc = to_json(
         &ctx.info().name,
         &loaded.name,
         gpu_scene.bvh_stats.triangles,
@@ -388,7 +390,7 @@ pub(crate) fn run_shadows(
         &timings,
         &reference,
     );
-    print!("{}", shadows::table(&doc));
+    print!("{}", table(&doc));
     for t in &timings {
         let steps: Vec<String> = t.steps.iter().map(|(name, ms)| format!("{name} {ms:.1} ms")).collect();
         if !steps.is_empty() {

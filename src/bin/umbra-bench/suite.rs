@@ -29,14 +29,16 @@
 //! independent of theirs: with `R` reference samples a method's relative MSE has a floor of
 //! about the path tracer's relative MSE at `R` spp (reported as `reference_rel_mse_floor`).
 
-// What the runner (moved here from main.rs) uses of the binary's root: its helpers and modules.
-#[allow(unused_imports)]
-use crate::*;
-
 use super::chart::{self, Chart, ChartPoint};
 use super::num;
 use super::rays::{median, warm_up};
+use crate::scenes::bench_camera;
+use crate::scenes::load_gltf;
+use crate::scenes::sponza_under_a_sun;
+use anyhow::Context as _;
 use anyhow::{bail, Result};
+use glam::Vec3;
+use serde_json::json;
 use std::path::{Path, PathBuf};
 use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
@@ -45,6 +47,7 @@ use umbra::passes::pathtrace::PathTarget;
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
 use umbra::render::{AoMethod, HybridSettings, PathSettings};
 use umbra::scene::{Camera, Scene};
+use umbra::vk::ContextDesc;
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
 /// What the suite runs.
@@ -768,7 +771,7 @@ pub(crate) fn cornell_point_light() -> umbra::scene::Scene {
 pub(crate) const SPONZA_SUITE_SPP: (u32, u32) = (512, 64);
 
 pub(crate) fn run_suite(
-    settings: &suite::SuiteSettings,
+    settings: &SuiteSettings,
     quick: bool,
     gltf: &[PathBuf],
     sponza: Option<&std::path::Path>,
@@ -803,7 +806,7 @@ pub(crate) fn run_suite(
         let camera = bench_camera(scene);
         let capped;
         let scene_settings = if key == "sponza-sun" {
-            capped = suite::SuiteSettings {
+            capped = SuiteSettings {
                 reference_spp: settings.reference_spp.min(SPONZA_SUITE_SPP.0),
                 max_spp: settings.max_spp.min(SPONZA_SUITE_SPP.1),
                 ..settings.clone()
@@ -812,8 +815,8 @@ pub(crate) fn run_suite(
         } else {
             settings
         };
-        let result = suite::run_scene(&ctx, key, scene, &camera, scene_settings)
-            .with_context(|| scene.name.clone())?;
+        let result =
+            run_scene(&ctx, key, scene, &camera, scene_settings).with_context(|| scene.name.clone())?;
         println!(
             "\n{} ({} triangles), reference noise floor {:.2e}:",
             result.name, result.triangles, result.reference_rel_mse_floor
@@ -877,7 +880,7 @@ pub(crate) fn run_suite(
     let path = settings.out.join("suite.json");
     umbra::atomic::write(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     let csv = settings.out.join("suite.csv");
-    umbra::atomic::write(&csv, suite::csv(&results).as_bytes())?;
+    umbra::atomic::write(&csv, self::csv(&results).as_bytes())?;
     println!("wrote {}, {} and suite-<scene>.svg/.png", path.display(), csv.display());
     Ok(())
 }

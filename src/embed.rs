@@ -47,6 +47,16 @@
 //! // or baked offline (`umbra bake`, or `bake_probes` then `save_probes`) and loaded:
 //! let hash = umbra::bake::scene_hash(&scene, environment_map.as_ref());  // once per scene
 //! let probes = renderer.load_probes(Path::new("level.probes"), hash, &lighting)?;
+//! // or the host's passes and umbra's in one recording, every barrier between them derived:
+//! renderer.record(cmd, |rec| {
+//!     let (passes, scene) = (renderer.passes(), renderer.scene());
+//!     passes.record_gbuffer(rec, scene, &camera, &gbuffer_views)?;
+//!     rec.access(&[(Resource::Image(gbuffer_views.normal), Use::ComputeRead),
+//!                  (Resource::Image(host_view), Use::ComputeWrite)]);
+//!     host_kernel.dispatch(rec.cmd());                  // the host's own, declared above
+//!     passes.record_ssao(rec, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
+//!     Ok(())
+//! })?;
 //! ```
 //!
 //! Every `record_*` goes through [`crate::render::Passes`], the orchestrator that owns the
@@ -61,10 +71,12 @@
 //! - Images passed in are storage images in `GENERAL` layout with the formats the pass
 //!   documents ([`crate::passes::gbuffer`] for a G-buffer). Before a `record_*` call, the host
 //!   makes its writes to them visible to compute-shader reads (for its own compute kernels, a
-//!   compute → compute memory barrier). Each `record_*` call ends with a compute → compute
-//!   barrier (`SHADER_STORAGE_WRITE` → `SHADER_STORAGE_READ | WRITE`); a host that reads the output
-//!   in another stage adds its own barrier from `COMPUTE_SHADER`/`SHADER_STORAGE_WRITE`. Layouts
-//!   are never changed.
+//!   compute → compute memory barrier), or records them inside [`Renderer::record`], declared.
+//!   Within one `record_*` call or one [`Renderer::record`], umbra derives every barrier from
+//!   what each operation reads and writes ([`crate::vk::Recorder`]); each ends with one barrier
+//!   from the compute and transfer work it recorded to compute-shader, indirect and transfer
+//!   reads and writes. A host that reads the output in another stage adds its own barrier from
+//!   `COMPUTE_SHADER`/`SHADER_STORAGE_WRITE`. Layouts are never changed.
 //! - `record_*` binds its own pipeline, push descriptors and push constants: the host re-binds
 //!   its own state afterwards.
 //! - No global state: two `Renderer`s (on one device or two) are independent.
@@ -88,7 +100,7 @@ use crate::passes::temporal::{TemporalHistory, TemporalSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{HybridSettings, HybridTargets, Passes};
 use crate::scene::{Camera, Scene};
-use crate::vk::{raw, Context, GpuTimer};
+use crate::vk::{raw, Context, GpuTimer, Recorder};
 use std::path::Path;
 
 /// umbra's passes and one scene on a (host's) device: the scene, its image-based lighting
@@ -143,6 +155,23 @@ impl Renderer {
             ctx: ctx.clone(),
             generation: 0,
         })
+    }
+
+    /// Records into the host's `cmd` through one [`Recorder`], which derives every barrier
+    /// between what `record` records from what each operation reads and writes: umbra's passes
+    /// ([`Renderer::passes`]' `record_*` with [`Renderer::scene`]) and the host's own, each
+    /// declared with [`Recorder::access`] before the host records it into [`Recorder::cmd`].
+    /// Ends with the one barrier of the contract. The `record_*` methods below are this with
+    /// one pass each.
+    pub fn record<T>(
+        &self,
+        cmd: raw::CommandBuffer,
+        record: impl FnOnce(&mut Recorder<'_>) -> Result<T>,
+    ) -> Result<T> {
+        let mut rec = Recorder::new(&self.ctx, cmd);
+        let value = record(&mut rec)?;
+        rec.finish();
+        Ok(value)
     }
 
     /// The scene on the GPU.
@@ -207,19 +236,21 @@ impl Renderer {
         first: u32,
         count: u32,
     ) -> Result<()> {
-        self.passes.record_path_samples(cmd, &self.scene, camera, target, settings, first, count)
+        self.record(cmd, |rec| {
+            self.passes.record_path_samples(rec, &self.scene, camera, target, settings, first, count)
+        })
     }
 
     /// Records the copy of `target`'s running mean into `output`: the host's
     /// `R32G32B32A32_SFLOAT` storage image of the target's size, in `GENERAL` layout (then, like
-    /// every `record_*`, a compute → compute barrier).
+    /// every `record_*`, the barrier of the contract).
     pub fn record_path_resolve(
         &self,
         cmd: raw::CommandBuffer,
         target: &PathTarget,
         output: raw::ImageView,
     ) -> Result<()> {
-        self.passes.record_path_resolve(cmd, target, output)
+        self.record(cmd, |rec| self.passes.record_path_resolve(rec, target, output))
     }
 
     /// Working images for [`Renderer::record_path_denoise`] at `size` (owned by umbra, freed on
@@ -241,7 +272,7 @@ impl Renderer {
         output: raw::ImageView,
         settings: &DenoiseSettings,
     ) -> Result<()> {
-        self.passes.record_denoise(cmd, target, images, output, settings)
+        self.record(cmd, |rec| self.passes.record_denoise(rec, target, images, output, settings))
     }
 
     /// The history of the temporal denoiser ([`crate::passes::temporal`]) for a view of `size`
@@ -275,7 +306,9 @@ impl Renderer {
             history.reset();
             history.generation = self.generation;
         }
-        self.passes.record_denoise_temporal(cmd, camera, target, images, history, output, settings)
+        self.record(cmd, |rec| {
+            self.passes.record_denoise_temporal(rec, camera, target, images, history, output, settings)
+        })
     }
 
     /// Records umbra's ray-cast G-buffer for `camera` into `target`.
@@ -285,7 +318,7 @@ impl Renderer {
         camera: &Camera,
         target: &GBufferViews,
     ) -> Result<()> {
-        self.passes.record_gbuffer(cmd, &self.scene, camera, target)
+        self.record(cmd, |rec| self.passes.record_gbuffer(rec, &self.scene, camera, target))
     }
 
     /// Records SSAO of `gbuffer` (umbra's or the host's) into `raw_ao` and, when `settings.blur`,
@@ -301,7 +334,7 @@ impl Renderer {
         blurred: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<raw::ImageView> {
-        self.passes.record_ssao(cmd, camera, gbuffer, raw_ao, blurred, settings)
+        self.record(cmd, |rec| self.passes.record_ssao(rec, camera, gbuffer, raw_ao, blurred, settings))
     }
 
     /// Records ray-traced ambient occlusion of `gbuffer` (SSAO's ground truth: `settings.samples`
@@ -315,7 +348,7 @@ impl Renderer {
         output: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<()> {
-        self.passes.record_rtao(cmd, &self.scene, camera, gbuffer, output, settings)
+        self.record(cmd, |rec| self.passes.record_rtao(rec, &self.scene, camera, gbuffer, output, settings))
     }
 
     /// Records deferred lighting of `gbuffer` (umbra's or the host's own) seen from `camera` into
@@ -331,7 +364,18 @@ impl Renderer {
         inputs: &LightingInputs<'_>,
         settings: &LightingSettings,
     ) -> Result<()> {
-        self.passes.record_lighting(cmd, &self.scene, &self.ibl, camera, gbuffer, output, inputs, settings)
+        self.record(cmd, |rec| {
+            self.passes.record_lighting(
+                rec,
+                &self.scene,
+                &self.ibl,
+                camera,
+                gbuffer,
+                output,
+                inputs,
+                settings,
+            )
+        })
     }
 
     /// ReSTIR's reservoirs for a view of `size` (keep them from frame to frame: they hold the
@@ -354,7 +398,9 @@ impl Renderer {
         settings: &RestirSettings,
         lighting: &LightingSettings,
     ) -> Result<()> {
-        self.passes.record_restir(cmd, &self.scene, camera, gbuffer, reservoirs, settings, lighting)
+        self.record(cmd, |rec| {
+            self.passes.record_restir(rec, &self.scene, camera, gbuffer, reservoirs, settings, lighting)
+        })
     }
 
     /// A probe volume over the scene by `settings`, its probes inactive until updated
@@ -375,7 +421,9 @@ impl Renderer {
         lighting: &LightingSettings,
     ) -> Result<()> {
         let blend_min = 1.0 - volume.settings.hysteresis;
-        self.passes.record_probe_update(cmd, &self.scene, volume, budget, blend_min, lighting)
+        self.record(cmd, |rec| {
+            self.passes.record_probe_update(rec, &self.scene, volume, budget, blend_min, lighting)
+        })
     }
 
     /// Bakes `volume` now (submits on the context's queue and waits; call it while no command
@@ -434,7 +482,7 @@ impl Renderer {
         maps: &ShadowMaps,
         view: Option<ShadowView<'_>>,
     ) -> Result<()> {
-        self.passes.record_shadow_maps(cmd, &self.scene, maps, view)
+        self.record(cmd, |rec| self.passes.record_shadow_maps(rec, &self.scene, maps, view))
     }
 
     /// Records a whole hybrid frame into the host's `targets` (G-buffer, SSAO and blur when
@@ -449,7 +497,9 @@ impl Renderer {
         settings: &HybridSettings,
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
-        self.passes.record_hybrid(cmd, &self.scene, &self.ibl, camera, targets, settings, timer)
+        self.record(cmd, |rec| {
+            self.passes.record_hybrid(rec, &self.scene, &self.ibl, camera, targets, settings, timer)
+        })
     }
 
     /// [`Self::record_hybrid`] but its G-buffer, already recorded into `targets.gbuffer`
@@ -462,7 +512,9 @@ impl Renderer {
         settings: &HybridSettings,
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
-        self.passes.record_hybrid_shading(cmd, &self.scene, &self.ibl, camera, targets, settings, timer)
+        self.record(cmd, |rec| {
+            self.passes.record_hybrid_shading(rec, &self.scene, &self.ibl, camera, targets, settings, timer)
+        })
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`
@@ -476,6 +528,6 @@ impl Renderer {
         exposure_stops: f32,
         curve: ToneCurve,
     ) -> Result<()> {
-        self.passes.record_tonemap(cmd, src, dst, size, exposure_stops, curve)
+        self.record(cmd, |rec| self.passes.record_tonemap(rec, src, dst, size, exposure_stops, curve))
     }
 }

@@ -731,13 +731,14 @@ fn run(cli: Cli, given: &[String]) -> Result<()> {
             use umbra::gpu::kernels::test_pattern;
             let pipeline = umbra::gpu::Pipeline::<test_pattern::Kernel>::plain(&ctx)?;
             let mut timer = GpuTimer::new(&ctx, 1)?;
-            ctx.submit(|cmd| {
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
                 timer.reset(cmd);
                 image.init_general(&ctx, cmd);
                 timer.begin(cmd, "test_pattern")?;
                 let params = umbra::gpu::layout::PatternParams { size: [w, h], seed: 0, frame: 0 };
                 pipeline.record(
-                    cmd,
+                    rec,
                     &test_pattern::Resources { out_image: &image.view },
                     &params,
                     [w, h, 1],

@@ -16,12 +16,12 @@ fn pattern_pipeline(gpu: &Gpu, multiplier: u32) -> Pipeline<test_pattern::Kernel
 /// Records test_pattern.comp over `params.size` into `image` (8×8 workgroups).
 fn record_pattern(
     pipeline: &Pipeline<test_pattern::Kernel>,
-    cmd: raw::CommandBuffer,
+    rec: &mut umbra::vk::Recorder<'_>,
     image: &Image,
     params: &PatternParams,
 ) -> umbra::Result<()> {
     let [w, h] = params.size;
-    pipeline.record(cmd, &test_pattern::Resources { out_image: &image.view }, params, [w, h, 1])
+    pipeline.record(rec, &test_pattern::Resources { out_image: &image.view }, params, [w, h, 1])
 }
 
 /// The CPU twin of `pattern_hash` in test_pattern.comp.
@@ -42,9 +42,9 @@ fn pattern_1080p_reads_back_exactly() {
     let multiplier = 3;
     let image = Image::storage_2d(&gpu, "pattern", w, h, raw::Format::R32G32B32A32_SFLOAT).unwrap();
     let pipeline = pattern_pipeline(&gpu, multiplier);
-    gpu.submit(|cmd| {
-        image.init_general(&gpu, cmd);
-        record_pattern(&pipeline, cmd, &image, &params)
+    gpu.record(|rec| {
+        image.init_general(&gpu, rec.cmd());
+        record_pattern(&pipeline, rec, &image, &params)
     })
     .unwrap();
     let texels: Vec<f32> = image.read(&gpu).unwrap();
@@ -74,14 +74,14 @@ fn timestamps_give_positive_durations() {
     let image = Image::storage_2d(&gpu, "timed", w, h, raw::Format::R32G32B32A32_SFLOAT).unwrap();
     let pipeline = pattern_pipeline(&gpu, 1);
     let mut timer = GpuTimer::new(&gpu, 2).unwrap();
-    gpu.submit(|cmd| {
+    gpu.record(|rec| {
+        let cmd = rec.cmd();
         timer.reset(cmd);
         image.init_general(&gpu, cmd);
         for pass in ["first", "second"] {
             timer.begin(cmd, pass)?;
-            record_pattern(&pipeline, cmd, &image, &PatternParams { size: [w, h], seed: 1, frame: 0 })?;
+            record_pattern(&pipeline, rec, &image, &PatternParams { size: [w, h], seed: 1, frame: 0 })?;
             timer.end(cmd)?;
-            umbra::vk::barrier::compute_to_compute(&gpu, cmd);
         }
         // A third pass exceeds the timer's capacity and is refused, not written out of range.
         assert!(timer.begin(cmd, "third").is_err());
@@ -107,9 +107,9 @@ fn buffers_round_trip_through_staging_and_a_kernel() {
     let dst = Buffer::upload(&gpu, "output", &vec![0u32; count as usize], usage).unwrap();
     let pipeline = Pipeline::<test_buffer::Kernel>::plain(&gpu).unwrap();
     let params = BufferTestParams { count, add: 17 };
-    gpu.submit(|cmd| {
+    gpu.record(|rec| {
         let resources = test_buffer::Resources { values_in: &src, values_out: &dst };
-        pipeline.record(cmd, &resources, &params, [count, 1, 1])
+        pipeline.record(rec, &resources, &params, [count, 1, 1])
     })
     .unwrap();
     let out: Vec<u32> = dst.read(&gpu).unwrap();
@@ -163,9 +163,9 @@ fn folded_specialization_constants_keep_the_kernels_meaning() {
             Pipeline::<fold_test::Kernel>::new(&gpu, &fold_test::Spec { flag_a: a, flag_b: b }, None)
                 .unwrap();
         let params = BufferTestParams { count, add: 1 << 12 };
-        gpu.submit(|cmd| {
+        gpu.record(|rec| {
             let resources = fold_test::Resources { values_in: &src, values_out: &dst };
-            pipeline.record(cmd, &resources, &params, [count, 1, 1])
+            pipeline.record(rec, &resources, &params, [count, 1, 1])
         })
         .unwrap();
         let out: Vec<u32> = dst.read(&gpu).unwrap();
@@ -253,9 +253,9 @@ fn contexts_coexist_across_threads() {
                 let gpu = Gpu::new();
                 let image = Image::storage_2d(&gpu, "img", 16, 16, raw::Format::R32G32B32A32_SFLOAT).unwrap();
                 let pipeline = pattern_pipeline(&gpu, 1);
-                gpu.submit(|cmd| {
-                    image.init_general(&gpu, cmd);
-                    record_pattern(&pipeline, cmd, &image, &PatternParams { size: [16, 16], seed, frame: 0 })
+                gpu.record(|rec| {
+                    image.init_general(&gpu, rec.cmd());
+                    record_pattern(&pipeline, rec, &image, &PatternParams { size: [16, 16], seed, frame: 0 })
                 })
                 .unwrap();
                 let texels: Vec<f32> = image.read(&gpu).unwrap();
@@ -283,4 +283,75 @@ fn unknown_device_filter_names_the_devices() {
     for (name, _) in &devices {
         assert!(message.contains(name.as_str()), "'{name}' missing from: {message}");
     }
+}
+
+/// A host's own kernel recorded between umbra's passes, its write declared to the recorder, is
+/// ordered by the barrier the recorder derives: the tone map reads the host's pattern (the same
+/// bytes as with a submission between the two), with one barrier between them and one at the end,
+/// and the validation layer's synchronization checks find no hazard. Left undeclared, the same
+/// recording has no barrier between them and the validation layer reports the read after write:
+/// the synchronization checks, on in every test, are what tests each derived barrier.
+#[test]
+fn a_declared_host_pass_is_ordered_by_derived_barriers() {
+    use umbra::passes::tonemap::{ToneCurve, TonemapPass};
+    use umbra::vk::{Recorder, Resource, Use};
+    let gpu = Gpu::new();
+    let (w, h) = (32u32, 32u32);
+    let hdr = Image::storage_2d(&gpu, "hdr", w, h, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+    let ldr = Image::storage_2d(&gpu, "ldr", w, h, raw::Format::R8G8B8A8_UNORM).unwrap();
+    // The host's kernel: test_pattern through the untyped pipeline, which the recorder never sees.
+    let desc = PipelineDesc {
+        bindings: &[(0, raw::DescriptorType::STORAGE_IMAGE)],
+        push_constant_size: std::mem::size_of::<PatternParams>() as u32,
+        specialization: &[(umbra::gpu::kernel::FIRST_KERNEL_SPEC_ID, 1)],
+    };
+    let host = ComputePipeline::new(&gpu, "test_pattern", &desc).unwrap();
+    let tonemap = TonemapPass::new(&gpu).unwrap();
+    let params = PatternParams { size: [w, h], seed: 5, frame: 0 };
+    let host_pass = |cmd| -> umbra::Result<()> {
+        host.bind(cmd);
+        host.push_descriptors(cmd, &[Descriptor::StorageImage(&hdr)])?;
+        host.push_constants(cmd, &params)?;
+        host.dispatch(cmd, [w, h, 1], test_pattern::LOCAL)
+    };
+    let tone = |rec: &mut Recorder<'_>| tonemap.record(rec, hdr.view, ldr.view, (w, h), 1.0, ToneCurve::Aces);
+    gpu.submit(|cmd| {
+        hdr.init_general(&gpu, cmd);
+        ldr.init_general(&gpu, cmd);
+        Ok(())
+    })
+    .unwrap();
+
+    // The reference: a submission between the host's pass and umbra's.
+    gpu.submit(host_pass).unwrap();
+    gpu.record(tone).unwrap();
+    let reference: Vec<u8> = ldr.read(&gpu).unwrap();
+    assert!(reference.chunks(4).any(|p| p[..3] != reference[..3]), "the pattern is not flat");
+    assert!(gpu.log().take().is_empty());
+
+    let record = |declared: bool| {
+        gpu.submit(|cmd| {
+            let mut rec = Recorder::new(&gpu, cmd);
+            if declared {
+                rec.access(&[(Resource::Image(hdr.view), Use::ComputeWrite)]);
+            }
+            host_pass(cmd)?;
+            tone(&mut rec)?;
+            Ok(rec.finish())
+        })
+        .unwrap()
+    };
+    let stats = record(true);
+    assert_eq!((stats.operations, stats.barriers), (2, 2), "one barrier between the passes, one at the end");
+    assert_eq!(ldr.read::<u8>(&gpu).unwrap(), reference);
+    let messages = gpu.log().take();
+    assert!(messages.is_empty(), "{messages:?}");
+
+    let stats = record(false);
+    assert_eq!((stats.operations, stats.barriers), (1, 1), "nothing to order the tone map after");
+    let messages = gpu.log().take();
+    assert!(
+        messages.iter().any(|m| m.contains("SYNC-HAZARD-READ-AFTER-WRITE")),
+        "the undeclared write is a hazard the validation layer reports: {messages:?}"
+    );
 }

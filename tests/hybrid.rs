@@ -40,7 +40,7 @@ fn gbuffer_matches_cpu_traversal() {
         let pass = GBufferPass::new(&gpu, &gpu_scene).unwrap();
         let target = GBuffer::new(&gpu, size).unwrap();
         let params = GBufferPass::params(&camera, size);
-        gpu.submit(|cmd| pass.record(&gpu, cmd, &gpu_scene, &target.views(), &params)).unwrap();
+        gpu.record(|rec| pass.record(rec, &gpu_scene, &target.views(), &params)).unwrap();
         let data = target.read(&gpu).unwrap();
 
         let cam = GpuCamera::new(&camera, size);
@@ -208,9 +208,10 @@ fn tonemap_kernel_matches_its_cpu_twin() {
     src.write(&gpu, &texels).unwrap();
     let pass = TonemapPass::new(&gpu).unwrap();
     for curve in [ToneCurve::Clamp, ToneCurve::Aces, ToneCurve::KhronosPbrNeutral] {
-        gpu.submit(|cmd| {
+        gpu.record(|rec| {
+            let cmd = rec.cmd();
             dst.init_general(&gpu, cmd);
-            pass.record(&gpu, cmd, src.view, dst.view, (w, h), 0.5, curve)
+            pass.record(rec, src.view, dst.view, (w, h), 0.5, curve)
         })
         .unwrap();
         let got: Vec<[u8; 4]> = dst.read(&gpu).unwrap();

@@ -424,8 +424,8 @@ fn ris_reuse_carries_over_between_records_and_caps_its_counts() {
     let target = PathTarget::new(&gpu, settings.size).expect("target");
     let mut first = 0;
     for count in [1, 2, 3] {
-        gpu.submit(|cmd| {
-            passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &settings, first, count)
+        gpu.record(|rec| {
+            passes.record_path_samples(rec, &gpu_scene, &camera, &target, &settings, first, count)
         })
         .expect("record");
         first += count;

@@ -19,7 +19,7 @@ use umbra::scene::{Sampler, Scene, Texture, TextureRef, IDENTITY_TRANSFORM};
 use umbra::gpu::kernels::{spin_test, test_buffer};
 use umbra::gpu::layout::BufferTestParams;
 use umbra::gpu::Pipeline;
-use umbra::vk::{barrier, raw, Buffer, MemoryLocation};
+use umbra::vk::{raw, Buffer, MemoryLocation};
 use umbra::Error;
 
 /// Every warning logged in this test binary (tests run in parallel: filter by a unique name).
@@ -270,12 +270,13 @@ fn failed_submissions_name_the_last_pass() {
         gpu.inject_submit_fault(fault);
         let mut recorded = raw::CommandBuffer::null();
         let err = gpu
-            .submit(|cmd| {
+            .record(|rec| {
+                let cmd = rec.cmd();
                 recorded = cmd;
                 output.init_general(&gpu, cmd);
-                pass.record(&gpu, cmd, &device_scene, &target, &params)?;
+                pass.record(rec, &device_scene, &target, &params)?;
                 if then_resolve {
-                    resolve.record(&gpu, cmd, &target, output.view)?;
+                    resolve.record(rec, &target, output.view)?;
                 }
                 Ok(())
             })
@@ -352,19 +353,17 @@ fn hung_submission(wait_fault: Option<raw::Result>) -> Hung {
     let (sender, receiver) = std::sync::mpsc::channel();
     let (result, waited, still) = std::thread::scope(|s| {
         s.spawn(|| {
-            let result = gpu.submit(|cmd| {
+            let result = gpu.record(|rec| {
                 for (k, output) in outputs.iter().enumerate() {
                     let resources = test_buffer::Resources { values_in: &input, values_out: output };
                     let params = BufferTestParams { count: 64, add: k as u32 };
-                    quick.record(cmd, &resources, &params, [64, 1, 1])?;
-                    barrier::compute_to_compute(&gpu, cmd);
+                    quick.record(rec, &resources, &params, [64, 1, 1])?;
                     if k == 0 {
                         // 1024 workgroups of 64: on lavapipe (where an invocation's loops end
                         // after 65535 iterations) ~80 ms each on one core, 40 s on two, if
                         // never released; released, they all end within milliseconds.
                         let resources = spin_test::Resources { spin: &flag };
-                        spin.record(cmd, &resources, &(), [1024 * 64, 1, 1])?;
-                        barrier::compute_to_compute(&gpu, cmd);
+                        spin.record(rec, &resources, &(), [1024 * 64, 1, 1])?;
                     }
                 }
                 Ok(())
@@ -511,22 +510,14 @@ fn ten_thousand_samples_equal_a_float64_accumulation() {
         MemoryLocation::GpuOnly,
     )
     .unwrap();
-    let transfer = (
-        raw::PipelineStageFlags2::ALL_TRANSFER,
-        raw::AccessFlags2::TRANSFER_READ | raw::AccessFlags2::TRANSFER_WRITE,
-    );
     for first in (0..N).step_by(1000) {
-        gpu.submit(|cmd| {
+        gpu.record(|rec| {
             for s in first..first + 1000 {
-                // SAFETY: valid buffers, recording command buffer.
-                unsafe { gpu.device().cmd_fill_buffer(cmd, target.accum.raw, 0, raw::WHOLE_SIZE, 0) };
-                barrier::transfer_to_compute(&gpu, cmd);
+                rec.fill(&target.accum, 0);
                 params.sample_index = s;
-                pass.record(&gpu, cmd, &device_scene, &target, &params)?;
-                barrier::compute_to_transfer(&gpu, cmd);
+                pass.record(rec, &device_scene, &target, &params)?;
                 let region = [raw::BufferCopy::default().dst_offset(s as u64 * row).size(row)];
-                unsafe { gpu.device().cmd_copy_buffer(cmd, target.accum.raw, samples.raw, &region) };
-                barrier::memory(&gpu, cmd, transfer, transfer);
+                rec.copy(&target.accum, &samples, &region);
             }
             Ok(())
         })

@@ -65,9 +65,9 @@ fn reservoirs_of(
     let gbuffer = GBuffer::new(gpu, SIZE).expect("G-buffer");
     let reservoirs = Reservoirs::new(gpu, SIZE).expect("reservoirs");
     let lighting = LightingSettings { seed, ..Default::default() };
-    gpu.submit(|cmd| {
-        passes.record_gbuffer(cmd, &gpu_scene, &camera, &gbuffer.views())?;
-        passes.record_restir(cmd, &gpu_scene, &camera, &gbuffer.views(), &reservoirs, settings, &lighting)
+    gpu.record(|rec| {
+        passes.record_gbuffer(rec, &gpu_scene, &camera, &gbuffer.views())?;
+        passes.record_restir(rec, &gpu_scene, &camera, &gbuffer.views(), &reservoirs, settings, &lighting)
     })
     .expect("record and submit");
     reservoirs.read(gpu).expect("read back")
@@ -222,9 +222,9 @@ fn bad_restir_settings_are_refused() {
     let gbuffer = GBuffer::new(&gpu, SIZE).expect("G-buffer");
     let reservoirs = Reservoirs::new(&gpu, (8, 8)).expect("reservoirs");
     let error = gpu
-        .submit(|cmd| {
+        .record(|rec| {
             passes.record_restir(
-                cmd,
+                rec,
                 &gpu_scene,
                 &camera,
                 &gbuffer.views(),

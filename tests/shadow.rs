@@ -586,7 +586,7 @@ fn cascades_render_only_what_the_view_reads() {
     let size = (128, 128);
     let passes = Passes::new(&gpu, &gpu_scene);
     let gbuffer = GBuffer::new(&gpu, size).unwrap();
-    gpu.submit(|cmd| passes.record_gbuffer(cmd, &gpu_scene, &stage.camera, &gbuffer.views())).unwrap();
+    gpu.record(|rec| passes.record_gbuffer(rec, &gpu_scene, &stage.camera, &gbuffer.views())).unwrap();
     let base = ShadowSettings { map_size: 256, cascades: 4, ..Default::default() };
     // Each method at its defaults, and PCF 12 texels wide (its taps reach past a tile).
     let wide = ShadowSettings { method: ShadowMethod::Pcf, pcf_radius: 12.0, ..base };

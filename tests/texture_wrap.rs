@@ -54,14 +54,14 @@ fn repeat_and_mirror_wrapping_are_exact() {
         TexelBuffer::upload(&gpu, "no textures", &[0u32; 8], raw::Format::R32G32B32A32_UINT, 16).unwrap();
     let texels = TexelBuffer::upload(&gpu, "no texels", &[[0u32; 2]], raw::Format::R32G32_UINT, 8).unwrap();
     let pipeline = Pipeline::<texture_wrap_test::Kernel>::plain(&gpu).unwrap();
-    gpu.submit(|cmd| {
+    gpu.record(|rec| {
         let resources = texture_wrap_test::Resources {
             cases: &input,
             wrapped: &output,
             texture_texels: &textures,
             scene_texels: &texels,
         };
-        pipeline.record(cmd, &resources, &BufferTestParams { count, add: 0 }, [count, 1, 1])
+        pipeline.record(rec, &resources, &BufferTestParams { count, add: 0 }, [count, 1, 1])
     })
     .unwrap();
     let out: Vec<i32> = output.read(&gpu).unwrap();

@@ -194,9 +194,9 @@ fn waves_of_rows_and_progressive_batches_trace_the_same_samples() {
     split_target.init_wave(&ctx, &gpu_scene, settings.max_bounces, 7 * 24).unwrap();
     let mut first = 0;
     for count in [1, 2, 3] {
-        ctx.submit(|cmd| {
-            passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &settings, first, count)?;
-            passes.record_path_samples(cmd, &gpu_scene, &camera, &split_target, &split, first, count)
+        ctx.record(|rec| {
+            passes.record_path_samples(rec, &gpu_scene, &camera, &target, &settings, first, count)?;
+            passes.record_path_samples(rec, &gpu_scene, &camera, &split_target, &split, first, count)
         })
         .unwrap();
         first += count;

@@ -9,7 +9,7 @@ use crate::gpu::kernels::trace;
 pub use crate::gpu::layout::GpuBvhNode;
 use crate::gpu::layout::{TraceHit, TraceParams, TraceRay, BVH_REGISTERS};
 use crate::gpu::Pipeline;
-use crate::vk::{raw, Buffer, Context, Descriptor, MemoryLocation, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, Descriptor, MemoryLocation, Recorder, TexelBuffer};
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -527,15 +527,9 @@ impl RayTracer {
     }
 
     /// Records a trace of `batch`'s rays into its hits. Never submits.
-    pub fn record(
-        &self,
-        cmd: raw::CommandBuffer,
-        query: Query,
-        bvh: &GpuBvh,
-        batch: &RayBatch,
-    ) -> Result<()> {
+    pub fn record(&self, rec: &mut Recorder<'_>, query: Query, bvh: &GpuBvh, batch: &RayBatch) -> Result<()> {
         self.pipeline(query, bvh.register_stack())?.record(
-            cmd,
+            rec,
             &trace::Resources { bvh, rays: &batch.rays, hits: &batch.hits },
             &TraceParams { count: batch.count, ..Default::default() },
             [batch.count, 1, 1],
@@ -551,7 +545,7 @@ impl RayTracer {
         rays: &[TraceRay],
     ) -> Result<Vec<TraceHit>> {
         let batch = RayBatch::new(ctx, rays)?;
-        ctx.submit(|cmd| self.record(cmd, query, bvh, &batch))?;
+        ctx.record(|rec| self.record(rec, query, bvh, &batch))?;
         batch.read_hits(ctx)
     }
 }

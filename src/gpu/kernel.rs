@@ -5,7 +5,7 @@
 
 use super::scene::GpuScene;
 use crate::error::{Error, Result};
-use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc};
+use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc, Recorder, Resource, Use};
 use std::marker::PhantomData;
 
 pub use super::layout::{
@@ -345,41 +345,59 @@ impl<K: Kernel> Pipeline<K> {
     }
 
     /// Records one dispatch: binds the pipeline, pushes `resources` and `push`, and dispatches
-    /// enough workgroups of the kernel's size ([`Kernel::LOCAL`]) to cover `size` invocations.
-    /// The caller records the barrier that orders it with what follows.
+    /// enough workgroups of the kernel's size ([`Kernel::LOCAL`]) to cover `size` invocations,
+    /// after the barrier its bindings' accesses need ([`Recorder`]).
     pub fn record(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         resources: &K::Resources<'_>,
         push: &K::Push,
         size: [u32; 3],
     ) -> Result<()> {
-        self.bind(cmd, resources)?;
-        self.push_constants(cmd, push)?;
-        self.dispatch(cmd, size)
+        self.bind(rec, resources)?;
+        self.push_constants(rec, push)?;
+        self.dispatch(rec, size)
     }
 
     /// Binds the pipeline and pushes `resources` (for several dispatches that differ only in
-    /// their push constants: [`Self::push_constants`] and [`Self::dispatch`] after it).
-    pub fn bind(&self, cmd: raw::CommandBuffer, resources: &K::Resources<'_>) -> Result<()> {
-        self.pipeline.bind(cmd);
-        self.pipeline.push_descriptors(cmd, &resources.descriptors())
+    /// their push constants: [`Self::push_constants`] and [`Self::dispatch`] after it). Each
+    /// binding is read or written as the kernel's interface declares it.
+    pub fn bind(&self, rec: &mut Recorder<'_>, resources: &K::Resources<'_>) -> Result<()> {
+        let descriptors = resources.descriptors();
+        let uses = K::INTERFACE
+            .numbered_bindings()
+            .iter()
+            .zip(&descriptors)
+            .map(|((_, binding), descriptor)| {
+                let how = match binding.access {
+                    Access::ReadOnly => Use::ComputeRead,
+                    Access::WriteOnly | Access::ReadWrite | Access::Coherent => Use::ComputeWrite,
+                };
+                (Resource::of(descriptor), how)
+            })
+            .collect();
+        self.pipeline.bind(rec.cmd());
+        self.pipeline.push_descriptors(rec.cmd(), &descriptors)?;
+        rec.bind(uses);
+        Ok(())
     }
 
     /// Pushes the push constants.
-    pub fn push_constants(&self, cmd: raw::CommandBuffer, push: &K::Push) -> Result<()> {
-        self.pipeline.push_constants(cmd, push)
+    pub fn push_constants(&self, rec: &mut Recorder<'_>, push: &K::Push) -> Result<()> {
+        self.pipeline.push_constants(rec.cmd(), push)
     }
 
     /// Dispatches the workgroup counts in `buffer` at `offset` (a `VkDispatchIndirectCommand`
     /// that an earlier kernel wrote; `buffer` made with `INDIRECT_BUFFER` usage).
-    pub fn dispatch_indirect(&self, cmd: raw::CommandBuffer, buffer: &crate::vk::Buffer, offset: u64) {
-        self.pipeline.dispatch_indirect(cmd, buffer.raw, offset)
+    pub fn dispatch_indirect(&self, rec: &mut Recorder<'_>, buffer: &crate::vk::Buffer, offset: u64) {
+        rec.dispatch(Some(buffer.raw));
+        self.pipeline.dispatch_indirect(rec.cmd(), buffer.raw, offset)
     }
 
     /// Dispatches enough workgroups of the kernel's size ([`Kernel::LOCAL`]) to cover `size`
     /// invocations.
-    pub fn dispatch(&self, cmd: raw::CommandBuffer, size: [u32; 3]) -> Result<()> {
-        self.pipeline.dispatch(cmd, size, K::LOCAL)
+    pub fn dispatch(&self, rec: &mut Recorder<'_>, size: [u32; 3]) -> Result<()> {
+        rec.dispatch(None);
+        self.pipeline.dispatch(rec.cmd(), size, K::LOCAL)
     }
 }

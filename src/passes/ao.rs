@@ -19,8 +19,7 @@
 //!   objects read as thick the third).
 //!
 //! Every pass reads G-buffer views (umbra's or a host's, formats of [`super::gbuffer`]) and writes
-//! an `R32_SFLOAT` storage image in `GENERAL` layout; each records a compute-to-compute barrier
-//! after itself and never submits.
+//! an `R32_SFLOAT` storage image in `GENERAL` layout and never submits.
 
 use super::gbuffer::GBufferViews;
 use crate::error::{Error, Result};
@@ -29,7 +28,7 @@ use crate::gpu::layout::{AoBlurParams, AoParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Context};
+use crate::vk::{raw, Context, Recorder};
 
 /// What the AO passes compute.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -108,22 +107,20 @@ impl SsaoPass {
     }
 
     /// Records the pass: G-buffer depth and normal in, `output` (`R32_SFLOAT`, `GENERAL`, the
-    /// G-buffer's size) written, then a compute-to-compute barrier. Never submits.
+    /// G-buffer's size) written. Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
         params: &AoParams,
     ) -> Result<()> {
         self.pipeline.record(
-            cmd,
+            rec,
             &ssao::Resources { gb_depth: &gbuffer.depth, gb_normal: &gbuffer.normal, out_ao: &output },
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
         )?;
-        barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }
 }
@@ -155,18 +152,17 @@ impl AoBlurPass {
     }
 
     /// Records the blur of `input` into `output` (both `R32_SFLOAT`, `GENERAL`, the G-buffer's
-    /// size; distinct images), then a compute-to-compute barrier. Never submits.
+    /// size; distinct images). Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         gbuffer: &GBufferViews,
         input: raw::ImageView,
         output: raw::ImageView,
         params: &AoBlurParams,
     ) -> Result<()> {
         self.pipeline.record(
-            cmd,
+            rec,
             &ao_blur::Resources {
                 ao_in: &input,
                 gb_depth: &gbuffer.depth,
@@ -176,7 +172,6 @@ impl AoBlurPass {
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
         )?;
-        barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }
 }
@@ -208,13 +203,11 @@ impl RtaoPass {
     pub const RAYS_PER_DISPATCH: u32 = 32;
 
     /// Records the pass: the scene's BVH and the G-buffer's depth, normal and material (for the
-    /// geometric normal) in, `output` (`R32_SFLOAT`, `GENERAL`) written, then a
-    /// compute-to-compute barrier. The rays go in batches of [`RtaoPass::RAYS_PER_DISPATCH`],
+    /// geometric normal) in, `output` (`R32_SFLOAT`, `GENERAL`) written. The rays go in batches of [`RtaoPass::RAYS_PER_DISPATCH`],
     /// one dispatch each. Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
@@ -229,15 +222,14 @@ impl RtaoPass {
         };
         // The pipeline and resources once; per batch only the push constants change.
         let p = &self.pipeline;
-        p.bind(cmd, &resources)?;
+        p.bind(rec, &resources)?;
         let rays = params.samples.max(1);
         for first in (0..rays).step_by(Self::RAYS_PER_DISPATCH as usize) {
             let mut batch = *params;
             batch.first_ray = first;
             batch.batch_rays = Self::RAYS_PER_DISPATCH.min(rays - first);
-            p.push_constants(cmd, &batch)?;
-            p.dispatch(cmd, [gbuffer.size.0, gbuffer.size.1, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            p.push_constants(rec, &batch)?;
+            p.dispatch(rec, [gbuffer.size.0, gbuffer.size.1, 1])?;
         }
         Ok(())
     }

@@ -26,7 +26,7 @@ use crate::gpu::layout::{DeferredParams, GpuCamera, GpuReservoir};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Buffer, Context, Image, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, Image, Recorder, TexelBuffer};
 
 /// What the lighting pass computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -325,15 +325,13 @@ impl DeferredPass {
     }
 
     /// Records the pass (G-buffer in, `output` written: an `R32G32B32A32_SFLOAT` storage image in
-    /// `GENERAL` layout of the G-buffer's size) and a compute-to-compute barrier after it. Never
-    /// submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `inputs`
+    /// `GENERAL` layout of the G-buffer's size). Never submits. `ibl` holds the scene's precomputed tables (recorded before this pass); `inputs`
     /// what else the pass was built to read (shadow maps for a map method, a probe volume,
     /// lightmaps), recorded before it.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
@@ -426,8 +424,7 @@ impl DeferredPass {
             lightmap_texels,
             reservoirs,
         };
-        self.pipeline.record(cmd, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1])?;
-        barrier::compute_to_compute(ctx, cmd);
+        self.pipeline.record(rec, &resources, params, [gbuffer.size.0, gbuffer.size.1, 1])?;
         Ok(())
     }
 }

@@ -20,8 +20,8 @@
 //! apart, ping-ponging between two images; with the lobe split one dispatch filters both parts
 //! while both have iterations left, [`DenoiseSettings::specular_iterations`] on the specular
 //! part) and `denoise_remodulate.comp` (× albedo, + emission,
-//! into the output image). Every image is in `GENERAL` layout; a compute-to-compute barrier
-//! follows each dispatch; [`DenoisePass::record`] never submits. One frame's samples are filtered
+//! into the output image). Every image is in `GENERAL` layout; [`DenoisePass::record`] never
+//! submits. One frame's samples are filtered
 //! on their own; [`DenoisePass::record_temporal`] blends them with the previous frames' first
 //! (temporal accumulation with reprojection, [`crate::passes::temporal`]).
 
@@ -35,7 +35,7 @@ use crate::gpu::layout::{
 use crate::gpu::Pipeline;
 use crate::passes::pathtrace::PathTarget;
 use crate::passes::temporal::{TemporalHistory, TemporalPass};
-use crate::vk::{barrier, raw, Buffer, Context, Image};
+use crate::vk::{raw, Buffer, Context, Image, Recorder};
 
 /// The filter's settings. The σ's are SVGF's (σ_l 4, σ_n 128, σ_z 1); the rest were chosen on
 /// `umbra-bench denoise` (BENCHMARKS.md; how the defaults were chosen: docs/history/2026-12-05.md):
@@ -295,42 +295,39 @@ impl DenoisePass {
     }
 
     /// Records the filter of `inputs` into `output` (an `R32G32B32A32_SFLOAT` storage image of
-    /// the same size in `GENERAL` layout: denoised radiance, alpha 1), through `images`, with a
-    /// compute-to-compute barrier after each of its `iterations + 2` dispatches. Never submits.
+    /// the same size in `GENERAL` layout: denoised radiance, alpha 1), through `images`, in
+    /// `iterations + 2` dispatches. Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         inputs: &DenoiseInputs<'_>,
         images: &DenoiseImages,
         output: raw::ImageView,
         settings: &DenoiseSettings,
     ) -> Result<()> {
-        self.record_frame(ctx, cmd, inputs, images, output, settings, None)
+        self.record_frame(rec, inputs, images, output, settings, None)
     }
 
     /// [`DenoisePass::record`] with the temporal step ([`crate::passes::temporal`]) between the
     /// preparation and the à-trous iterations: the frame, seen by `camera`, blended with
-    /// `history`, which then holds this frame for the next (one more dispatch and barrier).
+    /// `history`, which then holds this frame for the next (one more dispatch).
     #[allow(clippy::too_many_arguments)]
     pub fn record_temporal(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         inputs: &DenoiseInputs<'_>,
         images: &DenoiseImages,
         output: raw::ImageView,
         settings: &DenoiseSettings,
         temporal: (&TemporalPass, &mut TemporalHistory, &GpuCamera),
     ) -> Result<()> {
-        self.record_frame(ctx, cmd, inputs, images, output, settings, Some(temporal))
+        self.record_frame(rec, inputs, images, output, settings, Some(temporal))
     }
 
     #[allow(clippy::too_many_arguments)]
     fn record_frame(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         inputs: &DenoiseInputs<'_>,
         images: &DenoiseImages,
         output: raw::ImageView,
@@ -362,7 +359,7 @@ impl DenoisePass {
         let params = |step| settings.params(size, step, split.is_some());
         let grid = [size.0, size.1, 1];
         self.prepare.record(
-            cmd,
+            rec,
             &denoise_prepare::Resources {
                 accum: inputs.accum,
                 moment: inputs.moment,
@@ -382,14 +379,13 @@ impl DenoisePass {
             &params(0),
             grid,
         )?;
-        barrier::compute_to_compute(ctx, cmd);
         // Where the iterations start (the prepared or the accumulated image) and, with the
         // history fed back after the first iteration, where that one writes.
         let (specular_ping, specular_pong) = split.map_or((&images.ping, &images.pong), |(_, (a, b))| (a, b));
         let mut starts = (&images.ping, None, specular_ping, None);
         if let Some((pass, history, camera)) = &temporal {
             let iterations = (settings.iterations, settings.specular_iterations);
-            let out = pass.record(ctx, cmd, images, history, camera, split.is_some(), iterations)?;
+            let out = pass.record(rec, images, history, camera, split.is_some(), iterations)?;
             starts = (out.diffuse, out.diffuse_first, out.specular, out.specular_first);
         }
         let (diffuse_src, diffuse_first, specular_src, specular_first) = starts;
@@ -406,10 +402,10 @@ impl DenoisePass {
             iterations: settings.specular_iterations,
         });
         let (diffuse, specular) =
-            self.record_iterations(ctx, cmd, images, diffuse_chain, specular_chain, &params)?;
+            self.record_iterations(rec, images, diffuse_chain, specular_chain, &params)?;
         let specular = specular.unwrap_or(&images.pong);
         self.remodulate.record(
-            cmd,
+            rec,
             &denoise_remodulate::Resources {
                 dn_in: &diffuse.view,
                 dn_specular: &specular.view,
@@ -421,7 +417,6 @@ impl DenoisePass {
             &params(0),
             grid,
         )?;
-        barrier::compute_to_compute(ctx, cmd);
         if let Some((_, history, camera)) = temporal {
             TemporalPass::advance(history, camera, split.is_some());
         }
@@ -434,8 +429,7 @@ impl DenoisePass {
     /// that hold the results.
     fn record_iterations<'i>(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         images: &DenoiseImages,
         mut first: Chain<'i>,
         mut second: Option<Chain<'i>>,
@@ -459,7 +453,7 @@ impl DenoisePass {
             // Without a second image its bindings repeat the first's (never read or written).
             let (in2, out2) = two.unwrap_or(one);
             self.atrous.record(
-                cmd,
+                rec,
                 &denoise_atrous::Resources {
                     dn_in: &one.0.view,
                     dn_guide: &images.guide.view,
@@ -471,7 +465,6 @@ impl DenoisePass {
                 &p,
                 [size.0, size.1, 1],
             )?;
-            barrier::compute_to_compute(ctx, cmd);
             if let Some((_, dst)) = a {
                 first.src = dst;
             }

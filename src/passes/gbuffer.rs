@@ -11,8 +11,7 @@
 //! | `layers` | `R32G32B32A32_UINT` | the texels of the material's layer textures (filtered like the other textures; 1 where a slot is empty), four `packUnorm4x8` values a word (exact for 8-bit linear texels read unfiltered, within 1/510 otherwise): x: `specularColorTexture` rgb, `specularTexture` a; y: `transmissionTexture` r, `clearcoatTexture` r, `clearcoatRoughnessTexture` g, `KHR_materials_volume`'s `thicknessTexture` g; z: the clear coat's normal (octahedral, two snorm16); w: `iridescenceTexture` r and `iridescenceThicknessTexture` g (two `packUnorm2x16` values). Written (and read by the lighting passes) only where the scene has some such texture: a host may leave it unwritten for scenes without |
 //! | `layers2` | `R32G32B32A32_UINT` | more layer textures' texels, as `layers`: x: `KHR_materials_sheen`'s `sheenColorTexture` rgb, `sheenRoughnessTexture` a; y: `KHR_materials_diffuse_transmission`'s `diffuseTransmissionColorTexture` rgb, `diffuseTransmissionTexture` a; z, w: unused (0). Written (and read) only where the scene has such a texture |
 //!
-//! Every image is in `GENERAL` layout, written by compute shader storage writes; the pass ends
-//! with a compute-to-compute barrier. Where no surface was hit, `depth`, `normal`, `base` and
+//! Every image is in `GENERAL` layout, written by compute shader storage writes. Where no surface was hit, `depth`, `normal`, `base` and
 //! `emission` (its a included) are 0.
 //!
 //! A host that writes its own G-buffer must write the occlusion too: 1 in `emission`'s a where a
@@ -25,7 +24,7 @@ use crate::gpu::layout::{GBufferParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Context, Image};
+use crate::vk::{raw, Context, Image, Recorder};
 
 /// The G-buffer images (see the module documentation for their formats and contents).
 pub struct GBuffer {
@@ -183,11 +182,10 @@ impl GBufferPass {
     }
 
     /// Records the pass into `target` (umbra's [`GBuffer::views`] or a host's images in the same
-    /// formats, `GENERAL` layout) and a compute-to-compute barrier after it. Never submits.
+    /// formats, `GENERAL` layout). Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         target: &GBufferViews,
         params: &GBufferParams,
@@ -202,8 +200,7 @@ impl GBufferPass {
             gb_layers: &target.layers,
             gb_layers2: &target.layers2,
         };
-        self.pipeline.record(cmd, &resources, params, [target.size.0, target.size.1, 1])?;
-        barrier::compute_to_compute(ctx, cmd);
+        self.pipeline.record(rec, &resources, params, [target.size.0, target.size.1, 1])?;
         Ok(())
     }
 }

@@ -11,7 +11,7 @@ use crate::gpu::layout::IblParams;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::split_sum::{chain_level_sizes, prefiltered_level_sizes, IBL_LEVELS, LUT_SIZE};
-use crate::vk::{barrier, raw, Buffer, Context, GpuTimer};
+use crate::vk::{raw, Buffer, Context, GpuTimer, Recorder};
 use gpu_allocator::MemoryLocation;
 
 /// What the precomputation spends.
@@ -109,21 +109,20 @@ impl IblResources {
     /// [`Self::new`], then records the precomputation and waits for it.
     pub fn build(ctx: &Context, scene: &GpuScene, settings: &IblSettings) -> Result<Self> {
         let ibl = Self::new(ctx, scene, settings)?;
-        ctx.submit(|cmd| ibl.record(ctx, cmd, scene, None))?;
+        ctx.record(|rec| ibl.record(rec, scene, None))?;
         Ok(ibl)
     }
 
     /// Records the precomputation (`scene` must be the one given to [`Self::new`]), timing the
     /// table ("ibl lut"), the chain and prefiltered levels ("ibl prefilter") and the SH
-    /// projection ("ibl sh") on `timer` when given (three passes). Never submits; ends with a
-    /// compute-to-compute barrier.
+    /// projection ("ibl sh") on `timer` when given (three passes). Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         mut timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
+        let cmd = rec.cmd();
         let begin = |timer: &mut Option<&mut GpuTimer>, name: &str| match timer {
             Some(t) => t.begin(cmd, name),
             None => Ok(()),
@@ -139,8 +138,7 @@ impl IblResources {
             ..Default::default()
         };
         let lut = ibl_lut::Resources { lut: &self.lut };
-        self.lut_pipeline.record(cmd, &lut, &params, [LUT_SIZE, LUT_SIZE, 1])?;
-        barrier::compute_to_compute(ctx, cmd);
+        self.lut_pipeline.record(rec, &lut, &params, [LUT_SIZE, LUT_SIZE, 1])?;
         end(&mut timer)?;
         let Some(size) = self.env_size else {
             return Ok(());
@@ -155,19 +153,18 @@ impl IblResources {
 
         begin(&mut timer, "ibl prefilter")?;
         let p = &self.downsample;
-        p.bind(cmd, &ibl_downsample::Resources { scene, chain: &self.chain })?;
+        p.bind(rec, &ibl_downsample::Resources { scene, chain: &self.chain })?;
         for (k, &(w, h)) in chain_level_sizes(size).iter().enumerate().skip(1) {
-            p.push_constants(cmd, &IblParams { src_size, src_level: k as u32, ..Default::default() })?;
-            p.dispatch(cmd, [w, h, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            p.push_constants(rec, &IblParams { src_size, src_level: k as u32, ..Default::default() })?;
+            p.dispatch(rec, [w, h, 1])?;
         }
         let p = &self.prefilter;
-        p.bind(cmd, &ibl_prefilter::Resources { scene, chain: &self.chain, prefiltered: &self.prefiltered })?;
+        p.bind(rec, &ibl_prefilter::Resources { scene, chain: &self.chain, prefiltered: &self.prefiltered })?;
         let mut offset = 0;
         for (k, &(w, h)) in prefiltered_level_sizes(size).iter().enumerate().skip(1) {
             let roughness = k as f32 / (IBL_LEVELS - 1) as f32;
             p.push_constants(
-                cmd,
+                rec,
                 &IblParams {
                     src_size,
                     dst_size: [w, h],
@@ -177,20 +174,18 @@ impl IblResources {
                     ..Default::default()
                 },
             )?;
-            p.dispatch(cmd, [w, h, 1])?;
+            p.dispatch(rec, [w, h, 1])?;
             offset += w * h;
         }
-        barrier::compute_to_compute(ctx, cmd);
         end(&mut timer)?;
 
         begin(&mut timer, "ibl sh")?;
         // 128 rows per dispatch (one per invocation): see ibl_sh.comp on llvmpipe's loop limiter.
         let p = &self.sh_pipeline;
-        p.bind(cmd, &ibl_sh::Resources { scene, sh: &self.sh })?;
+        p.bind(rec, &ibl_sh::Resources { scene, sh: &self.sh })?;
         for first_row in (0..src_size[1].max(1)).step_by(128) {
-            p.push_constants(cmd, &IblParams { src_size, first_row, ..Default::default() })?;
-            p.dispatch(cmd, [128, 1, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            p.push_constants(rec, &IblParams { src_size, first_row, ..Default::default() })?;
+            p.dispatch(rec, [128, 1, 1])?;
         }
         end(&mut timer)
     }

@@ -26,7 +26,7 @@ use crate::gpu::Pipeline;
 use crate::output::{write_exr, Layer};
 use crate::passes::probes::ProbeVolume;
 use crate::scene::Scene;
-use crate::vk::{barrier, raw, Buffer, Context, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, TexelBuffer};
 use glam::{Vec2, Vec3};
 use gpu_allocator::MemoryLocation;
 use std::path::{Path, PathBuf};
@@ -540,7 +540,7 @@ impl LightmapPass {
         let mut done = 0;
         while done < settings.samples {
             let n = batch.min(settings.samples - done);
-            ctx.submit(|cmd| {
+            ctx.record(|rec| {
                 for sample_index in done..done + n {
                     let params = LightmapParams {
                         env,
@@ -553,8 +553,7 @@ impl LightmapPass {
                         radius,
                         ..Default::default()
                     };
-                    pipeline.record(cmd, &resources, &params, [count as u32, 1, 1])?;
-                    barrier::compute_to_compute(ctx, cmd);
+                    pipeline.record(rec, &resources, &params, [count as u32, 1, 1])?;
                 }
                 Ok(())
             })?;

@@ -10,7 +10,7 @@ use crate::gpu::layout::{GpuCamera, GpuPathReservoir, PathParams, PathStats, Res
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation};
+use crate::vk::{raw, Buffer, Context, MemoryLocation, Recorder};
 
 /// The microfacet distribution of the specular lobes, and how their half vectors are sampled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -614,42 +614,34 @@ impl PathTarget {
     }
 
     /// Records the clearing of the running mean and second moment (a new render starts: the
-    /// kernel counts the samples accumulated so far in the mean's alpha) and a barrier before
-    /// the kernel.
-    pub fn record_clear(&self, ctx: &Context, cmd: raw::CommandBuffer) {
-        let device = ctx.device();
-        // SAFETY: `cmd` is recording; both buffers are this target's, made with TRANSFER_DST.
-        unsafe {
-            device.cmd_fill_buffer(cmd, self.accum.raw, 0, raw::WHOLE_SIZE, 0);
-            device.cmd_fill_buffer(cmd, self.moment.raw, 0, raw::WHOLE_SIZE, 0);
-        }
+    /// kernel counts the samples accumulated so far in the mean's alpha).
+    pub fn record_clear(&self, rec: &mut Recorder<'_>) {
+        rec.fill(&self.accum, 0);
+        rec.fill(&self.moment, 0);
         // A render with RIS reuse starts without reservoirs (count 0).
         if let Some(reservoirs) = self.ris_reservoirs.get() {
-            Self::record_clear_reservoirs(ctx, cmd, reservoirs);
+            Self::record_clear_reservoirs(rec, reservoirs);
         }
-        barrier::transfer_to_compute(ctx, cmd);
     }
 
-    /// Records the clearing of the RIS reservoirs (every count 0: no reservoir), without a barrier.
-    fn record_clear_reservoirs(ctx: &Context, cmd: raw::CommandBuffer, reservoirs: &[Buffer; 2]) {
+    /// Records the clearing of the RIS reservoirs (every count 0: no reservoir).
+    fn record_clear_reservoirs(rec: &mut Recorder<'_>, reservoirs: &[Buffer; 2]) {
         for buffer in reservoirs {
-            // SAFETY: `cmd` is recording; the buffers are this target's, made with TRANSFER_DST.
-            unsafe { ctx.device().cmd_fill_buffer(cmd, buffer.raw, 0, raw::WHOLE_SIZE, 0) };
+            rec.fill(buffer, 0);
         }
     }
 
-    /// The RIS reservoirs for reuse, made (and their clearing recorded, with a barrier) if the
-    /// target has none yet; an error when one would exceed the device's storage-buffer range.
-    fn ris_reservoirs(&self, ctx: &Context, cmd: raw::CommandBuffer) -> Result<&[Buffer; 2]> {
+    /// The RIS reservoirs for reuse, made (and their clearing recorded) if the target has none
+    /// yet; an error when one would exceed the device's storage-buffer range.
+    fn ris_reservoirs(&self, rec: &mut Recorder<'_>) -> Result<&[Buffer; 2]> {
         if let Some(reservoirs) = self.ris_reservoirs.get() {
             return Ok(reservoirs);
         }
         // (Buffer::new refuses a buffer over the device's storage-buffer range, naming it.)
         let bytes = self.size.0 as u64 * self.size.1 as u64 * std::mem::size_of::<GpuPathReservoir>() as u64;
-        let make = |name| Buffer::new(ctx, name, bytes, Self::USAGE, MemoryLocation::GpuOnly);
+        let make = |name| Buffer::new(rec.ctx(), name, bytes, Self::USAGE, MemoryLocation::GpuOnly);
         let reservoirs = [make("path RIS reservoirs 0")?, make("path RIS reservoirs 1")?];
-        Self::record_clear_reservoirs(ctx, cmd, &reservoirs);
-        barrier::transfer_to_compute(ctx, cmd);
+        Self::record_clear_reservoirs(rec, &reservoirs);
         Ok(self.ris_reservoirs.get_or_init(|| reservoirs))
     }
 }
@@ -794,12 +786,10 @@ impl PathTracePass {
     }
 
     /// Records samples `params.sample_index .. + params.sample_count` per pixel, in dispatches
-    /// of at most [`PathTracePass::SAMPLES_PER_DISPATCH`] each followed by a barrier, so the next
-    /// dispatch or a copy sees it. Never submits.
+    /// of at most [`PathTracePass::SAMPLES_PER_DISPATCH`] each. Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         target: &PathTarget,
         params: &PathParams,
@@ -811,7 +801,7 @@ impl PathTracePass {
         };
         let reuse = self.options.ris_reuse != RisReuse::Off;
         // Without reuse the reservoir bindings hold buffers the kernel never reads or writes.
-        let reservoirs = if reuse { Some(target.ris_reservoirs(ctx, cmd)?) } else { None };
+        let reservoirs = if reuse { Some(target.ris_reservoirs(rec)?) } else { None };
         let mut resources = pathtrace::Resources {
             scene,
             accum: &target.accum,
@@ -833,7 +823,7 @@ impl PathTracePass {
             )));
         }
         let pipeline =
-            self.variant(ctx, &scene.features(), target.lobe_split.is_some(), target.lane_counts)?;
+            self.variant(rec.ctx(), &scene.features(), target.lobe_split.is_some(), target.lane_counts)?;
         let end = params.sample_index + params.sample_count;
         let mut dispatch = *params;
         while dispatch.sample_index < end {
@@ -854,8 +844,7 @@ impl PathTracePass {
                 resources.ris_prev = &reservoirs[next ^ 1];
             }
             dispatch.sample_count = most.min(end - dispatch.sample_index);
-            pipeline.record(cmd, &resources, &dispatch, [target.size.0, target.size.1, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            pipeline.record(rec, &resources, &dispatch, [target.size.0, target.size.1, 1])?;
             dispatch.sample_index += dispatch.sample_count;
         }
         Ok(())
@@ -874,21 +863,14 @@ impl ResolvePass {
     }
 
     /// Records the copy of `target`'s mean into `output` (a storage image of the target's size
-    /// in `GENERAL` layout) and a compute-to-compute barrier after it. Never submits.
-    pub fn record(
-        &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
-        target: &PathTarget,
-        output: raw::ImageView,
-    ) -> Result<()> {
+    /// in `GENERAL` layout). Never submits.
+    pub fn record(&self, rec: &mut Recorder<'_>, target: &PathTarget, output: raw::ImageView) -> Result<()> {
         self.pipeline.record(
-            cmd,
+            rec,
             &resolve::Resources { accum: &target.accum, out_color: &output },
             &ResolveParams { size: [target.size.0, target.size.1], ..Default::default() },
             [target.size.0, target.size.1, 1],
         )?;
-        barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }
 }

@@ -33,7 +33,7 @@ use crate::gpu::layout::{
 };
 use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
-use crate::vk::{barrier, raw, Buffer, Context, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, Recorder, TexelBuffer};
 use glam::{Mat3, Quat, Vec3};
 use gpu_allocator::MemoryLocation;
 
@@ -375,12 +375,11 @@ impl ProbePass {
     /// dispatches of at most [`ProbeVolume::MAX_CHUNK`] probes, each new estimate weighed at
     /// least `blend_min` against the old once a probe's first [`ProbeSettings::bounces`] updates
     /// have replaced its maps, under environment `env` (the lighting's constant or map
-    /// multiplier). Never submits; ends with a compute → compute barrier.
+    /// multiplier). Never submits.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         volume: &mut ProbeVolume,
         count: u32,
@@ -420,8 +419,7 @@ impl ProbePass {
                 probe_distance: &volume.distance,
                 probe_rays: &volume.rays,
             };
-            self.trace.record(cmd, &trace, &params, [rays, n, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            self.trace.record(rec, &trace, &params, [rays, n, 1])?;
             let blend = probe_blend::Resources {
                 probe_rays: &volume.rays,
                 probe_texels: &volume.texels,
@@ -429,8 +427,7 @@ impl ProbePass {
                 probe_distance: &volume.distance,
             };
             let side = PROBE_DISTANCE_TEXELS + 2;
-            self.blend.record(cmd, &blend, &params, [side * n, side, 1])?;
-            barrier::compute_to_compute(ctx, cmd);
+            self.blend.record(rec, &blend, &params, [side * n, side, 1])?;
             done += n;
         }
         volume.cursor = (volume.cursor + count) % total;

@@ -41,7 +41,7 @@ use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::passes::gbuffer::GBufferViews;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation};
+use crate::vk::{raw, Buffer, Context, MemoryLocation, Recorder};
 use std::cell::Cell;
 
 /// ReSTIR DI's settings.
@@ -211,13 +211,11 @@ impl RestirPass {
     }
 
     /// Records one frame's reservoirs for the G-buffer seen by `camera` into `reservoirs` (its
-    /// size), reusing their history when `settings.temporal`, and a compute-to-compute barrier
-    /// after it. `frame` and `seed` pick the random numbers. Never submits.
+    /// size), reusing their history when `settings.temporal`. `frame` and `seed` pick the random numbers. Never submits.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         camera: &Camera,
         gbuffer: &GBufferViews,
@@ -234,14 +232,9 @@ impl RestirPass {
         let size = gbuffer.size;
         let history = reservoirs.history.get();
         if let Some(prev) = history {
-            // The previous camera for reprojection (after the last frame's reads of it).
-            barrier::compute_to_transfer(ctx, cmd);
-            // SAFETY: `cmd` is recording; the buffer is the reservoirs', made with TRANSFER_DST,
-            // and GpuCamera is 64 bytes, a multiple of 4 below the 65,536 vkCmdUpdateBuffer takes.
-            unsafe {
-                ctx.device().cmd_update_buffer(cmd, reservoirs.prev_camera.raw, 0, bytemuck::bytes_of(&prev));
-            }
-            barrier::transfer_to_compute(ctx, cmd);
+            // The previous camera for reprojection (GpuCamera is 64 bytes: within
+            // vkCmdUpdateBuffer's limits).
+            rec.update(&reservoirs.prev_camera, 0, bytemuck::bytes_of(&prev));
         }
         let gpu_camera = GpuCamera::new(camera, size);
         let params = RestirParams {
@@ -270,8 +263,7 @@ impl RestirPass {
             history: &reservoirs.frame,
             reservoirs: &reservoirs.initial,
         };
-        self.initial.record(cmd, &initial, &params, [size.0, size.1, 1])?;
-        barrier::compute_to_compute(ctx, cmd);
+        self.initial.record(rec, &initial, &params, [size.0, size.1, 1])?;
         let spatial = restir_spatial::Resources {
             scene,
             gb_depth: &gbuffer.depth,
@@ -283,8 +275,7 @@ impl RestirPass {
             reservoirs_in: &reservoirs.initial,
             reservoirs_out: &reservoirs.frame,
         };
-        self.spatial.record(cmd, &spatial, &params, [size.0, size.1, 1])?;
-        barrier::compute_to_compute(ctx, cmd);
+        self.spatial.record(rec, &spatial, &params, [size.0, size.1, 1])?;
         reservoirs.history.set(Some(gpu_camera));
         Ok(())
     }

@@ -49,7 +49,7 @@ use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::passes::gbuffer::GBufferViews;
 use crate::scene::Camera;
-use crate::vk::{barrier, raw, Buffer, Context, GpuTimer, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, GpuTimer, Recorder, TexelBuffer};
 use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 
@@ -736,64 +736,51 @@ impl ShadowPass {
         maps.plan.layers.len() as u32 * 7 + 1
     }
 
-    /// Records every layer of `maps` (and their moments when the method needs them), each
-    /// step behind a compute barrier, each timed under its kernel's name into `timer` when
+    /// Records every layer of `maps` (and their moments when the method needs them), each step
+    /// timed under its kernel's name into `timer` when
     /// given (room for [`ShadowPass::timer_entries`]). With a `view` and
     /// [`ShadowSettings::view_marks`], cascades render only the tiles its pixels read. Never
     /// submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         maps: &ShadowMaps,
         view: Option<ShadowView<'_>>,
         mut timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
+        let cmd = rec.cmd();
         let mut step = |name: &str, record: &mut dyn FnMut() -> Result<()>| -> Result<()> {
             if let Some(t) = timer.as_deref_mut() {
                 t.begin(cmd, name)?;
             }
             record()?;
-            barrier::compute_to_compute(ctx, cmd);
             if let Some(t) = timer.as_deref_mut() {
                 t.end(cmd)?;
             }
             Ok(())
         };
-        let device = ctx.device();
         let s = maps.settings.map_size;
         let tiles = s.div_ceil(SHADOW_TILE);
         let layer_bytes = 4 * (tiles * tiles) as u64;
         let view = view.filter(|_| maps.settings.view_marks);
-        // SAFETY: recording into a command buffer in the recording state; the buffers outlive it.
-        unsafe {
-            device.cmd_fill_buffer(cmd, maps.tile_count.raw, 0, raw::WHOLE_SIZE, 0);
-            device.cmd_fill_buffer(cmd, maps.stats.raw, 0, raw::WHOLE_SIZE, 0);
-            device.cmd_fill_buffer(cmd, maps.scratch.raw, 0, raw::WHOLE_SIZE, f32::INFINITY.to_bits());
-            device.cmd_fill_buffer(cmd, maps.dispatch.raw, 0, raw::WHOLE_SIZE, 0);
-            // Test builds poison every texel first (depth and moments 0: an occluder at the
-            // light): a lit point whose lookup reads one left unrendered shows as shadowed
-            // (tests/shadow.rs compares against whole layers).
-            #[cfg(feature = "testing")]
-            for texels in [&maps.depth, &maps.moments_x, &maps.moments] {
-                device.cmd_fill_buffer(cmd, texels.buffer.raw, 0, raw::WHOLE_SIZE, 0);
-            }
-            // Every tile of a window is marked but the cascades' for a view, which the view
-            // marks.
-            for (first, count, kind) in &maps.plan.lights {
-                let marked = view.is_none() || *kind != SHADOW_LIGHT_CASCADES;
-                let at = *first as u64 * layer_bytes;
-                device.cmd_fill_buffer(
-                    cmd,
-                    maps.marks.raw,
-                    at,
-                    *count as u64 * layer_bytes,
-                    u32::from(marked),
-                );
-            }
+        rec.fill(&maps.tile_count, 0);
+        rec.fill(&maps.stats, 0);
+        rec.fill(&maps.scratch, f32::INFINITY.to_bits());
+        rec.fill(&maps.dispatch, 0);
+        // Test builds poison every texel first (depth and moments 0: an occluder at the light):
+        // a lit point whose lookup reads one left unrendered shows as shadowed (tests/shadow.rs
+        // compares against whole layers).
+        #[cfg(feature = "testing")]
+        for texels in [&maps.depth, &maps.moments_x, &maps.moments] {
+            rec.fill(&texels.buffer, 0);
         }
-        barrier::transfer_to_compute(ctx, cmd);
+        // Every tile of a window is marked but the cascades' for a view, which the view marks.
+        for (first, count, kind) in &maps.plan.lights {
+            let marked = view.is_none() || *kind != SHADOW_LIGHT_CASCADES;
+            let at = *first as u64 * layer_bytes;
+            rec.fill_range(&maps.marks, at, *count as u64 * layer_bytes, u32::from(marked));
+        }
         if let Some(view) = view {
             let size = view.gbuffer.size;
             let params = ShadowMarkParams {
@@ -814,7 +801,7 @@ impl ShadowPass {
             step("shadow_mark", &mut || {
                 // An invocation per block of pixels.
                 self.mark.record(
-                    cmd,
+                    rec,
                     &resources,
                     &params,
                     [size.0.div_ceil(SHADOW_MARK_BLOCK), size.1.div_ceil(SHADOW_MARK_BLOCK), 1],
@@ -856,27 +843,19 @@ impl ShadowPass {
             };
             // The window's tiles.
             let span = [window[2] - window[0] + 1, window[3] - window[1] + 1];
-            step("shadow_tiles", &mut || {
-                self.tiles.record(cmd, &listing, &params, [span[0], span[1], 1])?;
-                barrier::compute_to_indirect(ctx, cmd);
-                Ok(())
-            })?;
+            step("shadow_tiles", &mut || self.tiles.record(rec, &listing, &params, [span[0], span[1], 1]))?;
             let dispatch_at = dispatch_offset(i);
-            step("shadow_bin", &mut || {
-                self.count.record(cmd, &bins, &params, [tri_count, 1, 1])?;
-                barrier::compute_to_indirect(ctx, cmd);
-                Ok(())
-            })?;
+            step("shadow_bin", &mut || self.count.record(rec, &bins, &params, [tri_count, 1, 1]))?;
             let scan = shadow_scan::Resources {
                 tile_count: &maps.tile_count,
                 tile_start: &maps.tile_start,
                 stats: &maps.stats,
             };
-            step("shadow_scan", &mut || self.scan.record(cmd, &scan, &params, [256, 1, 1]))?;
+            step("shadow_scan", &mut || self.scan.record(rec, &scan, &params, [256, 1, 1]))?;
             step("shadow_fill", &mut || {
-                self.fill.bind(cmd, &bins)?;
-                self.fill.push_constants(cmd, &params)?;
-                self.fill.dispatch_indirect(cmd, &maps.dispatch, dispatch_at + 16);
+                self.fill.bind(rec, &bins)?;
+                self.fill.push_constants(rec, &params)?;
+                self.fill.dispatch_indirect(rec, &maps.dispatch, dispatch_at + 16);
                 Ok(())
             })?;
             let raster = shadow_raster::Resources {
@@ -890,9 +869,9 @@ impl ShadowPass {
                 shadow_depth: &maps.depth,
             };
             step("shadow_raster", &mut || {
-                self.raster.bind(cmd, &raster)?;
-                self.raster.push_constants(cmd, &params)?;
-                self.raster.dispatch_indirect(cmd, &maps.dispatch, dispatch_at);
+                self.raster.bind(rec, &raster)?;
+                self.raster.push_constants(rec, &params)?;
+                self.raster.dispatch_indirect(rec, &maps.dispatch, dispatch_at);
                 Ok(())
             })?;
         }
@@ -922,9 +901,9 @@ impl ShadowPass {
                         list_at: i as u32 * tiles * tiles,
                     };
                     step("shadow_moments", &mut || {
-                        self.moments.bind(cmd, &resources)?;
-                        self.moments.push_constants(cmd, &params)?;
-                        self.moments.dispatch_indirect(cmd, &maps.dispatch, dispatch_offset(i));
+                        self.moments.bind(rec, &resources)?;
+                        self.moments.push_constants(rec, &params)?;
+                        self.moments.dispatch_indirect(rec, &maps.dispatch, dispatch_offset(i));
                         Ok(())
                     })?;
                 }

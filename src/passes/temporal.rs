@@ -39,7 +39,7 @@ use crate::gpu::layout::{
 };
 use crate::gpu::Pipeline;
 use crate::passes::denoise::DenoiseImages;
-use crate::vk::{raw, Context, Image};
+use crate::vk::{raw, Context, Image, Recorder};
 
 /// What the history keeps of a frame for the next.
 ///
@@ -248,13 +248,12 @@ impl TemporalPass {
     /// Records the blend of the prepared frame in `images` (diffuse part in `ping`, specular in
     /// the specular ping when `split`) with `history`, seen by `camera`, into the next slot of
     /// `history` and `images` as [`TemporalOutputs`] says (with the à-trous iteration counts
-    /// `iterations` of the two parts), then a compute-to-compute barrier. The caller calls
+    /// `iterations` of the two parts). The caller calls
     /// [`TemporalPass::advance`] once the frame is recorded.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record<'a>(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         images: &'a DenoiseImages,
         history: &'a TemporalHistory,
         camera: &GpuCamera,
@@ -310,7 +309,7 @@ impl TemporalPass {
             variance_frames: settings.variance_frames as f32,
         };
         self.pipeline.record(
-            cmd,
+            rec,
             &denoise_temporal::Resources {
                 dn_color: &images.ping.view,
                 dn_specular: &spec_ping.view,
@@ -339,7 +338,6 @@ impl TemporalPass {
             &params,
             [images.size.0, images.size.1, 1],
         )?;
-        crate::vk::barrier::compute_to_compute(ctx, cmd);
         Ok(outputs)
     }
 

@@ -1,13 +1,13 @@
 //! The display transform on the GPU (`spirv/tonemap.comp`): a linear `R32G32B32A32_SFLOAT` image
 //! × exposure, through a [`ToneCurve`], sRGB-encoded into an `R8G8B8A8_UNORM` image. Both images
-//! in `GENERAL` layout; a compute-to-compute barrier follows. [`crate::color`] is its CPU twin.
+//! in `GENERAL` layout. [`crate::color`] is its CPU twin.
 
 pub use crate::color::ToneCurve;
 use crate::error::Result;
 use crate::gpu::kernels::tonemap;
 use crate::gpu::layout::TonemapParams;
 use crate::gpu::Pipeline;
-use crate::vk::{barrier, raw, Context};
+use crate::vk::{raw, Context, Recorder};
 
 /// `tonemap.comp`.
 pub struct TonemapPass {
@@ -20,14 +20,13 @@ impl TonemapPass {
         Ok(Self { pipeline: Pipeline::plain(ctx)? })
     }
 
-    /// Records `dst = sRGB(curve(src × 2^stops))` over `size` pixels and a barrier after it:
+    /// Records `dst = sRGB(curve(src × 2^stops))` over `size` pixels:
     /// `src` an `R32G32B32A32_SFLOAT` and `dst` an `R8G8B8A8_UNORM` storage image, both in
     /// `GENERAL` layout. Never submits.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         src: raw::ImageView,
         dst: raw::ImageView,
         (w, h): (u32, u32),
@@ -35,12 +34,11 @@ impl TonemapPass {
         curve: ToneCurve,
     ) -> Result<()> {
         self.pipeline.record(
-            cmd,
+            rec,
             &tonemap::Resources { src: &src, dst: &dst },
             &TonemapParams { size: [w, h], exposure: exposure_stops.exp2(), curve: curve.code() },
             [w, h, 1],
         )?;
-        barrier::compute_to_compute(ctx, cmd);
         Ok(())
     }
 }

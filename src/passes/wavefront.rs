@@ -13,7 +13,7 @@ use crate::gpu::layout::{
 };
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
-use crate::vk::{barrier, raw, Buffer, Context, MemoryLocation, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, MemoryLocation, Recorder, TexelBuffer};
 use std::sync::OnceLock;
 
 /// Which integrator traces the path tracer's samples. Both trace the same samples (the same
@@ -289,13 +289,12 @@ impl WavefrontPass {
     }
 
     /// Records samples `params.sample_index .. + params.sample_count` per pixel into `target`,
-    /// in waves (each followed by a barrier), through `target`'s wavefront state (made now if
+    /// in waves, through `target`'s wavefront state (made now if
     /// the target has none), splitting the radiance by lobes for the denoiser in a target with
     /// the split ([`PathTarget::with_lobe_split`]). Never submits.
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         target: &PathTarget,
         settings: &PathSettings,
@@ -305,13 +304,19 @@ impl WavefrontPass {
         let state = match target.wave.get() {
             Some(state) => state,
             None => {
-                let state =
-                    WaveState::new(ctx, scene, target.size, settings.max_bounces, MAX_PATHS, lobe_split)?;
+                let state = WaveState::new(
+                    rec.ctx(),
+                    scene,
+                    target.size,
+                    settings.max_bounces,
+                    MAX_PATHS,
+                    lobe_split,
+                )?;
                 target.wave.get_or_init(|| state)
             }
         };
         state.check(scene, params.max_bounces, lobe_split)?;
-        let (extend, stages) = self.pipelines(ctx, &scene.features(), lobe_split)?;
+        let (extend, stages) = self.pipelines(rec.ctx(), &scene.features(), lobe_split)?;
         // Without the split its bindings hold buffers the stages then never read.
         let (aov_specular, aov_split) = match &target.lobe_split {
             Some(split) => (&split.specular, &split.split),
@@ -352,7 +357,6 @@ impl WavefrontPass {
         };
         // Every header a wave uses: x workgroups, 1, 1, no entries.
         let headers: Vec<[u32; 4]> = vec![[0, 1, 1, 0]; 2 * (params.max_bounces as usize + 2)];
-        let device = ctx.device();
         let (w, h) = target.size;
         let end = params.sample_index + params.sample_count;
         let mut camera = params.camera;
@@ -364,18 +368,9 @@ impl WavefrontPass {
                 // A wave over rows `row ..` of the region: a region of the region.
                 wave.size = [w, rows];
                 camera.set_region_origin((first_column, first_row + row));
-                // The previous wave's kernels (this record's or an earlier one's in `cmd`) read
-                // and write the camera and the queues' headers: done before the updates.
-                barrier::memory(ctx, cmd, barrier::access::COMPUTE_RW, barrier::access::TRANSFER_WRITE);
-                // SAFETY: `cmd` is recording; both buffers are the state's, made with
-                // TRANSFER_DST, and no earlier command reads or writes them any more (the barrier
-                // above).
-                unsafe {
-                    device.cmd_update_buffer(cmd, state.camera.raw, 0, bytemuck::bytes_of(&camera));
-                    device.cmd_update_buffer(cmd, state.counts.raw, 0, bytemuck::cast_slice(&headers));
-                }
-                barrier::transfer_to_indirect(ctx, cmd);
-                Self::wave(ctx, cmd, extend, stages, state, &resources, &mut wave, row)?;
+                rec.update(&state.camera, 0, bytemuck::bytes_of(&camera));
+                rec.update(&state.counts, 0, bytemuck::cast_slice(&headers));
+                Self::wave(rec, extend, stages, state, &resources, &mut wave, row)?;
             }
             wave.sample_index += wave.sample_count;
         }
@@ -386,8 +381,7 @@ impl WavefrontPass {
     /// `row` (the accumulation buffers' rows).
     #[allow(clippy::too_many_arguments)]
     fn wave(
-        ctx: &Context,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         extend: &Pipeline<wavefront::Kernel>,
         stages: &Stages,
         state: &WaveState,
@@ -398,8 +392,7 @@ impl WavefrontPass {
         wave.round = 0;
         wave.first_row = row;
         let [w, rows] = wave.size;
-        stages.camera_rays.record(cmd, resources, wave, [w, rows, wave.sample_count])?;
-        barrier::compute_to_indirect(ctx, cmd);
+        stages.camera_rays.record(rec, resources, wave, [w, rows, wave.sample_count])?;
         for round in 0..=wave.max_bounces {
             wave.round = round;
             let rays = 16 * round as u64;
@@ -409,14 +402,12 @@ impl WavefrontPass {
                     // No light samples at the last round's hits.
                     continue;
                 }
-                stage.bind(cmd, resources)?;
-                stage.push_constants(cmd, wave)?;
-                stage.dispatch_indirect(cmd, &state.counts, header);
-                barrier::compute_to_indirect(ctx, cmd);
+                stage.bind(rec, resources)?;
+                stage.push_constants(rec, wave)?;
+                stage.dispatch_indirect(rec, &state.counts, header);
             }
         }
-        stages.accumulate.record(cmd, resources, wave, [w, rows, 1])?;
-        barrier::compute_to_compute(ctx, cmd);
+        stages.accumulate.record(rec, resources, wave, [w, rows, 1])?;
         Ok(())
     }
 }

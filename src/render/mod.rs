@@ -39,7 +39,7 @@ use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::passes::wavefront::WavefrontPass;
 use crate::scene::Camera;
-use crate::vk::{raw, Buffer, Context, GpuTimer, Image};
+use crate::vk::{raw, Buffer, Context, GpuTimer, Image, Recorder};
 use std::sync::OnceLock;
 
 mod oneshot;

@@ -23,10 +23,11 @@ impl Passes {
         let mut timer = GpuTimer::new(ctx, 1)?;
         let mut ms = 0.0;
         for sweep in 1..=sweeps {
-            ctx.submit(|cmd| {
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
                 timer.reset(cmd);
                 timer.begin(cmd, "probes")?;
-                self.record_probe_update(cmd, scene, volume, count, 0.0, settings)?;
+                self.record_probe_update(rec, scene, volume, count, 0.0, settings)?;
                 timer.end(cmd)
             })?;
             ms += timer.read()?.iter().map(|t| t.ms).sum::<f64>();
@@ -49,9 +50,10 @@ impl Passes {
         self.check(scene)?;
         for _ in 0..2 {
             let mut timer = GpuTimer::new(ctx, ShadowPass::timer_entries(maps))?;
-            ctx.submit(|cmd| {
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
                 timer.reset(cmd);
-                self.shadow_pass(scene)?.record(ctx, cmd, scene, maps, view, Some(&mut timer))
+                self.shadow_pass(scene)?.record(rec, scene, maps, view, Some(&mut timer))
             })?;
             let mut steps: Vec<(String, f64)> = Vec::new();
             for t in timer.read()? {
@@ -116,12 +118,13 @@ impl Passes {
         let output = Image::storage_2d(ctx, "denoised", w, h, raw::Format::R32G32B32A32_SFLOAT)?;
         let pass = self.denoise_pass()?;
         let mut timer = GpuTimer::new(ctx, 1)?;
-        ctx.submit(|cmd| {
+        ctx.record(|rec| {
+            let cmd = rec.cmd();
             images.init_general(ctx, cmd);
             output.init_general(ctx, cmd);
             timer.reset(cmd);
             timer.begin(cmd, "denoise")?;
-            pass.record(ctx, cmd, &uploaded.inputs(), &images, output.view, settings)?;
+            pass.record(rec, &uploaded.inputs(), &images, output.view, settings)?;
             timer.end(cmd)
         })?;
         let gpu_ms = timer.read()?.iter().map(|t| t.ms).sum();
@@ -147,7 +150,8 @@ impl Passes {
         let mut history = TemporalHistory::new(ctx, size, *temporal)?;
         let output = Image::storage_2d(ctx, "denoised", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
         let (pass, temporal_pass) = (self.denoise_pass()?, self.temporal_pass()?);
-        ctx.submit(|cmd| {
+        ctx.record(|rec| {
+            let cmd = rec.cmd();
             images.init_general(ctx, cmd);
             history.init_general(ctx, cmd);
             output.init_general(ctx, cmd);
@@ -164,11 +168,12 @@ impl Passes {
             }
             let uploaded = UploadedImage::new(ctx, image)?;
             let camera = GpuCamera::new(camera, size);
-            ctx.submit(|cmd| {
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
                 timer.reset(cmd);
                 timer.begin(cmd, "denoise")?;
                 let temporal = (temporal_pass, &mut history, &camera);
-                pass.record_temporal(ctx, cmd, &uploaded.inputs(), &images, output.view, settings, temporal)?;
+                pass.record_temporal(rec, &uploaded.inputs(), &images, output.view, settings, temporal)?;
                 timer.end(cmd)
             })?;
             let gpu_ms = timer.read()?.iter().map(|t| t.ms).sum();
@@ -211,10 +216,11 @@ impl Passes {
         while done < settings.spp {
             let count = batch.min(settings.spp - done);
             let submitted = std::time::Instant::now();
-            ctx.submit(|cmd| {
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
                 timer.reset(cmd);
                 timer.begin(cmd, "pathtrace")?;
-                self.record_path_samples(cmd, scene, camera, &target, settings, done, count)?;
+                self.record_path_samples(rec, scene, camera, &target, settings, done, count)?;
                 timer.end(cmd)
             })?;
             let batch_ms = timer.read()?.iter().map(|t| t.ms).sum::<f64>();
@@ -324,11 +330,12 @@ impl Passes {
         // The environment's tables and the G-buffer first (the shadow maps render for its
         // view), then the rest of the frame.
         let mut first_timer = GpuTimer::new(ctx, 8)?;
-        ctx.submit(|cmd| {
+        ctx.record(|rec| {
+            let cmd = rec.cmd();
             first_timer.reset(cmd);
-            ibl.record(ctx, cmd, scene, Some(&mut first_timer))?;
+            ibl.record(rec, scene, Some(&mut first_timer))?;
             first_timer.begin(cmd, "gbuffer")?;
-            self.record_gbuffer(cmd, scene, camera, &views)?;
+            self.record_gbuffer(rec, scene, camera, &views)?;
             first_timer.end(cmd)
         })?;
         let mut shadow_ms = Vec::new();
@@ -358,7 +365,8 @@ impl Passes {
         // the last.
         let frames = settings.lighting.direct.restir().map_or(1, |r| r.frames);
         let mut timer = GpuTimer::new(ctx, 8)?;
-        ctx.submit(|cmd| {
+        ctx.record(|rec| {
+            let cmd = rec.cmd();
             output.init_general(ctx, cmd);
             display.init_general(ctx, cmd);
             if let Some((a, b)) = &ao_images {
@@ -370,7 +378,7 @@ impl Passes {
                 let mut frame = settings.clone();
                 frame.lighting.frame = settings.lighting.frame.wrapping_mul(frames).wrapping_add(f);
                 let timer = if f + 1 == frames { Some(&mut timer) } else { None };
-                self.record_hybrid_shading(cmd, scene, &ibl, camera, &targets, &frame, timer)?;
+                self.record_hybrid_shading(rec, scene, &ibl, camera, &targets, &frame, timer)?;
             }
             Ok(())
         })?;
@@ -407,19 +415,20 @@ impl Passes {
         let blurred = make("ambient occlusion blurred")?;
         let views = gbuffer.views();
         let mut timer = GpuTimer::new(ctx, 3)?;
-        ctx.submit(|cmd| {
+        ctx.record(|rec| {
+            let cmd = rec.cmd();
             raw_ao.init_general(ctx, cmd);
             blurred.init_general(ctx, cmd);
             timer.reset(cmd);
             timer.begin(cmd, "gbuffer")?;
-            self.record_gbuffer(cmd, scene, camera, &views)?;
+            self.record_gbuffer(rec, scene, camera, &views)?;
             timer.end(cmd)?;
             match method {
                 AoMethod::Ssao => {
                     // SSAO without its blur; the blur follows for both methods.
                     let unblurred = AoSettings { blur: false, ..*settings };
                     self.record_ssao_timed(
-                        cmd,
+                        rec,
                         camera,
                         &views,
                         (raw_ao.view, blurred.view),
@@ -429,14 +438,14 @@ impl Passes {
                 }
                 AoMethod::Rtao => {
                     timer.begin(cmd, "rtao")?;
-                    self.record_rtao(cmd, scene, camera, &views, raw_ao.view, settings)?;
+                    self.record_rtao(rec, scene, camera, &views, raw_ao.view, settings)?;
                     timer.end(cmd)?;
                 }
             }
             if settings.blur {
                 timer.begin(cmd, "ao_blur")?;
                 let params = AoBlurPass::params(camera, size);
-                self.blur_pass()?.record(ctx, cmd, &views, raw_ao.view, blurred.view, &params)?;
+                self.blur_pass()?.record(rec, &views, raw_ao.view, blurred.view, &params)?;
                 timer.end(cmd)?;
             }
             Ok(())

@@ -7,33 +7,33 @@ impl Passes {
     /// Records the ray-cast G-buffer of `scene` seen from `camera` into `target`.
     pub fn record_gbuffer(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         camera: &Camera,
         target: &GBufferViews,
     ) -> Result<()> {
         self.check(scene)?;
         let params = GBufferPass::params(camera, target.size);
-        self.gbuffer_pass()?.record(&self.ctx, cmd, scene, target, &params)
+        self.gbuffer_pass()?.record(rec, scene, target, &params)
     }
 
     /// Records SSAO of `gbuffer` into `raw_ao` and, when `settings.blur`, its depth-aware blur
     /// into `blurred` (`R32_SFLOAT`, the G-buffer's size). Returns the view holding the result.
     pub fn record_ssao(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         camera: &Camera,
         gbuffer: &GBufferViews,
         raw_ao: raw::ImageView,
         blurred: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<raw::ImageView> {
-        self.record_ssao_timed(cmd, camera, gbuffer, (raw_ao, blurred), settings, None)
+        self.record_ssao_timed(rec, camera, gbuffer, (raw_ao, blurred), settings, None)
     }
 
     pub(super) fn record_ssao_timed(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         camera: &Camera,
         gbuffer: &GBufferViews,
         (raw_ao, blurred): (raw::ImageView, raw::ImageView),
@@ -42,21 +42,15 @@ impl Passes {
     ) -> Result<raw::ImageView> {
         settings.validate()?;
         let size = gbuffer.size;
-        timed(&mut timer, cmd, "ssao", || {
-            self.ssao_pass()?.record(
-                &self.ctx,
-                cmd,
-                gbuffer,
-                raw_ao,
-                &SsaoPass::params(camera, size, settings),
-            )
+        timed(&mut timer, rec, "ssao", |rec| {
+            self.ssao_pass()?.record(rec, gbuffer, raw_ao, &SsaoPass::params(camera, size, settings))
         })?;
         if !settings.blur {
             return Ok(raw_ao);
         }
-        timed(&mut timer, cmd, "ao_blur", || {
+        timed(&mut timer, rec, "ao_blur", |rec| {
             let params = AoBlurPass::params(camera, size);
-            self.blur_pass()?.record(&self.ctx, cmd, gbuffer, raw_ao, blurred, &params)
+            self.blur_pass()?.record(rec, gbuffer, raw_ao, blurred, &params)
         })?;
         Ok(blurred)
     }
@@ -65,7 +59,7 @@ impl Passes {
     /// per pixel) into `output` (`R32_SFLOAT`, the G-buffer's size).
     pub fn record_rtao(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         camera: &Camera,
         gbuffer: &GBufferViews,
@@ -75,7 +69,7 @@ impl Passes {
         self.check(scene)?;
         settings.validate()?;
         let params = RtaoPass::params(camera, gbuffer.size, settings);
-        self.rtao_pass(scene)?.record(&self.ctx, cmd, scene, gbuffer, output, &params)
+        self.rtao_pass(scene)?.record(rec, scene, gbuffer, output, &params)
     }
 
     /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the
@@ -85,7 +79,7 @@ impl Passes {
     #[allow(clippy::too_many_arguments)]
     pub fn record_lighting(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         ibl: &IblResources,
         camera: &Camera,
@@ -109,7 +103,7 @@ impl Passes {
             )));
         }
         self.deferred_pass(settings, method, probes, lightmaps, restir)?
-            .record(&self.ctx, cmd, scene, gbuffer, output, ibl, inputs, &params)
+            .record(rec, scene, gbuffer, output, ibl, inputs, &params)
     }
 
     /// Records ReSTIR's candidates, temporal and spatial reuse for `gbuffer` (seen by `camera`)
@@ -118,7 +112,7 @@ impl Passes {
     #[allow(clippy::too_many_arguments)]
     pub fn record_restir(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         camera: &Camera,
         gbuffer: &GBufferViews,
@@ -128,8 +122,7 @@ impl Passes {
     ) -> Result<()> {
         self.check(scene)?;
         self.restir_pass(scene, settings)?.record(
-            &self.ctx,
-            cmd,
+            rec,
             scene,
             camera,
             gbuffer,
@@ -146,7 +139,7 @@ impl Passes {
     /// (0: a running mean), under the environment of `settings` (the lighting's). Never submits.
     pub fn record_probe_update(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         volume: &mut ProbeVolume,
         count: u32,
@@ -155,7 +148,7 @@ impl Passes {
     ) -> Result<()> {
         self.check(scene)?;
         settings.validate()?;
-        self.probe_pass(scene)?.record(&self.ctx, cmd, scene, volume, count, blend_min, settings.env)
+        self.probe_pass(scene)?.record(rec, scene, volume, count, blend_min, settings.env)
     }
 
     /// Places and allocates the shadow maps of `scene`'s punctual lights for `camera` over an
@@ -178,27 +171,27 @@ impl Passes {
     /// After the submission, [`ShadowMaps::check`] says whether the tile lists sufficed.
     pub fn record_shadow_maps(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         maps: &ShadowMaps,
         view: Option<ShadowView<'_>>,
     ) -> Result<()> {
         self.check(scene)?;
-        self.shadow_pass(scene)?.record(&self.ctx, cmd, scene, maps, view, None)
+        self.shadow_pass(scene)?.record(rec, scene, maps, view, None)
     }
 
     /// Records the display transform of `src` (`R32G32B32A32_SFLOAT`) into `dst`
     /// (`R8G8B8A8_UNORM`, sRGB-encoded values).
     pub fn record_tonemap(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         src: raw::ImageView,
         dst: raw::ImageView,
         size: (u32, u32),
         exposure_stops: f32,
         curve: ToneCurve,
     ) -> Result<()> {
-        self.tonemap_pass()?.record(&self.ctx, cmd, src, dst, size, exposure_stops, curve)
+        self.tonemap_pass()?.record(rec, src, dst, size, exposure_stops, curve)
     }
 
     /// Records one hybrid frame into `targets`: G-buffer, SSAO and its blur (when
@@ -207,7 +200,7 @@ impl Passes {
     #[allow(clippy::too_many_arguments)]
     pub fn record_hybrid(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         ibl: &IblResources,
         camera: &Camera,
@@ -217,8 +210,8 @@ impl Passes {
     ) -> Result<()> {
         self.check(scene)?;
         settings.lighting_with_shadows().validate()?;
-        timed(&mut timer, cmd, "gbuffer", || self.record_gbuffer(cmd, scene, camera, targets.gbuffer))?;
-        self.record_hybrid_shading(cmd, scene, ibl, camera, targets, settings, timer)
+        timed(&mut timer, rec, "gbuffer", |rec| self.record_gbuffer(rec, scene, camera, targets.gbuffer))?;
+        self.record_hybrid_shading(rec, scene, ibl, camera, targets, settings, timer)
     }
 
     /// [`Passes::record_hybrid`] after its G-buffer, which `targets.gbuffer` already holds
@@ -227,7 +220,7 @@ impl Passes {
     #[allow(clippy::too_many_arguments)]
     pub fn record_hybrid_shading(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         ibl: &IblResources,
         camera: &Camera,
@@ -257,7 +250,7 @@ impl Passes {
         let gbuffer = targets.gbuffer;
         let ao = match (&settings.ao, targets.ao) {
             (Some(ao), Some(images)) => {
-                Some(self.record_ssao_timed(cmd, camera, gbuffer, images, ao, timer.as_deref_mut())?)
+                Some(self.record_ssao_timed(rec, camera, gbuffer, images, ao, timer.as_deref_mut())?)
             }
             (Some(_), None) => {
                 return Err(Error::Invalid("the settings ask for SSAO but no AO images were given".into()))
@@ -267,8 +260,8 @@ impl Passes {
         let restir = match (settings.lighting.direct.restir(), targets.reservoirs) {
             (None, _) => None,
             (Some(restir), Some(reservoirs)) => {
-                timed(&mut timer, cmd, "restir", || {
-                    self.record_restir(cmd, scene, camera, gbuffer, reservoirs, restir, &settings.lighting)
+                timed(&mut timer, rec, "restir", |rec| {
+                    self.record_restir(rec, scene, camera, gbuffer, reservoirs, restir, &settings.lighting)
                 })?;
                 Some(reservoirs)
             }
@@ -276,15 +269,15 @@ impl Passes {
                 return Err(Error::Invalid("the settings ask for ReSTIR but no reservoirs were given".into()))
             }
         };
-        timed(&mut timer, cmd, "lighting", || {
+        timed(&mut timer, rec, "lighting", |rec| {
             let inputs =
                 LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
             let lighting = settings.lighting_with_shadows();
-            self.record_lighting(cmd, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &lighting)
+            self.record_lighting(rec, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &lighting)
         })?;
         if let Some(ldr) = targets.ldr {
-            timed(&mut timer, cmd, "tonemap", || {
-                self.record_tonemap(cmd, targets.hdr, ldr, gbuffer.size, settings.exposure, settings.curve)
+            timed(&mut timer, rec, "tonemap", |rec| {
+                self.record_tonemap(rec, targets.hdr, ldr, gbuffer.size, settings.exposure, settings.curve)
             })?;
         }
         Ok(())
@@ -299,7 +292,7 @@ impl Passes {
     #[allow(clippy::too_many_arguments)]
     pub fn record_path_samples(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         scene: &GpuScene,
         camera: &Camera,
         target: &PathTarget,
@@ -329,15 +322,15 @@ impl Passes {
             )?;
         params.sample_count = count;
         if first == 0 {
-            target.record_clear(&self.ctx, cmd);
+            target.record_clear(rec);
         }
         match settings.integrator {
             Integrator::Megakernel => {
-                self.lazy_path_pass(scene, settings.options())?.record(&self.ctx, cmd, scene, target, &params)
+                self.lazy_path_pass(scene, settings.options())?.record(rec, scene, target, &params)
             }
             Integrator::Wavefront => self
                 .lazy_wavefront_pass(scene, settings.options())?
-                .record(&self.ctx, cmd, scene, target, settings, &params),
+                .record(rec, scene, target, settings, &params),
         }
     }
 
@@ -345,11 +338,11 @@ impl Passes {
     /// target's size).
     pub fn record_path_resolve(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         target: &PathTarget,
         output: raw::ImageView,
     ) -> Result<()> {
-        self.resolve_pass()?.record(&self.ctx, cmd, target, output)
+        self.resolve_pass()?.record(rec, target, output)
     }
 
     /// Records the denoiser ([`crate::passes::denoise`]) of `target`'s samples so far into
@@ -357,13 +350,13 @@ impl Passes {
     /// (the target's size, already in `GENERAL` layout).
     pub fn record_denoise(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         target: &PathTarget,
         images: &DenoiseImages,
         output: raw::ImageView,
         settings: &DenoiseSettings,
     ) -> Result<()> {
-        self.denoise_pass()?.record(&self.ctx, cmd, &DenoiseInputs::from(target), images, output, settings)
+        self.denoise_pass()?.record(rec, &DenoiseInputs::from(target), images, output, settings)
     }
 
     /// Records the denoiser of `target`'s samples with temporal accumulation
@@ -373,7 +366,7 @@ impl Passes {
     #[allow(clippy::too_many_arguments)]
     pub fn record_denoise_temporal(
         &self,
-        cmd: raw::CommandBuffer,
+        rec: &mut Recorder<'_>,
         camera: &Camera,
         target: &PathTarget,
         images: &DenoiseImages,
@@ -384,8 +377,7 @@ impl Passes {
         let camera = GpuCamera::new(camera, target.size);
         let temporal = (self.temporal_pass()?, history, &camera);
         self.denoise_pass()?.record_temporal(
-            &self.ctx,
-            cmd,
+            rec,
             &DenoiseInputs::from(target),
             images,
             output,
@@ -398,16 +390,16 @@ impl Passes {
 /// Runs `record` between `timer.begin(name)` and `timer.end()` when there is a timer.
 pub(super) fn timed(
     timer: &mut Option<&mut GpuTimer>,
-    cmd: raw::CommandBuffer,
+    rec: &mut Recorder<'_>,
     name: &str,
-    record: impl FnOnce() -> Result<()>,
+    record: impl FnOnce(&mut Recorder<'_>) -> Result<()>,
 ) -> Result<()> {
     if let Some(t) = timer.as_deref_mut() {
-        t.begin(cmd, name)?;
+        t.begin(rec.cmd(), name)?;
     }
-    record()?;
+    record(rec)?;
     if let Some(t) = timer.as_deref_mut() {
-        t.end(cmd)?;
+        t.end(rec.cmd())?;
     }
     Ok(())
 }

@@ -2,7 +2,7 @@
 
 use super::breadcrumb::{self, CrumbBuffer, Trail};
 use super::context::Abandoned;
-use super::Context;
+use super::{Context, Recorder};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use std::sync::atomic::Ordering;
@@ -37,6 +37,17 @@ impl Context {
             (0, _) => Ok(()),
             (_, pass) => Err(Error::Timeout { seconds: timeout_ns as f64 * 1e-9, pass }),
         }
+    }
+
+    /// [`Context::submit`] through a [`Recorder`]: the barriers between what `record` records
+    /// are derived from what each operation reads and writes, and one ends the command buffer.
+    pub fn record<T>(&self, record: impl FnOnce(&mut Recorder<'_>) -> Result<T>) -> Result<T> {
+        self.submit(|cmd| {
+            let mut rec = Recorder::new(self, cmd);
+            let value = record(&mut rec)?;
+            rec.finish();
+            Ok(value)
+        })
     }
 
     /// Records `record` into a fresh primary command buffer, submits it and waits for it.

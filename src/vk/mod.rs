@@ -8,6 +8,7 @@ mod context;
 mod debug;
 mod image;
 mod pipeline;
+mod recorder;
 pub mod specialize;
 mod timer;
 
@@ -16,6 +17,7 @@ pub use context::{Context, ContextDesc, DeviceInfo, HostDevice, MemoryReport, RE
 pub use debug::ValidationLog;
 pub use image::Image;
 pub use pipeline::{ComputePipeline, Descriptor, PipelineDesc};
+pub use recorder::{Recorder, RecorderStats, Resource, Use};
 pub use timer::{GpuTimer, PassTime};
 
 pub use ash::vk as raw;

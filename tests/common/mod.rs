@@ -385,9 +385,9 @@ pub fn sample_test_rgb(gpu: &Gpu, name: &str, mode: u32, input: &[[f32; 4]], cou
             .unwrap();
     let pipeline = Pipeline::<sample_test::Kernel>::plain(gpu).unwrap();
     let params = SampleTestParams { mode, count, ..Default::default() };
-    gpu.submit(|cmd| {
+    gpu.record(|rec| {
         let resources = sample_test::Resources { directions: &directions, results: &results };
-        pipeline.record(cmd, &resources, &params, [count, 1, 1])
+        pipeline.record(rec, &resources, &params, [count, 1, 1])
     })
     .unwrap();
     let out: Vec<[f32; 4]> = results.read(gpu).unwrap();
@@ -413,9 +413,9 @@ pub fn sample_test_run(
     let results =
         Buffer::new(gpu, "sample test results", params.count as u64 * 16, usage, MemoryLocation::GpuOnly)
             .unwrap();
-    gpu.submit(|cmd| {
+    gpu.record(|rec| {
         let resources = sample_test::Resources { directions: &directions, results: &results };
-        pipeline.record(cmd, &resources, params, [params.count, 1, 1])
+        pipeline.record(rec, &resources, params, [params.count, 1, 1])
     })
     .unwrap();
     results.read(gpu).unwrap()

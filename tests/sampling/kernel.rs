@@ -177,9 +177,9 @@ impl Kernel {
         let output =
             Buffer::new(gpu, "sample test results", count as u64 * 16, usage, MemoryLocation::GpuOnly)
                 .unwrap();
-        gpu.submit(|cmd| {
+        gpu.record(|rec| {
             let resources = sample_test::Resources { directions: &input, results: &output };
-            pipeline.record(cmd, &resources, params, [count, 1, 1])
+            pipeline.record(rec, &resources, params, [count, 1, 1])
         })
         .unwrap();
         output.read(gpu).unwrap()

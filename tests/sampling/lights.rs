@@ -122,10 +122,10 @@ impl LightKernel {
             light_count: self.scene.light_count,
             ..Default::default()
         };
-        gpu.submit(|cmd| {
+        gpu.record(|rec| {
             let resources =
                 light_sample_test::Resources { scene: &self.scene, directions: &input, results: &output };
-            self.pipeline.record(cmd, &resources, &params, [run.count, 1, 1])
+            self.pipeline.record(rec, &resources, &params, [run.count, 1, 1])
         })
         .unwrap();
         output.read(gpu).unwrap()

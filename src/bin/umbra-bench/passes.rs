@@ -95,20 +95,21 @@ pub fn run(
         ..HybridSettings::default()
     };
     super::rays::warm_up(|| {
-        ctx.submit(|cmd| {
-            passes.record_hybrid(cmd, scene, &ibl, camera, &targets, &settings, None)?;
-            passes.record_path_samples(cmd, scene, camera, &target, &path_settings, 0, 1)
+        ctx.record(|rec| {
+            passes.record_hybrid(rec, scene, &ibl, camera, &targets, &settings, None)?;
+            passes.record_path_samples(rec, scene, camera, &target, &path_settings, 0, 1)
         })
     })?;
     let mut timer = GpuTimer::new(ctx, 5)?;
     let mut samples: Vec<Vec<f64>> = vec![Vec::new(); 5];
     let mut names = Vec::new();
     for repeat in 0..=repeats {
-        ctx.submit(|cmd| {
+        ctx.record(|rec| {
+            let cmd = rec.cmd();
             timer.reset(cmd);
-            passes.record_hybrid(cmd, scene, &ibl, camera, &targets, &settings, Some(&mut timer))?;
+            passes.record_hybrid(rec, scene, &ibl, camera, &targets, &settings, Some(&mut timer))?;
             timer.begin(cmd, "pathtrace 1 spp")?;
-            passes.record_path_samples(cmd, scene, camera, &target, &path_settings, repeat as u32, 1)?;
+            passes.record_path_samples(rec, scene, camera, &target, &path_settings, repeat as u32, 1)?;
             timer.end(cmd)
         })?;
         let times = timer.read()?;

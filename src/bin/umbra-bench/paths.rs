@@ -84,17 +84,18 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
             let mut submitted = 0u32;
             super::rays::warm_up(|| {
                 submitted += spp;
-                ctx.submit(|cmd| {
-                    passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted - spp, spp)
+                ctx.record(|rec| {
+                    passes.record_path_samples(rec, &gpu_scene, &camera, &target, &path, submitted - spp, spp)
                 })
             })?;
             let mut timer = GpuTimer::new(ctx, 1)?;
             let mut ms = Vec::new();
             for _ in 0..settings.repeats.max(1) {
-                ctx.submit(|cmd| {
+                ctx.record(|rec| {
+                    let cmd = rec.cmd();
                     timer.reset(cmd);
                     timer.begin(cmd, "pathtrace")?;
-                    passes.record_path_samples(cmd, &gpu_scene, &camera, &target, &path, submitted, spp)?;
+                    passes.record_path_samples(rec, &gpu_scene, &camera, &target, &path, submitted, spp)?;
                     timer.end(cmd)
                 })?;
                 submitted += spp;
@@ -104,8 +105,8 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
             let samples = settings.size.0 as f64 * settings.size.1 as f64 * submitted as f64;
             let busy_lanes = if settings.lanes && integrator == Integrator::Megakernel {
                 let counting = PathTarget::new(ctx, settings.size)?.with_lane_counts();
-                ctx.submit(|cmd| {
-                    passes.record_path_samples(cmd, &gpu_scene, &camera, &counting, &path, 0, spp)
+                ctx.record(|rec| {
+                    passes.record_path_samples(rec, &gpu_scene, &camera, &counting, &path, 0, spp)
                 })?;
                 let stats: Vec<PathStats> = counting.stats.read(ctx)?;
                 let subgroup = ctx.info().subgroup_size;

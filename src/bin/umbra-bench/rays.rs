@@ -320,7 +320,7 @@ fn trace_validated(
 ) -> Result<(RayBatch, Vec<TraceHit>)> {
     let trace_rays: Vec<TraceRay> = rays.iter().map(TraceRay::from).collect();
     let batch = RayBatch::new(ctx, &trace_rays)?;
-    ctx.submit(|cmd| tracer.record(cmd, query, device_bvh, &batch))?;
+    ctx.record(|rec| tracer.record(rec, query, device_bvh, &batch))?;
     let hits = batch.read_hits(ctx)?;
     let bad = rays
         .par_iter()
@@ -363,14 +363,15 @@ fn time_trace(
     repeats: usize,
 ) -> Result<f64> {
     let mut timer = GpuTimer::new(ctx, 1)?;
-    warm_up(|| ctx.submit(|cmd| tracer.record(cmd, query, bvh, batch)))?;
+    warm_up(|| ctx.record(|rec| tracer.record(rec, query, bvh, batch)))?;
     let mut times = Vec::new();
     for i in 0..=repeats {
         let start = Instant::now();
-        ctx.submit(|cmd| {
+        ctx.record(|rec| {
+            let cmd = rec.cmd();
             timer.reset(cmd);
             timer.begin(cmd, "trace")?;
-            tracer.record(cmd, query, bvh, batch)?;
+            tracer.record(rec, query, bvh, batch)?;
             timer.end(cmd)
         })?;
         let ms = timer.read()?[0].ms;

@@ -93,7 +93,7 @@ pub fn run(
         super::passes::FrameImages::new(ctx, scene, size)?;
     let views = gbuffer.views();
     // The view's G-buffer, which the maps' marks read (record_hybrid renders the same again).
-    ctx.submit(|cmd| passes.record_gbuffer(cmd, scene, camera, &views))?;
+    ctx.record(|rec| passes.record_gbuffer(rec, scene, camera, &views))?;
     let view = Some(ShadowView { camera, gbuffer: &views });
     let lighting = LightingSettings { env: [0.2; 3], ..LightingSettings::default() };
     let mut point: Option<Vec<[f32; 4]>> = None;
@@ -152,14 +152,15 @@ pub fn run(
             continue;
         }
         let frame =
-            || ctx.submit(|cmd| passes.record_hybrid(cmd, scene, &ibl, camera, &targets, &hybrid, None));
+            || ctx.record(|rec| passes.record_hybrid(rec, scene, &ibl, camera, &targets, &hybrid, None));
         super::rays::warm_up(frame)?;
         let mut timer = GpuTimer::new(ctx, 2)?;
         let mut lighting_ms = Vec::new();
         for _ in 0..repeats.max(1) {
-            ctx.submit(|cmd| {
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
                 timer.reset(cmd);
-                passes.record_hybrid(cmd, scene, &ibl, camera, &targets, &hybrid, Some(&mut timer))
+                passes.record_hybrid(rec, scene, &ibl, camera, &targets, &hybrid, Some(&mut timer))
             })?;
             let times = timer.read()?;
             lighting_ms.extend(times.iter().filter(|t| t.name == "lighting").map(|t| t.ms));
@@ -209,7 +210,7 @@ pub fn run(
                     shadows: settings,
                     ..HybridSettings::default()
                 };
-                ctx.submit(|cmd| passes.record_hybrid(cmd, scene, &ibl, camera, &targets, &hybrid, None))?;
+                ctx.record(|rec| passes.record_hybrid(rec, scene, &ibl, camera, &targets, &hybrid, None))?;
                 let image: Vec<[f32; 4]> = output.read(ctx)?;
                 for (s, p) in sum.iter_mut().zip(&image) {
                     for c in 0..4 {

@@ -91,7 +91,7 @@ macro_rules! gated_statement {
 }
 
 macro_rules! gpu_structs {
-    ($($(#[$meta:meta])* $role:ident $name:ident {
+    ($group:ident; $($(#[$meta:meta])* $role:ident $name:ident {
         $($(#[$fmeta:meta])* $field:ident : $ty:tt $(as $rust:ty)?),* $(,)?
     })*) => {
         $(
@@ -105,23 +105,39 @@ macro_rules! gpu_structs {
             );
         )*
 
+        mod $group {
+            use super::*;
+
+            /// The group's structs' layouts, in order.
+            #[allow(clippy::vec_init_then_push)] // some pushes are cfg'd out
+            pub(super) fn layouts() -> Vec<StructLayout> {
+                let mut layouts = Vec::new();
+                $(gated_statement!($role, layouts.push({
+                    let zero = <$name as Zeroable>::zeroed();
+                    StructLayout {
+                        name: stringify!($name),
+                        size: size_of::<$name>(),
+                        members: vec![$(MemberLayout {
+                            name: stringify!($field),
+                            offset: offset_of!($name, $field),
+                            size: std::mem::size_of_val(&zero.$field),
+                        }),*],
+                    }
+                }));)*
+                layouts
+            }
+        }
+    };
+}
+
+/// The groups of structs `interface.rs` includes, in order.
+macro_rules! struct_groups {
+    ($($group:ident),* $(,)?) => {
         /// Every host/GPU struct pair: each member's name, offset and size, and the struct's
         /// size (which is also its array stride).
-        #[allow(clippy::vec_init_then_push)] // some pushes are cfg'd out
         pub fn gpu_layouts() -> Vec<StructLayout> {
             let mut layouts = Vec::new();
-            $(gated_statement!($role, layouts.push({
-                let zero = <$name as Zeroable>::zeroed();
-                StructLayout {
-                    name: stringify!($name),
-                    size: size_of::<$name>(),
-                    members: vec![$(MemberLayout {
-                        name: stringify!($field),
-                        offset: offset_of!($name, $field),
-                        size: std::mem::size_of_val(&zero.$field),
-                    }),*],
-                }
-            }));)*
+            $(layouts.extend($group::layouts());)*
             layouts
         }
     };
@@ -276,21 +292,14 @@ macro_rules! scene_descriptors {
 }
 
 macro_rules! kernels {
-    ($($(#[$meta:meta])* $role:ident $kernel:ident {
+    ($family:ident; $($(#[$meta:meta])* $role:ident $kernel:ident {
         scene: $scene:ident $([$($feature:ident),* $(,)?])?,
         push: $push:ty,
         local: [$lx:expr, $ly:expr, $lz:expr],
         spec: { $($spec:ident : $sty:tt = $sdef:expr),* $(,)? },
         bindings: { $($(#[$bmeta:meta])* $name:ident : $access:ident $kind:ident $arg:tt),* $(,)? }
     })*) => {
-        /// One module per kernel of `spirv/`: its resources by name ([`Resources`]), push
-        /// constants ([`Push`]), specialization constants ([`Spec`]) and interface (what the
-        /// pipeline layout and the naga test read).
-        ///
-        /// [`Resources`]: crate::gpu::kernels::pathtrace::Resources
-        /// [`Push`]: crate::gpu::kernels::pathtrace::Push
-        /// [`Spec`]: crate::gpu::kernels::pathtrace::Spec
-        pub mod kernels {
+        mod $family {
             $(gated!($role,
                 $(#[$meta])*
                 #[allow(unused_imports)]
@@ -363,11 +372,34 @@ macro_rules! kernels {
                 }
             );)*
 
-            /// Every kernel's interface (the test kernels' with the `testing` feature).
+            /// The family's kernels' interfaces, in order.
             #[allow(clippy::vec_init_then_push)] // some pushes are cfg'd out
-            pub fn all() -> Vec<&'static crate::gpu::kernel::KernelInterface> {
+            pub(super) fn all() -> Vec<&'static crate::gpu::kernel::KernelInterface> {
                 let mut all = Vec::new();
                 $(gated_statement!($role, all.push(&$kernel::INTERFACE));)*
+                all
+            }
+        }
+    };
+}
+
+/// The families of kernels `interface.rs` includes, in order.
+macro_rules! kernel_families {
+    ($($family:ident),* $(,)?) => {
+        /// One module per kernel of `spirv/`: its resources by name ([`Resources`]), push
+        /// constants ([`Push`]), specialization constants ([`Spec`]) and interface (what the
+        /// pipeline layout and the naga test read).
+        ///
+        /// [`Resources`]: crate::gpu::kernels::pathtrace::Resources
+        /// [`Push`]: crate::gpu::kernels::pathtrace::Push
+        /// [`Spec`]: crate::gpu::kernels::pathtrace::Spec
+        pub mod kernels {
+            $(pub use super::$family::*;)*
+
+            /// Every kernel's interface (the test kernels' with the `testing` feature).
+            pub fn all() -> Vec<&'static crate::gpu::kernel::KernelInterface> {
+                let mut all = Vec::new();
+                $(all.extend(super::$family::all());)*
                 all
             }
         }

@@ -131,6 +131,125 @@ fn suite_quick_writes_json_csv_and_charts() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `umbra-bench suite --redraw` redraws every scene's three charts (image error, FLIP, AO) of the
+/// committed suite.json, and nothing else, with no Vulkan driver to be found (it measures
+/// nothing): each SVG and PNG of the usual size, each SVG titled with its scene and holding every
+/// charted series of the JSON. A truncated file, a missing field and a missing file are errors
+/// naming the file (and the field), and write nothing.
+#[test]
+fn suite_redraw_writes_every_scenes_charts_from_json() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = common::fresh_folder("suite-redraw");
+    let out = dir.join("charts");
+    // What the committed file's scenes are keyed by (it predates the JSON's `key`).
+    let keys = [
+        ("cornell-box.glb (embedded)", "cornell"),
+        ("Cornell box, point light", "cornell-point"),
+        ("scenes/spheres.glb", "spheres"),
+        ("scenes/textured.glb", "textured"),
+        ("sponza_dabrovic under a sun", "sponza-sun"),
+    ];
+    let redraw = |file: &std::path::Path| {
+        Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+            .current_dir(root)
+            .env("VK_DRIVER_FILES", "/nonexistent/no-driver.json")
+            .env("VK_ICD_FILENAMES", "/nonexistent/no-driver.json")
+            .args(["suite", "--redraw"])
+            .arg(file)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let file = std::path::Path::new(root).join("docs/bench/suite.json");
+    let run = redraw(&file);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    let scenes = json["scenes"].as_array().unwrap();
+    assert!(scenes.len() >= 5, "every scene of the suite, Sponza's included");
+    let mut expected = Vec::new();
+    for scene in scenes {
+        let name = scene["scene"].as_str().unwrap();
+        let key = scene["key"].as_str().or_else(|| keys.iter().find(|(n, _)| *n == name).map(|(_, k)| *k));
+        let key = key.unwrap_or_else(|| panic!("no key for the scene {name:?}: add it to this test"));
+        // The series each chart draws: those with a point of positive time and error.
+        let series = |points: &str, error: &str| -> Vec<String> {
+            let mut names: Vec<String> = Vec::new();
+            for p in scene[points].as_array().unwrap() {
+                let method = p["method"].as_str().unwrap().to_string();
+                let charted = p["gpu_ms"].as_f64().is_some_and(|v| v > 0.0)
+                    && p[error].as_f64().is_some_and(|v| v > 0.0);
+                if charted && !names.contains(&method) {
+                    names.push(method);
+                }
+            }
+            assert!(!names.is_empty(), "{name}: nothing to chart in {points}");
+            names
+        };
+        // The titles the measuring run gives them (the committed file predates `ao_radius`: the
+        // default 0.5).
+        let (w, h) = (&json["size"][0], &json["size"][1]);
+        let title = format!("{name} — {w}×{h} on {}", json["device"].as_str().unwrap());
+        let r = json["ao_radius"].as_f64().unwrap_or(0.5);
+        let ao_title = format!("ambient occlusion, r = {r} — {name} — {w}×{h}");
+        for (stem, title, series) in [
+            (format!("suite-{key}"), &title, series("points", "rel_mse")),
+            (format!("suite-{key}-flip"), &title, series("points", "flip")),
+            (format!("suite-{key}-ao"), &ao_title, series("ao_points", "mse")),
+        ] {
+            let svg = std::fs::read_to_string(out.join(format!("{stem}.svg")))
+                .unwrap_or_else(|e| panic!("{stem}.svg: {e}"));
+            assert!(svg.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{stem}.svg");
+            assert!(svg.contains(r#"width="900" height="600""#), "{stem}.svg is not 900×600");
+            let escape = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;");
+            // plotters writes each text on a line of its own.
+            let has_text = |text: &str| svg.lines().any(|line| line == escape(text));
+            assert!(has_text(title), "{stem}.svg is not titled {title:?}");
+            for method in &series {
+                assert!(has_text(method), "{stem}.svg: no series {method:?} in the legend");
+            }
+            let png = image::open(out.join(format!("{stem}.png")))
+                .unwrap_or_else(|e| panic!("{stem}.png does not decode: {e}"));
+            assert_eq!((png.width(), png.height()), (900, 600), "{stem}.png");
+            expected.extend([format!("{stem}.png"), format!("{stem}.svg")]);
+        }
+    }
+    expected.sort();
+    let mut written: Vec<String> =
+        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    written.sort();
+    assert_eq!(written, expected, "the charts, and nothing else");
+
+    // Bad input: an error naming the file (and the field), no panic, nothing written.
+    let text = std::fs::read_to_string(&file).unwrap();
+    let truncated = dir.join("truncated.json");
+    std::fs::write(&truncated, &text[..text.len() / 2]).unwrap();
+    let mut doc = json.clone();
+    doc["scenes"][1]["points"][3].as_object_mut().unwrap().remove("gpu_ms");
+    let missing_field = dir.join("missing-field.json");
+    std::fs::write(&missing_field, serde_json::to_string(&doc).unwrap()).unwrap();
+    for (bad, says) in [
+        (truncated, "parsing"),
+        (missing_field, "scenes[1].points[3].gpu_ms"),
+        (dir.join("absent.json"), "No such file"),
+    ] {
+        std::fs::remove_dir_all(&out).ok();
+        let run = redraw(&bad);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{}: {stderr}", bad.display());
+        assert!(
+            stderr.contains(&bad.display().to_string())
+                && stderr.contains(says)
+                && !stderr.contains("panicked"),
+            "{}: the error should name it and say {says:?}: {stderr}",
+            bad.display()
+        );
+        assert!(!out.exists(), "{}: charts written from bad input", bad.display());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `umbra-bench denoise --quick` writes JSON with both series at every reading and a chart, and
 /// its table prints it; the denoiser lowers the Cornell box's relative MSE at 4 spp (4.3× measured at
 /// 64×64 against its 256-spp reference; 3× is asked for).

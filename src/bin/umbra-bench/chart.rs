@@ -421,7 +421,8 @@ where
         .x_desc("GPU time per frame (ms, log)")
         .y_desc(spec.y_desc)
         .label_style(("sans-serif", 13))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| log_tick_label(*v, (x1 * 1.5 / (x0 / 1.5)).log10(), |v| format!("{v}")))
+        .y_label_formatter(&|v| log_tick_label(*v, (y1 * 2.0 / (y0 / 2.0)).log10(), |v| format!("{v:.0e}")))
         .draw()
         .map_err(err)?;
     if floor > 0.0 {
@@ -560,6 +561,23 @@ fn draw_marker<DB: DrawingBackend>(
             area.draw(&PathElement::new(vec![(x - r, y), (x + r, y)], line))?;
             area.draw(&PathElement::new(vec![(x, y - r), (x, y + r)], line))
         }
+    }
+}
+
+/// The label of a log axis's tick at `v` on an axis spanning `decades`: every tick on an axis of
+/// under one decade; else only at 1, 2 and 5 times a power of ten, since plotters puts a tick at
+/// every integer multiple and on a wide axis their labels (3 to 9 times, 10 to 30 px apart) run
+/// together.
+fn log_tick_label(v: f64, decades: f64, format: impl Fn(f64) -> String) -> String {
+    if decades < 1.0 {
+        return format(v);
+    }
+    let mantissa = v / 10f64.powf(v.log10().floor());
+    let kept = [1.0, 2.0, 5.0, 10.0].iter().any(|m| (mantissa - m).abs() < 1e-6 * m);
+    if kept {
+        format(v)
+    } else {
+        String::new()
     }
 }
 
@@ -721,45 +739,18 @@ mod tests {
         assert!(drawn.labels.len() >= 14, "only {} labels placed", drawn.labels.len());
     }
 
-    /// Redraws Sponza's suite chart from docs/bench/suite.json into the temporary directory
-    /// (`cargo test --bin umbra-bench redraw -- --ignored`), to look at.
+    /// On a wide log axis only 1, 2 and 5 times a power of ten are labelled, so neighbouring
+    /// labels stay apart; on a narrow one every tick is.
     #[test]
-    #[ignore]
-    fn redraw_suite_sponza_sun() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-        let text = std::fs::read_to_string(root.join("docs/bench/suite.json")).unwrap();
-        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
-        let scene = json["scenes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|s| s["scene"].as_str().unwrap().starts_with("sponza"))
-            .expect("Sponza in suite.json");
-        let points: Vec<ChartPoint> = scene["points"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|p| ChartPoint {
-                method: p["method"].as_str().unwrap(),
-                unit: p["unit"].as_str().unwrap(),
-                value: p["value"].as_u64().unwrap() as u32,
-                ms: p["gpu_ms"].as_f64().unwrap(),
-                error: p["rel_mse"].as_f64().unwrap(),
-            })
-            .collect();
-        let size = &json["size"];
-        let title = format!(
-            "{} — {}×{} on {}",
-            scene["scene"].as_str().unwrap(),
-            size[0],
-            size[1],
-            json["device"].as_str().unwrap()
-        );
-        let floor = scene["reference_rel_mse_floor"].as_f64().unwrap();
-        let chart = Chart { title: &title, y_desc: "relative MSE vs converged path tracing (log)", floor };
-        let dir = std::env::temp_dir().join("umbra-chart");
-        std::fs::create_dir_all(&dir).unwrap();
-        write(&dir.join("suite-sponza-sun"), &chart, &points).unwrap();
-        println!("{}", dir.join("suite-sponza-sun.png").display());
+    fn wide_log_axes_label_one_two_and_five_only() {
+        let labels = |decades: f64, ticks: &[f64]| -> Vec<String> {
+            ticks.iter().map(|&v| log_tick_label(v, decades, |v| format!("{v}"))).collect()
+        };
+        let ticks = [3.0, 5.0, 7.0, 8.0, 9.0, 10.0, 20.0, 30.0, 50.0, 200.0, 0.5, 0.7];
+        let wide = labels(2.5, &ticks);
+        let kept: Vec<&str> = wide.iter().filter(|l| !l.is_empty()).map(|l| l.as_str()).collect();
+        assert_eq!(kept, ["5", "10", "20", "50", "200", "0.5"]);
+        // At 560 px for 2.5 decades the labels kept are at least log10(2) · 224 = 67 px apart.
+        assert!(labels(0.6, &ticks).iter().all(|l| !l.is_empty()), "a narrow axis labels every tick");
     }
 }

@@ -96,6 +96,11 @@ enum Command {
         /// rendered).
         #[arg(long)]
         table: Option<PathBuf>,
+        /// Redraw the charts of an earlier run's suite.json (every scene's three, SVG and PNG)
+        /// into --out and exit: nothing is rendered or measured. The AO charts' radius is the
+        /// file's, or --ao-radius where the file does not record it.
+        #[arg(long, value_name = "FILE", conflicts_with = "table")]
+        redraw: Option<PathBuf>,
     },
     /// BVH build statistics and ray throughput (Mrays/s) for primary, shadow and diffuse rays.
     Rays {
@@ -906,9 +911,20 @@ fn run(cli: Cli) -> Result<()> {
             only,
             out,
             table,
+            redraw,
         } => {
             if let Some(path) = table {
                 print!("{}", suite::table(&read_json(&path)?));
+                return Ok(());
+            }
+            if let Some(path) = redraw {
+                let stems = suite::redraw(&path, &out, ao_radius)?;
+                println!(
+                    "redrew {} charts of {} in {} (.svg, .png)",
+                    stems.len(),
+                    path.display(),
+                    out.display()
+                );
                 return Ok(());
             }
             let settings = if quick {

@@ -166,6 +166,8 @@ fn shadow_reference(
 
 /// One scene's results.
 pub struct SceneResult {
+    /// The scene's key: its charts' file names (`suite-{key}…`) and `--only`'s name for it.
+    pub key: String,
     /// Scene name.
     pub name: String,
     /// Triangles.
@@ -399,35 +401,11 @@ pub fn run_scene(
         precompute_ms.push((format!("probes bake 1/{} ({} probes)", p.point.value, p.probes), p.bake_ms));
         points.push(p.point);
     }
-    let title = format!("{} — {}×{} on {}", scene.name, s.size.0, s.size.1, ctx.info().name);
-    let stem = s.out.join(format!("suite-{key}"));
-    let chart = Chart { title: &title, y_desc: "relative MSE vs converged path tracing (log)", floor };
-    chart::write(&stem, &chart, &chart_points(&points))?;
-    let flip_points: Vec<ChartPoint> = points
-        .iter()
-        .filter_map(|p| {
-            p.flip.map(|flip| ChartPoint {
-                method: &p.method,
-                unit: p.unit,
-                value: p.value,
-                ms: p.ms,
-                error: flip,
-            })
-        })
-        .collect();
-    let flip_chart =
-        Chart { title: &title, y_desc: "mean LDR-FLIP vs converged path tracing (log)", floor: 0.0 };
-    chart::write(&s.out.join(format!("suite-{key}-flip")), &flip_chart, &flip_points)?;
-
     // Ambient occlusion: SSAO (blurred) and RTAO against a many-ray RTAO reference.
     let (ao_points, ao_floor) = ambient_occlusion_sweep(&renderer, camera, s)?;
-    let ao_title =
-        format!("ambient occlusion, r = {} — {} — {}×{}", s.ao_radius, scene.name, s.size.0, s.size.1);
-    let ao_chart =
-        Chart { title: &ao_title, y_desc: "MSE vs ray-traced AO reference (log)", floor: ao_floor };
-    chart::write(&s.out.join(format!("suite-{key}-ao")), &ao_chart, &chart_points(&ao_points))?;
 
-    Ok(SceneResult {
+    let result = SceneResult {
+        key: key.to_string(),
         name: scene.name.clone(),
         triangles: renderer.scene().bvh_stats.triangles,
         points,
@@ -437,7 +415,9 @@ pub fn run_scene(
         precompute_ms,
         shadow_reference: shadow_ref.map(|(_, r)| r),
         reference_spp: s.reference_spp,
-    })
+    };
+    SceneCharts::of(&result, &ctx.info().name, s.size, s.ao_radius).write(&s.out)?;
+    Ok(result)
 }
 
 /// The IBL tables and prefiltered maps are computed once per scene, not per frame.
@@ -515,13 +495,6 @@ pub fn timed<T>(
     Ok((median(&mut times), last))
 }
 
-fn chart_points(points: &[Point]) -> Vec<ChartPoint<'_>> {
-    points
-        .iter()
-        .map(|p| ChartPoint { method: &p.method, unit: p.unit, value: p.value, ms: p.ms, error: p.rel_mse })
-        .collect()
-}
-
 /// SSAO at each kernel size and RTAO at each ray count against an RTAO reference; the error is
 /// the MSE over pixels with a surface, the time the AO passes' (G-buffer excluded).
 fn ambient_occlusion_sweep(
@@ -585,6 +558,256 @@ fn ambient_occlusion_sweep(
         });
     }
     Ok((points, floor))
+}
+
+/// A point as a scene's charts read it: a measured [`Point`], or one of a suite JSON.
+struct Plotted<'a> {
+    method: &'a str,
+    unit: &'a str,
+    value: u32,
+    ms: f64,
+    /// Relative MSE (image points) or MSE (AO points).
+    error: f64,
+    /// Mean LDR-FLIP (image points).
+    flip: Option<f64>,
+}
+
+impl Point {
+    fn plotted(&self) -> Plotted<'_> {
+        Plotted {
+            method: &self.method,
+            unit: self.unit,
+            value: self.value,
+            ms: self.ms,
+            error: self.rel_mse,
+            flip: self.flip,
+        }
+    }
+}
+
+/// What one scene's three charts show: drawn by [`SceneCharts::write`] alike after a run
+/// ([`SceneCharts::of`]) and from a suite JSON ([`redraw`]).
+struct SceneCharts<'a> {
+    /// The scene's key (file names).
+    key: String,
+    /// The scene's name (titles).
+    scene: &'a str,
+    /// The device measured on.
+    device: &'a str,
+    size: (u32, u32),
+    ao_radius: f32,
+    /// The path-traced reference's own relative MSE.
+    floor: f64,
+    points: Vec<Plotted<'a>>,
+    /// The AO reference's own MSE.
+    ao_floor: f64,
+    ao_points: Vec<Plotted<'a>>,
+}
+
+impl<'a> SceneCharts<'a> {
+    /// The charts of a scene just measured on `device` at `size`, AO of `ao_radius`.
+    fn of(r: &'a SceneResult, device: &'a str, size: (u32, u32), ao_radius: f32) -> Self {
+        SceneCharts {
+            key: r.key.clone(),
+            scene: &r.name,
+            device,
+            size,
+            ao_radius,
+            floor: r.reference_rel_mse_floor,
+            points: r.points.iter().map(Point::plotted).collect(),
+            ao_floor: r.ao_reference_mse_floor,
+            ao_points: r.ao_points.iter().map(Point::plotted).collect(),
+        }
+    }
+
+    /// Writes `suite-{key}` (relative MSE against the path-traced reference, its noise floor
+    /// drawn), `suite-{key}-flip` (mean LDR-FLIP) and `suite-{key}-ao` (AO's MSE against the RTAO
+    /// reference, its noise floor drawn) into `out`, each as .svg and .png; their stems.
+    fn write(&self, out: &Path) -> Result<[PathBuf; 3]> {
+        let (w, h) = self.size;
+        let chart_points = |points: &[Plotted<'a>], error: fn(&Plotted) -> Option<f64>| -> Vec<ChartPoint> {
+            points
+                .iter()
+                .filter_map(|p| {
+                    error(p).map(|error| ChartPoint {
+                        method: p.method,
+                        unit: p.unit,
+                        value: p.value,
+                        ms: p.ms,
+                        error,
+                    })
+                })
+                .collect()
+        };
+        let title = format!("{} — {w}×{h} on {}", self.scene, self.device);
+        let stems = [
+            out.join(format!("suite-{}", self.key)),
+            out.join(format!("suite-{}-flip", self.key)),
+            out.join(format!("suite-{}-ao", self.key)),
+        ];
+        let chart = Chart {
+            title: &title,
+            y_desc: "relative MSE vs converged path tracing (log)",
+            floor: self.floor,
+        };
+        chart::write(&stems[0], &chart, &chart_points(&self.points, |p| Some(p.error)))?;
+        let flip_chart =
+            Chart { title: &title, y_desc: "mean LDR-FLIP vs converged path tracing (log)", floor: 0.0 };
+        chart::write(&stems[1], &flip_chart, &chart_points(&self.points, |p| p.flip))?;
+        let ao_title = format!("ambient occlusion, r = {} — {} — {w}×{h}", self.ao_radius, self.scene);
+        let ao_chart =
+            Chart { title: &ao_title, y_desc: "MSE vs ray-traced AO reference (log)", floor: self.ao_floor };
+        chart::write(&stems[2], &ao_chart, &chart_points(&self.ao_points, |p| Some(p.error)))?;
+        Ok(stems)
+    }
+}
+
+/// Redraws the three charts of every scene of the suite JSON `file` (as `run_suite` writes it)
+/// into `out`, rendering and measuring nothing (no Vulkan device); the charts' stems. A scene's
+/// file names take its `key`, or where the file has none (written before the suite recorded it)
+/// the key the run gives a scene of its name ([`key_of_name`]); the AO chart's radius is the
+/// file's `ao_radius`, else `ao_radius`. Every scene is read before any chart is written: a
+/// missing file, text that is not JSON, or a missing or mistyped field is an error naming the
+/// file and the field, and writes nothing.
+pub fn redraw(file: &Path, out: &Path, ao_radius: f32) -> Result<Vec<PathBuf>> {
+    let text = std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {} as JSON", file.display()))?;
+    let charts = charts_of_json(&doc, ao_radius).with_context(|| format!("reading {}", file.display()))?;
+    umbra::atomic::create_dir(out)?;
+    let mut stems = Vec::new();
+    for c in &charts {
+        stems.extend(c.write(out).with_context(|| format!("drawing the charts of {}", c.scene))?);
+    }
+    Ok(stems)
+}
+
+/// The charts of every scene of a suite JSON (see [`redraw`]).
+fn charts_of_json(doc: &serde_json::Value, ao_radius: f32) -> Result<Vec<SceneCharts<'_>>> {
+    let device = json_str(doc, "", "device")?;
+    let size = json_list(doc, "", "size")?;
+    let size = match size {
+        [w, h] => (json_u32(w, "size[0]")?, json_u32(h, "size[1]")?),
+        _ => bail!("field `size` is not [width, height]"),
+    };
+    let ao_radius = match doc.get("ao_radius") {
+        Some(_) => json_f64(doc, "", "ao_radius")? as f32,
+        None => ao_radius,
+    };
+    let mut charts = Vec::new();
+    for (i, scene) in json_list(doc, "", "scenes")?.iter().enumerate() {
+        let at = format!("scenes[{i}]");
+        let name = json_str(scene, &at, "scene")?;
+        let key = match scene.get("key") {
+            Some(_) => {
+                let key = json_str(scene, &at, "key")?;
+                if key.is_empty() || key.contains(['/', '\\']) {
+                    bail!("field `{at}.key` ({key:?}) is not a file-name part");
+                }
+                key.to_string()
+            }
+            None => key_of_name(name),
+        };
+        let points = json_list(scene, &at, "points")?
+            .iter()
+            .enumerate()
+            .map(|(j, p)| json_point(p, &format!("{at}.points[{j}]"), "rel_mse", true))
+            .collect::<Result<_>>()?;
+        let ao_points = json_list(scene, &at, "ao_points")?
+            .iter()
+            .enumerate()
+            .map(|(j, p)| json_point(p, &format!("{at}.ao_points[{j}]"), "mse", false))
+            .collect::<Result<_>>()?;
+        charts.push(SceneCharts {
+            key,
+            scene: name,
+            device,
+            size,
+            ao_radius,
+            floor: json_f64(scene, &at, "reference_rel_mse_floor")?,
+            points,
+            ao_floor: json_f64(scene, &at, "ao_reference_mse_floor")?,
+            ao_points,
+        });
+    }
+    Ok(charts)
+}
+
+/// A point of a suite JSON's `points` (`error` its `rel_mse`, `flip` its `flip`) or `ao_points`
+/// (`error` its `mse`, no FLIP); `at` names it in errors.
+fn json_point<'a>(p: &'a serde_json::Value, at: &str, error: &str, flip: bool) -> Result<Plotted<'a>> {
+    Ok(Plotted {
+        method: json_str(p, at, "method")?,
+        unit: json_str(p, at, "unit")?,
+        value: json_u32(json_field(p, at, "value")?, &field_path(at, "value"))?,
+        ms: json_f64(p, at, "gpu_ms")?,
+        error: json_f64(p, at, error)?,
+        // Written for every image point, null where there is none.
+        flip: match flip {
+            true => Some(json_f64(p, at, "flip")?).filter(|f| !f.is_nan()),
+            false => None,
+        },
+    })
+}
+
+/// `at.key`, or `key` at the top level (`at` empty).
+fn field_path(at: &str, key: &str) -> String {
+    match at {
+        "" => key.to_string(),
+        at => format!("{at}.{key}"),
+    }
+}
+
+/// The field `key` of the object `v` (at `at`).
+fn json_field<'a>(v: &'a serde_json::Value, at: &str, key: &str) -> Result<&'a serde_json::Value> {
+    v.get(key).ok_or_else(|| anyhow::anyhow!("field `{}` is missing", field_path(at, key)))
+}
+
+fn json_str<'a>(v: &'a serde_json::Value, at: &str, key: &str) -> Result<&'a str> {
+    let field = json_field(v, at, key)?;
+    field.as_str().ok_or_else(|| anyhow::anyhow!("field `{}` is not a string: {field}", field_path(at, key)))
+}
+
+fn json_list<'a>(v: &'a serde_json::Value, at: &str, key: &str) -> Result<&'a [serde_json::Value]> {
+    let field = json_field(v, at, key)?;
+    match field.as_array() {
+        Some(list) => Ok(list),
+        None => bail!("field `{}` is not a list: {field}", field_path(at, key)),
+    }
+}
+
+/// A number field; null reads as NaN (serde_json writes a NaN as null).
+fn json_f64(v: &serde_json::Value, at: &str, key: &str) -> Result<f64> {
+    match json_field(v, at, key)? {
+        serde_json::Value::Null => Ok(f64::NAN),
+        field => field
+            .as_f64()
+            .ok_or_else(|| anyhow::anyhow!("field `{}` is not a number: {field}", field_path(at, key))),
+    }
+}
+
+/// `v` (the field `path`) as a u32.
+fn json_u32(v: &serde_json::Value, path: &str) -> Result<u32> {
+    v.as_u64()
+        .and_then(|n| u32::try_from(n).ok())
+        .ok_or_else(|| anyhow::anyhow!("field `{path}` is not a whole number below 2³²: {v}"))
+}
+
+/// The key [`suite_scenes`] gives the scene it names `name`, for a suite JSON that does not record
+/// its scenes' keys: `cornell` for the embedded Cornell box, `cornell-point` for its point-light
+/// variant ([`cornell_point_light`]), `sponza-sun` for Sponza under a sun (`<stem> under a sun`,
+/// [`sponza_under_a_sun`]), else the file stem of the name: the scenes loaded from a file
+/// (`scenes/<key>.glb`, `--gltf` files) are named by its path.
+fn key_of_name(name: &str) -> String {
+    if name == umbra::scene::Scene::cornell_box().name {
+        "cornell".into()
+    } else if name == cornell_point_light().name {
+        "cornell-point".into()
+    } else if name.ends_with(" under a sun") {
+        "sponza-sun".into()
+    } else {
+        Path::new(name).file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+    }
 }
 
 /// The CSV of every scene's points.
@@ -770,15 +993,17 @@ pub(crate) fn cornell_point_light() -> umbra::scene::Scene {
 /// Sponza costs about 3× one through the other scenes: this keeps its run to a few minutes).
 pub(crate) const SPONZA_SUITE_SPP: (u32, u32) = (512, 64);
 
-pub(crate) fn run_suite(
-    settings: &SuiteSettings,
+/// The suite's scenes, each with its key: the embedded Cornell box (`cornell`), its point-light
+/// variant (`cornell-point`), the repository's `scenes/spheres.glb` and `scenes/textured.glb`
+/// (by their stems), Sponza under a sun (`sponza-sun`) and the `gltf` files (by their stems);
+/// `quick` keeps the Cornell box and the sphere grid, `only` (where not empty) the scenes of those
+/// keys.
+fn suite_scenes(
     quick: bool,
     gltf: &[PathBuf],
     sponza: Option<&std::path::Path>,
     only: &[String],
-) -> Result<()> {
-    let ctx = Context::new(&ContextDesc::default())?;
-    umbra::atomic::create_dir(&settings.out)?;
+) -> Result<Vec<(String, Scene)>> {
     let mut scenes = vec![("cornell".to_string(), umbra::scene::Scene::cornell_box())];
     if !quick {
         scenes.push(("cornell-point".to_string(), cornell_point_light()));
@@ -801,6 +1026,19 @@ pub(crate) fn run_suite(
             anyhow::bail!("--only {}: none of the suite's scenes has that key", only.join(","));
         }
     }
+    Ok(scenes)
+}
+
+pub(crate) fn run_suite(
+    settings: &SuiteSettings,
+    quick: bool,
+    gltf: &[PathBuf],
+    sponza: Option<&std::path::Path>,
+    only: &[String],
+) -> Result<()> {
+    let scenes = suite_scenes(quick, gltf, sponza, only)?;
+    let ctx = Context::new(&ContextDesc::default())?;
+    umbra::atomic::create_dir(&settings.out)?;
     let mut results = Vec::new();
     for (key, scene) in &scenes {
         let camera = bench_camera(scene);
@@ -849,10 +1087,12 @@ pub(crate) fn run_suite(
     let doc = json!({
         "device": ctx.info().name,
         "size": [settings.size.0, settings.size.1],
+        "ao_radius": settings.ao_radius,
         "reference_spp": settings.reference_spp,
         "repeats": settings.repeats,
         "scenes": results.iter().map(|r| json!({
             "scene": r.name,
+            "key": r.key,
             "triangles": r.triangles,
             "reference_rel_mse_floor": r.reference_rel_mse_floor,
             "reference_spp": r.reference_spp,
@@ -883,4 +1123,25 @@ pub(crate) fn run_suite(
     umbra::atomic::write(&csv, self::csv(&results).as_bytes())?;
     println!("wrote {}, {} and suite-<scene>.svg/.png", path.display(), csv.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A suite JSON that does not record its scenes' keys redraws under the run's: every scene of
+    /// the full suite (a glTF file standing in for Sponza) and a `--gltf` file get back the key
+    /// the run gave them from their names alone.
+    #[test]
+    fn the_keys_of_scene_names_are_the_runs() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let sponza = root.join("scenes/textured.glb");
+        let gltf = [root.join("scenes/cornell-box.glb")];
+        let scenes = suite_scenes(false, &gltf, Some(&sponza), &[]).unwrap();
+        let keys: Vec<&str> = scenes.iter().map(|(key, _)| key.as_str()).collect();
+        assert_eq!(keys, ["cornell", "cornell-point", "spheres", "textured", "sponza-sun", "cornell-box"]);
+        for (key, scene) in &scenes {
+            assert_eq!(&key_of_name(&scene.name), key, "{}", scene.name);
+        }
+    }
 }

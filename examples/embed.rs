@@ -1,7 +1,9 @@
 //! A small host engine, written only with `ash` and `gpu-allocator`, that uses umbra on its own
 //! device: it creates its instance, device, allocator, images and command buffer, writes a
 //! G-buffer with its own kernel (`examples/embed_gbuffer.comp`), asks umbra to record SSAO,
-//! deferred lighting and tone mapping into its command buffer, submits with its own fence and writes a PNG.
+//! deferred lighting and tone mapping into its command buffer (one recording, the host's pass
+//! declared in it: every barrier between them is derived), submits with its own fence and writes
+//! a PNG.
 //!
 //! ```sh
 //! cargo run --example embed -- embed.png          # UMBRA_VALIDATION=1 turns the layer on
@@ -26,7 +28,7 @@ use umbra::passes::deferred::LightingSettings;
 use umbra::passes::gbuffer::GBufferViews;
 use umbra::passes::tonemap::ToneCurve;
 use umbra::scene::Scene;
-use umbra::vk::{Context, HostDevice};
+use umbra::vk::{Context, HostDevice, Resource, Use};
 
 /// The host's G-buffer kernel, compiled by umbra's build script into `OUT_DIR`.
 const GBUFFER_SPV: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/embed_gbuffer.spv"));
@@ -548,57 +550,75 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             .collect();
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_general));
 
-        // 1. The host's own G-buffer pass.
-        let c = umbra::gpu::layout::GpuCamera::new(&camera, size);
-        let v4 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
-        let push = HostCamera {
-            origin: v4(c.origin),
-            forward: v4(c.forward),
-            right: v4(c.right),
-            up: v4(c.up),
-            size: [size.0, size.1, tris.len() as u32, c.orthographic],
-        };
-        device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
-        device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, pipeline_layout, 0, &[set], &[]);
-        device.cmd_push_constants(
-            cmd,
-            pipeline_layout,
-            vk::ShaderStageFlags::COMPUTE,
-            0,
-            bytemuck::bytes_of(&push),
-        );
-        device.cmd_dispatch(cmd, size.0.div_ceil(8), size.1.div_ceil(8), 1);
-        // Make the host's writes visible to umbra's compute reads (the documented contract).
-        let written = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)];
-        device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&written));
-
-        // 2. umbra computes SSAO on the host's G-buffer, lights it (a dim constant sky as
-        // image-based light, occluded by the SSAO) and tone-maps it into the host's images.
+        // One recording through umbra's recorder (`Renderer::record`): the host's own G-buffer
+        // pass, its writes declared, then umbra's passes on it. Every barrier between them is
+        // derived from what each pass reads and writes, and one ends the recording: the host
+        // places none of its own until its copies below.
         let lighting = LightingSettings { shadow_rays: 16, env: [0.3; 3], ..LightingSettings::default() };
         let ao_settings = AoSettings { radius: 0.1, ..AoSettings::default() };
         let curve = ToneCurve::KhronosPbrNeutral;
-        for (set, gbuffer) in [(0, &host_views), (1, &umbra_views)] {
-            let image = |i: usize| &images[set * SET + i];
-            if set == 1 {
-                // 3. For comparison: umbra's own G-buffer, then the same passes.
-                renderer.record_gbuffer(cmd, &camera, gbuffer)?;
-            }
-            let ao =
-                renderer.record_ssao(cmd, &camera, gbuffer, image(9).view, image(10).view, &ao_settings)?;
-            renderer.record_lighting(
+        let (passes, scene, ibl) = (renderer.passes(), renderer.scene(), renderer.ibl());
+        renderer.record(cmd, |rec| {
+            // 1. The host's own G-buffer pass, which writes the seven images of `host_views`.
+            let writes: Vec<_> = host_views
+                .in_order()
+                .iter()
+                .map(|&view| (Resource::Image(view), Use::ComputeWrite))
+                .collect();
+            rec.access(&writes);
+            let c = umbra::gpu::layout::GpuCamera::new(&camera, size);
+            let v4 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+            let push = HostCamera {
+                origin: v4(c.origin),
+                forward: v4(c.forward),
+                right: v4(c.right),
+                up: v4(c.up),
+                size: [size.0, size.1, tris.len() as u32, c.orthographic],
+            };
+            let cmd = rec.cmd();
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+            device.cmd_bind_descriptor_sets(
                 cmd,
-                &camera,
-                gbuffer,
-                image(7).view,
-                &umbra::passes::deferred::LightingInputs { ao: Some(ao), ..Default::default() },
-                &lighting,
-            )?;
-            renderer.record_tonemap(cmd, image(7).view, image(8).view, size, 0.0, curve)?;
-        }
+                vk::PipelineBindPoint::COMPUTE,
+                pipeline_layout,
+                0,
+                &[set],
+                &[],
+            );
+            device.cmd_push_constants(
+                cmd,
+                pipeline_layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::bytes_of(&push),
+            );
+            device.cmd_dispatch(cmd, size.0.div_ceil(8), size.1.div_ceil(8), 1);
+
+            // 2. umbra computes SSAO on the host's G-buffer, lights it (a dim constant sky as
+            // image-based light, occluded by the SSAO) and tone-maps it into the host's images.
+            for (set, gbuffer) in [(0, &host_views), (1, &umbra_views)] {
+                let image = |i: usize| &images[set * SET + i];
+                if set == 1 {
+                    // 3. For comparison: umbra's own G-buffer, then the same passes.
+                    passes.record_gbuffer(rec, scene, &camera, gbuffer)?;
+                }
+                let ao =
+                    passes.record_ssao(rec, &camera, gbuffer, image(9).view, image(10).view, &ao_settings)?;
+                let inputs = umbra::passes::deferred::LightingInputs { ao: Some(ao), ..Default::default() };
+                passes.record_lighting(
+                    rec,
+                    scene,
+                    ibl,
+                    &camera,
+                    gbuffer,
+                    image(7).view,
+                    &inputs,
+                    &lighting,
+                )?;
+                passes.record_tonemap(rec, image(7).view, image(8).view, size, 0.0, curve)?;
+            }
+            Ok(())
+        })?;
 
         // The host copies its LDR images out: its own barrier from umbra's compute writes, and
         // its own layout change (umbra leaves every image in GENERAL).

@@ -179,6 +179,12 @@ impl Renderer {
         &self.scene
     }
 
+    /// The scene's image-based lighting tables (for [`Passes::record_lighting`] inside
+    /// [`Renderer::record`]).
+    pub fn ibl(&self) -> &IblResources {
+        &self.ibl
+    }
+
     /// The pipelines (the orchestrator every `record_*` goes through).
     pub fn passes(&self) -> &Passes {
         &self.passes

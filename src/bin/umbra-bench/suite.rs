@@ -420,7 +420,6 @@ pub fn run_scene(
     Ok(result)
 }
 
-/// The IBL tables and prefiltered maps are computed once per scene, not per frame.
 /// Accumulates `target`'s samples from `*done` up to `level` in submissions of at most 16,
 /// advancing `*done` and `bar`; the GPU milliseconds they took.
 #[allow(clippy::too_many_arguments)]
@@ -451,6 +450,7 @@ pub fn trace_until(
     Ok(ms)
 }
 
+/// Whether `pass` runs once per scene, not per frame (the IBL tables and prefiltered maps).
 fn is_once(pass: &str) -> bool {
     pass.starts_with("ibl")
 }

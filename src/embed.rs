@@ -168,10 +168,7 @@ impl Renderer {
         cmd: raw::CommandBuffer,
         record: impl FnOnce(&mut Recorder<'_>) -> Result<T>,
     ) -> Result<T> {
-        let mut rec = Recorder::new(&self.ctx, cmd);
-        let value = record(&mut rec)?;
-        rec.finish();
-        Ok(value)
+        Recorder::run(&self.ctx, cmd, record)
     }
 
     /// The scene on the GPU.

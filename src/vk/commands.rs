@@ -42,12 +42,7 @@ impl Context {
     /// [`Context::submit`] through a [`Recorder`]: the barriers between what `record` records
     /// are derived from what each operation reads and writes, and one ends the command buffer.
     pub fn record<T>(&self, record: impl FnOnce(&mut Recorder<'_>) -> Result<T>) -> Result<T> {
-        self.submit(|cmd| {
-            let mut rec = Recorder::new(self, cmd);
-            let value = record(&mut rec)?;
-            rec.finish();
-            Ok(value)
-        })
+        self.submit(|cmd| Recorder::run(self, cmd, record))
     }
 
     /// Records `record` into a fresh primary command buffer, submits it and waits for it.

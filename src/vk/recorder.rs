@@ -14,6 +14,7 @@
 //! view, a texel buffer by its buffer).
 
 use super::{Buffer, Context, Descriptor};
+use crate::error::Result;
 use ash::vk;
 use std::collections::HashMap;
 
@@ -202,6 +203,19 @@ impl<'a> Recorder<'a> {
     /// ordered before it (the host's barrier, or none).
     pub fn new(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
         Self { ctx, cmd, tracker: Tracker::default(), bound: Vec::new(), stats: RecorderStats::default() }
+    }
+
+    /// Runs `record` with a recorder for `cmd` ([`Recorder::new`]) and ends the recording with
+    /// [`Recorder::finish`]'s barrier.
+    pub fn run<T>(
+        ctx: &'a Context,
+        cmd: vk::CommandBuffer,
+        record: impl FnOnce(&mut Recorder<'_>) -> Result<T>,
+    ) -> Result<T> {
+        let mut rec = Recorder::new(ctx, cmd);
+        let value = record(&mut rec)?;
+        rec.finish();
+        Ok(value)
     }
 
     /// The context.

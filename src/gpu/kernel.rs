@@ -114,6 +114,12 @@ impl KernelInterface {
 
     /// Every binding with its number: the scene's (those the kernel declares), then its own.
     pub fn numbered_bindings(&self) -> Vec<(u32, BindingDesc)> {
+        self.bindings_in_order().collect()
+    }
+
+    /// [`KernelInterface::numbered_bindings`] without collecting them (each dispatch's bind
+    /// reads them).
+    pub fn bindings_in_order(&self) -> impl Iterator<Item = (u32, BindingDesc)> + '_ {
         let scene: &[BindingDesc] = match self.scene {
             SceneUse::None => &[],
             SceneUse::Bvh => &super::layout::SCENE_BINDING_DESCS[..2],
@@ -124,8 +130,7 @@ impl KernelInterface {
             .iter()
             .enumerate()
             .map(|(i, b)| (i as u32, *b))
-            .chain(self.bindings.iter().enumerate().map(|(i, b)| (first + i as u32, *b)))
-            .collect()
+            .chain(self.bindings.iter().enumerate().map(move |(i, b)| (first + i as u32, *b)))
     }
 
     /// The constant id of scene feature `name`.
@@ -320,7 +325,7 @@ impl<K: Kernel> Pipeline<K> {
             specialization.push((FIRST_KERNEL_SPEC_ID + i as u32, value));
         }
         let bindings: Vec<(u32, raw::DescriptorType)> =
-            interface.numbered_bindings().into_iter().map(|(n, b)| (n, b.kind.descriptor_type())).collect();
+            interface.bindings_in_order().map(|(n, b)| (n, b.kind.descriptor_type())).collect();
         let pipeline = ComputePipeline::new(
             ctx,
             interface.name,
@@ -365,8 +370,7 @@ impl<K: Kernel> Pipeline<K> {
     pub fn bind(&self, rec: &mut Recorder<'_>, resources: &K::Resources<'_>) -> Result<()> {
         let descriptors = resources.descriptors();
         let uses = K::INTERFACE
-            .numbered_bindings()
-            .iter()
+            .bindings_in_order()
             .zip(&descriptors)
             .map(|((_, binding), descriptor)| {
                 let how = match binding.access {

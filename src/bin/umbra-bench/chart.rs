@@ -406,13 +406,15 @@ where
     let caption = ("sans-serif", 18).into_font().color(&BLACK).pos(Pos::new(HPos::Center, VPos::Top));
     root.draw_text(spec.title, &caption, (root.dim_in_pixel().0 as i32 / 2, 8)).map_err(err)?;
 
+    // The axes' ranges: the points' with room around them.
+    let (xs, ys) = ((x0 / 1.5, x1 * 1.5), (y0 / 2.0, y1 * 2.0));
     let c = layout.chart;
     let chart_area = root.clone().shrink((c.x0, c.y0), (c.x1 - c.x0, c.y1 - c.y0));
     let mut chart = ChartBuilder::on(&chart_area)
         .margin(MARGIN)
         .x_label_area_size(X_LABEL_AREA)
         .y_label_area_size(Y_LABEL_AREA)
-        .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), (y0 / 2.0..y1 * 2.0).log_scale())
+        .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
         .map_err(err)?;
     let (px, py) = chart.plotting_area().get_pixel_range();
     let plot = Rect { x0: px.start, y0: py.start, x1: px.end, y1: py.end };
@@ -421,13 +423,13 @@ where
         .x_desc("GPU time per frame (ms, log)")
         .y_desc(spec.y_desc)
         .label_style(("sans-serif", 13))
-        .x_label_formatter(&|v| log_tick_label(*v, (x1 * 1.5 / (x0 / 1.5)).log10(), |v| format!("{v}")))
-        .y_label_formatter(&|v| log_tick_label(*v, (y1 * 2.0 / (y0 / 2.0)).log10(), |v| format!("{v:.0e}")))
+        .x_label_formatter(&|v| log_tick_label(*v, (xs.1 / xs.0).log10(), |v| format!("{v}")))
+        .y_label_formatter(&|v| log_tick_label(*v, (ys.1 / ys.0).log10(), |v| format!("{v:.0e}")))
         .draw()
         .map_err(err)?;
     if floor > 0.0 {
         chart
-            .draw_series(LineSeries::new([(x0 / 1.5, floor), (x1 * 1.5, floor)], FLOOR_GREY.stroke_width(1)))
+            .draw_series(LineSeries::new([(xs.0, floor), (xs.1, floor)], FLOOR_GREY.stroke_width(1)))
             .map_err(err)?;
     }
     for (k, s) in series.iter().enumerate() {

@@ -181,6 +181,17 @@ fn folded_specialization_constants_keep_the_kernels_meaning() {
     }
 }
 
+/// test_pattern.comp through the untyped pipeline of the Vulkan layer (as a host engine would
+/// make its own kernel), its pattern multiplier 1.
+fn untyped_pattern_pipeline(gpu: &Gpu) -> ComputePipeline {
+    let desc = PipelineDesc {
+        bindings: &[(0, raw::DescriptorType::STORAGE_IMAGE)],
+        push_constant_size: std::mem::size_of::<PatternParams>() as u32,
+        specialization: &[(umbra::gpu::kernel::FIRST_KERNEL_SPEC_ID, 1)],
+    };
+    ComputePipeline::new(gpu, "test_pattern", &desc).unwrap()
+}
+
 #[test]
 fn binding_mistakes_are_errors_not_silent() {
     let gpu = Gpu::new();
@@ -188,12 +199,7 @@ fn binding_mistakes_are_errors_not_silent() {
     let buffer = Buffer::upload(&gpu, "buf", &[0u32; 16], raw::BufferUsageFlags::STORAGE_BUFFER).unwrap();
     // The untyped pipeline of the Vulkan layer (what the typed one is built on) checks what it is
     // given against its layout.
-    let desc = PipelineDesc {
-        bindings: &[(0, raw::DescriptorType::STORAGE_IMAGE)],
-        push_constant_size: std::mem::size_of::<PatternParams>() as u32,
-        specialization: &[(8, 1)],
-    };
-    let pipeline = ComputePipeline::new(&gpu, "test_pattern", &desc).unwrap();
+    let pipeline = untyped_pattern_pipeline(&gpu);
     gpu.submit(|cmd| {
         pipeline.bind(cmd);
         let wrong_type = pipeline.push_descriptors(cmd, &[Descriptor::Buffer(&buffer)]);
@@ -300,12 +306,7 @@ fn a_declared_host_pass_is_ordered_by_derived_barriers() {
     let hdr = Image::storage_2d(&gpu, "hdr", w, h, raw::Format::R32G32B32A32_SFLOAT).unwrap();
     let ldr = Image::storage_2d(&gpu, "ldr", w, h, raw::Format::R8G8B8A8_UNORM).unwrap();
     // The host's kernel: test_pattern through the untyped pipeline, which the recorder never sees.
-    let desc = PipelineDesc {
-        bindings: &[(0, raw::DescriptorType::STORAGE_IMAGE)],
-        push_constant_size: std::mem::size_of::<PatternParams>() as u32,
-        specialization: &[(umbra::gpu::kernel::FIRST_KERNEL_SPEC_ID, 1)],
-    };
-    let host = ComputePipeline::new(&gpu, "test_pattern", &desc).unwrap();
+    let host = untyped_pattern_pipeline(&gpu);
     let tonemap = TonemapPass::new(&gpu).unwrap();
     let params = PatternParams { size: [w, h], seed: 5, frame: 0 };
     let host_pass = |cmd| -> umbra::Result<()> {

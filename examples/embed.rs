@@ -1,8 +1,8 @@
 //! A small host engine, written only with `ash` and `gpu-allocator`, that uses umbra on its own
 //! device: it creates its instance, device, allocator, images and command buffer, writes a
 //! G-buffer with its own kernel (`examples/embed_gbuffer.comp`), asks umbra to record SSAO,
-//! deferred lighting and tone mapping into its command buffer (one recording, the host's pass
-//! declared in it: every barrier between them is derived), submits with its own fence and writes
+//! deferred lighting and tone mapping into its command buffer (one frame graph, the host's pass
+//! declared in it: every barrier between them is derived, SSAO's images allocated by umbra), submits with its own fence and writes
 //! a PNG.
 //!
 //! ```sh
@@ -25,10 +25,11 @@ use std::sync::{Arc, Mutex};
 use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
-use umbra::passes::gbuffer::GBufferViews;
+use umbra::passes::gbuffer::{GBufferImages, GBufferViews};
 use umbra::passes::tonemap::ToneCurve;
+use umbra::render::{HybridSettings, HybridTargets};
 use umbra::scene::Scene;
-use umbra::vk::{Context, HostDevice, Resource, Use};
+use umbra::vk::{Context, Graph, HostDevice};
 
 /// The host's G-buffer kernel, compiled by umbra's build script into `OUT_DIR`.
 const GBUFFER_SPV: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/embed_gbuffer.spv"));
@@ -43,6 +44,9 @@ pub struct Frames {
     pub umbra_gbuffer: Vec<u8>,
     /// Validation messages the host's debug messenger received (0 when validation is off).
     pub validation_messages: usize,
+    /// What the frame graph recorded: its passes, and its transient images and the physical
+    /// images that held them.
+    pub graph: umbra::vk::GraphStats,
 }
 
 /// The host's view of its world: one triangle per entry, material index in `a[3]`'s bits.
@@ -397,10 +401,8 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         }
         images.push(host.image(&format!("{set} hdr"), size, vk::Format::R32G32B32A32_SFLOAT)?);
         images.push(host.image(&format!("{set} ldr"), size, vk::Format::R8G8B8A8_UNORM)?);
-        images.push(host.image(&format!("{set} ssao"), size, vk::Format::R32_SFLOAT)?);
-        images.push(host.image(&format!("{set} ssao blurred"), size, vk::Format::R32_SFLOAT)?);
     }
-    const SET: usize = 11; // images per set: 7 G-buffer, hdr, ldr, ssao, ssao blurred
+    const SET: usize = 9; // images per set: 7 G-buffer, hdr, ldr (SSAO's are umbra's, transient)
     let views = |set: usize| {
         let v = |i: usize| images[set * SET + i].view;
         GBufferViews {
@@ -550,32 +552,41 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             .collect();
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_general));
 
-        // One recording through umbra's recorder (`Renderer::record`): the host's own G-buffer
-        // pass, its writes declared, then umbra's passes on it. Every barrier between them is
-        // derived from what each pass reads and writes, and one ends the recording: the host
-        // places none of its own until its copies below.
-        let lighting = LightingSettings { shadow_rays: 16, env: [0.3; 3], ..LightingSettings::default() };
-        let ao_settings = AoSettings { radius: 0.1, ..AoSettings::default() };
-        let curve = ToneCurve::KhronosPbrNeutral;
-        let (passes, scene, ibl) = (renderer.passes(), renderer.scene(), renderer.ibl());
-        renderer.record(cmd, |rec| {
-            // 1. The host's own G-buffer pass, which writes the seven images of `host_views`.
-            let writes: Vec<_> = host_views
-                .in_order()
-                .iter()
-                .map(|&view| (Resource::Image(view), Use::ComputeWrite))
-                .collect();
-            rec.access(&writes);
-            let c = umbra::gpu::layout::GpuCamera::new(&camera, size);
-            let v4 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
-            let push = HostCamera {
-                origin: v4(c.origin),
-                forward: v4(c.forward),
-                right: v4(c.right),
-                up: v4(c.up),
-                size: [size.0, size.1, tris.len() as u32, c.orthographic],
-            };
-            let cmd = rec.cmd();
+        // One frame graph (`Renderer::record_graph`): the host's own G-buffer pass, its writes
+        // declared, then umbra's passes on it. The graph derives every barrier between them from
+        // what each pass reads and writes and allocates SSAO's images itself (transient); one
+        // barrier ends the recording: the host places none of its own until its copies below.
+        let settings = HybridSettings {
+            size,
+            lighting: LightingSettings { shadow_rays: 16, env: [0.3; 3], ..LightingSettings::default() },
+            ao: Some(AoSettings { radius: 0.1, ..AoSettings::default() }),
+            curve: ToneCurve::KhronosPbrNeutral,
+            ..HybridSettings::default()
+        };
+        let target = |set: usize, gbuffer| HybridTargets {
+            gbuffer,
+            ao: None,
+            hdr: images[set * SET + 7].view,
+            ldr: Some(images[set * SET + 8].view),
+            shadows: None,
+            probes: None,
+            lightmaps: None,
+            reservoirs: None,
+        };
+        let (host_targets, umbra_targets) = (target(0, &host_views), target(1, &umbra_views));
+        // 1. The host's own G-buffer pass, which writes the seven images of `host_views`.
+        let c = umbra::gpu::layout::GpuCamera::new(&camera, size);
+        let v4 = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+        let push = HostCamera {
+            origin: v4(c.origin),
+            forward: v4(c.forward),
+            right: v4(c.right),
+            up: v4(c.up),
+            size: [size.0, size.1, tris.len() as u32, c.orthographic],
+        };
+        let mut graph = Graph::new();
+        let host_gbuffer = GBufferImages::import(&mut graph, &host_views);
+        graph.add_pass("host gbuffer").write_all(host_gbuffer.images).record_raw(|cmd, _| {
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
             device.cmd_bind_descriptor_sets(
                 cmd,
@@ -585,40 +596,18 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
                 &[set],
                 &[],
             );
-            device.cmd_push_constants(
-                cmd,
-                pipeline_layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
-                bytemuck::bytes_of(&push),
-            );
+            let push = bytemuck::bytes_of(&push);
+            device.cmd_push_constants(cmd, pipeline_layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             device.cmd_dispatch(cmd, size.0.div_ceil(8), size.1.div_ceil(8), 1);
-
-            // 2. umbra computes SSAO on the host's G-buffer, lights it (a dim constant sky as
-            // image-based light, occluded by the SSAO) and tone-maps it into the host's images.
-            for (set, gbuffer) in [(0, &host_views), (1, &umbra_views)] {
-                let image = |i: usize| &images[set * SET + i];
-                if set == 1 {
-                    // 3. For comparison: umbra's own G-buffer, then the same passes.
-                    passes.record_gbuffer(rec, scene, &camera, gbuffer)?;
-                }
-                let ao =
-                    passes.record_ssao(rec, &camera, gbuffer, image(9).view, image(10).view, &ao_settings)?;
-                let inputs = umbra::passes::deferred::LightingInputs { ao: Some(ao), ..Default::default() };
-                passes.record_lighting(
-                    rec,
-                    scene,
-                    ibl,
-                    &camera,
-                    gbuffer,
-                    image(7).view,
-                    &inputs,
-                    &lighting,
-                )?;
-                passes.record_tonemap(rec, image(7).view, image(8).view, size, 0.0, curve)?;
-            }
             Ok(())
-        })?;
+        });
+        // 2. umbra computes SSAO on the host's G-buffer, lights it (a dim constant sky as
+        // image-based light, occluded by the SSAO) and tone-maps it into the host's images.
+        let (passes, frame) = (renderer.passes(), renderer.frame(&camera));
+        passes.add_hybrid_shading(&mut graph, frame, host_gbuffer, &host_targets, &settings)?;
+        // 3. For comparison: umbra's own G-buffer, then the same passes.
+        passes.add_hybrid(&mut graph, frame, &umbra_targets, &settings)?;
+        let graph = renderer.record_graph(cmd, graph, None)?;
 
         // The host copies its LDR images out: its own barrier from umbra's compute writes, and
         // its own layout change (umbra leaves every image in GENERAL).
@@ -661,9 +650,9 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
         device.queue_submit2(host.queue, &[vk::SubmitInfo2::default().command_buffer_infos(&cmds)], fence)?;
         device.wait_for_fences(&[fence], true, u64::MAX)?;
-        Ok::<_, anyhow::Error>(())
+        Ok::<_, anyhow::Error>(graph)
     };
-    recorded?;
+    let graph = recorded?;
     let read = |b: &HostBuffer| -> Result<Vec<u8>> {
         Ok(b.allocation.mapped_slice().ok_or_else(|| anyhow!("readback not mapped"))?[..pixels * 4].to_vec())
     };
@@ -688,7 +677,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         host.destroy_buffer(buffer)?;
     }
     let validation_messages = host.destroy();
-    Ok(Frames { size, host_gbuffer, umbra_gbuffer, validation_messages })
+    Ok(Frames { size, host_gbuffer, umbra_gbuffer, validation_messages, graph })
 }
 
 #[allow(dead_code)]

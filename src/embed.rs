@@ -98,9 +98,9 @@ use crate::passes::restir::{Reservoirs, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowSettings, ShadowView};
 use crate::passes::temporal::{TemporalHistory, TemporalSettings};
 use crate::passes::tonemap::ToneCurve;
-use crate::render::{HybridSettings, HybridTargets, Passes};
+use crate::render::{Frame, HybridSettings, HybridTargets, Passes};
 use crate::scene::{Camera, Scene};
-use crate::vk::{raw, Context, GpuTimer, Recorder};
+use crate::vk::{raw, Context, GpuTimer, Graph, GraphStats, Recorder};
 use std::path::Path;
 
 /// umbra's passes and one scene on a (host's) device: the scene, its image-based lighting
@@ -169,6 +169,27 @@ impl Renderer {
         record: impl FnOnce(&mut Recorder<'_>) -> Result<T>,
     ) -> Result<T> {
         Recorder::run(&self.ctx, cmd, record)
+    }
+
+    /// Records a frame graph into the host's `cmd` ([`Passes::execute`]): umbra's passes
+    /// ([`Passes::add_hybrid`], [`Passes::add_hybrid_shading`] with [`Renderer::frame`]) and
+    /// the host's own ([`Graph::add_pass`], its reads and writes declared, then
+    /// [`crate::vk::PassBuilder::record_raw`]), in one recording whose every barrier is derived,
+    /// ended by the one barrier of the contract. Transient images come from the renderer's pool:
+    /// reused by the next graph recorded, ordered after this one on the same queue.
+    pub fn record_graph(
+        &self,
+        cmd: raw::CommandBuffer,
+        graph: Graph<'_>,
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<GraphStats> {
+        self.record(cmd, |rec| self.passes.execute(rec, graph, timer))
+    }
+
+    /// What a frame of `camera` records against: this renderer's scene and image-based
+    /// lighting tables.
+    pub fn frame<'a>(&'a self, camera: &'a Camera) -> Frame<'a> {
+        Frame { scene: &self.scene, ibl: &self.ibl, camera }
     }
 
     /// The scene on the GPU.

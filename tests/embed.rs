@@ -26,6 +26,13 @@ fn compare(a: &[u8], b: &[u8], tolerance: u8) -> (f64, f64) {
 fn host_gbuffer_lit_by_umbra_matches_umbra_gbuffer() {
     let frames = embed::run((96, 96), true).expect("the example host runs");
     assert_eq!(frames.validation_messages, 0, "validation messages (printed above)");
+    // One frame graph: the host's pass and umbra's, SSAO's four transient images (two per
+    // frame) held by two physical images, the second frame's reusing the first's.
+    let passes = ["ssao", "ao_blur", "lighting", "tonemap"];
+    let expected: Vec<&str> =
+        ["host gbuffer"].iter().chain(&passes).chain(&["gbuffer"]).chain(&passes).copied().collect();
+    assert_eq!(frames.graph.recorded, expected);
+    assert_eq!((frames.graph.transients, frames.graph.physical), (4, 2));
     let (mean, share) = compare(&frames.host_gbuffer, &frames.umbra_gbuffer, 8);
     eprintln!(
         "host vs umbra G-buffer: mean max-channel difference {mean:.3} steps, {:.2} % of pixels over 8 steps",

@@ -380,10 +380,9 @@ impl<K: Kernel> Pipeline<K> {
                 (Resource::of(descriptor), how)
             })
             .collect();
+        rec.bind(uses)?;
         self.pipeline.bind(rec.cmd());
-        self.pipeline.push_descriptors(rec.cmd(), &descriptors)?;
-        rec.bind(uses);
-        Ok(())
+        self.pipeline.push_descriptors(rec.cmd(), &descriptors)
     }
 
     /// Pushes the push constants.

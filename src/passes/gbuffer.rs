@@ -24,7 +24,7 @@ use crate::gpu::layout::{GBufferParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
-use crate::vk::{raw, Context, Image, Recorder};
+use crate::vk::{raw, Context, Graph, GraphImage, GraphViews, Image, Recorder};
 
 /// The G-buffer images (see the module documentation for their formats and contents).
 pub struct GBuffer {
@@ -136,6 +136,38 @@ impl GBufferViews {
     /// The views in binding order.
     pub fn in_order(&self) -> [raw::ImageView; 7] {
         [self.depth, self.normal, self.base, self.emission, self.material, self.layers, self.layers2]
+    }
+}
+
+/// A G-buffer's images in a frame graph ([`crate::vk::Graph`]), in binding order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GBufferImages {
+    /// Width and height of every image.
+    pub size: (u32, u32),
+    /// The images in [`GBufferViews::in_order`]'s order.
+    pub images: [GraphImage; 7],
+}
+
+impl GBufferImages {
+    /// The views of the images while `graph` records.
+    pub fn views(&self, views: &GraphViews) -> GBufferViews {
+        let [depth, normal, base, emission, material, layers, layers2] = self.images.map(|i| views[i]);
+        GBufferViews { size: self.size, depth, normal, base, emission, material, layers, layers2 }
+    }
+
+    /// Imports the caller's G-buffer `views` into `graph`.
+    pub fn import(graph: &mut Graph<'_>, views: &GBufferViews) -> Self {
+        const NAMES: [&str; 7] = [
+            "gbuffer depth",
+            "gbuffer normal",
+            "gbuffer base",
+            "gbuffer emission",
+            "gbuffer material",
+            "gbuffer layers",
+            "gbuffer layers2",
+        ];
+        let in_order = views.in_order();
+        Self { size: views.size, images: std::array::from_fn(|i| graph.import(NAMES[i], in_order[i])) }
     }
 }
 

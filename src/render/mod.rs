@@ -24,7 +24,7 @@ use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingInputs, LightingSettings, SizedLights};
 pub use crate::passes::denoise::DenoiseSettings;
 use crate::passes::denoise::{DenoiseImages, DenoiseInputs, DenoisePass};
-use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferPass, GBufferViews};
+use crate::passes::gbuffer::{GBuffer, GBufferData, GBufferImages, GBufferPass, GBufferViews};
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::lightmap::{
     GpuLightmaps, LightmapLayout, LightmapPass, LightmapSettings, Lightmaps, OcclusionMaps,
@@ -39,7 +39,9 @@ use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::passes::wavefront::WavefrontPass;
 use crate::scene::Camera;
-use crate::vk::{raw, Buffer, Context, GpuTimer, Image, Recorder};
+use crate::vk::{
+    raw, Buffer, Context, GpuTimer, Graph, GraphStats, Image, ImageDesc, Recorder, TransientPool,
+};
 use std::sync::OnceLock;
 
 mod oneshot;
@@ -290,12 +292,25 @@ pub struct AoImage {
     pub pass_ms: Vec<(String, f64)>,
 }
 
+/// What one frame's passes record against: the scene, its image-based lighting tables and the
+/// camera.
+#[derive(Clone, Copy)]
+pub struct Frame<'a> {
+    /// The scene on the GPU.
+    pub scene: &'a GpuScene,
+    /// Its image-based lighting tables.
+    pub ibl: &'a IblResources,
+    /// The camera.
+    pub camera: &'a Camera,
+}
+
 /// The images one hybrid frame reads and writes, all storage images of one size in `GENERAL`
 /// layout (umbra's or a host's).
 pub struct HybridTargets<'a> {
     /// The G-buffer ([`crate::passes::gbuffer`] formats).
     pub gbuffer: &'a GBufferViews,
-    /// `R32_SFLOAT` images for SSAO and its blur (used when the settings ask for AO).
+    /// `R32_SFLOAT` images for SSAO and its blur (used when the settings ask for AO), to read
+    /// them after the frame; `None`: the frame graph's transient images.
     pub ao: Option<(raw::ImageView, raw::ImageView)>,
     /// `R32G32B32A32_SFLOAT` linear radiance.
     pub hdr: raw::ImageView,

@@ -319,13 +319,6 @@ impl Passes {
             Image::storage_2d(ctx, "hybrid colour", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
         let display = Image::storage_2d(ctx, "hybrid display", size.0, size.1, raw::Format::R8G8B8A8_UNORM)?;
         let ibl = IblResources::new(ctx, scene, &settings.ibl)?;
-        let ao_images = match &settings.ao {
-            Some(_) => {
-                let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
-                Some((make("hybrid ssao")?, make("hybrid ssao blurred")?))
-            }
-            None => None,
-        };
         let views = gbuffer.views();
         // The environment's tables and the G-buffer first (the shadow maps render for its
         // view), then the rest of the frame.
@@ -353,7 +346,7 @@ impl Passes {
         };
         let targets = HybridTargets {
             gbuffer: &views,
-            ao: ao_images.as_ref().map(|(a, b)| (a.view, b.view)),
+            ao: None,
             hdr: output.view,
             ldr: Some(display.view),
             shadows: shadows.as_ref(),
@@ -369,10 +362,6 @@ impl Passes {
             let cmd = rec.cmd();
             output.init_general(ctx, cmd);
             display.init_general(ctx, cmd);
-            if let Some((a, b)) = &ao_images {
-                a.init_general(ctx, cmd);
-                b.init_general(ctx, cmd);
-            }
             timer.reset(cmd);
             for f in 0..frames {
                 let mut frame = settings.clone();

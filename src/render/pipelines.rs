@@ -39,6 +39,8 @@ pub struct Passes {
     pub(super) resolve: OnceLock<ResolvePass>,
     pub(super) denoise: OnceLock<DenoisePass>,
     pub(super) temporal: OnceLock<TemporalPass>,
+    /// The frame graphs' transient images, kept from frame to frame.
+    pub(super) transients: TransientPool,
 }
 impl Passes {
     /// The passes for `scene`'s features (no pipeline is built yet).
@@ -69,6 +71,7 @@ impl Passes {
             resolve: OnceLock::new(),
             denoise: OnceLock::new(),
             temporal: OnceLock::new(),
+            transients: TransientPool::new(),
         }
     }
 

@@ -196,7 +196,7 @@ impl Passes {
 
     /// Records one hybrid frame into `targets`: G-buffer, SSAO and its blur (when
     /// `settings.ao`), deferred lighting with `ibl` × AO, tonemap (when `targets.ldr`), each
-    /// timed under its name when a `timer` is given. The one place the hybrid frame is wired.
+    /// timed under its name when a `timer` is given: [`Passes::add_hybrid`]'s frame graph.
     #[allow(clippy::too_many_arguments)]
     pub fn record_hybrid(
         &self,
@@ -206,12 +206,11 @@ impl Passes {
         camera: &Camera,
         targets: &HybridTargets<'_>,
         settings: &HybridSettings,
-        mut timer: Option<&mut GpuTimer>,
+        timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
-        self.check(scene)?;
-        settings.lighting_with_shadows().validate()?;
-        timed(&mut timer, rec, "gbuffer", |rec| self.record_gbuffer(rec, scene, camera, targets.gbuffer))?;
-        self.record_hybrid_shading(rec, scene, ibl, camera, targets, settings, timer)
+        let mut graph = Graph::new();
+        self.add_hybrid(&mut graph, Frame { scene, ibl, camera }, targets, settings)?;
+        self.execute(rec, graph, timer).map(drop)
     }
 
     /// [`Passes::record_hybrid`] after its G-buffer, which `targets.gbuffer` already holds
@@ -226,10 +225,63 @@ impl Passes {
         camera: &Camera,
         targets: &HybridTargets<'_>,
         settings: &HybridSettings,
-        mut timer: Option<&mut GpuTimer>,
+        timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
+        let mut graph = Graph::new();
+        let gbuffer = GBufferImages::import(&mut graph, targets.gbuffer);
+        self.add_hybrid_shading(&mut graph, Frame { scene, ibl, camera }, gbuffer, targets, settings)?;
+        self.execute(rec, graph, timer).map(drop)
+    }
+
+    /// Records `graph` into `rec` ([`Graph::execute`]), its transient images from these passes'
+    /// pool (kept from frame to frame), each pass timed under its name with `timer` when given.
+    pub fn execute(
+        &self,
+        rec: &mut Recorder<'_>,
+        graph: Graph<'_>,
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<GraphStats> {
+        graph.execute(rec, &self.transients, timer)
+    }
+
+    /// Adds the hybrid frame's passes to `graph`: the G-buffer into `targets.gbuffer`, then
+    /// [`Passes::add_hybrid_shading`]. The one place the hybrid frame is wired.
+    pub fn add_hybrid<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        frame: Frame<'g>,
+        targets: &HybridTargets<'g>,
+        settings: &HybridSettings,
+    ) -> Result<GBufferImages> {
+        self.check(frame.scene)?;
+        let gbuffer = GBufferImages::import(graph, targets.gbuffer);
+        let pass = self.gbuffer_pass()?;
+        let params = GBufferPass::params(frame.camera, gbuffer.size);
+        let mut add = graph.add_pass("gbuffer");
+        for image in gbuffer.images {
+            add = add.write(image);
+        }
+        add.record(move |rec, views| pass.record(rec, frame.scene, &gbuffer.views(views), &params));
+        self.add_hybrid_shading(graph, frame, gbuffer, targets, settings)?;
+        Ok(gbuffer)
+    }
+
+    /// Adds the hybrid frame's passes after its G-buffer (`gbuffer`, written by an earlier pass
+    /// of `graph` or imported) to `graph`: SSAO and its blur into `targets.ao` or, when `None`,
+    /// into transient images; ReSTIR; the lighting into `targets.hdr`; the tonemap into
+    /// `targets.ldr`.
+    pub fn add_hybrid_shading<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        frame: Frame<'g>,
+        gbuffer: GBufferImages,
+        targets: &HybridTargets<'g>,
+        settings: &HybridSettings,
+    ) -> Result<()> {
+        let Frame { scene, ibl, camera } = frame;
         self.check(scene)?;
-        settings.lighting_with_shadows().validate()?;
+        let lighting = settings.lighting_with_shadows();
+        lighting.validate()?;
         let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
             (false, _) => None,
             (true, Some(maps)) if maps.settings.method == settings.shadows.method => Some(maps),
@@ -247,38 +299,85 @@ impl Passes {
                 )))
             }
         };
-        let gbuffer = targets.gbuffer;
-        let ao = match (&settings.ao, targets.ao) {
-            (Some(ao), Some(images)) => {
-                Some(self.record_ssao_timed(rec, camera, gbuffer, images, ao, timer.as_deref_mut())?)
+        let size = gbuffer.size;
+        let ao = match &settings.ao {
+            Some(ao) => {
+                ao.validate()?;
+                let (raw_ao, blurred) = match targets.ao {
+                    Some((a, b)) => (graph.import("ssao", a), graph.import("ssao blurred", b)),
+                    None => {
+                        let desc = ImageDesc { size, format: raw::Format::R32_SFLOAT };
+                        (graph.transient("ssao", desc), graph.transient("ssao blurred", desc))
+                    }
+                };
+                let (ssao, params) = (self.ssao_pass()?, SsaoPass::params(camera, size, ao));
+                graph.add_pass("ssao").read_all(gbuffer.images).write(raw_ao).record(move |rec, views| {
+                    ssao.record(rec, &gbuffer.views(views), views[raw_ao], &params)
+                });
+                if ao.blur {
+                    let (blur, params) = (self.blur_pass()?, AoBlurPass::params(camera, size));
+                    graph.add_pass("ao_blur").read_all(gbuffer.images).read(raw_ao).write(blurred).record(
+                        move |rec, views| {
+                            blur.record(rec, &gbuffer.views(views), views[raw_ao], views[blurred], &params)
+                        },
+                    );
+                    Some(blurred)
+                } else {
+                    Some(raw_ao)
+                }
             }
-            (Some(_), None) => {
-                return Err(Error::Invalid("the settings ask for SSAO but no AO images were given".into()))
-            }
-            (None, _) => None,
+            None => None,
         };
-        let restir = match (settings.lighting.direct.restir(), targets.reservoirs) {
+        let restir = match (lighting.direct.restir().copied(), targets.reservoirs) {
             (None, _) => None,
             (Some(restir), Some(reservoirs)) => {
-                timed(&mut timer, rec, "restir", |rec| {
-                    self.record_restir(rec, scene, camera, gbuffer, reservoirs, restir, &settings.lighting)
-                })?;
+                let pass = self.restir_pass(scene, &restir)?;
+                graph.add_pass("restir").read_all(gbuffer.images).record(move |rec, views| {
+                    let gbuffer = gbuffer.views(views);
+                    pass.record(
+                        rec,
+                        scene,
+                        camera,
+                        &gbuffer,
+                        reservoirs,
+                        &restir,
+                        lighting.frame,
+                        lighting.seed,
+                    )
+                });
                 Some(reservoirs)
             }
             (Some(_), None) => {
                 return Err(Error::Invalid("the settings ask for ReSTIR but no reservoirs were given".into()))
             }
         };
-        timed(&mut timer, rec, "lighting", |rec| {
-            let inputs =
-                LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
-            let lighting = settings.lighting_with_shadows();
-            self.record_lighting(rec, scene, ibl, camera, gbuffer, targets.hdr, &inputs, &lighting)
-        })?;
+        let hdr = graph.import("hdr", targets.hdr);
+        let (probes, lightmaps) = (targets.probes, targets.lightmaps);
+        let mut add = graph.add_pass("lighting").read_all(gbuffer.images).write(hdr);
+        if let Some(ao) = ao {
+            add = add.read(ao);
+        }
+        add.record(move |rec, views| {
+            let inputs = LightingInputs { ao: ao.map(|ao| views[ao]), shadows, probes, lightmaps, restir };
+            self.record_lighting(
+                rec,
+                scene,
+                ibl,
+                camera,
+                &gbuffer.views(views),
+                views[hdr],
+                &inputs,
+                &lighting,
+            )
+        });
         if let Some(ldr) = targets.ldr {
-            timed(&mut timer, rec, "tonemap", |rec| {
-                self.record_tonemap(rec, targets.hdr, ldr, gbuffer.size, settings.exposure, settings.curve)
-            })?;
+            let ldr = graph.import("ldr", ldr);
+            let (tonemap, exposure, curve) = (self.tonemap_pass()?, settings.exposure, settings.curve);
+            graph
+                .add_pass("tonemap")
+                .read(hdr)
+                .write(ldr)
+                .record(move |rec, views| tonemap.record(rec, views[hdr], views[ldr], size, exposure, curve));
         }
         Ok(())
     }

@@ -196,13 +196,22 @@ pub struct Recorder<'a> {
     /// What the bound kernel's resources are and how it uses them.
     bound: Vec<(Resource, Use)>,
     stats: RecorderStats,
+    /// While a frame graph's pass records: the graph's images it may touch.
+    pub(super) contract: Option<super::graph::Contract>,
 }
 
 impl<'a> Recorder<'a> {
     /// A recorder for `cmd`, in the recording state, whose earlier commands (if any) are already
     /// ordered before it (the host's barrier, or none).
     pub fn new(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
-        Self { ctx, cmd, tracker: Tracker::default(), bound: Vec::new(), stats: RecorderStats::default() }
+        Self {
+            ctx,
+            cmd,
+            tracker: Tracker::default(),
+            bound: Vec::new(),
+            stats: RecorderStats::default(),
+            contract: None,
+        }
     }
 
     /// Runs `record` with a recorder for `cmd` ([`Recorder::new`]) and ends the recording with
@@ -236,15 +245,56 @@ impl<'a> Recorder<'a> {
     /// Records the barrier an operation with `uses` needs after what came before (none when it
     /// needs none), and notes its uses. Call it right before recording the operation.
     pub fn access(&mut self, uses: &[(Resource, Use)]) {
+        if let Some(contract) = &mut self.contract {
+            for &(resource, how) in uses {
+                contract.check(resource, how.writes());
+            }
+        }
         if let Some(barrier) = self.tracker.before(uses) {
             self.barrier(barrier);
         }
         self.stats.operations += 1;
     }
 
-    /// Notes the resources of the kernel just bound: [`Recorder::dispatch`] uses them.
-    pub fn bind(&mut self, uses: Vec<(Resource, Use)>) {
+    /// Records `image`'s start afresh (undefined contents, `GENERAL` layout) after every kernel
+    /// and copy recorded before it on the queue: a transient image's first use in a frame.
+    pub fn discard(&mut self, image: &super::Image) {
+        let every =
+            [Use::ComputeWrite, Use::TransferWrite].iter().fold(Scope::default(), |s, u| s.union(u.scope()));
+        let after = Use::ComputeWrite.scope();
+        super::barrier::image(
+            self.ctx,
+            self.cmd,
+            image.raw,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::GENERAL,
+            (every.stages, every.access),
+            (after.stages, after.access),
+        );
+        self.tracker.states.remove(&Resource::Image(image.view));
+        self.stats.barriers += 1;
+    }
+
+    /// Notes the resources of the kernel about to be bound ([`Recorder::dispatch`] uses them),
+    /// or refuses them before anything is recorded: a null image view, or (in a frame graph's
+    /// pass) an image of the graph the pass did not declare.
+    pub fn bind(&mut self, uses: Vec<(Resource, Use)>) -> Result<()> {
+        if uses.iter().any(|(r, _)| *r == Resource::Image(vk::ImageView::null())) {
+            return Err(crate::error::Error::Invalid(
+                "a kernel's image binding is a null view (an image its frame-graph pass did not declare?)"
+                    .into(),
+            ));
+        }
+        if let Some(contract) = &mut self.contract {
+            for &(resource, how) in &uses {
+                contract.check(resource, how.writes());
+            }
+            if let Some(broken) = &contract.broken {
+                return Err(crate::error::Error::Invalid(format!("the kernel's bindings: {broken}")));
+            }
+        }
         self.bound = uses;
+        Ok(())
     }
 
     /// Records the barrier a dispatch of the bound kernel needs (reading its workgroup counts

@@ -20,6 +20,8 @@
 #ifndef UMBRA_IMPLICIT_GLSL
 #define UMBRA_IMPLICIT_GLSL
 
+#include "octahedral.glsl"
+
 // Marches of this invocation that ran out of steps (read by the kernel for its statistics).
 uint implicit_marches_exhausted = 0u;
 
@@ -97,23 +99,6 @@ vec3 implicit_gradient(uint base, vec3 p, float h) {
     return g * (0.25 / h);
 }
 
-// Octahedral encoding of a unit vector into [-1, 1]^2 (the Hit's bary of an implicit hit).
-vec2 implicit_oct_encode(vec3 n) {
-    vec2 p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if (n.z < 0.0) {
-        p = (1.0 - abs(p.yx)) * vec2(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
-    }
-    return p;
-}
-
-vec3 implicit_oct_decode(vec2 e) {
-    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    float t = max(-n.z, 0.0);
-    n.x += n.x >= 0.0 ? -t : t;
-    n.y += n.y >= 0.0 ? -t : t;
-    return normalize(n);
-}
-
 // Marches the shape at `base` along origin + t dir (dir need not be unit) for t in [t0, t1]
 // (the box's span within the ray's interval). True on a hit, with t and the unit outward normal
 // octahedrally encoded. The side the ray starts on is the sign of the distance there; a start on
@@ -187,7 +172,7 @@ bool implicit_march(uint base, vec3 origin, vec3 dir, float t0, float t1, out fl
         return false;
     }
     t_hit = t;
-    n_oct = implicit_oct_encode(g / g_len);
+    n_oct = oct_encode(g / g_len);
     return true;
 }
 

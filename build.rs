@@ -146,6 +146,25 @@ struct GlslStruct {
     metas: Vec<&'static str>,
     /// (doc attributes, declaration without the `;`)
     fields: Vec<(Vec<&'static str>, String)>,
+    /// A `texel_struct`'s members and how many 16-byte texels each spans.
+    texels: Option<Vec<(&'static str, usize)>>,
+}
+
+/// How many 16-byte texels a `texel_struct` member of GLSL type `ty` spans: its members are
+/// 4-vectors of 32-bit values or arrays of them.
+fn member_texels(ty: &str) -> usize {
+    let (elem, n) = match ty.strip_prefix('[').and_then(|t| t.strip_suffix(']')) {
+        Some(inner) => {
+            let (elem, n) = inner.split_once(';').expect("an array type [T; N]");
+            (elem.trim(), n.trim().parse().expect("an array length"))
+        }
+        None => (ty, 1),
+    };
+    assert!(
+        matches!(elem, "vec4" | "uvec4" | "ivec4"),
+        "a texel_struct's members are 4-vectors of 32-bit values (or arrays of them), not {elem}"
+    );
+    n
 }
 
 macro_rules! glsl_field {
@@ -168,6 +187,8 @@ macro_rules! gpu_structs {
                     name: stringify!($name),
                     metas: vec![$(stringify!($meta)),*],
                     fields: vec![$((vec![$(stringify!($fmeta)),*], glsl_field!($ty, $field))),*],
+                    texels: (stringify!($role) == "texel_struct")
+                        .then(|| vec![$((stringify!($field), member_texels(stringify!($ty)))),*]),
                 }),*]
             }
         }
@@ -304,9 +325,35 @@ fn layout_glsl() -> String {
             out.push_str(&format!("    {decl};\n"));
         }
         out.push_str("};\n\n");
+        if let Some(texels) = &s.texels {
+            out.push_str(&texel_constants(s.name, texels));
+        }
     }
     out.push_str(&glsl_constants());
     out.push_str("\n#endif\n");
+    out
+}
+
+/// A `texel_struct`'s constants, for kernels that read it from a texel buffer: its texels
+/// (`MATERIAL_TEXELS` for `GpuMaterial`) and each member's first (`MATERIAL_SHEEN_TEXEL`).
+fn texel_constants(name: &str, members: &[(&str, usize)]) -> String {
+    let prefix = name.strip_prefix("Gpu").unwrap_or(name);
+    let mut snake = String::new();
+    for (i, c) in prefix.chars().enumerate() {
+        if c.is_uppercase() && i > 0 {
+            snake.push('_');
+        }
+        snake.push(c.to_ascii_uppercase());
+    }
+    let total: usize = members.iter().map(|(_, n)| n).sum();
+    let mut out = format!("// {name} as 16-byte texels: their count, and each member's first.\n");
+    out.push_str(&format!("const uint {snake}_TEXELS = {total}u;\n"));
+    let mut first = 0;
+    for (member, n) in members {
+        out.push_str(&format!("const uint {snake}_{}_TEXEL = {first}u;\n", member.to_uppercase()));
+        first += n;
+    }
+    out.push('\n');
     out
 }
 

@@ -335,7 +335,7 @@ bool path_shade(inout Path path, bool found, Hit hit, uvec2 pixel, uint sample_i
     surface_anisotropy(s, tri, hit.bary, uv, LOD_LEVEL0, t, b, n);
     if (HAS_TRANSMISSION) {
         // A refracting boundary: glass (ior) behind the front face, air behind the back.
-        float ior = material_vec(material, 3u).y;
+        float ior = material_vec(material, MATERIAL_PARAMS_TEXEL).y;
         if (HAS_DISPERSION) {
             // A dispersive volume refracts each wavelength its own way: the path follows one
             // colour channel from the first such surface it meets, picked uniformly, its

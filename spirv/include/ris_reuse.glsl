@@ -77,7 +77,7 @@ ShadePoint ris_stored_point(uint tri, vec2 bary, vec3 p) {
     }
     surface_anisotropy(sp.s, tri, bary, uv, LOD_LEVEL0, sp.t, sp.b, sp.n);
     if (HAS_TRANSMISSION) {
-        float ior = material_vec(material, 3u).y;
+        float ior = material_vec(material, MATERIAL_PARAMS_TEXEL).y;
         sp.s.eta = front ? ior : 1.0 / ior;
     }
     return sp;

@@ -16,9 +16,8 @@
 #include "bsdf.glsl"
 #include "texture.glsl"
 
-// Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial: base_color, emissive_rough,
-// specular, params, flags, textures[0..5], tex_transform[0..40], clearcoat, parallax, sheen,
-// iridescence, anisotropy), as floats or as unsigned integers.
+// Texel k of material `id` (MATERIAL_TEXELS per GpuMaterial; a member's first texel is
+// MATERIAL_<MEMBER>_TEXEL, both generated from its layout), as floats or as unsigned integers.
 vec4 material_vec(uint id, uint k) {
     return uintBitsToFloat(imageLoad(material_texels, int(MATERIAL_TEXELS * id + k)));
 }
@@ -36,7 +35,7 @@ vec4 sheen_table_texel(uint t) {
 }
 
 bool material_flag(uint id, uint flag) {
-    return (material_uvec(id, 4u).x & flag) != 0u;
+    return (material_uvec(id, MATERIAL_FLAGS_TEXEL).x & flag) != 0u;
 }
 
 // Whether material `id` is unlit (KHR_materials_unlit); false in kernels not specialised for it.
@@ -49,7 +48,7 @@ bool material_unlit(uint id) {
 
 // The volume's attenuation coefficient rgb per unit length (KHR_materials_volume; 0 without one).
 vec3 material_attenuation(uint id) {
-    return uintBitsToFloat(material_uvec(id, 4u).yzw);
+    return uintBitsToFloat(material_uvec(id, MATERIAL_FLAGS_TEXEL).yzw);
 }
 
 // KHR_materials_dispersion: the dispersion (20 / Abbe number) of material `id`, 0 unless it is a
@@ -73,12 +72,12 @@ float dispersed_ior(float ior, float dispersion, uint c) {
 
 // Material `id`'s texture in `slot` (MATERIAL_SLOT_*): its index + 1, 0 when the slot is empty.
 uint material_slot_texture(uint id, uint slot) {
-    return material_uvec(id, 5u + slot / 4u)[slot % 4u];
+    return material_uvec(id, MATERIAL_TEXTURES_TEXEL + slot / 4u)[slot % 4u];
 }
 
 // Row `row` (0 or 1) of the texture transform of `slot` (GpuMaterial::tex_transform).
 vec4 material_slot_row(uint id, uint slot, uint row) {
-    return material_vec(id, 10u + 2u * slot + row);
+    return material_vec(id, MATERIAL_TEX_TRANSFORM_TEXEL + 2u * slot + row);
 }
 
 // An emissive-triangle table entry (GpuLightTri: tri, cdf, pmf, area) and a punctual light's
@@ -392,9 +391,9 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
     s.base = base;
     s.metallic = metallic;
     s.alpha = max(roughness * roughness, ALPHA_MIN);
-    float ior = material_vec(id, 3u).y;
+    float ior = material_vec(id, MATERIAL_PARAMS_TEXEL).y;
     float f0 = (ior - 1.0) / (ior + 1.0);
-    vec4 specular = material_vec(id, 2u);
+    vec4 specular = material_vec(id, MATERIAL_SPECULAR_TEXEL);
     if (HAS_SPECULAR_MAP) {
         specular *= tex.specular;
     }
@@ -471,7 +470,7 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
         if (HAS_THICKNESS_MAP) {
             s.thickness *= tex.layers.w;
         }
-        float transmission = material_vec(id, 3u).z;
+        float transmission = material_vec(id, MATERIAL_PARAMS_TEXEL).z;
         if (HAS_TRANSMISSION_MAP) {
             transmission *= tex.layers.x;
         }
@@ -488,10 +487,10 @@ Surface material_surface_from(uint id, vec3 base, float metallic, float roughnes
 // Material `id` at the hit's UV sets, textures applied, filtered for a ray cone's `cone_lod`
 // (see material_texture_lod).
 Surface material_surface_lod(uint id, vec4 uv, vec2 cone_lod) {
-    vec3 base = material_vec(id, 0u).rgb * material_texture_lod(id, MATERIAL_SLOT_BASE_COLOR, uv, cone_lod).rgb;
+    vec3 base = material_vec(id, MATERIAL_BASE_COLOR_TEXEL).rgb * material_texture_lod(id, MATERIAL_SLOT_BASE_COLOR, uv, cone_lod).rgb;
     vec4 mr = material_texture_lod(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv, cone_lod);
-    float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
-    float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
+    float metallic = clamp(material_vec(id, MATERIAL_PARAMS_TEXEL).x * mr.b, 0.0, 1.0);
+    float roughness = clamp(material_vec(id, MATERIAL_EMISSIVE_ROUGH_TEXEL).w * mr.g, 0.0, 1.0);
     return material_surface_from(id, base, metallic, roughness, material_layer_texels_lod(id, uv, cone_lod));
 }
 
@@ -507,10 +506,10 @@ float material_occlusion_lod(uint id, vec4 uv, vec2 cone_lod) {
 
 // Material `id` at the hit's UV sets, textures applied (level 0).
 Surface material_surface(uint id, vec4 uv) {
-    vec3 base = material_vec(id, 0u).rgb * material_texture(id, MATERIAL_SLOT_BASE_COLOR, uv).rgb;
+    vec3 base = material_vec(id, MATERIAL_BASE_COLOR_TEXEL).rgb * material_texture(id, MATERIAL_SLOT_BASE_COLOR, uv).rgb;
     vec4 mr = material_texture(id, MATERIAL_SLOT_METALLIC_ROUGHNESS, uv);
-    float metallic = clamp(material_vec(id, 3u).x * mr.b, 0.0, 1.0);
-    float roughness = clamp(material_vec(id, 1u).w * mr.g, 0.0, 1.0);
+    float metallic = clamp(material_vec(id, MATERIAL_PARAMS_TEXEL).x * mr.b, 0.0, 1.0);
+    float roughness = clamp(material_vec(id, MATERIAL_EMISSIVE_ROUGH_TEXEL).w * mr.g, 0.0, 1.0);
     return material_surface_from(id, base, metallic, roughness, material_layer_texels_lod(id, uv, LOD_LEVEL0));
 }
 
@@ -528,7 +527,7 @@ vec3 tri_normal(uint tri) {
 // implicit shape's unit gradient (its Hit carries it, octahedrally encoded in `bary`).
 vec3 hit_normal(Hit hit) {
     if (bvh_is_implicit(hit.tri)) {
-        return implicit_oct_decode(hit.bary);
+        return oct_decode(hit.bary);
     }
     return tri_normal(hit.tri);
 }
@@ -620,7 +619,7 @@ vec3 emitted_lod(uint tri, vec2 bary, vec3 n, vec3 towards, vec2 cone_lod) {
     if (!(front || two_sided)) {
         return vec3(0.0);
     }
-    vec3 e = material_vec(m, 1u).rgb;
+    vec3 e = material_vec(m, MATERIAL_EMISSIVE_ROUGH_TEXEL).rgb;
     if (HAS_EMISSIVE_MAP && any(greaterThan(e, vec3(0.0)))) {
         e *= material_texture_lod(m, MATERIAL_SLOT_EMISSIVE, tri_uv(tri, bary), cone_lod).rgb;
     }
@@ -1238,10 +1237,10 @@ vec3 punctual_direct(vec3 p, vec3 ng, vec3 t, vec3 b, vec3 n, Surface s, vec3 wo
 // rays, each path vertex) and the mean over samples is the blend.
 bool bvh_alpha_opaque(uint tri, vec2 bary, vec3 origin, vec3 dir) {
     uint m = tri_material(tri);
-    float alpha = material_vec(m, 0u).a * material_texture(m, MATERIAL_SLOT_BASE_COLOR, tri_uv(tri, bary)).a
+    float alpha = material_vec(m, MATERIAL_BASE_COLOR_TEXEL).a * material_texture(m, MATERIAL_SLOT_BASE_COLOR, tri_uv(tri, bary)).a
         * tri_color(tri, bary).a;
     if (floatBitsToUint(bvh_tri_v(tri, 1u).w) == 1u) {
-        return alpha >= material_vec(m, 3u).w;
+        return alpha >= material_vec(m, MATERIAL_PARAMS_TEXEL).w;
     }
     uvec4 h = pcg4d(uvec4(floatBitsToUint(origin) ^ floatBitsToUint(dir).yzx, tri));
     return float(h.x >> 8) * (1.0 / 16777216.0) < alpha;

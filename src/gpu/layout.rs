@@ -68,6 +68,7 @@ macro_rules! field_ty {
 macro_rules! gated {
     (struct, $($item:item)*) => { $($item)* };
     (kernel, $($item:item)*) => { $($item)* };
+    (texel_struct, $($item:item)*) => { $($item)* };
     (test_struct, $($item:item)*) => { $(#[cfg(feature = "testing")] #[doc(hidden)] $item)* };
     (test_kernel, $($item:item)*) => { $(#[cfg(feature = "testing")] #[doc(hidden)] $item)* };
 }
@@ -78,6 +79,9 @@ macro_rules! gated_statement {
         $s
     };
     (kernel, $s:stmt) => {
+        $s
+    };
+    (texel_struct, $s:stmt) => {
         $s
     };
     (test_struct, $s:stmt) => {
@@ -105,6 +109,8 @@ macro_rules! gpu_structs {
             );
         )*
 
+        $(texel_struct_items!($role, $name);)*
+
         mod $group {
             use super::*;
 
@@ -128,6 +134,20 @@ macro_rules! gpu_structs {
             }
         }
     };
+}
+
+/// A `texel_struct`'s own items: its texel count (build.rs gives the kernels the same count and
+/// each member's first texel, from the same member list).
+macro_rules! texel_struct_items {
+    (texel_struct, $name:ident) => {
+        impl $name {
+            /// Texels (16 bytes each) of one value in a texel buffer (the kernels' constant
+            /// of the same meaning, e.g. `MATERIAL_TEXELS`).
+            pub const TEXELS: u32 = (size_of::<$name>() / 16) as u32;
+        }
+        const _: () = assert!(size_of::<$name>() % 16 == 0);
+    };
+    ($role:ident, $name:ident) => {};
 }
 
 /// The groups of structs `interface.rs` includes, in order.
@@ -457,24 +477,9 @@ const _: () = assert!(size_of::<TraceRay>() == 32);
 const _: () = assert!(size_of::<TraceHit>() == 16);
 const _: () = assert!(size_of::<GpuTriangle>() == 32);
 const _: () = assert!(size_of::<GpuVertex>() == 48);
-const _: () = assert!(size_of::<GpuMaterial>() == 16 * MATERIAL_TEXELS as usize);
+const _: () = assert!(size_of::<GpuMaterial>() == 912);
 const _: () = assert!(size_of::<TexTransforms>() == 16 * 2 * MATERIAL_TEXTURE_SLOTS as usize);
-// shading.glsl reads a material's texture slots from texel 5 on and their transforms from texel 10
-// on, two texels per slot.
-const _: () = assert!(offset_of!(GpuMaterial, textures) == 16 * 5);
-const _: () = assert!(offset_of!(GpuMaterial, tex_transform) == 16 * 10);
 const _: () = assert!(5 * 4 == MATERIAL_TEXTURE_SLOTS as usize);
-// The clear coat follows the transforms; the parallax parameters follow the clear coat.
-const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * (10 + 2 * MATERIAL_TEXTURE_SLOTS as usize));
-const _: () = assert!(offset_of!(GpuMaterial, clearcoat) == 16 * MATERIAL_CLEARCOAT_TEXEL as usize);
-const _: () = assert!(offset_of!(GpuMaterial, parallax) == 16 * MATERIAL_PARALLAX_TEXEL as usize);
-const _: () = assert!(offset_of!(GpuMaterial, sheen) == 16 * MATERIAL_SHEEN_TEXEL as usize);
-const _: () = assert!(offset_of!(GpuMaterial, iridescence) == 16 * MATERIAL_IRIDESCENCE_TEXEL as usize);
-const _: () = assert!(offset_of!(GpuMaterial, anisotropy) == 16 * MATERIAL_ANISOTROPY_TEXEL as usize);
-const _: () = assert!(
-    offset_of!(GpuMaterial, diffuse_transmission) == 16 * MATERIAL_DIFFUSE_TRANSMISSION_TEXEL as usize
-);
-const _: () = assert!(offset_of!(GpuMaterial, volume) == 16 * MATERIAL_VOLUME_TEXEL as usize);
 const _: () = assert!(size_of::<GpuTexture>() == 32);
 const _: () = assert!(size_of::<GpuLightTri>() == 16);
 const _: () = assert!(size_of::<GpuLight>() == 64);

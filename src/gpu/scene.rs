@@ -23,7 +23,7 @@ pub struct GpuScene {
     pub triangles: TexelBuffer,
     /// `GpuVertex`s, as RGBA32UI texels (three each).
     pub vertices: TexelBuffer,
-    /// `GpuMaterial`s, as RGBA32UI texels (`MATERIAL_TEXELS` each).
+    /// `GpuMaterial`s, as RGBA32UI texels (`GpuMaterial::TEXELS` each).
     pub materials: TexelBuffer,
     /// `GpuLightTri`s as RGBA32UI texels (an empty list still gets one texel).
     pub lights: TexelBuffer,

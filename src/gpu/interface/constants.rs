@@ -22,8 +22,6 @@ gpu_constants! {
     /// `GpuMaterial::flags.x`: `KHR_materials_unlit`: the surface shows its base colour, lit or
     /// not (its emission is packed as 0). Read only by kernels specialised for it (`HAS_UNLIT`).
     MATERIAL_UNLIT: uint = 4;
-    /// Texels of one [`GpuMaterial`] in `material_texels` (its 912 bytes).
-    MATERIAL_TEXELS: uint = 57;
     /// [`GpuMaterial::textures`] slot of the base colour texture.
     MATERIAL_SLOT_BASE_COLOR: uint = 0;
     /// Slot of the metallic-roughness texture.
@@ -68,20 +66,10 @@ gpu_constants! {
     /// Slot of `iridescenceThicknessTexture` (G: the film's thickness from
     /// `iridescenceThicknessMinimum` at 0 to `iridescenceThicknessMaximum` at 1).
     MATERIAL_SLOT_IRIDESCENCE_THICKNESS: uint = 14;
-    /// The texel of [`GpuMaterial::clearcoat`] in a material's texels.
-    MATERIAL_CLEARCOAT_TEXEL: uint = 50;
-    /// The texel of [`GpuMaterial::parallax`] in a material's texels.
-    MATERIAL_PARALLAX_TEXEL: uint = 51;
-    /// The texel of [`GpuMaterial::sheen`] in a material's texels.
-    MATERIAL_SHEEN_TEXEL: uint = 52;
-    /// The texel of [`GpuMaterial::iridescence`] in a material's texels.
-    MATERIAL_IRIDESCENCE_TEXEL: uint = 53;
     /// Slot of `KHR_materials_anisotropy`'s `anisotropyTexture` (RG: the direction in tangent
     /// space, `2 x - 1`; B: × `anisotropyStrength`; left empty where the strength is 0). Looked
     /// up only by kernels specialised for it (`HAS_ANISOTROPY_MAP`).
     MATERIAL_SLOT_ANISOTROPY: uint = 12;
-    /// The texel of [`GpuMaterial::anisotropy`] in a material's texels.
-    MATERIAL_ANISOTROPY_TEXEL: uint = 54;
     /// Slot of `KHR_materials_sheen`'s `sheenColorTexture` (sRGB RGB: × `sheenColorFactor`; this
     /// and the next left empty where the material has no sheen). Looked up only by kernels
     /// specialised for the group (`HAS_SHEEN_MAP`).
@@ -94,13 +82,9 @@ gpu_constants! {
     MATERIAL_SLOT_DIFFUSE_TRANSMISSION: uint = 17;
     /// Slot of `diffuseTransmissionColorTexture` (sRGB RGB: × `diffuseTransmissionColorFactor`).
     MATERIAL_SLOT_DIFFUSE_TRANSMISSION_COLOR: uint = 18;
-    /// The texel of [`GpuMaterial::diffuse_transmission`] in a material's texels.
-    MATERIAL_DIFFUSE_TRANSMISSION_TEXEL: uint = 55;
     /// Slot of `KHR_materials_volume`'s `thicknessTexture` (G: × `thicknessFactor`; left empty
     /// without a volume). Looked up only by kernels specialised for it (`HAS_THICKNESS_MAP`).
     MATERIAL_SLOT_THICKNESS: uint = 19;
-    /// The texel of [`GpuMaterial::volume`] in a material's texels.
-    MATERIAL_VOLUME_TEXEL: uint = 56;
     /// Texture slots a material has room for (each with two `tex_transform` rows).
     MATERIAL_TEXTURE_SLOTS: uint = 20;
     /// `GpuTexture::flags`: clamp s.
@@ -293,7 +277,7 @@ scene_bindings! {
     triangle_texels: readonly texels rgba32ui,
     /// [`GpuVertex`]s, three RGBA32UI texels each (float bits).
     vertex_texels: readonly texels rgba32ui,
-    /// [`GpuMaterial`]s, [`MATERIAL_TEXELS`] RGBA32UI texels each (float bits but for `flags`,
+    /// [`GpuMaterial`]s, [`GpuMaterial::TEXELS`] RGBA32UI texels each (float bits but for `flags`,
     /// `textures`).
     material_texels: readonly texels rgba32ui,
     /// [`GpuTexture`]s, two RGBA32UI texels each.

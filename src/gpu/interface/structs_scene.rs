@@ -169,7 +169,7 @@ gpu_structs! {
     }
 
     /// A glTF metallic-roughness material's factors and texture slots.
-    struct GpuMaterial {
+    texel_struct GpuMaterial {
         /// baseColorFactor.
         base_color: vec4,
         /// Emission (strength applied) rgb, roughness.

@@ -57,6 +57,13 @@
 //!     passes.record_ssao(rec, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
 //!     Ok(())
 //! })?;
+//! // or a frame graph (crate::vk::Graph): passes declare the images they read and write; the
+//! // graph culls what nothing uses, allocates transient images, derives every barrier:
+//! let mut graph = Graph::new();
+//! let gbuffer = GBufferImages::import(&mut graph, &gbuffer_views);
+//! graph.add_pass("host gbuffer").write_all(gbuffer.images).record_raw(|cmd, views| host_pass(cmd))?;
+//! renderer.passes().add_hybrid_shading(&mut graph, renderer.frame(&camera), gbuffer, &targets, &settings)?;
+//! renderer.record_graph(cmd, graph, None)?;            // SSAO's images transient (`ao: None`)
 //! ```
 //!
 //! Every `record_*` goes through [`crate::render::Passes`], the orchestrator that owns the
@@ -261,7 +268,7 @@ impl Renderer {
         count: u32,
     ) -> Result<()> {
         self.record(cmd, |rec| {
-            self.passes.record_path_samples(rec, &self.scene, camera, target, settings, first, count)
+            self.passes.record_path_samples(rec, &self.scene, camera, target, settings, first..first + count)
         })
     }
 
@@ -389,16 +396,7 @@ impl Renderer {
         settings: &LightingSettings,
     ) -> Result<()> {
         self.record(cmd, |rec| {
-            self.passes.record_lighting(
-                rec,
-                &self.scene,
-                &self.ibl,
-                camera,
-                gbuffer,
-                output,
-                inputs,
-                settings,
-            )
+            self.passes.record_lighting(rec, self.frame(camera), gbuffer, output, inputs, settings)
         })
     }
 
@@ -521,9 +519,7 @@ impl Renderer {
         settings: &HybridSettings,
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
-        self.record(cmd, |rec| {
-            self.passes.record_hybrid(rec, &self.scene, &self.ibl, camera, targets, settings, timer)
-        })
+        self.record(cmd, |rec| self.passes.record_hybrid(rec, self.frame(camera), targets, settings, timer))
     }
 
     /// [`Self::record_hybrid`] but its G-buffer, already recorded into `targets.gbuffer`
@@ -537,7 +533,7 @@ impl Renderer {
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         self.record(cmd, |rec| {
-            self.passes.record_hybrid_shading(rec, &self.scene, &self.ibl, camera, targets, settings, timer)
+            self.passes.record_hybrid_shading(rec, self.frame(camera), targets, settings, timer)
         })
     }
 

@@ -425,7 +425,7 @@ fn ris_reuse_carries_over_between_records_and_caps_its_counts() {
     let mut first = 0;
     for count in [1, 2, 3] {
         gpu.record(|rec| {
-            passes.record_path_samples(rec, &gpu_scene, &camera, &target, &settings, first, count)
+            passes.record_path_samples(rec, &gpu_scene, &camera, &target, &settings, first..first + count)
         })
         .expect("record");
         first += count;

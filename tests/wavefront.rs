@@ -195,8 +195,8 @@ fn waves_of_rows_and_progressive_batches_trace_the_same_samples() {
     let mut first = 0;
     for count in [1, 2, 3] {
         ctx.record(|rec| {
-            passes.record_path_samples(rec, &gpu_scene, &camera, &target, &settings, first, count)?;
-            passes.record_path_samples(rec, &gpu_scene, &camera, &split_target, &split, first, count)
+            passes.record_path_samples(rec, &gpu_scene, &camera, &target, &settings, first..first + count)?;
+            passes.record_path_samples(rec, &gpu_scene, &camera, &split_target, &split, first..first + count)
         })
         .unwrap();
         first += count;

@@ -311,7 +311,6 @@ impl DenoisePass {
     /// [`DenoisePass::record`] with the temporal step ([`crate::passes::temporal`]) between the
     /// preparation and the à-trous iterations: the frame, seen by `camera`, blended with
     /// `history`, which then holds this frame for the next (one more dispatch).
-    #[allow(clippy::too_many_arguments)]
     pub fn record_temporal(
         &self,
         rec: &mut Recorder<'_>,
@@ -324,7 +323,6 @@ impl DenoisePass {
         self.record_frame(rec, inputs, images, output, settings, Some(temporal))
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn record_frame(
         &self,
         rec: &mut Recorder<'_>,

@@ -376,7 +376,6 @@ impl ProbePass {
     /// least `blend_min` against the old once a probe's first [`ProbeSettings::bounces`] updates
     /// have replaced its maps, under environment `env` (the lighting's constant or map
     /// multiplier). Never submits.
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,

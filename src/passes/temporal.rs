@@ -250,7 +250,6 @@ impl TemporalPass {
     /// `history` and `images` as [`TemporalOutputs`] says (with the à-trous iteration counts
     /// `iterations` of the two parts). The caller calls
     /// [`TemporalPass::advance`] once the frame is recorded.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn record<'a>(
         &self,
         rec: &mut Recorder<'_>,

@@ -23,7 +23,6 @@ impl TonemapPass {
     /// Records `dst = sRGB(curve(src × 2^stops))` over `size` pixels:
     /// `src` an `R32G32B32A32_SFLOAT` and `dst` an `R8G8B8A8_UNORM` storage image, both in
     /// `GENERAL` layout. Never submits.
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,

@@ -379,7 +379,6 @@ impl WavefrontPass {
 
     /// Records one wave: `wave.sample_count` samples of the `wave.size` pixels from region row
     /// `row` (the accumulation buffers' rows).
-    #[allow(clippy::too_many_arguments)]
     fn wave(
         rec: &mut Recorder<'_>,
         extend: &Pipeline<wavefront::Kernel>,

@@ -220,7 +220,7 @@ impl Passes {
                 let cmd = rec.cmd();
                 timer.reset(cmd);
                 timer.begin(cmd, "pathtrace")?;
-                self.record_path_samples(rec, scene, camera, &target, settings, done, count)?;
+                self.record_path_samples(rec, scene, camera, &target, settings, done..done + count)?;
                 timer.end(cmd)
             })?;
             let batch_ms = timer.read()?.iter().map(|t| t.ms).sum::<f64>();
@@ -367,7 +367,7 @@ impl Passes {
                 let mut frame = settings.clone();
                 frame.lighting.frame = settings.lighting.frame.wrapping_mul(frames).wrapping_add(f);
                 let timer = if f + 1 == frames { Some(&mut timer) } else { None };
-                self.record_hybrid_shading(rec, scene, &ibl, camera, &targets, &frame, timer)?;
+                self.record_hybrid_shading(rec, Frame { scene, ibl: &ibl, camera }, &targets, &frame, timer)?;
             }
             Ok(())
         })?;

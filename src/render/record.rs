@@ -73,21 +73,19 @@ impl Passes {
     }
 
     /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the
-    /// scene's precomputed `ibl` and the optional `inputs` (ambient occlusion, shadow maps
-    /// instead of shadow rays, a probe volume and lightmaps for the diffuse lobe), each recorded
-    /// before.
-    #[allow(clippy::too_many_arguments)]
+    /// `frame`'s scene, camera and precomputed image-based lighting and the optional `inputs`
+    /// (ambient occlusion, shadow maps instead of shadow rays, a probe volume and lightmaps for
+    /// the diffuse lobe), each recorded before.
     pub fn record_lighting(
         &self,
         rec: &mut Recorder<'_>,
-        scene: &GpuScene,
-        ibl: &IblResources,
-        camera: &Camera,
+        frame: Frame<'_>,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
         inputs: &LightingInputs<'_>,
         settings: &LightingSettings,
     ) -> Result<()> {
+        let Frame { scene, ibl, camera } = frame;
         self.check(scene)?;
         settings.validate()?;
         settings.validate_sized_rays(scene.punctual_count)?;
@@ -195,41 +193,36 @@ impl Passes {
     }
 
     /// Records one hybrid frame into `targets`: G-buffer, SSAO and its blur (when
-    /// `settings.ao`), deferred lighting with `ibl` × AO, tonemap (when `targets.ldr`), each
-    /// timed under its name when a `timer` is given: [`Passes::add_hybrid`]'s frame graph.
-    #[allow(clippy::too_many_arguments)]
+    /// `settings.ao`), deferred lighting with the frame's image-based light × AO, tonemap (when
+    /// `targets.ldr`), each timed under its name when a `timer` is given:
+    /// [`Passes::add_hybrid`]'s frame graph.
     pub fn record_hybrid(
         &self,
         rec: &mut Recorder<'_>,
-        scene: &GpuScene,
-        ibl: &IblResources,
-        camera: &Camera,
+        frame: Frame<'_>,
         targets: &HybridTargets<'_>,
         settings: &HybridSettings,
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         let mut graph = Graph::new();
-        self.add_hybrid(&mut graph, Frame { scene, ibl, camera }, targets, settings)?;
+        self.add_hybrid(&mut graph, frame, targets, settings)?;
         self.execute(rec, graph, timer).map(drop)
     }
 
     /// [`Passes::record_hybrid`] after its G-buffer, which `targets.gbuffer` already holds
-    /// ([`Passes::record_gbuffer`] of `camera`): for shadow maps rendered for the view between
-    /// the two ([`crate::passes::shadow::ShadowView`]).
-    #[allow(clippy::too_many_arguments)]
+    /// ([`Passes::record_gbuffer`] of the frame's camera): for shadow maps rendered for the view
+    /// between the two ([`crate::passes::shadow::ShadowView`]).
     pub fn record_hybrid_shading(
         &self,
         rec: &mut Recorder<'_>,
-        scene: &GpuScene,
-        ibl: &IblResources,
-        camera: &Camera,
+        frame: Frame<'_>,
         targets: &HybridTargets<'_>,
         settings: &HybridSettings,
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         let mut graph = Graph::new();
         let gbuffer = GBufferImages::import(&mut graph, targets.gbuffer);
-        self.add_hybrid_shading(&mut graph, Frame { scene, ibl, camera }, gbuffer, targets, settings)?;
+        self.add_hybrid_shading(&mut graph, frame, gbuffer, targets, settings)?;
         self.execute(rec, graph, timer).map(drop)
     }
 
@@ -278,7 +271,7 @@ impl Passes {
         targets: &HybridTargets<'g>,
         settings: &HybridSettings,
     ) -> Result<()> {
-        let Frame { scene, ibl, camera } = frame;
+        let Frame { scene, camera, .. } = frame;
         self.check(scene)?;
         let lighting = settings.lighting_with_shadows();
         lighting.validate()?;
@@ -359,16 +352,7 @@ impl Passes {
         }
         add.record(move |rec, views| {
             let inputs = LightingInputs { ao: ao.map(|ao| views[ao]), shadows, probes, lightmaps, restir };
-            self.record_lighting(
-                rec,
-                scene,
-                ibl,
-                camera,
-                &gbuffer.views(views),
-                views[hdr],
-                &inputs,
-                &lighting,
-            )
+            self.record_lighting(rec, frame, &gbuffer.views(views), views[hdr], &inputs, &lighting)
         });
         if let Some(ldr) = targets.ldr {
             let ldr = graph.import("ldr", ldr);
@@ -382,13 +366,12 @@ impl Passes {
         Ok(())
     }
 
-    /// Records path-traced samples `first .. first + count` of `settings`' render into `target`
-    /// (its samples `settings.first_sample + first ..` of the sequence; `first` 0 records the
+    /// Records path-traced samples `samples` of `settings`' render into `target` (its samples
+    /// `settings.first_sample + samples.start ..` of the sequence; starting at 0 records the
     /// target's clearing first and restarts the running mean). `settings.size` must be the
     /// target's. With RIS reuse ([`crate::passes::pathtrace::RisReuse`]) the target's reservoirs
     /// are made at the first such record, and the samples continue from those the last record
-    /// left (`first` 0 clears them too).
-    #[allow(clippy::too_many_arguments)]
+    /// left (starting at 0 clears them too).
     pub fn record_path_samples(
         &self,
         rec: &mut Recorder<'_>,
@@ -396,9 +379,15 @@ impl Passes {
         camera: &Camera,
         target: &PathTarget,
         settings: &PathSettings,
-        first: u32,
-        count: u32,
+        samples: std::ops::Range<u32>,
     ) -> Result<()> {
+        let (first, count) = (
+            samples.start,
+            samples
+                .end
+                .checked_sub(samples.start)
+                .ok_or_else(|| Error::Invalid(format!("samples {samples:?}: the end is before the start")))?,
+        );
         if settings.ris_reuse != crate::passes::pathtrace::RisReuse::Off {
             // (Reuse chains the samples: the settings that cannot be split are refused.)
             settings.validate()?;

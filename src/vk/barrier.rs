@@ -74,7 +74,6 @@ pub fn transfer_to_host(ctx: &Context, cmd: vk::CommandBuffer) {
 }
 
 /// An image layout transition with explicit stages and accesses on both sides.
-#[allow(clippy::too_many_arguments)]
 pub fn image(
     ctx: &Context,
     cmd: vk::CommandBuffer,

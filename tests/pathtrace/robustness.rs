@@ -145,7 +145,7 @@ fn render_into(gpu: &Gpu, scene: &Scene, target: &PathTarget, spp: u32) -> PathS
     let passes = Passes::new(gpu, &device_scene);
     let camera = scene.camera(None).unwrap();
     let settings = PathSettings { size: target.size, spp, ..PathSettings::default() };
-    gpu.record(|rec| passes.record_path_samples(rec, &device_scene, &camera, target, &settings, 0, spp))
+    gpu.record(|rec| passes.record_path_samples(rec, &device_scene, &camera, target, &settings, 0..spp))
         .unwrap();
     target.stats.read::<PathStats>(gpu).unwrap()[0]
 }

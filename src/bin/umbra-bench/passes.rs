@@ -15,7 +15,7 @@ use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::gbuffer::GBuffer;
 use umbra::passes::pathtrace::PathTarget;
-use umbra::render::{HybridSettings, HybridTargets, Passes, PathSettings};
+use umbra::render::{Frame, HybridSettings, HybridTargets, Passes, PathSettings};
 use umbra::scene::Camera;
 use umbra::vk::ContextDesc;
 use umbra::vk::{raw, Context, GpuTimer, Image};
@@ -96,8 +96,8 @@ pub fn run(
     };
     super::rays::warm_up(|| {
         ctx.record(|rec| {
-            passes.record_hybrid(rec, scene, &ibl, camera, &targets, &settings, None)?;
-            passes.record_path_samples(rec, scene, camera, &target, &path_settings, 0, 1)
+            passes.record_hybrid(rec, Frame { scene, ibl: &ibl, camera }, &targets, &settings, None)?;
+            passes.record_path_samples(rec, scene, camera, &target, &path_settings, 0..1)
         })
     })?;
     let mut timer = GpuTimer::new(ctx, 5)?;
@@ -107,9 +107,22 @@ pub fn run(
         ctx.record(|rec| {
             let cmd = rec.cmd();
             timer.reset(cmd);
-            passes.record_hybrid(rec, scene, &ibl, camera, &targets, &settings, Some(&mut timer))?;
+            passes.record_hybrid(
+                rec,
+                Frame { scene, ibl: &ibl, camera },
+                &targets,
+                &settings,
+                Some(&mut timer),
+            )?;
             timer.begin(cmd, "pathtrace 1 spp")?;
-            passes.record_path_samples(rec, scene, camera, &target, &path_settings, repeat as u32, 1)?;
+            passes.record_path_samples(
+                rec,
+                scene,
+                camera,
+                &target,
+                &path_settings,
+                repeat as u32..repeat as u32 + 1,
+            )?;
             timer.end(cmd)
         })?;
         let times = timer.read()?;

@@ -85,7 +85,14 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
             super::rays::warm_up(|| {
                 submitted += spp;
                 ctx.record(|rec| {
-                    passes.record_path_samples(rec, &gpu_scene, &camera, &target, &path, submitted - spp, spp)
+                    passes.record_path_samples(
+                        rec,
+                        &gpu_scene,
+                        &camera,
+                        &target,
+                        &path,
+                        submitted - spp..submitted,
+                    )
                 })
             })?;
             let mut timer = GpuTimer::new(ctx, 1)?;
@@ -95,7 +102,14 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
                     let cmd = rec.cmd();
                     timer.reset(cmd);
                     timer.begin(cmd, "pathtrace")?;
-                    passes.record_path_samples(rec, &gpu_scene, &camera, &target, &path, submitted, spp)?;
+                    passes.record_path_samples(
+                        rec,
+                        &gpu_scene,
+                        &camera,
+                        &target,
+                        &path,
+                        submitted..submitted + spp,
+                    )?;
                     timer.end(cmd)
                 })?;
                 submitted += spp;
@@ -106,7 +120,7 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
             let busy_lanes = if settings.lanes && integrator == Integrator::Megakernel {
                 let counting = PathTarget::new(ctx, settings.size)?.with_lane_counts();
                 ctx.record(|rec| {
-                    passes.record_path_samples(rec, &gpu_scene, &camera, &counting, &path, 0, spp)
+                    passes.record_path_samples(rec, &gpu_scene, &camera, &counting, &path, 0..spp)
                 })?;
                 let stats: Vec<PathStats> = counting.stats.read(ctx)?;
                 let subgroup = ctx.info().subgroup_size;

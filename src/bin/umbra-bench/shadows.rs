@@ -23,7 +23,7 @@ use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::gbuffer::GBufferViews;
 use umbra::passes::shadow::{ShadowMaps, ShadowMethod, ShadowSettings, ShadowView};
-use umbra::render::{HybridSettings, HybridTargets, Passes};
+use umbra::render::{Frame, HybridSettings, HybridTargets, Passes};
 use umbra::scene::Camera;
 use umbra::vk::ContextDesc;
 use umbra::vk::{raw, Context, GpuTimer};
@@ -151,8 +151,11 @@ pub fn run(
         if sized_rays && hybrid.lighting_with_shadows().validate_sized_rays(scene.punctual_count).is_err() {
             continue;
         }
-        let frame =
-            || ctx.record(|rec| passes.record_hybrid(rec, scene, &ibl, camera, &targets, &hybrid, None));
+        let frame = || {
+            ctx.record(|rec| {
+                passes.record_hybrid(rec, Frame { scene, ibl: &ibl, camera }, &targets, &hybrid, None)
+            })
+        };
         super::rays::warm_up(frame)?;
         let mut timer = GpuTimer::new(ctx, 2)?;
         let mut lighting_ms = Vec::new();
@@ -160,7 +163,13 @@ pub fn run(
             ctx.record(|rec| {
                 let cmd = rec.cmd();
                 timer.reset(cmd);
-                passes.record_hybrid(rec, scene, &ibl, camera, &targets, &hybrid, Some(&mut timer))
+                passes.record_hybrid(
+                    rec,
+                    Frame { scene, ibl: &ibl, camera },
+                    &targets,
+                    &hybrid,
+                    Some(&mut timer),
+                )
             })?;
             let times = timer.read()?;
             lighting_ms.extend(times.iter().filter(|t| t.name == "lighting").map(|t| t.ms));
@@ -210,7 +219,9 @@ pub fn run(
                     shadows: settings,
                     ..HybridSettings::default()
                 };
-                ctx.record(|rec| passes.record_hybrid(rec, scene, &ibl, camera, &targets, &hybrid, None))?;
+                ctx.record(|rec| {
+                    passes.record_hybrid(rec, Frame { scene, ibl: &ibl, camera }, &targets, &hybrid, None)
+                })?;
                 let image: Vec<[f32; 4]> = output.read(ctx)?;
                 for (s, p) in sum.iter_mut().zip(&image) {
                     for c in 0..4 {

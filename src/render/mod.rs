@@ -2,9 +2,10 @@
 //! renders with them, in three files, one per job:
 //! - `pipelines.rs`: each pipeline built once, on first use or ahead of it, cached by what
 //!   specialises it;
-//! - `record.rs`: recording the frames into a command buffer, never submitting: the hybrid frame
-//!   (G-buffer → SSAO → blur → deferred lighting → tonemap, [`Passes::record_hybrid`]), ambient
-//!   occlusion, the progressive path tracer, the denoiser;
+//! - `frame.rs` and `record.rs`: recording into a command buffer, never submitting: umbra's
+//!   passes in a frame graph, one `add_*` each, and the hybrid frame wired from them (G-buffer →
+//!   SSAO → blur → deferred lighting → tonemap, [`Passes::add_hybrid`]); ambient occlusion,
+//!   the lighting, the progressive path tracer, the denoiser;
 //! - `oneshot.rs`: the one-shot renders and bakes ([`Passes::hybrid`], [`Passes::path_trace`],
 //!   [`Passes::ambient_occlusion`], ...), which allocate the images, submit in batches and read
 //!   back linear images; the free functions of the same names build a [`Passes`] for one render.
@@ -40,10 +41,11 @@ use crate::passes::tonemap::{ToneCurve, TonemapPass};
 use crate::passes::wavefront::WavefrontPass;
 use crate::scene::Camera;
 use crate::vk::{
-    raw, Buffer, Context, GpuTimer, Graph, GraphStats, Image, ImageDesc, Recorder, TransientPool,
+    raw, Buffer, Context, GpuTimer, Graph, GraphImage, GraphStats, Image, ImageDesc, Recorder, TransientPool,
 };
 use std::sync::OnceLock;
 
+mod frame;
 mod oneshot;
 mod pipelines;
 mod record;

@@ -402,42 +402,25 @@ impl Passes {
         let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
         let raw_ao = make("ambient occlusion")?;
         let blurred = make("ambient occlusion blurred")?;
-        let views = gbuffer.views();
+        let mut graph = Graph::new();
+        let views = GBufferImages::import(&mut graph, &gbuffer.views());
+        let unblurred = graph.import("ambient occlusion", raw_ao.view);
+        self.add_gbuffer(&mut graph, scene, camera, views)?;
+        match method {
+            AoMethod::Ssao => self.add_ssao(&mut graph, camera, views, unblurred, settings)?,
+            AoMethod::Rtao => self.add_rtao(&mut graph, scene, camera, views, unblurred, settings)?,
+        }
+        if settings.blur {
+            let output = graph.import("ambient occlusion blurred", blurred.view);
+            self.add_ao_blur(&mut graph, camera, views, unblurred, output)?;
+        }
         let mut timer = GpuTimer::new(ctx, 3)?;
         ctx.record(|rec| {
             let cmd = rec.cmd();
             raw_ao.init_general(ctx, cmd);
             blurred.init_general(ctx, cmd);
             timer.reset(cmd);
-            timer.begin(cmd, "gbuffer")?;
-            self.record_gbuffer(rec, scene, camera, &views)?;
-            timer.end(cmd)?;
-            match method {
-                AoMethod::Ssao => {
-                    // SSAO without its blur; the blur follows for both methods.
-                    let unblurred = AoSettings { blur: false, ..*settings };
-                    self.record_ssao_timed(
-                        rec,
-                        camera,
-                        &views,
-                        (raw_ao.view, blurred.view),
-                        &unblurred,
-                        Some(&mut timer),
-                    )?;
-                }
-                AoMethod::Rtao => {
-                    timer.begin(cmd, "rtao")?;
-                    self.record_rtao(rec, scene, camera, &views, raw_ao.view, settings)?;
-                    timer.end(cmd)?;
-                }
-            }
-            if settings.blur {
-                timer.begin(cmd, "ao_blur")?;
-                let params = AoBlurPass::params(camera, size);
-                self.blur_pass()?.record(rec, &views, raw_ao.view, blurred.view, &params)?;
-                timer.end(cmd)?;
-            }
-            Ok(())
+            self.execute(rec, graph, Some(&mut timer)).map(drop)
         })?;
         let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
         let unblurred: Vec<f32> = raw_ao.read(ctx)?;

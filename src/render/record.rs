@@ -28,30 +28,13 @@ impl Passes {
         blurred: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<raw::ImageView> {
-        self.record_ssao_timed(rec, camera, gbuffer, (raw_ao, blurred), settings, None)
-    }
-
-    pub(super) fn record_ssao_timed(
-        &self,
-        rec: &mut Recorder<'_>,
-        camera: &Camera,
-        gbuffer: &GBufferViews,
-        (raw_ao, blurred): (raw::ImageView, raw::ImageView),
-        settings: &AoSettings,
-        mut timer: Option<&mut GpuTimer>,
-    ) -> Result<raw::ImageView> {
         settings.validate()?;
         let size = gbuffer.size;
-        timed(&mut timer, rec, "ssao", |rec| {
-            self.ssao_pass()?.record(rec, gbuffer, raw_ao, &SsaoPass::params(camera, size, settings))
-        })?;
+        self.ssao_pass()?.record(rec, gbuffer, raw_ao, &SsaoPass::params(camera, size, settings))?;
         if !settings.blur {
             return Ok(raw_ao);
         }
-        timed(&mut timer, rec, "ao_blur", |rec| {
-            let params = AoBlurPass::params(camera, size);
-            self.blur_pass()?.record(rec, gbuffer, raw_ao, blurred, &params)
-        })?;
+        self.blur_pass()?.record(rec, gbuffer, raw_ao, blurred, &AoBlurPass::params(camera, size))?;
         Ok(blurred)
     }
 
@@ -237,135 +220,6 @@ impl Passes {
         graph.execute(rec, &self.transients, timer)
     }
 
-    /// Adds the hybrid frame's passes to `graph`: the G-buffer into `targets.gbuffer`, then
-    /// [`Passes::add_hybrid_shading`]. The one place the hybrid frame is wired.
-    pub fn add_hybrid<'g>(
-        &'g self,
-        graph: &mut Graph<'g>,
-        frame: Frame<'g>,
-        targets: &HybridTargets<'g>,
-        settings: &HybridSettings,
-    ) -> Result<GBufferImages> {
-        self.check(frame.scene)?;
-        let gbuffer = GBufferImages::import(graph, targets.gbuffer);
-        let pass = self.gbuffer_pass()?;
-        let params = GBufferPass::params(frame.camera, gbuffer.size);
-        let mut add = graph.add_pass("gbuffer");
-        for image in gbuffer.images {
-            add = add.write(image);
-        }
-        add.record(move |rec, views| pass.record(rec, frame.scene, &gbuffer.views(views), &params));
-        self.add_hybrid_shading(graph, frame, gbuffer, targets, settings)?;
-        Ok(gbuffer)
-    }
-
-    /// Adds the hybrid frame's passes after its G-buffer (`gbuffer`, written by an earlier pass
-    /// of `graph` or imported) to `graph`: SSAO and its blur into `targets.ao` or, when `None`,
-    /// into transient images; ReSTIR; the lighting into `targets.hdr`; the tonemap into
-    /// `targets.ldr`.
-    pub fn add_hybrid_shading<'g>(
-        &'g self,
-        graph: &mut Graph<'g>,
-        frame: Frame<'g>,
-        gbuffer: GBufferImages,
-        targets: &HybridTargets<'g>,
-        settings: &HybridSettings,
-    ) -> Result<()> {
-        let Frame { scene, camera, .. } = frame;
-        self.check(scene)?;
-        let lighting = settings.lighting_with_shadows();
-        lighting.validate()?;
-        let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
-            (false, _) => None,
-            (true, Some(maps)) if maps.settings.method == settings.shadows.method => Some(maps),
-            (true, Some(maps)) => {
-                return Err(Error::Invalid(format!(
-                    "the settings shadow by '{}' but the maps given were made for '{}'",
-                    settings.shadows.method.name(),
-                    maps.settings.method.name()
-                )))
-            }
-            (true, None) => {
-                return Err(Error::Invalid(format!(
-                    "the settings shadow by '{}' but no shadow maps were given",
-                    settings.shadows.method.name()
-                )))
-            }
-        };
-        let size = gbuffer.size;
-        let ao = match &settings.ao {
-            Some(ao) => {
-                ao.validate()?;
-                let (raw_ao, blurred) = match targets.ao {
-                    Some((a, b)) => (graph.import("ssao", a), graph.import("ssao blurred", b)),
-                    None => {
-                        let desc = ImageDesc { size, format: raw::Format::R32_SFLOAT };
-                        (graph.transient("ssao", desc), graph.transient("ssao blurred", desc))
-                    }
-                };
-                let (ssao, params) = (self.ssao_pass()?, SsaoPass::params(camera, size, ao));
-                graph.add_pass("ssao").read_all(gbuffer.images).write(raw_ao).record(move |rec, views| {
-                    ssao.record(rec, &gbuffer.views(views), views[raw_ao], &params)
-                });
-                if ao.blur {
-                    let (blur, params) = (self.blur_pass()?, AoBlurPass::params(camera, size));
-                    graph.add_pass("ao_blur").read_all(gbuffer.images).read(raw_ao).write(blurred).record(
-                        move |rec, views| {
-                            blur.record(rec, &gbuffer.views(views), views[raw_ao], views[blurred], &params)
-                        },
-                    );
-                    Some(blurred)
-                } else {
-                    Some(raw_ao)
-                }
-            }
-            None => None,
-        };
-        let restir = match (lighting.direct.restir().copied(), targets.reservoirs) {
-            (None, _) => None,
-            (Some(restir), Some(reservoirs)) => {
-                let pass = self.restir_pass(scene, &restir)?;
-                graph.add_pass("restir").read_all(gbuffer.images).record(move |rec, views| {
-                    let gbuffer = gbuffer.views(views);
-                    pass.record(
-                        rec,
-                        scene,
-                        camera,
-                        &gbuffer,
-                        reservoirs,
-                        &restir,
-                        lighting.frame,
-                        lighting.seed,
-                    )
-                });
-                Some(reservoirs)
-            }
-            (Some(_), None) => {
-                return Err(Error::Invalid("the settings ask for ReSTIR but no reservoirs were given".into()))
-            }
-        };
-        let hdr = graph.import("hdr", targets.hdr);
-        let (probes, lightmaps) = (targets.probes, targets.lightmaps);
-        let mut add = graph.add_pass("lighting").read_all(gbuffer.images).write(hdr);
-        if let Some(ao) = ao {
-            add = add.read(ao);
-        }
-        add.record(move |rec, views| {
-            let inputs = LightingInputs { ao: ao.map(|ao| views[ao]), shadows, probes, lightmaps, restir };
-            self.record_lighting(rec, frame, &gbuffer.views(views), views[hdr], &inputs, &lighting)
-        });
-        if let Some(ldr) = targets.ldr {
-            let ldr = graph.import("ldr", ldr);
-            let (tonemap, exposure, curve) = (self.tonemap_pass()?, settings.exposure, settings.curve);
-            graph
-                .add_pass("tonemap")
-                .read(hdr)
-                .write(ldr)
-                .record(move |rec, views| tonemap.record(rec, views[hdr], views[ldr], size, exposure, curve));
-        }
-        Ok(())
-    }
-
     /// Records path-traced samples `samples` of `settings`' render into `target` (its samples
     /// `settings.first_sample + samples.start ..` of the sequence; starting at 0 records the
     /// target's clearing first and restarts the running mean). `settings.size` must be the
@@ -473,21 +327,4 @@ impl Passes {
             temporal,
         )
     }
-}
-
-/// Runs `record` between `timer.begin(name)` and `timer.end()` when there is a timer.
-pub(super) fn timed(
-    timer: &mut Option<&mut GpuTimer>,
-    rec: &mut Recorder<'_>,
-    name: &str,
-    record: impl FnOnce(&mut Recorder<'_>) -> Result<()>,
-) -> Result<()> {
-    if let Some(t) = timer.as_deref_mut() {
-        t.begin(rec.cmd(), name)?;
-    }
-    record(rec)?;
-    if let Some(t) = timer.as_deref_mut() {
-        t.end(rec.cmd())?;
-    }
-    Ok(())
 }

@@ -82,18 +82,12 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
             };
             let spp = settings.spp;
             let mut submitted = 0u32;
+            let samples = |rec: &mut umbra::vk::Recorder<'_>, range| {
+                passes.record_path_samples(rec, &gpu_scene, &camera, &target, &path, range)
+            };
             super::rays::warm_up(|| {
                 submitted += spp;
-                ctx.record(|rec| {
-                    passes.record_path_samples(
-                        rec,
-                        &gpu_scene,
-                        &camera,
-                        &target,
-                        &path,
-                        submitted - spp..submitted,
-                    )
-                })
+                ctx.record(|rec| samples(rec, submitted - spp..submitted))
             })?;
             let mut timer = GpuTimer::new(ctx, 1)?;
             let mut ms = Vec::new();
@@ -102,14 +96,7 @@ pub fn run(ctx: &Context, scenes: &[(String, Scene)], settings: &PathsSettings) 
                     let cmd = rec.cmd();
                     timer.reset(cmd);
                     timer.begin(cmd, "pathtrace")?;
-                    passes.record_path_samples(
-                        rec,
-                        &gpu_scene,
-                        &camera,
-                        &target,
-                        &path,
-                        submitted..submitted + spp,
-                    )?;
+                    samples(rec, submitted..submitted + spp)?;
                     timer.end(cmd)
                 })?;
                 submitted += spp;

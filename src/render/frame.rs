@@ -1,0 +1,210 @@
+//! umbra's passes in a frame graph ([`crate::vk::Graph`]): one `add_*` per pass, each declaring
+//! the images it reads and writes; the hybrid frame is wired from them ([`Passes::add_hybrid`]),
+//! and a host adds its own passes to the same graph ([`crate::embed::Renderer::record_graph`]).
+
+use super::*;
+
+impl Passes {
+    /// Adds the ray-cast G-buffer of `scene` seen from `camera`, written into `gbuffer`.
+    pub fn add_gbuffer<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        scene: &'g GpuScene,
+        camera: &Camera,
+        gbuffer: GBufferImages,
+    ) -> Result<()> {
+        self.check(scene)?;
+        let (pass, params) = (self.gbuffer_pass()?, GBufferPass::params(camera, gbuffer.size));
+        graph
+            .add_pass("gbuffer")
+            .write_all(gbuffer.images)
+            .record(move |rec, views| pass.record(rec, scene, &gbuffer.views(views), &params));
+        Ok(())
+    }
+
+    /// Adds SSAO of `gbuffer` (seen from `camera`) into `output` (`R32_SFLOAT`, unblurred).
+    pub fn add_ssao<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        camera: &Camera,
+        gbuffer: GBufferImages,
+        output: GraphImage,
+        settings: &AoSettings,
+    ) -> Result<()> {
+        settings.validate()?;
+        let (pass, params) = (self.ssao_pass()?, SsaoPass::params(camera, gbuffer.size, settings));
+        graph
+            .add_pass("ssao")
+            .read_all(gbuffer.images)
+            .write(output)
+            .record(move |rec, views| pass.record(rec, &gbuffer.views(views), views[output], &params));
+        Ok(())
+    }
+
+    /// Adds ray-traced AO of `gbuffer` (`settings.samples` rays of length `settings.radius` per
+    /// pixel through `scene`) into `output` (`R32_SFLOAT`).
+    pub fn add_rtao<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        scene: &'g GpuScene,
+        camera: &Camera,
+        gbuffer: GBufferImages,
+        output: GraphImage,
+        settings: &AoSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        settings.validate()?;
+        let (pass, params) = (self.rtao_pass(scene)?, RtaoPass::params(camera, gbuffer.size, settings));
+        graph
+            .add_pass("rtao")
+            .read_all(gbuffer.images)
+            .write(output)
+            .record(move |rec, views| pass.record(rec, scene, &gbuffer.views(views), views[output], &params));
+        Ok(())
+    }
+
+    /// Adds the depth-aware blur of `ao` into `blurred` (both `R32_SFLOAT`).
+    pub fn add_ao_blur<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        camera: &Camera,
+        gbuffer: GBufferImages,
+        ao: GraphImage,
+        blurred: GraphImage,
+    ) -> Result<()> {
+        let (pass, params) = (self.blur_pass()?, AoBlurPass::params(camera, gbuffer.size));
+        graph.add_pass("ao_blur").read_all(gbuffer.images).read(ao).write(blurred).record(
+            move |rec, views| pass.record(rec, &gbuffer.views(views), views[ao], views[blurred], &params),
+        );
+        Ok(())
+    }
+
+    /// Adds the display transform of `hdr` (`R32G32B32A32_SFLOAT`) into `ldr` (`R8G8B8A8_UNORM`,
+    /// sRGB-encoded values).
+    pub fn add_tonemap<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        hdr: GraphImage,
+        ldr: GraphImage,
+        size: (u32, u32),
+        exposure_stops: f32,
+        curve: ToneCurve,
+    ) -> Result<()> {
+        let pass = self.tonemap_pass()?;
+        graph
+            .add_pass("tonemap")
+            .read(hdr)
+            .write(ldr)
+            .record(move |rec, views| pass.record(rec, views[hdr], views[ldr], size, exposure_stops, curve));
+        Ok(())
+    }
+
+    /// Adds the hybrid frame's passes to `graph`: the G-buffer into `targets.gbuffer`, then
+    /// [`Passes::add_hybrid_shading`]. The one place the hybrid frame is wired.
+    pub fn add_hybrid<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        frame: Frame<'g>,
+        targets: &HybridTargets<'g>,
+        settings: &HybridSettings,
+    ) -> Result<GBufferImages> {
+        let gbuffer = GBufferImages::import(graph, targets.gbuffer);
+        self.add_gbuffer(graph, frame.scene, frame.camera, gbuffer)?;
+        self.add_hybrid_shading(graph, frame, gbuffer, targets, settings)?;
+        Ok(gbuffer)
+    }
+
+    /// Adds the hybrid frame's passes after its G-buffer (`gbuffer`, written by an earlier pass
+    /// of `graph` or imported) to `graph`: SSAO and its blur into `targets.ao` or, when `None`,
+    /// into transient images; ReSTIR; the lighting into `targets.hdr`; the tonemap into
+    /// `targets.ldr`.
+    pub fn add_hybrid_shading<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        frame: Frame<'g>,
+        gbuffer: GBufferImages,
+        targets: &HybridTargets<'g>,
+        settings: &HybridSettings,
+    ) -> Result<()> {
+        let Frame { scene, camera, .. } = frame;
+        self.check(scene)?;
+        let lighting = settings.lighting_with_shadows();
+        lighting.validate()?;
+        let shadows = match (settings.shadows.method.uses_maps(), targets.shadows) {
+            (false, _) => None,
+            (true, Some(maps)) if maps.settings.method == settings.shadows.method => Some(maps),
+            (true, Some(maps)) => {
+                return Err(Error::Invalid(format!(
+                    "the settings shadow by '{}' but the maps given were made for '{}'",
+                    settings.shadows.method.name(),
+                    maps.settings.method.name()
+                )))
+            }
+            (true, None) => {
+                return Err(Error::Invalid(format!(
+                    "the settings shadow by '{}' but no shadow maps were given",
+                    settings.shadows.method.name()
+                )))
+            }
+        };
+        let size = gbuffer.size;
+        let ao = match &settings.ao {
+            Some(ao) => {
+                ao.validate()?;
+                let (raw_ao, blurred) = match targets.ao {
+                    Some((a, b)) => (graph.import("ssao", a), graph.import("ssao blurred", b)),
+                    None => {
+                        let desc = ImageDesc { size, format: raw::Format::R32_SFLOAT };
+                        (graph.transient("ssao", desc), graph.transient("ssao blurred", desc))
+                    }
+                };
+                self.add_ssao(graph, camera, gbuffer, raw_ao, ao)?;
+                if ao.blur {
+                    self.add_ao_blur(graph, camera, gbuffer, raw_ao, blurred)?;
+                    Some(blurred)
+                } else {
+                    Some(raw_ao)
+                }
+            }
+            None => None,
+        };
+        let restir = match (lighting.direct.restir().copied(), targets.reservoirs) {
+            (None, _) => None,
+            (Some(restir), Some(reservoirs)) => {
+                let pass = self.restir_pass(scene, &restir)?;
+                graph.add_pass("restir").read_all(gbuffer.images).record(move |rec, views| {
+                    let gbuffer = gbuffer.views(views);
+                    pass.record(
+                        rec,
+                        scene,
+                        camera,
+                        &gbuffer,
+                        reservoirs,
+                        &restir,
+                        lighting.frame,
+                        lighting.seed,
+                    )
+                });
+                Some(reservoirs)
+            }
+            (Some(_), None) => {
+                return Err(Error::Invalid("the settings ask for ReSTIR but no reservoirs were given".into()))
+            }
+        };
+        let hdr = graph.import("hdr", targets.hdr);
+        let (probes, lightmaps) = (targets.probes, targets.lightmaps);
+        let mut add = graph.add_pass("lighting").read_all(gbuffer.images).write(hdr);
+        if let Some(ao) = ao {
+            add = add.read(ao);
+        }
+        add.record(move |rec, views| {
+            let inputs = LightingInputs { ao: ao.map(|ao| views[ao]), shadows, probes, lightmaps, restir };
+            self.record_lighting(rec, frame, &gbuffer.views(views), views[hdr], &inputs, &lighting)
+        });
+        if let Some(ldr) = targets.ldr {
+            let ldr = graph.import("ldr", ldr);
+            self.add_tonemap(graph, hdr, ldr, size, settings.exposure, settings.curve)?;
+        }
+        Ok(())
+    }
+}

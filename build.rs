@@ -288,7 +288,7 @@ macro_rules! kernels {
                     name: stringify!($kernel),
                     test: stringify!($role) == "test_kernel",
                     scene: stringify!($scene),
-                    features: vec![$($(stringify!($feature)),*)?],
+                    features: expand_features(&[$($(stringify!($feature)),*)?]),
                     push: stringify!($push),
                     local: [stringify!($lx), stringify!($ly), stringify!($lz)],
                     spec: vec![$((stringify!($spec), stringify!($sty), stringify!($sdef))),*],
@@ -435,6 +435,12 @@ fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> 
         } else {
             out.push_str("const uint BVH_STACK = BVH_REGISTERS;  // not specialised in this kernel\n");
         }
+    }
+    if let Some((set, _)) = FEATURE_SETS.iter().find(|(set, _)| SCENE_FEATURES.contains(set)) {
+        return Err(format!("feature set '{set}' is named like a scene feature"));
+    }
+    if let Some(f) = FEATURE_SETS.iter().flat_map(|(_, f)| *f).find(|f| !SCENE_FEATURES.contains(f)) {
+        return Err(format!("a feature set holds '{f}', which is no scene feature"));
     }
     if let Some(f) = k.features.iter().find(|f| !SCENE_FEATURES.contains(f)) {
         return Err(format!("kernel {}: unknown scene feature '{f}'", k.name));

@@ -235,11 +235,11 @@ fn check_interface(
     let mut spec: Vec<(u16, String)> = SCENE_FEATURES
         .iter()
         .enumerate()
-        .filter(|(_, f)| interface.features.contains(f))
+        .filter(|(_, f)| interface.features().contains(f))
         .map(|(i, f)| (i as u16, format!("HAS_{}", f.to_uppercase())))
         .collect();
     // The register stack's entries, in kernels that walk with them.
-    if interface.features.contains(&"shallow_bvh") {
+    if interface.features().contains(&"shallow_bvh") {
         spec.push((umbra::gpu::kernel::BVH_STACK_SPEC_ID as u16, "BVH_STACK".to_string()));
     }
     for (i, s) in interface.spec.iter().enumerate() {
@@ -401,4 +401,23 @@ fn kernels_stay_inside_the_walls_gpus_enforce() {
     assert!(
         bindings.0 <= MAX_KERNEL_BINDINGS && push.0 <= MAX_PUSH_CONSTANT_BYTES && spec.0 <= KERNEL_SPEC_IDS
     );
+}
+
+/// A feature set's name in a kernel's list stands for its features, each feature once and none
+/// other: the deferred kernel, listed with `all_lights`, is specialised on the environment map;
+/// ReSTIR's, listed with `lights, punctual`, is not.
+#[test]
+fn feature_sets_expand_to_their_features_once() {
+    use umbra::gpu::kernel::{expand_features, FEATURE_SETS};
+    use umbra::gpu::kernels::{deferred, restir_initial};
+    let surface = FEATURE_SETS.iter().find(|(name, _)| *name == "surface").expect("the surface set").1;
+    let expanded = expand_features(&["alpha", "surface", "implicit"]);
+    assert_eq!(expanded.len(), surface.len() + 1, "{expanded:?}");
+    assert_eq!((expanded[0], expanded[expanded.len() - 1]), ("alpha", "implicit"));
+    for feature in surface {
+        assert_eq!(expanded.iter().filter(|e| *e == feature).count(), 1, "{feature}");
+    }
+    assert!(deferred::INTERFACE.features().contains(&"env_map"));
+    assert!(!restir_initial::INTERFACE.features().contains(&"env_map"));
+    assert!(restir_initial::INTERFACE.features().contains(&"punctual"));
 }

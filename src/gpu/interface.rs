@@ -73,6 +73,51 @@ pub const SCENE_FEATURES: [&str; 30] = [
     "shallow_bvh",
 ];
 
+/// Named sets of scene features, written by name in the kernels' `scene: full [...]` lists:
+/// `surface`, what every kernel that shades or cuts out a surface reads (its textures, each slot's
+/// feature, alpha and vertex colours); `all_lights`, every kind of light (emissive triangles,
+/// punctual lights, the environment map). [`expand_features`] spells a list out, the same for
+/// the Rust side and build.rs, which refuses a set named like a feature or holding an unknown one.
+pub const FEATURE_SETS: [(&str, &[&str]); 2] = [
+    (
+        "surface",
+        &[
+            "textures",
+            "alpha",
+            "colors",
+            "base_color_map",
+            "metal_rough_map",
+            "emissive_map",
+            "normal_map",
+            "occlusion_map",
+            "specular_map",
+            "transmission_map",
+            "clearcoat_map",
+            "iridescence_map",
+            "anisotropy_map",
+            "sheen_map",
+            "diffuse_transmission_map",
+            "thickness_map",
+        ],
+    ),
+    ("all_lights", &["lights", "punctual", "env_map"]),
+];
+
+/// A kernel's feature list spelled out: each set's name ([`FEATURE_SETS`]) replaced by its
+/// features, each feature once, in the order written.
+pub fn expand_features(list: &[&'static str]) -> Vec<&'static str> {
+    let mut out: Vec<&'static str> = Vec::new();
+    for &name in list {
+        let set = FEATURE_SETS.iter().find(|(set, _)| *set == name);
+        for &feature in set.map_or(&[name][..], |(_, features)| features) {
+            if !out.contains(&feature) {
+                out.push(feature);
+            }
+        }
+    }
+    out
+}
+
 /// The scene features of the texture slots, each with the `MATERIAL_SLOT_*` slots it covers (bit k
 /// for slot k): some material has a texture in one of them. One feature per slot of the core
 /// material; one per extension's texture group (`KHR_materials_specular`'s two textures share

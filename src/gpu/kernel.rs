@@ -9,7 +9,8 @@ use crate::vk::{raw, ComputePipeline, Context, Descriptor, PipelineDesc, Recorde
 use std::marker::PhantomData;
 
 pub use super::layout::{
-    BVH_REGISTERS, BVH_STACK_SPEC_ID, FIRST_KERNEL_SPEC_ID, SCENE_FEATURES, TEXTURE_SLOT_FEATURES,
+    expand_features, BVH_REGISTERS, BVH_STACK_SPEC_ID, FEATURE_SETS, FIRST_KERNEL_SPEC_ID, SCENE_FEATURES,
+    TEXTURE_SLOT_FEATURES,
 };
 
 /// How a binding is read.
@@ -89,8 +90,9 @@ pub struct KernelInterface {
     pub name: &'static str,
     /// Which part of the scene's bindings it declares.
     pub scene: SceneUse,
-    /// The scene features ([`SCENE_FEATURES`]) it is specialised on; the others are `false`.
-    pub features: &'static [&'static str],
+    /// The scene features ([`SCENE_FEATURES`]) it is specialised on, as written: features and
+    /// names of [`FEATURE_SETS`] ([`KernelInterface::features`] spells them out).
+    pub feature_list: &'static [&'static str],
     /// Its own bindings, in order (numbered from [`KernelInterface::first_own_binding`]).
     pub bindings: &'static [BindingDesc],
     /// The push-constant struct's name (`()` for none).
@@ -131,6 +133,11 @@ impl KernelInterface {
             .enumerate()
             .map(|(i, b)| (i as u32, *b))
             .chain(self.bindings.iter().enumerate().map(move |(i, b)| (first + i as u32, *b)))
+    }
+
+    /// The scene features it is specialised on (the others are `false`), each once.
+    pub fn features(&self) -> Vec<&'static str> {
+        expand_features(self.feature_list)
     }
 
     /// The constant id of scene feature `name`.
@@ -303,7 +310,8 @@ impl<K: Kernel> Pipeline<K> {
         let clock = std::time::Instant::now();
         let interface = K::INTERFACE;
         let mut specialization = Vec::new();
-        for &name in interface.features {
+        let listed = interface.features();
+        for &name in &listed {
             let id = KernelInterface::feature_id(name).ok_or_else(|| {
                 Error::Invalid(format!("kernel '{}': unknown scene feature '{name}'", interface.name))
             })?;
@@ -317,7 +325,7 @@ impl<K: Kernel> Pipeline<K> {
         }
         // The register stack's entries, where the kernel walks the BVH with them (any value for
         // a deep BVH, whose walk keeps its stack in memory).
-        if interface.features.contains(&"shallow_bvh") {
+        if listed.contains(&"shallow_bvh") {
             let entries = features.map_or(0, |f| f.bvh_stack);
             specialization.push((BVH_STACK_SPEC_ID, if entries == 0 { BVH_REGISTERS } else { entries }));
         }

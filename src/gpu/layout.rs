@@ -371,7 +371,7 @@ macro_rules! kernels {
                     pub static INTERFACE: KernelInterface = KernelInterface {
                         name: stringify!($kernel),
                         scene: scene_use!($scene),
-                        features: &[$($(stringify!($feature)),*)?],
+                        feature_list: &[$($(stringify!($feature)),*)?],
                         bindings: &[$(binding_desc!($name, $access $kind $arg)),*],
                         push_type: stringify!($push),
                         push_size: std::mem::size_of::<$push>() as u32,

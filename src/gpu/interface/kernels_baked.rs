@@ -10,7 +10,7 @@ kernels! {
     /// scratch layer); a larger one counts itself into (`fill` false) or enters itself in (`fill`
     /// true) the list of every tile its box overlaps.
     kernel shadow_bin {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
+        scene: full [surface],
         push: ShadowRasterParams,
         local: [64, 1, 1],
         spec: { fill: bool = false },
@@ -93,7 +93,7 @@ kernels! {
     /// Shadow maps, step 4: each tile's texels against the triangles in its list (watertight
     /// homogeneous edge functions, a tie rule), nearest linear depth written.
     kernel shadow_raster {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map],
+        scene: full [surface],
         push: ShadowRasterParams,
         local: [SHADOW_TILE / SHADOW_QUAD, SHADOW_TILE / SHADOW_QUAD, 1],
         spec: {},
@@ -135,7 +135,7 @@ kernels! {
 
     /// Lightmaps: one sample of each texel's irradiance.
     kernel lightmap_bake {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
+        scene: full [surface, all_lights, unlit, clearcoat, implicit, sheen, iridescence, shallow_bvh],
         push: LightmapParams,
         local: [64, 1, 1],
         spec: { occlusion: bool = false },
@@ -158,7 +158,7 @@ kernels! {
     }
     /// Irradiance probes, update step 1: each probe's rays traced and shaded.
     kernel probe_trace {
-        scene: full [textures, alpha, lights, punctual, env_map, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
+        scene: full [surface, all_lights, unlit, clearcoat, implicit, sheen, iridescence, shallow_bvh],
         push: ProbeUpdateParams,
         local: [PROBE_RAY_GROUP, 1, 1],
         spec: {},

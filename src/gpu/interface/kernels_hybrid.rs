@@ -7,7 +7,7 @@ kernels! {
     kernels_hybrid;
     /// The ray-cast G-buffer.
     kernel gbuffer {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
+        scene: full [surface, clearcoat, implicit, parallax, diffuse_transmission, anisotropy, shallow_bvh],
         push: GBufferParams,
         local: [8, 8, 1],
         spec: {},
@@ -32,7 +32,7 @@ kernels! {
 
     /// Deferred lighting of a G-buffer.
     kernel deferred {
-        scene: full [textures, lights, punctual, env_map, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
+        scene: full [surface, all_lights, transmission, unlit, clearcoat, implicit, parallax, sheen, iridescence, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: DeferredParams,
         local: [8, 8, 1],
         spec: {
@@ -94,7 +94,7 @@ kernels! {
 
     /// ReSTIR DI's candidates and temporal reuse ([`crate::passes::restir`]).
     kernel restir_initial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
+        scene: full [surface, lights, punctual, transmission, unlit, clearcoat, implicit, sheen, iridescence, diffuse_transmission, anisotropy, shallow_bvh],
         push: RestirParams,
         local: [8, 8, 1],
         spec: {
@@ -126,7 +126,7 @@ kernels! {
 
     /// ReSTIR DI's spatial reuse ([`crate::passes::restir`]).
     kernel restir_spatial {
-        scene: full [textures, lights, punctual, alpha, transmission, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, shallow_bvh],
+        scene: full [surface, lights, punctual, transmission, unlit, clearcoat, implicit, sheen, iridescence, diffuse_transmission, anisotropy, shallow_bvh],
         push: RestirParams,
         local: [8, 8, 1],
         spec: {
@@ -171,7 +171,7 @@ kernels! {
 
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
-        scene: full [textures, alpha, colors, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, implicit, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, shallow_bvh],
+        scene: full [surface, implicit, shallow_bvh],
         push: AoParams,
         local: [8, 8, 1],
         spec: {},

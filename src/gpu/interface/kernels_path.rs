@@ -7,7 +7,7 @@ kernels! {
     kernels_path;
     /// The progressive path tracer.
     kernel pathtrace {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
+        scene: full [all_lights, surface, transmission, unlit, clearcoat, implicit, parallax, sheen, iridescence, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: PathParams,
         local: [8, 8, 1],
         spec: {
@@ -59,7 +59,7 @@ kernels! {
     /// The wavefront path tracer (Laine, Karras and Aila 2013): the path tracer's paths in
     /// queues, each stage a specialisation of this kernel (the `wf_*` constants, one true).
     kernel wavefront {
-        scene: full [lights, punctual, env_map, textures, transmission, alpha, colors, unlit, base_color_map, metal_rough_map, emissive_map, normal_map, occlusion_map, specular_map, transmission_map, clearcoat_map, iridescence_map, clearcoat, implicit, parallax, sheen, iridescence, anisotropy_map, sheen_map, diffuse_transmission_map, thickness_map, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
+        scene: full [all_lights, surface, transmission, unlit, clearcoat, implicit, parallax, sheen, iridescence, diffuse_transmission, anisotropy, dispersion, shallow_bvh],
         push: WaveParams,
         local: [8, 8, 1],
         spec: {

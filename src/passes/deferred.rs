@@ -26,7 +26,7 @@ use crate::gpu::layout::{DeferredParams, GpuCamera, GpuReservoir};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
-use crate::vk::{raw, Buffer, Context, Image, Recorder, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, GraphImage, GraphViews, Image, Recorder, TexelBuffer};
 
 /// What the lighting pass computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -175,12 +175,13 @@ impl LightingSettings {
     }
 }
 
-/// What the lighting pass reads besides the G-buffer, each optional.
+/// What the lighting pass reads besides the G-buffer, each optional; the ambient occlusion
+/// image by its view (`Ao` of a frame graph: [`crate::vk::GraphImage`]).
 #[derive(Clone, Copy, Default)]
-pub struct LightingInputs<'a> {
+pub struct LightingInputs<'a, Ao = raw::ImageView> {
     /// Ambient occlusion (`R32_SFLOAT`, the G-buffer's size, `GENERAL`; 1 = unoccluded)
     /// multiplying the ambient light; `None`: unoccluded.
-    pub ao: Option<raw::ImageView>,
+    pub ao: Option<Ao>,
     /// Shadow maps for the punctual lights (recorded before; their method picks the filter);
     /// `None`: shadow rays.
     pub shadows: Option<&'a ShadowMaps>,
@@ -193,6 +194,14 @@ pub struct LightingInputs<'a> {
     /// ReSTIR's reservoirs for this frame, recorded before ([`crate::passes::restir`]); the pass
     /// must have been built for them.
     pub restir: Option<&'a Reservoirs>,
+}
+
+impl<'a> LightingInputs<'a, GraphImage> {
+    /// The inputs with the ambient occlusion's view while a frame graph records.
+    pub fn resolve(&self, views: &GraphViews) -> LightingInputs<'a> {
+        let Self { ao, shadows, probes, lightmaps, restir } = *self;
+        LightingInputs { ao: ao.map(|ao| views[ao]), shadows, probes, lightmaps, restir }
+    }
 }
 
 /// The direction along which the split sum reads its prefiltered environment.

@@ -79,6 +79,54 @@ impl Passes {
         Ok(())
     }
 
+    /// Adds ReSTIR's candidates, temporal and spatial reuse for `gbuffer` (seen from `camera`)
+    /// into `reservoirs`, with the random numbers of `lighting`'s frame and seed and its
+    /// [`crate::passes::deferred::DirectLight::Restir`] settings; the lighting pass then shades
+    /// them ([`LightingInputs::restir`]).
+    pub fn add_restir<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        scene: &'g GpuScene,
+        camera: &'g Camera,
+        gbuffer: GBufferImages,
+        reservoirs: &'g Reservoirs,
+        lighting: &LightingSettings,
+    ) -> Result<()> {
+        self.check(scene)?;
+        let Some(restir) = lighting.direct.restir().copied() else {
+            return Err(Error::Invalid("ReSTIR was added but the lighting does not sample by it".into()));
+        };
+        let (pass, frame, seed) = (self.restir_pass(scene, &restir)?, lighting.frame, lighting.seed);
+        graph.add_pass("restir").read_all(gbuffer.images).record(move |rec, views| {
+            let gbuffer = gbuffer.views(views);
+            pass.record(rec, scene, camera, &gbuffer, reservoirs, &restir, frame, seed)
+        });
+        Ok(())
+    }
+
+    /// Adds deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`) with the
+    /// frame's scene, camera and image-based lighting and the optional `inputs` (ambient
+    /// occlusion by its graph image, written by an earlier pass; shadow maps, probes, lightmaps
+    /// and ReSTIR's reservoirs, each recorded before).
+    pub fn add_lighting<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        frame: Frame<'g>,
+        gbuffer: GBufferImages,
+        output: GraphImage,
+        inputs: LightingInputs<'g, GraphImage>,
+        settings: &LightingSettings,
+    ) -> Result<()> {
+        let settings = *settings;
+        graph.add_pass("lighting").read_all(gbuffer.images).read_all(inputs.ao).write(output).record(
+            move |rec, views| {
+                let gbuffer = gbuffer.views(views);
+                self.record_lighting(rec, frame, &gbuffer, views[output], &inputs.resolve(views), &settings)
+            },
+        );
+        Ok(())
+    }
+
     /// Adds the display transform of `hdr` (`R32G32B32A32_SFLOAT`) into `ldr` (`R8G8B8A8_UNORM`,
     /// sRGB-encoded values).
     pub fn add_tonemap<'g>(
@@ -168,23 +216,10 @@ impl Passes {
             }
             None => None,
         };
-        let restir = match (lighting.direct.restir().copied(), targets.reservoirs) {
+        let restir = match (lighting.direct.restir(), targets.reservoirs) {
             (None, _) => None,
-            (Some(restir), Some(reservoirs)) => {
-                let pass = self.restir_pass(scene, &restir)?;
-                graph.add_pass("restir").read_all(gbuffer.images).record(move |rec, views| {
-                    let gbuffer = gbuffer.views(views);
-                    pass.record(
-                        rec,
-                        scene,
-                        camera,
-                        &gbuffer,
-                        reservoirs,
-                        &restir,
-                        lighting.frame,
-                        lighting.seed,
-                    )
-                });
+            (Some(_), Some(reservoirs)) => {
+                self.add_restir(graph, scene, camera, gbuffer, reservoirs, &lighting)?;
                 Some(reservoirs)
             }
             (Some(_), None) => {
@@ -192,15 +227,9 @@ impl Passes {
             }
         };
         let hdr = graph.import("hdr", targets.hdr);
-        let (probes, lightmaps) = (targets.probes, targets.lightmaps);
-        let mut add = graph.add_pass("lighting").read_all(gbuffer.images).write(hdr);
-        if let Some(ao) = ao {
-            add = add.read(ao);
-        }
-        add.record(move |rec, views| {
-            let inputs = LightingInputs { ao: ao.map(|ao| views[ao]), shadows, probes, lightmaps, restir };
-            self.record_lighting(rec, frame, &gbuffer.views(views), views[hdr], &inputs, &lighting)
-        });
+        let inputs =
+            LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
+        self.add_lighting(graph, frame, gbuffer, hdr, inputs, &lighting)?;
         if let Some(ldr) = targets.ldr {
             let ldr = graph.import("ldr", ldr);
             self.add_tonemap(graph, hdr, ldr, size, settings.exposure, settings.curve)?;

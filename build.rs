@@ -251,6 +251,22 @@ macro_rules! glsl_binding {
     };
 }
 
+/// The bindings of one entry of a kernel's bindings: a G-buffer group's members, or the one.
+macro_rules! glsl_bindings {
+    ($name:ident : $access:ident gbuffer [$($member:ident),* $(,)?]) => {
+        vec![$(GlslBinding {
+            name: concat!(stringify!($name), "_", stringify!($member)),
+            access: stringify!($access),
+            kind: "image",
+            arg: gbuffer_format!($member),
+            array: false,
+        }),*]
+    };
+    ($name:ident : $access:ident $kind:ident $arg:tt) => {
+        vec![glsl_binding!($name : $access $kind $arg)]
+    };
+}
+
 macro_rules! scene_bindings {
     ($($(#[$meta:meta])* $name:ident : $access:ident $kind:ident $arg:tt),* $(,)?) => {
         fn glsl_scene_bindings() -> Vec<GlslBinding> {
@@ -292,7 +308,7 @@ macro_rules! kernels {
                     push: stringify!($push),
                     local: [stringify!($lx), stringify!($ly), stringify!($lz)],
                     spec: vec![$((stringify!($spec), stringify!($sty), stringify!($sdef))),*],
-                    bindings: vec![$(glsl_binding!($name : $access $kind $arg)),*],
+                    bindings: [$(glsl_bindings!($name : $access $kind $arg)),*].concat(),
                 }),*]
             }
         }

@@ -18,6 +18,9 @@
 // tests/layout.rs reads every compiled kernel with naga and checks each struct's offsets and
 // each binding's set, number, name and type against this file: the generator cannot drift either.
 //
+// Kernels specialised on the scene list their features (`scene: full [...]`) by name or by the
+// name of a set of them (`FEATURE_SETS`).
+//
 // Types are GLSL's names (`float`, `uint`, `int`, `vec2`..`vec4`, `uvec2`..`uvec4`, `ivec2`,
 // `[T; N]` for `T name[N]`, a struct's name). std430 rules apply: a `vec3` or `uvec2` must sit
 // on its own alignment, which the Rust `[f32; 3]`/`[u32; 2]` does not enforce: the naga test
@@ -30,7 +33,9 @@
 //
 // Bindings: `name: access kind arg`, access `readonly`, `writeonly`, `readwrite` or `coherent`;
 // kind `buffer` (arg `[T]`: a runtime array, or `T`: one struct), `image` (arg: its storage
-// format), `texels` (a storage texel buffer read as `uimageBuffer`, arg: its format). The scene's
+// format), `texels` (a storage texel buffer read as `uimageBuffer`, arg: its format), `gbuffer`
+// (arg `[depth, normal, ...]`: those G-buffer images, `<name>_<member>` in GLSL, in the members'
+// order and formats of `gbuffer_format!` below; one `&GBufferViews` in Rust). The scene's
 // bindings are one block with the same numbers in every kernel that uses the scene (`scene: full`)
 // or only its BVH (`scene: bvh`); a kernel's own bindings follow from `SCENE_BINDINGS` on (from 0
 // without a scene), in the order written.
@@ -102,6 +107,34 @@ pub const FEATURE_SETS: [(&str, &[&str]); 2] = [
     ),
     ("all_lights", &["lights", "punctual", "env_map"]),
 ];
+
+// The G-buffer's images as a binding group, named once: in a kernel's bindings,
+// `gb: readonly gbuffer [depth, normal]` declares `gb_depth` and `gb_normal` in that order (a
+// subset in this order), each a storage image of its member's format below (the images are
+// documented in src/passes/gbuffer.rs); the Rust side takes them as one `&GBufferViews`.
+macro_rules! gbuffer_format {
+    (depth) => {
+        "r32f"
+    };
+    (normal) => {
+        "rgba16f"
+    };
+    (base) => {
+        "rgba16f"
+    };
+    (emission) => {
+        "rgba16f"
+    };
+    (material) => {
+        "rgba32ui"
+    };
+    (layers) => {
+        "rgba32ui"
+    };
+    (layers2) => {
+        "rgba32ui"
+    };
+}
 
 /// A kernel's feature list spelled out: each set's name ([`FEATURE_SETS`]) replaced by its
 /// features, each feature once, in the order written.

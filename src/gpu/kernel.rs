@@ -13,6 +13,39 @@ pub use super::layout::{
     TEXTURE_SLOT_FEATURES,
 };
 
+/// A G-buffer as image views: umbra's own ([`crate::passes::gbuffer::GBuffer::views`]) or a host
+/// engine's images in the formats and layout [`crate::passes::gbuffer`] documents (`GENERAL`,
+/// written before the reading pass with a barrier that makes compute-shader writes visible to
+/// compute-shader reads); the kernels bind them as one group (`gbuffer [...]` in `interface/`).
+/// umbra never destroys the images behind them.
+#[derive(Debug, Clone, Copy)]
+pub struct GBufferViews {
+    /// Width and height of every image.
+    pub size: (u32, u32),
+    /// `R32_SFLOAT` view depth.
+    pub depth: raw::ImageView,
+    /// `R16G16B16A16_SFLOAT` shading normal and roughness.
+    pub normal: raw::ImageView,
+    /// `R16G16B16A16_SFLOAT` base colour and metallic.
+    pub base: raw::ImageView,
+    /// `R16G16B16A16_SFLOAT` emission rgb, material occlusion a (1 for none).
+    pub emission: raw::ImageView,
+    /// `R32G32B32A32_UINT` material index, geometric normal and UV1.
+    pub material: raw::ImageView,
+    /// `R32G32B32A32_UINT` the layer textures' texels (only for scenes with such textures).
+    pub layers: raw::ImageView,
+    /// `R32G32B32A32_UINT` more layer textures' texels (only for scenes with a sheen's or a
+    /// diffuse transmission's textures).
+    pub layers2: raw::ImageView,
+}
+
+impl GBufferViews {
+    /// The views in binding order.
+    pub fn in_order(&self) -> [raw::ImageView; 7] {
+        [self.depth, self.normal, self.base, self.emission, self.material, self.layers, self.layers2]
+    }
+}
+
 /// How a binding is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Access {
@@ -93,8 +126,9 @@ pub struct KernelInterface {
     /// The scene features ([`SCENE_FEATURES`]) it is specialised on, as written: features and
     /// names of [`FEATURE_SETS`] ([`KernelInterface::features`] spells them out).
     pub feature_list: &'static [&'static str],
-    /// Its own bindings, in order (numbered from [`KernelInterface::first_own_binding`]).
-    pub bindings: &'static [BindingDesc],
+    /// Its own bindings, in order (numbered from [`KernelInterface::first_own_binding`]), as
+    /// written: an entry each, a G-buffer group's members in one.
+    pub bindings: &'static [&'static [BindingDesc]],
     /// The push-constant struct's name (`()` for none).
     pub push_type: &'static str,
     /// Its size in bytes.
@@ -128,11 +162,9 @@ impl KernelInterface {
             SceneUse::Full => super::layout::SCENE_BINDING_DESCS,
         };
         let first = self.first_own_binding();
-        scene
-            .iter()
-            .enumerate()
-            .map(|(i, b)| (i as u32, *b))
-            .chain(self.bindings.iter().enumerate().map(move |(i, b)| (first + i as u32, *b)))
+        scene.iter().enumerate().map(|(i, b)| (i as u32, *b)).chain(
+            self.bindings.iter().flat_map(|e| e.iter()).enumerate().map(move |(i, b)| (first + i as u32, *b)),
+        )
     }
 
     /// The scene features it is specialised on (the others are `false`), each once.

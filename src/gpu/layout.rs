@@ -169,6 +169,21 @@ macro_rules! gpu_constants {
     };
 }
 
+/// The bindings of one entry of a kernel's bindings: a G-buffer group's members, or the one.
+macro_rules! binding_descs {
+    ($name:ident, $access:ident gbuffer [$($member:ident),* $(,)?]) => {
+        &[$(BindingDesc {
+            name: concat!(stringify!($name), "_", stringify!($member)),
+            access: access!($access),
+            kind: BindingKind::Image,
+            arg: gbuffer_format!($member),
+        }),*]
+    };
+    ($name:ident, $access:ident $kind:ident $arg:tt) => {
+        &[binding_desc!($name, $access $kind $arg)]
+    };
+}
+
 /// The binding kind of `access kind arg`.
 macro_rules! binding_desc {
     ($name:ident, $access:ident buffer [$elem:tt]) => {
@@ -225,6 +240,17 @@ macro_rules! resource_ty {
     ($lt:lifetime buffer) => { &$lt crate::vk::Buffer };
     ($lt:lifetime image) => { &$lt crate::vk::raw::ImageView };
     ($lt:lifetime texels) => { &$lt crate::vk::TexelBuffer };
+    ($lt:lifetime gbuffer) => { &$lt crate::gpu::kernel::GBufferViews };
+}
+
+/// The descriptors of one entry of a kernel's bindings (a G-buffer group's members, or the one).
+macro_rules! descriptors {
+    (gbuffer [$($member:ident),* $(,)?], $v:expr) => {
+        [$(crate::vk::Descriptor::StorageView($v.$member)),*]
+    };
+    ($kind:ident $arg:tt, $v:expr) => {
+        [descriptor!($kind, $v)]
+    };
 }
 
 macro_rules! descriptor {
@@ -332,7 +358,7 @@ macro_rules! kernels {
                     impl<'a> crate::gpu::kernel::BindResources<'a> for Resources<'a> {
                         fn descriptors(&self) -> Vec<crate::vk::Descriptor<'a>> {
                             let mut d = scene_descriptors!($scene, self);
-                            d.extend([$(descriptor!($kind, self.$name)),*]);
+                            $(d.extend(descriptors!($kind $arg, self.$name));)*
                             d
                         }
                     }
@@ -372,7 +398,7 @@ macro_rules! kernels {
                         name: stringify!($kernel),
                         scene: scene_use!($scene),
                         feature_list: &[$($(stringify!($feature)),*)?],
-                        bindings: &[$(binding_desc!($name, $access $kind $arg)),*],
+                        bindings: &[$(binding_descs!($name, $access $kind $arg)),*],
                         push_type: stringify!($push),
                         push_size: std::mem::size_of::<$push>() as u32,
                         local: LOCAL,

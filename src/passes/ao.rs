@@ -117,7 +117,7 @@ impl SsaoPass {
     ) -> Result<()> {
         self.pipeline.record(
             rec,
-            &ssao::Resources { gb_depth: &gbuffer.depth, gb_normal: &gbuffer.normal, out_ao: &output },
+            &ssao::Resources { gb: gbuffer, out_ao: &output },
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
         )?;
@@ -163,12 +163,7 @@ impl AoBlurPass {
     ) -> Result<()> {
         self.pipeline.record(
             rec,
-            &ao_blur::Resources {
-                ao_in: &input,
-                gb_depth: &gbuffer.depth,
-                gb_normal: &gbuffer.normal,
-                out_ao: &output,
-            },
+            &ao_blur::Resources { ao_in: &input, gb: gbuffer, out_ao: &output },
             params,
             [gbuffer.size.0, gbuffer.size.1, 1],
         )?;
@@ -213,13 +208,7 @@ impl RtaoPass {
         output: raw::ImageView,
         params: &AoParams,
     ) -> Result<()> {
-        let resources = rtao::Resources {
-            scene,
-            gb_depth: &gbuffer.depth,
-            gb_normal: &gbuffer.normal,
-            gb_material: &gbuffer.material,
-            out_ao: &output,
-        };
+        let resources = rtao::Resources { scene, gb: gbuffer, out_ao: &output };
         // The pipeline and resources once; per batch only the push constants change.
         let p = &self.pipeline;
         p.bind(rec, &resources)?;

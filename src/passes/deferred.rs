@@ -412,13 +412,7 @@ impl DeferredPass {
         };
         let resources = deferred::Resources {
             scene,
-            gb_depth: &gbuffer.depth,
-            gb_normal: &gbuffer.normal,
-            gb_base: &gbuffer.base,
-            gb_emission: &gbuffer.emission,
-            gb_material: &gbuffer.material,
-            gb_layers: &gbuffer.layers,
-            gb_layers2: &gbuffer.layers2,
+            gb: gbuffer,
             shadow_texels,
             shadow_depth,
             shadow_moments,

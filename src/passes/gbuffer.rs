@@ -18,6 +18,7 @@
 //! surface has no occlusion map (0 there darkens the image-based light to nothing).
 
 use crate::error::Result;
+pub use crate::gpu::kernel::GBufferViews;
 use crate::gpu::kernels::gbuffer;
 pub use crate::gpu::layout::GBUFFER_NO_SURFACE;
 use crate::gpu::layout::{GBufferParams, GpuCamera};
@@ -107,38 +108,6 @@ impl GBuffer {
     }
 }
 
-/// A G-buffer as image views: umbra's own ([`GBuffer::views`]) or a host engine's images in the
-/// formats and layout of the module documentation (`GENERAL`, written before the reading pass
-/// with a barrier that makes compute-shader writes visible to compute-shader reads). umbra never
-/// destroys the images behind them.
-#[derive(Debug, Clone, Copy)]
-pub struct GBufferViews {
-    /// Width and height of every image.
-    pub size: (u32, u32),
-    /// `R32_SFLOAT` view depth.
-    pub depth: raw::ImageView,
-    /// `R16G16B16A16_SFLOAT` shading normal and roughness.
-    pub normal: raw::ImageView,
-    /// `R16G16B16A16_SFLOAT` base colour and metallic.
-    pub base: raw::ImageView,
-    /// `R16G16B16A16_SFLOAT` emission rgb, material occlusion a (1 for none).
-    pub emission: raw::ImageView,
-    /// `R32G32B32A32_UINT` material index, geometric normal and UV1.
-    pub material: raw::ImageView,
-    /// `R32G32B32A32_UINT` the layer textures' texels (only for scenes with such textures).
-    pub layers: raw::ImageView,
-    /// `R32G32B32A32_UINT` more layer textures' texels (only for scenes with a sheen's or a
-    /// diffuse transmission's textures).
-    pub layers2: raw::ImageView,
-}
-
-impl GBufferViews {
-    /// The views in binding order.
-    pub fn in_order(&self) -> [raw::ImageView; 7] {
-        [self.depth, self.normal, self.base, self.emission, self.material, self.layers, self.layers2]
-    }
-}
-
 /// A G-buffer's images in a frame graph ([`crate::vk::Graph`]), in binding order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct GBufferImages {
@@ -222,16 +191,7 @@ impl GBufferPass {
         target: &GBufferViews,
         params: &GBufferParams,
     ) -> Result<()> {
-        let resources = gbuffer::Resources {
-            scene,
-            gb_depth: &target.depth,
-            gb_normal: &target.normal,
-            gb_base: &target.base,
-            gb_emission: &target.emission,
-            gb_material: &target.material,
-            gb_layers: &target.layers,
-            gb_layers2: &target.layers2,
-        };
+        let resources = gbuffer::Resources { scene, gb: target };
         self.pipeline.record(rec, &resources, params, [target.size.0, target.size.1, 1])?;
         Ok(())
     }

@@ -253,12 +253,7 @@ impl RestirPass {
         };
         let initial = restir_initial::Resources {
             scene,
-            gb_depth: &gbuffer.depth,
-            gb_normal: &gbuffer.normal,
-            gb_base: &gbuffer.base,
-            gb_material: &gbuffer.material,
-            gb_layers: &gbuffer.layers,
-            gb_layers2: &gbuffer.layers2,
+            gb: gbuffer,
             prev_camera: &reservoirs.prev_camera,
             history: &reservoirs.frame,
             reservoirs: &reservoirs.initial,
@@ -266,12 +261,7 @@ impl RestirPass {
         self.initial.record(rec, &initial, &params, [size.0, size.1, 1])?;
         let spatial = restir_spatial::Resources {
             scene,
-            gb_depth: &gbuffer.depth,
-            gb_normal: &gbuffer.normal,
-            gb_base: &gbuffer.base,
-            gb_material: &gbuffer.material,
-            gb_layers: &gbuffer.layers,
-            gb_layers2: &gbuffer.layers2,
+            gb: gbuffer,
             reservoirs_in: &reservoirs.initial,
             reservoirs_out: &reservoirs.frame,
         };

@@ -794,7 +794,7 @@ impl ShadowPass {
                 box_limit: maps.settings.mark_box,
             };
             let resources = shadow_mark::Resources {
-                gb_depth: &view.gbuffer.depth,
+                gb: view.gbuffer,
                 shadow_texels: &maps.texels,
                 tile_marks: &maps.marks,
             };

@@ -48,8 +48,8 @@ kernels! {
         local: [8, 8, 1],
         spec: {},
         bindings: {
-            /// View-space depth.
-            gb_depth: readonly image r32f,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth],
             /// The lights' records and layers ([`GpuShadowLayer`]).
             shadow_texels: readonly texels rgba32ui,
             /// Per layer and tile, set to 1 where a pixel reads it.

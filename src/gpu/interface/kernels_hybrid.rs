@@ -12,21 +12,8 @@ kernels! {
         local: [8, 8, 1],
         spec: {},
         bindings: {
-            /// View-space depth.
-            gb_depth: writeonly image r32f,
-            /// Shading normal xyz, perceptual roughness.
-            gb_normal: writeonly image rgba16f,
-            /// Base colour, metallic.
-            gb_base: writeonly image rgba16f,
-            /// Emission, material occlusion.
-            gb_emission: writeonly image rgba16f,
-            /// Material index, octahedral geometric normal, UV1 (float bits).
-            gb_material: writeonly image rgba32ui,
-            /// The layer textures' texels, unorm8 × 4 a word (written only where the scene has them).
-            gb_layers: writeonly image rgba32ui,
-            /// More layer textures' texels (the sheen's, the diffuse transmission's), unorm8 × 4
-            /// a word (written only where the scene has them).
-            gb_layers2: writeonly image rgba32ui,
+            /// The G-buffer's images written (`gbuffer_format!` in interface.rs).
+            gb: writeonly gbuffer [depth, normal, base, emission, material, layers, layers2],
         }
     }
 
@@ -47,20 +34,8 @@ kernels! {
             shadow_sized: bool = false
         },
         bindings: {
-            /// View-space depth.
-            gb_depth: readonly image r32f,
-            /// Shading normal xyz, perceptual roughness.
-            gb_normal: readonly image rgba16f,
-            /// Base colour, metallic.
-            gb_base: readonly image rgba16f,
-            /// Emission, material occlusion.
-            gb_emission: readonly image rgba16f,
-            /// Material index, octahedral geometric normal, UV1 (float bits).
-            gb_material: readonly image rgba32ui,
-            /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
-            gb_layers: readonly image rgba32ui,
-            /// More layer textures' texels (the sheen's, the diffuse transmission's).
-            gb_layers2: readonly image rgba32ui,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth, normal, base, emission, material, layers, layers2],
             /// Shadow maps: the filter settings, each punctual light's record, the layers
             /// ([`GpuShadowLayer`]); one texel when the lights cast shadow rays.
             shadow_texels: readonly texels rgba32ui,
@@ -103,18 +78,8 @@ kernels! {
             temporal: bool = true
         },
         bindings: {
-            /// View-space depth.
-            gb_depth: readonly image r32f,
-            /// Shading normal xyz, perceptual roughness.
-            gb_normal: readonly image rgba16f,
-            /// Base colour, metallic.
-            gb_base: readonly image rgba16f,
-            /// Material index, octahedral geometric normal, UV1 (float bits).
-            gb_material: readonly image rgba32ui,
-            /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
-            gb_layers: readonly image rgba32ui,
-            /// More layer textures' texels (the sheen's, the diffuse transmission's).
-            gb_layers2: readonly image rgba32ui,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth, normal, base, material, layers, layers2],
             /// The previous frame's camera.
             prev_camera: readonly buffer GpuCamera,
             /// The previous frame's reservoirs.
@@ -134,18 +99,8 @@ kernels! {
             unbiased: bool = false
         },
         bindings: {
-            /// View-space depth.
-            gb_depth: readonly image r32f,
-            /// Shading normal xyz, perceptual roughness.
-            gb_normal: readonly image rgba16f,
-            /// Base colour, metallic.
-            gb_base: readonly image rgba16f,
-            /// Material index, octahedral geometric normal, UV1 (float bits).
-            gb_material: readonly image rgba32ui,
-            /// The layer textures' texels, unorm8 × 4 a word (read only where the scene has them).
-            gb_layers: readonly image rgba32ui,
-            /// More layer textures' texels (the sheen's, the diffuse transmission's).
-            gb_layers2: readonly image rgba32ui,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth, normal, base, material, layers, layers2],
             /// The reservoirs before spatial reuse.
             reservoirs_in: readonly buffer [GpuReservoir],
             /// The frame's reservoirs.
@@ -160,10 +115,8 @@ kernels! {
         local: [8, 8, 1],
         spec: {},
         bindings: {
-            /// View-space depth.
-            gb_depth: readonly image r32f,
-            /// Shading normal xyz, perceptual roughness.
-            gb_normal: readonly image rgba16f,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth, normal],
             /// AO (1 = unoccluded).
             out_ao: writeonly image r32f,
         }
@@ -176,12 +129,8 @@ kernels! {
         local: [8, 8, 1],
         spec: {},
         bindings: {
-            /// View-space depth.
-            gb_depth: readonly image r32f,
-            /// Shading normal xyz, perceptual roughness.
-            gb_normal: readonly image rgba16f,
-            /// Material index, octahedral geometric normal, UV1 (float bits).
-            gb_material: readonly image rgba32ui,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth, normal, material],
             /// AO, accumulated over batches of rays.
             out_ao: readwrite image r32f,
         }
@@ -196,10 +145,8 @@ kernels! {
         bindings: {
             /// The AO to blur.
             ao_in: readonly image r32f,
-            /// View-space depth.
-            gb_depth: readonly image r32f,
-            /// Shading normal xyz, perceptual roughness.
-            gb_normal: readonly image rgba16f,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth, normal],
             /// The blurred AO.
             out_ao: writeonly image r32f,
         }

@@ -151,7 +151,7 @@ pub struct GraphStats {
     pub recorded: Vec<String>,
     /// The passes culled (nothing used what they write).
     pub culled: Vec<String>,
-    /// Transient images used, and the physical images that held them.
+    /// Transient images used.
     pub transients: usize,
     /// Physical images that held the transients.
     pub physical: usize,
@@ -210,12 +210,9 @@ impl<'g> Graph<'g> {
                 Slot::Transient(desc) => Some(*desc),
             })
             .collect();
-        let plan = plan(&kinds, &metas).map_err(|e| {
-            let (pass, image, what) = e;
-            Error::Invalid(format!(
-                "frame graph: pass '{}' {what} '{}'",
-                self.nodes[pass].name, self.names[image]
-            ))
+        let plan = plan(&kinds, &metas).map_err(|(pass, image, what)| {
+            let image = image.map_or("", |i| self.names[i].as_str());
+            Error::Invalid(format!("frame graph: pass '{}' {what}{image}", self.nodes[pass].name))
         })?;
         let ctx = rec.ctx();
         let mut physical = pool.take(ctx, &plan.physical)?;
@@ -229,9 +226,10 @@ impl<'g> Graph<'g> {
                 (Slot::Transient(_), None) => vk::ImageView::null(),
             })
             .collect();
-        let managed: HashMap<Resource, usize> = (0..self.slots.len())
+        // The graph's images by resource, for each pass's contract (moved in and back out).
+        let mut managed: HashMap<Resource, String> = (0..self.slots.len())
             .filter(|&i| views[i] != vk::ImageView::null())
-            .map(|i| (Resource::Image(views[i]), i))
+            .map(|i| (Resource::Image(views[i]), self.names[i].clone()))
             .collect();
         for image in &physical {
             rec.discard(image);
@@ -258,18 +256,15 @@ impl<'g> Graph<'g> {
                     pass_views.declared[image.0] = true;
                     *declared.entry(Resource::Image(views[image.0])).or_default() |= writes;
                 }
-                let names = &self.names;
-                let contract = Contract {
-                    managed: managed.iter().map(|(r, i)| (*r, names[*i].clone())).collect(),
-                    declared,
-                    broken: None,
-                };
                 if let Some(t) = timer.as_deref_mut() {
                     t.begin(rec.cmd(), &node.name)?;
                 }
-                rec.contract = Some(contract);
+                rec.contract =
+                    Some(Contract { managed: std::mem::take(&mut managed), declared, broken: None });
                 let recorded = (node.record)(rec, &pass_views);
-                let mut broken = rec.contract.take().and_then(|c| c.broken);
+                let contract = rec.contract.take().expect("the pass's contract");
+                managed = contract.managed;
+                let mut broken = contract.broken;
                 if let Some(i) = pass_views.undeclared.get() {
                     broken = Some(format!("uses the image '{}' it did not declare", self.names[i]));
                 }
@@ -309,20 +304,18 @@ struct Plan {
 
 /// Plans an execution over images (`None`: imported; `Some`: a transient of that description)
 /// and passes, in their order: an error `(pass, image, what)` for an image read before any write
-/// or an index out of range.
+/// or one of another graph.
 fn plan(
     images: &[Option<ImageDesc>],
     passes: &[PassMeta],
-) -> std::result::Result<Plan, (usize, usize, &'static str)> {
+) -> std::result::Result<Plan, (usize, Option<usize>, &'static str)> {
     let mut written = vec![false; images.len()];
     for (p, pass) in passes.iter().enumerate() {
-        for &i in pass.reads.iter().chain(&pass.writes) {
-            if i >= images.len() {
-                return Err((p, 0, "names an image of another graph instead of"));
-            }
+        if pass.reads.iter().chain(&pass.writes).any(|&i| i >= images.len()) {
+            return Err((p, None, "names an image of another graph"));
         }
         if let Some(&i) = pass.reads.iter().find(|&&i| images[i].is_some() && !written[i]) {
-            return Err((p, i, "reads, before any pass writes it, the transient image"));
+            return Err((p, Some(i), "reads, before any pass writes it, the transient image "));
         }
         for &i in &pass.writes {
             written[i] = true;
@@ -385,8 +378,16 @@ pub(super) struct Contract {
 }
 
 impl Contract {
+    /// Notes the first breach by an operation with `uses`; returns it, if any so far.
+    pub(super) fn check_all(&mut self, uses: &[(Resource, Use)]) -> Option<&String> {
+        for &(resource, how) in uses {
+            self.check(resource, how.writes());
+        }
+        self.broken.as_ref()
+    }
+
     /// Notes a breach by an operation using `resource`, writing it or not.
-    pub(super) fn check(&mut self, resource: Resource, writes: bool) {
+    fn check(&mut self, resource: Resource, writes: bool) {
         if self.broken.is_some() {
             return;
         }
@@ -488,7 +489,7 @@ mod tests {
     fn a_transient_read_before_it_is_written_is_refused() {
         let images = [None, Some(A)];
         let err = plan(&images, &[pass(&[1], &[0]), pass(&[], &[1])]).unwrap_err();
-        assert_eq!((err.0, err.1), (0, 1));
+        assert_eq!((err.0, err.1), (0, Some(1)));
         // An imported image may be read first: the caller wrote it.
         assert!(plan(&images, &[pass(&[0], &[1]), pass(&[1], &[0])]).is_ok());
     }

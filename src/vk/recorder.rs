@@ -88,7 +88,7 @@ impl Use {
         Scope { stages, access }
     }
 
-    fn writes(self) -> bool {
+    pub(super) fn writes(self) -> bool {
         matches!(self, Use::ComputeWrite | Use::TransferWrite)
     }
 }
@@ -246,10 +246,13 @@ impl<'a> Recorder<'a> {
     /// needs none), and notes its uses. Call it right before recording the operation.
     pub fn access(&mut self, uses: &[(Resource, Use)]) {
         if let Some(contract) = &mut self.contract {
-            for &(resource, how) in uses {
-                contract.check(resource, how.writes());
-            }
+            contract.check_all(uses);
         }
+        self.note(uses);
+    }
+
+    /// [`Recorder::access`] without the frame graph's contract (already checked).
+    fn note(&mut self, uses: &[(Resource, Use)]) {
         if let Some(barrier) = self.tracker.before(uses) {
             self.barrier(barrier);
         }
@@ -285,13 +288,8 @@ impl<'a> Recorder<'a> {
                     .into(),
             ));
         }
-        if let Some(contract) = &mut self.contract {
-            for &(resource, how) in &uses {
-                contract.check(resource, how.writes());
-            }
-            if let Some(broken) = &contract.broken {
-                return Err(crate::error::Error::Invalid(format!("the kernel's bindings: {broken}")));
-            }
+        if let Some(broken) = self.contract.as_mut().and_then(|c| c.check_all(&uses)) {
+            return Err(crate::error::Error::Invalid(format!("the kernel's bindings: {broken}")));
         }
         self.bound = uses;
         Ok(())
@@ -303,7 +301,7 @@ impl<'a> Recorder<'a> {
         let mut uses = std::mem::take(&mut self.bound);
         let own = uses.len();
         uses.extend(indirect.map(|b| (Resource::Buffer(b), Use::IndirectRead)));
-        self.access(&uses);
+        self.note(&uses);
         uses.truncate(own);
         self.bound = uses;
     }

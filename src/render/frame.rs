@@ -5,40 +5,36 @@
 use super::*;
 
 impl Passes {
+    // Each `add_*` declares its pass's images and records through its `record_*` twin
+    // (record.rs), which checks the settings and specialises the kernel.
+
     /// Adds the ray-cast G-buffer of `scene` seen from `camera`, written into `gbuffer`.
     pub fn add_gbuffer<'g>(
         &'g self,
         graph: &mut Graph<'g>,
         scene: &'g GpuScene,
-        camera: &Camera,
+        camera: &'g Camera,
         gbuffer: GBufferImages,
-    ) -> Result<()> {
-        self.check(scene)?;
-        let (pass, params) = (self.gbuffer_pass()?, GBufferPass::params(camera, gbuffer.size));
+    ) {
         graph
             .add_pass("gbuffer")
             .write_all(gbuffer.images)
-            .record(move |rec, views| pass.record(rec, scene, &gbuffer.views(views), &params));
-        Ok(())
+            .record(move |rec, views| self.record_gbuffer(rec, scene, camera, &gbuffer.views(views)));
     }
 
     /// Adds SSAO of `gbuffer` (seen from `camera`) into `output` (`R32_SFLOAT`, unblurred).
     pub fn add_ssao<'g>(
         &'g self,
         graph: &mut Graph<'g>,
-        camera: &Camera,
+        camera: &'g Camera,
         gbuffer: GBufferImages,
         output: GraphImage,
         settings: &AoSettings,
-    ) -> Result<()> {
-        settings.validate()?;
-        let (pass, params) = (self.ssao_pass()?, SsaoPass::params(camera, gbuffer.size, settings));
-        graph
-            .add_pass("ssao")
-            .read_all(gbuffer.images)
-            .write(output)
-            .record(move |rec, views| pass.record(rec, &gbuffer.views(views), views[output], &params));
-        Ok(())
+    ) {
+        let settings = *settings;
+        graph.add_pass("ssao").read_all(gbuffer.images).write(output).record(move |rec, views| {
+            self.record_ssao_unblurred(rec, camera, &gbuffer.views(views), views[output], &settings)
+        });
     }
 
     /// Adds ray-traced AO of `gbuffer` (`settings.samples` rays of length `settings.radius` per
@@ -47,36 +43,31 @@ impl Passes {
         &'g self,
         graph: &mut Graph<'g>,
         scene: &'g GpuScene,
-        camera: &Camera,
+        camera: &'g Camera,
         gbuffer: GBufferImages,
         output: GraphImage,
         settings: &AoSettings,
-    ) -> Result<()> {
-        self.check(scene)?;
-        settings.validate()?;
-        let (pass, params) = (self.rtao_pass(scene)?, RtaoPass::params(camera, gbuffer.size, settings));
-        graph
-            .add_pass("rtao")
-            .read_all(gbuffer.images)
-            .write(output)
-            .record(move |rec, views| pass.record(rec, scene, &gbuffer.views(views), views[output], &params));
-        Ok(())
+    ) {
+        let settings = *settings;
+        graph.add_pass("rtao").read_all(gbuffer.images).write(output).record(move |rec, views| {
+            self.record_rtao(rec, scene, camera, &gbuffer.views(views), views[output], &settings)
+        });
     }
 
     /// Adds the depth-aware blur of `ao` into `blurred` (both `R32_SFLOAT`).
     pub fn add_ao_blur<'g>(
         &'g self,
         graph: &mut Graph<'g>,
-        camera: &Camera,
+        camera: &'g Camera,
         gbuffer: GBufferImages,
         ao: GraphImage,
         blurred: GraphImage,
-    ) -> Result<()> {
-        let (pass, params) = (self.blur_pass()?, AoBlurPass::params(camera, gbuffer.size));
+    ) {
         graph.add_pass("ao_blur").read_all(gbuffer.images).read(ao).write(blurred).record(
-            move |rec, views| pass.record(rec, &gbuffer.views(views), views[ao], views[blurred], &params),
+            move |rec, views| {
+                self.record_ao_blur(rec, camera, &gbuffer.views(views), views[ao], views[blurred])
+            },
         );
-        Ok(())
     }
 
     /// Adds ReSTIR's candidates, temporal and spatial reuse for `gbuffer` (seen from `camera`)
@@ -92,14 +83,12 @@ impl Passes {
         reservoirs: &'g Reservoirs,
         lighting: &LightingSettings,
     ) -> Result<()> {
-        self.check(scene)?;
+        let lighting = *lighting;
         let Some(restir) = lighting.direct.restir().copied() else {
             return Err(Error::Invalid("ReSTIR was added but the lighting does not sample by it".into()));
         };
-        let (pass, frame, seed) = (self.restir_pass(scene, &restir)?, lighting.frame, lighting.seed);
         graph.add_pass("restir").read_all(gbuffer.images).record(move |rec, views| {
-            let gbuffer = gbuffer.views(views);
-            pass.record(rec, scene, camera, &gbuffer, reservoirs, &restir, frame, seed)
+            self.record_restir(rec, scene, camera, &gbuffer.views(views), reservoirs, &restir, &lighting)
         });
         Ok(())
     }
@@ -116,7 +105,7 @@ impl Passes {
         output: GraphImage,
         inputs: LightingInputs<'g, GraphImage>,
         settings: &LightingSettings,
-    ) -> Result<()> {
+    ) {
         let settings = *settings;
         graph.add_pass("lighting").read_all(gbuffer.images).read_all(inputs.ao).write(output).record(
             move |rec, views| {
@@ -124,7 +113,6 @@ impl Passes {
                 self.record_lighting(rec, frame, &gbuffer, views[output], &inputs.resolve(views), &settings)
             },
         );
-        Ok(())
     }
 
     /// Adds the display transform of `hdr` (`R32G32B32A32_SFLOAT`) into `ldr` (`R8G8B8A8_UNORM`,
@@ -137,14 +125,10 @@ impl Passes {
         size: (u32, u32),
         exposure_stops: f32,
         curve: ToneCurve,
-    ) -> Result<()> {
-        let pass = self.tonemap_pass()?;
-        graph
-            .add_pass("tonemap")
-            .read(hdr)
-            .write(ldr)
-            .record(move |rec, views| pass.record(rec, views[hdr], views[ldr], size, exposure_stops, curve));
-        Ok(())
+    ) {
+        graph.add_pass("tonemap").read(hdr).write(ldr).record(move |rec, views| {
+            self.record_tonemap(rec, views[hdr], views[ldr], size, exposure_stops, curve)
+        });
     }
 
     /// Adds the hybrid frame's passes to `graph`: the G-buffer into `targets.gbuffer`, then
@@ -157,7 +141,7 @@ impl Passes {
         settings: &HybridSettings,
     ) -> Result<GBufferImages> {
         let gbuffer = GBufferImages::import(graph, targets.gbuffer);
-        self.add_gbuffer(graph, frame.scene, frame.camera, gbuffer)?;
+        self.add_gbuffer(graph, frame.scene, frame.camera, gbuffer);
         self.add_hybrid_shading(graph, frame, gbuffer, targets, settings)?;
         Ok(gbuffer)
     }
@@ -206,9 +190,9 @@ impl Passes {
                         (graph.transient("ssao", desc), graph.transient("ssao blurred", desc))
                     }
                 };
-                self.add_ssao(graph, camera, gbuffer, raw_ao, ao)?;
+                self.add_ssao(graph, camera, gbuffer, raw_ao, ao);
                 if ao.blur {
-                    self.add_ao_blur(graph, camera, gbuffer, raw_ao, blurred)?;
+                    self.add_ao_blur(graph, camera, gbuffer, raw_ao, blurred);
                     Some(blurred)
                 } else {
                     Some(raw_ao)
@@ -229,10 +213,10 @@ impl Passes {
         let hdr = graph.import("hdr", targets.hdr);
         let inputs =
             LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
-        self.add_lighting(graph, frame, gbuffer, hdr, inputs, &lighting)?;
+        self.add_lighting(graph, frame, gbuffer, hdr, inputs, &lighting);
         if let Some(ldr) = targets.ldr {
             let ldr = graph.import("ldr", ldr);
-            self.add_tonemap(graph, hdr, ldr, size, settings.exposure, settings.curve)?;
+            self.add_tonemap(graph, hdr, ldr, size, settings.exposure, settings.curve);
         }
         Ok(())
     }

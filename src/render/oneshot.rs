@@ -405,14 +405,14 @@ impl Passes {
         let mut graph = Graph::new();
         let views = GBufferImages::import(&mut graph, &gbuffer.views());
         let unblurred = graph.import("ambient occlusion", raw_ao.view);
-        self.add_gbuffer(&mut graph, scene, camera, views)?;
+        self.add_gbuffer(&mut graph, scene, camera, views);
         match method {
-            AoMethod::Ssao => self.add_ssao(&mut graph, camera, views, unblurred, settings)?,
-            AoMethod::Rtao => self.add_rtao(&mut graph, scene, camera, views, unblurred, settings)?,
+            AoMethod::Ssao => self.add_ssao(&mut graph, camera, views, unblurred, settings),
+            AoMethod::Rtao => self.add_rtao(&mut graph, scene, camera, views, unblurred, settings),
         }
         if settings.blur {
             let output = graph.import("ambient occlusion blurred", blurred.view);
-            self.add_ao_blur(&mut graph, camera, views, unblurred, output)?;
+            self.add_ao_blur(&mut graph, camera, views, unblurred, output);
         }
         let mut timer = GpuTimer::new(ctx, 3)?;
         ctx.record(|rec| {

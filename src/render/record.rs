@@ -28,14 +28,37 @@ impl Passes {
         blurred: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<raw::ImageView> {
-        settings.validate()?;
-        let size = gbuffer.size;
-        self.ssao_pass()?.record(rec, gbuffer, raw_ao, &SsaoPass::params(camera, size, settings))?;
+        self.record_ssao_unblurred(rec, camera, gbuffer, raw_ao, settings)?;
         if !settings.blur {
             return Ok(raw_ao);
         }
-        self.blur_pass()?.record(rec, gbuffer, raw_ao, blurred, &AoBlurPass::params(camera, size))?;
+        self.record_ao_blur(rec, camera, gbuffer, raw_ao, blurred)?;
         Ok(blurred)
+    }
+
+    /// SSAO of `gbuffer` into `output`, without its blur.
+    pub(super) fn record_ssao_unblurred(
+        &self,
+        rec: &mut Recorder<'_>,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        output: raw::ImageView,
+        settings: &AoSettings,
+    ) -> Result<()> {
+        settings.validate()?;
+        self.ssao_pass()?.record(rec, gbuffer, output, &SsaoPass::params(camera, gbuffer.size, settings))
+    }
+
+    /// The depth-aware blur of `ao` into `blurred`.
+    pub(super) fn record_ao_blur(
+        &self,
+        rec: &mut Recorder<'_>,
+        camera: &Camera,
+        gbuffer: &GBufferViews,
+        ao: raw::ImageView,
+        blurred: raw::ImageView,
+    ) -> Result<()> {
+        self.blur_pass()?.record(rec, gbuffer, ao, blurred, &AoBlurPass::params(camera, gbuffer.size))
     }
 
     /// Records ray-traced AO of `gbuffer` (`settings.samples` rays of length `settings.radius`

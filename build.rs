@@ -373,6 +373,17 @@ fn texel_constants(name: &str, members: &[(&str, usize)]) -> String {
     out
 }
 
+/// Refuses a feature set (`FEATURE_SETS`) named like a scene feature or holding an unknown one.
+fn check_feature_sets() -> Result<(), String> {
+    if let Some((set, _)) = FEATURE_SETS.iter().find(|(set, _)| SCENE_FEATURES.contains(set)) {
+        return Err(format!("src/gpu/interface.rs: feature set '{set}' is named like a scene feature"));
+    }
+    if let Some(f) = FEATURE_SETS.iter().flat_map(|(_, f)| *f).find(|f| !SCENE_FEATURES.contains(f)) {
+        return Err(format!("src/gpu/interface.rs: a feature set holds '{f}', which is no scene feature"));
+    }
+    Ok(())
+}
+
 fn camel(name: &str) -> String {
     name.split('_').map(|w| w[..1].to_uppercase() + &w[1..]).collect()
 }
@@ -451,12 +462,6 @@ fn kernel_glsl(k: &GlslKernel, scene: &[GlslBinding]) -> Result<String, String> 
         } else {
             out.push_str("const uint BVH_STACK = BVH_REGISTERS;  // not specialised in this kernel\n");
         }
-    }
-    if let Some((set, _)) = FEATURE_SETS.iter().find(|(set, _)| SCENE_FEATURES.contains(set)) {
-        return Err(format!("feature set '{set}' is named like a scene feature"));
-    }
-    if let Some(f) = FEATURE_SETS.iter().flat_map(|(_, f)| *f).find(|f| !SCENE_FEATURES.contains(f)) {
-        return Err(format!("a feature set holds '{f}', which is no scene feature"));
     }
     if let Some(f) = k.features.iter().find(|f| !SCENE_FEATURES.contains(f)) {
         return Err(format!("kernel {}: unknown scene feature '{f}'", k.name));
@@ -570,6 +575,7 @@ fn generate(dir: &Path, spirv: &Path, kernels: &[String]) -> Result<(), String> 
     write(dir.join("layout.glsl"), layout_glsl())?;
     write(dir.join("sheen_albedo.glsl"), sheen_glsl())?;
     write(dir.join("sheen_table.rs"), sheen_rust())?;
+    check_feature_sets()?;
     let scene = glsl_scene_bindings();
     let defs = glsl_kernels();
     for k in &defs {

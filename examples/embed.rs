@@ -2,8 +2,8 @@
 //! device: it creates its instance, device, allocator, images and command buffer, writes a
 //! G-buffer with its own kernel (`examples/embed_gbuffer.comp`), asks umbra to record SSAO,
 //! deferred lighting and tone mapping into its command buffer (one frame graph, the host's pass
-//! declared in it: every barrier between them is derived, SSAO's images allocated by umbra), submits with its own fence and writes
-//! a PNG.
+//! declared in it: every barrier between them is derived, SSAO's images allocated by umbra),
+//! submits with its own fence and writes a PNG.
 //!
 //! ```sh
 //! cargo run --example embed -- embed.png          # UMBRA_VALIDATION=1 turns the layer on

@@ -115,8 +115,13 @@ vec3 prefiltered_light(vec3 r, float roughness) {
 // sum's, and without `ibl` only the probes' diffuse light remains. A material with a lightmap
 // (LIGHTMAPS) takes its ambient irradiance at UV1 `uv1` instead of both. A clear coat reflects
 // about its own normal `coat_n` (world).
+//
+// The environment's light is occluded by `env_occlusion` (ambient occlusion and the material's
+// occlusion map); the probes' and lightmaps' irradiance by `baked_occlusion` alone (the
+// occlusion map's): their bake already holds the geometry's occlusion of that light, and screen-
+// space AO on top darkens it twice.
 vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv, uint material, vec2 uv1,
-                  vec3 coat_n) {
+                  vec3 coat_n, float env_occlusion, float baked_occlusion) {
     // The prefiltered map assumed n = v = r; a rough lobe actually leans from the mirror direction
     // towards the normal: look up along the dominant direction (Lagarde and de Rousiers 2014,
     // "Moving Frostbite to PBR", eq. 56, with alpha as their linear roughness).
@@ -141,7 +146,7 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         r = normalize(mix(rn, r, smooth_ * (sqrt(smooth_) + s.alpha)));
     }
     vec4 table = ibl_table(nv, roughness);
-    vec3 env = params.ibl != 0u ? params.env : vec3(0.0);
+    vec3 env = params.ibl != 0u ? params.env * env_occlusion : vec3(0.0);
     vec3 specular_light = env;
     vec3 irradiance_over_pi = env;
     vec3 transmitted_light = env;
@@ -184,12 +189,12 @@ vec3 ibl_lighting(Surface s, float roughness, vec3 p, vec3 n, vec3 wo, float nv,
         back_over_pi *= max(e, vec3(0.0)) * INV_PI;
     }
     if (PROBES) {
-        irradiance_over_pi = probe_volume_irradiance(p, n, wo) * INV_PI;
+        irradiance_over_pi = probe_volume_irradiance(p, n, wo) * (INV_PI * baked_occlusion);
     }
     if (LIGHTMAPS) {
         vec3 e;
         if (lightmap_irradiance(material, uv1, e)) {
-            irradiance_over_pi = e * INV_PI;
+            irradiance_over_pi = e * (INV_PI * baked_occlusion);
         }
     }
     vec3 dielectric_spec = s.f0 * table.x + s.f90 * table.y;
@@ -337,11 +342,13 @@ void main() {
         if (ambient) {
             float ao = imageLoad(ao_image, min(pixel, imageSize(ao_image) - 1)).x;
             // The material's occlusion map (glTF occlusionTexture): ambient light only (the
-            // probes' indirect light too, as glTF says of indirect light).
+            // probes' indirect light too, as glTF says of indirect light). It and the ambient
+            // occlusion estimate one occlusion, baked and on screen: the smaller of the two (as
+            // Filament combines them), not their product, which counts it twice.
             float occlusion = imageLoad(gb_emission, pixel).a;
-            radiance += ao * occlusion
-                * ibl_lighting(s, sp.roughness, sp.p, sp.n, sp.wo, sp.wo_local.z, sp.material, sp.uv1,
-                               sp.t * s.coat_n.x + sp.b * s.coat_n.y + sp.n * s.coat_n.z);
+            radiance += ibl_lighting(s, sp.roughness, sp.p, sp.n, sp.wo, sp.wo_local.z, sp.material, sp.uv1,
+                                     sp.t * s.coat_n.x + sp.b * s.coat_n.y + sp.n * s.coat_n.z,
+                                     min(ao, occlusion), occlusion);
         }
 
         // ReSTIR DI (restir.glsl): the pixel's reservoir's one light sample, its shadow ray, its

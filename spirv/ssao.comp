@@ -20,8 +20,8 @@ KERNEL_LOCAL_SIZE;
 #include "random.glsl"
 #include "sampling.glsl"
 #include "gbuffer.glsl"
+#include "ao_noise.glsl"
 
-// The 4x4 Bayer matrix: 16 distinct rotations over each 4x4 tile.
 // The camera, copied out of the push constants once per invocation: its vec3 fields read from
 // push-constant memory inside the loops cost llvmpipe a load each time (field by field: naga
 // cannot read the OpCopyLogical a whole-struct copy compiles to).
@@ -31,7 +31,6 @@ vec3 cam_right;
 vec3 cam_up;
 bool cam_ortho;
 
-const uint BAYER4[16] = uint[16](0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
 const float GOLDEN = 0.61803398874989485;
 
 vec3 position_at(ivec2 pixel, float depth) {
@@ -84,7 +83,7 @@ void main() {
     uint steps = max(params.steps, 1u);
 
     // The tile's rotation about n, and its offset within each cos²θ stratum.
-    float k = (float(BAYER4[(pixel.y & 3) * 4 + (pixel.x & 3)]) + 0.5) / 16.0;
+    float k = ao_tile_noise(pixel);
     vec4 kernel_seed = rand4(uvec2(0u), params.frame, 0u, params.seed);
     vec3 t;
     vec3 b;

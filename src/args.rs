@@ -6,6 +6,7 @@ use crate::cli;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use umbra::color::ToneCurve;
+use umbra::passes::ao::{AoMethod, AoResolution, AoSettings};
 use umbra::passes::deferred::{DirectLight, LightingSettings};
 use umbra::passes::pathtrace::{
     EmitterSampling, Heuristic, Integrator, Microfacet, RisReuse, Sampler, Strategy,
@@ -21,6 +22,8 @@ pub(crate) struct Cli {
     pub(crate) command: Command,
 }
 
+// Parsed once per run: the render variant's size costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// Render a glTF scene (or, without one, the embedded Cornell box).
@@ -217,7 +220,9 @@ pub(crate) struct RenderArgs {
     #[command(flatten)]
     pub(crate) ao: AoArgs,
     #[command(flatten)]
-    pub(crate) ao_blur: AoBlurArgs,
+    pub(crate) screen_ao: ScreenAoArgs,
+    #[command(flatten)]
+    pub(crate) gtao: GtaoArgs,
 }
 
 /// The library's settings from the flags: a flag and what it sets sit in this one file.
@@ -271,14 +276,29 @@ impl RenderArgs {
             exposure: self.display.exposure,
             curve: self.display.tonemap,
             ibl: Default::default(),
-            ao: (!self.hybrid.no_ao).then(|| umbra::passes::ao::AoSettings {
-                samples: self.ao.ao_samples,
-                radius: self.ao.ao_radius,
-                blur: !self.ao_blur.ao_no_blur,
-                seed: self.seed,
-                ..Default::default()
-            }),
+            ao: (!self.hybrid.no_ao).then(|| self.ao_settings()),
             shadows: self.shadow_settings(),
+        }
+    }
+
+    /// The ambient occlusion's settings (`--mode ao` or `rtao`, or the hybrid's AO): each
+    /// method's own defaults ([`AoSettings::of`]) where a flag is not given.
+    pub(crate) fn ao_settings(&self) -> AoSettings {
+        let method = match (self.mode, self.screen_ao.ao) {
+            (Mode::Rtao, _) => AoMethod::Rtao,
+            (_, ScreenAo::Ssao) => AoMethod::Ssao,
+            (_, ScreenAo::Gtao) => AoMethod::Gtao,
+        };
+        let defaults = AoSettings::of(method);
+        AoSettings {
+            samples: self.ao.ao_samples.unwrap_or(defaults.samples),
+            steps: self.screen_ao.ao_steps.unwrap_or(defaults.steps),
+            radius: self.ao.ao_radius,
+            blur: method != AoMethod::Rtao && !self.screen_ao.ao_no_blur,
+            resolution: self.gtao.ao_resolution.into(),
+            falloff: self.gtao.ao_falloff,
+            seed: self.seed,
+            ..defaults
         }
     }
 }
@@ -477,25 +497,73 @@ pub(crate) struct SizedLightArgs {
     pub(crate) sun_angle: f32,
 }
 
-/// `umbra render`: ambient occlusion (`--mode ao` or `rtao`, or the hybrid's SSAO).
+/// `umbra render`: ambient occlusion (`--mode ao` or `rtao`, or the hybrid's AO).
 #[derive(clap::Args)]
-#[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's SSAO)")]
+#[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's AO)")]
 pub(crate) struct AoArgs {
-    /// AO modes and hybrid SSAO: kernel directions (ao) or rays (rtao) per pixel.
-    #[arg(long, default_value_t = 16)]
-    pub(crate) ao_samples: u32,
-    /// AO modes and hybrid SSAO: the occlusion radius in scene units (metres).
+    /// AO modes and hybrid AO: kernel directions (ssao, 16 by default), slices (gtao, 3) or rays
+    /// (rtao, 16) per pixel.
+    #[arg(long)]
+    pub(crate) ao_samples: Option<u32>,
+    /// AO modes and hybrid AO: the occlusion radius in scene units (metres).
     #[arg(long, default_value_t = 0.5, value_parser = cli::parse_positive)]
     pub(crate) ao_radius: f32,
 }
 
-/// `umbra render`: the SSAO blur (`--mode ao`, or the hybrid's SSAO; rtao never blurs).
+/// `--ao`: the screen-space estimators.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub(crate) enum ScreenAo {
+    /// Screen-space AO: a hemisphere kernel marched through the depth buffer (the baseline).
+    Ssao,
+    /// Ground-truth-based AO (Jimenez et al. 2016): horizons in a few slices, integrated in
+    /// closed form.
+    Gtao,
+}
+
+/// `umbra render`: the screen-space AO (`--mode ao`, or the hybrid's AO; rtao casts rays).
 #[derive(clap::Args)]
-#[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's SSAO)")]
-pub(crate) struct AoBlurArgs {
-    /// AO modes: skip the depth-aware blur (ao blurs by default, rtao never does).
+#[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's AO)")]
+pub(crate) struct ScreenAoArgs {
+    /// --mode ao and hybrid AO: the estimator.
+    #[arg(long, value_enum, default_value = "ssao")]
+    pub(crate) ao: ScreenAo,
+    /// --mode ao and hybrid AO: points per direction (ssao, 4 by default) or each side of the
+    /// pixel per slice (gtao, 3).
+    #[arg(long)]
+    pub(crate) ao_steps: Option<u32>,
+    /// --mode ao and hybrid AO: skip the depth-aware blur (ao blurs by default, rtao never does).
     #[arg(long)]
     pub(crate) ao_no_blur: bool,
+}
+
+/// `umbra render`: GTAO's own flags (`--ao gtao`).
+#[derive(clap::Args)]
+#[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's AO)")]
+pub(crate) struct GtaoArgs {
+    /// --ao gtao: compute the AO at every pixel, or at one of each 2x2 block and upsample it
+    /// with the depth-aware blur.
+    #[arg(long, value_enum, default_value = "full")]
+    pub(crate) ao_resolution: AoResolutionArg,
+    /// --ao gtao: the fraction of the radius over which an occluder's weight fades out (0: a
+    /// hard cut-off at the radius, as RTAO's rays).
+    #[arg(long, default_value_t = AoSettings::GTAO_FALLOFF, value_parser = cli::parse_unit)]
+    pub(crate) ao_falloff: f32,
+}
+
+/// `--ao-resolution`.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub(crate) enum AoResolutionArg {
+    Full,
+    Half,
+}
+
+impl From<AoResolutionArg> for AoResolution {
+    fn from(r: AoResolutionArg) -> Self {
+        match r {
+            AoResolutionArg::Full => AoResolution::Full,
+            AoResolutionArg::Half => AoResolution::Half,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -559,6 +627,7 @@ pub(crate) fn render_flag_groups(args: &RenderArgs) -> Vec<cli::FlagGroup> {
     let (pathtrace, hybrid) = (args.mode == Mode::Pathtrace, args.mode == Mode::Hybrid);
     let ao_modes = matches!(args.mode, Mode::Ao | Mode::Rtao);
     let ssao = hybrid && !args.hybrid.no_ao;
+    let screen_ao = ssao || args.mode == Mode::Ao;
     let shadows = args.hybrid.shadows;
     let groups = vec![
         (cli::arg_ids::<PathArgs>(), pathtrace, "--mode pathtrace"),
@@ -590,11 +659,12 @@ pub(crate) fn render_flag_groups(args: &RenderArgs) -> Vec<cli::FlagGroup> {
             "--mode hybrid --probes bake (a bake file keeps the settings it was made with)",
         ),
         (cli::arg_ids::<LightmapArgs>(), args.hybrid.lightmaps, "--lightmaps (hybrid)"),
-        (cli::arg_ids::<AoArgs>(), ssao || ao_modes, "--mode ao or rtao, or hybrid's SSAO"),
+        (cli::arg_ids::<AoArgs>(), ssao || ao_modes, "--mode ao or rtao, or hybrid's AO"),
+        (cli::arg_ids::<ScreenAoArgs>(), screen_ao, "--mode ao, or hybrid's AO (rtao casts rays)"),
         (
-            cli::arg_ids::<AoBlurArgs>(),
-            ssao || args.mode == Mode::Ao,
-            "--mode ao, or hybrid's SSAO (rtao never blurs)",
+            cli::arg_ids::<GtaoArgs>(),
+            screen_ao && args.screen_ao.ao == ScreenAo::Gtao,
+            "--ao gtao (with --mode ao, or hybrid's AO)",
         ),
     ];
     groups

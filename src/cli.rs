@@ -186,6 +186,15 @@ pub fn parse_tile(s: &str) -> Result<[u32; 4], String> {
     }
 }
 
+/// Parses a number in [0, 1].
+#[allow(dead_code)] // one binary uses it
+pub fn parse_unit(s: &str) -> Result<f32, String> {
+    match parse_finite(s)? {
+        x if (0.0..=1.0).contains(&x) => Ok(x),
+        _ => Err(format!("'{s}' must lie in [0, 1]")),
+    }
+}
+
 /// Parses a finite number greater than 0.
 pub fn parse_positive(s: &str) -> Result<f32, String> {
     match parse_finite(s)? {

@@ -9,7 +9,8 @@
 //! let mut renderer = Renderer::new(&ctx, &scene)?;          // uploads the scene once
 //! // per frame, inside the host's command buffer:
 //! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;   // or the host writes its own
-//! let ao = renderer.record_ssao(cmd, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
+//! let ao = renderer.record_ao(cmd, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
+//! // (SSAO, GTAO at full or half resolution, or RTAO: `ao_settings.method`, `.resolution`)
 //! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view,
 //!     &LightingInputs { ao: Some(ao), ..Default::default() }, &lighting)?;
 //! renderer.record_tonemap(cmd, hdr_view, ldr_view, size, 0.0, ToneCurve::KhronosPbrNeutral)?;
@@ -54,7 +55,7 @@
 //!     rec.access(&[(Resource::Image(gbuffer_views.normal), Use::ComputeRead),
 //!                  (Resource::Image(host_view), Use::ComputeWrite)]);
 //!     host_kernel.dispatch(rec.cmd());                  // the host's own, declared above
-//!     passes.record_ssao(rec, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
+//!     passes.record_ao(rec, scene, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
 //!     Ok(())
 //! })?;
 //! // or a frame graph (crate::vk::Graph): passes declare the images they read and write; the
@@ -352,11 +353,12 @@ impl Renderer {
         self.record(cmd, |rec| self.passes.record_gbuffer(rec, &self.scene, camera, target))
     }
 
-    /// Records SSAO of `gbuffer` (umbra's or the host's) into `raw_ao` and, when `settings.blur`,
-    /// its depth-aware blur into `blurred`: both `R32_SFLOAT` storage images of the G-buffer's
-    /// size in `GENERAL` layout (1 = unoccluded). Returns the view holding the result, for
-    /// [`Self::record_lighting`].
-    pub fn record_ssao(
+    /// Records the ambient occlusion of `gbuffer` (umbra's or the host's) by `settings.method`
+    /// (SSAO, GTAO or RTAO) into `raw_ao` and, when `settings.blur`, its depth-aware blur (for
+    /// half-resolution GTAO also its upsample) into `blurred`: both `R32_SFLOAT` storage images
+    /// of the G-buffer's size in `GENERAL` layout (1 = unoccluded). Returns the view holding the
+    /// result, for [`Self::record_lighting`].
+    pub fn record_ao(
         &self,
         cmd: raw::CommandBuffer,
         camera: &Camera,
@@ -365,7 +367,9 @@ impl Renderer {
         blurred: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<raw::ImageView> {
-        self.record(cmd, |rec| self.passes.record_ssao(rec, camera, gbuffer, raw_ao, blurred, settings))
+        self.record(cmd, |rec| {
+            self.passes.record_ao(rec, &self.scene, camera, gbuffer, raw_ao, blurred, settings)
+        })
     }
 
     /// Records ray-traced ambient occlusion of `gbuffer` (SSAO's ground truth: `settings.samples`

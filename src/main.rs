@@ -636,19 +636,9 @@ fn render_ao(
     camera: &umbra::scene::Camera,
     args: &RenderArgs,
 ) -> Result<()> {
-    use umbra::render::AoMethod;
-    let (method, name) = match args.mode {
-        Mode::Rtao => (AoMethod::Rtao, "rtao"),
-        _ => (AoMethod::Ssao, "ao"),
-    };
-    let settings = umbra::passes::ao::AoSettings {
-        samples: args.ao.ao_samples,
-        radius: args.ao.ao_radius,
-        blur: method == AoMethod::Ssao && !args.ao_blur.ao_no_blur,
-        seed: args.seed,
-        ..Default::default()
-    };
-    let image = umbra::render::ambient_occlusion(ctx, scene, camera, args.size, method, &settings)?;
+    let settings = args.ao_settings();
+    let name = settings.method.name();
+    let image = umbra::render::ambient_occlusion(ctx, scene, camera, args.size, &settings)?;
     let times: Vec<String> = image.pass_ms.iter().map(|(name, ms)| format!("{name} {ms:.3} ms")).collect();
     println!("{name}: {}x{}; GPU {}", args.size.0, args.size.1, times.join(", "));
     let (w, h) = args.size;
@@ -668,16 +658,15 @@ fn render_ao(
     }
     if let Some(path) = exr {
         use umbra::output::Layer;
-        umbra::output::write_exr(
-            &path,
-            w as usize,
-            h as usize,
-            &[
-                Layer { name: "", channels: &["Y"], data: &image.values },
-                Layer { name: "unblurred", channels: &["Y"], data: &image.unblurred },
-                Layer { name: "depth", channels: &["Z"], data: &image.gbuffer.depth },
-            ],
-        )?;
+        let mut layers = vec![
+            Layer { name: "", channels: &["Y"], data: &image.values },
+            Layer { name: "depth", channels: &["Z"], data: &image.gbuffer.depth },
+        ];
+        // Half-resolution AO's texels are not the image's pixels: no such layer then.
+        if image.ao_size == image.size {
+            layers.insert(1, Layer { name: "unblurred", channels: &["Y"], data: &image.unblurred });
+        }
+        umbra::output::write_exr(&path, w as usize, h as usize, &layers)?;
         println!("wrote {}", path.display());
     }
     Ok(())

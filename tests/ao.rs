@@ -15,7 +15,7 @@ use common::Gpu;
 use glam::Vec3;
 use umbra::gpu::layout::GpuCamera;
 use umbra::gpu::scene::{GpuScene, SceneArrays};
-use umbra::passes::ao::AoSettings;
+use umbra::passes::ao::{AoResolution, AoSettings};
 use umbra::render::{ambient_occlusion, AoImage, AoMethod};
 use umbra::scene::{AlphaMode, Camera, Material, Scene};
 
@@ -110,18 +110,16 @@ fn surfaces(image: &AoImage, cam: &Camera) -> Vec<Option<(Vec3, Vec3)>> {
         .collect()
 }
 
-fn render(
-    gpu: &Gpu,
-    scene: &GpuScene,
-    cam: &Camera,
-    size: u32,
-    method: AoMethod,
-    settings: &AoSettings,
-) -> AoImage {
-    let image = ambient_occlusion(gpu, scene, cam, (size, size), method, settings).unwrap();
+fn render(gpu: &Gpu, scene: &GpuScene, cam: &Camera, size: u32, settings: &AoSettings) -> AoImage {
+    let image = ambient_occlusion(gpu, scene, cam, (size, size), settings).unwrap();
     let times: Vec<String> = image.pass_ms.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect();
-    eprintln!("  {method:?} {size}x{size}: {}", times.join(", "));
+    eprintln!("  {:?} {:?} {size}x{size}: {}", settings.method, settings.resolution, times.join(", "));
     image
+}
+
+/// RTAO with `rays` rays of length `radius` per pixel, unblurred.
+fn rtao(rays: u32, radius: f32) -> AoSettings {
+    AoSettings { method: AoMethod::Rtao, samples: rays, radius, blur: false, ..Default::default() }
 }
 
 /// RTAO sees alpha as the path tracer does: a ceiling h = 0.2 above the floor (AO (h/r)² = 0.16
@@ -132,7 +130,7 @@ fn render(
 #[test]
 fn rtao_sees_through_alpha_masked_surfaces() {
     let gpu = Gpu::new();
-    let settings = AoSettings { samples: 16, radius: 0.5, blur: false, ..Default::default() };
+    let settings = rtao(16, 0.5);
     let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 30.0);
     let with_ceiling = |alpha: f32| {
         let mut quads = Quads::new().floor().quad(
@@ -151,13 +149,13 @@ fn rtao_sees_through_alpha_masked_surfaces() {
         quads.scene.triangle_material[n - 2..].fill(1);
         quads.upload(&gpu)
     };
-    let masked = render(&gpu, &with_ceiling(0.2), &cam, 32, AoMethod::Rtao, &settings);
+    let masked = render(&gpu, &with_ceiling(0.2), &cam, 32, &settings);
     for (i, s) in surfaces(&masked, &cam).iter().enumerate() {
         let (p, _) = s.expect("the floor fills the image");
         assert!(p.y.abs() < 1e-4, "pixel {i} sees {p}, not the floor through the masked ceiling");
         assert_eq!(masked.values[i], 1.0, "pixel {i}: RTAO occluded by a masked-away ceiling");
     }
-    let opaque = render(&gpu, &with_ceiling(0.5), &cam, 32, AoMethod::Rtao, &settings);
+    let opaque = render(&gpu, &with_ceiling(0.5), &cam, 32, &settings);
     let heights: Vec<f32> = surfaces(&opaque, &cam).iter().map(|s| s.expect("a surface").0.y).collect();
     assert!(heights.iter().all(|y| (y - 0.2).abs() < 1e-4), "the opaque ceiling hides the floor");
 }
@@ -185,7 +183,7 @@ fn rtao_matches_analytic_occlusion() {
     let gpu = Gpu::new();
     let r = 0.5f32;
     let rays = 64u32;
-    let settings = AoSettings { samples: rays, radius: r, blur: false, ..Default::default() };
+    let settings = rtao(rays, r);
     let z_crit = 3.26;
     // A wall x = 0 facing +x, 2 high; the camera 2 above the floor looks straight down at x in
     // [0, 1.2] (the wall seen edge-on at the image's left border).
@@ -196,7 +194,7 @@ fn rtao_matches_analytic_occlusion() {
     let half = 0.6f32;
     let yfov = 2.0 * (half / 2.0f32).atan().to_degrees();
     let cam = camera(Vec3::new(half, 2.0, 0.0), Vec3::new(half, 0.0, 0.0), Vec3::new(0.0, 0.0, -1.0), yfov);
-    let image = render(&gpu, &scene, &cam, 64, AoMethod::Rtao, &settings);
+    let image = render(&gpu, &scene, &cam, 64, &settings);
     let points = surfaces(&image, &cam);
     const BINS: usize = 8;
     let mut bins = [(0usize, 0.0f64, 0.0f64, 0.0f64); BINS]; // pixels, Σ got, Σ expected, Σ variance
@@ -251,7 +249,7 @@ fn rtao_matches_analytic_occlusion() {
         .quad(Vec3::new(-20.0, h, -20.0), Vec3::new(40.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 40.0))
         .upload(&gpu);
     let cam = camera(Vec3::new(0.0, 0.25, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 60.0);
-    let image = render(&gpu, &scene, &cam, 64, AoMethod::Rtao, &settings);
+    let image = render(&gpu, &scene, &cam, 64, &settings);
     let q = ((h / r) as f64).powi(2);
     let n = image.values.len() as f64;
     let got: f64 = image.values.iter().map(|&v| v as f64).sum();
@@ -273,61 +271,86 @@ fn room() -> Quads {
         .quad(Vec3::new(1.0, 0.0, -1.0), 2.0 * z, 2.0 * y)
 }
 
-/// SSAO (blurred) and the RTAO reference of one view.
-fn ssao_and_reference(
+/// The screen-space estimators held to RTAO, each with its defaults and blurred: SSAO, and GTAO
+/// at full and at half resolution.
+fn screen_space(radius: f32) -> [AoSettings; 3] {
+    let gtao = AoSettings { radius, ..AoSettings::of(AoMethod::Gtao) };
+    [
+        AoSettings { radius, ..AoSettings::of(AoMethod::Ssao) },
+        gtao,
+        AoSettings { resolution: AoResolution::Half, ..gtao },
+    ]
+}
+
+/// An estimator's name in messages.
+fn label(settings: &AoSettings) -> String {
+    match settings.resolution {
+        AoResolution::Full => settings.method.name().to_string(),
+        AoResolution::Half => format!("{} half", settings.method.name()),
+    }
+}
+
+/// Each screen-space estimate ([`screen_space`]) and the RTAO reference of one view.
+fn estimates_and_reference(
     gpu: &Gpu,
     scene: &GpuScene,
     cam: &Camera,
     size: u32,
     radius: f32,
-) -> (AoImage, AoImage) {
-    let ssao = AoSettings { radius, ..Default::default() };
-    let rtao = AoSettings { samples: REFERENCE_RAYS, radius, blur: false, ..Default::default() };
-    (
-        render(gpu, scene, cam, size, AoMethod::Ssao, &ssao),
-        render(gpu, scene, cam, size, AoMethod::Rtao, &rtao),
-    )
+) -> (Vec<(String, AoImage)>, AoImage) {
+    let estimates =
+        screen_space(radius).iter().map(|s| (label(s), render(gpu, scene, cam, size, s))).collect();
+    (estimates, render(gpu, scene, cam, size, &rtao(REFERENCE_RAYS, radius)))
 }
 
-fn abs_error(ssao: &AoImage, rtao: &AoImage, i: usize) -> f64 {
-    (ssao.values[i] as f64 - rtao.values[i] as f64).abs()
+fn abs_error(estimate: &AoImage, rtao: &AoImage, i: usize) -> f64 {
+    (estimate.values[i] as f64 - rtao.values[i] as f64).abs()
 }
 
-/// Where its assumptions hold (the room's floor/wall creases seen from inside, pixels at least
-/// r's screen size from the border, so no kernel point leaves the screen), blurred SSAO agrees
-/// with the RTAO reference: mean |SSAO − RTAO| < 0.05 (RTAO's own noise contributes ≈ 0.01). The
-/// blur removes most of the rotation pattern: the unblurred error is larger.
+/// Where their assumptions hold (the room's floor/wall creases seen from inside, pixels at least
+/// r's screen size from the border, so no kernel point leaves the screen), every blurred
+/// screen-space estimate agrees with the RTAO reference: mean |AO − RTAO| < 0.05 (RTAO's own noise
+/// contributes ≈ 0.01). The blur removes most of the rotation pattern: the unblurred error is
+/// larger.
 #[test]
-fn ssao_agrees_with_rtao_inside_a_room() {
+fn screen_space_ao_agrees_with_rtao_inside_a_room() {
     let gpu = Gpu::new();
     let scene = room().upload(&gpu);
     let cam = camera(Vec3::new(0.2, 1.0, 0.6), Vec3::new(-1.0, 0.0, -1.0), Vec3::Y, 60.0);
     let size = 64;
-    let (ssao, rtao) = ssao_and_reference(&gpu, &scene, &cam, size, 0.5);
-    dump("room_ssao", size, &ssao.values);
-    dump("room_ssao_raw", size, &ssao.unblurred);
+    let (estimates, rtao) = estimates_and_reference(&gpu, &scene, &cam, size, 0.5);
     dump("room_rtao", size, &rtao.values);
     let margin = 12;
     let interior = |i: usize| {
         let (x, y) = ((i as u32) % size, (i as u32) / size);
         (margin..size - margin).contains(&x) && (margin..size - margin).contains(&y)
     };
-    let (blurred, n) = mean_over(ssao.values.len(), interior, |i| abs_error(&ssao, &rtao, i));
-    let (unblurred, _) =
-        mean_over(ssao.values.len(), interior, |i| (ssao.unblurred[i] as f64 - rtao.values[i] as f64).abs());
-    let (occluded, _) = mean_over(ssao.values.len(), interior, |i| 1.0 - rtao.values[i] as f64);
-    eprintln!(
-        "room interior ({n} px, mean RTAO occlusion {occluded:.3}): mean |SSAO - RTAO| blurred {blurred:.4}, unblurred {unblurred:.4}"
-    );
+    let (occluded, n) = mean_over(rtao.values.len(), interior, |i| 1.0 - rtao.values[i] as f64);
     assert!(occluded > 0.1, "the view shows too little occlusion to compare ({occluded})");
-    assert!(blurred < 0.05, "mean |SSAO - RTAO| = {blurred}");
-    assert!(unblurred > blurred, "the blur did not reduce the error: {unblurred} vs {blurred}");
+    for (name, image) in &estimates {
+        dump(&format!("room_{name}"), size, &image.values);
+        let (blurred, _) = mean_over(image.values.len(), interior, |i| abs_error(image, &rtao, i));
+        eprintln!(
+            "room interior ({n} px, mean RTAO occlusion {occluded:.3}): mean |{name} - RTAO| {blurred:.4}"
+        );
+        assert!(blurred < 0.05, "mean |{name} - RTAO| = {blurred}");
+        if image.ao_size == image.size {
+            let (unblurred, _) = mean_over(image.values.len(), interior, |i| {
+                (image.unblurred[i] as f64 - rtao.values[i] as f64).abs()
+            });
+            eprintln!("  unblurred {unblurred:.4}");
+            assert!(
+                unblurred > blurred,
+                "{name}: the blur did not reduce the error: {unblurred} vs {blurred}"
+            );
+        }
+    }
 
     // With 4 directions a pixel's estimate is coarse, but the 4×4 tile holds 16 rotations of
     // them: the blur must recover most of the accuracy (a pattern that did not vary over the
     // tile would leave nothing to average).
     let few = AoSettings { samples: 4, radius: 0.5, ..Default::default() };
-    let coarse = render(&gpu, &scene, &cam, size, AoMethod::Ssao, &few);
+    let coarse = render(&gpu, &scene, &cam, size, &few);
     let (blurred4, _) = mean_over(coarse.values.len(), interior, |i| abs_error(&coarse, &rtao, i));
     let (unblurred4, _) = mean_over(coarse.values.len(), interior, |i| {
         (coarse.unblurred[i] as f64 - rtao.values[i] as f64).abs()
@@ -341,21 +364,21 @@ fn ssao_agrees_with_rtao_inside_a_room() {
     );
 }
 
-/// SSAO under an orthographic camera (its kernel points projected to the screen without the
-/// perspective divide, its points reconstructed on parallel rays): the room's creases seen from
-/// inside by an orthographic view (half extents 0.9), blurred SSAO against the RTAO reference as in
-/// the perspective room (mean |SSAO − RTAO| < 0.05 over pixels at least r's screen size from the
-/// border). SSAO projecting with a pinhole's divide reads the wrong pixels and misses the creases.
+/// The screen-space estimators under an orthographic camera (points projected to the screen
+/// without the perspective divide, reconstructed on parallel rays): the room's creases seen from
+/// inside by an orthographic view (half extents 0.9), each blurred estimate against the RTAO
+/// reference as in the perspective room (mean |AO − RTAO| < 0.05 over pixels at least r's screen
+/// size from the border). An estimator projecting with a pinhole's divide reads the wrong pixels
+/// and misses the creases.
 #[test]
-fn ssao_agrees_with_rtao_under_an_orthographic_camera() {
+fn screen_space_ao_agrees_with_rtao_under_an_orthographic_camera() {
     let gpu = Gpu::new();
     let scene = room().upload(&gpu);
     let pinhole = camera(Vec3::new(0.4, 1.4, 0.8), Vec3::new(-0.5, 0.2, -0.6), Vec3::Y, 60.0);
     let magnification = umbra::scene::Orthographic { xmag: 0.9, ymag: 0.9, zfar: 10.0 };
     let cam = Camera { yfov: 0.0, aspect: Some(1.0), orthographic: Some(magnification), ..pinhole };
     let size = 64;
-    let (ssao, rtao) = ssao_and_reference(&gpu, &scene, &cam, size, 0.5);
-    dump("ortho_room_ssao", size, &ssao.values);
+    let (estimates, rtao) = estimates_and_reference(&gpu, &scene, &cam, size, 0.5);
     dump("ortho_room_rtao", size, &rtao.values);
     // r = 0.5 is 0.5 / 0.9 × 32 ≈ 18 pixels at every depth.
     let margin = 18;
@@ -363,11 +386,16 @@ fn ssao_agrees_with_rtao_under_an_orthographic_camera() {
         let (x, y) = ((i as u32) % size, (i as u32) / size);
         (margin..size - margin).contains(&x) && (margin..size - margin).contains(&y)
     };
-    let (error, n) = mean_over(ssao.values.len(), interior, |i| abs_error(&ssao, &rtao, i));
-    let (occluded, _) = mean_over(ssao.values.len(), interior, |i| 1.0 - rtao.values[i] as f64);
-    eprintln!("orthographic room ({n} px, mean RTAO occlusion {occluded:.3}): mean |SSAO - RTAO| {error:.4}");
+    let (occluded, n) = mean_over(rtao.values.len(), interior, |i| 1.0 - rtao.values[i] as f64);
     assert!(occluded > 0.1, "the view shows too little occlusion to compare ({occluded})");
-    assert!(error < 0.05, "mean |SSAO - RTAO| = {error}");
+    for (name, image) in &estimates {
+        dump(&format!("ortho_room_{name}"), size, &image.values);
+        let (error, _) = mean_over(image.values.len(), interior, |i| abs_error(image, &rtao, i));
+        eprintln!(
+            "orthographic room ({n} px, mean RTAO occlusion {occluded:.3}): mean |{name} - RTAO| {error:.4}"
+        );
+        assert!(error < 0.05, "mean |{name} - RTAO| = {error}");
+    }
 }
 
 /// With UMBRA_AO_DUMP=dir set, writes the AO images of a test as grey PNGs (for looking).
@@ -380,16 +408,16 @@ fn dump(name: &str, size: u32, values: &[f32]) {
             [g, g, g, 255]
         })
         .collect();
-    let path = std::path::Path::new(&dir).join(format!("{name}.png"));
+    let path = std::path::Path::new(&dir).join(format!("{}.png", name.replace(' ', "_")));
     umbra::output::write_png(&path, size, size, &bytes).unwrap();
 }
 
-/// SSAO's failure at the screen's edge: the crease of the room's back wall and floor seen in the
-/// image's centre, then (the camera pitched up) a few pixels above its bottom border, so the
-/// floor that occludes the wall's foot is off screen and SSAO counts those kernel points as
-/// unoccluded. Mean |SSAO − RTAO| over the wall within r of the floor: larger at the border.
+/// The screen-space estimators' failure at the screen's edge: the crease of the room's back wall
+/// and floor seen in the image's centre, then (the camera pitched up) a few pixels above its
+/// bottom border, so the floor that occludes the wall's foot is off screen and they count it as
+/// open. Mean |AO − RTAO| over the wall within r of the floor: larger at the border, for each.
 #[test]
-fn ssao_fails_at_the_screen_edge() {
+fn screen_space_ao_fails_at_the_screen_edge() {
     let gpu = Gpu::new();
     let scene = room().upload(&gpu);
     let (size, r, yfov) = (64u32, 0.3f32, 50.0f32);
@@ -401,34 +429,36 @@ fn ssao_fails_at_the_screen_edge() {
         let ndc = 1.0 - 2.0 * rows_from_bottom / size as f32;
         beta - (ndc * (yfov.to_radians() / 2.0).tan()).atan()
     };
-    let mut errors = Vec::new();
+    let mut errors: Vec<Vec<f64>> = Vec::new();
     for (name, gamma) in [("centre", beta), ("border", row(3.0))] {
         let cam = camera(eye, eye + Vec3::new(0.0, -gamma.tan(), -1.0), Vec3::Y, yfov);
-        let (ssao, rtao) = ssao_and_reference(&gpu, &scene, &cam, size, r);
-        dump(&format!("edge_{name}_ssao"), size, &ssao.values);
+        let (estimates, rtao) = estimates_and_reference(&gpu, &scene, &cam, size, r);
         dump(&format!("edge_{name}_rtao"), size, &rtao.values);
         let points = surfaces(&rtao, &cam);
         let wall_foot = |i: usize| points[i].is_some_and(|(p, n)| n.z > 0.99 && p.y < r && p.x.abs() < 0.5);
-        let (error, n) = mean_over(points.len(), wall_foot, |i| abs_error(&ssao, &rtao, i));
-        let (signed, _) =
-            mean_over(points.len(), wall_foot, |i| ssao.values[i] as f64 - rtao.values[i] as f64);
-        eprintln!("screen edge, crease in the {name}: {n} wall px, mean |SSAO - RTAO| {error:.4} (SSAO - RTAO {signed:+.4})");
-        assert!(n > 100, "{name}: only {n} pixels of the wall's foot");
-        errors.push(error);
+        let mut row = Vec::new();
+        for (method, image) in &estimates {
+            dump(&format!("edge_{name}_{method}"), size, &image.values);
+            let (error, n) = mean_over(points.len(), wall_foot, |i| abs_error(image, &rtao, i));
+            let (signed, _) =
+                mean_over(points.len(), wall_foot, |i| image.values[i] as f64 - rtao.values[i] as f64);
+            eprintln!("screen edge, crease in the {name}: {n} wall px, mean |{method} - RTAO| {error:.4} ({method} - RTAO {signed:+.4})");
+            assert!(n > 100, "{name}: only {n} pixels of the wall's foot");
+            row.push(error);
+        }
+        errors.push(row);
     }
-    assert!(
-        errors[1] > 2.0 * errors[0] && errors[1] > 0.05,
-        "border error {} vs centre {}",
-        errors[1],
-        errors[0]
-    );
+    for (k, (method, _)) in screen_space(r).iter().map(|s| (label(s), ())).enumerate() {
+        let (centre, border) = (errors[0][k], errors[1][k]);
+        assert!(border > 2.0 * centre && border > 0.05, "{method}: border error {border} vs centre {centre}");
+    }
 }
 
-/// SSAO's failure with occluders off screen: a floor under a ceiling at h = 0.3 (r = 0.5), seen
-/// by a camera between the two looking straight down, so the ceiling is behind it. RTAO gives
-/// the analytic (h/r)² = 0.36; SSAO sees an open floor.
+/// The screen-space estimators' failure with occluders off screen: a floor under a ceiling at
+/// h = 0.3 (r = 0.5), seen by a camera between the two looking straight down, so the ceiling is
+/// behind it. RTAO gives the analytic (h/r)² = 0.36; SSAO and GTAO see an open floor.
 #[test]
-fn ssao_misses_occluders_outside_the_frustum() {
+fn screen_space_ao_misses_occluders_outside_the_frustum() {
     let gpu = Gpu::new();
     let h = 0.3f32;
     let scene = Quads::new()
@@ -436,58 +466,64 @@ fn ssao_misses_occluders_outside_the_frustum() {
         .quad(Vec3::new(-20.0, h, -20.0), Vec3::new(40.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 40.0))
         .upload(&gpu);
     let cam = camera(Vec3::new(0.0, 0.25, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 60.0);
-    let (ssao, rtao) = ssao_and_reference(&gpu, &scene, &cam, 32, 0.5);
+    let (estimates, rtao) = estimates_and_reference(&gpu, &scene, &cam, 32, 0.5);
     let all = |_| true;
-    let (error, n) = mean_over(ssao.values.len(), all, |i| abs_error(&ssao, &rtao, i));
-    let (s, _) = mean_over(n, all, |i| ssao.values[i] as f64);
-    let (t, _) = mean_over(n, all, |i| rtao.values[i] as f64);
-    eprintln!(
-        "occluder behind the camera: SSAO {s:.4}, RTAO {t:.4} (analytic 0.36), mean |SSAO - RTAO| {error:.4}"
-    );
+    let (t, n) = mean_over(rtao.values.len(), all, |i| rtao.values[i] as f64);
     assert!((t - 0.36).abs() < 0.01, "RTAO {t}");
-    assert!(s > 0.99 && error > 0.6, "SSAO {s}, error {error}");
+    for (name, image) in &estimates {
+        let (error, _) = mean_over(n, all, |i| abs_error(image, &rtao, i));
+        let (s, _) = mean_over(n, all, |i| image.values[i] as f64);
+        eprintln!(
+            "occluder behind the camera: {name} {s:.4}, RTAO {t:.4} (analytic 0.36), mean |{name} - RTAO| {error:.4}"
+        );
+        assert!(s > 0.99 && error > 0.6, "{name} {s}, error {error}");
+    }
 }
 
-/// SSAO's failure with thin geometry: a 6 cm wide, zero-thickness pole 0.2 in front of a wall
-/// (within r = 0.4), seen obliquely. The depth buffer reads the pole as solid all the way back
-/// to the wall, so SSAO darkens the wall beside the pole's image far more than the thin pole
-/// occludes it (RTAO). Mean (RTAO − SSAO) over the wall within r of the pole: above the 0.05
-/// SSAO meets in the room, where its assumptions hold. The same pole 2r in front of the wall
-/// occludes nothing, and SSAO's range check must discard it (both 1).
+/// The screen-space estimators' failure with thin geometry: a 6 cm wide, zero-thickness pole 0.2
+/// in front of a wall (within r = 0.4), seen obliquely. The depth buffer reads the pole as solid
+/// all the way back to the wall, so SSAO and GTAO darken the wall beside the pole's image far more
+/// than the thin pole occludes it (RTAO). Mean (RTAO − AO) over the wall within r of the pole:
+/// above the 0.05 they meet in the room, where their assumptions hold. The same pole 2r in front
+/// of the wall occludes nothing, and their range checks must discard it (AO and RTAO both 1).
 #[test]
-fn ssao_fails_on_thin_geometry() {
+fn screen_space_ao_fails_on_thin_geometry() {
     let gpu = Gpu::new();
     let (size, r, gap, width) = (64u32, 0.4f32, 0.2f32, 0.06f32);
     let wall = || Quads::new().quad(Vec3::new(-3.0, -3.0, 0.0), 6.0 * Vec3::X, 6.0 * Vec3::Y);
     let pole = |gap: f32| wall().quad(Vec3::new(-width / 2.0, -3.0, gap), width * Vec3::X, 6.0 * Vec3::Y);
     let cam = camera(Vec3::new(0.8, 0.0, 1.6), Vec3::ZERO, Vec3::Y, 40.0);
-    let mut results = Vec::new();
     let cases =
         [("wall", wall()), ("wall and thin pole", pole(gap)), ("wall and thin pole beyond r", pole(2.0 * r))];
-    for (name, quads) in cases {
+    for (case, (name, quads)) in cases.into_iter().enumerate() {
         let scene = quads.upload(&gpu);
-        let (ssao, rtao) = ssao_and_reference(&gpu, &scene, &cam, size, r);
-        dump(&format!("thin_{}_ssao", results.len()), size, &ssao.values);
-        dump(&format!("thin_{}_rtao", results.len()), size, &rtao.values);
+        let (estimates, rtao) = estimates_and_reference(&gpu, &scene, &cam, size, r);
+        dump(&format!("thin_{case}_rtao"), size, &rtao.values);
         let points = surfaces(&rtao, &cam);
         let near_pole =
             |i: usize| points[i].is_some_and(|(p, _)| p.z.abs() < 1e-3 && p.x.abs() < r && p.y.abs() < 0.5);
-        let (darker, n) =
-            mean_over(points.len(), near_pole, |i| rtao.values[i] as f64 - ssao.values[i] as f64);
-        let (error, _) = mean_over(points.len(), near_pole, |i| abs_error(&ssao, &rtao, i));
-        let (t, _) = mean_over(points.len(), near_pole, |i| rtao.values[i] as f64);
-        let mut errors: Vec<f64> =
-            (0..points.len()).filter(|&i| near_pole(i)).map(|i| abs_error(&ssao, &rtao, i)).collect();
-        errors.sort_by(f64::total_cmp);
-        let p95 = errors[errors.len() * 95 / 100];
-        eprintln!("thin geometry, {name}: {n} wall px, RTAO {t:.4}, RTAO - SSAO {darker:+.4}, mean |SSAO - RTAO| {error:.4}, 95th percentile {p95:.4}");
-        results.push((darker, error));
+        let (t, n) = mean_over(points.len(), near_pole, |i| rtao.values[i] as f64);
+        for (method, image) in &estimates {
+            dump(&format!("thin_{case}_{method}"), size, &image.values);
+            let (darker, _) =
+                mean_over(points.len(), near_pole, |i| rtao.values[i] as f64 - image.values[i] as f64);
+            let (error, _) = mean_over(points.len(), near_pole, |i| abs_error(image, &rtao, i));
+            let mut errors: Vec<f64> =
+                (0..points.len()).filter(|&i| near_pole(i)).map(|i| abs_error(image, &rtao, i)).collect();
+            errors.sort_by(f64::total_cmp);
+            let p95 = errors[errors.len() * 95 / 100];
+            eprintln!("thin geometry, {name}: {n} wall px, RTAO {t:.4}, RTAO - {method} {darker:+.4}, mean |{method} - RTAO| {error:.4}, 95th percentile {p95:.4}");
+            match case {
+                0 => assert!(error < 0.01, "a bare wall: {method} and RTAO should both be 1: {error}"),
+                // Beyond the 0.05 they meet where their assumptions hold (the room), and darker.
+                1 => {
+                    assert!(darker > 0.05, "{method} should be darker than RTAO beside a thin pole: {darker}")
+                }
+                // A pole 2r in front of the wall occludes nothing; the range check must ignore it.
+                _ => assert!(error < 0.01, "{method}: the range check let a distant pole occlude: {error}"),
+            }
+        }
     }
-    assert!(results[0].1 < 0.01, "a bare wall: SSAO and RTAO should both be 1: {:?}", results[0]);
-    // Beyond the 0.05 that SSAO meets where its assumptions hold (the room), and darker.
-    assert!(results[1].0 > 0.05, "SSAO should be darker than RTAO beside a thin pole: {:?}", results[1]);
-    // A pole 2r in front of the wall occludes nothing; SSAO's range check must ignore it.
-    assert!(results[2].1 < 0.01, "the range check let a distant pole occlude: {:?}", results[2]);
 }
 
 /// The blur is depth-aware: a box seen from above over a floor 1 m farther away. Over the
@@ -502,8 +538,8 @@ fn blur_does_not_cross_silhouettes() {
     let yfov = 2.0 * 0.2f32.atan().to_degrees();
     let cam = camera(Vec3::new(0.0, 5.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), yfov);
     let size = 64u32;
-    let settings = AoSettings { samples: 64, radius: 0.5, blur: true, ..Default::default() };
-    let image = render(&gpu, &scene, &cam, size, AoMethod::Rtao, &settings);
+    let settings = AoSettings { blur: true, ..rtao(64, 0.5) };
+    let image = render(&gpu, &scene, &cam, size, &settings);
     dump("blur_in", size, &image.unblurred);
     dump("blur_out", size, &image.values);
     let depth = &image.gbuffer.depth;
@@ -540,8 +576,9 @@ fn blur_does_not_cross_silhouettes() {
     assert!(bilateral < 0.1 * boxed, "the blur bleeds across the silhouette: {bilateral} vs box {boxed}");
 }
 
-/// `umbra render --mode ao|rtao`: the grey PNG holds the sRGB encoding of the EXR's AO (the same
-/// deterministic render), each pass's GPU time is printed, and a bad radius is one clear error.
+/// `umbra render --mode ao|rtao` (ao by SSAO, and by GTAO at half resolution): the grey PNG holds
+/// the sRGB encoding of the EXR's AO (the same deterministic render), each pass's GPU time is
+/// printed, and a bad radius, or half resolution asked of SSAO, is one clear error.
 #[test]
 fn cli_writes_ao_png_and_exr() {
     let dir = std::env::temp_dir().join(format!("umbra-ao-cli-{}", std::process::id()));
@@ -549,13 +586,17 @@ fn cli_writes_ao_png_and_exr() {
     let umbra = || std::process::Command::new(env!("CARGO_BIN_EXE_umbra"));
     let (png, exr) = (dir.join("ao.png"), dir.join("ao.exr"));
     let args = ["render", "--size", "32x24", "--ao-samples", "8", "--ao-radius", "0.2"];
-    for (mode, passes) in
-        [("ao", ["gbuffer", "ssao", "ao_blur"].as_slice()), ("rtao", ["gbuffer", "rtao"].as_slice())]
-    {
+    let gtao = ["--ao", "gtao", "--ao-resolution", "half"];
+    for (mode, extra, passes) in [
+        ("ao", [].as_slice(), ["gbuffer", "ssao", "ao_blur"].as_slice()),
+        ("ao", gtao.as_slice(), ["gbuffer", "gtao", "ao_blur"].as_slice()),
+        ("rtao", [].as_slice(), ["gbuffer", "rtao"].as_slice()),
+    ] {
         let mut stdout = String::new();
         for out in [&png, &exr] {
             let output = umbra()
                 .args(args)
+                .args(extra)
                 .args(["--mode", mode, "-o"])
                 .arg(out)
                 .env("UMBRA_VALIDATION", "1")
@@ -579,12 +620,18 @@ fn cli_writes_ao_png_and_exr() {
             assert!((pixel[0] as f32 - expected).abs() <= 0.5 + 1e-3, "{mode}: PNG {} vs EXR {v}", pixel[0]);
         }
     }
-    let output = umbra().args(["render", "--mode", "ao", "--ao-radius=-1", "-o"]).arg(&png).output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        !output.status.success() && stderr.contains("radius") && !stderr.contains("panicked"),
-        "{stderr}"
-    );
+    for (bad, word) in [
+        (["--ao-radius=-1"].as_slice(), "radius"),
+        (["--ao-resolution", "half"].as_slice(), "--ao gtao"),
+        (["--ao", "gtao", "--ao-no-blur", "--ao-resolution", "half"].as_slice(), "upsample"),
+    ] {
+        let output = umbra().args(["render", "--mode", "ao"]).args(bad).arg("-o").arg(&png).output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            !output.status.success() && stderr.contains(word) && !stderr.contains("panicked"),
+            "{bad:?}: {stderr}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -616,20 +663,11 @@ fn rtao_with_many_rays_is_not_cut_short() {
     let scene = quads.upload(&gpu);
     let cam = camera(Vec3::new(0.0, 3.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 30.0);
     let size = 16;
-    let settings = |samples, frame| AoSettings {
-        samples,
-        radius: 0.5,
-        blur: false,
-        frame,
-        seed: 99,
-        ..Default::default()
-    };
-    let many =
-        ambient_occlusion(&gpu, &scene, &cam, (size, size), AoMethod::Rtao, &settings(1024, 0)).unwrap();
+    let settings = |samples, frame| AoSettings { frame, seed: 99, ..rtao(samples, 0.5) };
+    let many = ambient_occlusion(&gpu, &scene, &cam, (size, size), &settings(1024, 0)).unwrap();
     let mut mean = vec![0.0f64; (size * size) as usize];
     for frame in 0..16 {
-        let few = ambient_occlusion(&gpu, &scene, &cam, (size, size), AoMethod::Rtao, &settings(64, frame))
-            .unwrap();
+        let few = ambient_occlusion(&gpu, &scene, &cam, (size, size), &settings(64, frame)).unwrap();
         for (m, v) in mean.iter_mut().zip(&few.values) {
             *m += *v as f64 / 16.0;
         }

@@ -63,7 +63,7 @@ fn suite_quick_writes_json_csv_and_charts() {
         for method in ["pathtrace", "hybrid", "hybrid, no SSAO", "hybrid, no IBL", "hybrid, SSAO sweep"] {
             assert!(points.iter().any(|p| p["method"] == method), "{method} missing in {}", scene["scene"]);
         }
-        for method in ["ssao", "rtao"] {
+        for method in ["ssao", "gtao", "gtao half", "rtao"] {
             assert!(
                 ao_points.iter().any(|p| p["method"] == method),
                 "{method} missing in {}",
@@ -121,6 +121,7 @@ fn suite_quick_writes_json_csv_and_charts() {
         ("spheres", "pathtrace"),
         ("cornell-ao", "rtao"),
         ("spheres-ao", "ssao"),
+        ("spheres-ao", "gtao half"),
         ("cornell-flip", "hybrid"),
     ] {
         let svg = std::fs::read_to_string(dir.join(format!("suite-{key}.svg"))).expect("SVG chart");
@@ -457,7 +458,8 @@ fn build_writes_json_and_a_table() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `umbra-bench passes` writes passes.json with every pass, and two runs print as one table.
+/// `umbra-bench passes` writes passes.json with every pass and stage of each AO variant's hybrid
+/// frame (each stage the sum of its passes), and two runs print as one table.
 #[test]
 fn passes_writes_json_and_a_table() {
     let dir = std::env::temp_dir().join(format!("umbra-passes-{}", std::process::id()));
@@ -469,9 +471,27 @@ fn passes_writes_json_and_a_table() {
     let path = dir.join("passes.json");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).expect("passes.json written")).expect("parses");
-    let passes: Vec<&str> =
-        json["passes"].as_array().unwrap().iter().map(|p| p["pass"].as_str().unwrap()).collect();
-    assert_eq!(passes, ["gbuffer", "ssao", "ao_blur", "lighting", "pathtrace 1 spp"]);
+    let frames = json["frames"].as_array().unwrap();
+    let labels: Vec<&str> = frames.iter().map(|f| f["ao"].as_str().unwrap()).collect();
+    assert_eq!(labels, ["ssao", "gtao", "gtao half"]);
+    for (frame, ao) in frames.iter().zip(["ssao", "gtao", "gtao"]) {
+        let passes: Vec<&str> =
+            frame["passes"].as_array().unwrap().iter().map(|p| p["pass"].as_str().unwrap()).collect();
+        assert_eq!(passes, ["gbuffer", ao, "ao_blur", "lighting"]);
+        // One repeat: each stage is the sum of its passes' times, the frame the sum of all.
+        let ms = |pass: &str| {
+            frame["passes"].as_array().unwrap().iter().find(|p| p["pass"] == pass).unwrap()["median_ms"]
+                .as_f64()
+                .unwrap()
+        };
+        let stage = |name: &str| frame["stages"][name]["median_ms"].as_f64().unwrap();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+        assert!(close(stage("gbuffer"), ms("gbuffer")), "{frame}");
+        assert!(close(stage("ao"), ms(ao) + ms("ao_blur")), "{frame}");
+        assert!(close(stage("lighting"), ms("lighting")), "{frame}");
+        assert!(close(stage("frame"), stage("gbuffer") + stage("ao") + stage("lighting")), "{frame}");
+    }
+    assert!(json["pathtrace"]["median_ms"].as_f64().unwrap() > 0.0);
     let output = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
         .args(["passes", "--table"])
         .arg(&path)
@@ -480,7 +500,13 @@ fn passes_writes_json_and_a_table() {
         .output()
         .unwrap();
     let table = String::from_utf8_lossy(&output.stdout);
-    assert!(output.status.success() && table.contains("| pathtrace 1 spp |"), "{table}");
+    assert!(
+        output.status.success()
+            && table.contains("| pathtrace 1 spp |")
+            && table.contains("| **frame** |")
+            && table.contains(": gtao half |"),
+        "{table}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -667,6 +667,7 @@ fn interior(a: &umbra::passes::gbuffer::GBufferData, b: &umbra::passes::gbuffer:
 /// noise: the tolerances are those of the 327,680-triangle tessellation and of half floats).
 #[test]
 fn hybrid_and_rtao_see_the_implicit_sphere() {
+    use umbra::passes::ao::AoSettings;
     use umbra::render::{ambient_occlusion, hybrid, AoMethod, HybridSettings};
     let gpu = Gpu::new();
     let size = (48, 48);
@@ -678,8 +679,8 @@ fn hybrid_and_rtao_see_the_implicit_sphere() {
         let camera = scene.camera(None).unwrap();
         images
             .push(hybrid(&gpu, &gpu_scene, &camera, &HybridSettings { size, ..Default::default() }).unwrap());
-        let settings = umbra::passes::ao::AoSettings { samples: 64, ..Default::default() };
-        aos.push(ambient_occlusion(&gpu, &gpu_scene, &camera, size, AoMethod::Rtao, &settings).unwrap());
+        let settings = AoSettings { samples: 64, ..AoSettings::of(AoMethod::Rtao) };
+        aos.push(ambient_occlusion(&gpu, &gpu_scene, &camera, size, &settings).unwrap());
     }
     let (a, b) = (&images[0], &images[1]);
     let keep = interior(&a.gbuffer, &b.gbuffer);

@@ -515,7 +515,7 @@ const _: () = assert!(size_of::<PathParams>() == 128);
 const _: () = assert!(size_of::<DeferredParams>() == 128);
 const _: () = assert!(size_of::<GBufferParams>() == 80);
 const _: () = assert!(size_of::<AoParams>() == 112);
-const _: () = assert!(size_of::<AoBlurParams>() == 80);
+const _: () = assert!(size_of::<AoBlurParams>() == 96);
 const _: () = assert!(size_of::<TemporalParams>() == 128);
 const _: () = assert!(size_of::<IblParams>() == 48);
 #[cfg(feature = "testing")]

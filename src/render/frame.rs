@@ -4,6 +4,21 @@
 
 use super::*;
 
+/// The stage of the hybrid frame a pass of this file belongs to, by the name its `add_*` gives
+/// it: `"gbuffer"` (primary visibility and the surfaces' attributes), `"ao"` (ambient occlusion
+/// with its blur or upsample), `"lighting"` (ReSTIR's reuse and the lighting itself) or
+/// `"tonemap"`; `None` for a pass of another's (a host's). Benchmarks sum a stage's passes
+/// whatever they are called, so a pass added here is given its stage here.
+pub fn stage_of(pass: &str) -> Option<&'static str> {
+    match pass {
+        "gbuffer" => Some("gbuffer"),
+        "ssao" | "gtao" | "rtao" | "ao_blur" => Some("ao"),
+        "restir" | "lighting" => Some("lighting"),
+        "tonemap" => Some("tonemap"),
+        _ => None,
+    }
+}
+
 impl Passes {
     // Each `add_*` declares its pass's images and records through its `record_*` twin
     // (record.rs), which checks the settings and specialises the kernel.
@@ -22,24 +37,11 @@ impl Passes {
             .record(move |rec, views| self.record_gbuffer(rec, scene, camera, &gbuffer.views(views)));
     }
 
-    /// Adds SSAO of `gbuffer` (seen from `camera`) into `output` (`R32_SFLOAT`, unblurred).
-    pub fn add_ssao<'g>(
-        &'g self,
-        graph: &mut Graph<'g>,
-        camera: &'g Camera,
-        gbuffer: GBufferImages,
-        output: GraphImage,
-        settings: &AoSettings,
-    ) {
-        let settings = *settings;
-        graph.add_pass("ssao").read_all(gbuffer.images).write(output).record(move |rec, views| {
-            self.record_ssao_unblurred(rec, camera, &gbuffer.views(views), views[output], &settings)
-        });
-    }
-
-    /// Adds ray-traced AO of `gbuffer` (`settings.samples` rays of length `settings.radius` per
-    /// pixel through `scene`) into `output` (`R32_SFLOAT`).
-    pub fn add_rtao<'g>(
+    /// Adds the ambient occlusion of `gbuffer` (seen from `camera`) by `settings.method` into
+    /// `output` (`R32_SFLOAT`, unblurred; half-resolution AO fills
+    /// [`crate::passes::ao::AoResolution::ao_size`] of it). `scene` is read by RTAO alone. The
+    /// pass is named after the method.
+    pub fn add_ao<'g>(
         &'g self,
         graph: &mut Graph<'g>,
         scene: &'g GpuScene,
@@ -49,12 +51,15 @@ impl Passes {
         settings: &AoSettings,
     ) {
         let settings = *settings;
-        graph.add_pass("rtao").read_all(gbuffer.images).write(output).record(move |rec, views| {
-            self.record_rtao(rec, scene, camera, &gbuffer.views(views), views[output], &settings)
-        });
+        graph.add_pass(settings.method.name()).read_all(gbuffer.images).write(output).record(
+            move |rec, views| {
+                self.record_ao_unblurred(rec, scene, camera, &gbuffer.views(views), views[output], &settings)
+            },
+        );
     }
 
-    /// Adds the depth-aware blur of `ao` into `blurred` (both `R32_SFLOAT`).
+    /// Adds the depth-aware blur of `ao` (computed with `settings`; at half resolution the blur
+    /// is its upsample too) into `blurred` (both `R32_SFLOAT`).
     pub fn add_ao_blur<'g>(
         &'g self,
         graph: &mut Graph<'g>,
@@ -62,10 +67,12 @@ impl Passes {
         gbuffer: GBufferImages,
         ao: GraphImage,
         blurred: GraphImage,
+        settings: &AoSettings,
     ) {
+        let settings = *settings;
         graph.add_pass("ao_blur").read_all(gbuffer.images).read(ao).write(blurred).record(
             move |rec, views| {
-                self.record_ao_blur(rec, camera, &gbuffer.views(views), views[ao], views[blurred])
+                self.record_ao_blur(rec, camera, &gbuffer.views(views), views[ao], views[blurred], &settings)
             },
         );
     }
@@ -184,15 +191,19 @@ impl Passes {
             Some(ao) => {
                 ao.validate()?;
                 let (raw_ao, blurred) = match targets.ao {
-                    Some((a, b)) => (graph.import("ssao", a), graph.import("ssao blurred", b)),
+                    Some((a, b)) => (graph.import("ao", a), graph.import("ao blurred", b)),
                     None => {
-                        let desc = ImageDesc { size, format: raw::Format::R32_SFLOAT };
-                        (graph.transient("ssao", desc), graph.transient("ssao blurred", desc))
+                        let format = raw::Format::R32_SFLOAT;
+                        let unblurred = ImageDesc { size: ao.resolution.ao_size(size), format };
+                        (
+                            graph.transient("ao", unblurred),
+                            graph.transient("ao blurred", ImageDesc { size, format }),
+                        )
                     }
                 };
-                self.add_ssao(graph, camera, gbuffer, raw_ao, ao);
+                self.add_ao(graph, scene, camera, gbuffer, raw_ao, ao);
                 if ao.blur {
-                    self.add_ao_blur(graph, camera, gbuffer, raw_ao, blurred);
+                    self.add_ao_blur(graph, camera, gbuffer, raw_ao, blurred, ao);
                     Some(blurred)
                 } else {
                     Some(raw_ao)

@@ -21,7 +21,7 @@ use crate::gpu::kernels::deferred;
 use crate::gpu::layout::{GpuCamera, PathStats};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::SceneFeatures;
-use crate::passes::ao::{AoBlurPass, AoSettings, RtaoPass, SsaoPass};
+use crate::passes::ao::{ao_params, AoBlurPass, AoSettings, GtaoPass, RtaoPass, SsaoPass};
 use crate::passes::deferred::{DeferredPass, LightingInputs, LightingSettings, SizedLights};
 pub use crate::passes::denoise::DenoiseSettings;
 use crate::passes::denoise::{DenoiseImages, DenoiseInputs, DenoisePass};
@@ -50,6 +50,7 @@ mod oneshot;
 mod pipelines;
 mod record;
 
+pub use frame::stage_of;
 pub use oneshot::{ambient_occlusion, denoise, denoise_temporal, hybrid, path_trace};
 pub use pipelines::Passes;
 
@@ -270,14 +271,7 @@ pub struct HybridImage {
     pub pass_ms: Vec<(String, f64)>,
 }
 
-/// Which ambient occlusion estimator [`Passes::ambient_occlusion`] runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AoMethod {
-    /// Screen-space AO from the G-buffer ([`crate::passes::ao::SsaoPass`]).
-    Ssao,
-    /// Ray-traced AO through the BVH ([`crate::passes::ao::RtaoPass`]), the ground truth.
-    Rtao,
-}
+pub use crate::passes::ao::AoMethod;
 
 /// An ambient occlusion image (1 = unoccluded), its G-buffer and the GPU time of each pass.
 #[derive(Debug, Clone)]
@@ -286,11 +280,13 @@ pub struct AoImage {
     pub size: (u32, u32),
     /// AO per pixel, row-major from the top left: blurred when the settings asked for it.
     pub values: Vec<f32>,
-    /// The AO before the blur (equal to `values` when there was none).
+    /// The size of `unblurred`: `size`, or about half of it for half-resolution AO.
+    pub ao_size: (u32, u32),
+    /// The AO before the blur (equal to `values` when there was none), `ao_size` texels.
     pub unblurred: Vec<f32>,
     /// The G-buffer the AO was computed from.
     pub gbuffer: GBufferData,
-    /// GPU milliseconds per pass, in order (`gbuffer`, `ssao` or `rtao`, and `ao_blur`).
+    /// GPU milliseconds per pass, in order (`gbuffer`, `ssao`, `gtao` or `rtao`, and `ao_blur`).
     pub pass_ms: Vec<(String, f64)>,
 }
 

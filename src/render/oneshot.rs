@@ -386,33 +386,30 @@ impl Passes {
     }
 
     /// Renders the G-buffer of `scene` seen by `camera` at `size` and its ambient occlusion by
-    /// `method` (see [`crate::passes::ao`] for the definition both estimate), blurred when
-    /// `settings.blur`.
+    /// `settings.method` (see [`crate::passes::ao`] for the definition they all estimate),
+    /// blurred (and at half resolution upsampled) when `settings.blur`.
     pub fn ambient_occlusion(
         &self,
         scene: &GpuScene,
         camera: &Camera,
         size: (u32, u32),
-        method: AoMethod,
         settings: &AoSettings,
     ) -> Result<AoImage> {
         let ctx = &self.ctx;
         settings.validate()?;
         let gbuffer = GBuffer::new(ctx, size)?;
-        let make = |name| Image::storage_2d(ctx, name, size.0, size.1, raw::Format::R32_SFLOAT);
-        let raw_ao = make("ambient occlusion")?;
-        let blurred = make("ambient occlusion blurred")?;
+        let ao_size = settings.resolution.ao_size(size);
+        let make = |name, (w, h)| Image::storage_2d(ctx, name, w, h, raw::Format::R32_SFLOAT);
+        let raw_ao = make("ambient occlusion", ao_size)?;
+        let blurred = make("ambient occlusion blurred", size)?;
         let mut graph = Graph::new();
         let views = GBufferImages::import(&mut graph, &gbuffer.views());
         let unblurred = graph.import("ambient occlusion", raw_ao.view);
         self.add_gbuffer(&mut graph, scene, camera, views);
-        match method {
-            AoMethod::Ssao => self.add_ssao(&mut graph, camera, views, unblurred, settings),
-            AoMethod::Rtao => self.add_rtao(&mut graph, scene, camera, views, unblurred, settings),
-        }
+        self.add_ao(&mut graph, scene, camera, views, unblurred, settings);
         if settings.blur {
             let output = graph.import("ambient occlusion blurred", blurred.view);
-            self.add_ao_blur(&mut graph, camera, views, unblurred, output);
+            self.add_ao_blur(&mut graph, camera, views, unblurred, output, settings);
         }
         let mut timer = GpuTimer::new(ctx, 3)?;
         ctx.record(|rec| {
@@ -425,7 +422,7 @@ impl Passes {
         let pass_ms = timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
         let unblurred: Vec<f32> = raw_ao.read(ctx)?;
         let values = if settings.blur { blurred.read(ctx)? } else { unblurred.clone() };
-        Ok(AoImage { size, values, unblurred, gbuffer: gbuffer.read(ctx)?, pass_ms })
+        Ok(AoImage { size, ao_size, values, unblurred, gbuffer: gbuffer.read(ctx)?, pass_ms })
     }
 }
 
@@ -458,10 +455,9 @@ pub fn ambient_occlusion(
     scene: &GpuScene,
     camera: &Camera,
     size: (u32, u32),
-    method: AoMethod,
     settings: &AoSettings,
 ) -> Result<AoImage> {
-    Passes::new(ctx, scene).ambient_occlusion(scene, camera, size, method, settings)
+    Passes::new(ctx, scene).ambient_occlusion(scene, camera, size, settings)
 }
 
 /// Denoises a sequence of frames with temporal accumulation ([`Passes::denoise_temporal`] with

@@ -29,6 +29,7 @@ pub struct Passes {
     pub(super) probe: OnceLock<ProbePass>,
     pub(super) lightmap: OnceLock<LightmapPass>,
     pub(super) ssao: OnceLock<SsaoPass>,
+    pub(super) gtao: OnceLock<GtaoPass>,
     pub(super) ao_blur: OnceLock<AoBlurPass>,
     pub(super) rtao: OnceLock<RtaoPass>,
     pub(super) tonemap: OnceLock<TonemapPass>,
@@ -63,6 +64,7 @@ impl Passes {
             probe: OnceLock::new(),
             lightmap: OnceLock::new(),
             ssao: OnceLock::new(),
+            gtao: OnceLock::new(),
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
             tonemap: OnceLock::new(),
@@ -147,6 +149,10 @@ impl Passes {
         built(&self.ssao, || SsaoPass::new(&self.ctx))
     }
 
+    pub(super) fn gtao_pass(&self) -> Result<&GtaoPass> {
+        built(&self.gtao, || GtaoPass::new(&self.ctx))
+    }
+
     pub(super) fn blur_pass(&self) -> Result<&AoBlurPass> {
         built(&self.ao_blur, || AoBlurPass::new(&self.ctx))
     }
@@ -203,6 +209,7 @@ impl Passes {
                 })
                 .and_then(|_| self.rtao_stage())
                 .and_then(|_| self.ssao_pass())
+                .and_then(|_| self.gtao_pass())
                 .and_then(|_| self.blur_pass())
                 .and_then(|_| self.tonemap_pass())
                 .and_then(|_| self.resolve_pass())

@@ -17,39 +17,52 @@ impl Passes {
         self.gbuffer_pass()?.record(rec, scene, target, &params)
     }
 
-    /// Records SSAO of `gbuffer` into `raw_ao` and, when `settings.blur`, its depth-aware blur
-    /// into `blurred` (`R32_SFLOAT`, the G-buffer's size). Returns the view holding the result.
-    pub fn record_ssao(
+    /// Records the ambient occlusion of `gbuffer` by `settings.method` into `raw_ao` and, when
+    /// `settings.blur`, its depth-aware blur (or half-resolution AO's upsample) into `blurred`
+    /// (`R32_SFLOAT`, the G-buffer's size; `scene` is read by RTAO alone). Returns the view
+    /// holding the result.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_ao(
         &self,
         rec: &mut Recorder<'_>,
+        scene: &GpuScene,
         camera: &Camera,
         gbuffer: &GBufferViews,
         raw_ao: raw::ImageView,
         blurred: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<raw::ImageView> {
-        self.record_ssao_unblurred(rec, camera, gbuffer, raw_ao, settings)?;
+        self.record_ao_unblurred(rec, scene, camera, gbuffer, raw_ao, settings)?;
         if !settings.blur {
             return Ok(raw_ao);
         }
-        self.record_ao_blur(rec, camera, gbuffer, raw_ao, blurred)?;
+        self.record_ao_blur(rec, camera, gbuffer, raw_ao, blurred, settings)?;
         Ok(blurred)
     }
 
-    /// SSAO of `gbuffer` into `output`, without its blur.
-    pub(super) fn record_ssao_unblurred(
+    /// The ambient occlusion of `gbuffer` by `settings.method` into `output`, without its blur.
+    pub(super) fn record_ao_unblurred(
         &self,
         rec: &mut Recorder<'_>,
+        scene: &GpuScene,
         camera: &Camera,
         gbuffer: &GBufferViews,
         output: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<()> {
         settings.validate()?;
-        self.ssao_pass()?.record(rec, gbuffer, output, &SsaoPass::params(camera, gbuffer.size, settings))
+        let params = ao_params(camera, gbuffer.size, settings);
+        match settings.method {
+            AoMethod::Ssao => self.ssao_pass()?.record(rec, gbuffer, output, &params),
+            AoMethod::Gtao => self.gtao_pass()?.record(rec, gbuffer, output, &params),
+            AoMethod::Rtao => {
+                self.check(scene)?;
+                self.rtao_pass(scene)?.record(rec, scene, gbuffer, output, &params)
+            }
+        }
     }
 
-    /// The depth-aware blur of `ao` into `blurred`.
+    /// The depth-aware blur of `ao` (computed with `settings`) into `blurred`.
     pub(super) fn record_ao_blur(
         &self,
         rec: &mut Recorder<'_>,
@@ -57,12 +70,14 @@ impl Passes {
         gbuffer: &GBufferViews,
         ao: raw::ImageView,
         blurred: raw::ImageView,
+        settings: &AoSettings,
     ) -> Result<()> {
-        self.blur_pass()?.record(rec, gbuffer, ao, blurred, &AoBlurPass::params(camera, gbuffer.size))
+        let params = AoBlurPass::params(camera, gbuffer.size, settings.resolution);
+        self.blur_pass()?.record(rec, gbuffer, ao, blurred, &params)
     }
 
     /// Records ray-traced AO of `gbuffer` (`settings.samples` rays of length `settings.radius`
-    /// per pixel) into `output` (`R32_SFLOAT`, the G-buffer's size).
+    /// per pixel) into `output` (`R32_SFLOAT`, the G-buffer's size), whatever `settings.method`.
     pub fn record_rtao(
         &self,
         rec: &mut Recorder<'_>,
@@ -72,10 +87,8 @@ impl Passes {
         output: raw::ImageView,
         settings: &AoSettings,
     ) -> Result<()> {
-        self.check(scene)?;
-        settings.validate()?;
-        let params = RtaoPass::params(camera, gbuffer.size, settings);
-        self.rtao_pass(scene)?.record(rec, scene, gbuffer, output, &params)
+        let settings = AoSettings { method: AoMethod::Rtao, ..*settings };
+        self.record_ao_unblurred(rec, scene, camera, gbuffer, output, &settings)
     }
 
     /// Records deferred lighting of `gbuffer` into `output` (`R32G32B32A32_SFLOAT`), with the

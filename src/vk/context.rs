@@ -81,6 +81,10 @@ pub struct DeviceInfo {
     pub max_push_descriptors: u32,
     /// Vulkan API version of the device.
     pub api_version: u32,
+    /// Whether kernels could use 64-bit integer atomics on storage buffers
+    /// (`shaderBufferInt64Atomics`) and on storage images (`VK_EXT_shader_image_atomic_int64`),
+    /// as a visibility buffer's one-pass depth-and-id `atomicMin` would (reported, not enabled).
+    pub int64_atomics: (bool, bool),
 }
 
 /// The shared core behind a [`Context`], kept alive by every resource made from it.
@@ -692,6 +696,21 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) ->
         instance.get_physical_device_queue_family_properties(pd)
     };
     let p = props2.properties;
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut image64 = vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12).push_next(&mut image64);
+    // SAFETY: valid physical device; an extension's structure the driver does not know stays
+    // zeroed (false).
+    let exts = unsafe {
+        instance.get_physical_device_features2(pd, &mut f2);
+        instance.enumerate_device_extension_properties(pd).unwrap_or_default()
+    };
+    let image64_ext =
+        exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ash::ext::shader_image_atomic_int64::NAME));
+    let int64_atomics = (
+        f12.shader_buffer_int64_atomics == vk::TRUE,
+        image64_ext && image64.shader_image_int64_atomics == vk::TRUE,
+    );
     DeviceInfo {
         name: device_name(&p),
         device_type: p.device_type,
@@ -704,6 +723,7 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) ->
         subgroup_size: subgroup.subgroup_size,
         max_push_descriptors: push.max_push_descriptors,
         api_version: p.api_version,
+        int64_atomics,
     }
 }
 

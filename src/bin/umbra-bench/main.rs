@@ -136,8 +136,9 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
-    /// GPU time per pass (G-buffer, deferred lighting, one path-traced sample per pixel) on one
-    /// scene, median over repeats after a warm-up.
+    /// GPU time per pass and per stage of the hybrid frame (G-buffer, ambient occlusion, deferred
+    /// lighting) with each AO variant, and of one path-traced sample per pixel, on one scene,
+    /// median over repeats after a warm-up.
     Passes {
         /// A glTF scene (its first camera, or one framing it); the Cornell box when absent.
         scene: Option<PathBuf>,
@@ -153,10 +154,14 @@ enum Command {
         /// Where to write passes.json.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
-        /// Print the Markdown table of earlier runs' passes.json (repeat it: a column per file,
-        /// all measured with the same settings) and exit (nothing is rendered).
+        /// Print the Markdown table of earlier runs' passes.json (repeat it: a column per file
+        /// and frame variant, all measured with the same settings) and exit (nothing is
+        /// rendered).
         #[arg(long)]
         table: Vec<PathBuf>,
+        /// The hybrid frame's ambient occlusion variants timed, in turn within each repeat.
+        #[arg(long, value_enum, value_delimiter = ',', default_value = "ssao,gtao,gtao-half")]
+        ao: Vec<passes::AoVariant>,
     },
     /// Shadow maps against shadow rays on one scene: the maps' GPU time by step, the lighting
     /// pass with each filter, and each lit image's error against the ray-traced one (JSON and a
@@ -655,8 +660,8 @@ fn run(cli: Cli) -> Result<()> {
             let docs = table.iter().map(|path| read_json(path)).collect::<Result<Vec<_>>>()?;
             print!("{}", passes::table(&docs)?);
         }
-        Command::Passes { scene, size, repeats, shadow_rays, out, table: _ } => {
-            passes::run_passes(scene, size, repeats, shadow_rays, out)?
+        Command::Passes { scene, size, repeats, shadow_rays, out, table: _, ao } => {
+            passes::run_passes(scene, size, repeats, shadow_rays, out, &ao)?
         }
         Command::Implicit { table: Some(path), .. } => print!("{}", implicit::table(&read_json(&path)?)),
         Command::Implicit { size, spp, repeats, rays, subdivisions, out, table: None } => {
@@ -754,6 +759,7 @@ fn run(cli: Cli) -> Result<()> {
                     shadow_map_sizes: vec![],
                     probes_per_side: vec![],
                     ssao_samples: vec![],
+                    gtao_slices: vec![],
                     rtao_rays: vec![],
                     ao_reference_rays: 0,
                     ao_radius: 0.5,
@@ -816,6 +822,7 @@ fn run(cli: Cli) -> Result<()> {
                     shadow_map_sizes: vec![],
                     probes_per_side: per_side,
                     ssao_samples: vec![16],
+                    gtao_slices: vec![],
                     rtao_rays: vec![],
                     ao_reference_rays: 0,
                     ao_radius: 0.5,
@@ -936,6 +943,7 @@ fn run(cli: Cli) -> Result<()> {
                     shadow_map_sizes: vec![128, 512],
                     probes_per_side: vec![4, 8],
                     ssao_samples: vec![4, 16],
+                    gtao_slices: vec![1, 3],
                     rtao_rays: vec![1, 4, 16],
                     ao_reference_rays: 256,
                     ao_radius,
@@ -952,6 +960,7 @@ fn run(cli: Cli) -> Result<()> {
                     shadow_map_sizes: vec![128, 256, 512, 1024, 2048],
                     probes_per_side: vec![4, 8, 16],
                     ssao_samples: vec![4, 8, 16, 32],
+                    gtao_slices: vec![1, 2, 3, 4],
                     rtao_rays: vec![1, 2, 4, 8, 16, 32, 64],
                     ao_reference_rays: 1024,
                     ao_radius,

@@ -8,7 +8,8 @@
 //! runs the same series on its scenes; `probes` runs it alone, with Sponza and a sun, and on the
 //! Cornell box also lightmaps (its triangles unwrapped into charts of their own, baked at a sweep
 //! of map sizes, the bounces beyond the first from the 1/8 probe volume, which lights the
-//! unmapped rest).
+//! unmapped rest). Each baked point is rendered again with the command line's default SSAO on
+//! top, its error and bias recorded: the AO must leave the baked light alone.
 
 use super::num;
 use super::suite::{self, Point, SuiteSettings};
@@ -42,6 +43,41 @@ pub struct ProbePoint {
     pub active: u32,
     /// GPU milliseconds of the bake.
     pub bake_ms: f64,
+    /// What the bake's light does with and without the command line's default SSAO on top.
+    pub ao: BakedWithAo,
+}
+
+/// A baked point's bias without ambient occlusion, and its relative MSE and bias with the
+/// default SSAO on top (which must leave the baked light alone: it holds its occlusion).
+#[derive(Clone, Copy)]
+pub struct BakedWithAo {
+    /// The image's mean over the reference's, less 1, without AO.
+    pub bias: f64,
+    /// Relative MSE with SSAO.
+    pub ssao_rel_mse: f64,
+    /// Bias with SSAO.
+    pub ssao_bias: f64,
+}
+
+/// The mean of `image` over the mean of `reference` (all channels), less 1.
+fn bias(image: &[[f32; 4]], reference: &[[f32; 4]]) -> f64 {
+    let sum = |c: &[[f32; 4]]| c.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+    sum(image) / sum(reference) - 1.0
+}
+
+/// [`BakedWithAo`] of a baked point whose image without AO is `bare`, rendering it again with
+/// the default SSAO by `render`.
+fn with_ao(
+    bare: &[[f32; 4]],
+    reference: &[[f32; 4]],
+    render: impl FnOnce() -> umbra::error::Result<umbra::render::HybridImage>,
+) -> Result<BakedWithAo> {
+    let image = render()?;
+    Ok(BakedWithAo {
+        bias: bias(bare, reference),
+        ssao_rel_mse: suite::errors(&image.color, reference).1,
+        ssao_bias: bias(&image.color, reference),
+    })
 }
 
 /// The hybrid's settings of the probe series (without SSAO) and of the points without probes it
@@ -66,6 +102,7 @@ pub fn series(
     per_side: &[u32],
 ) -> Result<Vec<ProbePoint>> {
     let settings = hybrid_settings(s, false);
+    let with_ssao = hybrid_settings(s, true);
     let [lo, hi] = renderer.scene().bounds;
     let longest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
     let mut out = Vec::new();
@@ -85,6 +122,9 @@ pub fn series(
         )?;
         let (rmse, rel_mse) = suite::errors(&image.color, reference);
         let flip = Some(suite::flip_mean(&image.color, reference, s.size));
+        let ao = with_ao(&image.color, reference, || {
+            renderer.passes().hybrid_with_probes(renderer.scene(), camera, &with_ssao, Some(&volume))
+        })?;
         let active = volume.read_active(ctx)?.iter().filter(|a| **a).count() as u32;
         out.push(ProbePoint {
             point: Point {
@@ -100,6 +140,7 @@ pub fn series(
             probes: volume.grid.count(),
             active,
             bake_ms,
+            ao,
         });
     }
     Ok(out)
@@ -131,6 +172,8 @@ pub struct LightmapPoint {
     pub bake_ms: f64,
     /// The frame.
     pub point: Point,
+    /// With the default SSAO on top.
+    pub ao: BakedWithAo,
 }
 
 /// Lightmaps on `scene` unwrapped (a chart per triangle), at each map size of `sizes`, with a
@@ -145,6 +188,7 @@ pub fn lightmap_series(
 ) -> Result<Vec<LightmapPoint>> {
     use umbra::passes::lightmap::{unwrap_triangles, GpuLightmaps, LightmapLayout, LightmapSettings};
     let settings = hybrid_settings(s, false);
+    let with_ssao = hybrid_settings(s, true);
     let mut out = Vec::new();
     for &size in sizes {
         let mut unwrapped = scene.clone();
@@ -185,6 +229,10 @@ pub fn lightmap_series(
         )?;
         let (rmse, rel_mse) = suite::errors(&image.color, reference);
         let flip = Some(suite::flip_mean(&image.color, reference, s.size));
+        let ao = with_ao(&image.color, reference, || {
+            let passes = renderer.passes();
+            passes.hybrid_with(renderer.scene(), camera, &with_ssao, Some(&volume), Some(&lightmaps))
+        })?;
         let method = "hybrid + lightmaps".to_string();
         out.push(LightmapPoint {
             size,
@@ -200,6 +248,7 @@ pub fn lightmap_series(
                 flip,
                 shadow_rel_mse: None,
             },
+            ao,
         });
     }
     Ok(out)
@@ -270,6 +319,12 @@ pub fn run_scene(
     })
 }
 
+/// A baked point's JSON gains its bias and its error and bias with SSAO.
+fn baked_ao(v: &mut Value, ao: &BakedWithAo) {
+    v["bias"] = json!(ao.bias);
+    v["with_ssao"] = json!({"rel_mse": ao.ssao_rel_mse, "bias": ao.ssao_bias});
+}
+
 /// The JSON document of a run.
 pub fn to_json(device: &str, s: &SuiteSettings, scenes: &[SceneProbes]) -> Value {
     let point = |p: &Point| json!({ "gpu_ms": p.ms, "rel_mse": p.rel_mse, "flip": p.flip, "rmse": p.rmse });
@@ -290,6 +345,7 @@ pub fn to_json(device: &str, s: &SuiteSettings, scenes: &[SceneProbes]) -> Value
                 v["probes"] = json!(p.probes);
                 v["active"] = json!(p.active);
                 v["bake_ms"] = json!(p.bake_ms);
+                baked_ao(&mut v, &p.ao);
                 v
             }).collect::<Vec<_>>(),
             "lightmaps": r.lightmaps.iter().map(|p| {
@@ -297,6 +353,7 @@ pub fn to_json(device: &str, s: &SuiteSettings, scenes: &[SceneProbes]) -> Value
                 v["size"] = json!(p.size);
                 v["maps"] = json!(p.maps);
                 v["bake_ms"] = json!(p.bake_ms);
+                baked_ao(&mut v, &p.ao);
                 v
             }).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
@@ -307,9 +364,11 @@ pub fn to_json(device: &str, s: &SuiteSettings, scenes: &[SceneProbes]) -> Value
 pub fn table(doc: &Value) -> String {
     let mut out = format!(
         "{}×{}, {}-spp references, {}; hybrid = 4 shadow rays, IBL (SSAO 16 where said; the probes' \
-         irradiance replaces the IBL's diffuse part); ratios against the hybrid with SSAO:\n\n\
-         | scene | probes (longest side / n) | active | bake | frame | ÷ hybrid frame | rel. MSE | ÷ hybrid rel. MSE | FLIP |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+         irradiance replaces the IBL's diffuse part); ratios against the hybrid with SSAO; bias: the \
+         image's mean over the reference's, less 1; the baked rows without AO, and (last two \
+         columns) with the command line's default SSAO on top:\n\n\
+         | scene | probes (longest side / n) | active | bake | frame | ÷ hybrid frame | rel. MSE | ÷ hybrid rel. MSE | FLIP | bias | with SSAO: rel. MSE | with SSAO: bias |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         doc["size"][0],
         doc["size"][1],
         doc["reference_spp"],
@@ -320,12 +379,12 @@ pub fn table(doc: &Value) -> String {
         let plain = &scene["hybrid"];
         let (plain_ms, plain_rel) = (num(&plain["gpu_ms"]), num(&plain["rel_mse"]));
         out += &format!(
-            "| {name} | none (SSAO) | — | — | {plain_ms:.1} ms | 1 | {plain_rel:.4} | 1 | {:.3} |\n",
+            "| {name} | none (SSAO) | — | — | {plain_ms:.1} ms | 1 | {plain_rel:.4} | 1 | {:.3} | — | — | — |\n",
             num(&plain["flip"])
         );
         let bare = &scene["hybrid_no_ssao"];
         out += &format!(
-            "| {name} | none (no SSAO) | — | — | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
+            "| {name} | none (no SSAO) | — | — | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} | — | — | — |\n",
             num(&bare["gpu_ms"]),
             num(&bare["gpu_ms"]) / plain_ms,
             num(&bare["rel_mse"]),
@@ -334,14 +393,21 @@ pub fn table(doc: &Value) -> String {
         );
         // A baked row: its label, active probes, bake and frame against the hybrid with SSAO.
         let row = |label: String, active: String, p: &Value| {
+            // Bias and the SSAO columns, where the run recorded them.
+            let percent =
+                |v: &Value| if v.is_f64() { format!("{:+.1} %", 100.0 * num(v)) } else { "—".into() };
+            let ssao_rel = &p["with_ssao"]["rel_mse"];
             format!(
-                "| {name} | {label} | {active} | {:.0} ms | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} |\n",
+                "| {name} | {label} | {active} | {:.0} ms | {:.1} ms | {:.2} | {:.4} | {:.2} | {:.3} | {} | {} | {} |\n",
                 num(&p["bake_ms"]),
                 num(&p["gpu_ms"]),
                 num(&p["gpu_ms"]) / plain_ms,
                 num(&p["rel_mse"]),
                 num(&p["rel_mse"]) / plain_rel,
                 num(&p["flip"]),
+                percent(&p["bias"]),
+                if ssao_rel.is_f64() { format!("{:.4}", num(ssao_rel)) } else { "—".into() },
+                percent(&p["with_ssao"]["bias"]),
             )
         };
         for p in scene["probes"].as_array().cloned().unwrap_or_default() {

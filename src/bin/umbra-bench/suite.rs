@@ -41,7 +41,7 @@ use glam::Vec3;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use umbra::embed::Renderer;
-use umbra::passes::ao::AoSettings;
+use umbra::passes::ao::{AoResolution, AoSettings};
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::pathtrace::PathTarget;
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
@@ -67,6 +67,8 @@ pub struct SuiteSettings {
     pub ssao_samples: Vec<u32>,
     /// Probe spacings of the hybrid's probe series, as the scene's longest side / n.
     pub probes_per_side: Vec<u32>,
+    /// GTAO slice counts of the AO chart (3 steps a side), at full and at half resolution.
+    pub gtao_slices: Vec<u32>,
     /// RTAO ray counts of the AO chart.
     pub rtao_rays: Vec<u32>,
     /// Rays per pixel of the RTAO reference.
@@ -495,21 +497,22 @@ pub fn timed<T>(
     Ok((median(&mut times), last))
 }
 
-/// SSAO at each kernel size and RTAO at each ray count against an RTAO reference; the error is
-/// the MSE over pixels with a surface, the time the AO passes' (G-buffer excluded).
+/// SSAO at each kernel size, GTAO at each slice count (full and half resolution) and RTAO at each
+/// ray count against an RTAO reference; the error is the MSE over pixels with a surface, the time
+/// the AO passes' (G-buffer excluded).
 fn ambient_occlusion_sweep(
     renderer: &Renderer,
     camera: &Camera,
     s: &SuiteSettings,
 ) -> Result<(Vec<Point>, f64)> {
     let (passes, scene) = (renderer.passes(), renderer.scene());
-    let settings = |samples, seed| AoSettings { samples, radius: s.ao_radius, seed, ..AoSettings::default() };
+    let settings =
+        |method, samples, seed| AoSettings { samples, radius: s.ao_radius, seed, ..AoSettings::of(method) };
     let reference = passes.ambient_occlusion(
         scene,
         camera,
         s.size,
-        AoMethod::Rtao,
-        &settings(s.ao_reference_rays, 99),
+        &AoSettings { blur: false, ..settings(AoMethod::Rtao, s.ao_reference_rays, 99) },
     )?;
     let surface: Vec<bool> = reference.gbuffer.depth.iter().map(|&d| d > 0.0).collect();
     let count = surface.iter().filter(|&&x| x).count().max(1) as f64;
@@ -521,20 +524,23 @@ fn ambient_occlusion_sweep(
         .map(|(&a, _)| (a as f64 * (1.0 - a as f64)) / s.ao_reference_rays as f64)
         .sum::<f64>()
         / count;
-    let mut runs: Vec<(&str, &'static str, u32, AoMethod)> = Vec::new();
+    let mut runs: Vec<(&str, &'static str, u32, AoSettings)> = Vec::new();
     for &n in &s.ssao_samples {
-        runs.push(("ssao", "ssao_samples", n, AoMethod::Ssao));
+        runs.push(("ssao", "ssao_samples", n, settings(AoMethod::Ssao, n, 1)));
+    }
+    for &n in &s.gtao_slices {
+        let gtao = settings(AoMethod::Gtao, n, 1);
+        runs.push(("gtao", "slices", n, gtao));
+        runs.push(("gtao half", "slices", n, AoSettings { resolution: AoResolution::Half, ..gtao }));
     }
     for &n in &s.rtao_rays {
-        runs.push(("rtao", "rays", n, AoMethod::Rtao));
+        runs.push(("rtao", "rays", n, AoSettings { blur: false, ..settings(AoMethod::Rtao, n, 1) }));
     }
     let mut points = Vec::new();
-    for (method, unit, value, ao_method) in runs {
-        let mut run_settings = settings(value, 1);
-        run_settings.blur = ao_method == AoMethod::Ssao;
+    for (method, unit, value, run_settings) in runs {
         let (ms, image) = timed(
             s.repeats,
-            || passes.ambient_occlusion(scene, camera, s.size, ao_method, &run_settings),
+            || passes.ambient_occlusion(scene, camera, s.size, &run_settings),
             |image| image.pass_ms.iter().filter(|(name, _)| name != "gbuffer").map(|(_, ms)| ms).sum(),
         )?;
         let mse = image
@@ -897,7 +903,7 @@ pub fn table(doc: &serde_json::Value) -> String {
         out += &row;
     }
     out += "\nAmbient occlusion, MSE against the RTAO reference (surface pixels):\n\n\
-            | scene | SSAO 4 / 16 / 32 directions (+ blur) | RTAO 1 / 4 / 16 / 64 rays |\n|---|---|---|\n";
+            | scene | SSAO 4 / 16 / 32 directions (+ blur) | GTAO 1 / 2 / 3 slices (+ blur) | GTAO half resolution 1 / 2 / 3 slices (+ upsample) | RTAO 1 / 4 / 16 / 64 rays |\n|---|---|---|---|---|\n";
     for scene in &scenes {
         let points = &scene["ao_points"];
         let cells = |method: &str, unit: &str, values: &[u64]| {
@@ -912,9 +918,11 @@ pub fn table(doc: &serde_json::Value) -> String {
             cells.join(" / ")
         };
         out += &format!(
-            "| {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} |\n",
             scene["scene"].as_str().unwrap_or("?"),
             cells("ssao", "ssao_samples", &[4, 16, 32]),
+            cells("gtao", "slices", &[1, 2, 3]),
+            cells("gtao half", "slices", &[1, 2, 3]),
             cells("rtao", "rays", &[1, 4, 16, 64])
         );
     }

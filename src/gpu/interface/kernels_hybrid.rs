@@ -122,6 +122,20 @@ kernels! {
         }
     }
 
+    /// Ground-truth-based ambient occlusion (GTAO), at full or half resolution.
+    kernel gtao {
+        scene: none,
+        push: AoParams,
+        local: [8, 8, 1],
+        spec: {},
+        bindings: {
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth, normal],
+            /// AO (1 = unoccluded), one texel per `scale`² G-buffer pixels.
+            out_ao: writeonly image r32f,
+        }
+    }
+
     /// Ray-traced ambient occlusion (SSAO's ground truth).
     kernel rtao {
         scene: full [surface, implicit, shallow_bvh],
@@ -136,7 +150,7 @@ kernels! {
         }
     }
 
-    /// The depth-aware AO blur.
+    /// The depth-aware AO blur (and half-resolution AO's upsample).
     kernel ao_blur {
         scene: none,
         push: AoBlurParams,

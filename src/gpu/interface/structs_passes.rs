@@ -435,7 +435,7 @@ gpu_structs! {
         pad2: float,
     }
 
-    /// Push constants of `ssao.comp` and `rtao.comp`.
+    /// Push constants of `ssao.comp`, `gtao.comp` and `rtao.comp`.
     struct AoParams {
         /// The camera.
         camera: GpuCamera,
@@ -443,19 +443,21 @@ gpu_structs! {
         radius: float,
         /// SSAO plane bias (world units).
         bias: float,
-        /// Padding.
-        pad0: uint,
-        /// Padding.
-        pad1: uint,
-        /// Image width and height.
+        /// GTAO: the fraction of r over which an occluder's weight fades to 0 at r (0: cut off
+        /// at r).
+        falloff: float,
+        /// GTAO: G-buffer pixels per AO texel along each axis (1 or 2); the AO image is the
+        /// G-buffer's size divided by it, rounded up.
+        scale: uint,
+        /// G-buffer width and height.
         size: uvec2,
         /// Frame index.
         frame: uint,
         /// Seed of the random numbers.
         seed: uint,
-        /// Directions (SSAO) or rays (RTAO) per pixel.
+        /// Directions (SSAO), slices (GTAO) or rays (RTAO) per pixel.
         samples: uint,
-        /// SSAO steps per direction.
+        /// SSAO: steps per direction; GTAO: steps each side of the pixel per slice.
         steps: uint,
         /// RTAO: the first ray of this dispatch.
         first_ray: uint,
@@ -469,10 +471,19 @@ gpu_structs! {
         camera: GpuCamera,
         /// Plane-distance sigma, a fraction of the view depth.
         depth_sigma: float,
-        /// Normal exponent.
-        normal_exponent: float,
-        /// Image width and height.
+        /// Padding (the normal weight's exponent is 8, `ao_blur.comp`).
+        pad3: float,
+        /// G-buffer (and output) width and height.
         size: uvec2,
+        /// G-buffer pixels per texel of the AO read (1, or 2 for half-resolution AO: the blur
+        /// is then its depth-aware upsample too).
+        scale: uint,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+        /// Padding.
+        pad2: uint,
     }
 
     /// Push constants of the IBL precomputation kernels (`ibl_*.comp`).

@@ -14,7 +14,9 @@
 // `steps` depth-buffer points on its side of the pixel, at screen distances s r (s stratified in
 // (0, 1]; XeGTAO's s² measured less accurate against RTAO's hard radius, src/passes/ao.rs),
 // whose pull fades over the last `falloff` fraction of r (the range check: an occluder beyond r
-// does not count; 0, the default, cuts off at r). Points off screen or on the background do not
+// does not count; 0, the default, cuts off at r, and then a point beyond r no more than r in
+// front of p stands for the solid behind it, which may come within r). Points off screen or on
+// the background do not
 // raise the horizon (the screen holds no information there, as for SSAO), nor do points within
 // `bias` of the tangent plane (they cannot raise it, and their rounding would).
 //
@@ -130,12 +132,33 @@ void main() {
                 if (dq <= 0.0) {
                     continue;
                 }
-                vec3 delta = gbuffer_position(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, q, size, dq) - p;
+                vec3 s_pos = gbuffer_position(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, q, size, dq);
+                vec3 delta = s_pos - p;
                 float dist = length(delta);
+                float weight = 1.0;
+                if (fade > 0.0) {
+                    weight = clamp((radius - dist) / fade, 0.0, 1.0);
+                } else if (!(dist < radius)) {
+                    // The depth buffer reads as solid behind its surface (the height field): where
+                    // the surface point lies beyond r but not more than r in front of p (SSAO's
+                    // range check), the solid behind it may still come within r (the hidden side
+                    // of a sphere beside the pixel). Its highest point within r is where the view
+                    // ray through the sample, continued behind the surface, enters the ball.
+                    if (d0 - dq > radius) {
+                        continue;
+                    }
+                    vec3 u = cam_ortho ? cam_forward : normalize(s_pos - cam_origin);
+                    float b = dot(delta, u);
+                    float disc = b * b - (dist * dist - radius * radius);
+                    if (!(disc >= 0.0 && b < 0.0)) {
+                        continue;
+                    }
+                    delta += (-b - sqrt(disc)) * u;
+                    dist = length(delta);
+                }
                 if (!(dot(delta, n) > bias)) {
                     continue;
                 }
-                float weight = fade > 0.0 ? clamp((radius - dist) / fade, 0.0, 1.0) : float(dist < radius);
                 float low = side == 0 ? low0 : low1;
                 float h = mix(low, dot(delta, v) / dist, weight);
                 if (side == 0) {

@@ -132,33 +132,26 @@ void main() {
                 if (dq <= 0.0) {
                     continue;
                 }
-                vec3 s_pos = gbuffer_position(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, q, size, dq);
+                vec2 ndc = vec2(2.0 * (float(q.x) + 0.5) / float(size.x) - 1.0, 1.0 - 2.0 * (float(q.y) + 0.5) / float(size.y));
+                vec3 ray = cam_forward + ndc.x * cam_right + ndc.y * cam_up;
+                vec3 s_pos = cam_ortho ? cam_origin + (ray - cam_forward) + dq * cam_forward : cam_origin + dq * ray;
                 vec3 delta = s_pos - p;
                 float dist = length(delta);
-                float weight = 1.0;
+                vec3 u = cam_ortho ? cam_forward : normalize(ray);
+                float b = dot(delta, u);
+                float disc = b * b - (dist * dist - radius * radius);
+                bool inside = dist < radius;
+                bool enters = disc >= 0.0 && b < 0.0 && d0 - dq <= radius;
+                vec3 moved = delta + (-b - sqrt(max(disc, 0.0))) * u;
+                float weight;
                 if (fade > 0.0) {
                     weight = clamp((radius - dist) / fade, 0.0, 1.0);
-                } else if (!(dist < radius)) {
-                    // The depth buffer reads as solid behind its surface (the height field): where
-                    // the surface point lies beyond r but not more than r in front of p (SSAO's
-                    // range check), the solid behind it may still come within r (the hidden side
-                    // of a sphere beside the pixel). Its highest point within r is where the view
-                    // ray through the sample, continued behind the surface, enters the ball.
-                    if (d0 - dq > radius) {
-                        continue;
-                    }
-                    vec3 u = cam_ortho ? cam_forward : normalize(s_pos - cam_origin);
-                    float b = dot(delta, u);
-                    float disc = b * b - (dist * dist - radius * radius);
-                    if (!(disc >= 0.0 && b < 0.0)) {
-                        continue;
-                    }
-                    delta += (-b - sqrt(disc)) * u;
-                    dist = length(delta);
+                } else {
+                    weight = (inside || enters) ? 1.0 : 0.0;
+                    delta = inside ? delta : moved;
+                    dist = inside ? dist : length(moved);
                 }
-                if (!(dot(delta, n) > bias)) {
-                    continue;
-                }
+                weight = dot(delta, n) > bias ? weight : 0.0;
                 float low = side == 0 ? low0 : low1;
                 float h = mix(low, dot(delta, v) / dist, weight);
                 if (side == 0) {

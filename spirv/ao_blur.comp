@@ -18,6 +18,8 @@
 
 KERNEL_LOCAL_SIZE;
 
+#include "camera.glsl"
+
 // The camera, copied out of the push constants once per invocation: its vec3 fields read from
 // push-constant memory inside the loops cost llvmpipe a load each time (field by field: naga
 // cannot read the OpCopyLogical a whole-struct copy compiles to).
@@ -26,14 +28,10 @@ vec3 cam_right;
 vec3 cam_up;
 bool cam_ortho;
 
-// The view-space position (camera at the origin) of `pixel`'s surface at view depth `depth`
-// (camera_point's, unnormalised: a pinhole's ray through the pixel scaled so its forward part
-// is `depth`; an orthographic view's offset plus `depth` forward).
+// The view-space position (camera at the origin) of `pixel`'s surface at view depth `depth`.
 vec3 view_position(ivec2 pixel, float depth) {
-    vec2 ndc = vec2(2.0 * (float(pixel.x) + 0.5) / float(params.size.x) - 1.0,
-                    1.0 - 2.0 * (float(pixel.y) + 0.5) / float(params.size.y));
-    vec3 offset = ndc.x * cam_right + ndc.y * cam_up;
-    return cam_ortho ? offset + depth * cam_forward : depth * (cam_forward + offset);
+    return camera_depth_point(cam_forward, cam_ortho, camera_offset(cam_right, cam_up, vec2(pixel) + 0.5, params.size),
+                              depth);
 }
 
 void main() {

@@ -71,7 +71,8 @@ void main() {
         imageStore(out_ao, texel, vec4(1.0));
         return;
     }
-    vec3 p = gbuffer_position(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, pixel, size, d0);
+    // Positions by camera_depth_point, the samples' as the pixel's (their differences matter).
+    vec3 p = cam_origin + camera_depth_point(cam_forward, cam_ortho, camera_offset(cam_right, cam_up, vec2(pixel) + 0.5, size), d0);
     vec3 n = normalize(imageLoad(gb_normal, pixel).xyz);
     vec3 v = cam_ortho ? -cam_forward : normalize(cam_origin - p);
     float radius = params.radius;
@@ -132,12 +133,10 @@ void main() {
                 if (dq <= 0.0) {
                     continue;
                 }
-                vec2 ndc = vec2(2.0 * (float(q.x) + 0.5) / float(size.x) - 1.0, 1.0 - 2.0 * (float(q.y) + 0.5) / float(size.y));
-                vec3 ray = cam_forward + ndc.x * cam_right + ndc.y * cam_up;
-                vec3 s_pos = cam_ortho ? cam_origin + (ray - cam_forward) + dq * cam_forward : cam_origin + dq * ray;
-                vec3 delta = s_pos - p;
+                vec3 offset = camera_offset(cam_right, cam_up, vec2(q) + 0.5, size);
+                vec3 delta = cam_origin + camera_depth_point(cam_forward, cam_ortho, offset, dq) - p;
                 float dist = length(delta);
-                vec3 u = cam_ortho ? cam_forward : normalize(ray);
+                vec3 u = cam_ortho ? cam_forward : normalize(cam_forward + offset);
                 float b = dot(delta, u);
                 float disc = b * b - (dist * dist - radius * radius);
                 bool inside = dist < radius;

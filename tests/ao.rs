@@ -303,6 +303,14 @@ fn estimates_and_reference(
     (estimates, render(gpu, scene, cam, size, &rtao(REFERENCE_RAYS, radius)))
 }
 
+/// Whether pixel `i` of a `size`² image lies at least `margin` pixels from its border.
+fn interior(size: u32, margin: u32) -> impl Fn(usize) -> bool + Copy {
+    move |i| {
+        let (x, y) = ((i as u32) % size, (i as u32) / size);
+        (margin..size - margin).contains(&x) && (margin..size - margin).contains(&y)
+    }
+}
+
 fn abs_error(estimate: &AoImage, rtao: &AoImage, i: usize) -> f64 {
     (estimate.values[i] as f64 - rtao.values[i] as f64).abs()
 }
@@ -321,10 +329,7 @@ fn screen_space_ao_agrees_with_rtao_inside_a_room() {
     let (estimates, rtao) = estimates_and_reference(&gpu, &scene, &cam, size, 0.5);
     dump("room_rtao", size, &rtao.values);
     let margin = 12;
-    let interior = |i: usize| {
-        let (x, y) = ((i as u32) % size, (i as u32) / size);
-        (margin..size - margin).contains(&x) && (margin..size - margin).contains(&y)
-    };
+    let interior = interior(size, margin);
     let (occluded, n) = mean_over(rtao.values.len(), interior, |i| 1.0 - rtao.values[i] as f64);
     assert!(occluded > 0.1, "the view shows too little occlusion to compare ({occluded})");
     for (name, image) in &estimates {
@@ -382,10 +387,7 @@ fn screen_space_ao_agrees_with_rtao_under_an_orthographic_camera() {
     dump("ortho_room_rtao", size, &rtao.values);
     // r = 0.5 is 0.5 / 0.9 × 32 ≈ 18 pixels at every depth.
     let margin = 18;
-    let interior = |i: usize| {
-        let (x, y) = ((i as u32) % size, (i as u32) / size);
-        (margin..size - margin).contains(&x) && (margin..size - margin).contains(&y)
-    };
+    let interior = interior(size, margin);
     let (occluded, n) = mean_over(rtao.values.len(), interior, |i| 1.0 - rtao.values[i] as f64);
     assert!(occluded > 0.1, "the view shows too little occlusion to compare ({occluded})");
     for (name, image) in &estimates {

@@ -5,11 +5,24 @@
 #ifndef UMBRA_CAMERA_GLSL
 #define UMBRA_CAMERA_GLSL
 
+// The offset of image position `pos` across the image plane at unit view depth (a pinhole's) or
+// from the plane's centre (an orthographic view's).
+vec3 camera_offset(vec3 right, vec3 up, vec2 pos, uvec2 size) {
+    vec2 ndc = vec2(2.0 * pos.x / float(size.x) - 1.0, 1.0 - 2.0 * pos.y / float(size.y));
+    return ndc.x * right + ndc.y * up;
+}
+
+// The point at view depth `depth` on the ray of image-plane offset `offset` (camera_offset),
+// relative to `eye`: camera_point without normalising the ray (the same point to rounding, for
+// kernels that reconstruct many).
+vec3 camera_depth_point(vec3 forward, bool orthographic, vec3 offset, float depth) {
+    return orthographic ? offset + depth * forward : depth * (forward + offset);
+}
+
 // The ray through image position `pos`: its origin and unit direction.
 void camera_ray(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, vec2 pos, uvec2 size,
                 out vec3 origin, out vec3 dir) {
-    vec2 ndc = vec2(2.0 * pos.x / float(size.x) - 1.0, 1.0 - 2.0 * pos.y / float(size.y));
-    vec3 offset = ndc.x * right + ndc.y * up;
+    vec3 offset = camera_offset(right, up, pos, size);
     origin = orthographic ? eye + offset : eye;
     dir = orthographic ? forward : normalize(forward + offset);
 }

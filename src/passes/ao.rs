@@ -194,7 +194,8 @@ impl AoSettings {
     }
 }
 
-/// The push constants of both AO kernels for `camera` over an image of `size`.
+/// The push constants of the AO kernels (SSAO, GTAO, RTAO) for `camera` over a G-buffer of
+/// `size`.
 pub fn ao_params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> AoParams {
     AoParams {
         camera: GpuCamera::new(camera, size),
@@ -220,11 +221,6 @@ impl SsaoPass {
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Self { pipeline: Pipeline::plain(ctx)? })
-    }
-
-    /// The push constants (see [`ao_params`]).
-    pub fn params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> AoParams {
-        ao_params(camera, size, settings)
     }
 
     /// Records the pass: G-buffer depth and normal in, `output` (`R32_SFLOAT`, `GENERAL`, the
@@ -339,11 +335,6 @@ impl RtaoPass {
     /// [`RtaoPass::new`] for a scene with `features` (before it is uploaded).
     pub fn for_features(ctx: &Context, features: &SceneFeatures) -> Result<Self> {
         Ok(Self { pipeline: Pipeline::new(ctx, &rtao::Spec::default(), Some(features))? })
-    }
-
-    /// The push constants (see [`ao_params`]).
-    pub fn params(camera: &Camera, size: (u32, u32), settings: &AoSettings) -> AoParams {
-        ao_params(camera, size, settings)
     }
 
     /// Rays per pixel in one dispatch: llvmpipe breaks every loop of an invocation after 65,535

@@ -379,6 +379,8 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         queue: host.queue,
         queue_family_index: host.queue_family,
         allocator: host.allocator.clone(),
+        // The host's device enables no 64-bit atomics: umbra's G-buffers here are ray-cast.
+        int64_atomics: false,
     })?;
     let clock = std::time::Instant::now();
     let renderer = Renderer::new(&ctx, &scene)?;
@@ -565,6 +567,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         };
         let target = |set: usize, gbuffer| HybridTargets {
             gbuffer,
+            visibility: None,
             ao: None,
             hdr: images[set * SET + 7].view,
             ldr: Some(images[set * SET + 8].view),

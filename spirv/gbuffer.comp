@@ -1,7 +1,9 @@
 #version 460
-// The G-buffer from primary rays through the BVH, one ray through each pixel's centre: what the
-// deferred passes (SSAO, lighting) need of the first surface, in the formats src/passes/gbuffer.rs
-// documents. Shading attributes come from shading.glsl, so the G-buffer sees exactly the surface
+// The G-buffer of the first surface through each pixel's centre: what the deferred passes (SSAO,
+// lighting) need of it, in the formats src/passes/gbuffer.rs documents. Ray-cast through the BVH
+// (`RASTER` false) or resolved from the visibility buffer (`RASTER` true, Burns and Hunt 2013):
+// the pixel's ray meets the rasterized triangle in the traversal's own watertight terms, so its
+// hit (t, barycentrics) is the ray cast's bit for bit wherever both found that triangle. Shading attributes come from shading.glsl, so the G-buffer sees exactly the surface
 // the path tracer sees.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/gbuffer.glsl"
@@ -31,7 +33,34 @@ void main() {
                size, origin, dir);
 
     Hit hit;
-    if (!bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
+    bool found;
+    if (RASTER) {
+        uint tri = visibility[pixel.y * params.vis_stride + pixel.x].x;
+        found = tri != RASTER_NO_TRIANGLE;
+        if (found) {
+            // The traversal's watertight terms for the pixel's ray, without its inside test: where
+            // the ray meets the triangle, its t and barycentrics bit for bit; where the centre
+            // lies within rounding of an edge that the test puts outside, the same formulas a
+            // hair beyond it (no fallback to a ray cast: on llvmpipe a traversal inside an `if`
+            // costs every pixel a pass of its loop).
+            precise float u;
+            precise float v;
+            precise float w;
+            precise float big_t;
+            uint order;
+            uint alpha;
+            bvh_edge_functions(bvh_ray(origin, dir), tri, u, v, w, big_t, order, alpha);
+            precise float det = u + v + w;
+            hit.tri = tri;
+            hit.t = big_t / det;
+            hit.bary = vec2(v / det, w / det);
+            // An edge-on triangle (the rasterizer's rounding against the ray's): no surface.
+            found = hit.t > 0.0 && !isinf(hit.t);
+        }
+    } else {
+        found = bvh_closest(origin, dir, 0.0, BVH_INF, hit);
+    }
+    if (!found) {
         imageStore(gb_depth, pixel, vec4(0.0));
         imageStore(gb_normal, pixel, vec4(0.0));
         imageStore(gb_base, pixel, vec4(0.0));

@@ -14,6 +14,7 @@ use umbra::passes::pathtrace::{
 use umbra::passes::probes::ProbeSettings;
 use umbra::passes::restir::RestirSettings;
 use umbra::passes::shadow::{ShadowMethod, ShadowSettings};
+use umbra::passes::visibility::GBufferMethod;
 
 #[derive(Parser)]
 #[command(name = "umbra", version, about = "Physically based rendering with Vulkan compute kernels")]
@@ -254,6 +255,7 @@ impl RenderArgs {
     pub(crate) fn hybrid_settings(&self) -> umbra::render::HybridSettings {
         umbra::render::HybridSettings {
             size: self.size,
+            gbuffer: self.hybrid.gbuffer,
             lighting: LightingSettings {
                 shadow_rays: self.hybrid.shadow_rays,
                 seed: self.seed,
@@ -396,6 +398,11 @@ pub(crate) struct DisplayArgs {
 #[derive(clap::Args)]
 #[command(next_help_heading = "Hybrid (--mode hybrid)")]
 pub(crate) struct HybridArgs {
+    /// Hybrid: how the G-buffer finds each pixel's first surface: rasterized into a visibility
+    /// buffer and resolved (raster; ray-cast where the device has no 64-bit buffer atomics or
+    /// the scene has implicit shapes or blended materials), or one ray per pixel (raycast).
+    #[arg(long, value_enum, default_value = "raycast")]
+    pub(crate) gbuffer: GBufferMethod,
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles (and, with
     /// --rt-light-size, per punctual light).
     #[arg(long, default_value_t = 4)]

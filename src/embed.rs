@@ -5,10 +5,13 @@
 //!
 //! ```text
 //! let ctx = Context::from_host(HostDevice { entry, instance, physical_device, device, queue,
-//!                                           queue_family_index, allocator: Some(allocator) })?;
+//!                                           queue_family_index, allocator: Some(allocator),
+//!                                           int64_atomics: false })?;
 //! let mut renderer = Renderer::new(&ctx, &scene)?;          // uploads the scene once
 //! // per frame, inside the host's command buffer:
 //! renderer.record_gbuffer(cmd, &camera, &gbuffer_views)?;   // or the host writes its own
+//! // (or rasterized: `renderer.visibility_buffer(size, GBufferMethod::Raster)?` once, then
+//! // `renderer.record_gbuffer_with(cmd, &camera, &gbuffer_views, visibility.as_ref())?`)
 //! let ao = renderer.record_ao(cmd, &camera, &gbuffer_views, ao_view, ao_blur_view, &ao_settings)?;
 //! // (SSAO, GTAO at full or half resolution, or RTAO: `ao_settings.method`, `.resolution`)
 //! renderer.record_lighting(cmd, &camera, &gbuffer_views, hdr_view,
@@ -27,7 +30,7 @@
 //!     hdr_view, &DenoiseSettings::default())?;
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
-//!     ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
+//!     visibility: None, ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
 //!     probes: None, lightmaps: None, reservoirs: None },
 //!     &settings, None)?;
 //! // shadow maps instead of shadow rays: placed once, re-recorded when a light, the geometry
@@ -98,7 +101,7 @@ use crate::gpu::SceneFeatures;
 use crate::passes::ao::AoSettings;
 use crate::passes::deferred::{LightingInputs, LightingSettings};
 use crate::passes::denoise::{DenoiseImages, DenoiseSettings};
-use crate::passes::gbuffer::GBufferViews;
+use crate::passes::gbuffer::{GBufferMethod, GBufferViews, VisibilityBuffer};
 use crate::passes::ibl::{IblResources, IblSettings};
 use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
 use crate::passes::probes::{ProbeSettings, ProbeVolume};
@@ -351,6 +354,33 @@ impl Renderer {
         target: &GBufferViews,
     ) -> Result<()> {
         self.record(cmd, |rec| self.passes.record_gbuffer(rec, &self.scene, camera, target))
+    }
+
+    /// A visibility buffer for rasterized G-buffers of `size` ([`Self::record_gbuffer_with`],
+    /// [`HybridTargets::visibility`]), when `method` rasterizes and the device (64-bit buffer
+    /// atomics enabled: [`crate::vk::HostDevice::int64_atomics`]) and the scene allow it; `None`
+    /// (ray-cast G-buffers) otherwise, the reason in the log. Make a new one after
+    /// [`Self::update_scene`].
+    pub fn visibility_buffer(
+        &self,
+        size: (u32, u32),
+        method: GBufferMethod,
+    ) -> Result<Option<VisibilityBuffer>> {
+        self.passes.visibility_for(&self.scene, size, method)
+    }
+
+    /// Records umbra's G-buffer for `camera` into `target`: rasterized into `visibility` and
+    /// resolved from it when given, ray-cast otherwise. After the host's submission completes,
+    /// [`VisibilityBuffer::check`] says whether its tile lists held the view
+    /// ([`VisibilityBuffer::reserve`] and record again if not).
+    pub fn record_gbuffer_with(
+        &self,
+        cmd: raw::CommandBuffer,
+        camera: &Camera,
+        target: &GBufferViews,
+        visibility: Option<&VisibilityBuffer>,
+    ) -> Result<()> {
+        self.record(cmd, |rec| self.passes.record_gbuffer_with(rec, &self.scene, camera, target, visibility))
     }
 
     /// Records the ambient occlusion of `gbuffer` (umbra's or the host's) by `settings.method`

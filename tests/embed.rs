@@ -196,6 +196,7 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
     let views = gbuffer.views();
     let targets = HybridTargets {
         gbuffer: &views,
+        visibility: None,
         ao: Some((ao[0].view, ao[1].view)),
         hdr: hdr.view,
         ldr: Some(ldr.view),

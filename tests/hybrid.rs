@@ -40,7 +40,7 @@ fn gbuffer_matches_cpu_traversal() {
         let pass = GBufferPass::new(&gpu, &gpu_scene).unwrap();
         let target = GBuffer::new(&gpu, size).unwrap();
         let params = GBufferPass::params(&camera, size);
-        gpu.record(|rec| pass.record(rec, &gpu_scene, &target.views(), &params)).unwrap();
+        gpu.record(|rec| pass.record(rec, &gpu_scene, &target.views(), &params, None)).unwrap();
         let data = target.read(&gpu).unwrap();
 
         let cam = GpuCamera::new(&camera, size);

@@ -105,6 +105,7 @@ fn glsl_type(module: &Module, ty: naga::Handle<naga::Type>) -> String {
     let t = &module.types[ty];
     let scalar = |s: &naga::Scalar| match s.kind {
         naga::ScalarKind::Float => ("float", ""),
+        naga::ScalarKind::Uint if s.width == 8 => ("uint64_t", "u64"),
         naga::ScalarKind::Uint => ("uint", "u"),
         naga::ScalarKind::Sint => ("int", "i"),
         _ => ("?", "?"),

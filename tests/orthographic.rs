@@ -42,7 +42,7 @@ fn gbuffer_of_squares_facing_an_orthographic_camera_is_exact() {
     for (size, covered) in [((128u32, 64u32), 32 * 32), ((64, 64), 16 * 32)] {
         let target = GBuffer::new(&gpu, size).unwrap();
         let params = GBufferPass::params(&camera, size);
-        gpu.record(|rec| pass.record(rec, &gpu_scene, &target.views(), &params)).unwrap();
+        gpu.record(|rec| pass.record(rec, &gpu_scene, &target.views(), &params, None)).unwrap();
         let data = target.read(&gpu).unwrap();
         let half_width = size.0 as f32 / size.1 as f32;
         let (mut counts, mut wrong) = ([0usize; 2], Vec::new());

@@ -535,6 +535,7 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
     let view = umbra::passes::shadow::ShadowView { camera: &stage.camera, gbuffer: &views };
     let mut targets = umbra::render::HybridTargets {
         gbuffer: &views,
+        visibility: None,
         ao: None,
         hdr: hdr.view,
         ldr: None,

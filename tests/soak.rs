@@ -92,6 +92,7 @@ fn record_frames(
     let [ao, blurred, hdr, ldr] = &targets.images;
     let frame_targets = HybridTargets {
         gbuffer: &views,
+        visibility: None,
         ao: Some((ao.view, blurred.view)),
         hdr: hdr.view,
         ldr: Some(ldr.view),

@@ -201,7 +201,7 @@ fn gbuffer(gpu: &Gpu, scene: &Scene, size: (u32, u32)) -> GBufferData {
     let pass = GBufferPass::new(gpu, &gpu_scene).unwrap();
     let target = GBuffer::new(gpu, size).unwrap();
     let params = GBufferPass::params(&camera, size);
-    gpu.record(|rec| pass.record(rec, &gpu_scene, &target.views(), &params)).unwrap();
+    gpu.record(|rec| pass.record(rec, &gpu_scene, &target.views(), &params, None)).unwrap();
     target.read(gpu).unwrap()
 }
 

@@ -99,11 +99,12 @@ float bvh_next_up(float x) {
     return x > 0.0 ? uintBitsToFloat(bits + 1u) : (x == 0.0 ? uintBitsToFloat(1u) : uintBitsToFloat(bits - 1u));
 }
 
-// Watertight test against triangle i: true with t in (tmin, tmax), the barycentrics, the
-// triangle's index in the input (`order`, which breaks ties between equally near hits) and its
-// alpha-mode bits (`alpha`: 0 opaque, 1 mask, 2 blend).
-bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary, out uint order,
-                   out uint alpha) {
+// The watertight test's terms for triangle i (Woop et al. 2013): the edge functions u, v, w of
+// the ray's sheared frame (all of one sign where the ray meets the triangle), the scaled
+// distance big_t (t = big_t / (u + v + w)), the triangle's index in the input (`order`) and its
+// alpha-mode bits (`alpha`).
+void bvh_edge_functions(BvhRay r, uint i, out float u, out float v, out float w, out float big_t, out uint order,
+                        out uint alpha) {
     vec4 v0 = bvh_tri_v(i, 0u);
     vec4 v1 = bvh_tri_v(i, 1u);
     order = floatBitsToUint(v0.w);
@@ -117,9 +118,26 @@ bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out ve
     precise float by = b[r.ky] - r.shear.y * b[r.kz];
     precise float cx = c[r.kx] - r.shear.x * c[r.kz];
     precise float cy = c[r.ky] - r.shear.y * c[r.kz];
-    precise float u = cx * by - cy * bx;
-    precise float v = ax * cy - ay * cx;
-    precise float w = bx * ay - by * ax;
+    precise float pu = cx * by - cy * bx;
+    precise float pv = ax * cy - ay * cx;
+    precise float pw = bx * ay - by * ax;
+    precise float pt = pu * (r.shear.z * a[r.kz]) + pv * (r.shear.z * b[r.kz]) + pw * (r.shear.z * c[r.kz]);
+    u = pu;
+    v = pv;
+    w = pw;
+    big_t = pt;
+}
+
+// Watertight test against triangle i: true with t in (tmin, tmax), the barycentrics, the
+// triangle's index in the input (`order`, which breaks ties between equally near hits) and its
+// alpha-mode bits (`alpha`: 0 opaque, 1 mask, 2 blend).
+bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out vec2 bary, out uint order,
+                   out uint alpha) {
+    precise float u;
+    precise float v;
+    precise float w;
+    precise float big_t;
+    bvh_edge_functions(r, i, u, v, w, big_t, order, alpha);
     t = 0.0;
     bary = vec2(0.0);
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
@@ -129,7 +147,6 @@ bool bvh_intersect(BvhRay r, uint i, float tmin, float tmax, out float t, out ve
     if (det == 0.0) {
         return false;
     }
-    precise float big_t = u * (r.shear.z * a[r.kz]) + v * (r.shear.z * b[r.kz]) + w * (r.shear.z * c[r.kz]);
     precise float tt = big_t / det;
     if (!(tt > tmin && tt < tmax)) {
         return false;

@@ -61,6 +61,9 @@ pub struct GpuScene {
     /// Whether some triangle's material is alpha-masked or blended: the traversal in the shading
     /// kernels is specialised for the alpha test only then.
     pub has_alpha: bool,
+    /// Whether some triangle's material is blended: its stochastic coverage hashes the ray, which
+    /// the rasterized G-buffer does not have (such scenes' G-buffers are ray-cast).
+    pub has_blend: bool,
     /// Whether some vertex has a `COLOR_0` other than opaque white: the shading kernels read
     /// vertex colours only then.
     pub has_colors: bool,
@@ -693,6 +696,7 @@ impl GpuScene {
             has_transmission: transmits(&arrays.materials),
             // The alpha bits with_bvh wrote into the BVH triangles.
             has_alpha: arrays.bvh.tris.iter().any(|t| t.v1[3].to_bits() != 0),
+            has_blend: arrays.bvh.tris.iter().any(|t| t.v1[3].to_bits() == 2),
             has_colors: colored(&arrays.vertices),
             has_unlit: unlit(&arrays.materials),
             has_clearcoat: coated(&arrays.materials),

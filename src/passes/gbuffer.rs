@@ -17,15 +17,17 @@
 //! A host that writes its own G-buffer must write the occlusion too: 1 in `emission`'s a where a
 //! surface has no occlusion map (0 there darkens the image-based light to nothing).
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 pub use crate::gpu::kernel::GBufferViews;
 use crate::gpu::kernels::gbuffer;
 pub use crate::gpu::layout::GBUFFER_NO_SURFACE;
 use crate::gpu::layout::{GBufferParams, GpuCamera};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
+pub use crate::passes::visibility::{GBufferMethod, VisibilityBuffer};
 use crate::scene::Camera;
-use crate::vk::{raw, Context, Graph, GraphImage, GraphViews, Image, Recorder};
+use crate::vk::{raw, Buffer, Context, Graph, GraphImage, GraphViews, Image, Recorder};
+use gpu_allocator::MemoryLocation;
 
 /// The G-buffer images (see the module documentation for their formats and contents).
 pub struct GBuffer {
@@ -161,20 +163,35 @@ pub struct GBufferData {
     pub layers2: Vec<[u32; 4]>,
 }
 
-/// `gbuffer.comp`, specialised for whether the scene has textures and alpha-tested materials.
+/// `gbuffer.comp`, specialised for whether the scene has textures and alpha-tested materials,
+/// and for ray casting or resolving a visibility buffer.
 pub struct GBufferPass {
     pipeline: Pipeline<gbuffer::Kernel>,
+    raster: bool,
+    /// The `visibility` binding of the ray-cast kernel, which never reads it.
+    no_visibility: Buffer,
 }
 
 impl GBufferPass {
-    /// Builds the pipeline for what `scene` has (textures, alpha-tested materials).
+    /// Builds the ray-cast pipeline for what `scene` has (textures, alpha-tested materials).
     pub fn new(ctx: &Context, scene: &GpuScene) -> Result<Self> {
         Self::for_features(ctx, &scene.features())
     }
 
     /// [`GBufferPass::new`] for a scene with `features` (before it is uploaded).
     pub fn for_features(ctx: &Context, features: &SceneFeatures) -> Result<Self> {
-        Ok(Self { pipeline: Pipeline::new(ctx, &gbuffer::Spec::default(), Some(features))? })
+        Self::with_raster(ctx, features, false)
+    }
+
+    /// The pipeline that ray-casts (`raster` false) or resolves a [`VisibilityBuffer`]
+    /// (`raster` true), for a scene with `features`.
+    pub fn with_raster(ctx: &Context, features: &SceneFeatures, raster: bool) -> Result<Self> {
+        let storage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            pipeline: Pipeline::new(ctx, &gbuffer::Spec { raster }, Some(features))?,
+            raster,
+            no_visibility: Buffer::new(ctx, "no visibility buffer", 8, storage, MemoryLocation::GpuOnly)?,
+        })
     }
 
     /// The push constants for `camera` over an image of `size`.
@@ -183,16 +200,39 @@ impl GBufferPass {
     }
 
     /// Records the pass into `target` (umbra's [`GBuffer::views`] or a host's images in the same
-    /// formats, `GENERAL` layout). Never submits.
+    /// formats, `GENERAL` layout), resolving `visibility` (recorded before, for this camera and
+    /// size) where the pipeline was made to. Never submits.
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
         scene: &GpuScene,
         target: &GBufferViews,
         params: &GBufferParams,
+        visibility: Option<&VisibilityBuffer>,
     ) -> Result<()> {
-        let resources = gbuffer::Resources { scene, gb: target };
-        self.pipeline.record(rec, &resources, params, [target.size.0, target.size.1, 1])?;
+        let mut params = *params;
+        let buffer = match (self.raster, visibility) {
+            (false, None) => &self.no_visibility,
+            (true, Some(vis)) if vis.size() == target.size => {
+                params.vis_stride = vis.stride();
+                &vis.visibility
+            }
+            (true, Some(vis)) => {
+                return Err(Error::Invalid(format!(
+                    "a visibility buffer of {:?} for a G-buffer of {:?}",
+                    vis.size(),
+                    target.size
+                )))
+            }
+            (true, None) => {
+                return Err(Error::Invalid("the raster G-buffer needs a visibility buffer".into()))
+            }
+            (false, Some(_)) => {
+                return Err(Error::Invalid("the ray-cast G-buffer pass was given a visibility buffer".into()))
+            }
+        };
+        let resources = gbuffer::Resources { scene, gb: target, visibility: buffer };
+        self.pipeline.record(rec, &resources, &params, [target.size.0, target.size.1, 1])?;
         Ok(())
     }
 }

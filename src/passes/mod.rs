@@ -12,4 +12,5 @@ pub mod restir;
 pub mod shadow;
 pub mod temporal;
 pub mod tonemap;
+pub mod visibility;
 pub mod wavefront;

@@ -23,18 +23,19 @@ impl Passes {
     // Each `add_*` declares its pass's images and records through its `record_*` twin
     // (record.rs), which checks the settings and specialises the kernel.
 
-    /// Adds the ray-cast G-buffer of `scene` seen from `camera`, written into `gbuffer`.
+    /// Adds the G-buffer of `scene` seen from `camera`, written into `gbuffer`: rasterized into
+    /// `visibility` and resolved from it when given, ray-cast otherwise (one pass either way).
     pub fn add_gbuffer<'g>(
         &'g self,
         graph: &mut Graph<'g>,
         scene: &'g GpuScene,
         camera: &'g Camera,
         gbuffer: GBufferImages,
+        visibility: Option<&'g VisibilityBuffer>,
     ) {
-        graph
-            .add_pass("gbuffer")
-            .write_all(gbuffer.images)
-            .record(move |rec, views| self.record_gbuffer(rec, scene, camera, &gbuffer.views(views)));
+        graph.add_pass("gbuffer").write_all(gbuffer.images).record(move |rec, views| {
+            self.record_gbuffer_with(rec, scene, camera, &gbuffer.views(views), visibility)
+        });
     }
 
     /// Adds the ambient occlusion of `gbuffer` (seen from `camera`) by `settings.method` into
@@ -148,7 +149,7 @@ impl Passes {
         settings: &HybridSettings,
     ) -> Result<GBufferImages> {
         let gbuffer = GBufferImages::import(graph, targets.gbuffer);
-        self.add_gbuffer(graph, frame.scene, frame.camera, gbuffer);
+        self.add_gbuffer(graph, frame.scene, frame.camera, gbuffer, targets.visibility);
         self.add_hybrid_shading(graph, frame, gbuffer, targets, settings)?;
         Ok(gbuffer)
     }

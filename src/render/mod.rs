@@ -38,6 +38,8 @@ use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, Sh
 pub use crate::passes::temporal::{TemporalFeedback, TemporalSettings};
 use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
+use crate::passes::visibility::VisibilityPass;
+pub use crate::passes::visibility::{GBufferMethod, VisibilityBuffer};
 use crate::passes::wavefront::WavefrontPass;
 use crate::scene::Camera;
 use crate::vk::{
@@ -228,6 +230,9 @@ impl UploadedImage {
 pub struct HybridSettings {
     /// Width and height in pixels.
     pub size: (u32, u32),
+    /// How the G-buffer finds each pixel's first surface: rasterized where the device and the
+    /// scene allow ([`VisibilityBuffer::unsupported`]), else ray-cast.
+    pub gbuffer: GBufferMethod,
     /// The lighting pass's settings.
     pub lighting: LightingSettings,
     /// Exposure of the display image, in stops.
@@ -307,6 +312,9 @@ pub struct Frame<'a> {
 pub struct HybridTargets<'a> {
     /// The G-buffer ([`crate::passes::gbuffer`] formats).
     pub gbuffer: &'a GBufferViews,
+    /// The visibility buffer the G-buffer is rasterized into and resolved from ([`Passes::add_hybrid`]);
+    /// `None`: the G-buffer is ray-cast.
+    pub visibility: Option<&'a VisibilityBuffer>,
     /// `R32_SFLOAT` images for SSAO and its blur (used when the settings ask for AO), to read
     /// them after the frame; `None`: the frame graph's transient images.
     pub ao: Option<(raw::ImageView, raw::ImageView)>,

@@ -274,6 +274,25 @@ impl Passes {
         Ok(image)
     }
 
+    /// A visibility buffer for a G-buffer of `size` when `method` rasterizes and the device and
+    /// `scene` allow it ([`VisibilityBuffer::unsupported`]); `None` (a ray-cast G-buffer, said in
+    /// the log) otherwise.
+    pub fn visibility_for(
+        &self,
+        scene: &GpuScene,
+        size: (u32, u32),
+        method: GBufferMethod,
+    ) -> Result<Option<VisibilityBuffer>> {
+        if method != GBufferMethod::Raster {
+            return Ok(None);
+        }
+        if let Some(why) = VisibilityBuffer::unsupported(&self.ctx, scene) {
+            log::info!("the G-buffer is ray-cast: {why}");
+            return Ok(None);
+        }
+        VisibilityBuffer::new(&self.ctx, scene, size).map(Some)
+    }
+
     /// Renders `scene` with the hybrid pipeline: the IBL precomputation (BRDF table, prefiltered
     /// environment, SH irradiance) for `settings.ibl`, then [`Passes::record_hybrid`].
     pub fn hybrid(
@@ -323,14 +342,29 @@ impl Passes {
         // The environment's tables and the G-buffer first (the shadow maps render for its
         // view), then the rest of the frame.
         let mut first_timer = GpuTimer::new(ctx, 8)?;
+        let mut visibility = self.visibility_for(scene, size, settings.gbuffer)?;
+        let mut gbuffer_ms = None;
         ctx.record(|rec| {
             let cmd = rec.cmd();
             first_timer.reset(cmd);
             ibl.record(rec, scene, Some(&mut first_timer))?;
             first_timer.begin(cmd, "gbuffer")?;
-            self.record_gbuffer(rec, scene, camera, &views)?;
+            self.record_gbuffer_with(rec, scene, camera, &views, visibility.as_ref())?;
             first_timer.end(cmd)
         })?;
+        // Tile lists too short for this view: grown, and the G-buffer rendered again.
+        while let Some(vis) = visibility.as_mut() {
+            let Some(entries) = vis.check(ctx)? else { break };
+            vis.reserve(ctx, entries)?;
+            let mut timer = GpuTimer::new(ctx, 1)?;
+            ctx.record(|rec| {
+                timer.reset(rec.cmd());
+                timer.begin(rec.cmd(), "gbuffer")?;
+                self.record_gbuffer_with(rec, scene, camera, &views, Some(vis))?;
+                timer.end(rec.cmd())
+            })?;
+            gbuffer_ms = timer.read()?.first().map(|t| t.ms);
+        }
         let mut shadow_ms = Vec::new();
         let shadows = if settings.shadows.method.uses_maps() {
             let mut maps = self.shadow_maps(scene, camera, size, &settings.shadows)?;
@@ -346,6 +380,7 @@ impl Passes {
         };
         let targets = HybridTargets {
             gbuffer: &views,
+            visibility: None,
             ao: None,
             hdr: output.view,
             ldr: Some(display.view),
@@ -374,6 +409,13 @@ impl Passes {
         // In the order they ran: the environment's tables and the G-buffer, the maps, the rest.
         let named = |t: crate::vk::PassTime| (t.name, t.ms);
         let mut pass_ms: Vec<(String, f64)> = first_timer.read()?.into_iter().map(named).collect();
+        if let Some(ms) = gbuffer_ms {
+            for (name, t) in &mut pass_ms {
+                if name == "gbuffer" {
+                    *t = ms;
+                }
+            }
+        }
         pass_ms.extend(shadow_ms);
         pass_ms.extend(timer.read()?.into_iter().map(named));
         Ok(HybridImage {
@@ -405,7 +447,7 @@ impl Passes {
         let mut graph = Graph::new();
         let views = GBufferImages::import(&mut graph, &gbuffer.views());
         let unblurred = graph.import("ambient occlusion", raw_ao.view);
-        self.add_gbuffer(&mut graph, scene, camera, views);
+        self.add_gbuffer(&mut graph, scene, camera, views, None);
         self.add_ao(&mut graph, scene, camera, views, unblurred, settings);
         if settings.blur {
             let output = graph.import("ambient occlusion blurred", blurred.view);

@@ -20,6 +20,8 @@ pub struct Passes {
     pub(super) ctx: Context,
     pub(super) features: SceneFeatures,
     pub(super) gbuffer: OnceLock<GBufferPass>,
+    /// The G-buffer kernel that resolves a visibility buffer, and the rasterizer's kernels.
+    pub(super) gbuffer_raster: OnceLock<(GBufferPass, VisibilityPass)>,
     /// The lighting pass by its kernel's specialization ([`DeferredPass::spec`]: the shadow
     /// method, probes, lightmaps, ReSTIR, sized lights).
     pub(super) deferred: Cache<deferred::Spec, DeferredPass>,
@@ -58,6 +60,7 @@ impl Passes {
             ctx: ctx.clone(),
             features,
             gbuffer: OnceLock::new(),
+            gbuffer_raster: OnceLock::new(),
             deferred: Cache::new(),
             restir: Cache::new(),
             shadow: OnceLock::new(),
@@ -99,6 +102,16 @@ impl Passes {
 
     pub(super) fn gbuffer_pass(&self) -> Result<&GBufferPass> {
         built(&self.gbuffer, || GBufferPass::for_features(&self.ctx, &self.features))
+    }
+
+    /// The visibility buffer's kernels and the G-buffer kernel that resolves it.
+    pub(super) fn gbuffer_raster_passes(&self) -> Result<&(GBufferPass, VisibilityPass)> {
+        built(&self.gbuffer_raster, || {
+            Ok((
+                GBufferPass::with_raster(&self.ctx, &self.features, true)?,
+                VisibilityPass::for_features(&self.ctx, &self.features)?,
+            ))
+        })
     }
 
     /// The lighting pass for `settings` and what the frame brings ([`DeferredPass::spec`]).

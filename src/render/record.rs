@@ -12,9 +12,30 @@ impl Passes {
         camera: &Camera,
         target: &GBufferViews,
     ) -> Result<()> {
+        self.record_gbuffer_with(rec, scene, camera, target, None)
+    }
+
+    /// Records the G-buffer of `scene` seen from `camera` into `target`: rasterized into
+    /// `visibility` and resolved from it when given (made for this scene and `target`'s size),
+    /// ray-cast otherwise.
+    pub fn record_gbuffer_with(
+        &self,
+        rec: &mut Recorder<'_>,
+        scene: &GpuScene,
+        camera: &Camera,
+        target: &GBufferViews,
+        visibility: Option<&VisibilityBuffer>,
+    ) -> Result<()> {
         self.check(scene)?;
         let params = GBufferPass::params(camera, target.size);
-        self.gbuffer_pass()?.record(rec, scene, target, &params)
+        match visibility {
+            Some(vis) => {
+                let (resolve, raster) = self.gbuffer_raster_passes()?;
+                raster.record(rec, scene, camera, vis)?;
+                resolve.record(rec, scene, target, &params, Some(vis))
+            }
+            None => self.gbuffer_pass()?.record(rec, scene, target, &params, None),
+        }
     }
 
     /// Records the ambient occlusion of `gbuffer` by `settings.method` into `raw_ao` and, when

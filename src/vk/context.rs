@@ -47,6 +47,9 @@ pub struct HostDevice {
     pub queue_family_index: u32,
     /// The host's allocator; `None` makes umbra create one on the host's device.
     pub allocator: Option<Arc<Mutex<Allocator>>>,
+    /// Whether the host enabled `shaderInt64` and `shaderBufferInt64Atomics` on `device`: the
+    /// rasterized G-buffer's visibility buffer needs them (false: umbra ray-casts its G-buffers).
+    pub int64_atomics: bool,
 }
 
 /// The push descriptors umbra's kernels may bind (each binds its resources by one push-descriptor
@@ -81,10 +84,15 @@ pub struct DeviceInfo {
     pub max_push_descriptors: u32,
     /// Vulkan API version of the device.
     pub api_version: u32,
-    /// Whether kernels could use 64-bit integer atomics on storage buffers
-    /// (`shaderBufferInt64Atomics`) and on storage images (`VK_EXT_shader_image_atomic_int64`),
-    /// as a visibility buffer's one-pass depth-and-id `atomicMin` would (reported, not enabled).
+    /// Whether the device offers 64-bit integer atomics on storage buffers
+    /// (`shaderBufferInt64Atomics`, with `shaderInt64`, which SPIR-V's `Int64Atomics` implies) and on storage images (`VK_EXT_shader_image_atomic_int64`),
+    /// as a visibility buffer's one-pass depth-and-id `atomicMin` uses them.
     pub int64_atomics: (bool, bool),
+    /// Whether umbra's kernels may use them: `shaderInt64` and `shaderBufferInt64Atomics` are
+    /// enabled on the device (umbra's own device enables them where offered; a host says so in
+    /// [`HostDevice::int64_atomics`]). The rasterized G-buffer needs them; without, the G-buffer
+    /// is ray-cast.
+    pub int64_enabled: bool,
 }
 
 /// The shared core behind a [`Context`], kept alive by every resource made from it.
@@ -330,7 +338,8 @@ impl Context {
                 return Err(e);
             }
         };
-        let device = match create_device(&instance, physical_device, queue_family) {
+        let int64 = device_info(&instance, physical_device, queue_family).int64_atomics.0;
+        let device = match create_device(&instance, physical_device, queue_family, int64) {
             Ok(d) => d,
             Err(e) => {
                 destroy_instance(debug);
@@ -339,7 +348,19 @@ impl Context {
         };
         // SAFETY: the family was created with one queue.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        Self::finish(entry, instance, physical_device, device, queue, queue_family, None, debug, log, true)
+        Self::finish(
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family,
+            None,
+            debug,
+            log,
+            true,
+            int64,
+        )
     }
 
     /// Builds umbra on a host engine's instance and device. Nothing of the host's is destroyed
@@ -356,6 +377,7 @@ impl Context {
             None,
             None,
             false,
+            host.int64_atomics,
         )
     }
 
@@ -371,8 +393,10 @@ impl Context {
         debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         validation: Option<Arc<ValidationLog>>,
         owned: bool,
+        int64_enabled: bool,
     ) -> Result<Self> {
-        let info = device_info(&instance, physical_device, queue_family);
+        let mut info = device_info(&instance, physical_device, queue_family);
+        info.int64_enabled = int64_enabled && info.int64_atomics.0;
         log::info!("umbra: using device '{}' ({:?})", info.name, info.device_type);
         let cleanup = |device: &ash::Device| unsafe {
             if owned {
@@ -672,16 +696,27 @@ fn pick_device(instance: &ash::Instance, filter: Option<&str>) -> Result<(vk::Ph
         .ok_or_else(|| Error::NoDevice(format!("no usable Vulkan device: {}", rejected.join("; "))))
 }
 
-fn create_device(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> Result<ash::Device> {
+/// Creates umbra's device, with 64-bit integers and their buffer atomics when `int64` (the
+/// device offers both: `shaderBufferInt64Atomics` requires `shaderInt64`).
+fn create_device(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    family: u32,
+    int64: bool,
+) -> Result<ash::Device> {
     let priorities = [1.0];
     let queues =
         [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
     let extensions = [ash::khr::push_descriptor::NAME.as_ptr()];
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(int64);
+    let features = vk::PhysicalDeviceFeatures::default().shader_int64(int64);
     let info = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
         .enabled_extension_names(&extensions)
-        .push_next(&mut f13);
+        .enabled_features(&features)
+        .push_next(&mut f13)
+        .push_next(&mut f12);
     // SAFETY: checked by `check_device`; pointers outlive the call.
     unsafe { instance.create_device(pd, &info, None) }.call("vkCreateDevice")
 }
@@ -699,16 +734,18 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) ->
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut image64 = vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default();
     let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12).push_next(&mut image64);
+    let int64;
     // SAFETY: valid physical device; an extension's structure the driver does not know stays
     // zeroed (false).
     let exts = unsafe {
         instance.get_physical_device_features2(pd, &mut f2);
+        int64 = f2.features.shader_int64;
         instance.enumerate_device_extension_properties(pd).unwrap_or_default()
     };
     let image64_ext =
         exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ash::ext::shader_image_atomic_int64::NAME));
     let int64_atomics = (
-        f12.shader_buffer_int64_atomics == vk::TRUE,
+        f12.shader_buffer_int64_atomics == vk::TRUE && int64 == vk::TRUE,
         image64_ext && image64.shader_image_int64_atomics == vk::TRUE,
     );
     DeviceInfo {
@@ -724,6 +761,7 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) ->
         max_push_descriptors: push.max_push_descriptors,
         api_version: p.api_version,
         int64_atomics,
+        int64_enabled: false,
     }
 }
 

@@ -162,6 +162,9 @@ enum Command {
         /// The hybrid frame's ambient occlusion variants timed, in turn within each repeat.
         #[arg(long, value_enum, value_delimiter = ',', default_value = "ssao,gtao,gtao-half")]
         ao: Vec<passes::AoVariant>,
+        /// The G-buffers timed (each with every AO variant): ray-cast, rasterized.
+        #[arg(long, value_enum, value_delimiter = ',', default_value = "raycast,raster")]
+        gbuffer: Vec<umbra::passes::visibility::GBufferMethod>,
     },
     /// Shadow maps against shadow rays on one scene: the maps' GPU time by step, the lighting
     /// pass with each filter, and each lit image's error against the ray-traced one (JSON and a
@@ -660,8 +663,12 @@ fn run(cli: Cli) -> Result<()> {
             let docs = table.iter().map(|path| read_json(path)).collect::<Result<Vec<_>>>()?;
             print!("{}", passes::table(&docs)?);
         }
-        Command::Passes { scene, size, repeats, shadow_rays, out, table: _, ao } => {
-            passes::run_passes(scene, size, repeats, shadow_rays, out, &ao)?
+        Command::Passes { scene, size, repeats, shadow_rays, out, table: _, ao, gbuffer } => {
+            let variants: Vec<passes::FrameVariant> = gbuffer
+                .iter()
+                .flat_map(|&gbuffer| ao.iter().map(move |&ao| passes::FrameVariant { gbuffer, ao }))
+                .collect();
+            passes::run_passes(scene, size, repeats, shadow_rays, out, &variants)?
         }
         Command::Implicit { table: Some(path), .. } => print!("{}", implicit::table(&read_json(&path)?)),
         Command::Implicit { size, spp, repeats, rays, subdivisions, out, table: None } => {

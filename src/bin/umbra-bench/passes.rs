@@ -1,7 +1,7 @@
-//! GPU time per pass of each method on one scene: the hybrid frame's passes (G-buffer, the
-//! ambient occlusion of each [`AoVariant`] asked for (SSAO, GTAO at full or half resolution,
-//! radius 0.5) and its blur, deferred lighting with IBL × AO) and their stages' totals, and one
-//! path-traced sample per pixel, each a median over repeats after a warm-up
+//! GPU time per pass of each method on one scene: the hybrid frame's passes (the G-buffer, ray-cast
+//! or rasterized, the ambient occlusion of each [`AoVariant`] asked for (SSAO, GTAO at full or
+//! half resolution, radius 0.5) and its blur, deferred lighting with IBL × AO) and their stages'
+//! totals, and one path-traced sample per pixel, each a median over repeats after a warm-up
 //! ([`super::rays::warm_up`]), from GPU timestamps.
 
 use super::num;
@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use umbra::gpu::scene::GpuScene;
 use umbra::passes::ao::{AoMethod, AoResolution, AoSettings};
 use umbra::passes::deferred::LightingSettings;
-use umbra::passes::gbuffer::GBuffer;
+use umbra::passes::gbuffer::{GBuffer, GBufferMethod, VisibilityBuffer};
 use umbra::passes::pathtrace::PathTarget;
 use umbra::render::{Frame, HybridSettings, HybridTargets, Passes, PathSettings};
 use umbra::scene::Camera;
@@ -93,11 +93,30 @@ impl AoVariant {
     }
 }
 
+/// One hybrid frame's variant: its G-buffer and its ambient occlusion.
+#[derive(Clone, Copy, PartialEq)]
+pub struct FrameVariant {
+    /// Ray-cast or rasterized.
+    pub gbuffer: GBufferMethod,
+    /// The AO.
+    pub ao: AoVariant,
+}
+
+impl FrameVariant {
+    /// The G-buffer's label in passes.json and the table.
+    pub fn gbuffer_label(self) -> &'static str {
+        match self.gbuffer {
+            GBufferMethod::Raycast => "raycast",
+            GBufferMethod::Raster => "raster",
+        }
+    }
+}
+
 /// The timings of one hybrid frame variant: each pass's, and each stage's
 /// ([`umbra::render::stage_of`]; `frame` all of them), medians over the repeats of their sums.
 pub struct FrameTiming {
     /// The variant.
-    pub variant: AoVariant,
+    pub variant: FrameVariant,
     /// Each pass, in recording order.
     pub passes: Vec<PassTiming>,
     /// `gbuffer`, `ao`, `lighting` and `frame`.
@@ -133,17 +152,34 @@ pub fn run(
     size: (u32, u32),
     repeats: usize,
     lighting: &LightingSettings,
-    variants: &[AoVariant],
+    variants: &[FrameVariant],
 ) -> Result<PassesRun> {
     let passes = Passes::new(ctx, scene);
     let FrameImages { gbuffer, output, ibl } = FrameImages::new(ctx, scene, size)?;
+    let mut visibility = None;
+    if variants.iter().any(|v| v.gbuffer == GBufferMethod::Raster) {
+        if let Some(why) = VisibilityBuffer::unsupported(ctx, scene) {
+            bail!("the raster G-buffer cannot be timed: {why}");
+        }
+        let mut vis = VisibilityBuffer::new(ctx, scene, size)?;
+        // Tile lists that hold this view's entries before anything is timed.
+        loop {
+            ctx.record(|rec| passes.record_gbuffer_with(rec, scene, camera, &gbuffer.views(), Some(&vis)))?;
+            match vis.check(ctx)? {
+                Some(entries) => vis.reserve(ctx, entries)?,
+                None => break,
+            }
+        }
+        visibility = Some(vis);
+    }
     let target = PathTarget::new(ctx, size)?;
     let path_settings = PathSettings { size, env: lighting.env, ..PathSettings::default() };
     let views = gbuffer.views();
     // The hybrid frame without its tonemap, as the renderer records it (the AO's images
     // transient).
-    let targets = HybridTargets {
+    let targets = |v: FrameVariant| HybridTargets {
         gbuffer: &views,
+        visibility: visibility.as_ref().filter(|_| v.gbuffer == GBufferMethod::Raster),
         ao: None,
         hdr: output.view,
         ldr: None,
@@ -152,17 +188,18 @@ pub fn run(
         lightmaps: None,
         reservoirs: None,
     };
-    let settings = |v: AoVariant| HybridSettings {
+    let settings = |v: FrameVariant| HybridSettings {
         size,
+        gbuffer: v.gbuffer,
         lighting: *lighting,
-        ao: v.settings(),
+        ao: v.ao.settings(),
         ..HybridSettings::default()
     };
     let frame = Frame { scene, ibl: &ibl, camera };
     super::rays::warm_up(|| {
         ctx.record(|rec| {
             for &v in variants {
-                passes.record_hybrid(rec, frame, &targets, &settings(v), None)?;
+                passes.record_hybrid(rec, frame, &targets(v), &settings(v), None)?;
             }
             passes.record_path_samples(rec, scene, camera, &target, &path_settings, 0..1)
         })
@@ -177,7 +214,7 @@ pub fn run(
             let timer = &mut timers[k];
             ctx.record(|rec| {
                 timer.reset(rec.cmd());
-                passes.record_hybrid(rec, frame, &targets, &settings(v), Some(&mut *timer))
+                passes.record_hybrid(rec, frame, &targets(v), &settings(v), Some(&mut *timer))
             })?;
             let times = timer.read()?;
             if repeat == 0 {
@@ -252,9 +289,9 @@ pub fn to_json(
         "size": [size.0, size.1],
         "repeats": repeats,
         "shadow_rays": shadow_rays,
-        "gbuffer": "raycast",
         "frames": frames.iter().map(|f| json!({
-            "ao": f.variant.label(),
+            "gbuffer": f.variant.gbuffer_label(),
+            "ao": f.variant.ao.label(),
             "passes": f.passes.iter().map(|t| json!({"pass": t.name, "median_ms": t.median_ms, "min_ms": t.min_ms})).collect::<Vec<_>>(),
             "stages": f.stages.iter().map(|(stage, t)| (stage.to_string(), time(t))).collect::<serde_json::Map<_, _>>(),
         })).collect::<Vec<_>>(),
@@ -302,9 +339,10 @@ pub fn table(docs: &[Value]) -> Result<String> {
         .collect();
     for (doc, frame) in &columns {
         out += &format!(
-            " {}, {} triangles: {} |",
+            " {}, {} triangles: {}, {} |",
             doc["scene"].as_str().unwrap_or("?"),
             doc["triangles"],
+            gbuffer_of(frame),
             frame["ao"].as_str().unwrap_or("?")
         );
     }
@@ -333,11 +371,16 @@ pub fn table(docs: &[Value]) -> Result<String> {
         }
         out += "\n";
     }
-    // Each stage against the same run's SSAO frame: what the other variants buy.
-    for stage in ["ao", "frame"] {
-        out += &format!("| {stage} ÷ ssao's |");
+    // Each stage against the same run's frame with a ray-cast G-buffer and SSAO (the seed's):
+    // what the other variants buy.
+    for stage in ["gbuffer", "ao", "frame"] {
+        out += &format!("| {stage} ÷ ray-cast + ssao's |");
         for (doc, frame) in &columns {
-            let ssao = doc["frames"].as_array().into_iter().flatten().find(|f| f["ao"] == "ssao");
+            let ssao = doc["frames"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .find(|f| f["ao"] == "ssao" && gbuffer_of(f) == "raycast");
             out += &ssao.map_or(" — |".to_string(), |ssao| {
                 format!(
                     " {:.2} |",
@@ -360,13 +403,18 @@ pub fn table(docs: &[Value]) -> Result<String> {
     Ok(out)
 }
 
+/// A frame's G-buffer in passes.json (runs before the raster G-buffer had only ray-cast ones).
+fn gbuffer_of(frame: &Value) -> &str {
+    frame["gbuffer"].as_str().unwrap_or("raycast")
+}
+
 pub(crate) fn run_passes(
     scene: Option<PathBuf>,
     size: (u32, u32),
     repeats: usize,
     shadow_rays: u32,
     out: PathBuf,
-    variants: &[AoVariant],
+    variants: &[FrameVariant],
 ) -> Result<()> {
     let ctx = Context::new(&ContextDesc::default())?;
     let loaded = match &scene {
@@ -396,7 +444,7 @@ pub(crate) fn run_passes(
         )
     };
     for f in &measured.frames {
-        println!(" hybrid frame, {}:", f.variant.label());
+        println!(" hybrid frame, {} G-buffer, {}:", f.variant.gbuffer_label(), f.variant.ao.label());
         f.passes.iter().for_each(line);
         f.stages.iter().for_each(|(_, t)| line(t));
     }

@@ -110,6 +110,7 @@ pub fn run(
     ) -> HybridTargets<'a> {
         HybridTargets {
             gbuffer: views,
+            visibility: None,
             ao: None,
             hdr,
             ldr: None,

@@ -138,6 +138,9 @@ gpu_constants! {
     /// The largest box (texels a side) a triangle rasterizes itself in: smaller ones loop over
     /// their own texels, larger ones go through the tiles.
     SHADOW_DIRECT_SPAN: uint = 16;
+    /// The triangle of a texel no triangle covers, in the compute rasterizer (shadow maps, the
+    /// visibility buffer, whose empty pixels read as all ones).
+    RASTER_NO_TRIANGLE: uint = 0xffffffff;
     /// Texels of `shadow_texels` before the lights' records: the filter settings.
     SHADOW_HEADER_TEXELS: uint = 2;
     /// Texels of one [`GpuShadowLayer`] in `shadow_texels` (its 96 bytes).

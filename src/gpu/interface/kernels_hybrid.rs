@@ -5,15 +5,76 @@
 
 kernels! {
     kernels_hybrid;
-    /// The ray-cast G-buffer.
+    /// The G-buffer: ray-cast (`raster` false), or resolved from the visibility buffer
+    /// `vis_bin` and `vis_raster` rasterized (`raster` true).
     kernel gbuffer {
         scene: full [surface, clearcoat, implicit, parallax, diffuse_transmission, anisotropy, shallow_bvh],
         push: GBufferParams,
         local: [8, 8, 1],
-        spec: {},
+        spec: { raster: bool = false },
         bindings: {
             /// The G-buffer's images written (`gbuffer_format!` in interface.rs).
             gb: writeonly gbuffer [depth, normal, base, emission, material, layers, layers2],
+            /// The visibility buffer (`raster` only; one element otherwise): per pixel, row-major
+            /// with [`GBufferParams::vis_stride`] a row, the nearest triangle's BVH index in x
+            /// (`u32::MAX`: none) and its depth's bits in y.
+            visibility: readonly buffer [uvec2],
+        }
+    }
+
+    /// The visibility buffer, steps 1 and 3 (`shadow_bin`'s binning with the camera as the
+    /// layer): a small triangle rasterizes itself (`atomicMin` of depth and triangle into the
+    /// visibility buffer); a larger one counts itself into (`fill` false) or enters itself in
+    /// (`fill` true) the list of every tile its box overlaps.
+    kernel vis_bin {
+        scene: full [surface],
+        push: ShadowRasterParams,
+        local: [64, 1, 1],
+        spec: { fill: bool = false },
+        bindings: {
+            /// The BVH positions to rasterize, one per scene triangle.
+            raster_tris: readonly buffer [uint],
+            /// Triangles per tile (counted, then filled again from 0).
+            tile_count: readwrite buffer [uint],
+            /// First entry of each tile's list.
+            tile_start: readwrite buffer [uint],
+            /// The lists: triangle indices in BVH order.
+            tile_tris: readwrite buffer [uint],
+            /// Per pixel (row-major, `size` a row), depth bits << 32 | triangle, the nearest
+            /// kept (all ones where none).
+            visibility: readwrite buffer [uint64_t],
+            /// Per large triangle its oriented edge functions and vertex depths.
+            tile_setup: readwrite buffer [vec4],
+            /// Per tile, nonzero where the tile is rendered.
+            tile_marks: readonly buffer [uint],
+            /// The large triangles that enter some rendered tile's list.
+            large_tris: readwrite buffer [uint],
+            /// [`SHADOW_DISPATCH_WORDS`] words: the tiles' and the fill's indirect dispatches.
+            tile_dispatch: readwrite buffer [uint],
+        }
+    }
+
+    /// The visibility buffer, step 4 (`shadow_raster`'s tiles): each tile's pixels against the
+    /// large triangles in its list, the nearest merged into the visibility buffer.
+    kernel vis_raster {
+        scene: full [surface],
+        push: ShadowRasterParams,
+        local: [SHADOW_TILE / SHADOW_QUAD, SHADOW_TILE / SHADOW_QUAD, 1],
+        spec: {},
+        bindings: {
+            /// Triangles per tile (set back to 0 once read).
+            tile_count: readwrite buffer [uint],
+            /// First entry of each tile's list.
+            tile_start: readonly buffer [uint],
+            /// The lists.
+            tile_tris: readonly buffer [uint],
+            /// `vis_bin`'s `tile_setup`, read as RGBA32F texels.
+            setup_texels: readonly texels rgba32f,
+            /// The tiles rendered (one workgroup each).
+            tile_list: readonly buffer [uint],
+            /// Depth bits << 32 | triangle per pixel: the small triangles' nearest, merged with
+            /// the large ones'.
+            visibility: readwrite buffer [uint64_t],
         }
     }
 

@@ -11,8 +11,8 @@ gpu_structs! {
         camera: GpuCamera,
         /// Image width and height.
         size: uvec2,
-        /// Padding.
-        pad0: uint,
+        /// The visibility buffer's row length in pixels (`raster` only).
+        vis_stride: uint,
         /// Padding.
         pad1: uint,
     }

@@ -401,7 +401,7 @@ pub(crate) struct HybridArgs {
     /// Hybrid: how the G-buffer finds each pixel's first surface: rasterized into a visibility
     /// buffer and resolved (raster; ray-cast where the device has no 64-bit buffer atomics or
     /// the scene has implicit shapes or blended materials), or one ray per pixel (raycast).
-    #[arg(long, value_enum, default_value = "raycast")]
+    #[arg(long, value_enum, default_value = "raster")]
     pub(crate) gbuffer: GBufferMethod,
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles (and, with
     /// --rt-light-size, per punctual light).

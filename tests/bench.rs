@@ -458,8 +458,8 @@ fn build_writes_json_and_a_table() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `umbra-bench passes` writes passes.json with every pass and stage of each AO variant's hybrid
-/// frame (each stage the sum of its passes), and two runs print as one table.
+/// `umbra-bench passes` writes passes.json with every pass and stage of each G-buffer's and AO
+/// variant's hybrid frame (each stage the sum of its passes), and two runs print as one table.
 #[test]
 fn passes_writes_json_and_a_table() {
     let dir = std::env::temp_dir().join(format!("umbra-passes-{}", std::process::id()));
@@ -472,12 +472,23 @@ fn passes_writes_json_and_a_table() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).expect("passes.json written")).expect("parses");
     let frames = json["frames"].as_array().unwrap();
-    let labels: Vec<&str> = frames.iter().map(|f| f["ao"].as_str().unwrap()).collect();
-    assert_eq!(labels, ["ssao", "gtao", "gtao half"]);
-    for (frame, ao) in frames.iter().zip(["ssao", "gtao", "gtao"]) {
+    let labels: Vec<(&str, &str)> =
+        frames.iter().map(|f| (f["gbuffer"].as_str().unwrap(), f["ao"].as_str().unwrap())).collect();
+    let variants = [("ssao", "ssao"), ("gtao", "gtao"), ("gtao half", "gtao")];
+    let expected: Vec<(&str, &str)> = ["raycast", "raster"]
+        .iter()
+        .flat_map(|&g| variants.iter().map(move |&(label, _)| (g, label)))
+        .collect();
+    assert_eq!(labels, expected);
+    for (frame, (gbuffer, ao)) in frames
+        .iter()
+        .zip(["raycast", "raster"].iter().flat_map(|&g| variants.iter().map(move |&(_, ao)| (g, ao))))
+    {
         let passes: Vec<&str> =
             frame["passes"].as_array().unwrap().iter().map(|p| p["pass"].as_str().unwrap()).collect();
-        assert_eq!(passes, ["gbuffer", ao, "ao_blur", "lighting"]);
+        // The raster G-buffer's visibility buffer is a pass of its own, of the gbuffer stage.
+        let first: &[&str] = if gbuffer == "raster" { &["visibility", "gbuffer"] } else { &["gbuffer"] };
+        assert_eq!(passes, [first, &[ao, "ao_blur", "lighting"]].concat());
         // One repeat: each stage is the sum of its passes' times, the frame the sum of all.
         let ms = |pass: &str| {
             frame["passes"].as_array().unwrap().iter().find(|p| p["pass"] == pass).unwrap()["median_ms"]
@@ -486,7 +497,8 @@ fn passes_writes_json_and_a_table() {
         };
         let stage = |name: &str| frame["stages"][name]["median_ms"].as_f64().unwrap();
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
-        assert!(close(stage("gbuffer"), ms("gbuffer")), "{frame}");
+        let gbuffer_ms: f64 = first.iter().map(|p| ms(p)).sum();
+        assert!(close(stage("gbuffer"), gbuffer_ms), "{frame}");
         assert!(close(stage("ao"), ms(ao) + ms("ao_blur")), "{frame}");
         assert!(close(stage("lighting"), ms("lighting")), "{frame}");
         assert!(close(stage("frame"), stage("gbuffer") + stage("ao") + stage("lighting")), "{frame}");
@@ -504,7 +516,9 @@ fn passes_writes_json_and_a_table() {
         output.status.success()
             && table.contains("| pathtrace 1 spp |")
             && table.contains("| **frame** |")
-            && table.contains(": gtao half |"),
+            && table.contains(": raycast, gtao half |")
+            && table.contains(": raster, ssao |")
+            && table.contains("| gbuffer ÷ ray-cast + ssao's |"),
         "{table}"
     );
     std::fs::remove_dir_all(&dir).ok();

@@ -22,7 +22,7 @@ use crate::gpu::layout::{GpuCamera, ShadowRasterParams, ShadowStats, SHADOW_DISP
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
 use crate::scene::Camera;
-use crate::vk::{raw, Buffer, Context, Recorder, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, GpuTimer, Recorder, TexelBuffer};
 use gpu_allocator::MemoryLocation;
 
 /// How the hybrid frame finds each pixel's first surface.
@@ -30,10 +30,12 @@ use gpu_allocator::MemoryLocation;
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum GBufferMethod {
     /// Rasterized into a visibility buffer, then resolved; ray-cast where the device or the
-    /// scene does not allow it ([`VisibilityBuffer::unsupported`]).
+    /// scene does not allow it ([`VisibilityBuffer::unsupported`]). The same G-buffer as
+    /// [`GBufferMethod::Raycast`]'s but for ties at triangle edges (tests/visibility.rs), and
+    /// cheaper where primary rays cost most (large scenes at high resolutions: BENCHMARKS.md).
+    #[default]
     Raster,
     /// One ray per pixel through the BVH.
-    #[default]
     Raycast,
 }
 
@@ -241,14 +243,32 @@ impl VisibilityPass {
         })
     }
 
-    /// Records the visibility of `scene` from `camera` into `vis`. Never submits.
+    /// Timer entries [`VisibilityPass::record`] uses: one per step.
+    pub const TIMER_ENTRIES: u32 = 6;
+
+    /// Records the visibility of `scene` from `camera` into `vis`, each step timed under its
+    /// kernel's name into `timer` when given (room for [`VisibilityPass::TIMER_ENTRIES`]). Never
+    /// submits.
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
         scene: &GpuScene,
         camera: &Camera,
         vis: &VisibilityBuffer,
+        mut timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
+        let cmd = rec.cmd();
+        let mut step =
+            |name: &str, rec: &mut Recorder<'_>, record: &mut dyn FnMut(&mut Recorder<'_>) -> Result<()>| {
+                if let Some(t) = timer.as_deref_mut() {
+                    t.begin(cmd, name)?;
+                }
+                record(rec)?;
+                if let Some(t) = timer.as_deref_mut() {
+                    t.end(cmd)?;
+                }
+                Result::Ok(())
+            };
         let (w, h) = vis.size;
         let tiles = vis.side.div_ceil(SHADOW_TILE);
         let [row0, row1, row2, row3] = camera_rows(&GpuCamera::new(camera, vis.size));
@@ -267,17 +287,22 @@ impl VisibilityPass {
             window_hi: last[0] | last[1] << 16,
             list_at: 0,
         };
-        rec.fill(&vis.visibility, u32::MAX);
-        rec.fill(&vis.tile_count, 0);
-        rec.fill(&vis.stats, 0);
-        rec.fill(&vis.dispatch, 0);
-        rec.fill(&vis.marks, 1);
+        step("vis_clear", rec, &mut |rec| {
+            rec.fill(&vis.visibility, u32::MAX);
+            rec.fill(&vis.tile_count, 0);
+            rec.fill(&vis.stats, 0);
+            rec.fill(&vis.dispatch, 0);
+            rec.fill(&vis.marks, 1);
+            Ok(())
+        })?;
         let listing = shadow_tiles::Resources {
             tile_marks: &vis.marks,
             tile_list: &vis.tile_list,
             tile_dispatch: &vis.dispatch,
         };
-        self.tiles.record(rec, &listing, &params, [last[0] + 1, last[1] + 1, 1])?;
+        step("vis_tiles", rec, &mut |rec| {
+            self.tiles.record(rec, &listing, &params, [last[0] + 1, last[1] + 1, 1])
+        })?;
         let bins = vis_bin::Resources {
             scene,
             raster_tris: &vis.raster_tris,
@@ -290,16 +315,19 @@ impl VisibilityPass {
             large_tris: &vis.large_tris,
             tile_dispatch: &vis.dispatch,
         };
-        self.count.record(rec, &bins, &params, [vis.raster_count, 1, 1])?;
+        step("vis_bin", rec, &mut |rec| self.count.record(rec, &bins, &params, [vis.raster_count, 1, 1]))?;
         let scan = shadow_scan::Resources {
             tile_count: &vis.tile_count,
             tile_start: &vis.tile_start,
             stats: &vis.stats,
         };
-        self.scan.record(rec, &scan, &params, [256, 1, 1])?;
-        self.fill.bind(rec, &bins)?;
-        self.fill.push_constants(rec, &params)?;
-        self.fill.dispatch_indirect(rec, &vis.dispatch, 16);
+        step("vis_scan", rec, &mut |rec| self.scan.record(rec, &scan, &params, [256, 1, 1]))?;
+        step("vis_fill", rec, &mut |rec| {
+            self.fill.bind(rec, &bins)?;
+            self.fill.push_constants(rec, &params)?;
+            self.fill.dispatch_indirect(rec, &vis.dispatch, 16);
+            Ok(())
+        })?;
         let raster = vis_raster::Resources {
             scene,
             tile_count: &vis.tile_count,
@@ -309,9 +337,11 @@ impl VisibilityPass {
             tile_list: &vis.tile_list,
             visibility: &vis.visibility,
         };
-        self.raster.bind(rec, &raster)?;
-        self.raster.push_constants(rec, &params)?;
-        self.raster.dispatch_indirect(rec, &vis.dispatch, 0);
-        Ok(())
+        step("vis_raster", rec, &mut |rec| {
+            self.raster.bind(rec, &raster)?;
+            self.raster.push_constants(rec, &params)?;
+            self.raster.dispatch_indirect(rec, &vis.dispatch, 0);
+            Ok(())
+        })
     }
 }

@@ -11,7 +11,7 @@ use super::*;
 /// whatever they are called, so a pass added here is given its stage here.
 pub fn stage_of(pass: &str) -> Option<&'static str> {
     match pass {
-        "gbuffer" => Some("gbuffer"),
+        "visibility" | "gbuffer" => Some("gbuffer"),
         "ssao" | "gtao" | "rtao" | "ao_blur" => Some("ao"),
         "restir" | "lighting" => Some("lighting"),
         "tonemap" => Some("tonemap"),
@@ -24,7 +24,8 @@ impl Passes {
     // (record.rs), which checks the settings and specialises the kernel.
 
     /// Adds the G-buffer of `scene` seen from `camera`, written into `gbuffer`: rasterized into
-    /// `visibility` and resolved from it when given, ray-cast otherwise (one pass either way).
+    /// `visibility` (the pass `visibility`) and resolved from it when given, ray-cast otherwise
+    /// (the pass `gbuffer` either way).
     pub fn add_gbuffer<'g>(
         &'g self,
         graph: &mut Graph<'g>,
@@ -33,8 +34,15 @@ impl Passes {
         gbuffer: GBufferImages,
         visibility: Option<&'g VisibilityBuffer>,
     ) {
+        if let Some(vis) = visibility {
+            // The visibility buffer is no graph image: the recorder orders its writes before
+            // the resolve's reads.
+            graph
+                .add_pass("visibility")
+                .record(move |rec, _| self.record_visibility(rec, scene, camera, vis));
+        }
         graph.add_pass("gbuffer").write_all(gbuffer.images).record(move |rec, views| {
-            self.record_gbuffer_with(rec, scene, camera, &gbuffer.views(views), visibility)
+            self.record_gbuffer_resolve(rec, scene, camera, &gbuffer.views(views), visibility)
         });
     }
 

@@ -341,15 +341,20 @@ impl Passes {
         let views = gbuffer.views();
         // The environment's tables and the G-buffer first (the shadow maps render for its
         // view), then the rest of the frame.
-        let mut first_timer = GpuTimer::new(ctx, 8)?;
+        let mut first_timer = GpuTimer::new(ctx, 10)?;
         let mut visibility = self.visibility_for(scene, size, settings.gbuffer)?;
-        let mut gbuffer_ms = None;
+        let mut visibility_ms = None;
         ctx.record(|rec| {
             let cmd = rec.cmd();
             first_timer.reset(cmd);
             ibl.record(rec, scene, Some(&mut first_timer))?;
+            if let Some(vis) = &visibility {
+                first_timer.begin(cmd, "visibility")?;
+                self.record_visibility(rec, scene, camera, vis)?;
+                first_timer.end(cmd)?;
+            }
             first_timer.begin(cmd, "gbuffer")?;
-            self.record_gbuffer_with(rec, scene, camera, &views, visibility.as_ref())?;
+            self.record_gbuffer_resolve(rec, scene, camera, &views, visibility.as_ref())?;
             first_timer.end(cmd)
         })?;
         // Tile lists too short for this view: grown, and the G-buffer rendered again.
@@ -359,11 +364,12 @@ impl Passes {
             let mut timer = GpuTimer::new(ctx, 1)?;
             ctx.record(|rec| {
                 timer.reset(rec.cmd());
-                timer.begin(rec.cmd(), "gbuffer")?;
-                self.record_gbuffer_with(rec, scene, camera, &views, Some(vis))?;
-                timer.end(rec.cmd())
+                timer.begin(rec.cmd(), "visibility")?;
+                self.record_visibility(rec, scene, camera, vis)?;
+                timer.end(rec.cmd())?;
+                self.record_gbuffer_resolve(rec, scene, camera, &views, Some(vis))
             })?;
-            gbuffer_ms = timer.read()?.first().map(|t| t.ms);
+            visibility_ms = timer.read()?.first().map(|t| t.ms);
         }
         let mut shadow_ms = Vec::new();
         let shadows = if settings.shadows.method.uses_maps() {
@@ -409,9 +415,9 @@ impl Passes {
         // In the order they ran: the environment's tables and the G-buffer, the maps, the rest.
         let named = |t: crate::vk::PassTime| (t.name, t.ms);
         let mut pass_ms: Vec<(String, f64)> = first_timer.read()?.into_iter().map(named).collect();
-        if let Some(ms) = gbuffer_ms {
+        if let Some(ms) = visibility_ms {
             for (name, t) in &mut pass_ms {
-                if name == "gbuffer" {
+                if name == "visibility" {
                     *t = ms;
                 }
             }

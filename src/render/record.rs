@@ -26,14 +26,39 @@ impl Passes {
         target: &GBufferViews,
         visibility: Option<&VisibilityBuffer>,
     ) -> Result<()> {
+        if let Some(vis) = visibility {
+            self.record_visibility(rec, scene, camera, vis)?;
+        }
+        self.record_gbuffer_resolve(rec, scene, camera, target, visibility)
+    }
+
+    /// Records the visibility buffer of `scene` seen from `camera` into `vis`, for
+    /// [`Self::record_gbuffer_resolve`].
+    pub fn record_visibility(
+        &self,
+        rec: &mut Recorder<'_>,
+        scene: &GpuScene,
+        camera: &Camera,
+        vis: &VisibilityBuffer,
+    ) -> Result<()> {
+        self.check(scene)?;
+        self.gbuffer_raster_passes()?.1.record(rec, scene, camera, vis, None)
+    }
+
+    /// Records the G-buffer of `scene` seen from `camera` into `target`, resolved from
+    /// `visibility` (recorded before for this camera) when given, ray-cast otherwise.
+    pub fn record_gbuffer_resolve(
+        &self,
+        rec: &mut Recorder<'_>,
+        scene: &GpuScene,
+        camera: &Camera,
+        target: &GBufferViews,
+        visibility: Option<&VisibilityBuffer>,
+    ) -> Result<()> {
         self.check(scene)?;
         let params = GBufferPass::params(camera, target.size);
         match visibility {
-            Some(vis) => {
-                let (resolve, raster) = self.gbuffer_raster_passes()?;
-                raster.record(rec, scene, camera, vis)?;
-                resolve.record(rec, scene, target, &params, Some(vis))
-            }
+            Some(vis) => self.gbuffer_raster_passes()?.0.record(rec, scene, target, &params, Some(vis)),
             None => self.gbuffer_pass()?.record(rec, scene, target, &params, None),
         }
     }

@@ -374,6 +374,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["rays", "--table", "docs/bench/rays.json"],
     &["build", "--table", "docs/bench/build.json"],
     &["passes", "--table", "docs/bench/passes-cornell.json", "--table", "docs/bench/passes-spheres.json"],
+    &["passes", "--table", "docs/bench/passes-sponza-1080.json"],
     &["paths", "--table", "docs/bench/paths.json"],
     &["pipelines", "--table", "docs/bench/pipelines.json"],
     &["suite", "--table", "docs/bench/suite.json"],

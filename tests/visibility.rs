@@ -263,3 +263,30 @@ fn raster_gbuffer_equals_ray_cast_from_inside_the_box() {
         );
     }
 }
+
+/// The embedding API's raster G-buffer: a visibility buffer for the raster method (none for the
+/// ray cast), recorded into a command buffer of the caller's, equal to the ray-cast G-buffer but
+/// for ties (at most 1 % of the pixels); its tile lists held the view.
+#[test]
+fn embedding_api_records_the_raster_gbuffer() {
+    let gpu = Gpu::new();
+    let scene = Scene::cornell_box();
+    let camera = scene.camera(None).unwrap();
+    let size = (80, 56);
+    let renderer = umbra::embed::Renderer::new(&gpu, &scene).unwrap();
+    let method = umbra::passes::gbuffer::GBufferMethod::Raycast;
+    assert!(renderer.visibility_buffer(size, method).unwrap().is_none(), "no buffer for the ray cast");
+    let method = umbra::passes::gbuffer::GBufferMethod::Raster;
+    let vis = renderer.visibility_buffer(size, method).unwrap().expect("lavapipe rasterizes");
+    let target = GBuffer::new(&gpu, size).unwrap();
+    gpu.submit(|cmd| renderer.record_gbuffer(cmd, &camera, &target.views())).unwrap();
+    let cast = target.read(&gpu).unwrap();
+    gpu.submit(|cmd| renderer.record_gbuffer_with(cmd, &camera, &target.views(), Some(&vis))).unwrap();
+    assert_eq!(vis.check(&gpu).unwrap(), None, "the tile lists held the view");
+    let raster = target.read(&gpu).unwrap();
+    let pixels = (size.0 * size.1) as usize;
+    let differ = (0..pixels).filter(|&i| pixel_bits(&cast, i) != pixel_bits(&raster, i)).count();
+    let surfaces =
+        raster.material.iter().filter(|m| m[0] != umbra::passes::gbuffer::GBUFFER_NO_SURFACE).count();
+    assert!(surfaces * 2 > pixels && differ * 100 <= pixels, "{differ} of {pixels} pixels differ");
+}

@@ -501,18 +501,10 @@ pub struct ShadowMaps {
     pub moments: TexelBuffer,
     tile_count: Buffer,
     tile_start: Buffer,
-    tile_tris: Buffer,
     /// One layer of depth bits for the small triangles' `atomicMin`.
     scratch: Buffer,
-    /// The BVH positions to rasterize ([`GpuScene::unique_triangles`]).
-    raster_tris: Buffer,
-    raster_count: u32,
-    /// One layer's large triangles that enter a rendered tile (the fill's work list).
-    large_tris: Buffer,
-    /// The large triangles' edge functions and depths (three `vec4` each).
-    setup: TexelBuffer,
+    lists: RasterLists,
     stats: Buffer,
-    capacity: u32,
     /// Per layer and tile: nonzero where rendered.
     marks: Buffer,
     /// Per layer, the rendered tiles.
@@ -549,8 +541,6 @@ impl ShadowMaps {
     /// Allocates the maps `plan` places for `scene`, refusing more than
     /// [`ShadowMaps::MAX_BYTES`].
     pub fn new(ctx: &Context, plan: ShadowPlan, settings: &ShadowSettings, scene: &GpuScene) -> Result<Self> {
-        let unique = scene.unique_triangles();
-        let triangles = scene.bvh_stats.references as u32;
         let s = settings.map_size as u64;
         let layers = plan.layers.len() as u64;
         let moments = settings.method == ShadowMethod::Moments;
@@ -566,7 +556,6 @@ impl ShadowMaps {
         let storage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
         let per_tile =
             |name| Buffer::new(ctx, name, 4 * layers.max(1) * tiles, storage, MemoryLocation::GpuOnly);
-        let capacity = (4 * unique.len() as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
         let texels = TexelBuffer::upload(
             ctx,
             "shadow records",
@@ -599,32 +588,9 @@ impl ShadowMaps {
             moments: TexelBuffer::new(ctx, "shadow moments", moment_texels, f32x4, 16, no_usage)?,
             tile_count: Buffer::new(ctx, "shadow tile counts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
             tile_start: Buffer::new(ctx, "shadow tile starts", 4 * tiles, storage, MemoryLocation::GpuOnly)?,
-            tile_tris: tile_lists(ctx, capacity)?,
             scratch: Buffer::new(ctx, "shadow scratch layer", 4 * s * s, storage, MemoryLocation::GpuOnly)?,
-            raster_tris: Buffer::upload(
-                ctx,
-                "shadow triangles",
-                &unique,
-                raw::BufferUsageFlags::STORAGE_BUFFER,
-            )?,
-            raster_count: unique.len() as u32,
-            large_tris: Buffer::new(
-                ctx,
-                "shadow large triangles",
-                4 * unique.len().max(1) as u64,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            setup: TexelBuffer::new(
-                ctx,
-                "shadow triangle set-ups",
-                3 * triangles as u64,
-                f32x4,
-                16,
-                raw::BufferUsageFlags::STORAGE_BUFFER,
-            )?,
+            lists: RasterLists::new(ctx, scene, "shadow", tiles)?,
             stats,
-            capacity,
             marks: per_tile("shadow tile marks")?,
             tile_list: per_tile("shadow tile lists of layers")?,
             dispatch: Buffer::new(
@@ -643,7 +609,7 @@ impl ShadowMaps {
 
     /// Tile-list entries the maps hold.
     pub fn capacity(&self) -> u32 {
-        self.capacity
+        self.lists.capacity
     }
 
     /// Triangles one tile may hold: each texel's invocation loops over them, and CPU devices
@@ -667,22 +633,12 @@ impl ShadowMaps {
             stats.entries,
             stats.tile_max
         );
-        if stats.tile_max > Self::MAX_TILE_TRIANGLES {
-            return Err(Error::Invalid(format!(
-                "shadow maps: one {SHADOW_TILE}x{SHADOW_TILE} tile holds {} triangles, more than {}: raise the map size",
-                stats.tile_max,
-                Self::MAX_TILE_TRIANGLES
-            )));
-        }
-        Ok((stats.entries > self.capacity).then_some(stats.entries))
+        self.lists.check(stats, "shadow maps", ": raise the map size")
     }
 
     /// Grows the tile lists to hold `entries` (and a quarter more).
     pub fn reserve(&mut self, ctx: &Context, entries: u32) -> Result<()> {
-        let capacity = entries.saturating_add(entries / 4).min(u32::MAX / 8);
-        self.tile_tris = tile_lists(ctx, capacity)?;
-        self.capacity = capacity;
-        Ok(())
+        self.lists.reserve(ctx, entries)
     }
 
     /// Per layer, the tiles ([`SHADOW_TILE`]² texels) the last submitted rendering rendered (read
@@ -699,10 +655,86 @@ impl ShadowMaps {
     }
 }
 
-/// The tiles' lists: `capacity` triangle indices.
-fn tile_lists(ctx: &Context, capacity: u32) -> Result<Buffer> {
-    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
-    Buffer::new(ctx, "shadow tile lists", 4 * capacity as u64, usage, MemoryLocation::GpuOnly)
+/// The compute rasterizer's triangles and tile lists, shared by the shadow maps and the
+/// visibility buffer ([`crate::passes::visibility`]): the BVH positions to rasterize, the large
+/// triangles one layer lists and their set-ups, and the tiles' lists with their capacity.
+pub(crate) struct RasterLists {
+    /// The BVH positions to rasterize ([`GpuScene::unique_triangles`]).
+    pub raster_tris: Buffer,
+    pub raster_count: u32,
+    /// One layer's large triangles that enter a rendered tile (the fill's work list).
+    pub large_tris: Buffer,
+    /// The large triangles' edge functions and depths (three `vec4` each).
+    pub setup: TexelBuffer,
+    /// The lists: `capacity` triangle indices.
+    pub tile_tris: Buffer,
+    pub capacity: u32,
+    /// The buffers' names begin with it.
+    prefix: &'static str,
+}
+
+impl RasterLists {
+    /// The lists for `scene` over layers of `tiles` tiles (the first capacity a guess that
+    /// [`RasterLists::reserve`] corrects).
+    pub fn new(ctx: &Context, scene: &GpuScene, prefix: &'static str, tiles: u64) -> Result<Self> {
+        let unique = scene.unique_triangles();
+        let storage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        let capacity = (4 * unique.len() as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
+        Ok(Self {
+            raster_tris: Buffer::upload(
+                ctx,
+                &format!("{prefix} triangles"),
+                &unique,
+                raw::BufferUsageFlags::STORAGE_BUFFER,
+            )?,
+            raster_count: unique.len() as u32,
+            large_tris: Buffer::new(
+                ctx,
+                &format!("{prefix} large triangles"),
+                4 * unique.len().max(1) as u64,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            setup: TexelBuffer::new(
+                ctx,
+                &format!("{prefix} triangle set-ups"),
+                3 * scene.bvh_stats.references as u64,
+                raw::Format::R32G32B32A32_SFLOAT,
+                16,
+                raw::BufferUsageFlags::STORAGE_BUFFER,
+            )?,
+            tile_tris: Self::lists(ctx, prefix, capacity)?,
+            capacity,
+            prefix,
+        })
+    }
+
+    fn lists(ctx: &Context, prefix: &str, capacity: u32) -> Result<Buffer> {
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        Buffer::new(ctx, &format!("{prefix} tile lists"), 4 * capacity as u64, usage, MemoryLocation::GpuOnly)
+    }
+
+    /// After a submitted rendering that counted `stats`: `None` when the lists held every entry,
+    /// else the entries needed; an error (naming `what`, with `advice`) when a tile held more
+    /// than [`ShadowMaps::MAX_TILE_TRIANGLES`].
+    pub fn check(&self, stats: ShadowStats, what: &str, advice: &str) -> Result<Option<u32>> {
+        if stats.tile_max > ShadowMaps::MAX_TILE_TRIANGLES {
+            return Err(Error::Invalid(format!(
+                "{what}: one {SHADOW_TILE}x{SHADOW_TILE} tile holds {} triangles, more than {}{advice}",
+                stats.tile_max,
+                ShadowMaps::MAX_TILE_TRIANGLES
+            )));
+        }
+        Ok((stats.entries > self.capacity).then_some(stats.entries))
+    }
+
+    /// Grows the lists to hold `entries` (and a quarter more).
+    pub fn reserve(&mut self, ctx: &Context, entries: u32) -> Result<()> {
+        let capacity = entries.saturating_add(entries / 4).min(u32::MAX / 8);
+        self.tile_tris = Self::lists(ctx, self.prefix, capacity)?;
+        self.capacity = capacity;
+        Ok(())
+    }
 }
 
 /// The shadow-map kernels.
@@ -808,17 +840,17 @@ impl ShadowPass {
                 )
             })?;
         }
-        let tri_count = maps.raster_count;
+        let tri_count = maps.lists.raster_count;
         let bins = shadow_bin::Resources {
             scene,
-            raster_tris: &maps.raster_tris,
+            raster_tris: &maps.lists.raster_tris,
             tile_count: &maps.tile_count,
             tile_start: &maps.tile_start,
-            tile_tris: &maps.tile_tris,
+            tile_tris: &maps.lists.tile_tris,
             shadow_scratch: &maps.scratch,
-            tile_setup: &maps.setup.buffer,
+            tile_setup: &maps.lists.setup.buffer,
             tile_marks: &maps.marks,
-            large_tris: &maps.large_tris,
+            large_tris: &maps.lists.large_tris,
             tile_dispatch: &maps.dispatch,
         };
         let listing = shadow_tiles::Resources {
@@ -836,7 +868,7 @@ impl ShadowPass {
                 tiles,
                 tri_count,
                 offset: layer.offset,
-                capacity: maps.capacity,
+                capacity: maps.lists.capacity,
                 window_lo: pack_pair(window[0], window[1]),
                 window_hi: pack_pair(window[2], window[3]),
                 list_at: i as u32 * tiles * tiles,
@@ -862,8 +894,8 @@ impl ShadowPass {
                 scene,
                 tile_count: &maps.tile_count,
                 tile_start: &maps.tile_start,
-                tile_tris: &maps.tile_tris,
-                setup_texels: &maps.setup,
+                tile_tris: &maps.lists.tile_tris,
+                setup_texels: &maps.lists.setup,
                 tile_list: &maps.tile_list,
                 shadow_scratch: &maps.scratch,
                 shadow_depth: &maps.depth,

@@ -21,8 +21,9 @@ use crate::gpu::kernels::{shadow_scan, shadow_tiles, vis_bin, vis_raster};
 use crate::gpu::layout::{GpuCamera, ShadowRasterParams, ShadowStats, SHADOW_DISPATCH_WORDS, SHADOW_TILE};
 use crate::gpu::scene::GpuScene;
 use crate::gpu::{Pipeline, SceneFeatures};
+use crate::passes::shadow::RasterLists;
 use crate::scene::Camera;
-use crate::vk::{raw, Buffer, Context, GpuTimer, Recorder, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, GpuTimer, Recorder};
 use gpu_allocator::MemoryLocation;
 
 /// How the hybrid frame finds each pixel's first surface.
@@ -49,22 +50,11 @@ pub struct VisibilityBuffer {
     pub(crate) visibility: Buffer,
     tile_count: Buffer,
     tile_start: Buffer,
-    tile_tris: Buffer,
-    capacity: u32,
-    raster_tris: Buffer,
-    raster_count: u32,
-    large_tris: Buffer,
-    setup: TexelBuffer,
+    lists: RasterLists,
     marks: Buffer,
     tile_list: Buffer,
     dispatch: Buffer,
     stats: Buffer,
-}
-
-/// The tiles' lists: `capacity` triangle indices.
-fn tile_lists(ctx: &Context, capacity: u32) -> Result<Buffer> {
-    let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
-    Buffer::new(ctx, "visibility tile lists", 4 * capacity as u64, usage, MemoryLocation::GpuOnly)
 }
 
 impl VisibilityBuffer {
@@ -87,13 +77,11 @@ impl VisibilityBuffer {
         if let Some(why) = Self::unsupported(ctx, scene) {
             return Err(Error::Invalid(format!("the G-buffer cannot be rasterized: {why}")));
         }
-        let unique = scene.unique_triangles();
         let side = size.0.max(size.1).max(1);
         let tiles = side.div_ceil(SHADOW_TILE) as u64;
         let tiles = tiles * tiles;
         let storage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
         let per_tile = |name| Buffer::new(ctx, name, 4 * tiles, storage, MemoryLocation::GpuOnly);
-        let capacity = (4 * unique.len() as u64).max(4 * tiles).max(1 << 16).min(u32::MAX as u64 / 8) as u32;
         Ok(Self {
             size,
             side,
@@ -106,30 +94,7 @@ impl VisibilityBuffer {
             )?,
             tile_count: per_tile("visibility tile counts")?,
             tile_start: per_tile("visibility tile starts")?,
-            tile_tris: tile_lists(ctx, capacity)?,
-            capacity,
-            raster_tris: Buffer::upload(
-                ctx,
-                "visibility triangles",
-                &unique,
-                raw::BufferUsageFlags::STORAGE_BUFFER,
-            )?,
-            raster_count: unique.len() as u32,
-            large_tris: Buffer::new(
-                ctx,
-                "visibility large triangles",
-                4 * unique.len().max(1) as u64,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            setup: TexelBuffer::new(
-                ctx,
-                "visibility triangle set-ups",
-                3 * scene.bvh_stats.references as u64,
-                raw::Format::R32G32B32A32_SFLOAT,
-                16,
-                raw::BufferUsageFlags::STORAGE_BUFFER,
-            )?,
+            lists: RasterLists::new(ctx, scene, "visibility", tiles)?,
             marks: per_tile("visibility tile marks")?,
             tile_list: per_tile("visibility tile list")?,
             dispatch: Buffer::new(
@@ -169,22 +134,12 @@ impl VisibilityBuffer {
             stats.entries,
             stats.tile_max
         );
-        if stats.tile_max > crate::passes::shadow::ShadowMaps::MAX_TILE_TRIANGLES {
-            return Err(Error::Invalid(format!(
-                "visibility buffer: one {SHADOW_TILE}x{SHADOW_TILE} tile holds {} triangles, more than {}",
-                stats.tile_max,
-                crate::passes::shadow::ShadowMaps::MAX_TILE_TRIANGLES
-            )));
-        }
-        Ok((stats.entries > self.capacity).then_some(stats.entries))
+        self.lists.check(stats, "visibility buffer", "")
     }
 
     /// Grows the tile lists to hold `entries` (and a quarter more).
     pub fn reserve(&mut self, ctx: &Context, entries: u32) -> Result<()> {
-        let capacity = entries.saturating_add(entries / 4).min(u32::MAX / 8);
-        self.tile_tris = tile_lists(ctx, capacity)?;
-        self.capacity = capacity;
-        Ok(())
+        self.lists.reserve(ctx, entries)
     }
 
     /// Reads the visibility buffer back (tests): per pixel of the image, row-major, the triangle's
@@ -280,9 +235,9 @@ impl VisibilityPass {
             row3,
             size: vis.side,
             tiles,
-            tri_count: vis.raster_count,
+            tri_count: vis.lists.raster_count,
             offset: 0,
-            capacity: vis.capacity,
+            capacity: vis.lists.capacity,
             window_lo: 0,
             window_hi: last[0] | last[1] << 16,
             list_at: 0,
@@ -305,17 +260,19 @@ impl VisibilityPass {
         })?;
         let bins = vis_bin::Resources {
             scene,
-            raster_tris: &vis.raster_tris,
+            raster_tris: &vis.lists.raster_tris,
             tile_count: &vis.tile_count,
             tile_start: &vis.tile_start,
-            tile_tris: &vis.tile_tris,
+            tile_tris: &vis.lists.tile_tris,
             visibility: &vis.visibility,
-            tile_setup: &vis.setup.buffer,
+            tile_setup: &vis.lists.setup.buffer,
             tile_marks: &vis.marks,
-            large_tris: &vis.large_tris,
+            large_tris: &vis.lists.large_tris,
             tile_dispatch: &vis.dispatch,
         };
-        step("vis_bin", rec, &mut |rec| self.count.record(rec, &bins, &params, [vis.raster_count, 1, 1]))?;
+        step("vis_bin", rec, &mut |rec| {
+            self.count.record(rec, &bins, &params, [vis.lists.raster_count, 1, 1])
+        })?;
         let scan = shadow_scan::Resources {
             tile_count: &vis.tile_count,
             tile_start: &vis.tile_start,
@@ -332,8 +289,8 @@ impl VisibilityPass {
             scene,
             tile_count: &vis.tile_count,
             tile_start: &vis.tile_start,
-            tile_tris: &vis.tile_tris,
-            setup_texels: &vis.setup,
+            tile_tris: &vis.lists.tile_tris,
+            setup_texels: &vis.lists.setup,
             tile_list: &vis.tile_list,
             visibility: &vis.visibility,
         };

@@ -170,8 +170,9 @@ fn embedded_path_tracing_equals_render_path_trace() {
 }
 
 /// The whole hybrid frame recorded through the embedding API into the caller's images (one
-/// `record_hybrid` call: G-buffer, SSAO and its blur, lighting, tonemap) is exactly the one-shot
-/// `render::hybrid` of the same settings: both go through the one orchestrator. Passes built for
+/// `record_hybrid` call: the visibility buffer and the G-buffer resolved from it, SSAO and its
+/// blur, lighting, tonemap) is exactly the one-shot `render::hybrid` of the same settings (whose
+/// G-buffer is rasterized by default): both go through the one orchestrator. Passes built for
 /// one scene's features refuse a scene with others instead of silently ignoring its textures.
 #[test]
 fn embedded_hybrid_frame_equals_render_hybrid() {
@@ -194,9 +195,11 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
     let ldr = image("ldr", raw::Format::R8G8B8A8_UNORM);
     let ao = [image("ao", raw::Format::R32_SFLOAT), image("ao blurred", raw::Format::R32_SFLOAT)];
     let views = gbuffer.views();
+    let visibility = renderer.visibility_buffer(size, settings.gbuffer).unwrap();
+    assert!(visibility.is_some(), "lavapipe rasterizes the default G-buffer");
     let targets = HybridTargets {
         gbuffer: &views,
-        visibility: None,
+        visibility: visibility.as_ref(),
         ao: Some((ao[0].view, ao[1].view)),
         hdr: hdr.view,
         ldr: Some(ldr.view),
@@ -215,7 +218,7 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
     })
     .unwrap();
     let names: Vec<String> = timer.read().unwrap().into_iter().map(|t| t.name).collect();
-    assert_eq!(names, ["gbuffer", "ssao", "ao_blur", "lighting", "tonemap"]);
+    assert_eq!(names, ["visibility", "gbuffer", "ssao", "ao_blur", "lighting", "tonemap"]);
     let reference = hybrid(&gpu, renderer.scene(), &camera, &settings).unwrap();
     let color: Vec<[f32; 4]> = hdr.read(&gpu).unwrap();
     let display: Vec<[u8; 4]> = ldr.read(&gpu).unwrap();

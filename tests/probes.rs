@@ -274,7 +274,9 @@ fn budgeted_probe_updates_in_a_host_frame_converge_to_the_bake() {
         "gap to the bake's mean irradiance {bake:.4} after 6, 12, 18, 24 updates per probe: {gaps:.3?}"
     );
     let embedded: Vec<[f32; 4]> = hdr.read(&gpu).unwrap();
-    let settings = HybridSettings { size, lighting, ao: None, ..Default::default() };
+    // The embedded frame's G-buffer is ray-cast (`record_gbuffer`): the one-shot's too.
+    let gbuffer = umbra::passes::gbuffer::GBufferMethod::Raycast;
+    let settings = HybridSettings { size, gbuffer, lighting, ao: None, ..Default::default() };
     let one_shot =
         renderer.passes().hybrid_with_probes(renderer.scene(), &camera, &settings, Some(&volume)).unwrap();
     assert!(embedded == one_shot.color, "the embedded frame differs from the one-shot render");

@@ -8,7 +8,8 @@
 //! tiles, watertight homogeneous edge functions with a tie rule, small triangles drawing
 //! themselves, a tile's depth cull) with the camera's rows: pixels for texels, view depth for the
 //! light's. The G-buffer kernel (`gbuffer.comp` with `raster`) then resolves each pixel: the
-//! pixel's ray meets its triangle in the traversal's own watertight test, and every attribute is
+//! pixel's ray meets its triangle in the traversal's own watertight terms (without their inside
+//! test: a centre within rounding of an edge is a tie either way), and every attribute is
 //! evaluated as the ray-cast G-buffer evaluates it.
 //!
 //! The one 64-bit atomic needs `shaderInt64` and `shaderBufferInt64Atomics`: lavapipe (Mesa 22.3)

@@ -475,16 +475,14 @@ fn passes_writes_json_and_a_table() {
     let frames = json["frames"].as_array().unwrap();
     let labels: Vec<(&str, &str)> =
         frames.iter().map(|f| (f["gbuffer"].as_str().unwrap(), f["ao"].as_str().unwrap())).collect();
+    // (G-buffer, AO label, AO pass) per frame, in the order the runs take turns.
     let variants = [("ssao", "ssao"), ("gtao", "gtao"), ("gtao half", "gtao")];
-    let expected: Vec<(&str, &str)> = ["raycast", "raster"]
+    let expected: Vec<(&str, &str, &str)> = ["raycast", "raster"]
         .iter()
-        .flat_map(|&g| variants.iter().map(move |&(label, _)| (g, label)))
+        .flat_map(|&g| variants.iter().map(move |&(label, pass)| (g, label, pass)))
         .collect();
-    assert_eq!(labels, expected);
-    for (frame, (gbuffer, ao)) in frames
-        .iter()
-        .zip(["raycast", "raster"].iter().flat_map(|&g| variants.iter().map(move |&(_, ao)| (g, ao))))
-    {
+    assert_eq!(labels, expected.iter().map(|&(g, label, _)| (g, label)).collect::<Vec<_>>());
+    for (frame, &(gbuffer, _, ao)) in frames.iter().zip(&expected) {
         let passes: Vec<&str> =
             frame["passes"].as_array().unwrap().iter().map(|p| p["pass"].as_str().unwrap()).collect();
         // The raster G-buffer's visibility buffer is a pass of its own, of the gbuffer stage.

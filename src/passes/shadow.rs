@@ -782,15 +782,8 @@ impl ShadowPass {
         mut timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
         let cmd = rec.cmd();
-        let mut step = |name: &str, record: &mut dyn FnMut() -> Result<()>| -> Result<()> {
-            if let Some(t) = timer.as_deref_mut() {
-                t.begin(cmd, name)?;
-            }
-            record()?;
-            if let Some(t) = timer.as_deref_mut() {
-                t.end(cmd)?;
-            }
-            Ok(())
+        let mut step = |name: &str, record: &mut dyn FnMut() -> Result<()>| {
+            GpuTimer::time(&mut timer, cmd, name, record)
         };
         let s = maps.settings.map_size;
         let tiles = s.div_ceil(SHADOW_TILE);

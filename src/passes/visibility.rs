@@ -216,14 +216,7 @@ impl VisibilityPass {
         let cmd = rec.cmd();
         let mut step =
             |name: &str, rec: &mut Recorder<'_>, record: &mut dyn FnMut(&mut Recorder<'_>) -> Result<()>| {
-                if let Some(t) = timer.as_deref_mut() {
-                    t.begin(cmd, name)?;
-                }
-                record(rec)?;
-                if let Some(t) = timer.as_deref_mut() {
-                    t.end(cmd)?;
-                }
-                Result::Ok(())
+                GpuTimer::time(&mut timer, cmd, name, || record(rec))
             };
         let (w, h) = vis.size;
         let tiles = vis.side.div_ceil(SHADOW_TILE);

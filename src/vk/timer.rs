@@ -48,6 +48,24 @@ impl GpuTimer {
         unsafe { self.shared.device.cmd_reset_query_pool(cmd, self.pool, 0, 2 * self.capacity) };
     }
 
+    /// Records `record` as pass `name` on `timer` when given (untimed without one): the steps of
+    /// a pass that times its own kernels.
+    pub fn time<T>(
+        timer: &mut Option<&mut GpuTimer>,
+        cmd: vk::CommandBuffer,
+        name: &str,
+        record: impl FnOnce() -> Result<T>,
+    ) -> Result<T> {
+        if let Some(t) = timer.as_deref_mut() {
+            t.begin(cmd, name)?;
+        }
+        let recorded = record()?;
+        if let Some(t) = timer.as_deref_mut() {
+            t.end(cmd)?;
+        }
+        Ok(recorded)
+    }
+
     /// Marks the start of pass `name`.
     pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<()> {
         if self.open || self.names.len() as u32 >= self.capacity {

@@ -575,6 +575,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             probes: None,
             lightmaps: None,
             reservoirs: None,
+            taa: None,
         };
         let (host_targets, umbra_targets) = (target(0, &host_views), target(1, &umbra_views));
         // 1. The host's own G-buffer pass, which writes the seven images of `host_views`.
@@ -585,7 +586,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             forward: v4(c.forward),
             right: v4(c.right),
             up: v4(c.up),
-            size: [size.0, size.1, tris.len() as u32, c.orthographic],
+            size: [size.0, size.1, tris.len() as u32, c.orthographic() as u32],
         };
         let mut graph = Graph::new();
         let host_gbuffer = GBufferImages::import(&mut graph, &host_views);

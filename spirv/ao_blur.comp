@@ -27,10 +27,11 @@ vec3 cam_forward;
 vec3 cam_right;
 vec3 cam_up;
 bool cam_ortho;
+vec2 cam_jitter;
 
 // The view-space position (camera at the origin) of `pixel`'s surface at view depth `depth`.
 vec3 view_position(ivec2 pixel, float depth) {
-    return camera_depth_point(cam_forward, cam_ortho, camera_offset(cam_right, cam_up, vec2(pixel) + 0.5, params.size),
+    return camera_depth_point(cam_forward, cam_ortho, camera_offset(cam_right, cam_up, vec2(pixel) + 0.5 + cam_jitter, params.size),
                               depth);
 }
 
@@ -38,7 +39,8 @@ void main() {
     cam_forward = params.camera.forward;
     cam_right = params.camera.right;
     cam_up = params.camera.up;
-    cam_ortho = params.camera.orthographic != 0u;
+    cam_ortho = camera_orthographic(params.camera.flags);
+    cam_jitter = camera_jitter(params.camera.flags);
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(params.size);
     if (any(greaterThanEqual(pixel, size))) {

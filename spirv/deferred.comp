@@ -299,7 +299,7 @@ void main() {
         vec3 origin;
         vec3 dir;
         camera_ray(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-                   params.camera.orthographic != 0u, vec2(pixel) + 0.5, size, origin, dir);
+                   camera_orthographic(params.camera.flags), camera_sample(pixel, params.camera.flags), size, origin, dir);
         vec3 background = params.env;
         if (HAS_ENV_MAP) {
             background *= env_radiance(dir, params.env_size);
@@ -322,7 +322,7 @@ void main() {
             vec3 origin;
             vec3 dir;
             camera_ray(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-                       params.camera.orthographic != 0u, vec2(pixel) + 0.5, size, origin, dir);
+                       camera_orthographic(params.camera.flags), camera_sample(pixel, params.camera.flags), size, origin, dir);
             Hit hit;
             if (bvh_closest(origin, dir, 0.0, BVH_INF, hit)) {
                 parallax_occlusion(hit.tri, hit.bary, sp.wo);

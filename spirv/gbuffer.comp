@@ -26,10 +26,10 @@ void main() {
         return;
     }
     vec3 forward = params.camera.forward;
-    bool orthographic = params.camera.orthographic != 0u;
+    bool orthographic = camera_orthographic(params.camera.flags);
     vec3 origin;
     vec3 dir;
-    camera_ray(params.camera.origin, forward, params.camera.right, params.camera.up, orthographic, vec2(pixel) + 0.5,
+    camera_ray(params.camera.origin, forward, params.camera.right, params.camera.up, orthographic, camera_sample(pixel, params.camera.flags),
                size, origin, dir);
 
     Hit hit;

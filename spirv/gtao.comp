@@ -42,6 +42,7 @@ vec3 cam_forward;
 vec3 cam_right;
 vec3 cam_up;
 bool cam_ortho;
+vec2 cam_jitter;
 
 const float GOLDEN = 0.61803398874989485;
 // The nearest point of a side is at least this many pixels from the pixel (XeGTAO's 1.3).
@@ -58,7 +59,8 @@ void main() {
     cam_forward = params.camera.forward;
     cam_right = params.camera.right;
     cam_up = params.camera.up;
-    cam_ortho = params.camera.orthographic != 0u;
+    cam_ortho = camera_orthographic(params.camera.flags);
+    cam_jitter = camera_jitter(params.camera.flags);
     ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
     uvec2 size = params.size;
     uint scale = max(params.scale, 1u);
@@ -72,7 +74,7 @@ void main() {
         return;
     }
     // Positions by camera_depth_point, the samples' as the pixel's (their differences matter).
-    vec3 p = cam_origin + camera_depth_point(cam_forward, cam_ortho, camera_offset(cam_right, cam_up, vec2(pixel) + 0.5, size), d0);
+    vec3 p = cam_origin + camera_depth_point(cam_forward, cam_ortho, camera_offset(cam_right, cam_up, vec2(pixel) + 0.5 + cam_jitter, size), d0);
     vec3 n = normalize(imageLoad(gb_normal, pixel).xyz);
     vec3 v = cam_ortho ? -cam_forward : normalize(cam_origin - p);
     float radius = params.radius;
@@ -133,7 +135,7 @@ void main() {
                 if (dq <= 0.0) {
                     continue;
                 }
-                vec3 offset = camera_offset(cam_right, cam_up, vec2(q) + 0.5, size);
+                vec3 offset = camera_offset(cam_right, cam_up, vec2(q) + 0.5 + cam_jitter, size);
                 vec3 delta = cam_origin + camera_depth_point(cam_forward, cam_ortho, offset, dq) - p;
                 float dist = length(delta);
                 vec3 u = cam_ortho ? cam_forward : normalize(cam_forward + offset);

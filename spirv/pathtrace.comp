@@ -72,7 +72,7 @@ bool path_trace(Path path, out Hit hit) {
 // Sample `sample_index` of `pixel` (of the whole image): its camera ray.
 Path camera_path_of(uvec2 pixel, uint sample_index) {
     return camera_path(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-                       params.camera.orthographic != 0u, uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
+                       camera_orthographic(params.camera.flags), uvec2(params.camera.image_width, params.camera.image_height), pixel, sample_index);
 }
 
 // One pixel's samples of a dispatch: the path in flight and the sums of the finished ones.

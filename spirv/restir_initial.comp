@@ -16,11 +16,14 @@ const bool GGX_WALTER = false;  // the BSDF is evaluated here, never sampled
 #include "shading.glsl"
 #include "restir.glsl"
 
-// Where world point p was in the previous frame's image (pixel coordinates, centres at +0.5),
-// and its view depth there; false when it was behind that camera.
+// Where world point p was in the previous frame's grid of samples (pixel coordinates, each
+// pixel's sample at +0.5: the image position less that frame's jitter), and its view depth there;
+// false when it was behind that camera.
 bool reproject(vec3 p, out vec2 pos, out float depth) {
-    return camera_project(prev_camera.origin, prev_camera.forward, prev_camera.right, prev_camera.up,
-                          prev_camera.orthographic != 0u, p, params.size, pos, depth);
+    bool front = camera_project(prev_camera.origin, prev_camera.forward, prev_camera.right, prev_camera.up,
+                                camera_orthographic(prev_camera.flags), p, params.size, pos, depth);
+    pos -= camera_jitter(prev_camera.flags);
+    return front;
 }
 
 void main() {

@@ -41,7 +41,8 @@ void main() {
         return;
     }
     vec3 p = gbuffer_position(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-                              params.camera.orthographic != 0u, pixel, size, depth);
+                              camera_orthographic(params.camera.flags), camera_jitter(params.camera.flags), pixel, size,
+                              depth);
     vec3 n = normalize(imageLoad(gb_normal, pixel).xyz);
     vec3 ng = oct_decode(unpackSnorm2x16(imageLoad(gb_material, pixel).y));
     vec3 o = offset_ray(p, ng);

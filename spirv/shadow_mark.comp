@@ -61,7 +61,7 @@ bool project(vec4 r0, vec4 r1, vec4 r3, vec3 p, out vec2 uv) {
 // The world point at view depth `depth` on the ray through image position `pos`.
 vec3 view_point(vec2 pos, float depth) {
     return camera_point(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-                        params.camera.orthographic != 0u, pos, params.size, depth);
+                        camera_orthographic(params.camera.flags), pos, params.size, depth);
 }
 
 // Marks tile (x, y) of the layer whose tiles start at `at`.
@@ -102,7 +102,7 @@ void main() {
     }
     bool any_point = dmax > 0.0;
     // The block's corner pixels' image positions.
-    vec2 c0 = vec2(base) + 0.5;
+    vec2 c0 = camera_sample(ivec2(base), params.camera.flags);
     vec2 c1 = c0 + float(BLOCK - 1u);
     for (uint k = 0u; k < params.lights; ++k) {
         uvec4 rec = imageLoad(shadow_texels, int(SHADOW_HEADER_TEXELS + k));
@@ -175,7 +175,7 @@ void main() {
             for (uint q = 0u; pointwise && q < BLOCK * BLOCK; ++q) {
                 float depth = block_depth(base, q);
                 if (depth > 0.0) {
-                    vec2 pos = vec2(base + uvec2(q % BLOCK, q / BLOCK)) + 0.5;
+                    vec2 pos = camera_sample(ivec2(base + uvec2(q % BLOCK, q / BLOCK)), params.camera.flags);
                     vec3 p = view_point(pos, depth);
                     // (Positive: the point lies in front of the camera.)
                     float d = max(dot(p - params.camera.origin, params.camera.forward), 1e-30);

@@ -30,11 +30,12 @@ vec3 cam_forward;
 vec3 cam_right;
 vec3 cam_up;
 bool cam_ortho;
+vec2 cam_jitter;
 
 const float GOLDEN = 0.61803398874989485;
 
 vec3 position_at(ivec2 pixel, float depth) {
-    return gbuffer_position(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, pixel, params.size, depth);
+    return gbuffer_position(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, cam_jitter, pixel, params.size, depth);
 }
 
 // Whether point q (world) is behind the depth buffer's surface, within range of p at depth d0.
@@ -44,6 +45,8 @@ bool occluded(vec3 q, float d0, float radius, float bias) {
     if (!camera_project(cam_origin, cam_forward, cam_right, cam_up, cam_ortho, q, params.size, pos, dq)) {
         return false;
     }
+    // In the pixels' sample grid (each pixel's sample at its centre moved by the jitter).
+    pos -= cam_jitter;
     vec2 size = vec2(params.size);
     if (any(lessThan(pos, vec2(0.0))) || any(greaterThanEqual(pos, size))) {
         return false;
@@ -63,7 +66,8 @@ void main() {
     cam_forward = params.camera.forward;
     cam_right = params.camera.right;
     cam_up = params.camera.up;
-    cam_ortho = params.camera.orthographic != 0u;
+    cam_ortho = camera_orthographic(params.camera.flags);
+    cam_jitter = camera_jitter(params.camera.flags);
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uvec2 size = params.size;
     if (any(greaterThanEqual(uvec2(pixel), size))) {

@@ -164,7 +164,7 @@ void camera_rays() {
     uint sample_index;
     path_pixel(path, pixel, sample_index);
     Path p = camera_path(wf_camera.origin, wf_camera.forward, wf_camera.right, wf_camera.up,
-                         wf_camera.orthographic != 0u, uvec2(wf_camera.image_width, wf_camera.image_height), pixel, sample_index);
+                         camera_orthographic(wf_camera.flags), uvec2(wf_camera.image_width, wf_camera.image_height), pixel, sample_index);
     store_fieldf(F_ORIGIN, path, vec4(p.origin, p.prev_pdf));
     store_field(F_DIR, path, uvec4(floatBitsToUint(p.dir), p.depth | p.channel << 16u));
     store_fieldf(F_THROUGHPUT, path, vec4(p.throughput, 0.0));

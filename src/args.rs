@@ -256,6 +256,7 @@ impl RenderArgs {
         umbra::render::HybridSettings {
             size: self.size,
             gbuffer: self.hybrid.gbuffer,
+            samples: self.hybrid.hybrid_samples,
             lighting: LightingSettings {
                 shadow_rays: self.hybrid.shadow_rays,
                 seed: self.seed,
@@ -403,6 +404,11 @@ pub(crate) struct HybridArgs {
     /// the scene has implicit shapes or blended materials), or one ray per pixel (raycast).
     #[arg(long, value_enum, default_value = "raster")]
     pub(crate) gbuffer: GBufferMethod,
+    /// Hybrid: anti-aliasing by supersampling: N sub-frames, each pixel sampled at N offsets
+    /// within it (a k x k grid when N = k², else Halton points), averaged; the EXR's AOVs stay
+    /// those of the pixels' centres. 1: one sample through each pixel's centre.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub(crate) hybrid_samples: u32,
     /// Hybrid: shadow rays (light samples) per pixel for emissive triangles (and, with
     /// --rt-light-size, per punctual light).
     #[arg(long, default_value_t = 4)]

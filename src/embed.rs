@@ -31,8 +31,12 @@
 //! // or the whole hybrid frame in one call (the one wiring the one-shot renders use too):
 //! renderer.record_hybrid(cmd, &camera, &HybridTargets { gbuffer: &gbuffer_views,
 //!     visibility: None, ao: Some((ao_view, ao_blur_view)), hdr: hdr_view, ldr: Some(ldr_view), shadows: None,
-//!     probes: None, lightmaps: None, reservoirs: None },
+//!     probes: None, lightmaps: None, reservoirs: None, taa: None },
 //!     &settings, None)?;
+//! // anti-aliased over frames (TAA): a history per view, made once, moved to GENERAL once;
+//! // record_hybrid then jitters the camera and resolves; the result is `taa.resolved()`:
+//! let taa = renderer.taa_history(size, TaaSettings::default())?;
+//! // ... `taa: Some(&taa)` in the targets above
 //! // shadow maps instead of shadow rays: placed once, re-recorded when a light, the geometry
 //! // or (for a directional light's cascades) the camera changes:
 //! let maps = renderer.shadow_maps(&camera, size, &shadow_settings)?;
@@ -107,6 +111,7 @@ use crate::passes::pathtrace::{PathOptions, PathSettings, PathTarget};
 use crate::passes::probes::{ProbeSettings, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowSettings, ShadowView};
+use crate::passes::taa::{TaaHistory, TaaSettings};
 use crate::passes::temporal::{TemporalHistory, TemporalSettings};
 use crate::passes::tonemap::ToneCurve;
 use crate::render::{Frame, HybridSettings, HybridTargets, Passes};
@@ -542,9 +547,12 @@ impl Renderer {
     }
 
     /// Records a whole hybrid frame into the host's `targets` (G-buffer, SSAO and blur when
-    /// `settings.ao`, lighting, tonemap when `targets.ldr`), timed into `timer` if given. The
-    /// renderer's image-based lighting is the default [`IblSettings`]' (`settings.ibl` is not
-    /// read here).
+    /// `settings.ao`, lighting, the TAA resolve when `targets.taa`, tonemap when
+    /// `targets.ldr`), timed into `timer` if given. With TAA the frame samples the pixels at
+    /// the history's next offset ([`TaaHistory::jitter`]; pass the camera unjittered), and the
+    /// anti-aliased radiance is then [`TaaHistory::resolved`] (`targets.hdr` holds the frame's
+    /// own). The renderer's image-based lighting is the default [`IblSettings`]'
+    /// (`settings.ibl` is not read here).
     pub fn record_hybrid(
         &self,
         cmd: raw::CommandBuffer,
@@ -553,7 +561,17 @@ impl Renderer {
         settings: &HybridSettings,
         timer: Option<&mut GpuTimer>,
     ) -> Result<()> {
+        let jittered = targets.taa.map(|history| camera.jittered(history.jitter()));
+        let camera = jittered.as_ref().unwrap_or(camera);
         self.record(cmd, |rec| self.passes.record_hybrid(rec, self.frame(camera), targets, settings, timer))
+    }
+
+    /// The history of temporal anti-aliasing ([`crate::passes::taa`]) for a view of `size`
+    /// (owned by umbra, freed on drop; keep it from frame to frame, one per view; move it to
+    /// `GENERAL` once with [`TaaHistory::init_general`]; [`TaaHistory::reset`] at a cut): pass
+    /// it as [`HybridTargets::taa`]. A new size needs a new history.
+    pub fn taa_history(&self, size: (u32, u32), settings: TaaSettings) -> Result<TaaHistory> {
+        TaaHistory::new(&self.ctx, size, settings)
     }
 
     /// [`Self::record_hybrid`] but its G-buffer, already recorded into `targets.gbuffer`

@@ -85,6 +85,7 @@ fn camera(position: Vec3, target: Vec3, up: Vec3, yfov_degrees: f32) -> Camera {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     }
 }
 

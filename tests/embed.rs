@@ -207,6 +207,7 @@ fn embedded_hybrid_frame_equals_render_hybrid() {
         probes: None,
         lightmaps: None,
         reservoirs: None,
+        taa: None,
     };
     let mut timer = GpuTimer::new(&gpu, 8).unwrap();
     gpu.submit(|cmd| {

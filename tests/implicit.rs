@@ -491,6 +491,7 @@ fn sphere_on_floor(implicit: bool, subdivisions: u32) -> Scene {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     });
     scene.update_emissive();
     scene

@@ -543,6 +543,7 @@ fn embedded_shadow_maps_match_the_one_shot_render() {
         probes: None,
         lightmaps: None,
         reservoirs: None,
+        taa: None,
     };
     gpu.submit(|cmd| {
         renderer.record_gbuffer(cmd, &stage.camera, &views)?;
@@ -901,6 +902,7 @@ fn half_plane() -> (Vec<[Vec3; 3]>, Vec<[Vec3; 3]>, Camera) {
         aspect: None,
         znear: 0.01,
         orthographic: Some(umbra::scene::Orthographic { xmag: 0.5, ymag: 0.5, zfar: 10.0 }),
+        jitter: [0.0; 2],
     };
     (floor, blocker, view)
 }

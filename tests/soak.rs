@@ -100,6 +100,7 @@ fn record_frames(
         probes: None,
         lightmaps: None,
         reservoirs: None,
+        taa: None,
     };
     let path_settings = PathSettings { size: SIZE, max_bounces: 2, ..PathSettings::default() };
     ctx.submit(|cmd| {

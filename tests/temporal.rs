@@ -27,6 +27,7 @@ fn camera(x: f32) -> Camera {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     }
 }
 

@@ -183,6 +183,7 @@ fn grazing_floor(sampler: Sampler) -> Scene {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     });
     scene.update_emissive();
     scene
@@ -389,6 +390,7 @@ fn gbuffer_of_a_magnified_texture_ignores_mipmaps() {
             aspect: None,
             znear: 0.01,
             orthographic: None,
+            jitter: [0.0; 2],
         });
         scene.update_emissive();
         scene

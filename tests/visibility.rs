@@ -32,12 +32,14 @@ fn scene_files() -> Vec<std::path::PathBuf> {
     files
 }
 
-/// The centre ray of pixel (x, y) in f64, from the same f32 camera the kernels read.
+/// The ray of pixel (x, y) in f64 (through its centre moved by the camera's jitter), from the
+/// same f32 camera the kernels read.
 fn centre_ray(c: &GpuCamera, (w, h): (u32, u32), (x, y): (u32, u32)) -> (DVec3, DVec3) {
     let v = |a: [f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
-    let ndc = (2.0 * (x as f64 + 0.5) / w as f64 - 1.0, 1.0 - 2.0 * (y as f64 + 0.5) / h as f64);
+    let [jx, jy] = c.jitter().map(f64::from);
+    let ndc = (2.0 * (x as f64 + 0.5 + jx) / w as f64 - 1.0, 1.0 - 2.0 * (y as f64 + 0.5 + jy) / h as f64);
     let offset = ndc.0 * v(c.right) + ndc.1 * v(c.up);
-    if c.orthographic != 0 {
+    if c.orthographic() {
         (v(c.origin) + offset, v(c.forward))
     } else {
         (v(c.origin), (v(c.forward) + offset).normalize())
@@ -124,7 +126,7 @@ fn compare(gpu: &Gpu, scene: &Scene, camera: &Camera, size: (u32, u32)) -> Optio
     // A pixel's width in world units: per unit of distance along a pinhole's ray (roughly: the
     // centre ray's), or flat for an orthographic view.
     let width = 2.0 * glam::Vec3::from(cam.up).length() as f64 / size.1 as f64;
-    let pixel = if cam.orthographic != 0 { (0.0, width) } else { (width, 0.0) };
+    let pixel = if cam.orthographic() { (0.0, width) } else { (width, 0.0) };
     let mut outcome = Outcome { surfaces: 0, ties: 0, unexplained: Vec::new() };
     for y in 0..size.1 {
         for x in 0..size.0 {
@@ -229,7 +231,9 @@ fn raster_gbuffer_equals_ray_cast_on_every_scene() {
 
 /// Views the rasterizer finds hardest, against the ray cast: from inside the Cornell box, where
 /// walls pass behind the camera (a pinhole's triangles with vertices behind it, clipped by the
-/// homogeneous edge functions alone) or behind an orthographic camera's plane (cut by depth).
+/// homogeneous edge functions alone) or behind an orthographic camera's plane (cut by depth);
+/// each also jittered (anti-aliasing's sub-pixel offsets: the rasterizer covers the pixels'
+/// moved sample positions, where the rays go).
 #[test]
 fn raster_gbuffer_equals_ray_cast_from_inside_the_box() {
     let gpu = Gpu::new();
@@ -250,7 +254,13 @@ fn raster_gbuffer_equals_ray_cast_from_inside_the_box() {
         orthographic: Some(umbra::scene::Orthographic { xmag: extent, ymag: extent, zfar: 100.0 }),
         ..common::camera(centre, centre + glam::Vec3::new(1.0, -0.2, 0.3))
     };
-    for (name, camera) in [("pinhole", pinhole), ("orthographic", orthographic)] {
+    let jitter = [0.3125, -0.4375];
+    for (name, camera) in [
+        ("pinhole", pinhole),
+        ("orthographic", orthographic),
+        ("jittered pinhole", pinhole.jittered(jitter)),
+        ("jittered orthographic", orthographic.jittered(jitter)),
+    ] {
         let outcome = compare(&gpu, &scene, &camera, (96, 80)).expect("the Cornell box rasterizes");
         eprintln!("{name}: {} surface pixels, {} ties", outcome.surfaces, outcome.ties);
         // (The box is open at the front.)

@@ -5,6 +5,25 @@
 #ifndef UMBRA_CAMERA_GLSL
 #define UMBRA_CAMERA_GLSL
 
+// GpuCamera.flags: whether the camera is orthographic (else a pinhole). (Its bit and the jitter's
+// unit are layout.glsl's CAMERA_ORTHOGRAPHIC and CAMERA_JITTER_UNIT, written out: hosts include
+// this file through gbuffer.glsl without layout.glsl.)
+bool camera_orthographic(uint flags) {
+    return (flags & 1u) != 0u;
+}
+
+// GpuCamera.flags: the offset of every pixel's sample position from its centre (anti-aliasing's
+// jitter), pixels: two signed 12-bit counts of 1/4096 pixel, bits 8..20 (x) and 20..32 (y).
+vec2 camera_jitter(uint flags) {
+    return vec2(bitfieldExtract(int(flags), 8, 12), bitfieldExtract(int(flags), 20, 12)) * (1.0 / 4096.0);
+}
+
+// The image position pixel `pixel` samples: its centre, moved by the jitter of the camera's
+// `flags` (exactly the centre where there is none).
+vec2 camera_sample(ivec2 pixel, uint flags) {
+    return vec2(pixel) + 0.5 + camera_jitter(flags);
+}
+
 // The offset of image position `pos` across the image plane at unit view depth (a pinhole's) or
 // from the plane's centre (an orthographic view's).
 vec3 camera_offset(vec3 right, vec3 up, vec2 pos, uvec2 size) {

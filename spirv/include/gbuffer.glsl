@@ -47,10 +47,11 @@ void gbuffer_unpack_layers2(uvec4 bits, out vec4 sheen, out vec4 diffuse_transmi
     diffuse_transmission = unpackUnorm4x8(bits.y);
 }
 
-// The world-space point at view-space `depth` (along forward) on pixel `pixel`'s centre ray.
-vec3 gbuffer_position(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, ivec2 pixel, uvec2 size,
-                      float depth) {
-    return camera_point(eye, forward, right, up, orthographic, vec2(pixel) + 0.5, size, depth);
+// The world-space point at view-space `depth` (along forward) on the ray pixel `pixel` sampled:
+// through its centre moved by the camera's `jitter` (camera_jitter).
+vec3 gbuffer_position(vec3 eye, vec3 forward, vec3 right, vec3 up, bool orthographic, vec2 jitter, ivec2 pixel,
+                      uvec2 size, float depth) {
+    return camera_point(eye, forward, right, up, orthographic, vec2(pixel) + 0.5 + jitter, size, depth);
 }
 
 #endif

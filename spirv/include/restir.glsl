@@ -32,7 +32,8 @@ bool gbuffer_point(ivec2 pixel, out ShadePoint sp) {
     vec3 origin;
     vec3 dir;
     camera_ray(params.camera.origin, params.camera.forward, params.camera.right, params.camera.up,
-               params.camera.orthographic != 0u, vec2(pixel) + 0.5, params.size, origin, dir);
+               camera_orthographic(params.camera.flags), camera_sample(pixel, params.camera.flags), params.size, origin,
+               dir);
     sp.p = origin + dir * (sp.depth / dot(dir, params.camera.forward));
     vec4 normal_rough = imageLoad(gb_normal, pixel);
     vec4 base_metal = imageLoad(gb_base, pixel);

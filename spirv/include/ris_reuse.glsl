@@ -41,7 +41,7 @@ bool ris_reuses() {
 // view's from its plane): the hit distance of the camera ray that found it.
 float ris_view_distance(vec3 p) {
     vec3 d = p - params.camera.origin;
-    return params.camera.orthographic != 0u ? dot(d, params.camera.forward) : length(d);
+    return camera_orthographic(params.camera.flags) ? dot(d, params.camera.forward) : length(d);
 }
 
 // The shading point of a stored first hit (triangle `tri`, barycentrics `bary`, position p), as
@@ -55,7 +55,7 @@ ShadePoint ris_stored_point(uint tri, vec2 bary, vec3 p) {
     ShadePoint sp;
     sp.p = p;
     sp.depth = ris_view_distance(p);
-    sp.wo = params.camera.orthographic != 0u ? -params.camera.forward : normalize(params.camera.origin - p);
+    sp.wo = camera_orthographic(params.camera.flags) ? -params.camera.forward : normalize(params.camera.origin - p);
     vec3 ng = normalize(hit_normal(hit));
     bool front = dot(ng, sp.wo) >= 0.0;
     if (!front) {

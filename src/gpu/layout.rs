@@ -516,6 +516,7 @@ const _: () = assert!(size_of::<DeferredParams>() == 128);
 const _: () = assert!(size_of::<GBufferParams>() == 80);
 const _: () = assert!(size_of::<AoParams>() == 112);
 const _: () = assert!(size_of::<AoBlurParams>() == 96);
+const _: () = assert!(size_of::<TaaParams>() == 96);
 const _: () = assert!(size_of::<TemporalParams>() == 128);
 const _: () = assert!(size_of::<IblParams>() == 48);
 #[cfg(feature = "testing")]
@@ -604,11 +605,37 @@ impl GpuCamera {
             up: (up * half_h).into(),
             image_width: w,
             image_height: h,
-            orthographic: camera.orthographic.is_some() as u32,
+            flags: if camera.orthographic.is_some() { CAMERA_ORTHOGRAPHIC } else { 0 },
             ..Default::default()
         };
         gpu.set_region_origin(origin);
+        gpu.set_jitter(camera.jitter);
         gpu
+    }
+
+    /// Whether the camera is orthographic (else a pinhole).
+    pub fn orthographic(&self) -> bool {
+        self.flags & CAMERA_ORTHOGRAPHIC != 0
+    }
+
+    /// The sub-pixel offset of every pixel's sample position from its centre, pixels (x right,
+    /// y down), as the kernels read it: a multiple of 1/4096 in [-0.5, 0.5).
+    pub fn jitter(&self) -> [f32; 2] {
+        // Each a signed 12-bit field: shifted to the word's top and back, sign-extended.
+        let field = |shift: u32| ((self.flags << (20 - shift)) as i32 >> 20) as f32 * CAMERA_JITTER_UNIT;
+        [field(8), field(20)]
+    }
+
+    /// Sets the sub-pixel offset of every pixel's sample position ([`GpuCamera::jitter`]),
+    /// rounded to the nearest 1/4096 pixel; each coordinate must lie in [-0.5, 0.5) (an offset
+    /// of a whole pixel moves the image: move the camera instead).
+    pub fn set_jitter(&mut self, jitter: [f32; 2]) {
+        let field = |j: f32| {
+            let q = (j / CAMERA_JITTER_UNIT).round();
+            debug_assert!((-2048.0..2048.0).contains(&q), "jitter {j} outside [-0.5, 0.5)");
+            (q.clamp(-2048.0, 2047.0) as i32 as u32) & 0xfff
+        };
+        self.flags = (self.flags & 0xff) | field(jitter[0]) << 8 | field(jitter[1]) << 20;
     }
 
     /// The region's first pixel (left column, top row).
@@ -644,5 +671,26 @@ impl PathStats {
     pub fn walk_counts(&self) -> [u64; 4] {
         [self.walk_lanes_closest, self.walk_groups_closest, self.walk_lanes_any, self.walk_groups_any]
             .map(|[lo, hi]| (hi as u64) << 32 | lo as u64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The jitter's fields keep their sign and the orthographic bit, and round to 1/4096 pixel.
+    #[test]
+    fn camera_jitter_round_trips() {
+        let mut camera = GpuCamera { flags: CAMERA_ORTHOGRAPHIC, ..Default::default() };
+        for jitter in [[0.0, 0.0], [0.25, -0.25], [-0.5, 0.499755859375], [0.1, -0.3]] {
+            camera.set_jitter(jitter);
+            let back = camera.jitter();
+            for k in 0..2 {
+                assert!((back[k] - jitter[k]).abs() <= 0.5 / 4096.0, "{jitter:?} came back as {back:?}");
+            }
+            assert!(camera.orthographic(), "the jitter cleared the orthographic bit");
+        }
+        camera.set_jitter([0.0, 0.0]);
+        assert_eq!(camera.flags, CAMERA_ORTHOGRAPHIC, "no jitter is no bits");
     }
 }

@@ -10,6 +10,7 @@ pub mod pathtrace;
 pub mod probes;
 pub mod restir;
 pub mod shadow;
+pub mod taa;
 pub mod temporal;
 pub mod tonemap;
 pub mod visibility;

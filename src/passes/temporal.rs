@@ -287,8 +287,8 @@ impl TemporalPass {
         let prev_camera = previous.map_or(*camera, |(c, _)| c);
         let flags = if previous.is_some() { TEMPORAL_HISTORY } else { 0 }
             | if split { TEMPORAL_SPLIT } else { 0 }
-            | if camera.orthographic != 0 { TEMPORAL_ORTHOGRAPHIC } else { 0 }
-            | if prev_camera.orthographic != 0 { TEMPORAL_PREV_ORTHOGRAPHIC } else { 0 };
+            | if camera.orthographic() { TEMPORAL_ORTHOGRAPHIC } else { 0 }
+            | if prev_camera.orthographic() { TEMPORAL_PREV_ORTHOGRAPHIC } else { 0 };
         let params = TemporalParams {
             origin: camera.origin,
             flags,

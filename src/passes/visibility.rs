@@ -156,13 +156,15 @@ impl VisibilityBuffer {
 }
 
 /// The camera's rows for the rasterizer: world point p to (x w, y w, depth, w) with x, y in
-/// pixels (row 0 at the top), depth the view depth along the forward axis and w that depth (a
+/// pixels (row 0 at the top) less the camera's jitter (so that the rasterizer's pixel centres are
+/// the pixels' sample positions), depth the view depth along the forward axis and w that depth (a
 /// pinhole) or 1 (orthographic): `camera.glsl`'s projection, computed in f64 from the same f32
 /// camera the G-buffer's rays start from.
 fn camera_rows(camera: &GpuCamera) -> [[f32; 4]; 4] {
     let v = |a: [f32; 3]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
     let (o, f, r, u) = (v(camera.origin), v(camera.forward), v(camera.right), v(camera.up));
     let (hw, hh) = (camera.image_width as f64 / 2.0, camera.image_height as f64 / 2.0);
+    let [jx, jy] = camera.jitter().map(f64::from);
     let a = r / r.length_squared();
     let b = u / u.length_squared();
     // A row (n, -n · o) + c: the affine function n · (p - o) + c.
@@ -171,10 +173,10 @@ fn camera_rows(camera: &GpuCamera) -> [[f32; 4]; 4] {
         [n.x as f32, n.y as f32, n.z as f32, w as f32]
     };
     let depth = row(f, 0.0);
-    if camera.orthographic != 0 {
-        [row(a * hw, hw), row(-b * hh, hh), depth, [0.0, 0.0, 0.0, 1.0]]
+    if camera.orthographic() {
+        [row(a * hw, hw - jx), row(-b * hh, hh - jy), depth, [0.0, 0.0, 0.0, 1.0]]
     } else {
-        [row((a + f) * hw, 0.0), row((f - b) * hh, 0.0), depth, depth]
+        [row((a + f) * hw - f * jx, 0.0), row((f - b) * hh - f * jy, 0.0), depth, depth]
     }
 }
 

@@ -6,14 +6,15 @@ use super::*;
 
 /// The stage of the hybrid frame a pass of this file belongs to, by the name its `add_*` gives
 /// it: `"gbuffer"` (primary visibility and the surfaces' attributes), `"ao"` (ambient occlusion
-/// with its blur or upsample), `"lighting"` (ReSTIR's reuse and the lighting itself) or
-/// `"tonemap"`; `None` for a pass of another's (a host's). Benchmarks sum a stage's passes
+/// with its blur or upsample), `"lighting"` (ReSTIR's reuse and the lighting itself),
+/// `"antialias"` (the TAA resolve) or `"tonemap"`; `None` for a pass of another's (a host's). Benchmarks sum a stage's passes
 /// whatever they are called, so a pass added here is given its stage here.
 pub fn stage_of(pass: &str) -> Option<&'static str> {
     match pass {
         "visibility" | "gbuffer" => Some("gbuffer"),
         "ssao" | "gtao" | "rtao" | "ao_blur" => Some("ao"),
         "restir" | "lighting" => Some("lighting"),
+        "taa" => Some("antialias"),
         "tonemap" => Some("tonemap"),
         _ => None,
     }
@@ -147,6 +148,30 @@ impl Passes {
         });
     }
 
+    /// Adds the anti-aliasing resolve of `current` (the frame's radiance, sampled at `camera`'s
+    /// jitter) with `history` into its next image, imported as `resolved` (which
+    /// [`TaaHistory::resolved`] names once the pass is recorded).
+    pub fn add_taa<'g>(
+        &'g self,
+        graph: &mut Graph<'g>,
+        camera: &'g Camera,
+        gbuffer: GBufferImages,
+        current: GraphImage,
+        history: &'g TaaHistory,
+        mode: TaaMode,
+    ) -> Result<GraphImage> {
+        // The image the resolve writes: the one the last did not (the graph needs it before the
+        // pass records, when the history flips).
+        let resolved = graph.import("taa resolved", history.next_view());
+        graph.add_pass("taa").read_all(gbuffer.images).read(current).write(resolved).record(
+            move |rec, views| {
+                let gbuffer = gbuffer.views(views);
+                self.record_taa(rec, &gbuffer, views[current], history, camera, mode)
+            },
+        );
+        Ok(resolved)
+    }
+
     /// Adds the hybrid frame's passes to `graph`: the G-buffer into `targets.gbuffer`, then
     /// [`Passes::add_hybrid_shading`]. The one place the hybrid frame is wired.
     pub fn add_hybrid<'g>(
@@ -234,9 +259,16 @@ impl Passes {
         let inputs =
             LightingInputs { ao, shadows, probes: targets.probes, lightmaps: targets.lightmaps, restir };
         self.add_lighting(graph, frame, gbuffer, hdr, inputs, &lighting);
+        let display = match targets.taa {
+            Some(history) => {
+                history.check_size(size)?;
+                self.add_taa(graph, camera, gbuffer, hdr, history, TaaMode::Reproject)?
+            }
+            None => hdr,
+        };
         if let Some(ldr) = targets.ldr {
             let ldr = graph.import("ldr", ldr);
-            self.add_tonemap(graph, hdr, ldr, size, settings.exposure, settings.curve);
+            self.add_tonemap(graph, display, ldr, size, settings.exposure, settings.curve);
         }
         Ok(())
     }

@@ -35,6 +35,7 @@ use crate::passes::pathtrace::{Integrator, PathOptions, PathTarget, PathTracePas
 use crate::passes::probes::{ProbePass, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirPass, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings, ShadowView};
+use crate::passes::taa::{supersample_jitters, TaaHistory, TaaMode, TaaPass};
 pub use crate::passes::temporal::{TemporalFeedback, TemporalSettings};
 use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};
@@ -245,6 +246,11 @@ pub struct HybridSettings {
     pub ao: Option<AoSettings>,
     /// How punctual lights are shadowed (shadow rays by default, or shadow maps).
     pub shadows: ShadowSettings,
+    /// Sub-frames of a one-shot render ([`Passes::hybrid`]), each pixel sampled at
+    /// [`crate::passes::taa::supersample_jitters`]' offsets and the frames averaged: anti-aliasing
+    /// by supersampling. 0 and 1: one frame through the pixels' centres. (Frames recorded by
+    /// [`Passes::record_hybrid`] are anti-aliased over time instead: [`HybridTargets::taa`].)
+    pub samples: u32,
 }
 
 impl HybridSettings {
@@ -333,4 +339,9 @@ pub struct HybridTargets<'a> {
     /// ReSTIR's reservoirs (and history) for this view, when the settings sample direct light
     /// by ReSTIR ([`crate::passes::deferred::DirectLight::Restir`]).
     pub reservoirs: Option<&'a Reservoirs>,
+    /// Temporal anti-aliasing ([`crate::passes::taa`]): the frame's radiance (`hdr`, sampled at
+    /// the camera's jitter: [`Camera::jittered`] by [`TaaHistory::jitter`]) resolved with this
+    /// history into its next image ([`TaaHistory::resolved`]), which the tonemap then reads;
+    /// `None`: `hdr` is the frame. ([`crate::embed::Renderer::record_hybrid`] jitters the camera.)
+    pub taa: Option<&'a TaaHistory>,
 }

@@ -394,10 +394,37 @@ impl Passes {
             probes,
             lightmaps,
             reservoirs: reservoirs.as_ref(),
+            taa: None,
         };
         // ReSTIR's one-shot render runs its frames with the camera still (its history), timing
         // the last.
         let frames = settings.lighting.direct.restir().map_or(1, |r| r.frames);
+        let named = |t: crate::vk::PassTime| (t.name, t.ms);
+        if settings.samples > 1 {
+            // The G-buffer above (through the pixels' centres) is the AOVs' and the shadow
+            // maps' view; the sub-frames render their own.
+            let sub = GBuffer::new(ctx, size)?;
+            let sub_views = sub.views();
+            let targets = HybridTargets { gbuffer: &sub_views, ldr: None, ..targets };
+            ctx.record(|rec| {
+                output.init_general(ctx, rec.cmd());
+                display.init_general(ctx, rec.cmd());
+                Ok(())
+            })?;
+            let frame = Frame { scene, ibl: &ibl, camera };
+            let (color, sub_ms) =
+                self.supersample(frame, &targets, settings, frames, visibility.as_mut(), &display)?;
+            let mut pass_ms: Vec<(String, f64)> = first_timer.read()?.into_iter().map(named).collect();
+            pass_ms.extend(shadow_ms);
+            pass_ms.extend(sub_ms);
+            return Ok(HybridImage {
+                size,
+                color,
+                display: display.read(ctx)?,
+                gbuffer: gbuffer.read(ctx)?,
+                pass_ms,
+            });
+        }
         let mut timer = GpuTimer::new(ctx, 8)?;
         ctx.record(|rec| {
             let cmd = rec.cmd();
@@ -413,7 +440,6 @@ impl Passes {
             Ok(())
         })?;
         // In the order they ran: the environment's tables and the G-buffer, the maps, the rest.
-        let named = |t: crate::vk::PassTime| (t.name, t.ms);
         let mut pass_ms: Vec<(String, f64)> = first_timer.read()?.into_iter().map(named).collect();
         if let Some(ms) = visibility_ms {
             for (name, t) in &mut pass_ms {
@@ -431,6 +457,93 @@ impl Passes {
             gbuffer: gbuffer.read(ctx)?,
             pass_ms,
         })
+    }
+
+    /// The sub-frames of a supersampled one-shot hybrid render ([`HybridSettings::samples`]):
+    /// each a G-buffer into `targets.gbuffer` (rasterized into `visibility` when given) and the
+    /// shading into `targets.hdr` for the frame's camera jittered, then their running mean
+    /// ([`TaaMode::Accumulate`]), tonemapped into `display`. Returns the mean radiance and the
+    /// GPU milliseconds of each pass summed over the sub-frames (ReSTIR's: its last frame of
+    /// each).
+    fn supersample(
+        &self,
+        frame: Frame<'_>,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        restir_frames: u32,
+        mut visibility: Option<&mut VisibilityBuffer>,
+        display: &Image,
+    ) -> Result<(Vec<[f32; 4]>, Vec<(String, f64)>)> {
+        let ctx = &self.ctx;
+        let size = settings.size;
+        let history = TaaHistory::new(ctx, size, Default::default())?;
+        let cameras: Vec<Camera> =
+            supersample_jitters(settings.samples).into_iter().map(|j| frame.camera.jittered(j)).collect();
+        // Per sub-frame: visibility, G-buffer, the shading's passes (at most 6), the resolve.
+        let mut timer = GpuTimer::new(ctx, 10 * settings.samples + 1)?;
+        loop {
+            history.reset();
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
+                history.init_general(ctx, cmd);
+                timer.reset(cmd);
+                for camera in &cameras {
+                    let mut t = Some(&mut timer);
+                    if let Some(vis) = visibility.as_deref() {
+                        GpuTimer::time(&mut t, cmd, "visibility", || {
+                            self.record_visibility(rec, frame.scene, camera, vis)
+                        })?;
+                    }
+                    GpuTimer::time(&mut t, cmd, "gbuffer", || {
+                        self.record_gbuffer_resolve(
+                            rec,
+                            frame.scene,
+                            camera,
+                            targets.gbuffer,
+                            visibility.as_deref(),
+                        )
+                    })?;
+                    for f in 0..restir_frames {
+                        let mut sub = settings.clone();
+                        sub.lighting.frame =
+                            settings.lighting.frame.wrapping_mul(restir_frames).wrapping_add(f);
+                        let t = if f + 1 == restir_frames { t.as_deref_mut() } else { None };
+                        self.record_hybrid_shading(rec, Frame { camera, ..frame }, targets, &sub, t)?;
+                    }
+                    GpuTimer::time(&mut t, cmd, "taa", || {
+                        self.record_taa(
+                            rec,
+                            targets.gbuffer,
+                            targets.hdr,
+                            &history,
+                            camera,
+                            TaaMode::Accumulate,
+                        )
+                    })?;
+                }
+                let view = history.resolved().view;
+                GpuTimer::time(&mut Some(&mut timer), cmd, "tonemap", || {
+                    self.record_tonemap(rec, view, display.view, size, settings.exposure, settings.curve)
+                })
+            })?;
+            // The jittered views' tile lists may overflow where the centres' did not: grown,
+            // and every sub-frame rendered again.
+            match visibility.as_deref_mut() {
+                Some(vis) => match vis.check(ctx)? {
+                    Some(entries) => vis.reserve(ctx, entries)?,
+                    None => break,
+                },
+                None => break,
+            }
+        }
+        let mut pass_ms: Vec<(String, f64)> = Vec::new();
+        for t in timer.read()? {
+            match pass_ms.iter_mut().find(|(name, _)| *name == t.name) {
+                Some(pass) => pass.1 += t.ms,
+                None => pass_ms.push((t.name, t.ms)),
+            }
+        }
+        Ok((history.resolved().read(ctx)?, pass_ms))
     }
 
     /// Renders the G-buffer of `scene` seen by `camera` at `size` and its ambient occlusion by

@@ -35,6 +35,7 @@ pub struct Passes {
     pub(super) ao_blur: OnceLock<AoBlurPass>,
     pub(super) rtao: OnceLock<RtaoPass>,
     pub(super) tonemap: OnceLock<TonemapPass>,
+    pub(super) taa: OnceLock<TaaPass>,
     /// The megakernel's pass by the estimator ([`PathOptions`]).
     pub(super) path: Cache<PathOptions, PathTracePass>,
     /// The wavefront path tracer's stages by the estimator.
@@ -71,6 +72,7 @@ impl Passes {
             ao_blur: OnceLock::new(),
             rtao: OnceLock::new(),
             tonemap: OnceLock::new(),
+            taa: OnceLock::new(),
             path: Cache::new(),
             wavefront: Cache::new(),
             resolve: OnceLock::new(),
@@ -183,6 +185,10 @@ impl Passes {
         built(&self.tonemap, || TonemapPass::new(&self.ctx))
     }
 
+    pub(super) fn taa_pass(&self) -> Result<&TaaPass> {
+        built(&self.taa, || TaaPass::new(&self.ctx))
+    }
+
     pub(super) fn resolve_pass(&self) -> Result<&ResolvePass> {
         built(&self.resolve, || ResolvePass::new(&self.ctx))
     }
@@ -225,6 +231,7 @@ impl Passes {
                 .and_then(|_| self.gtao_pass())
                 .and_then(|_| self.blur_pass())
                 .and_then(|_| self.tonemap_pass())
+                .and_then(|_| self.taa_pass())
                 .and_then(|_| self.resolve_pass())
                 .and_then(|_| self.denoise_pass())
                 .and_then(|_| self.temporal_pass())

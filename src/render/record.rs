@@ -257,6 +257,20 @@ impl Passes {
         self.tonemap_pass()?.record(rec, src, dst, size, exposure_stops, curve)
     }
 
+    /// Records the anti-aliasing resolve of `current` (the frame's radiance, sampled at
+    /// `camera`'s jitter over `gbuffer`'s pixels) with `history` ([`crate::passes::taa`]).
+    pub fn record_taa(
+        &self,
+        rec: &mut Recorder<'_>,
+        gbuffer: &GBufferViews,
+        current: raw::ImageView,
+        history: &TaaHistory,
+        camera: &Camera,
+        mode: TaaMode,
+    ) -> Result<()> {
+        self.taa_pass()?.record(rec, gbuffer, current, history, camera, mode)
+    }
+
     /// Records one hybrid frame into `targets`: G-buffer, SSAO and its blur (when
     /// `settings.ao`), deferred lighting with the frame's image-based light × AO, tonemap (when
     /// `targets.ldr`), each timed under its name when a `timer` is given:

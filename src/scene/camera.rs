@@ -26,6 +26,11 @@ pub struct Camera {
     pub znear: f32,
     /// `Some` for an orthographic camera (glTF `camera.orthographic`), `None` for a perspective one.
     pub orthographic: Option<Orthographic>,
+    /// The sub-pixel offset of every pixel's sample position from its centre, in pixels of the
+    /// image rendered (x right, y down), each in [-0.5, 0.5): anti-aliasing's jitter
+    /// ([`Camera::jittered`]). 0 for a file's cameras. The hybrid's passes sample there (rounded
+    /// to 1/4096 pixel); the path tracer samples each pixel's whole area and ignores it.
+    pub jitter: [f32; 2],
 }
 
 /// An orthographic camera's view: a box of parallel rays rather than a pyramid.
@@ -70,7 +75,7 @@ impl Camera {
                         "camera {index}: znear ({znear}) and aspectRatio ({aspect:?}) must be positive"
                     )));
                 }
-                Ok(Self { position, forward, up, yfov, aspect, znear, orthographic: None })
+                Ok(Self { position, forward, up, yfov, aspect, znear, orthographic: None, jitter: [0.0; 2] })
             }
             (Checked::Valid(json::camera::Type::Orthographic), _, Some(o)) => {
                 let (xmag, ymag, znear, zfar) = (o.xmag, o.ymag, o.znear, o.zfar);
@@ -87,7 +92,7 @@ impl Camera {
                 }
                 let (yfov, aspect) = (0.0, Some((xmag / ymag).abs()));
                 let orthographic = Some(Orthographic { xmag, ymag, zfar });
-                Ok(Self { position, forward, up, yfov, aspect, znear, orthographic })
+                Ok(Self { position, forward, up, yfov, aspect, znear, orthographic, jitter: [0.0; 2] })
             }
             (Checked::Valid(json::camera::Type::Perspective), None, _) => {
                 Err(origin
@@ -98,6 +103,11 @@ impl Camera {
                     .error(format!("camera {index} is 'orthographic' but has no orthographic properties")))
             }
         }
+    }
+
+    /// This camera with every pixel sampled at `jitter` pixels from its centre ([`Camera::jitter`]).
+    pub fn jittered(&self, jitter: [f32; 2]) -> Self {
+        Self { jitter, ..*self }
     }
 
     /// Half the view's width and height at view depth `depth` for an image of aspect
@@ -128,6 +138,7 @@ impl Camera {
             aspect: None,
             znear: (distance - radius) * 0.5,
             orthographic: None,
+            jitter: [0.0; 2],
         }
     }
 }

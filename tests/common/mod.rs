@@ -305,6 +305,7 @@ pub fn camera(position: Vec3, target: Vec3) -> Camera {
         aspect: None,
         znear: 0.05,
         orthographic: None,
+        jitter: [0.0; 2],
     }
 }
 

@@ -183,6 +183,7 @@ fn sphere_scene(base: [f32; 3], metallic: f32, roughness: f32) -> Scene {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     }];
     scene
 }

@@ -54,6 +54,7 @@ fn looking_down(height: f32, yfov: f32) -> Camera {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     }
 }
 
@@ -107,6 +108,7 @@ fn camera(position: Vec3, target: Vec3, yfov_degrees: f32) -> Camera {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     }
 }
 

@@ -112,6 +112,7 @@ fn camera() -> Camera {
         aspect: None,
         znear: 0.01,
         orthographic: None,
+        jitter: [0.0; 2],
     }
 }
 

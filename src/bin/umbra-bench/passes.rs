@@ -187,6 +187,7 @@ pub fn run(
         probes: None,
         lightmaps: None,
         reservoirs: None,
+        taa: None,
     };
     let settings = |v: FrameVariant| HybridSettings {
         size,

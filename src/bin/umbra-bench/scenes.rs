@@ -44,6 +44,7 @@ pub(crate) fn bench_camera(scene: &umbra::scene::Scene) -> umbra::scene::Camera 
                 aspect: None,
                 znear: 0.01,
                 orthographic: None,
+                jitter: [0.0; 2],
             }
         }
     }

@@ -118,6 +118,7 @@ pub fn run(
             probes: None,
             lightmaps: None,
             reservoirs: None,
+            taa: None,
         }
     }
     for (i, &(method, rays)) in runs.iter().enumerate() {

@@ -180,6 +180,15 @@ gpu_constants! {
     /// `dn_out`, `dn_in2` into `dn_out2`: the lobe split's diffuse and specular parts), their
     /// taps' normal and depth weights computed once; else `dn_in2` and `dn_out2` are unread.
     DENOISE_BOTH: uint = 64;
+    /// [`GpuCamera::flags`]: an orthographic camera (else a pinhole).
+    CAMERA_ORTHOGRAPHIC: uint = 1;
+    /// [`GpuCamera::flags`]: 1/4096 pixel, the unit of the jitter in its bits 8..32.
+    CAMERA_JITTER_UNIT: float = 0.000244140625;
+    /// [`TaaParams::flags`]: the history holds a frame (else the resolve is the current frame).
+    TAA_HISTORY: uint = 1;
+    /// [`TaaParams::flags`]: the running mean of still sub-frames: each pixel's history read at the
+    /// pixel, not reprojected nor clipped, weighted by its length (one-shot supersampling).
+    TAA_ACCUMULATE: uint = 2;
     /// [`TemporalParams::flags`]: the history holds a previous frame (else every pixel starts
     /// afresh).
     TEMPORAL_HISTORY: uint = 1;

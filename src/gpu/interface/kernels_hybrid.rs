@@ -227,6 +227,26 @@ kernels! {
         }
     }
 
+    /// Temporal anti-aliasing and sub-frame accumulation ([`crate::passes::taa`]).
+    kernel taa {
+        scene: none,
+        push: TaaParams,
+        local: [8, 8, 1],
+        spec: {},
+        bindings: {
+            /// The frame's linear radiance (each pixel's sample at the camera's jitter).
+            current: readonly image rgba32f,
+            /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
+            gb: readonly gbuffer [depth],
+            /// The history: the last resolve (rgb) and the frames each pixel holds (a).
+            history: readonly image rgba32f,
+            /// The resolve (the next frame's history).
+            resolved: writeonly image rgba32f,
+            /// The camera `history` was resolved for.
+            prev_camera: readonly buffer GpuCamera,
+        }
+    }
+
     /// HDR to display.
     kernel tonemap {
         scene: none,

@@ -323,6 +323,27 @@ gpu_structs! {
         list_at: uint,
     }
 
+    /// Push constants of `taa.comp` ([`crate::passes::taa`]).
+    struct TaaParams {
+        /// This frame's camera (the pixels' centres are reprojected; its jitter is not read).
+        camera: GpuCamera,
+        /// Width, height.
+        size: uvec2,
+        /// [`TAA_HISTORY`] | [`TAA_ACCUMULATE`].
+        flags: uint,
+        /// The least weight of the frame in the blend with the reprojected history (before, the
+        /// frame's weight is 1 / the history's length).
+        blend: float,
+        /// The neighbourhood's box: its mean ± this × its standard deviation, per channel (YCoCg).
+        clip_sigma: float,
+        /// Padding.
+        pad0: uint,
+        /// Padding.
+        pad1: uint,
+        /// Padding.
+        pad2: uint,
+    }
+
     /// Push constants of `tonemap.comp`.
     struct TonemapParams {
         /// Width, height.

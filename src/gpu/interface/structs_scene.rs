@@ -25,8 +25,12 @@ gpu_structs! {
         region: uint,
         /// Pinhole: up × tan(yfov/2); orthographic: up × half the view's height.
         up: vec3,
-        /// 1: orthographic (rays parallel to `forward` from the plane through `origin`), 0: pinhole.
-        orthographic: uint,
+        /// Bit 0: orthographic (rays parallel to `forward` from the plane through `origin`), else a
+        /// pinhole. Bits 8..20 and 20..32: the sub-pixel offset of every pixel's sample position
+        /// from its centre (x right, y down; anti-aliasing's jitter), each a signed 12-bit count of
+        /// 1/4096 pixels ([`GpuCamera::jitter`]). The hybrid's kernels sample there (and the
+        /// rasterizer covers there); the path tracer samples each pixel's whole area and ignores it.
+        flags: uint,
     }
 
     /// Push constants of `test_pattern.comp`.

@@ -60,7 +60,14 @@ fn suite_quick_writes_json_csv_and_charts() {
         let points = scene["points"].as_array().unwrap();
         let ao_points = scene["ao_points"].as_array().unwrap();
         rows += points.len() + ao_points.len();
-        for method in ["pathtrace", "hybrid", "hybrid, no SSAO", "hybrid, no IBL", "hybrid, SSAO sweep"] {
+        for method in [
+            "pathtrace",
+            "hybrid",
+            "hybrid, no SSAO",
+            "hybrid, no IBL",
+            "hybrid, SSAO sweep",
+            "hybrid, supersampled",
+        ] {
             assert!(points.iter().any(|p| p["method"] == method), "{method} missing in {}", scene["scene"]);
         }
         for method in ["ssao", "gtao", "gtao half", "rtao"] {
@@ -285,6 +292,39 @@ fn denoise_quick_writes_json_and_a_chart() {
     let table = String::from_utf8(table.unwrap().stdout).unwrap();
     assert!(table.contains("| cornell-box.glb (embedded) |"), "{table}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `umbra-bench antialias` measures both series (supersampled at each sub-frame count, TAA after
+/// each frame), writes JSON and a chart, and prints its table from the JSON.
+#[test]
+fn antialias_writes_json_a_chart_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-antialias-bench-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["antialias", "--size", "24x16", "--reference-spp", "8", "--samples", "1,4"])
+        .args(["--taa-frames", "3", "--repeats", "1", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = dir.join("antialias-spheres.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("JSON written")).expect("parses");
+    let points = json["points"].as_array().expect("points");
+    let series = |m: &str| points.iter().filter(|p| p["method"] == m).count();
+    assert_eq!((series("supersampled"), series("TAA, still camera")), (2, 3), "{points:?}");
+    assert!(points.iter().all(|p| p["ms"].as_f64().unwrap() > 0.0 && p["flip"].as_f64().unwrap() > 0.0));
+    let svg = std::fs::read_to_string(dir.join("antialias-spheres.svg")).expect("SVG chart");
+    assert!(svg.contains("TAA, still camera"), "the TAA series is charted");
+    let table = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .arg("antialias")
+        .arg("--table")
+        .arg(&path)
+        .output()
+        .unwrap();
+    let table = String::from_utf8(table.stdout).unwrap();
+    assert!(table.contains("| supersampled | 4 sub-frames |"), "{table}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `umbra-bench restir` on a tiny image writes JSON with every method's points and a chart, and

@@ -9,6 +9,7 @@
 //! file without measuring anything: BENCHMARKS.md's current figures are those tables, printed
 //! from the JSON committed in docs/bench (tests/bench.rs checks that they still match).
 
+mod antialias;
 mod build;
 mod chart;
 mod denoise;
@@ -480,6 +481,41 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
+    /// Anti-aliasing of the hybrid frame: one-shot supersampling at a sweep of sub-frames and
+    /// TAA (embedding API, still camera) after each frame, mean LDR-FLIP against the path
+    /// tracer against GPU time; JSON, a table and a chart.
+    Antialias {
+        /// The scene (default: scenes/spheres.glb).
+        #[arg(long, default_value = "scenes/spheres.glb")]
+        scene: PathBuf,
+        /// Equirectangular environment map lighting the scene (else --env-color).
+        #[arg(long)]
+        env: Option<PathBuf>,
+        /// Constant environment radiance r,g,b when there is no --env map.
+        #[arg(long, value_parser = cli::parse_rgb, default_value = "0.5,0.5,0.5")]
+        env_color: [f32; 3],
+        /// Image size.
+        #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of the reference.
+        #[arg(long, default_value_t = 1024)]
+        reference_spp: u32,
+        /// Sub-frame counts of the supersampled series.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16")]
+        samples: Vec<u32>,
+        /// Frames of the TAA series.
+        #[arg(long, default_value_t = 16)]
+        taa_frames: u32,
+        /// Timed repeats of each supersampled render (after a warm-up); the median is reported.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Where to write antialias-<scene>.json and the chart.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
     /// ReSTIR DI against power-sampled light sampling in the hybrid's lighting pass on a
     /// many-light scene: error against time of the direct light, and the equal-error speed-up.
     Restir {
@@ -680,6 +716,39 @@ fn run(cli: Cli) -> Result<()> {
             write_json(&out, "implicit.json", &doc)?;
             implicit::write_chart(&out, &rows)?;
         }
+        Command::Antialias { table: Some(path), .. } => print!("{}", antialias::table(&read_json(&path)?)),
+        Command::Antialias {
+            scene,
+            env,
+            env_color,
+            size,
+            reference_spp,
+            samples,
+            taa_frames,
+            repeats,
+            out,
+            table: None,
+        } => {
+            let ctx = Context::new(&ContextDesc::default())?;
+            let loaded = umbra::scene::Scene::load(&scene)?;
+            let mut gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
+            let env = match &env {
+                Some(path) => {
+                    gpu_scene.set_environment(&ctx, &umbra::environment::EnvironmentMap::load(path)?)?;
+                    [1.0; 3]
+                }
+                None => env_color,
+            };
+            let renderer = umbra::embed::Renderer::with_gpu_scene(&ctx, gpu_scene)?;
+            let settings =
+                antialias::AntialiasBench { size, reference_spp, samples, taa_frames, repeats, env };
+            let mut doc = antialias::run(&ctx, &renderer, &loaded, &settings)?;
+            add_conditions(&mut doc);
+            print!("{}", antialias::table(&doc));
+            let stem = scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+            write_json(&out, &format!("antialias-{stem}.json"), &doc)?;
+            antialias::write_chart(&out, &stem, &doc)?;
+        }
         Command::Restir { table: Some(path), .. } => print!("{}", restir::table(&read_json(&path)?)),
         Command::Restir { scene, size, reference_frames, repeats, frames, out, table: None } => {
             let ctx = Context::new(&ContextDesc::default())?;
@@ -764,6 +833,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_spp,
                     shadow_rays: vec![],
                     shadow_map_sizes: vec![],
+                    hybrid_samples: vec![],
                     probes_per_side: vec![],
                     ssao_samples: vec![],
                     gtao_slices: vec![],
@@ -827,6 +897,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_spp: 1,
                     shadow_rays: vec![4],
                     shadow_map_sizes: vec![],
+                    hybrid_samples: vec![],
                     probes_per_side: per_side,
                     ssao_samples: vec![16],
                     gtao_slices: vec![],
@@ -948,6 +1019,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_spp: 32,
                     shadow_rays: vec![1, 4, 16],
                     shadow_map_sizes: vec![128, 512],
+                    hybrid_samples: vec![4],
                     probes_per_side: vec![4, 8],
                     ssao_samples: vec![4, 16],
                     gtao_slices: vec![1, 3],
@@ -965,6 +1037,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_spp,
                     shadow_rays,
                     shadow_map_sizes: vec![128, 256, 512, 1024, 2048],
+                    hybrid_samples: vec![1, 2, 4, 8, 16],
                     probes_per_side: vec![4, 8, 16],
                     ssao_samples: vec![4, 8, 16, 32],
                     gtao_slices: vec![1, 2, 3, 4],

@@ -17,6 +17,10 @@
 //!   the hybrid's also get the shadow term's error: against the same hybrid with the sized lights'
 //!   shadows ray-traced with 256 rays per light ([`ShadowReference`], the truth PCSS's soft
 //!   shadows approximate; the path tracer's lights are points).
+//! - `hybrid, supersampled`: the hybrid at 4 shadow rays with SSAO and IBL, anti-aliased by a
+//!   sweep of sub-frames per image ([`umbra::render::HybridSettings::samples`]; the path
+//!   tracer's pixels integrate their area, the one-sample hybrid's see their centres); the time
+//!   is every sub-frame's and the centres' G-buffer for the AOVs.
 //! - `hybrid + probes`: the hybrid at 4 shadow rays with irradiance probes baked at a sweep of
 //!   spacings (the scene's longest side / n) lighting its diffuse lobe; the bake is reported
 //!   apart, as precomputation.
@@ -63,6 +67,9 @@ pub struct SuiteSettings {
     pub shadow_rays: Vec<u32>,
     /// Shadow-map sizes of the hybrid's shadow-map series (scenes with punctual lights).
     pub shadow_map_sizes: Vec<u32>,
+    /// Sub-frame counts of the hybrid's supersampling series (`hybrid, supersampled`, 4 shadow
+    /// rays, SSAO 16, IBL: anti-aliasing by [`umbra::render::HybridSettings::samples`]).
+    pub hybrid_samples: Vec<u32>,
     /// SSAO kernel sizes of the hybrid's SSAO sweep and of the AO chart.
     pub ssao_samples: Vec<u32>,
     /// Probe spacings of the hybrid's probe series, as the scene's longest side / n.
@@ -313,14 +320,19 @@ pub fn run_scene(
     // SSAO kernel size at 4 shadow rays.
     let ssao = |samples| AoSettings { samples, radius: s.ao_radius, seed: 1, ..AoSettings::default() };
     let mut precompute_ms = Vec::new();
-    /// One hybrid setting: its series, what its value counts, the value, SSAO, IBL, shadows.
-    struct Sweep(String, &'static str, u32, Option<AoSettings>, bool, ShadowSettings);
+    /// One hybrid setting: its series, what its value counts, the value, SSAO, IBL, shadows,
+    /// sub-frames.
+    struct Sweep(String, &'static str, u32, Option<AoSettings>, bool, ShadowSettings, u32);
     let rt = ShadowSettings::default();
     let mut sweeps: Vec<Sweep> = Vec::new();
     for &rays in &s.shadow_rays {
-        sweeps.push(Sweep("hybrid".into(), "shadow_rays", rays, Some(ssao(16)), true, rt));
-        sweeps.push(Sweep("hybrid, no SSAO".into(), "shadow_rays", rays, None, true, rt));
-        sweeps.push(Sweep("hybrid, no IBL".into(), "shadow_rays", rays, Some(ssao(16)), false, rt));
+        sweeps.push(Sweep("hybrid".into(), "shadow_rays", rays, Some(ssao(16)), true, rt, 1));
+        sweeps.push(Sweep("hybrid, no SSAO".into(), "shadow_rays", rays, None, true, rt, 1));
+        sweeps.push(Sweep("hybrid, no IBL".into(), "shadow_rays", rays, Some(ssao(16)), false, rt, 1));
+    }
+    for &samples in &s.hybrid_samples {
+        let label = "hybrid, supersampled".to_string();
+        sweeps.push(Sweep(label, "hybrid_samples", samples, Some(ssao(16)), true, rt, samples));
     }
     for &samples in &s.ssao_samples {
         sweeps.push(Sweep(
@@ -330,6 +342,7 @@ pub fn run_scene(
             Some(ssao(samples)),
             true,
             rt,
+            1,
         ));
     }
     let punctual = renderer.scene().punctual_count;
@@ -344,13 +357,14 @@ pub fn run_scene(
                 Some(ssao(16)),
                 true,
                 shadows,
+                1,
             ));
         }
         for method in [ShadowMethod::Hard, ShadowMethod::Pcf, ShadowMethod::Pcss, ShadowMethod::Moments] {
             for &map_size in &s.shadow_map_sizes {
                 let shadows = ShadowSettings { method, map_size, ..rt };
                 let label = format!("hybrid, {} shadow maps", method.name());
-                sweeps.push(Sweep(label, "map_size", map_size, Some(ssao(16)), true, shadows));
+                sweeps.push(Sweep(label, "map_size", map_size, Some(ssao(16)), true, shadows, 1));
             }
         }
     }
@@ -367,11 +381,11 @@ pub fn run_scene(
         true => Some(shadow_reference(&renderer, camera, &shadow_base)?),
         false => None,
     };
-    for Sweep(method, unit, value, ao, ibl, shadows) in sweeps {
+    for Sweep(method, unit, value, ao, ibl, shadows, samples) in sweeps {
         let rays = if unit == "shadow_rays" { value } else { 4 };
         // The shadow term's error where everything but the shadows (and the emissive triangles'
         // sample count) is the reference's.
-        let same_but_shadows = ao.is_some_and(|a| a.samples == 16) && ibl;
+        let same_but_shadows = ao.is_some_and(|a| a.samples == 16) && ibl && samples == 1;
         let settings = HybridSettings {
             size: s.size,
             lighting: LightingSettings {
@@ -383,6 +397,7 @@ pub fn run_scene(
             },
             ao,
             shadows,
+            samples,
             ..HybridSettings::default()
         };
         let (ms, image) =

@@ -415,6 +415,8 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["build", "--table", "docs/bench/build.json"],
     &["passes", "--table", "docs/bench/passes-cornell.json", "--table", "docs/bench/passes-spheres.json"],
     &["passes", "--table", "docs/bench/passes-sponza-1080.json"],
+    &["antialias", "--table", "docs/bench/antialias-helmet.json"],
+    &["antialias", "--table", "docs/bench/antialias-spheres.json"],
     &["paths", "--table", "docs/bench/paths.json"],
     &["pipelines", "--table", "docs/bench/pipelines.json"],
     &["suite", "--table", "docs/bench/suite.json"],

@@ -5,6 +5,9 @@
 use super::pipelines::built;
 use super::*;
 
+/// GPU milliseconds by pass name, in the order the passes first ran.
+type PassTimes = Vec<(String, f64)>;
+
 impl Passes {
     /// Bakes `volume` now (submits and waits): [`ProbeVolume::bake_sweeps`] sweeps over every
     /// probe, a running mean after the replacing ones, under the environment of `settings`,
@@ -473,7 +476,7 @@ impl Passes {
         restir_frames: u32,
         mut visibility: Option<&mut VisibilityBuffer>,
         display: &Image,
-    ) -> Result<(Vec<[f32; 4]>, Vec<(String, f64)>)> {
+    ) -> Result<(Vec<[f32; 4]>, PassTimes)> {
         let ctx = &self.ctx;
         let size = settings.size;
         let history = TaaHistory::new(ctx, size, Default::default())?;

@@ -143,6 +143,12 @@ fn num(v: &Value) -> f64 {
     v.as_f64().unwrap_or(f64::NAN)
 }
 
+/// The scene's file name (the JSON keeps the path it was loaded from).
+fn scene_name(doc: &Value) -> String {
+    let path = doc["scene"].as_str().unwrap_or("?");
+    Path::new(path).file_name().map_or(path.to_owned(), |n| n.to_string_lossy().into_owned())
+}
+
 /// The Markdown of a run's JSON ([`run`]).
 pub fn table(doc: &Value) -> String {
     let points = doc["points"].as_array().cloned().unwrap_or_default();
@@ -150,7 +156,7 @@ pub fn table(doc: &Value) -> String {
     let (one_ms, one_flip) = one.map_or((f64::NAN, f64::NAN), |p| (num(&p["ms"]), num(&p["flip"])));
     let mut out = format!(
         "{} at {}x{} on {}, against the path tracer at {} spp (mean LDR-FLIP; relative MSE); time ÷ the one-sample frame's {one_ms:.1} ms:\n\n",
-        doc["scene"].as_str().unwrap_or("?"),
+        scene_name(doc),
         doc["size"][0],
         doc["size"][1],
         doc["device"].as_str().unwrap_or("?"),
@@ -161,8 +167,8 @@ pub fn table(doc: &Value) -> String {
     for p in &points {
         // TAA: frames 1, 2, 4, 8, ... and the last.
         let k = p["value"].as_u64().unwrap_or(0);
-        let last = p["method"] != "supersampled"
-            && points.iter().filter(|q| q["method"] == p["method"]).last() == Some(p);
+        let last =
+            p["method"] != "supersampled" && points.iter().rfind(|q| q["method"] == p["method"]) == Some(p);
         if p["method"] != "supersampled" && !k.is_power_of_two() && !last {
             continue;
         }
@@ -201,7 +207,7 @@ pub fn write_chart(out: &Path, stem: &str, doc: &Value) -> Result<PathBuf> {
         .collect();
     let title = format!(
         "{}: anti-aliasing of the hybrid frame — {}",
-        doc["scene"].as_str().unwrap_or("?"),
+        scene_name(doc),
         doc["device"].as_str().unwrap_or("?")
     );
     let chart = Chart { title: &title, y_desc: "mean LDR-FLIP against the path tracer (log)", floor: 0.0 };

@@ -509,12 +509,16 @@ enum Command {
         /// Timed repeats of each supersampled render (after a warm-up); the median is reported.
         #[arg(long, default_value_t = 3)]
         repeats: usize,
-        /// Where to write antialias-<scene>.json and the chart.
+        /// Where to write `antialias-<scene>.json` and the chart.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
         /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
         #[arg(long)]
         table: Option<PathBuf>,
+        /// With --table: also redraw that run's chart into --out (`antialias-<stem>.svg`, `.png`,
+        /// the stem the JSON file's own, less "antialias-").
+        #[arg(long, requires = "table")]
+        redraw: bool,
     },
     /// ReSTIR DI against power-sampled light sampling in the hybrid's lighting pass on a
     /// many-light scene: error against time of the direct light, and the equal-error speed-up.
@@ -716,7 +720,15 @@ fn run(cli: Cli) -> Result<()> {
             write_json(&out, "implicit.json", &doc)?;
             implicit::write_chart(&out, &rows)?;
         }
-        Command::Antialias { table: Some(path), .. } => print!("{}", antialias::table(&read_json(&path)?)),
+        Command::Antialias { table: Some(path), redraw, out, .. } => {
+            let doc = read_json(&path)?;
+            print!("{}", antialias::table(&doc));
+            if redraw {
+                let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+                umbra::atomic::create_dir(&out)?;
+                antialias::write_chart(&out, stem.trim_start_matches("antialias-"), &doc)?;
+            }
+        }
         Command::Antialias {
             scene,
             env,
@@ -728,6 +740,7 @@ fn run(cli: Cli) -> Result<()> {
             repeats,
             out,
             table: None,
+            redraw: _,
         } => {
             let ctx = Context::new(&ContextDesc::default())?;
             let loaded = umbra::scene::Scene::load(&scene)?;

@@ -183,7 +183,7 @@ gpu_constants! {
     /// [`GpuCamera::flags`]: an orthographic camera (else a pinhole).
     CAMERA_ORTHOGRAPHIC: uint = 1;
     /// [`GpuCamera::flags`]: 1/4096 pixel, the unit of the jitter in its bits 8..32.
-    CAMERA_JITTER_UNIT: float = 0.000244140625;
+    CAMERA_JITTER_UNIT: float = 1.0 / 4096.0;
     /// [`TaaParams::flags`]: the history holds a frame (else the resolve is the current frame).
     TAA_HISTORY: uint = 1;
     /// [`TaaParams::flags`]: the running mean of still sub-frames: each pixel's history read at the

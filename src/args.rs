@@ -35,8 +35,16 @@ pub(crate) enum Command {
     /// Join path-traced parts of one render (EXRs of `render --sample-range` and/or `--tile`,
     /// e.g. from an array job) into the render one process would have made.
     Merge(MergeArgs),
-    /// List the Vulkan devices and the one umbra would use.
-    Info,
+    /// What a glTF file holds (triangles, materials and their extensions, textures, cameras,
+    /// lights, variants, animations, bounds) and what umbra reads, ignores or refuses of it, with
+    /// no GPU work; without a scene, the Vulkan devices and the one umbra would use.
+    Info {
+        /// A .gltf or .glb file.
+        scene: Option<PathBuf>,
+        /// Print JSON (for scripts) instead of text.
+        #[arg(long, requires = "scene")]
+        json: bool,
+    },
     /// Render the foundation test pattern (a known function of the pixel) to PNG and/or EXR.
     Pattern {
         /// Image size as WIDTHxHEIGHT.
@@ -65,6 +73,10 @@ pub(crate) struct SceneArgs {
     /// Constant environment radiance, as R,G,B (linear), when there is no --env map.
     #[arg(long, value_parser = cli::parse_rgb, default_value = "0,0,0")]
     pub(crate) env_color: [f32; 3],
+    /// KHR_materials_variants: render the file's variant of this name (its materials on the
+    /// primitives it maps); without it, each primitive's own material.
+    #[arg(long, value_name = "NAME")]
+    pub(crate) variant: Option<String>,
     /// A texture image that cannot be read or decoded: refuse the scene (error), or warn once
     /// per image and render its slots with the material's factors alone (warn).
     #[arg(long, value_enum, default_value = "error")]

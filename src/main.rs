@@ -295,6 +295,140 @@ fn render_identity(args: &RenderArgs, loaded: &LoadedScene) -> String {
     }
 }
 
+/// `umbra info SCENE --json`.
+fn info_json(info: &umbra::scene::info::SceneInfo) -> serde_json::Value {
+    use serde_json::json;
+    let loaded = match &info.loaded {
+        Ok(l) => json!({
+            "triangles": l.stats.triangles,
+            "vertices": l.stats.vertices,
+            "instances": l.stats.instances,
+            "degenerate_triangles": l.stats.degenerate_triangles,
+            "implicit_shapes": l.implicit_shapes,
+            "bounds": {"min": l.bounds.0, "max": l.bounds.1},
+            "warnings": l.warnings,
+        }),
+        Err(reason) => json!({"refused": reason}),
+    };
+    json!({
+        "file": info.file,
+        "container": info.container,
+        "generator": info.generator,
+        "extensions": info.extensions.iter().map(|e| json!({
+            "name": e.name, "required": e.required, "umbra": e.status.name()
+        })).collect::<Vec<_>>(),
+        "nodes": info.nodes,
+        "meshes": info.meshes,
+        "primitives": info.primitives,
+        "materials": info.materials.iter().map(|m| json!({"name": m.name, "extensions": m.extensions})).collect::<Vec<_>>(),
+        "images": info.images.iter().map(|i| json!({
+            "name": i.name, "format": i.format, "size": i.size.map(|(w, h)| [w, h])
+        })).collect::<Vec<_>>(),
+        "cameras": info.cameras,
+        "lights": info.lights.iter().map(|(kind, name)| json!({"type": kind, "name": name})).collect::<Vec<_>>(),
+        "variants": info.variants,
+        "animations": info.animations.iter().map(|a| json!({
+            "name": a.name, "channels": a.channels, "duration": a.duration
+        })).collect::<Vec<_>>(),
+        "skins": info.skins,
+        "morphed_meshes": info.morphed_meshes,
+        "loaded": loaded,
+    })
+}
+
+/// `umbra info SCENE`: the same as text.
+fn info_text(info: &umbra::scene::info::SceneInfo) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let named = |name: &str, i: usize| if name.is_empty() { format!("#{i}") } else { format!("'{name}'") };
+    let _ = writeln!(
+        out,
+        "{} ({}{})",
+        info.file,
+        info.container,
+        info.generator.as_ref().map_or(String::new(), |g| format!(", by {g}"))
+    );
+    match &info.loaded {
+        Ok(l) => {
+            let _ = writeln!(
+                out,
+                "{} triangles, {} vertices, {} placed instances of {} meshes ({} primitives), {} nodes{}",
+                l.stats.triangles,
+                l.stats.vertices,
+                l.stats.instances,
+                info.meshes,
+                info.primitives,
+                info.nodes,
+                if l.implicit_shapes > 0 {
+                    format!(", {} implicit shapes", l.implicit_shapes)
+                } else {
+                    String::new()
+                }
+            );
+            let _ = writeln!(out, "bounds {:?} to {:?}", l.bounds.0, l.bounds.1);
+        }
+        Err(reason) => {
+            let _ = writeln!(out, "REFUSED: {reason}");
+            let _ = writeln!(
+                out,
+                "{} meshes ({} primitives), {} nodes",
+                info.meshes, info.primitives, info.nodes
+            );
+        }
+    }
+    for e in &info.extensions {
+        let _ = writeln!(
+            out,
+            "extension {}{}: {}",
+            e.name,
+            if e.required { " (required)" } else { "" },
+            e.status.name()
+        );
+    }
+    let _ = writeln!(out, "{} materials", info.materials.len());
+    for (i, m) in info.materials.iter().enumerate() {
+        let ext =
+            if m.extensions.is_empty() { String::new() } else { format!(": {}", m.extensions.join(", ")) };
+        let _ = writeln!(out, "  {}{ext}", named(&m.name, i));
+    }
+    let _ = writeln!(out, "{} images", info.images.len());
+    for i in &info.images {
+        let size = i.size.map_or("not decoded".to_owned(), |(w, h)| format!("{w}x{h}"));
+        let _ = writeln!(out, "  {} ({}) {size}", i.name, if i.format.is_empty() { "?" } else { &i.format });
+    }
+    let _ = writeln!(
+        out,
+        "cameras: {}",
+        if info.cameras.is_empty() {
+            "none (umbra frames the bounds)".into()
+        } else {
+            info.cameras.join(", ")
+        }
+    );
+    let lights: Vec<String> = info
+        .lights
+        .iter()
+        .map(|(k, n)| if n.is_empty() { k.clone() } else { format!("{k} '{n}'") })
+        .collect();
+    let _ = writeln!(out, "lights: {}", if lights.is_empty() { "none".into() } else { lights.join(", ") });
+    if !info.variants.is_empty() {
+        let _ = writeln!(out, "variants (--variant NAME): {}", info.variants.join(", "));
+    }
+    for (i, a) in info.animations.iter().enumerate() {
+        let _ =
+            writeln!(out, "animation {}: {} channels, {:.3} s", named(&a.name, i), a.channels, a.duration);
+    }
+    if info.skins > 0 || info.morphed_meshes > 0 {
+        let _ = writeln!(out, "{} skins, {} meshes with morph targets", info.skins, info.morphed_meshes);
+    }
+    if let Ok(l) = &info.loaded {
+        for w in &l.warnings {
+            let _ = writeln!(out, "warning: {w}");
+        }
+    }
+    out
+}
+
 /// A scene and its environment map, loaded, not yet on the GPU.
 struct LoadedScene {
     scene: umbra::scene::Scene,
@@ -309,7 +443,7 @@ impl SceneArgs {
 
     /// Loads the scene (or the embedded Cornell box) and the environment map.
     fn load(&self) -> Result<LoadedScene> {
-        let scene = match &self.scene {
+        let mut scene = match &self.scene {
             Some(path) => {
                 use umbra::scene::LoadOptions;
                 let missing_textures = self.missing_textures;
@@ -317,6 +451,11 @@ impl SceneArgs {
             }
             None => umbra::scene::Scene::cornell_box(),
         };
+        if let Some(name) = &self.variant {
+            let index = scene.variant_index(name)?;
+            scene.select_variant(Some(index))?;
+            log::info!("{}: variant '{name}'", scene.name);
+        }
         let env_map = match &self.env {
             Some(path) => {
                 let map = umbra::environment::EnvironmentMap::load(path)?;
@@ -699,7 +838,15 @@ fn run(cli: Cli, given: &[String]) -> Result<()> {
             bake(args)?
         }
         Command::Merge(args) => merge(args)?,
-        Command::Info => {
+        Command::Info { scene: Some(path), json } => {
+            let info = umbra::scene::info::SceneInfo::read(&path, &Default::default())?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&info_json(&info))?);
+            } else {
+                print!("{}", info_text(&info));
+            }
+        }
+        Command::Info { scene: None, .. } => {
             for (name, ty) in Context::list_devices()? {
                 println!("{name} ({ty:?})");
             }

@@ -117,7 +117,18 @@ impl<'a> Builder<'a> {
             morphed_meshes: Vec::new(),
             default_material: None,
             dropped: 0,
-            scene: Scene { name: origin.name().to_owned(), materials, ..Scene::default() },
+            scene: Scene {
+                name: origin.name().to_owned(),
+                materials,
+                variants: super::Variants {
+                    names: asset
+                        .document
+                        .variants()
+                        .map_or(Vec::new(), |v| v.map(|v| v.name().to_owned()).collect()),
+                    ..Default::default()
+                },
+                ..Scene::default()
+            },
         }
     }
 
@@ -380,6 +391,7 @@ impl<'a> Builder<'a> {
                         )));
                     }
                 }
+                let first = self.scene.triangles.len();
                 match joints {
                     Some(joints) => {
                         let posed = skin::pose(&local, joints).map_err(|e| {
@@ -393,6 +405,7 @@ impl<'a> Builder<'a> {
                     }
                     None => self.append(&local, world, material)?,
                 }
+                self.map_variants(mesh, &primitive, material, first)?;
                 self.dropped += local.dropped;
             }
         }
@@ -463,6 +476,40 @@ impl<'a> Builder<'a> {
     }
 
     /// The scene material index for a glTF material index (`None`: the default material).
+    /// `KHR_materials_variants`: records the materials the variants give the primitive just
+    /// placed (its triangles from `first` on; `material` its own).
+    fn map_variants(
+        &mut self,
+        mesh: &gltf::Mesh,
+        primitive: &gltf::Primitive,
+        material: u32,
+        first: usize,
+    ) -> Result<()> {
+        let count = self.scene.variants.names.len();
+        let mut variants = vec![None; count];
+        for mapping in primitive.mappings() {
+            let mapped = self.material_index(mapping.material().index());
+            for &v in mapping.variants() {
+                let slot = variants.get_mut(v as usize).ok_or_else(|| {
+                    self.origin.error(format!(
+                        "{}: KHR_materials_variants maps variant {v}, but the file has {count}",
+                        super::geometry::label(mesh, primitive)
+                    ))
+                })?;
+                *slot = Some(mapped);
+            }
+        }
+        if variants.iter().any(Option::is_some) {
+            self.scene.variants.primitives.push(super::VariantPrimitive {
+                first_triangle: first as u32,
+                triangle_count: (self.scene.triangles.len() - first) as u32,
+                material,
+                variants,
+            });
+        }
+        Ok(())
+    }
+
     fn material_index(&mut self, material: Option<usize>) -> u32 {
         match material {
             Some(m) => m as u32,

@@ -40,6 +40,7 @@ mod emissive;
 mod geometry;
 mod hash;
 pub mod implicit;
+pub mod info;
 mod load;
 mod material;
 mod ranges;
@@ -74,6 +75,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_unlit",
+    "KHR_materials_variants",
     "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
@@ -128,6 +130,10 @@ pub struct Scene {
     /// Implicit surfaces (`UMBRA_implicit` on nodes) in node order (depth first): each enters the
     /// BVH as one procedural primitive, its world box, after the triangles.
     pub implicits: Vec<ImplicitShape>,
+    /// `KHR_materials_variants`: the file's variants, the primitives whose material they change,
+    /// and the one selected ([`Scene::select_variant`]; none at load: every primitive's own
+    /// material).
+    pub variants: Variants,
     /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
     /// optional glTF extensions it ignored (one entry naming them all), the anisotropic
     /// primitives without a tangent frame (one entry) and, for a file with
@@ -174,6 +180,31 @@ pub struct Instance {
     pub first_triangle: u32,
     /// How many triangles it placed.
     pub triangle_count: u32,
+}
+
+/// `KHR_materials_variants`: a product's material variants (a configurator's colours and
+/// finishes), each a name and, per primitive, the material it takes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Variants {
+    /// The variants' names, in file order (a variant's index is its position).
+    pub names: Vec<String>,
+    /// Each placed primitive that some variant maps to another material, in triangle order.
+    pub primitives: Vec<VariantPrimitive>,
+    /// The variant the triangles' materials are now those of; `None`: each primitive's own.
+    pub selected: Option<usize>,
+}
+
+/// One placed primitive with variant mappings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VariantPrimitive {
+    /// Its first triangle in [`Scene::triangles`].
+    pub first_triangle: u32,
+    /// How many triangles it placed.
+    pub triangle_count: u32,
+    /// Its own material (in [`Scene::materials`]).
+    pub material: u32,
+    /// Per variant, the material it takes (`None`: its own).
+    pub variants: Vec<Option<u32>>,
 }
 
 /// Sizes of a [`Scene`], for logs and tests.
@@ -280,6 +311,41 @@ impl Scene {
         }
     }
 
+    /// The index of the variant called `name`; an error naming the file's variants otherwise.
+    pub fn variant_index(&self, name: &str) -> Result<usize> {
+        self.variants.names.iter().position(|n| n == name).ok_or_else(|| Error::Scene {
+            path: PathBuf::from(&self.name),
+            message: match self.variants.names.len() {
+                0 => format!("there is no variant '{name}': the file has no KHR_materials_variants"),
+                _ => format!(
+                    "there is no variant '{name}': the file's variants are {}",
+                    self.variants.names.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")
+                ),
+            },
+        })
+    }
+
+    /// Gives every mapped primitive's triangles the material of variant `variant` (by index;
+    /// `None`: each primitive's own) and rebuilds the emissive table. An embedding host then
+    /// calls [`crate::embed::Renderer::update_scene`] (a new upload where a material's alpha
+    /// mode changes).
+    pub fn select_variant(&mut self, variant: Option<usize>) -> Result<()> {
+        if let Some(v) = variant.filter(|&v| v >= self.variants.names.len()) {
+            return Err(Error::Scene {
+                path: PathBuf::from(&self.name),
+                message: format!("there is no variant {v}: the file has {}", self.variants.names.len()),
+            });
+        }
+        for p in &self.variants.primitives {
+            let material = variant.and_then(|v| p.variants[v]).unwrap_or(p.material);
+            let range = p.first_triangle as usize..(p.first_triangle + p.triangle_count) as usize;
+            self.triangle_material[range].fill(material);
+        }
+        self.variants.selected = variant;
+        self.update_emissive();
+        Ok(())
+    }
+
     /// Recomputes the emissive-triangle table from the current triangles and materials (after
     /// building a scene in code, or changing emission).
     pub fn update_emissive(&mut self) {
@@ -317,6 +383,8 @@ impl Scene {
             emissive: _,
             instances: _,
             implicits,
+            // Their effect is in `triangle_material`.
+            variants: _,
             warnings: _,
         } = self;
         let mut h = ContentHasher::new();

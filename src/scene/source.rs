@@ -75,6 +75,16 @@ pub(super) fn open<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<Asset<'a>> {
     Ok(Asset { document, buffers, ignored_extensions })
 }
 
+/// The JSON of `bytes` (GLB or glTF JSON) as a plain value, unvalidated ([`super::info`]).
+pub(super) fn json_value(origin: &Origin, bytes: &[u8]) -> Result<gltf::json::Value> {
+    let json_bytes = if bytes.starts_with(b"glTF") { split_glb(origin, bytes)?.0 } else { bytes };
+    if json_bytes.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
+        return Err(origin.error("not a glTF file: it is neither GLB (no 'glTF' magic) nor JSON"));
+    }
+    gltf::json::deserialize::from_slice(json_bytes)
+        .map_err(|e| origin.error(format!("invalid glTF JSON: {e}")))
+}
+
 /// Splits a GLB file into its JSON chunk and optional BIN chunk.
 fn split_glb<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<(&'a [u8], Option<&'a [u8]>)> {
     let word = |at: usize| bytes.get(at..at + 4).and_then(|b| b.try_into().ok()).map(u32::from_le_bytes);

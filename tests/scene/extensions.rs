@@ -352,3 +352,48 @@ fn dispersion_is_read() {
     let error = load(json!({"dispersion": -0.5})).unwrap_err().to_string();
     assert!(error.contains("prism.glb") && error.contains("dispersion is -0.5"), "{error}");
 }
+
+/// KHR_materials_variants: the file's variant names are read, every primitive keeps its own
+/// material until a variant is selected, then takes the one its mappings give that variant (its
+/// own where none does); an unknown name is an error listing the variants, and a mapping to a
+/// variant the file lacks is refused naming the primitive. No warning: the extension is read.
+#[test]
+fn variants_select_materials() {
+    let (base, bin) = read_glb(&crate::khronos("Box"));
+    let own = base["materials"].as_array().map_or(0, Vec::len);
+    let load = |mappings: Value| {
+        let mut json = base.clone();
+        json["extensionsUsed"] = json!(["KHR_materials_variants"]);
+        json["extensions"] = json!({"KHR_materials_variants": {"variants": [
+            {"name": "red"}, {"name": "green"}, {"name": "plain"}
+        ]}});
+        let materials = json["materials"].as_array_mut().unwrap();
+        materials.push(json!({"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 1]}}));
+        materials.push(json!({"name": "green", "pbrMetallicRoughness": {"baseColorFactor": [0, 1, 0, 1]}}));
+        json["meshes"][0]["primitives"][0]["extensions"] =
+            json!({"KHR_materials_variants": {"mappings": mappings}});
+        Scene::from_glb_bytes("configurator.glb", &to_glb(&json, &bin))
+    };
+    let mappings = json!([{"material": own, "variants": [0]}, {"material": own + 1, "variants": [1]}]);
+    let mut scene = load(mappings).unwrap();
+    assert_eq!(scene.variants.names, ["red", "green", "plain"]);
+    assert!(scene.warnings.iter().all(|w| !w.contains("variants")), "{:?}", scene.warnings);
+    let plain = scene.triangle_material.clone();
+    assert!(!plain.is_empty() && plain.iter().all(|&m| (m as usize) < own), "{plain:?}");
+    for (name, material) in [("red", Some(own)), ("green", Some(own + 1)), ("plain", None)] {
+        let index = scene.variant_index(name).unwrap();
+        scene.select_variant(Some(index)).unwrap();
+        match material {
+            Some(m) => assert!(scene.triangle_material.iter().all(|&t| t as usize == m), "{name}"),
+            None => assert_eq!(scene.triangle_material, plain, "{name}"),
+        }
+        assert_eq!(scene.variants.selected, Some(index));
+    }
+    scene.select_variant(None).unwrap();
+    assert_eq!(scene.triangle_material, plain);
+    let error = scene.variant_index("blue").unwrap_err().to_string();
+    assert!(error.contains("configurator.glb") && error.contains("'red', 'green', 'plain'"), "{error}");
+    assert!(scene.select_variant(Some(3)).is_err());
+    let error = load(json!([{"material": own, "variants": [7]}])).unwrap_err().to_string();
+    assert!(error.contains("mesh 0") && error.contains("variant 7"), "{error}");
+}

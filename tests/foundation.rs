@@ -123,10 +123,10 @@ fn fold_expected(v: u32, a: bool, b: bool, add: u32) -> u32 {
     if a && v & 1 == 1 {
         r |= 4;
     }
-    if v % 3 == 0 || b {
+    if v.is_multiple_of(3) || b {
         r |= 8;
     }
-    if b || v % 5 == 0 {
+    if b || v.is_multiple_of(5) {
         r |= 16;
     }
     if !(a && v > 5) {

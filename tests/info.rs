@@ -100,16 +100,16 @@ fn info_names_what_umbra_reads_ignores_and_refuses() {
     let warnings = report["loaded"]["warnings"].to_string();
     assert!(warnings.contains("EXT_lights_image_based") && warnings.contains("animated"), "{warnings}");
 
-    root["extensionsRequired"] = json!(["EXT_meshopt_compression"]);
-    root["extensionsUsed"] = json!(["EXT_meshopt_compression"]);
-    let path = write("meshopt.glb", &root, &bin);
+    root["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    root["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+    let path = write("draco.glb", &root, &bin);
     let report: Value = serde_json::from_str(&info(&[path.to_str().unwrap(), "--json"])).unwrap();
     assert_eq!(report["extensions"][0]["umbra"], "refused", "{report}");
     let refused = report["loaded"]["refused"].as_str().expect("refused");
-    assert!(refused.contains("meshopt.glb") && refused.contains("EXT_meshopt_compression"), "{refused}");
+    assert!(refused.contains("draco.glb") && refused.contains("KHR_draco_mesh_compression"), "{refused}");
     let text = info(&[path.to_str().unwrap()]);
     assert!(
-        text.contains("REFUSED") && text.contains("EXT_meshopt_compression (required): refused"),
+        text.contains("REFUSED") && text.contains("KHR_draco_mesh_compression (required): refused"),
         "{text}"
     );
 }

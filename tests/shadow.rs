@@ -756,7 +756,7 @@ fn alpha_masked_casters_cut_holes_in_the_map_as_in_the_rays() {
     let n = 8u32;
     let rgba8: Vec<u8> = (0..n * n)
         .flat_map(|i| {
-            let open = ((i % n) + (i / n)) % 2 == 0;
+            let open = ((i % n) + (i / n)).is_multiple_of(2);
             [200, 200, 200, if open { 0 } else { 255 }]
         })
         .collect();

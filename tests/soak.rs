@@ -168,13 +168,13 @@ fn a_long_embedded_run_does_not_grow_memory() {
     let measure = |renderer: &mut Renderer, frames: std::ops::Range<u32>| {
         let mut frame = frames.start;
         while frame < frames.end {
-            if frame > 0 && frame % update_every == 0 {
+            if frame > 0 && frame.is_multiple_of(update_every) {
                 renderer.update_scene(&recoloured(&base, frame / update_every)).unwrap();
             }
             let count = FRAMES_PER_SUBMIT.min(frames.end - frame).min(update_every - frame % update_every);
             record_frames(&gpu, renderer, &camera, &targets, &path, frame, count);
             frame += count;
-            if std::env::var_os("UMBRA_SOAK_TRACE").is_some() && frame % 200 == 0 {
+            if std::env::var_os("UMBRA_SOAK_TRACE").is_some() && frame.is_multiple_of(200) {
                 eprintln!(
                     "frame {frame}: resident {:.1} MiB, GPU {:?}",
                     resident_bytes() as f64 / 1048576.0,

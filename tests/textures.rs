@@ -22,7 +22,7 @@ use umbra::scene::{
 fn checker(size: u32, srgb: bool, sampler: Sampler) -> Texture {
     let rgba8 = (0..size * size)
         .flat_map(|i| {
-            let v = if (i % size + i / size) % 2 == 0 { 0 } else { 255 };
+            let v = if (i % size + i / size).is_multiple_of(2) { 0 } else { 255 };
             [v, v, v, 255]
         })
         .collect();

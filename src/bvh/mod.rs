@@ -308,7 +308,7 @@ impl Bvh {
                 }
             } else {
                 let left = node.left_first as usize;
-                if left % 2 != 0 || left < 2 || left + 1 >= self.nodes.len() {
+                if !left.is_multiple_of(2) || left < 2 || left + 1 >= self.nodes.len() {
                     return Err(format!("node {index} has children at {left}, which is invalid"));
                 }
                 for child in [left, left + 1] {

@@ -94,7 +94,7 @@ impl ProbeSettings {
                 return invalid(format!("spacing {s} must be a positive distance"));
             }
         }
-        if self.rays == 0 || self.rays % PROBE_RAY_GROUP != 0 || self.rays > PROBE_MAX_RAYS {
+        if self.rays == 0 || !self.rays.is_multiple_of(PROBE_RAY_GROUP) || self.rays > PROBE_MAX_RAYS {
             return invalid(format!(
                 "{} rays per probe: must be a multiple of {PROBE_RAY_GROUP} up to {PROBE_MAX_RAYS}",
                 self.rays

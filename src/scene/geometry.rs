@@ -257,7 +257,7 @@ fn assemble(mode: Mode, v: &[u32], file: &str, label: &str) -> Vec<[u32; 3]> {
             .collect(),
         Mode::TriangleFan => (0..v.len().saturating_sub(2)).map(|i| [v[i + 1], v[i + 2], v[0]]).collect(),
         _ => {
-            if v.len() % 3 != 0 {
+            if !v.len().is_multiple_of(3) {
                 log::warn!("{file}: {label} has {} indices, not a multiple of 3; ignoring the rest", v.len());
             }
             v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()

@@ -43,6 +43,7 @@ pub mod implicit;
 pub mod info;
 mod load;
 mod material;
+mod meshopt;
 mod ranges;
 mod skin;
 mod source;
@@ -80,6 +81,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_mesh_quantization",
     "KHR_texture_transform",
     "EXT_mesh_gpu_instancing",
+    "EXT_meshopt_compression",
     "EXT_texture_webp",
     "UMBRA_implicit",
 ];

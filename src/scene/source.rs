@@ -70,7 +70,15 @@ pub(super) fn open<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<Asset<'a>> {
     use_webp_sources(origin, &mut root)?;
     super::ranges::check(origin, json_bytes)?;
     let document = validate(origin, root)?;
-    let buffers = load_buffers(origin, &document, bin)?;
+    let mut buffers = load_buffers(origin, &document, bin)?;
+    // Compressed views decoded into a buffer of their own, and the document pointed at it.
+    let document = if super::meshopt::any(document.as_json()) {
+        let mut root = document.into_json();
+        buffers.push(Cow::Owned(super::meshopt::decode(origin, &mut root, &buffers)?));
+        validate(origin, root)?
+    } else {
+        document
+    };
     check_views(origin, &document, &buffers)?;
     Ok(Asset { document, buffers, ignored_extensions })
 }
@@ -243,6 +251,11 @@ fn load_buffers<'a>(
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
         let what = format!("buffer {}", buffer.index());
+        // EXT_meshopt_compression's fallback for readers without it: umbra decodes the views.
+        if super::meshopt::is_fallback(&buffer) {
+            buffers.push(Cow::Borrowed(&[][..]));
+            continue;
+        }
         let data: Cow<'a, [u8]> = match buffer.source() {
             gltf::buffer::Source::Uri(uri) => Cow::Owned(origin.resolve_uri(uri, &what)?),
             // The GLB BIN chunk belongs to the first buffer without a URI.

@@ -10,6 +10,7 @@ mod common;
 
 mod cameras_and_lights;
 mod committed;
+mod compressed;
 mod errors;
 mod extensions;
 mod features;

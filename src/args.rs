@@ -730,7 +730,8 @@ mod tests {
                 "output",
                 "scene",
                 "seed",
-                "size"
+                "size",
+                "variant"
             ]
         );
     }

@@ -60,7 +60,7 @@ pub(crate) enum Command {
 }
 
 /// The scene and the environment that lights it: what `render` and `bake` share.
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 pub(crate) struct SceneArgs {
     /// A .gltf or .glb file; the embedded Cornell box when absent.
     pub(crate) scene: Option<PathBuf>,
@@ -77,6 +77,13 @@ pub(crate) struct SceneArgs {
     /// primitives it maps); without it, each primitive's own material.
     #[arg(long, value_name = "NAME")]
     pub(crate) variant: Option<String>,
+    /// Pose the scene by its animations at this time, seconds (node transforms, morph weights,
+    /// and skins through their joints); without it every node keeps its default transform.
+    #[arg(long, value_name = "SECONDS")]
+    pub(crate) time: Option<f32>,
+    /// With --time: the animation that plays, by index or name (default: all of them).
+    #[arg(long, value_name = "N|NAME", requires = "time")]
+    pub(crate) animation: Option<String>,
     /// A texture image that cannot be read or decoded: refuse the scene (error), or warn once
     /// per image and render its slots with the material's factors alone (warn).
     #[arg(long, value_enum, default_value = "error")]
@@ -85,7 +92,7 @@ pub(crate) struct SceneArgs {
 
 /// How the irradiance probes are baked (`bake`, and `render --probes bake`); unset: the
 /// defaults of `ProbeSettings`.
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Probe bakes (render --probes bake, and umbra bake)")]
 pub(crate) struct ProbeArgs {
     /// Probes: distance between neighbouring probes, metres (default: the scene's longest side / 8).
@@ -131,7 +138,7 @@ pub(crate) fn parse_probes(s: &str) -> Result<ProbesArg, String> {
 }
 
 /// How lightmaps and occlusion maps are baked (`bake`, and `render --lightmaps bake`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Lightmap bakes (render --lightmaps, and umbra bake)")]
 pub(crate) struct LightmapArgs {
     /// Lightmaps and occlusion maps: texels a side of each material's map.
@@ -156,7 +163,7 @@ impl LightmapArgs {
     }
 }
 
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 pub(crate) struct BakeArgs {
     #[command(flatten)]
     pub(crate) scene: SceneArgs,
@@ -182,7 +189,7 @@ pub(crate) struct BakeArgs {
     pub(crate) lightmap: LightmapArgs,
 }
 
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 pub(crate) struct RenderArgs {
     #[command(flatten)]
     pub(crate) scene: SceneArgs,
@@ -212,6 +219,15 @@ pub(crate) struct RenderArgs {
     /// and moment layers (and `noisy` with --denoise).
     #[arg(long, value_parser = cli::parse_exr)]
     pub(crate) exr: Option<PathBuf>,
+    /// Render frames A up to B (B excluded) of the scene's animations, frame f posed at f / --fps
+    /// seconds, each into -o (and --exr) with the frame number in place of a printf field such as
+    /// %04d: `-o frame-%04d.png`. Each frame is a whole render of the re-posed scene (its BVH
+    /// built anew).
+    #[arg(long, value_parser = cli::parse_sample_range, value_name = "A..B", conflicts_with = "time")]
+    pub(crate) frames: Option<(u32, u32)>,
+    /// Frames per second of --frames.
+    #[arg(long, default_value_t = 24.0, value_parser = cli::parse_positive)]
+    pub(crate) fps: f32,
     #[command(flatten)]
     pub(crate) path: PathArgs,
     #[command(flatten)]
@@ -319,7 +335,7 @@ impl RenderArgs {
 }
 
 /// `umbra render`: the path tracer's flags (`--mode pathtrace`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Path tracer (--mode pathtrace)")]
 pub(crate) struct PathArgs {
     /// Samples per pixel (64 by default); with --sample-range, the whole render's, of which the
@@ -381,7 +397,7 @@ pub(crate) struct PathArgs {
 }
 
 /// `umbra render`: the path tracer's RIS (`--mode pathtrace --direct ris`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Path tracer, --direct ris")]
 pub(crate) struct RisArgs {
     /// Path tracer, --direct ris: candidates resampled at each vertex (at most 512 over a path's
@@ -396,7 +412,7 @@ pub(crate) struct RisArgs {
 }
 
 /// `umbra render`: the PNG's exposure and tone curve (`--mode pathtrace` or `hybrid`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Display (--mode pathtrace or hybrid)")]
 pub(crate) struct DisplayArgs {
     /// Exposure in stops for the PNG.
@@ -408,7 +424,7 @@ pub(crate) struct DisplayArgs {
 }
 
 /// `umbra render`: the hybrid's flags (`--mode hybrid`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Hybrid (--mode hybrid)")]
 pub(crate) struct HybridArgs {
     /// Hybrid: how the G-buffer finds each pixel's first surface: rasterized into a visibility
@@ -452,7 +468,7 @@ pub(crate) struct HybridArgs {
 }
 
 /// `umbra render`: the hybrid's ReSTIR (`--mode hybrid --direct restir`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Hybrid, --direct restir")]
 pub(crate) struct RestirArgs {
     /// Hybrid, ReSTIR: candidates resampled per pixel and frame.
@@ -478,7 +494,7 @@ pub(crate) struct RestirArgs {
 }
 
 /// `umbra render`: the hybrid's shadow maps (`--shadows hard|pcf|pcss|moments`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Hybrid shadow maps (--shadows hard|pcf|pcss|moments)")]
 pub(crate) struct ShadowMapArgs {
     /// Hybrid shadow maps: width = height of each layer in texels (16 to 2048).
@@ -510,7 +526,7 @@ pub(crate) struct ShadowMapArgs {
 }
 
 /// `umbra render`: the size of punctual lights (`--shadows pcss`, or `--rt-light-size`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Sized lights (--shadows pcss, or --rt-light-size)")]
 pub(crate) struct SizedLightArgs {
     /// Hybrid shadow maps (pcss) and --rt-light-size: radius of point and spot lights, metres.
@@ -523,7 +539,7 @@ pub(crate) struct SizedLightArgs {
 }
 
 /// `umbra render`: ambient occlusion (`--mode ao` or `rtao`, or the hybrid's AO).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's AO)")]
 pub(crate) struct AoArgs {
     /// AO modes and hybrid AO: kernel directions (ssao, 16 by default), slices (gtao, 3) or rays
@@ -546,7 +562,7 @@ pub(crate) enum ScreenAo {
 }
 
 /// `umbra render`: the screen-space AO (`--mode ao`, or the hybrid's AO; rtao casts rays).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's AO)")]
 pub(crate) struct ScreenAoArgs {
     /// --mode ao and hybrid AO: the estimator.
@@ -562,7 +578,7 @@ pub(crate) struct ScreenAoArgs {
 }
 
 /// `umbra render`: GTAO's own flags (`--ao gtao`).
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 #[command(next_help_heading = "Ambient occlusion (--mode ao or rtao, or the hybrid's AO)")]
 pub(crate) struct GtaoArgs {
     /// --ao gtao: compute the AO at every pixel, or at one of each 2x2 block and upsample it
@@ -591,7 +607,7 @@ impl From<AoResolutionArg> for AoResolution {
     }
 }
 
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 pub(crate) struct MergeArgs {
     /// The parts: EXRs written by `umbra render` (path tracer) of one scene and settings.
     #[arg(required = true)]
@@ -719,18 +735,22 @@ mod tests {
         assert_eq!(
             common,
             [
+                "animation",
                 "camera",
                 "direct",
                 "env",
                 "env_color",
                 "env_strength",
                 "exr",
+                "fps",
+                "frames",
                 "missing_textures",
                 "mode",
                 "output",
                 "scene",
                 "seed",
                 "size",
+                "time",
                 "variant"
             ]
         );

@@ -67,6 +67,56 @@ fn merge(args: MergeArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--frames A..B`: one render per frame, the scene posed at frame / fps seconds, each written
+/// to the outputs with the frame number in their printf field.
+fn render_frames(args: RenderArgs, (first, end): (u32, u32)) -> Result<()> {
+    let frame_path = |pattern: &std::path::Path, flag: &str, frame: u32| -> Result<std::path::PathBuf> {
+        let text = pattern.to_string_lossy();
+        let field = frame_field(&text).ok_or_else(|| {
+            anyhow::anyhow!(
+                "{flag} {text}: --frames needs a frame number field in the name, such as frame-%04d.png"
+            )
+        })?;
+        let (start, len, width) = field;
+        let number = format!("{frame:0width$}");
+        Ok(format!("{}{number}{}", &text[..start], &text[start + len..]).into())
+    };
+    // Checked before the first frame renders.
+    frame_path(&args.output, "-o", first)?;
+    if let Some(exr) = &args.exr {
+        frame_path(exr, "--exr", first)?;
+    }
+    let bar = indicatif::ProgressBar::new((end - first) as u64).with_style(
+        indicatif::ProgressStyle::with_template("frames {bar:40} {pos}/{len}  ETA {eta}")
+            .expect("valid template"),
+    );
+    for frame in first..end {
+        let mut one = args.clone();
+        one.frames = None;
+        one.scene.time = Some(frame as f32 / args.fps);
+        one.output = frame_path(&args.output, "-o", frame)?;
+        one.exr = args.exr.as_deref().map(|e| frame_path(e, "--exr", frame)).transpose()?;
+        bar.suspend(|| render(one))?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!("rendered frames {first}..{end} at {} fps", args.fps);
+    Ok(())
+}
+
+/// The printf field of a frame pattern (`%d` or `%0Nd`): its byte offset, length and width.
+fn frame_field(text: &str) -> Option<(usize, usize, usize)> {
+    let start = text.find('%')?;
+    let rest = &text[start + 1..];
+    let digits = rest.find('d')?;
+    let spec = &rest[..digits];
+    if !spec.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let width = if spec.is_empty() { 0 } else { spec.trim_start_matches('0').parse().unwrap_or(0) };
+    Some((start, digits + 2, width))
+}
+
 fn render(args: RenderArgs) -> Result<()> {
     if args.direct == Direct::Restir && args.mode != Mode::Hybrid {
         anyhow::bail!("--direct restir applies to --mode hybrid (the path tracer's is --direct ris)");
@@ -443,12 +493,22 @@ impl SceneArgs {
 
     /// Loads the scene (or the embedded Cornell box) and the environment map.
     fn load(&self) -> Result<LoadedScene> {
+        use umbra::scene::{AnimationSelect, LoadOptions, PoseAt};
+        let pose = self.time.map(|time| PoseAt {
+            time,
+            animations: match &self.animation {
+                None => AnimationSelect::All,
+                Some(a) => {
+                    a.parse().map_or_else(|_| AnimationSelect::Name(a.clone()), AnimationSelect::Index)
+                }
+            },
+        });
         let mut scene = match &self.scene {
             Some(path) => {
-                use umbra::scene::LoadOptions;
-                let missing_textures = self.missing_textures;
-                umbra::scene::Scene::load_with(path, &LoadOptions { missing_textures })?
+                let options = LoadOptions { missing_textures: self.missing_textures, pose };
+                umbra::scene::Scene::load_with(path, &options)?
             }
+            None if pose.is_some() => anyhow::bail!("--time: the embedded Cornell box has no animations"),
             None => umbra::scene::Scene::cornell_box(),
         };
         if let Some(name) = &self.variant {
@@ -825,7 +885,10 @@ fn run(cli: Cli, given: &[String]) -> Result<()> {
     match cli.command {
         Command::Render(args) => {
             cli::refuse_inapplicable(given, &render_flag_groups(&args))?;
-            render(args)?
+            match args.frames {
+                Some(frames) => render_frames(args, frames)?,
+                None => render(args)?,
+            }
         }
         Command::Bake(args) => {
             let (probes, maps) = (args.output.is_some(), args.lightmaps.is_some() || args.ao_maps.is_some());

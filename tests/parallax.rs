@@ -453,7 +453,7 @@ fn the_extension_is_read_and_bad_input_named() {
     std::fs::write(&file, generate::glb(&serde_json::to_vec(&json).unwrap(), &bin)).unwrap();
     let err = Scene::load_with(&file, &LoadOptions::default()).unwrap_err().to_string();
     assert!(err.contains("garbage.glb"), "{err}");
-    let warn = LoadOptions { missing_textures: MissingTextures::Warn };
+    let warn = LoadOptions { missing_textures: MissingTextures::Warn, ..Default::default() };
     let scene = Scene::load_with(&file, &warn).expect("an undecodable height map is a warning");
     assert!(scene.materials[0].parallax.is_none(), "parallax kept without its height map");
     assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);

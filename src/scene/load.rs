@@ -39,6 +39,9 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
         materials.push(material);
     }
     let mut builder = Builder::new(&origin, &asset, materials);
+    if let Some(at) = &options.pose {
+        builder.pose = Some(super::animation::pose(&origin, &builder.reader, &asset.document, at)?);
+    }
     builder.walk()?;
     let posed = builder.static_pose_warning();
     let frameless = builder.frameless_warning();
@@ -98,6 +101,8 @@ struct Builder<'a> {
     morphed_meshes: Vec<usize>,
     /// Index of the glTF default material once a primitive needed it.
     default_material: Option<u32>,
+    /// The animations' pose the nodes take (`LoadOptions::pose`); `None`: their defaults.
+    pose: Option<super::animation::Pose>,
     /// Triangles dropped for non-finite positions, over all placements.
     dropped: usize,
     scene: Scene,
@@ -116,6 +121,7 @@ impl<'a> Builder<'a> {
             skinned_nodes: 0,
             morphed_meshes: Vec::new(),
             default_material: None,
+            pose: None,
             dropped: 0,
             scene: Scene {
                 name: origin.name().to_owned(),
@@ -157,7 +163,7 @@ impl<'a> Builder<'a> {
                     node.index()
                 )));
             }
-            let world = parent * local_transform(&node);
+            let world = parent * local_with(&self.pose, &node);
             if !world.is_finite() {
                 return Err(self.origin.error(format!(
                     "{}: its world transform is not finite (check its matrix, rotation and scale)",
@@ -242,8 +248,10 @@ impl<'a> Builder<'a> {
 
     /// Joint matrices of `skin` as `node` uses it (`skin.rs`).
     fn joint_matrices(&mut self, node: &gltf::Node, skin: &gltf::Skin) -> Result<Vec<Mat4>> {
-        let worlds =
-            self.node_worlds.get_or_insert_with(|| skin::node_worlds(&self.asset.document, local_transform));
+        let pose = &self.pose;
+        let worlds = self
+            .node_worlds
+            .get_or_insert_with(|| skin::node_worlds(&self.asset.document, |n| local_with(pose, n)));
         self.skinned_nodes += 1;
         skin::joint_matrices(&self.reader, skin, worlds, &node_label(node))
     }
@@ -270,6 +278,10 @@ impl<'a> Builder<'a> {
     }
 
     fn static_pose_warning(&self) -> Option<String> {
+        // Posed at a time, the file renders as it moves there.
+        if self.pose.is_some() {
+            return None;
+        }
         let plural = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         let mut what = Vec::new();
         let animations = self.asset.document.animations().len();
@@ -371,7 +383,9 @@ impl<'a> Builder<'a> {
         let first_triangle = self.scene.triangles.len();
         let first_vertex = self.scene.positions.len();
         // The node's morph weights override the mesh's (glTF); absent, every weight is 0.
-        let weights = node.weights().or(mesh.weights()).unwrap_or_default();
+        // Animated weights (a pose) override both.
+        let animated = self.pose.as_ref().and_then(|p| p.weights[node.index()].clone());
+        let weights = animated.as_deref().or(node.weights()).or(mesh.weights()).unwrap_or_default();
         if mesh.primitives().any(|p| p.morph_targets().len() > 0)
             && !self.morphed_meshes.contains(&mesh.index())
         {
@@ -585,8 +599,13 @@ impl<'a> Builder<'a> {
 /// targets), skinned.
 type PrimitiveKey = (usize, usize, Vec<u32>, bool);
 
+/// A node's local transform under `pose` (its animated properties), or its own.
+fn local_with(pose: &Option<super::animation::Pose>, node: &gltf::Node) -> Mat4 {
+    pose.as_ref().map_or_else(|| local_transform(node), |p| p.local(node))
+}
+
 /// A node's local transform: its matrix, or translation · rotation · scale.
-fn local_transform(node: &gltf::Node) -> Mat4 {
+pub(super) fn local_transform(node: &gltf::Node) -> Mat4 {
     match node.transform() {
         gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
         gltf::scene::Transform::Decomposed { translation, rotation, scale } => {

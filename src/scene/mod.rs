@@ -35,6 +35,7 @@
 pub const MAX_COORDINATE: f32 = 5e17;
 
 mod accessor;
+pub mod animation;
 mod camera;
 mod emissive;
 mod geometry;
@@ -53,6 +54,7 @@ use crate::error::{Error, Result};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
+pub use animation::{AnimationSelect, PoseAt};
 pub use camera::{Camera, Light, LightKind, Orthographic};
 pub use emissive::EmissiveTable;
 pub use hash::ContentHasher;
@@ -158,11 +160,14 @@ pub enum MissingTextures {
     Warn,
 }
 
-/// How [`Scene::load_with`] treats imperfect input.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How [`Scene::load_with`] treats imperfect input, and the pose it loads.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadOptions {
     /// Texture images that cannot be read or decoded.
     pub missing_textures: MissingTextures,
+    /// Pose the scene by its animations at a time ([`animation`]); `None`: every node at its
+    /// default transform and weights (one static pose, with a warning when the file moves).
+    pub pose: Option<PoseAt>,
 }
 
 /// One mesh placed by one node (or one `EXT_mesh_gpu_instancing` instance of a node).

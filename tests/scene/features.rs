@@ -143,7 +143,10 @@ fn features_before_the_upload_are_the_uploads() {
     }
     // Some of the shared models lack image files: their slots stay empty as in `umbra render
     // --missing-textures warn`, which is what the features must see.
-    let options = umbra::scene::LoadOptions { missing_textures: umbra::scene::MissingTextures::Warn };
+    let options = umbra::scene::LoadOptions {
+        missing_textures: umbra::scene::MissingTextures::Warn,
+        ..Default::default()
+    };
     // Those without their geometry (a .gltf whose .bin was not copied) are left out, named.
     for path in &files {
         match Scene::load_with(path, &options) {

@@ -70,7 +70,7 @@ fn missing_files_are_named() {
 #[test]
 fn missing_textures_can_be_warned_about_and_neutralised() {
     use umbra::scene::{LoadOptions, MissingTextures};
-    let warn = LoadOptions { missing_textures: MissingTextures::Warn };
+    let warn = LoadOptions { missing_textures: MissingTextures::Warn, ..Default::default() };
     let reference = load(&scenes_dir().join("textured.glb"));
     let path = write_gltf("lenient", |json| json["images"][0] = json!({ "uri": "gone.png" }));
     assert_scene_error(Scene::load(&path), "scene.gltf", "gone.png");

@@ -188,7 +188,10 @@ pub(crate) fn named_path_scenes(files: &[PathBuf]) -> Result<Vec<(String, umbra:
 /// A scene of `umbra-bench paths`, keyed by its file name. A sample model whose image files are
 /// absent renders with its factors alone (a warning each).
 pub(crate) fn load_path_scene(path: &std::path::Path) -> Result<(String, umbra::scene::Scene)> {
-    let options = umbra::scene::LoadOptions { missing_textures: umbra::scene::MissingTextures::Warn };
+    let options = umbra::scene::LoadOptions {
+        missing_textures: umbra::scene::MissingTextures::Warn,
+        ..Default::default()
+    };
     let name =
         path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     Ok((name, umbra::scene::Scene::load_with(path, &options)?))

@@ -159,7 +159,7 @@ impl Passes {
         current: GraphImage,
         history: &'g TaaHistory,
         mode: TaaMode,
-    ) -> Result<GraphImage> {
+    ) -> GraphImage {
         // The image the resolve writes: the one the last did not (the graph needs it before the
         // pass records, when the history flips).
         let resolved = graph.import("taa resolved", history.next_view());
@@ -169,7 +169,7 @@ impl Passes {
                 self.record_taa(rec, &gbuffer, views[current], history, camera, mode)
             },
         );
-        Ok(resolved)
+        resolved
     }
 
     /// Adds the hybrid frame's passes to `graph`: the G-buffer into `targets.gbuffer`, then
@@ -262,7 +262,7 @@ impl Passes {
         let display = match targets.taa {
             Some(history) => {
                 history.check_size(size)?;
-                self.add_taa(graph, camera, gbuffer, hdr, history, TaaMode::Reproject)?
+                self.add_taa(graph, camera, gbuffer, hdr, history, TaaMode::Reproject)
             }
             None => hdr,
         };

@@ -8,6 +8,19 @@ use super::*;
 /// GPU milliseconds by pass name, in the order the passes first ran.
 type PassTimes = Vec<(String, f64)>;
 
+/// `times` summed by name (a pass recorded several times: layers, sub-frames), in the order
+/// each name first ran.
+fn summed_by_name(times: Vec<crate::vk::PassTime>) -> PassTimes {
+    let mut summed: PassTimes = Vec::new();
+    for t in times {
+        match summed.iter_mut().find(|(name, _)| *name == t.name) {
+            Some(pass) => pass.1 += t.ms,
+            None => summed.push((t.name, t.ms)),
+        }
+    }
+    summed
+}
+
 impl Passes {
     /// Bakes `volume` now (submits and waits): [`ProbeVolume::bake_sweeps`] sweeps over every
     /// probe, a running mean after the replacing ones, under the environment of `settings`,
@@ -58,13 +71,7 @@ impl Passes {
                 timer.reset(cmd);
                 self.shadow_pass(scene)?.record(rec, scene, maps, view, Some(&mut timer))
             })?;
-            let mut steps: Vec<(String, f64)> = Vec::new();
-            for t in timer.read()? {
-                match steps.iter_mut().find(|(name, _)| *name == t.name) {
-                    Some(step) => step.1 += t.ms,
-                    None => steps.push((t.name, t.ms)),
-                }
-            }
+            let steps = summed_by_name(timer.read()?);
             match maps.check(ctx)? {
                 None => return Ok(steps),
                 Some(entries) => maps.reserve(ctx, entries)?,
@@ -402,8 +409,8 @@ impl Passes {
         // ReSTIR's one-shot render runs its frames with the camera still (its history), timing
         // the last.
         let frames = settings.lighting.direct.restir().map_or(1, |r| r.frames);
-        let named = |t: crate::vk::PassTime| (t.name, t.ms);
-        if settings.samples > 1 {
+        let frame = Frame { scene, ibl: &ibl, camera };
+        let (color, shading_ms) = if settings.samples > 1 {
             // The G-buffer above (through the pixels' centres) is the AOVs' and the shadow
             // maps' view; the sub-frames render their own.
             let sub = GBuffer::new(ctx, size)?;
@@ -414,36 +421,20 @@ impl Passes {
                 display.init_general(ctx, rec.cmd());
                 Ok(())
             })?;
-            let frame = Frame { scene, ibl: &ibl, camera };
-            let (color, sub_ms) =
-                self.supersample(frame, &targets, settings, frames, visibility.as_mut(), &display)?;
-            let mut pass_ms: Vec<(String, f64)> = first_timer.read()?.into_iter().map(named).collect();
-            pass_ms.extend(shadow_ms);
-            pass_ms.extend(sub_ms);
-            return Ok(HybridImage {
-                size,
-                color,
-                display: display.read(ctx)?,
-                gbuffer: gbuffer.read(ctx)?,
-                pass_ms,
-            });
-        }
-        let mut timer = GpuTimer::new(ctx, 8)?;
-        ctx.record(|rec| {
-            let cmd = rec.cmd();
-            output.init_general(ctx, cmd);
-            display.init_general(ctx, cmd);
-            timer.reset(cmd);
-            for f in 0..frames {
-                let mut frame = settings.clone();
-                frame.lighting.frame = settings.lighting.frame.wrapping_mul(frames).wrapping_add(f);
-                let timer = if f + 1 == frames { Some(&mut timer) } else { None };
-                self.record_hybrid_shading(rec, Frame { scene, ibl: &ibl, camera }, &targets, &frame, timer)?;
-            }
-            Ok(())
-        })?;
+            self.supersample(frame, &targets, settings, frames, visibility.as_mut(), &display)?
+        } else {
+            let mut timer = GpuTimer::new(ctx, 8)?;
+            ctx.record(|rec| {
+                let cmd = rec.cmd();
+                output.init_general(ctx, cmd);
+                display.init_general(ctx, cmd);
+                timer.reset(cmd);
+                self.record_shading_frames(rec, frame, &targets, settings, frames, Some(&mut timer))
+            })?;
+            (output.read(ctx)?, timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect())
+        };
         // In the order they ran: the environment's tables and the G-buffer, the maps, the rest.
-        let mut pass_ms: Vec<(String, f64)> = first_timer.read()?.into_iter().map(named).collect();
+        let mut pass_ms: PassTimes = first_timer.read()?.into_iter().map(|t| (t.name, t.ms)).collect();
         if let Some(ms) = visibility_ms {
             for (name, t) in &mut pass_ms {
                 if name == "visibility" {
@@ -452,14 +443,29 @@ impl Passes {
             }
         }
         pass_ms.extend(shadow_ms);
-        pass_ms.extend(timer.read()?.into_iter().map(named));
-        Ok(HybridImage {
-            size,
-            color: output.read(ctx)?,
-            display: display.read(ctx)?,
-            gbuffer: gbuffer.read(ctx)?,
-            pass_ms,
-        })
+        pass_ms.extend(shading_ms);
+        Ok(HybridImage { size, color, display: display.read(ctx)?, gbuffer: gbuffer.read(ctx)?, pass_ms })
+    }
+
+    /// Records the hybrid frame's shading of `frame` (its G-buffer in `targets`) `restir_frames`
+    /// times with the camera still: ReSTIR's one-shot render builds its history over them, each
+    /// with its own random numbers (1 without ReSTIR). Only the last is timed into `timer`.
+    fn record_shading_frames(
+        &self,
+        rec: &mut Recorder<'_>,
+        frame: Frame<'_>,
+        targets: &HybridTargets<'_>,
+        settings: &HybridSettings,
+        restir_frames: u32,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<()> {
+        for f in 0..restir_frames {
+            let mut one = settings.clone();
+            one.lighting.frame = settings.lighting.frame.wrapping_mul(restir_frames).wrapping_add(f);
+            let timer = if f + 1 == restir_frames { timer.as_deref_mut() } else { None };
+            self.record_hybrid_shading(rec, frame, targets, &one, timer)?;
+        }
+        Ok(())
     }
 
     /// The sub-frames of a supersampled one-shot hybrid render ([`HybridSettings::samples`]):
@@ -506,13 +512,15 @@ impl Passes {
                             visibility.as_deref(),
                         )
                     })?;
-                    for f in 0..restir_frames {
-                        let mut sub = settings.clone();
-                        sub.lighting.frame =
-                            settings.lighting.frame.wrapping_mul(restir_frames).wrapping_add(f);
-                        let t = if f + 1 == restir_frames { t.as_deref_mut() } else { None };
-                        self.record_hybrid_shading(rec, Frame { camera, ..frame }, targets, &sub, t)?;
-                    }
+                    let sub_frame = Frame { camera, ..frame };
+                    self.record_shading_frames(
+                        rec,
+                        sub_frame,
+                        targets,
+                        settings,
+                        restir_frames,
+                        t.as_deref_mut(),
+                    )?;
                     GpuTimer::time(&mut t, cmd, "taa", || {
                         self.record_taa(
                             rec,
@@ -539,14 +547,7 @@ impl Passes {
                 None => break,
             }
         }
-        let mut pass_ms: Vec<(String, f64)> = Vec::new();
-        for t in timer.read()? {
-            match pass_ms.iter_mut().find(|(name, _)| *name == t.name) {
-                Some(pass) => pass.1 += t.ms,
-                None => pass_ms.push((t.name, t.ms)),
-            }
-        }
-        Ok((history.resolved().read(ctx)?, pass_ms))
+        Ok((history.resolved().read(ctx)?, summed_by_name(timer.read()?)))
     }
 
     /// Renders the G-buffer of `scene` seen by `camera` at `size` and its ambient occlusion by

@@ -136,12 +136,14 @@ impl SceneInfo {
             std::fs::read(path).map_err(|e| origin.error(format!("cannot read the scene file: {e}")))?;
         let container = if bytes.starts_with(b"glTF") { "glb" } else { "gltf" };
         let root = source::json_value(&origin, &bytes)?;
-        let loaded = Scene::load_with(path, options);
+        // The bytes read once: loaded as `Scene::load_with` loads the file.
+        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let loaded = super::load::load(&name, &bytes, Some(&base), options);
         Ok(Self::of(name, container, &root, loaded))
     }
 
     fn of(file: String, container: &'static str, root: &Value, loaded: Result<Scene>) -> SceneInfo {
-        let list = |key: &str| root.get(key).and_then(Value::as_array).cloned().unwrap_or_default();
+        let list = |key: &str| array(root, key);
         let str_of = |v: &Value, key: &str| v.get(key).and_then(Value::as_str).unwrap_or_default().to_owned();
         let keys = |v: &Value| -> Vec<String> {
             v.get("extensions").and_then(Value::as_object).map_or(Vec::new(), |o| o.keys().cloned().collect())
@@ -166,19 +168,18 @@ impl SceneInfo {
             })
             .collect();
         let meshes = list("meshes");
-        let primitives =
-            |m: &Value| m.get("primitives").and_then(Value::as_array).cloned().unwrap_or_default();
+        let primitives = |m| array(m, "primitives");
         let accessors = list("accessors");
         let animations = list("animations")
             .iter()
             .map(|a| {
-                let samplers = a.get("samplers").and_then(Value::as_array).cloned().unwrap_or_default();
+                let samplers = array(a, "samplers");
                 let duration = samplers
                     .iter()
                     .filter_map(|s| s.get("input").and_then(Value::as_u64))
                     .filter_map(|i| accessors.get(i as usize)?.get("max")?.get(0)?.as_f64())
                     .fold(0.0f64, f64::max) as f32;
-                let channels = a.get("channels").and_then(Value::as_array).map_or(0, Vec::len);
+                let channels = array(a, "channels").len();
                 AnimationInfo { name: str_of(a, "name"), channels, duration }
             })
             .collect();
@@ -264,4 +265,9 @@ impl SceneInfo {
             loaded: loaded.map(|(info, _)| info).map_err(|e| e.to_string()),
         }
     }
+}
+
+/// `value[key]` as an array; empty when it is absent or not one.
+fn array<'a>(value: &'a Value, key: &str) -> &'a [Value] {
+    value.get(key).and_then(Value::as_array).map_or(&[], Vec::as_slice)
 }

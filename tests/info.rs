@@ -100,18 +100,24 @@ fn info_names_what_umbra_reads_ignores_and_refuses() {
     let warnings = report["loaded"]["warnings"].to_string();
     assert!(warnings.contains("EXT_lights_image_based") && warnings.contains("animated"), "{warnings}");
 
-    root["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
-    root["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
-    let path = write("draco.glb", &root, &bin);
+    root["extensionsRequired"] = json!(["EXT_texture_avif"]);
+    root["extensionsUsed"] = json!(["EXT_texture_avif"]);
+    let path = write("avif.glb", &root, &bin);
     let report: Value = serde_json::from_str(&info(&[path.to_str().unwrap(), "--json"])).unwrap();
     assert_eq!(report["extensions"][0]["umbra"], "refused", "{report}");
     let refused = report["loaded"]["refused"].as_str().expect("refused");
-    assert!(refused.contains("draco.glb") && refused.contains("KHR_draco_mesh_compression"), "{refused}");
+    assert!(refused.contains("avif.glb") && refused.contains("EXT_texture_avif"), "{refused}");
     let text = info(&[path.to_str().unwrap()]);
-    assert!(
-        text.contains("REFUSED") && text.contains("KHR_draco_mesh_compression (required): refused"),
-        "{text}"
-    );
+    assert!(text.contains("REFUSED") && text.contains("EXT_texture_avif (required): refused"), "{text}");
+
+    // A Draco file (Google's encoder, tests/scene/draco/) is read, with the build's feature.
+    let draco = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scene/draco/glass-draco.glb");
+    let report: Value = serde_json::from_str(&info(&[draco.to_str().unwrap(), "--json"])).unwrap();
+    let expected = if cfg!(feature = "draco") { "read" } else { "refused" };
+    assert_eq!(report["extensions"][0]["umbra"], expected, "{report}");
+    if cfg!(feature = "draco") {
+        assert_eq!(report["loaded"]["triangles"], 2214, "{report}");
+    }
 }
 
 /// Not glTF at all: an error naming the file, no report.

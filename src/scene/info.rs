@@ -3,7 +3,7 @@
 //! extensions umbra reads, ignores or refuses.
 
 use super::source::{self, Origin};
-use super::{LoadOptions, Scene, SUPPORTED_EXTENSIONS};
+use super::{extension_supported, LoadOptions, Scene};
 use crate::error::Result;
 use gltf::json::Value;
 use std::path::Path;
@@ -159,7 +159,7 @@ impl SceneInfo {
             .into_iter()
             .map(|name| {
                 let required = required.contains(&name);
-                let status = match (SUPPORTED_EXTENSIONS.contains(&name.as_str()), required) {
+                let status = match (extension_supported(&name), required) {
                     (true, _) => ExtensionUse::Read,
                     (false, false) => ExtensionUse::Ignored,
                     (false, true) => ExtensionUse::Refused,

@@ -18,8 +18,13 @@ use std::borrow::Cow;
 const EXTENSION: &str = "EXT_meshopt_compression";
 
 /// Whether buffer `buffer` is only the fallback of compressed views (no data to read).
-pub(super) fn is_fallback(buffer: &gltf::Buffer) -> bool {
-    buffer.extension_value(EXTENSION).and_then(|e| e.get("fallback")).and_then(json::Value::as_bool)
+pub(super) fn is_fallback(buffer: &json::Buffer) -> bool {
+    buffer
+        .extensions
+        .as_ref()
+        .and_then(|e| e.others.get(EXTENSION))
+        .and_then(|e| e.get("fallback"))
+        .and_then(json::Value::as_bool)
         == Some(true)
 }
 

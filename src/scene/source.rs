@@ -4,7 +4,7 @@
 //! The GLB container is parsed here rather than by the `gltf` crate so that a truncated or
 //! malformed file gets a precise message (and cannot reach an arithmetic overflow there).
 
-use super::SUPPORTED_EXTENSIONS;
+use super::extension_supported;
 use crate::error::{Error, Result};
 use gltf::json;
 use gltf::json::validation::{Checked, Validate};
@@ -69,16 +69,18 @@ pub(super) fn open<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<Asset<'a>> {
     let ignored_extensions = check_extensions(origin, &root)?;
     use_webp_sources(origin, &mut root)?;
     super::ranges::check(origin, json_bytes)?;
-    let document = validate(origin, root)?;
-    let mut buffers = load_buffers(origin, &document, bin)?;
-    // Compressed views decoded into a buffer of their own, and the document pointed at it.
-    let document = if super::meshopt::any(document.as_json()) {
-        let mut root = document.into_json();
+    // Compressed views and primitives are decoded into buffers of their own, and the JSON
+    // pointed at them, before it is validated: Draco's accessors have no views until then. The
+    // decoders check every index they follow.
+    let mut buffers = load_buffers(origin, &root, bin)?;
+    if super::meshopt::any(&root) {
         buffers.push(Cow::Owned(super::meshopt::decode(origin, &mut root, &buffers)?));
-        validate(origin, root)?
-    } else {
-        document
-    };
+    }
+    #[cfg(feature = "draco")]
+    if super::draco::any(&root) {
+        buffers.push(Cow::Owned(super::draco::decode(origin, &mut root, &buffers)?));
+    }
+    let document = validate(origin, root)?;
     check_views(origin, &document, &buffers)?;
     Ok(Asset { document, buffers, ignored_extensions })
 }
@@ -160,14 +162,19 @@ fn parse_json(origin: &Origin, bytes: &[u8]) -> Result<json::Root> {
 /// one warning (logged, and returned for the scene's warnings): what they add to the look is not
 /// rendered.
 fn check_extensions(origin: &Origin, root: &json::Root) -> Result<Option<String>> {
-    let supported = |name: &&String| SUPPORTED_EXTENSIONS.contains(&name.as_str());
+    let supported = |name: &&String| extension_supported(name);
     let unsupported: Vec<&str> =
         root.extensions_required.iter().filter(|e| !supported(e)).map(String::as_str).collect();
     if !unsupported.is_empty() {
         return Err(origin.error(format!(
-            "requires glTF extension{} umbra does not support: {}",
+            "requires glTF extension{} umbra does not support: {}{}",
             if unsupported.len() == 1 { "" } else { "s" },
-            unsupported.join(", ")
+            unsupported.join(", "),
+            if unsupported.contains(&"KHR_draco_mesh_compression") {
+                " (this umbra was built without its `draco` feature)"
+            } else {
+                ""
+            }
         )));
     }
     let ignored: Vec<&str> =
@@ -245,28 +252,28 @@ fn check_position_indices(origin: &Origin, root: &json::Root) -> Result<()> {
 /// The bytes of every buffer, each at least as long as its declared `byteLength`.
 fn load_buffers<'a>(
     origin: &Origin,
-    document: &gltf::Document,
+    root: &json::Root,
     mut bin: Option<&'a [u8]>,
 ) -> Result<Vec<Cow<'a, [u8]>>> {
     let mut buffers = Vec::new();
-    for buffer in document.buffers() {
-        let what = format!("buffer {}", buffer.index());
+    for (index, buffer) in root.buffers.iter().enumerate() {
+        let what = format!("buffer {index}");
         // EXT_meshopt_compression's fallback for readers without it: umbra decodes the views.
-        if super::meshopt::is_fallback(&buffer) {
+        if super::meshopt::is_fallback(buffer) {
             buffers.push(Cow::Borrowed(&[][..]));
             continue;
         }
-        let data: Cow<'a, [u8]> = match buffer.source() {
-            gltf::buffer::Source::Uri(uri) => Cow::Owned(origin.resolve_uri(uri, &what)?),
+        let data: Cow<'a, [u8]> = match &buffer.uri {
+            Some(uri) => Cow::Owned(origin.resolve_uri(uri, &what)?),
             // The GLB BIN chunk belongs to the first buffer without a URI.
-            gltf::buffer::Source::Bin => Cow::Borrowed(bin.take().ok_or_else(|| {
+            None => Cow::Borrowed(bin.take().ok_or_else(|| {
                 origin.error(format!("{what} has no uri and there is no (unclaimed) GLB BIN chunk"))
             })?),
         };
-        if data.len() < buffer.length() {
+        if (data.len() as u64) < buffer.byte_length.0 {
             return Err(origin.error(format!(
                 "{what} declares {} bytes but its data has only {}",
-                buffer.length(),
+                buffer.byte_length.0,
                 data.len()
             )));
         }

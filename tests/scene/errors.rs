@@ -68,7 +68,7 @@ fn json_that_breaks_gltf_rules_is_rejected() {
 fn unsupported_required_extensions_are_named_and_optional_ones_ignored() {
     let (mut json, bin) = read_glb(&khronos("Box"));
     json["extensionsUsed"] = json!([
-        "KHR_draco_mesh_compression",
+        "EXT_texture_avif",
         "KHR_texture_transform",
         "KHR_materials_iridescence",
         "KHR_materials_anisotropy",
@@ -79,13 +79,13 @@ fn unsupported_required_extensions_are_named_and_optional_ones_ignored() {
     // Named once, at warn level and in the scene's warnings; those umbra reads are not named.
     assert_eq!(
         scene.warnings,
-        vec!["optional.glb: ignoring optional glTF extensions KHR_draco_mesh_compression, EXT_unknown: rendered without them"]
+        vec!["optional.glb: ignoring optional glTF extensions EXT_texture_avif, EXT_unknown: rendered without them"]
     );
-    json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    json["extensionsRequired"] = json!(["EXT_texture_avif"]);
     assert_scene_error(
-        Scene::from_glb_bytes("draco.glb", &to_glb(&json, &bin)),
-        "draco.glb",
-        "does not support: KHR_draco_mesh_compression",
+        Scene::from_glb_bytes("avif.glb", &to_glb(&json, &bin)),
+        "avif.glb",
+        "does not support: EXT_texture_avif",
     );
     json["extensionsRequired"] = json!(["KHR_texture_transform", "KHR_materials_emissive_strength"]);
     Scene::from_glb_bytes("supported.glb", &to_glb(&json, &bin)).expect("required extensions umbra reads");

@@ -11,6 +11,8 @@ mod common;
 mod cameras_and_lights;
 mod committed;
 mod compressed;
+#[cfg(feature = "draco")]
+mod draco;
 mod errors;
 mod extensions;
 mod features;

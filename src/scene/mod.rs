@@ -44,6 +44,7 @@ mod geometry;
 mod hash;
 pub mod implicit;
 pub mod info;
+mod ktx2;
 mod load;
 mod material;
 mod meshopt;
@@ -86,6 +87,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_variants",
     "KHR_materials_volume",
     "KHR_mesh_quantization",
+    "KHR_texture_basisu",
     "KHR_texture_transform",
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",

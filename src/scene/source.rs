@@ -67,7 +67,7 @@ pub(super) fn open<'a>(origin: &Origin, bytes: &'a [u8]) -> Result<Asset<'a>> {
         if bytes.starts_with(b"glTF") { split_glb(origin, bytes)? } else { (bytes, None) };
     let mut root = parse_json(origin, json_bytes)?;
     let ignored_extensions = check_extensions(origin, &root)?;
-    use_webp_sources(origin, &mut root)?;
+    use_extension_sources(origin, &mut root)?;
     super::ranges::check(origin, json_bytes)?;
     // Compressed views and primitives are decoded into buffers of their own, and the JSON
     // pointed at them, before it is validated: Draco's accessors have no views until then. The
@@ -193,20 +193,27 @@ fn check_extensions(origin: &Origin, root: &json::Root) -> Result<Option<String>
     Ok(Some(warning))
 }
 
-/// `EXT_texture_webp`: a texture's WebP image replaces its `source` (which, if present, is the
-/// fallback for readers without the extension, and may be absent when the extension is
-/// required). The extension's `source` must name an image.
-fn use_webp_sources(origin: &Origin, root: &mut json::Root) -> Result<()> {
+/// `KHR_texture_basisu` and `EXT_texture_webp`: a texture's KTX2 or WebP image replaces its
+/// `source` (which, if present, is the fallback for readers without the extension, and may be
+/// absent when the extension is required); with both, the KTX2. The extension's `source` must
+/// name an image.
+fn use_extension_sources(origin: &Origin, root: &mut json::Root) -> Result<()> {
     let images = root.images.len();
     for (i, texture) in root.textures.iter_mut().enumerate() {
-        let extension = texture.extensions.as_ref().and_then(|e| e.others.get("EXT_texture_webp"));
-        let Some(source) = extension.map(|e| e.get("source")) else { continue };
+        let others = texture.extensions.as_ref().map(|e| &e.others);
+        let Some((name, extension)) = ["KHR_texture_basisu", "EXT_texture_webp"]
+            .into_iter()
+            .find_map(|name| Some((name, others?.get(name)?)))
+        else {
+            continue;
+        };
+        let source = extension.get("source");
         match source.and_then(json::Value::as_u64).filter(|&s| (s as usize) < images) {
             Some(image) => texture.source = json::Index::new(image as u32),
             None => {
                 return Err(origin.error(format!(
-                    "texture {i}: the source of its EXT_texture_webp ({}) is not an image index (the file \
-                     has {images} images)",
+                    "texture {i}: the source of its {name} ({}) is not an image index (the file has \
+                     {images} images)",
                     source.map_or("absent".to_owned(), |s| s.to_string())
                 )))
             }

@@ -354,18 +354,23 @@ struct Decoded {
     rgba8: Vec<u8>,
 }
 
-/// Reads and decodes image `index` (PNG, JPEG or, for `EXT_texture_webp`, WebP: told apart by
-/// content) to RGBA8.
+/// Reads and decodes image `index` (PNG, JPEG, for `EXT_texture_webp` WebP, for
+/// `KHR_texture_basisu` KTX2: told apart by content) to RGBA8.
 fn decode_image(origin: &Origin, asset: &Asset, index: usize) -> Result<Decoded> {
     let (bytes, description) = source::image_bytes(origin, asset, index)?;
-    let image = image::load_from_memory(&bytes)
-        .map_err(|e| origin.error(format!("{description}: cannot decode the image: {e}")))?
-        .to_rgba8();
+    let (width, height, rgba8) = if bytes.starts_with(super::ktx2::MAGIC) {
+        super::ktx2::decode(&bytes).map_err(|e| origin.error(format!("{description}: KTX2: {e}")))?
+    } else {
+        let image = image::load_from_memory(&bytes)
+            .map_err(|e| origin.error(format!("{description}: cannot decode the image: {e}")))?
+            .to_rgba8();
+        (image.width(), image.height(), image.into_raw())
+    };
     let json = &asset.document.as_json().images[index];
     let name = match (&json.name, &json.uri) {
         (Some(name), _) => name.clone(),
         (None, Some(uri)) if !uri.starts_with("data:") => uri.clone(),
         _ => format!("image {index}"),
     };
-    Ok(Decoded { name, width: image.width(), height: image.height(), rgba8: image.into_raw() })
+    Ok(Decoded { name, width, height, rgba8 })
 }

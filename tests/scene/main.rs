@@ -19,6 +19,7 @@ mod features;
 mod files;
 mod fuzz;
 mod geometry;
+mod ktx2;
 mod materials;
 
 use serde_json::Value;

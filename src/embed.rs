@@ -100,7 +100,7 @@
 //!   pending (after the host's frame fence).
 
 use crate::error::Result;
-use crate::gpu::scene::{GpuScene, SceneBvh};
+use crate::gpu::scene::{BvhUpdate, GpuScene, SceneBvh};
 use crate::gpu::SceneFeatures;
 use crate::passes::ao::AoSettings;
 use crate::passes::deferred::{LightingInputs, LightingSettings};
@@ -230,6 +230,22 @@ impl Renderer {
     /// them, so an engine can update every frame without compiling a kernel.
     pub fn update_scene(&mut self, scene: &Scene) -> Result<()> {
         self.scene.update(&self.ctx, scene)?;
+        self.generation += 1;
+        if self.scene.features() != self.passes.features() {
+            self.passes = Passes::new(&self.ctx, &self.scene);
+            self.passes.prepare(&self.scene, self.path_options)?;
+        }
+        Ok(())
+    }
+
+    /// Takes `scene`'s moved geometry after [`Scene::pose`] (the same triangles and materials),
+    /// its BVH refitted or rebuilt by `how` ([`BvhUpdate`]); lights and cameras move with it.
+    /// The pipelines are re-specialised only when a rebuilt tree needs a deeper walk. The temporal
+    /// denoiser's history starts afresh, as after [`Renderer::update_scene`] (it has no motion
+    /// vectors for moving geometry). No command buffer using the scene may be pending (wait for
+    /// the host's frame fence first).
+    pub fn update_geometry(&mut self, scene: &Scene, how: BvhUpdate) -> Result<()> {
+        self.scene.update_geometry(&self.ctx, scene, how)?;
         self.generation += 1;
         if self.scene.features() != self.passes.features() {
             self.passes = Passes::new(&self.ctx, &self.scene);

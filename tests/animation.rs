@@ -301,3 +301,72 @@ fn frames_render_one_image_each() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && stderr.contains("frame number field"), "{stderr}");
 }
+
+/// `Scene::pose` on a loaded scene gives exactly what loading the file at that time gives (every
+/// vertex, triangle, instance, camera and light), for every animation kind in `animated.glb`
+/// (a skin, a rigid node, a morph weight); a scene without animations says so.
+#[test]
+fn posing_a_loaded_scene_equals_loading_it_at_that_time() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/animated.glb");
+    let mut scene = Scene::load(&path).unwrap();
+    let rest = scene.positions.clone();
+    for (time, animations) in [
+        (0.3, AnimationSelect::All),
+        (1.7, AnimationSelect::Name("bend".into())),
+        (0.9, AnimationSelect::Index(2)),
+    ] {
+        let at = PoseAt { time, animations };
+        scene.pose(&at).unwrap();
+        let loaded =
+            Scene::load_with(&path, &LoadOptions { pose: Some(at.clone()), ..Default::default() }).unwrap();
+        assert_eq!(scene.positions, loaded.positions, "{at:?}");
+        assert_eq!(scene.normals, loaded.normals, "{at:?}");
+        assert_eq!(scene.triangles, loaded.triangles, "{at:?}");
+        assert_eq!(scene.instances, loaded.instances, "{at:?}");
+        assert_eq!(scene.lights, loaded.lights, "{at:?}");
+        assert_eq!(scene.cameras, loaded.cameras, "{at:?}");
+        assert_eq!(scene.content_hash(), loaded.content_hash(), "{at:?}");
+        assert_ne!(scene.positions, rest, "{at:?} moved nothing");
+    }
+    let mut still = Scene::cornell_box();
+    let error = still.pose(&PoseAt { time: 1.0, animations: AnimationSelect::All }).unwrap_err().to_string();
+    assert!(error.contains("has no animations to pose"), "{error}");
+}
+
+/// A refitted BVH finds, ray for ray, the hit a brute-force search over the posed triangles
+/// finds (the same triangle, distance and barycentrics), and its boxes still hold their
+/// triangles (`Bvh::validate`), after posing far from the rest pose it was built for.
+#[test]
+fn a_refitted_bvh_finds_what_brute_force_finds() {
+    use glam::Vec3;
+    use umbra::bvh::{reference::Reference, Bvh, Ray};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/animated.glb");
+    let mut scene = Scene::load(&path).unwrap();
+    let mut bvh = Bvh::build(&scene.triangle_soup()).unwrap();
+    scene.pose(&PoseAt { time: 1.0, animations: AnimationSelect::All }).unwrap();
+    let soup = scene.triangle_soup();
+    bvh.refit(&soup, &[]).unwrap();
+    bvh.validate().unwrap();
+    let reference = Reference::new(&soup);
+    let mut state = 0x1234_5678_u32;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as f32 / u32::MAX as f32
+    };
+    let mut hits = 0;
+    for _ in 0..4000 {
+        let origin = Vec3::new(next() * 6.0 - 3.0, next() * 2.5, next() * 6.0 - 3.0);
+        let dir = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+        let ray = Ray { origin, dir, tmin: 0.0, tmax: f32::MAX };
+        let expected = reference.closest(&ray);
+        let got = bvh.closest(&ray);
+        hits += usize::from(expected.is_some());
+        assert!(
+            umbra::bvh::reference::same_hit(got, expected, |i| bvh.prim_order[i as usize]),
+            "ray {ray:?}: refitted {got:?}, brute force {expected:?}"
+        );
+    }
+    assert!(hits > 1000, "only {hits} of 4000 rays hit: the test sees too little");
+}

@@ -1032,7 +1032,7 @@ fn compact(slots: &[BvhNode], order: &[u32]) -> (Vec<BvhNode>, Vec<u32>) {
     (nodes, leaf_order)
 }
 
-fn stats(bvh: &Bvh, options: &BuildOptions, triangles: usize) -> BvhStats {
+pub(super) fn stats(bvh: &Bvh, options: &BuildOptions, triangles: usize) -> BvhStats {
     let root_area = bvh.nodes[0].surface_area().max(f32::MIN_POSITIVE);
     let mut s = BvhStats { triangles, references: bvh.tris.len(), ..Default::default() };
     let mut cost = 0.0f64;

@@ -220,6 +220,79 @@ impl Bvh {
         self.stats.triangles = total;
     }
 
+    /// Moves the triangles and procedural boxes to new positions (the build's input order and
+    /// counts: `triangles`, then `boxes`) and refits every node's box bottom-up, keeping the
+    /// tree: O(n), against a rebuild's O(n log n), at the price of the tree's quality once
+    /// things have moved far from where it was built (boxes grow and overlap). A triangle split
+    /// into pieces by the build now bounds its whole triangle in each piece's leaf. Triangles a
+    /// [`Bvh::renumber`]ed build left out stay out. The tree, its leaves and every reference's
+    /// input index are unchanged; so are [`Bvh::stats`] but for `sah_cost`, recomputed (with the
+    /// default build options' costs).
+    pub fn refit(&mut self, triangles: &[[Vec3; 3]], boxes: &[[Vec3; 2]]) -> crate::Result<()> {
+        let n = self.stats.triangles;
+        if triangles.len() != n || boxes.len() != self.procedurals {
+            return Err(crate::Error::Invalid(format!(
+                "a refit needs the build's {n} triangles and {} boxes, not {} and {}",
+                self.procedurals,
+                triangles.len(),
+                boxes.len()
+            )));
+        }
+        if let Some(i) = triangles.iter().position(|t| !t.iter().all(|v| v.is_finite())) {
+            return Err(crate::Error::Invalid(format!(
+                "refit triangle {i} has a non-finite vertex: {:?}",
+                triangles[i]
+            )));
+        }
+        let mut bounds = Vec::with_capacity(self.tris.len());
+        for t in &mut self.tris {
+            let input = t.input_index() as usize;
+            let (lo, hi) = if input < n {
+                let v = triangles[input];
+                t.v0[..3].copy_from_slice(&v[0].to_array());
+                t.v1[..3].copy_from_slice(&v[1].to_array());
+                t.v2[..3].copy_from_slice(&v[2].to_array());
+                (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
+            } else {
+                let b = boxes[input - n];
+                t.v0[..3].copy_from_slice(&b[0].to_array());
+                t.v1[..3].copy_from_slice(&b[1].to_array());
+                t.v2[..3].copy_from_slice(&b[0].to_array());
+                (b[0], b[1])
+            };
+            bounds.push((lo, hi));
+        }
+        if self.is_empty() {
+            return Ok(());
+        }
+        // Post-order by an explicit stack (the depth is at most MAX_DEPTH): a node's box once
+        // its children's are known.
+        let mut stack = vec![(0usize, false)];
+        while let Some((i, children_done)) = stack.pop() {
+            let node = self.nodes[i];
+            let (lo, hi) = if node.is_leaf() {
+                let first = node.left_first as usize;
+                bounds[first..first + node.tri_count as usize]
+                    .iter()
+                    .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), b| (lo.min(b.0), hi.max(b.1)))
+            } else if !children_done {
+                let left = node.left_first as usize;
+                stack.extend([(i, true), (left, false), (left + 1, false)]);
+                continue;
+            } else {
+                let [a, b] = [0, 1].map(|k| self.nodes[node.left_first as usize + k]);
+                (
+                    Vec3::from(a.aabb_min).min(Vec3::from(b.aabb_min)),
+                    Vec3::from(a.aabb_max).max(Vec3::from(b.aabb_max)),
+                )
+            };
+            self.nodes[i].aabb_min = lo.into();
+            self.nodes[i].aabb_max = hi.into();
+        }
+        self.stats.sah_cost = build::stats(self, &BuildOptions::default(), n).sah_cost;
+        Ok(())
+    }
+
     /// The BVH of no triangles: every ray misses.
     pub fn empty() -> Self {
         let root = BvhNode { aabb_min: [f32::MAX; 3], left_first: 0, aabb_max: [-f32::MAX; 3], tri_count: 0 };

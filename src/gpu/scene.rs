@@ -106,6 +106,21 @@ pub struct GpuScene {
     /// Each scene triangle's alpha bits, `None` where the BVH leaves it out ([`bvh_alpha`];
     /// kept for `update`).
     alpha: Vec<Option<u32>>,
+    /// The host-side BVH, kept for [`GpuScene::update_geometry`]'s refit when the scene was
+    /// uploaded with an animation source ([`Scene::animation`]); `None` otherwise.
+    host_bvh: Option<Bvh>,
+}
+
+/// How [`GpuScene::update_geometry`] brings the BVH to moved triangles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum BvhUpdate {
+    /// Keep the tree and refit its boxes bottom-up: O(n), but the tree degrades as things move
+    /// far from the pose it was built for.
+    #[default]
+    Refit,
+    /// Build a new tree: O(n log n), the best tree for every pose.
+    Rebuild,
 }
 
 /// The host-side arrays [`GpuScene`] uploads (also what tests inspect).
@@ -667,7 +682,10 @@ impl GpuScene {
         let arrays = SceneArrays::with_alpha(scene, bvh, alpha);
         arrays.check_limits(&scene.name, ctx.info())?;
         let bvh = GpuBvh::upload_nodes(ctx, &arrays.bvh, nodes)?;
-        Self::with_gpu_bvh(ctx, &arrays, bvh)
+        let mut uploaded = Self::with_gpu_bvh(ctx, &arrays, bvh)?;
+        // An animated scene keeps its host BVH for refits.
+        uploaded.host_bvh = scene.animation.is_some().then_some(arrays.bvh);
+        Ok(uploaded)
     }
 
     /// Uploads arrays already laid out (tests keep them to compare against).
@@ -714,17 +732,57 @@ impl GpuScene {
             bvh_stats: arrays.bvh.stats.clone(),
             prim_order: arrays.bvh.prim_order.clone(),
             alpha: arrays.alpha.clone(),
+            host_bvh: None,
         })
     }
 
-    /// Re-uploads what shading reads (materials, textures, vertex attributes, the emissive and
-    /// punctual lights) from `scene`, keeping the BVH: for materials or lights changed after
-    /// loading. The geometry must be the same (same triangles and positions), and so must each
-    /// triangle's alpha bits in the BVH (its material's alpha mode and, for an alpha-tested one,
-    /// its class from the texels: a new alpha factor or texture may move it, and a triangle
-    /// transparent everywhere is not in the BVH at all, unless it is a light). Replaces buffers, so
-    /// no command buffer using this scene may be pending (wait for the host's frame fence first).
-    pub fn update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+    /// Takes `scene`'s moved geometry (the same triangles, posed anew: [`Scene::pose`]) and
+    /// brings the BVH to it by `how`, then re-uploads what shading reads as
+    /// [`GpuScene::update`] does; the environment stays. A refit needs the scene to have been
+    /// uploaded with its animation source (the host BVH is kept only then). The triangle count
+    /// and each triangle's alpha class must not change. A rebuild may change the walk's stack
+    /// depth, which the kernels are specialised for: compare [`GpuScene::features`] after it.
+    /// Replaces buffers, so no command buffer using this scene may be pending.
+    pub fn update_geometry(&mut self, ctx: &Context, scene: &Scene, how: BvhUpdate) -> Result<()> {
+        self.check_same_triangles(scene)?;
+        let clock = std::time::Instant::now();
+        let (bvh, alpha) = match how {
+            BvhUpdate::Refit => {
+                let mut bvh = self.host_bvh.take().ok_or_else(|| {
+                    Error::Invalid(format!(
+                        "scene '{}' was uploaded without an animation source: its BVH can only be rebuilt",
+                        scene.name
+                    ))
+                })?;
+                bvh.refit(&scene.triangle_soup(), &scene_boxes(scene)?)?;
+                (bvh, self.alpha.clone())
+            }
+            BvhUpdate::Rebuild => build_scene_bvh(scene)?,
+        };
+        let ms = clock.elapsed().as_secs_f64() * 1e3;
+        let arrays = SceneArrays::with_alpha(scene, bvh, alpha);
+        arrays.check_limits(&scene.name, ctx.info())?;
+        let gpu_bvh = GpuBvh::upload(ctx, &arrays.bvh)?;
+        let mut next = Self::with_gpu_bvh(ctx, &arrays, gpu_bvh)?;
+        next.bvh_stats.build_ms = ms;
+        std::mem::swap(&mut next.env_texels, &mut self.env_texels);
+        std::mem::swap(&mut next.env_alias, &mut self.env_alias);
+        next.env_size = self.env_size;
+        next.env_luminance = self.env_luminance;
+        next.host_bvh = Some(arrays.bvh);
+        *self = next;
+        Ok(())
+    }
+
+    /// The BVH's time in the last [`GpuScene::update_geometry`] (refit or rebuild) or the
+    /// upload's build, in milliseconds.
+    pub fn bvh_ms(&self) -> f64 {
+        self.bvh_stats.build_ms
+    }
+
+    /// The checks [`GpuScene::update`] and [`GpuScene::update_geometry`] share: the same
+    /// triangle count and alpha classes as uploaded.
+    fn check_same_triangles(&self, scene: &Scene) -> Result<()> {
         if scene.triangles.len() != self.bvh_stats.triangles {
             return Err(Error::Invalid(format!(
                 "scene '{}' has {} triangles but was uploaded with {}: geometry changes need a new upload",
@@ -739,6 +797,18 @@ impl GpuScene {
                 scene.name
             )));
         }
+        Ok(())
+    }
+
+    /// Re-uploads what shading reads (materials, textures, vertex attributes, the emissive and
+    /// punctual lights) from `scene`, keeping the BVH: for materials or lights changed after
+    /// loading. The geometry must be the same (same triangles and positions), and so must each
+    /// triangle's alpha bits in the BVH (its material's alpha mode and, for an alpha-tested one,
+    /// its class from the texels: a new alpha factor or texture may move it, and a triangle
+    /// transparent everywhere is not in the BVH at all, unless it is a light). Replaces buffers, so
+    /// no command buffer using this scene may be pending (wait for the host's frame fence first).
+    pub fn update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        self.check_same_triangles(scene)?;
         let arrays = ShadingArrays::new(scene, &self.prim_order);
         self.triangles = upload_rgba32ui(ctx, "scene triangles", &arrays.triangles)?;
         self.vertices = upload_rgba32ui(ctx, "scene vertices", &arrays.vertices)?;

@@ -38,6 +38,15 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
         }
         materials.push(material);
     }
+    // A file with animations keeps what posing it again needs (Scene::pose): the document, its
+    // buffers and the materials as read (before their unreadable textures are dropped).
+    let rig = (asset.document.animations().len() > 0).then(|| Rig {
+        name: name.to_owned(),
+        base: base.map(Path::to_path_buf),
+        document: asset.document.clone(),
+        buffers: asset.buffers.iter().map(|b| b.to_vec()).collect(),
+        materials: materials.clone(),
+    });
     let mut builder = Builder::new(&origin, &asset, materials);
     if let Some(at) = &options.pose {
         builder.pose = Some(super::animation::pose(&origin, &builder.reader, &asset.document, at)?);
@@ -74,10 +83,81 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
         );
     }
     scene.update_emissive();
+    scene.animation = rig.map(|r| super::AnimationSource(std::sync::Arc::new(r)));
     if log::log_enabled!(log::Level::Debug) {
         log::debug!("{name}: {:?}", scene.stats());
     }
     Ok(scene)
+}
+
+/// What [`Scene::pose`] poses a loaded scene from: the file's validated document, its buffers
+/// (decompressed) and its materials as read.
+pub(super) struct Rig {
+    name: String,
+    base: Option<std::path::PathBuf>,
+    document: gltf::Document,
+    buffers: Vec<Vec<u8>>,
+    materials: Vec<Material>,
+}
+
+/// Poses `scene` (loaded from a file with animations) at `at`: walks its node tree again under
+/// the animations' pose and takes the new geometry, instances, cameras and lights, keeping the
+/// materials and textures (and the selected variant). Nothing is read from disk.
+pub(super) fn pose(scene: &mut Scene, at: &super::PoseAt) -> Result<()> {
+    let Some(source) = scene.animation.clone() else {
+        return Err(crate::Error::Scene {
+            path: scene.name.clone().into(),
+            message:
+                "has no animations to pose (only a scene loaded from a file with animations can be posed)"
+                    .into(),
+        });
+    };
+    let rig = &source.0;
+    let origin = Origin::new(&rig.name, rig.base.clone());
+    let asset = Asset {
+        document: rig.document.clone(),
+        buffers: rig.buffers.iter().map(|b| std::borrow::Cow::Borrowed(&b[..])).collect(),
+        ignored_extensions: None,
+    };
+    let mut builder = Builder::new(&origin, &asset, rig.materials.clone());
+    builder.pose = Some(super::animation::pose(&origin, &builder.reader, &asset.document, at)?);
+    builder.walk()?;
+    let posed = builder.finish()?;
+    if posed.materials.len() != scene.materials.len() {
+        return Err(origin.error("posing it placed a different set of materials than loading it did"));
+    }
+    let Scene {
+        positions,
+        normals,
+        tangents,
+        uv0,
+        uv1,
+        colors,
+        triangles,
+        triangle_material,
+        cameras,
+        lights,
+        instances,
+        implicits,
+        variants,
+        ..
+    } = posed;
+    scene.positions = positions;
+    scene.normals = normals;
+    scene.tangents = tangents;
+    scene.uv0 = uv0;
+    scene.uv1 = uv1;
+    scene.colors = colors;
+    scene.triangles = triangles;
+    scene.triangle_material = triangle_material;
+    scene.cameras = cameras;
+    scene.lights = lights;
+    scene.instances = instances;
+    scene.implicits = implicits;
+    scene.variants.primitives = variants.primitives;
+    let selected = scene.variants.selected;
+    // Re-applies the variant, and rebuilds the emissive table over the moved triangles.
+    scene.select_variant(selected)
 }
 
 /// Accumulates the flat scene while the node tree is walked.

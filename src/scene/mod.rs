@@ -151,12 +151,26 @@ pub struct Scene {
     /// and the one selected ([`Scene::select_variant`]; none at load: every primitive's own
     /// material).
     pub variants: Variants,
+    /// For a scene loaded from a file with animations, what [`Scene::pose`] poses it from (the
+    /// parsed file and its buffers, kept in memory); `None` for any other scene.
+    pub animation: Option<AnimationSource>,
     /// What loading replaced under [`LoadOptions`] (each missing texture file once), the
     /// optional glTF extensions it ignored (one entry naming them all), the anisotropic
     /// primitives without a tangent frame (one entry) and, for a file with
     /// animations, skins or morph targets, that one static pose is rendered (one entry); also
     /// logged as warnings.
     pub warnings: Vec<String>,
+}
+
+/// A loaded scene's animated source ([`Scene::animation`]): its file's document, buffers and
+/// materials as read, shared by the scene's clones.
+#[derive(Clone)]
+pub struct AnimationSource(std::sync::Arc<load::Rig>);
+
+impl std::fmt::Debug for AnimationSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("AnimationSource")
+    }
 }
 
 /// What to do with a texture image that cannot be read or decoded.
@@ -265,6 +279,15 @@ impl Scene {
     /// `name` names the scene in errors. Nothing outside `bytes` is read.
     pub fn from_glb_bytes(name: &str, bytes: &[u8]) -> Result<Scene> {
         load::load(name, bytes, None, &LoadOptions::default())
+    }
+
+    /// Poses a scene loaded from a file with animations at `at` without reading the file again:
+    /// node transforms, morph weights and skins as [`LoadOptions::pose`] would have loaded them;
+    /// the materials, textures and selected variant stay. Then
+    /// [`crate::embed::Renderer::update_geometry`] (or [`crate::gpu::scene::GpuScene::update_geometry`])
+    /// takes it to the GPU. A scene without [`Scene::animation`] is an error.
+    pub fn pose(&mut self, at: &PoseAt) -> Result<()> {
+        load::pose(self, at)
     }
 
     /// The embedded default scene: the classic Cornell box (`scenes/cornell-box.glb`).
@@ -405,6 +428,8 @@ impl Scene {
             implicits,
             // Their effect is in `triangle_material`.
             variants: _,
+            // What the current pose came from: its effect is in the geometry.
+            animation: _,
             warnings: _,
         } = self;
         let mut h = ContentHasher::new();

@@ -21,6 +21,7 @@ pub fn all() -> Vec<(&'static str, Vec<u8>)> {
         ("instanced.glb", instanced()),
         ("glass.glb", glass()),
         ("many-lights.glb", many_lights()),
+        ("animated.glb", animated()),
     ]
 }
 
@@ -365,6 +366,150 @@ pub fn glass() -> Vec<u8> {
         vec![corner],
         &["KHR_texture_transform", "KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior"],
     )
+}
+
+/// Animation for `--time` / `--frames` and the embedding API's re-posing (one 2-second loop):
+/// a skinned tube bending at its elbow (two joints, weights blended over the middle fifth),
+/// a wedge turning on its node (rigid), and a sphere squashing by a morph target; on a floor, lit
+/// by a sun and a point light. Three animations: "bend" (the elbow, LINEAR rotations: slerp),
+/// "turn" (the wedge, LINEAR quaternions), "squash" (the morph weight, CUBICSPLINE).
+pub fn animated() -> Vec<u8> {
+    let mut g = Gltf::new();
+    let floor_material = g.material("floor", [0.6, 0.6, 0.6], 0.0, 0.8);
+    let arm_material = g.material("arm", [0.8, 0.3, 0.2], 0.0, 0.5);
+    let wedge_material = g.material("wedge", [0.2, 0.4, 0.8], 0.5, 0.3);
+    let ball_material = g.material("ball", [0.9, 0.8, 0.3], 0.0, 0.4);
+    let mut floor = Mesh::default();
+    floor.quad(Vec3::ZERO, Vec3::new(3.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -3.0));
+    let floor = vec![g.primitive(&floor.bare(), floor_material)];
+    let floor = g.mesh("floor", floor);
+
+    // The tube: radius 0.15, 1.6 m up from (-1, 0, 0), in mesh space where the skin binds it.
+    let (segments, rings, radius, height) = (32u32, 40u32, 0.15f32, 1.6f32);
+    let mut tube = Mesh::default();
+    let mut joints: Vec<[u8; 4]> = Vec::new();
+    let mut weights: Vec<[f32; 4]> = Vec::new();
+    for r in 0..=rings {
+        let y = height * r as f32 / rings as f32;
+        // Joint 1 (the elbow, at 0.8 m) takes over between 0.64 and 0.96 m.
+        let w = ((y - 0.64) / 0.32).clamp(0.0, 1.0);
+        for s in 0..=segments {
+            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+            let n = Vec3::new(phi.cos(), 0.0, -phi.sin());
+            tube.positions.push((Vec3::new(-1.0, y, 0.0) + n * radius).to_array());
+            tube.normals.push(n.to_array());
+            joints.push([0, 1, 0, 0]);
+            weights.push([1.0 - w, w, 0.0, 0.0]);
+        }
+    }
+    let row = segments + 1;
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            tube.indices.extend([a, a + 1, b, a + 1, b + 1, b]);
+        }
+    }
+    let mut arm = g.primitive(&tube.bare(), arm_material);
+    let joints_bytes: Vec<u8> = joints.iter().flatten().copied().collect();
+    let view = g.view(&joints_bytes, Some(34962));
+    arm["attributes"]["JOINTS_0"] = json!(g.push(
+        "accessors",
+        json!({ "bufferView": view, "componentType": 5121, "count": joints.len(), "type": "VEC4" })
+    ));
+    arm["attributes"]["WEIGHTS_0"] = json!(g.floats(&weights, false));
+    let arm = g.mesh("arm", vec![arm]);
+    let inverse_bind: Vec<u8> = [Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, -0.8, 0.0)]
+        .iter()
+        .flat_map(|t| glam::Mat4::from_translation(*t).to_cols_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let view = g.view(&inverse_bind, None);
+    let inverse_bind =
+        g.push("accessors", json!({ "bufferView": view, "componentType": 5126, "count": 2, "type": "MAT4" }));
+
+    let wedge = vec![g.primitive(&Mesh::wedge(), wedge_material)];
+    let wedge = g.mesh("wedge", wedge);
+
+    // The ball: a UV sphere with one morph target that squashes it (y × 0.5, x and z × 1.25).
+    let sphere = Mesh::uv_sphere(0.3, 40, 20);
+    let mut ball = g.primitive(&sphere, ball_material);
+    let squash: Vec<[f32; 3]> =
+        sphere.positions.iter().map(|p| [p[0] * 0.25, -p[1] * 0.5, p[2] * 0.25]).collect();
+    ball["targets"] = json!([{ "POSITION": g.floats(&squash, true) }]);
+    let ball = g.push("meshes", json!({ "name": "ball", "primitives": [ball], "weights": [0.0] }));
+
+    let nodes = [
+        json!({ "name": "floor", "mesh": floor }),
+        json!({ "name": "arm", "mesh": arm, "skin": 0 }),
+        json!({ "name": "shoulder", "translation": [-1.0, 0.0, 0.0], "children": [3] }),
+        json!({ "name": "elbow", "translation": [0.0, 0.8, 0.0] }),
+        json!({ "name": "wedge", "mesh": wedge, "translation": [1.0, 0.0, -0.3], "scale": [0.8, 0.8, 0.8] }),
+        json!({ "name": "ball", "mesh": ball, "translation": [0.1, 0.3, 0.8] }),
+    ];
+    for node in nodes {
+        g.push("nodes", node);
+    }
+    g.push(
+        "skins",
+        json!({ "name": "arm", "joints": [2, 3], "skeleton": 2, "inverseBindMatrices": inverse_bind }),
+    );
+    let sun =
+        g.light(json!({ "name": "sun", "type": "directional", "color": [1.0, 0.96, 0.9], "intensity": 2.5 }));
+    let sun = g.push(
+        "nodes",
+        json!({ "name": "sun", "extensions": { "KHR_lights_punctual": { "light": sun } },
+        "rotation": quat(Quat::from_rotation_y(0.6) * Quat::from_rotation_x(-0.9)) }),
+    );
+    let bulb =
+        g.light(json!({ "name": "bulb", "type": "point", "color": [1.0, 0.85, 0.7], "intensity": 6.0 }));
+    let bulb = g.push(
+        "nodes",
+        json!({ "name": "bulb", "translation": [0.0, 2.2, 1.0],
+        "extensions": { "KHR_lights_punctual": { "light": bulb } } }),
+    );
+    let camera = g.camera_node(
+        "camera",
+        [0.0, 1.6, 4.2],
+        look_rotation(Vec3::new(0.0, 1.6, 4.2), Vec3::new(0.0, 0.6, 0.0)),
+        0.7,
+        4.0 / 3.0,
+    );
+
+    // Times and values of each animation's sampler.
+    let times = |g: &mut Gltf, t: &[f32]| {
+        let data: Vec<[f32; 1]> = t.iter().map(|&t| [t]).collect();
+        g.floats(&data, true)
+    };
+    let keys = [0.0, 0.5, 1.0, 1.5, 2.0];
+    let bend_in = times(&mut g, &keys);
+    let bend: Vec<[f32; 4]> = [0.0f32, 50.0, 80.0, 50.0, 0.0]
+        .iter()
+        .map(|d| Quat::from_rotation_z(d.to_radians()).to_array())
+        .collect();
+    let bend = g.floats(&bend, false);
+    let turn_in = times(&mut g, &keys);
+    let turn: Vec<[f32; 4]> = [0.0f32, 60.0, 120.0, 60.0, 0.0]
+        .iter()
+        .map(|d| Quat::from_rotation_y(d.to_radians()).to_array())
+        .collect();
+    let turn = g.floats(&turn, false);
+    // CUBICSPLINE: in-tangent, value, out-tangent per key (weights 0, 1, 0 at 0, 1, 2 s).
+    let squash_in = times(&mut g, &[0.0, 1.0, 2.0]);
+    let squash: Vec<[f32; 1]> = [[0.0], [0.0], [1.5], [0.0], [1.0], [0.0], [-1.5], [0.0], [0.0]].to_vec();
+    let squash = g.floats(&squash, false);
+    let animation = |name: &str,
+                     input: usize,
+                     output: usize,
+                     interpolation: &str,
+                     node: usize,
+                     path: &str| {
+        json!({ "name": name, "samplers": [{ "input": input, "output": output, "interpolation": interpolation }],
+            "channels": [{ "sampler": 0, "target": { "node": node, "path": path } }] })
+    };
+    g.push("animations", animation("bend", bend_in, bend, "LINEAR", 3, "rotation"));
+    g.push("animations", animation("turn", turn_in, turn, "LINEAR", 4, "rotation"));
+    g.push("animations", animation("squash", squash_in, squash, "CUBICSPLINE", 5, "weights"));
+    g.finish(vec![0, 1, 2, 4, 5, sun, bulb, camera], &["KHR_lights_punctual"])
 }
 
 /// A rough white 2 m square facing the camera (+Z) and filling its view, for the occlusion-map

@@ -221,10 +221,14 @@ pub(crate) struct RenderArgs {
     pub(crate) exr: Option<PathBuf>,
     /// Render frames A up to B (B excluded) of the scene's animations, frame f posed at f / --fps
     /// seconds, each into -o (and --exr) with the frame number in place of a printf field such as
-    /// %04d: `-o frame-%04d.png`. Each frame is a whole render of the re-posed scene (its BVH
-    /// built anew).
+    /// %04d: `-o frame-%04d.png`. The file is read and the device and kernels made once; each
+    /// frame poses the scene anew and brings its BVH along by --bvh.
     #[arg(long, value_parser = cli::parse_sample_range, value_name = "A..B", conflicts_with = "time")]
     pub(crate) frames: Option<(u32, u32)>,
+    /// With --frames: how each frame's BVH follows the moved triangles: refit the first frame's
+    /// tree (fast; the tree loosens as things move far) or rebuild it.
+    #[arg(long, value_enum, default_value_t = umbra::gpu::scene::BvhUpdate::Refit, requires = "frames")]
+    pub(crate) bvh: umbra::gpu::scene::BvhUpdate,
     /// Frames per second of --frames.
     #[arg(long, default_value_t = 24.0, value_parser = cli::parse_positive)]
     pub(crate) fps: f32,
@@ -736,6 +740,7 @@ mod tests {
             common,
             [
                 "animation",
+                "bvh",
                 "camera",
                 "direct",
                 "env",

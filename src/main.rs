@@ -90,13 +90,15 @@ fn render_frames(args: RenderArgs, (first, end): (u32, u32)) -> Result<()> {
         indicatif::ProgressStyle::with_template("frames {bar:40} {pos}/{len}  ETA {eta}")
             .expect("valid template"),
     );
+    // The device, the loaded file and the GPU scene with its kernels carry from frame to frame.
+    let mut reuse = None;
     for frame in first..end {
         let mut one = args.clone();
         one.frames = None;
         one.scene.time = Some(frame as f32 / args.fps);
         one.output = frame_path(&args.output, "-o", frame)?;
         one.exr = args.exr.as_deref().map(|e| frame_path(e, "--exr", frame)).transpose()?;
-        bar.suspend(|| render(one))?;
+        bar.suspend(|| render_with(one, &mut reuse))?;
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -118,6 +120,22 @@ fn frame_field(text: &str) -> Option<(usize, usize, usize)> {
 }
 
 fn render(args: RenderArgs) -> Result<()> {
+    render_with(args, &mut None)
+}
+
+/// What `--frames` keeps from one frame's render to the next: the device, the loaded scene
+/// (posed anew each frame, [`umbra::scene::Scene::pose`]) and the GPU scene with its kernels
+/// (its BVH refitted or rebuilt, `--bvh`).
+struct Reuse {
+    ctx: Context,
+    loaded: LoadedScene,
+    gpu: Option<(Passes, GpuScene)>,
+    how: umbra::gpu::scene::BvhUpdate,
+}
+
+/// One render; with `reuse`, of a scene already loaded (posed at `args.scene.time`) on a device
+/// and GPU scene already made, which it fills at the first frame.
+fn render_with(args: RenderArgs, reuse: &mut Option<Reuse>) -> Result<()> {
     if args.direct == Direct::Restir && args.mode != Mode::Hybrid {
         anyhow::bail!("--direct restir applies to --mode hybrid (the path tracer's is --direct ris)");
     }
@@ -146,14 +164,27 @@ fn render(args: RenderArgs) -> Result<()> {
         &[args.scene.inputs().as_slice(), &[("--probes", probes_file)]].concat(),
     )?;
     let mut stages = Stages::start();
-    let mut loaded = args.scene.load()?;
-    stages.lap("load");
+    match reuse {
+        Some(r) => {
+            let at = args.scene.pose().expect("--frames sets the time");
+            r.loaded.scene.pose(&at)?;
+            stages.lap("pose");
+        }
+        None => {
+            let loaded = args.scene.load()?;
+            stages.lap("load");
+            let ctx = Context::new(&ContextDesc::default())?;
+            stages.lap("device");
+            *reuse = Some(Reuse { ctx, loaded, gpu: None, how: args.bvh });
+        }
+    }
+    let Reuse { ctx, loaded, gpu, how } = reuse.as_mut().expect("made above");
     if args.lightmap.unwrap {
         umbra::passes::lightmap::unwrap_triangles(&mut loaded.scene, args.lightmap.lightmap_size);
     }
     let camera = loaded.scene.camera(args.camera)?;
-    let ctx = Context::new(&ContextDesc::default())?;
-    stages.lap("device");
+    let ctx = &*ctx;
+    let loaded = &*loaded;
     let planned_spp = args.path.spp.unwrap_or(64);
     let (first_sample, spp) = args.path.sample_range.map_or((0, planned_spp), |(a, b)| (a, b - a));
     let settings = umbra::render::PathSettings {
@@ -185,26 +216,46 @@ fn render(args: RenderArgs) -> Result<()> {
         // them).
         lobe_split: args.path.denoise,
     };
+    let hybrid = args.hybrid_settings();
+    let prepare = |passes: &Passes| match args.mode {
+        Mode::Ao | Mode::Rtao => Ok(()),
+        Mode::Hybrid => passes.prepare_hybrid(&hybrid, args.hybrid.probes.is_some(), args.hybrid.lightmaps),
+        Mode::Pathtrace => passes.prepare_path_trace(&settings),
+    };
+    let (passes, gpu_scene) = match gpu {
+        Some((passes, gpu_scene)) => {
+            gpu_scene.update_geometry(ctx, &loaded.scene, *how)?;
+            stages.lap(match how {
+                umbra::gpu::scene::BvhUpdate::Refit => "BVH refit and upload",
+                umbra::gpu::scene::BvhUpdate::Rebuild => "BVH rebuild and upload",
+            });
+            log::info!("{}: BVH {:?} in {:.2} ms", loaded.scene.name, how, gpu_scene.bvh_ms());
+            // Kernels made for a deeper walk serve a shallower one (the stack depth moves).
+            if !passes.features().covers(&gpu_scene.features()) {
+                *passes = Passes::with_features(ctx, passes.features().widened_to(&gpu_scene.features()));
+                prepare(passes)?;
+                stages.lap("pipelines");
+            }
+            (&*passes, &*gpu_scene)
+        }
+        None => {
+            let made = upload_alongside(ctx, loaded, &mut stages, prepare)?;
+            let (passes, gpu_scene) = gpu.insert(made);
+            (&*passes, &*gpu_scene)
+        }
+    };
     if matches!(args.mode, Mode::Ao | Mode::Rtao) {
-        let gpu_scene = loaded.upload(&ctx)?;
-        stages.lap("BVH and upload");
-        return render_ao(&ctx, &gpu_scene, &camera, &args);
+        return render_ao(ctx, gpu_scene, &camera, &args);
     }
     if args.mode == Mode::Hybrid {
-        let hybrid = args.hybrid_settings();
-        let (passes, gpu_scene) = upload_alongside(&ctx, &loaded, &mut stages, |passes| {
-            passes.prepare_hybrid(&hybrid, args.hybrid.probes.is_some(), args.hybrid.lightmaps)
-        })?;
-        return render_hybrid(&ctx, &passes, &loaded, &gpu_scene, &camera, &hybrid, &args);
+        return render_hybrid(ctx, passes, loaded, gpu_scene, &camera, &hybrid, &args);
     }
-    let (passes, gpu_scene) =
-        upload_alongside(&ctx, &loaded, &mut stages, |passes| passes.prepare_path_trace(&settings))?;
     let bar = indicatif::ProgressBar::new(settings.spp as u64).with_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {per_sec}  ETA {eta}")
             .expect("valid template"),
     );
     let start = std::time::Instant::now();
-    let image = passes.path_trace(&gpu_scene, &camera, &settings, |done, _| bar.set_position(done as u64))?;
+    let image = passes.path_trace(gpu_scene, &camera, &settings, |done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     stages.lap("path tracing");
     let pixels = (settings.size.0 * settings.size.1) as f64 * image.spp as f64;
@@ -238,7 +289,7 @@ fn render(args: RenderArgs) -> Result<()> {
     let (w, h) = settings.size;
     // The image shown: the denoised one with --denoise, else the estimate itself.
     let shown = if args.path.denoise {
-        let denoised = umbra::render::denoise(&ctx, &image, &denoise)?;
+        let denoised = umbra::render::denoise(ctx, &image, &denoise)?;
         let split = match image.lobe_split {
             Some(_) => format!(
                 ", diffuse and specular parts apart ({} on the specular)",
@@ -265,7 +316,7 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     stages.lap("PNG");
     if let Some(path) = &exr {
-        let mut exr = umbra::merge::PathExr::new(&image, &settings, render_identity(&args, &loaded));
+        let mut exr = umbra::merge::PathExr::new(&image, &settings, render_identity(&args, loaded));
         if args.path.sample_range.is_some() {
             exr.planned_spp = Some(planned_spp);
         }
@@ -492,9 +543,10 @@ impl SceneArgs {
     }
 
     /// Loads the scene (or the embedded Cornell box) and the environment map.
-    fn load(&self) -> Result<LoadedScene> {
-        use umbra::scene::{AnimationSelect, LoadOptions, PoseAt};
-        let pose = self.time.map(|time| PoseAt {
+    /// The pose `--time` and `--animation` ask for.
+    fn pose(&self) -> Option<umbra::scene::PoseAt> {
+        use umbra::scene::{AnimationSelect, PoseAt};
+        self.time.map(|time| PoseAt {
             time,
             animations: match &self.animation {
                 None => AnimationSelect::All,
@@ -502,7 +554,12 @@ impl SceneArgs {
                     a.parse().map_or_else(|_| AnimationSelect::Name(a.clone()), AnimationSelect::Index)
                 }
             },
-        });
+        })
+    }
+
+    fn load(&self) -> Result<LoadedScene> {
+        use umbra::scene::LoadOptions;
+        let pose = self.pose();
         let mut scene = match &self.scene {
             Some(path) => {
                 let options = LoadOptions { missing_textures: self.missing_textures, pose };

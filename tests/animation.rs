@@ -370,3 +370,44 @@ fn a_refitted_bvh_finds_what_brute_force_finds() {
     }
     assert!(hits > 1000, "only {hits} of 4000 rays hit: the test sees too little");
 }
+
+/// `--frames` carries the device, the loaded file and the kernels from frame to frame, posing the
+/// scene again and refitting (or rebuilding) its BVH: each frame's image is byte for byte the one
+/// a render of that time alone gives (`--time`), path-traced, for both `--bvh` choices.
+#[test]
+fn frames_equal_renders_of_each_time_alone() {
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/animated.glb");
+    let dir = std::env::temp_dir().join(format!("umbra-frames-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let umbra = || std::process::Command::new(env!("CARGO_BIN_EXE_umbra"));
+    let common = ["--mode", "pathtrace", "--size", "40x30", "--spp", "2"];
+    for bvh in ["refit", "rebuild"] {
+        common::run_validated(
+            umbra()
+                .arg("render")
+                .arg(&scene)
+                .args(common)
+                .args(["--frames", "1..4", "--fps", "3", "--bvh", bvh, "-o"])
+                .arg(dir.join(format!("{bvh}-%d.png"))),
+        );
+        for frame in 1..4 {
+            let alone = dir.join(format!("alone-{frame}.png"));
+            if !alone.exists() {
+                common::run_validated(
+                    umbra()
+                        .arg("render")
+                        .arg(&scene)
+                        .args(common)
+                        .args(["--time", &format!("{}", frame as f32 / 3.0), "-o"])
+                        .arg(&alone),
+                );
+            }
+            let framed = std::fs::read(dir.join(format!("{bvh}-{frame}.png"))).unwrap();
+            assert!(
+                framed == std::fs::read(&alone).unwrap(),
+                "--bvh {bvh}: frame {frame} differs from --time"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -366,6 +366,42 @@ fn restir_writes_json_a_chart_and_a_table() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `umbra-bench animation` on tiny frames writes JSON with both BVH updates for each motion,
+/// and its table prints them with the ratio to the rebuild's frame.
+#[test]
+fn animation_writes_json_and_a_table() {
+    let dir = std::env::temp_dir().join(format!("umbra-animation-bench-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["animation", "--size", "16x16", "--spp", "1", "--frames", "2", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = dir.join("animation.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("animation.json written"))
+            .expect("parses");
+    let points = json["points"].as_array().expect("points");
+    for motion in ["skin", "rigid node", "morph target", "all three"] {
+        for bvh in ["refit", "rebuild"] {
+            let p = points.iter().find(|p| p["motion"] == motion && p["bvh"] == bvh);
+            let p = p.unwrap_or_else(|| panic!("{motion} with a {bvh} measured"));
+            for key in ["bvh_ms", "update_ms", "sah", "trace_ms"] {
+                assert!(p[key].as_f64().unwrap() > 0.0, "{motion} {bvh}: {key} {}", p[key]);
+            }
+        }
+    }
+    let table = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .args(["animation", "--table"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let table = String::from_utf8(table.stdout).unwrap();
+    assert_eq!(table.lines().filter(|l| l.starts_with("| skin |")).count(), 2, "{table}");
+    assert!(table.contains("| 1.000 |"), "the rebuild's own ratio: {table}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `umbra-bench restir-pt` on a tiny image writes JSON with the power, RIS and RIS-with-reuse
 /// series and a chart, and its table prints them.
 #[test]

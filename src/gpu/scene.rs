@@ -174,12 +174,19 @@ impl SceneBvh {
 }
 
 /// The BVH of `scene`'s triangles but those no ray may hit, and each scene triangle's alpha
-/// class ([`bvh_alpha`]).
+/// class ([`bvh_alpha`]). An animated scene's ([`Scene::animation`]) is built without split
+/// references (early split clipping, spatial splits), so that a refit keeps it tight: a split
+/// piece's box bounds only its part of the triangle, which a refit cannot follow (it would have
+/// to bound the whole moved triangle in every piece's leaf: the 4,090-triangle
+/// `scenes/animated.glb` then path-traced 4–8× slower after one refit).
 fn build_scene_bvh(scene: &Scene) -> Result<(Bvh, Vec<Option<u32>>)> {
     let boxes = scene_boxes(scene)?;
     let alpha = bvh_alpha(scene);
     let soup = scene.triangle_soup();
-    let options = crate::bvh::BuildOptions::default();
+    let options = match scene.animation {
+        Some(_) => crate::bvh::BuildOptions { presplit: 0.0, spatial: 0.0, ..Default::default() },
+        None => crate::bvh::BuildOptions::default(),
+    };
     let kept: Vec<u32> = (0..soup.len() as u32).filter(|&t| alpha[t as usize].is_some()).collect();
     let bvh = if kept.len() == soup.len() {
         Bvh::build_mixed(&soup, &boxes, &options)?

@@ -370,14 +370,14 @@ pub fn glass() -> Vec<u8> {
 
 /// Animation for `--time` / `--frames` and the embedding API's re-posing (one 2-second loop):
 /// a skinned tube bending at its elbow (two joints, weights blended over the middle fifth),
-/// a wedge turning on its node (rigid), and a sphere squashing by a morph target; on a floor, lit
+/// a tilted roller turning on a turntable node (rigid: its child keeps the tilt), and a sphere squashing by a morph target; on a floor, lit
 /// by a sun and a point light. Three animations: "bend" (the elbow, LINEAR rotations: slerp),
-/// "turn" (the wedge, LINEAR quaternions), "squash" (the morph weight, CUBICSPLINE).
+/// "turn" (the turntable, LINEAR quaternions), "squash" (the morph weight, CUBICSPLINE).
 pub fn animated() -> Vec<u8> {
     let mut g = Gltf::new();
     let floor_material = g.material("floor", [0.6, 0.6, 0.6], 0.0, 0.8);
     let arm_material = g.material("arm", [0.8, 0.3, 0.2], 0.0, 0.5);
-    let wedge_material = g.material("wedge", [0.2, 0.4, 0.8], 0.5, 0.3);
+    let roller_material = g.material("roller", [0.2, 0.4, 0.8], 0.5, 0.3);
     let ball_material = g.material("ball", [0.9, 0.8, 0.3], 0.0, 0.4);
     let mut floor = Mesh::default();
     floor.quad(Vec3::ZERO, Vec3::new(3.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -3.0));
@@ -385,30 +385,17 @@ pub fn animated() -> Vec<u8> {
     let floor = g.mesh("floor", floor);
 
     // The tube: radius 0.15, 1.6 m up from (-1, 0, 0), in mesh space where the skin binds it.
-    let (segments, rings, radius, height) = (32u32, 40u32, 0.15f32, 1.6f32);
-    let mut tube = Mesh::default();
-    let mut joints: Vec<[u8; 4]> = Vec::new();
-    let mut weights: Vec<[f32; 4]> = Vec::new();
-    for r in 0..=rings {
-        let y = height * r as f32 / rings as f32;
-        // Joint 1 (the elbow, at 0.8 m) takes over between 0.64 and 0.96 m.
-        let w = ((y - 0.64) / 0.32).clamp(0.0, 1.0);
-        for s in 0..=segments {
-            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
-            let n = Vec3::new(phi.cos(), 0.0, -phi.sin());
-            tube.positions.push((Vec3::new(-1.0, y, 0.0) + n * radius).to_array());
-            tube.normals.push(n.to_array());
-            joints.push([0, 1, 0, 0]);
-            weights.push([1.0 - w, w, 0.0, 0.0]);
-        }
-    }
-    let row = segments + 1;
-    for r in 0..rings {
-        for s in 0..segments {
-            let (a, b) = (r * row + s, (r + 1) * row + s);
-            tube.indices.extend([a, a + 1, b, a + 1, b + 1, b]);
-        }
-    }
+    let tube = Mesh::tube(Vec3::new(-1.0, 0.0, 0.0), 0.15, 1.6, 32, 40);
+    // Joint 1 (the elbow, at 0.8 m) takes over between 0.64 and 0.96 m.
+    let joints: Vec<[u8; 4]> = vec![[0, 1, 0, 0]; tube.positions.len()];
+    let weights: Vec<[f32; 4]> = tube
+        .positions
+        .iter()
+        .map(|p| {
+            let w = ((p[1] - 0.64) / 0.32).clamp(0.0, 1.0);
+            [1.0 - w, w, 0.0, 0.0]
+        })
+        .collect();
     let mut arm = g.primitive(&tube.bare(), arm_material);
     let joints_bytes: Vec<u8> = joints.iter().flatten().copied().collect();
     let view = g.view(&joints_bytes, Some(34962));
@@ -427,8 +414,9 @@ pub fn animated() -> Vec<u8> {
     let inverse_bind =
         g.push("accessors", json!({ "bufferView": view, "componentType": 5126, "count": 2, "type": "MAT4" }));
 
-    let wedge = vec![g.primitive(&Mesh::wedge(), wedge_material)];
-    let wedge = g.mesh("wedge", wedge);
+    let roller =
+        vec![g.primitive(&Mesh::tube(Vec3::new(0.0, -0.5, 0.0), 0.12, 1.0, 32, 40), roller_material)];
+    let roller = g.mesh("roller", roller);
 
     // The ball: a UV sphere with one morph target that squashes it (y × 0.5, x and z × 1.25).
     let sphere = Mesh::uv_sphere(0.3, 40, 20);
@@ -443,8 +431,9 @@ pub fn animated() -> Vec<u8> {
         json!({ "name": "arm", "mesh": arm, "skin": 0 }),
         json!({ "name": "shoulder", "translation": [-1.0, 0.0, 0.0], "children": [3] }),
         json!({ "name": "elbow", "translation": [0.0, 0.8, 0.0] }),
-        json!({ "name": "wedge", "mesh": wedge, "translation": [1.0, 0.0, -0.3], "scale": [0.8, 0.8, 0.8] }),
+        json!({ "name": "turntable", "translation": [1.1, 0.35, -0.3], "children": [6] }),
         json!({ "name": "ball", "mesh": ball, "translation": [0.1, 0.3, 0.8] }),
+        json!({ "name": "roller", "mesh": roller, "rotation": quat(Quat::from_rotation_z(1.2)) }),
     ];
     for node in nodes {
         g.push("nodes", node);
@@ -488,7 +477,7 @@ pub fn animated() -> Vec<u8> {
         .collect();
     let bend = g.floats(&bend, false);
     let turn_in = times(&mut g, &keys);
-    let turn: Vec<[f32; 4]> = [0.0f32, 60.0, 120.0, 60.0, 0.0]
+    let turn: Vec<[f32; 4]> = [0.0f32, 80.0, 160.0, 80.0, 0.0]
         .iter()
         .map(|d| Quat::from_rotation_y(d.to_radians()).to_array())
         .collect();
@@ -809,6 +798,29 @@ impl Mesh {
             }
         }
         mesh.uvs.clear();
+        mesh
+    }
+
+    /// An open tube of `radius` standing `height` up +Y from `base`: `segments` around, `rings`
+    /// along, normals out (no UVs, no caps).
+    pub fn tube(base: Vec3, radius: f32, height: f32, segments: u32, rings: u32) -> Self {
+        let mut mesh = Mesh::default();
+        for r in 0..=rings {
+            let y = height * r as f32 / rings as f32;
+            for s in 0..=segments {
+                let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+                let n = Vec3::new(phi.cos(), 0.0, -phi.sin());
+                mesh.positions.push((base + Vec3::new(0.0, y, 0.0) + n * radius).to_array());
+                mesh.normals.push(n.to_array());
+            }
+        }
+        let row = segments + 1;
+        for r in 0..rings {
+            for s in 0..segments {
+                let (a, b) = (r * row + s, (r + 1) * row + s);
+                mesh.indices.extend([a, a + 1, b, a + 1, b + 1, b]);
+            }
+        }
         mesh
     }
 

@@ -9,6 +9,7 @@
 //! file without measuring anything: BENCHMARKS.md's current figures are those tables, printed
 //! from the JSON committed in docs/bench (tests/bench.rs checks that they still match).
 
+mod animation;
 mod antialias;
 mod build;
 mod chart;
@@ -481,6 +482,29 @@ enum Command {
         #[arg(long)]
         table: Option<PathBuf>,
     },
+    /// An animated scene's BVH following its pose frame by frame, refit against rebuild, for a
+    /// skin, a rigid node, a morph target and all three: BVH and update time, SAH cost, the
+    /// path-traced frame's GPU time; JSON and a table.
+    Animation {
+        /// The animated scene (its animations "bend", "turn" and "squash").
+        #[arg(long, default_value = "scenes/animated.glb")]
+        scene: PathBuf,
+        /// Image size of the path-traced frames.
+        #[arg(long, default_value = "256x256", value_parser = cli::parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of each frame.
+        #[arg(long, default_value_t = 4)]
+        spp: u32,
+        /// Frames over the loop.
+        #[arg(long, default_value_t = 24)]
+        frames: u32,
+        /// Where to write `animation.json`.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Print the Markdown table of an earlier run's JSON and exit (nothing is rendered).
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
     /// Anti-aliasing of the hybrid frame: one-shot supersampling at a sweep of sub-frames and
     /// TAA (embedding API, still camera) after each frame, mean LDR-FLIP against the path
     /// tracer against GPU time; JSON, a table and a chart.
@@ -719,6 +743,15 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", implicit::table(&doc));
             write_json(&out, "implicit.json", &doc)?;
             implicit::write_chart(&out, &rows)?;
+        }
+        Command::Animation { table: Some(path), .. } => print!("{}", animation::table(&read_json(&path)?)),
+        Command::Animation { scene, size, spp, frames, out, table: None } => {
+            let ctx = Context::new(&ContextDesc::default())?;
+            let settings = animation::AnimationBench { size, spp, frames };
+            let mut doc = animation::run(&ctx, &scene, &settings)?;
+            add_conditions(&mut doc);
+            print!("{}", animation::table(&doc));
+            write_json(&out, "animation.json", &doc)?;
         }
         Command::Antialias { table: Some(path), redraw, out, .. } => {
             let doc = read_json(&path)?;

@@ -62,37 +62,44 @@ fn host_gbuffer_lit_by_umbra_matches_umbra_gbuffer() {
 
 mod common;
 
+/// umbra's G-buffer of `camera`, lit by umbra's deferred lighting (default settings), read back.
+fn lit_gbuffer(
+    gpu: &common::Gpu,
+    renderer: &umbra::embed::Renderer,
+    camera: &umbra::scene::Camera,
+    size: (u32, u32),
+) -> Vec<[f32; 4]> {
+    use umbra::vk::{raw, Image};
+    let gbuffer = umbra::passes::gbuffer::GBuffer::new(gpu, size).unwrap();
+    let hdr = Image::storage_2d(gpu, "hdr", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT).unwrap();
+    gpu.submit(|cmd| {
+        hdr.init_general(gpu, cmd);
+        renderer.record_gbuffer(cmd, camera, &gbuffer.views())?;
+        renderer.record_lighting(
+            cmd,
+            camera,
+            &gbuffer.views(),
+            hdr.view,
+            &umbra::passes::deferred::LightingInputs::default(),
+            &umbra::passes::deferred::LightingSettings::default(),
+        )
+    })
+    .unwrap();
+    hdr.read(gpu).unwrap()
+}
+
 /// A scene update (materials and lights changed, same geometry) through `Renderer::update_scene`
 /// renders exactly what a renderer built from scratch on the changed scene renders, from a moved
 /// camera too, and differs from the frame before the update.
 #[test]
 fn update_scene_equals_a_fresh_renderer() {
     use umbra::embed::Renderer;
-    use umbra::passes::deferred::LightingSettings;
-    use umbra::passes::gbuffer::GBuffer;
     use umbra::scene::Scene;
-    use umbra::vk::{raw, Image};
 
     let gpu = common::Gpu::new();
     let size = (48, 48);
-    let render = |renderer: &Renderer, camera: &umbra::scene::Camera| -> Vec<[f32; 4]> {
-        let gbuffer = GBuffer::new(&gpu, size).unwrap();
-        let hdr = Image::storage_2d(&gpu, "hdr", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT).unwrap();
-        gpu.submit(|cmd| {
-            hdr.init_general(&gpu, cmd);
-            renderer.record_gbuffer(cmd, camera, &gbuffer.views())?;
-            renderer.record_lighting(
-                cmd,
-                camera,
-                &gbuffer.views(),
-                hdr.view,
-                &umbra::passes::deferred::LightingInputs::default(),
-                &LightingSettings::default(),
-            )
-        })
-        .unwrap();
-        hdr.read(&gpu).unwrap()
-    };
+    let render =
+        |renderer: &Renderer, camera: &umbra::scene::Camera| lit_gbuffer(&gpu, renderer, camera, size);
     let mut scene = Scene::cornell_box();
     let mut camera = scene.camera(None).unwrap();
     let mut renderer = Renderer::new(&gpu, &scene).unwrap();
@@ -127,31 +134,12 @@ fn update_scene_equals_a_fresh_renderer() {
 fn posed_and_refitted_equals_a_fresh_renderer_at_that_time() {
     use umbra::embed::Renderer;
     use umbra::gpu::scene::BvhUpdate;
-    use umbra::passes::deferred::LightingSettings;
-    use umbra::passes::gbuffer::GBuffer;
     use umbra::scene::{AnimationSelect, LoadOptions, PoseAt, Scene};
-    use umbra::vk::{raw, Image};
 
     let gpu = common::Gpu::new();
     let size = (64, 48);
-    let render = |renderer: &Renderer, camera: &umbra::scene::Camera| -> Vec<[f32; 4]> {
-        let gbuffer = GBuffer::new(&gpu, size).unwrap();
-        let hdr = Image::storage_2d(&gpu, "hdr", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT).unwrap();
-        gpu.submit(|cmd| {
-            hdr.init_general(&gpu, cmd);
-            renderer.record_gbuffer(cmd, camera, &gbuffer.views())?;
-            renderer.record_lighting(
-                cmd,
-                camera,
-                &gbuffer.views(),
-                hdr.view,
-                &umbra::passes::deferred::LightingInputs::default(),
-                &LightingSettings::default(),
-            )
-        })
-        .unwrap();
-        hdr.read(&gpu).unwrap()
-    };
+    let render =
+        |renderer: &Renderer, camera: &umbra::scene::Camera| lit_gbuffer(&gpu, renderer, camera, size);
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/animated.glb");
     let mut scene = Scene::load(&path).unwrap();
     let camera = scene.camera(None).unwrap();

@@ -163,13 +163,7 @@ pub(super) fn decode(origin: &Origin, root: &mut json::Root, buffers: &[Cow<[u8]
             }
         }
     }
-    root.buffers.push(json::Buffer {
-        byte_length: (out.len() as u64).into(),
-        name: Some(format!("{EXTENSION} decoded")),
-        uri: None,
-        extensions: None,
-        extras: Default::default(),
-    });
+    super::meshopt::push_decoded_buffer(root, EXTENSION, out.len());
     Ok(out)
 }
 

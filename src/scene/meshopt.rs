@@ -106,14 +106,20 @@ pub(super) fn decode(origin: &Origin, root: &mut json::Root, buffers: &[Cow<[u8]
             e.others.remove(EXTENSION);
         }
     }
+    push_decoded_buffer(root, EXTENSION, out.len());
+    Ok(out)
+}
+
+/// Appends the buffer a decoder of `extension` fills with `length` decoded bytes (its data is
+/// the decoder's, handed to the loader beside the file's buffers).
+pub(super) fn push_decoded_buffer(root: &mut json::Root, extension: &str, length: usize) {
     root.buffers.push(json::Buffer {
-        byte_length: (out.len() as u64).into(),
-        name: Some(format!("{EXTENSION} decoded")),
+        byte_length: (length as u64).into(),
+        name: Some(format!("{extension} decoded")),
         uri: None,
         extensions: None,
         extras: Default::default(),
     });
-    Ok(out)
 }
 
 /// Decodes one view: `count` elements of `stride` bytes from `source`.

@@ -190,13 +190,7 @@ fn broken_draco_primitives_are_refused_naming_them() {
     let view_json = json.pointer(&format!("/bufferViews/{view}")).unwrap().clone();
     let start = view_json["byteOffset"].as_u64().unwrap_or(0) as usize;
     let length = view_json["byteLength"].as_u64().unwrap() as usize;
-    let mut state = 0x2545_f491_u32;
-    for _ in 0..400 {
-        state ^= state << 13;
-        state ^= state >> 17;
-        state ^= state << 5;
-        let at = start + state as usize % length;
-        let bit = 1u8 << (state >> 29);
+    crate::flip_bits(start, length, 0x2545_f491, 400, |at, bit| {
         let _ = load(&|_, b| b[at] ^= bit);
-    }
+    });
 }

@@ -124,13 +124,7 @@ fn broken_ktx2_images_are_refused_naming_them() {
         "broken.glb",
         "texture 2: the source of its KHR_texture_basisu (40) is not an image index",
     );
-    let mut state = 0x9e37_79b9_u32;
-    for _ in 0..400 {
-        state ^= state << 13;
-        state ^= state >> 17;
-        state ^= state << 5;
-        let at = start + state as usize % length;
-        let bit = 1u8 << (state >> 29);
+    crate::flip_bits(start, length, 0x9e37_79b9, 400, |at, bit| {
         let _ = load(&|_, b| b[at] ^= bit);
-    }
+    });
 }

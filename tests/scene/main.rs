@@ -153,6 +153,19 @@ fn texture_uses(root: &Value) -> HashSet<(u64, [u64; 4], bool)> {
     uses
 }
 
+/// Flips one pseudo-random bit (xorshift from `seed`) of `bytes[start..start + length]` at a time,
+/// `count` times, calling `load` with each flip: a robustness sweep (the test asserts, by running
+/// to the end, that no flip panics or hangs; errors and wrong results are allowed).
+fn flip_bits(start: usize, length: usize, seed: u32, count: usize, load: impl Fn(usize, u8)) {
+    let mut state = seed;
+    for _ in 0..count {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        load(start + state as usize % length, 1u8 << (state >> 29));
+    }
+}
+
 /// Asserts `result` is an `Error::Scene` naming `file` whose message contains `phrase`.
 #[track_caller]
 fn assert_scene_error<T: std::fmt::Debug>(result: umbra::Result<T>, file: &str, phrase: &str) {

@@ -372,7 +372,7 @@ fn restir_writes_json_a_chart_and_a_table() {
 fn animation_writes_json_and_a_table() {
     let dir = std::env::temp_dir().join(format!("umbra-animation-bench-{}", std::process::id()));
     let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
-        .args(["animation", "--size", "16x16", "--spp", "1", "--frames", "2", "--out"])
+        .args(["animation", "--size", "16x16", "--spp", "1", "--frames", "2", "--repeats", "1", "--out"])
         .arg(&dir)
         .output()
         .unwrap();
@@ -451,6 +451,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["build", "--table", "docs/bench/build.json"],
     &["passes", "--table", "docs/bench/passes-cornell.json", "--table", "docs/bench/passes-spheres.json"],
     &["passes", "--table", "docs/bench/passes-sponza-1080.json"],
+    &["animation", "--table", "docs/bench/animation.json"],
     &["antialias", "--table", "docs/bench/antialias-helmet.json"],
     &["antialias", "--table", "docs/bench/antialias-spheres.json"],
     &["paths", "--table", "docs/bench/paths.json"],

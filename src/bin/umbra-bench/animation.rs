@@ -25,6 +25,9 @@ pub struct AnimationBench {
     pub spp: u32,
     /// Frames over the loop (its duration split evenly; the first at the first step, not 0).
     pub frames: u32,
+    /// Path traces of each frame; the fastest is kept (the device's timing noise, ±10 % on
+    /// lavapipe, is as large as the trees' differences).
+    pub repeats: usize,
 }
 
 /// The motions measured: a name and the animation that plays (`None`: all).
@@ -84,6 +87,7 @@ pub fn run(ctx: &Context, path: &Path, s: &AnimationBench) -> Result<Value> {
         "size": [s.size.0, s.size.1],
         "spp": s.spp,
         "frames": s.frames,
+        "repeats": s.repeats,
         "points": points,
     }))
 }
@@ -96,14 +100,16 @@ fn num(v: &Value) -> f64 {
 pub fn table(doc: &Value) -> String {
     let points = doc["points"].as_array().cloned().unwrap_or_default();
     let mut out = format!(
-        "{} ({} triangles) on {}: {} frames over the 2 s loop, each path-traced at {} spp, {}x{}; medians over the frames:\n\n",
+        "{} ({} triangles) on {}: {} frames over the 2 s loop, each path-traced at {} spp (the fastest of {}), {}x{}, {}; medians over the frames:\n\n",
         doc["scene"].as_str().unwrap_or("?"),
         doc["triangles"],
         doc["device"].as_str().unwrap_or("?"),
         doc["frames"],
         doc["spp"],
+        doc["repeats"],
         doc["size"][0],
         doc["size"][1],
+        super::conditions_text(doc),
     );
     out += "| motion | BVH | BVH ms | update ms | SAH (at rest) | path trace GPU ms | update + trace ms | ÷ rebuild's |\n";
     out += "|---|---|---:|---:|---:|---:|---:|---:|\n";

@@ -498,6 +498,9 @@ enum Command {
         /// Frames over the loop.
         #[arg(long, default_value_t = 24)]
         frames: u32,
+        /// Path traces of each frame, the fastest kept.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
         /// Where to write `animation.json`.
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
@@ -745,9 +748,9 @@ fn run(cli: Cli) -> Result<()> {
             implicit::write_chart(&out, &rows)?;
         }
         Command::Animation { table: Some(path), .. } => print!("{}", animation::table(&read_json(&path)?)),
-        Command::Animation { scene, size, spp, frames, out, table: None } => {
+        Command::Animation { scene, size, spp, frames, repeats, out, table: None } => {
             let ctx = Context::new(&ContextDesc::default())?;
-            let settings = animation::AnimationBench { size, spp, frames };
+            let settings = animation::AnimationBench { size, spp, frames, repeats };
             let mut doc = animation::run(&ctx, &scene, &settings)?;
             add_conditions(&mut doc);
             print!("{}", animation::table(&doc));

@@ -231,7 +231,7 @@ fn render_with(args: RenderArgs, reuse: &mut Option<Reuse>) -> Result<()> {
             });
             log::info!("{}: BVH {:?} in {:.2} ms", loaded.scene.name, how, gpu_scene.bvh_ms());
             // Kernels made for a deeper walk serve a shallower one (the stack depth moves).
-            if !passes.features().covers(&gpu_scene.features()) {
+            if !passes.features().renders(&gpu_scene.features()) {
                 *passes = Passes::with_features(ctx, passes.features().widened_to(&gpu_scene.features()));
                 prepare(passes)?;
                 stages.lap("pipelines");

@@ -225,18 +225,11 @@ pub struct SceneFeatures {
 }
 
 impl SceneFeatures {
-    /// Whether kernels specialised for these features also run a scene of `other`'s: the same
-    /// in everything but the walk's stack, which here holds at least as many entries (or lives
-    /// in memory). A refitted or rebuilt BVH of a moving scene changes its stack depth from
-    /// frame to frame; kernels made for the deepest so far serve the shallower ones without a
-    /// recompile (about a second on the CPU device).
-    pub fn covers(&self, other: &SceneFeatures) -> bool {
-        let stack_fits = self.bvh_stack == 0 || (other.bvh_stack != 0 && other.bvh_stack <= self.bvh_stack);
-        stack_fits && SceneFeatures { bvh_stack: other.bvh_stack, ..*self } == *other
-    }
-
     /// `other`'s features with a walk's stack that also holds these (the deeper of the two,
-    /// memory if either is): kernels made for them cover both ([`SceneFeatures::covers`]).
+    /// memory if either is): kernels made for them render both ([`SceneFeatures::renders`]). A
+    /// refitted or rebuilt BVH of a moving scene changes its stack depth from frame to frame:
+    /// kernels made for the deepest so far serve the shallower ones without a recompile (about a
+    /// second on the CPU device).
     pub fn widened_to(&self, other: &SceneFeatures) -> SceneFeatures {
         let bvh_stack = match (self.bvh_stack, other.bvh_stack) {
             (0, _) | (_, 0) => 0,

@@ -165,11 +165,13 @@ fn render_with(args: RenderArgs, reuse: &mut Option<Reuse>) -> Result<()> {
     )?;
     let mut stages = Stages::start();
     match reuse {
-        Some(r) => {
+        // A still scene (no animations: `SceneArgs::load` warned) renders the same every frame.
+        Some(r) if r.loaded.scene.animation.is_some() => {
             let at = args.scene.pose().expect("--frames sets the time");
             r.loaded.scene.pose(&at)?;
             stages.lap("pose");
         }
+        Some(_) => {}
         None => {
             let loaded = args.scene.load()?;
             stages.lap("load");
@@ -223,6 +225,8 @@ fn render_with(args: RenderArgs, reuse: &mut Option<Reuse>) -> Result<()> {
         Mode::Pathtrace => passes.prepare_path_trace(&settings),
     };
     let (passes, gpu_scene) = match gpu {
+        // A still scene's GPU scene stands as it is.
+        Some((passes, gpu_scene)) if loaded.scene.animation.is_none() => (&*passes, &*gpu_scene),
         Some((passes, gpu_scene)) => {
             gpu_scene.update_geometry(ctx, &loaded.scene, *how)?;
             stages.lap(match how {
@@ -568,6 +572,9 @@ impl SceneArgs {
             None if pose.is_some() => anyhow::bail!("--time: the embedded Cornell box has no animations"),
             None => umbra::scene::Scene::cornell_box(),
         };
+        if self.time.is_some() && scene.animation.is_none() {
+            log::warn!("{}: the file has no animations: --time and --frames pose nothing", scene.name);
+        }
         if let Some(name) = &self.variant {
             let index = scene.variant_index(name)?;
             scene.select_variant(Some(index))?;

@@ -411,3 +411,23 @@ fn frames_equal_renders_of_each_time_alone() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--frames` over a file without animations renders the same image every frame (nothing to
+/// pose, the GPU scene kept) and says so once.
+#[test]
+fn frames_of_a_still_file_are_one_image_with_a_warning() {
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.glb");
+    let dir = std::env::temp_dir().join(format!("umbra-still-frames-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let stderr = common::run_validated(
+        std::process::Command::new(env!("CARGO_BIN_EXE_umbra"))
+            .arg("render")
+            .arg(&scene)
+            .args(["--mode", "hybrid", "--size", "32x24", "--frames", "0..2", "-o"])
+            .arg(dir.join("f-%d.png")),
+    );
+    assert_eq!(stderr.matches("the file has no animations").count(), 1, "{stderr}");
+    let [a, b] = [0, 1].map(|k| std::fs::read(dir.join(format!("f-{k}.png"))).unwrap());
+    assert!(a == b, "a still file's frames differ");
+    let _ = std::fs::remove_dir_all(&dir);
+}

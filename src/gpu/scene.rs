@@ -755,13 +755,18 @@ impl GpuScene {
         let clock = std::time::Instant::now();
         let (bvh, alpha) = match how {
             BvhUpdate::Refit => {
+                let boxes = scene_boxes(scene)?;
                 let mut bvh = self.host_bvh.take().ok_or_else(|| {
                     Error::Invalid(format!(
                         "scene '{}' was uploaded without an animation source: its BVH can only be rebuilt",
                         scene.name
                     ))
                 })?;
-                bvh.refit(&scene.triangle_soup(), &scene_boxes(scene)?)?;
+                // A refit checks its input before it moves anything: on an error the tree stays.
+                if let Err(e) = bvh.refit(&scene.triangle_soup(), &boxes) {
+                    self.host_bvh = Some(bvh);
+                    return Err(e);
+                }
                 (bvh, self.alpha.clone())
             }
             BvhUpdate::Rebuild => build_scene_bvh(scene)?,

@@ -241,16 +241,15 @@ impl Renderer {
     /// Takes `scene`'s moved geometry after [`Scene::pose`] (the same triangles and materials),
     /// its BVH refitted or rebuilt by `how` ([`BvhUpdate`]); lights and cameras move with it.
     /// The pipelines are re-specialised only when the moved tree needs a deeper walk than they
-    /// were made for ([`crate::gpu::SceneFeatures::renders`]). The temporal
+    /// were made for ([`Passes::for_moved`]). The temporal
     /// denoiser's history starts afresh, as after [`Renderer::update_scene`] (it has no motion
     /// vectors for moving geometry). No command buffer using the scene may be pending (wait for
     /// the host's frame fence first).
     pub fn update_geometry(&mut self, scene: &Scene, how: BvhUpdate) -> Result<()> {
         self.scene.update_geometry(&self.ctx, scene, how)?;
         self.generation += 1;
-        if !self.passes.features().renders(&self.scene.features()) {
-            let features = self.passes.features().widened_to(&self.scene.features());
-            self.passes = Passes::with_features(&self.ctx, features);
+        if let Some(passes) = self.passes.for_moved(&self.scene) {
+            self.passes = passes;
             self.passes.prepare(&self.scene, self.path_options)?;
         }
         Ok(())

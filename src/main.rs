@@ -130,7 +130,6 @@ struct Reuse {
     ctx: Context,
     loaded: LoadedScene,
     gpu: Option<(Passes, GpuScene)>,
-    how: umbra::gpu::scene::BvhUpdate,
 }
 
 /// One render; with `reuse`, of a scene already loaded (posed at `args.scene.time`) on a device
@@ -177,10 +176,10 @@ fn render_with(args: RenderArgs, reuse: &mut Option<Reuse>) -> Result<()> {
             stages.lap("load");
             let ctx = Context::new(&ContextDesc::default())?;
             stages.lap("device");
-            *reuse = Some(Reuse { ctx, loaded, gpu: None, how: args.bvh });
+            *reuse = Some(Reuse { ctx, loaded, gpu: None });
         }
     }
-    let Reuse { ctx, loaded, gpu, how } = reuse.as_mut().expect("made above");
+    let Reuse { ctx, loaded, gpu } = reuse.as_mut().expect("made above");
     if args.lightmap.unwrap {
         umbra::passes::lightmap::unwrap_triangles(&mut loaded.scene, args.lightmap.lightmap_size);
     }
@@ -228,15 +227,15 @@ fn render_with(args: RenderArgs, reuse: &mut Option<Reuse>) -> Result<()> {
         // A still scene's GPU scene stands as it is.
         Some((passes, gpu_scene)) if loaded.scene.animation.is_none() => (&*passes, &*gpu_scene),
         Some((passes, gpu_scene)) => {
-            gpu_scene.update_geometry(ctx, &loaded.scene, *how)?;
-            stages.lap(match how {
+            gpu_scene.update_geometry(ctx, &loaded.scene, args.bvh)?;
+            stages.lap(match args.bvh {
                 umbra::gpu::scene::BvhUpdate::Refit => "BVH refit and upload",
                 umbra::gpu::scene::BvhUpdate::Rebuild => "BVH rebuild and upload",
             });
-            log::info!("{}: BVH {:?} in {:.2} ms", loaded.scene.name, how, gpu_scene.bvh_ms());
-            // Kernels made for a deeper walk serve a shallower one (the stack depth moves).
-            if !passes.features().renders(&gpu_scene.features()) {
-                *passes = Passes::with_features(ctx, passes.features().widened_to(&gpu_scene.features()));
+            let ms = gpu_scene.bvh_stats.build_ms;
+            log::info!("{}: BVH {:?} in {ms:.2} ms", loaded.scene.name, args.bvh);
+            if let Some(moved) = passes.for_moved(gpu_scene) {
+                *passes = moved;
                 prepare(passes)?;
                 stages.lap("pipelines");
             }

@@ -226,10 +226,8 @@ pub struct SceneFeatures {
 
 impl SceneFeatures {
     /// `other`'s features with a walk's stack that also holds these (the deeper of the two,
-    /// memory if either is): kernels made for them render both ([`SceneFeatures::renders`]). A
-    /// refitted or rebuilt BVH of a moving scene changes its stack depth from frame to frame:
-    /// kernels made for the deepest so far serve the shallower ones without a recompile (about a
-    /// second on the CPU device).
+    /// memory if either is): kernels made for them render both ([`SceneFeatures::renders`];
+    /// [`crate::render::Passes::for_moved`]).
     pub fn widened_to(&self, other: &SceneFeatures) -> SceneFeatures {
         let bvh_stack = match (self.bvh_stack, other.bvh_stack) {
             (0, _) | (_, 0) => 0,

@@ -177,7 +177,7 @@ impl SceneBvh {
 /// class ([`bvh_alpha`]). An animated scene's ([`Scene::animation`]) is built without split
 /// references (early split clipping, spatial splits), so that a refit keeps it tight: a split
 /// piece's box bounds only its part of the triangle, which a refit cannot follow (it would have
-/// to bound the whole moved triangle in every piece's leaf: the 4,090-triangle
+/// to bound the whole moved triangle in every piece's leaf: a 4,090-triangle early version of
 /// `scenes/animated.glb` then path-traced 4–8× slower after one refit).
 fn build_scene_bvh(scene: &Scene) -> Result<(Bvh, Vec<Option<u32>>)> {
     let boxes = scene_boxes(scene)?;
@@ -747,8 +747,9 @@ impl GpuScene {
     /// brings the BVH to it by `how`, then re-uploads what shading reads as
     /// [`GpuScene::update`] does; the environment stays. A refit needs the scene to have been
     /// uploaded with its animation source (the host BVH is kept only then). The triangle count
-    /// and each triangle's alpha class must not change. A rebuild may change the walk's stack
-    /// depth, which the kernels are specialised for: compare [`GpuScene::features`] after it.
+    /// and each triangle's alpha class must not change. `bvh_stats.build_ms` is then the refit's
+    /// or the rebuild's time. Either may change the walk's stack depth (the 4-wide collapse
+    /// follows the boxes), which the kernels are specialised for: [`crate::render::Passes::for_moved`].
     /// Replaces buffers, so no command buffer using this scene may be pending.
     pub fn update_geometry(&mut self, ctx: &Context, scene: &Scene, how: BvhUpdate) -> Result<()> {
         self.check_same_triangles(scene)?;
@@ -784,12 +785,6 @@ impl GpuScene {
         next.host_bvh = Some(arrays.bvh);
         *self = next;
         Ok(())
-    }
-
-    /// The BVH's time in the last [`GpuScene::update_geometry`] (refit or rebuild) or the
-    /// upload's build, in milliseconds.
-    pub fn bvh_ms(&self) -> f64 {
-        self.bvh_stats.build_ms
     }
 
     /// The checks [`GpuScene::update`] and [`GpuScene::update_geometry`] share: the same

@@ -52,6 +52,17 @@ impl Passes {
         Self::with_features(ctx, scene.features())
     }
 
+    /// New passes for `scene` when these cannot render it ([`SceneFeatures::renders`]), made for
+    /// a walk's stack that holds both its BVH and the one these were made for
+    /// ([`SceneFeatures::widened_to`]): a moving scene's stack depth changes from frame to frame,
+    /// and kernels made for the deepest so far serve the shallower ones without a recompile.
+    /// `None` when these serve it. No pipeline is built yet.
+    pub fn for_moved(&self, scene: &GpuScene) -> Option<Passes> {
+        let features = scene.features();
+        (!self.features.renders(&features))
+            .then(|| Self::with_features(&self.ctx, self.features.widened_to(&features)))
+    }
+
     /// The passes for a scene with `features`, known before it is uploaded
     /// ([`SceneFeatures::of_scene`]): their pipelines can be built while the scene uploads
     /// ([`Passes::prepare_path_trace`] on another thread); they render only a scene with these

@@ -135,7 +135,8 @@ pub(super) fn pose(origin: &Origin, reader: &Reader, document: &gltf::Document, 
                     let values = reader.vectors::<4>(&output, &out_what)?;
                     check_count(origin, &what, values.len(), times.len() * per_key)?;
                     let v: Vec<Quat> = values.into_iter().map(Quat::from_array).collect();
-                    let value = sample(&v, &key, interpolation, slerp, Quat::normalize);
+                    // glam's slerp takes the shorter arc (it negates `end` when the dot is negative).
+                    let value = sample(&v, &key, interpolation, Quat::slerp, Quat::normalize);
                     pose.rotation[node] = Some(value.normalize());
                 }
                 Property::MorphTargetWeights => {
@@ -219,10 +220,4 @@ fn sample<T: Copy + std::ops::Add<Output = T> + std::ops::Mul<f32, Output = T>>(
             )
         }
     }
-}
-
-/// Spherical linear interpolation along the shorter arc.
-fn slerp(a: Quat, b: Quat, t: f32) -> Quat {
-    let b = if a.dot(b) < 0.0 { -b } else { b };
-    a.slerp(b, t)
 }

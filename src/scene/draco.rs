@@ -111,19 +111,28 @@ pub(super) fn decode(origin: &Origin, root: &mut json::Root, buffers: &[Cow<[u8]
                         || origin.error(format!("{label}: {semantic}'s Draco id {id} is not in the stream")),
                     )?;
                 let target = accessor_of(origin, root, &label, *accessor)?;
+                let element = target.component.size() * target.components;
                 let bytes = convert(attribute, target)
                     .map_err(|e| origin.error(format!("{label}: {semantic} (accessor {accessor}): {e}")))?;
                 points = Some(attribute.len());
-                outputs.push((*accessor, (c.view, *id), bytes, attribute.len(), true));
+                // Vertex attributes' elements start 4-byte aligned (the glTF rule for strides).
+                let (bytes, stride) = match element.is_multiple_of(4) {
+                    true => (bytes, None),
+                    false => {
+                        let stride = element.next_multiple_of(4);
+                        (bytes.chunks(element).flat_map(|e| pad(e, stride)).collect(), Some(stride))
+                    }
+                };
+                outputs.push((*accessor, (c.view, *id), bytes, attribute.len(), stride));
             }
             let points =
                 points.ok_or_else(|| origin.error(format!("{label}: no attribute is compressed")))?;
             let target = accessor_of(origin, root, &label, c.indices)?;
             let bytes = indices(mesh.get_faces(), points, target)
                 .map_err(|e| origin.error(format!("{label}: indices (accessor {}): {e}", c.indices)))?;
-            outputs.push((c.indices, (c.view, u64::MAX), bytes, mesh.get_faces().len() * 3, false));
+            outputs.push((c.indices, (c.view, u64::MAX), bytes, mesh.get_faces().len() * 3, None));
 
-            for (accessor, source, bytes, count, vertex) in outputs {
+            for (accessor, source, bytes, count, stride) in outputs {
                 match decoded.insert(accessor, source) {
                     Some(previous) if previous == source => continue,
                     Some(_) => {
@@ -133,13 +142,6 @@ pub(super) fn decode(origin: &Origin, root: &mut json::Root, buffers: &[Cow<[u8]
                     }
                     None => {}
                 }
-                let element = element_size(&root.accessors[accessor]);
-                // Vertex attributes' elements start 4-byte aligned (the glTF rule for strides).
-                let stride = (vertex && !element.is_multiple_of(4)).then(|| element.next_multiple_of(4));
-                let bytes = match stride {
-                    Some(stride) => bytes.chunks(element).flat_map(|e| pad(e, stride)).collect(),
-                    None => bytes,
-                };
                 out.resize(out.len().next_multiple_of(4), 0);
                 let at = out.len();
                 out.extend_from_slice(&bytes);
@@ -211,13 +213,6 @@ struct Target<'r> {
     accessor: &'r json::Accessor,
     component: ComponentType,
     components: usize,
-}
-
-fn element_size(accessor: &json::Accessor) -> usize {
-    match (accessor.component_type, accessor.type_) {
-        (Checked::Valid(GenericComponentType(c)), Checked::Valid(t)) => c.size() * t.multiplicity(),
-        _ => 0,
-    }
 }
 
 /// One decoded attribute as `target`'s elements: point by point, each component converted from

@@ -136,9 +136,7 @@ impl SceneInfo {
             std::fs::read(path).map_err(|e| origin.error(format!("cannot read the scene file: {e}")))?;
         let container = if bytes.starts_with(b"glTF") { "glb" } else { "gltf" };
         let root = source::json_value(&origin, &bytes)?;
-        // The bytes read once: loaded as `Scene::load_with` loads the file.
-        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        let loaded = super::load::load(&name, &bytes, Some(&base), options);
+        let loaded = Scene::load_file_bytes(path, &bytes, options);
         Ok(Self::of(name, container, &root, loaded))
     }
 

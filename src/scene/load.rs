@@ -41,10 +41,12 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
     // A file with animations keeps what posing it again needs (Scene::pose): the document, its
     // buffers and the materials as read (before their unreadable textures are dropped).
     let rig = (asset.document.animations().len() > 0).then(|| Rig {
-        name: name.to_owned(),
-        base: base.map(Path::to_path_buf),
-        document: asset.document.clone(),
-        buffers: asset.buffers.iter().map(|b| b.to_vec()).collect(),
+        origin: Origin::new(name, base.map(Path::to_path_buf)),
+        asset: Asset {
+            document: asset.document.clone(),
+            buffers: asset.buffers.iter().map(|b| std::borrow::Cow::Owned(b.to_vec())).collect(),
+            ignored_extensions: None,
+        },
         materials: materials.clone(),
     });
     let mut builder = Builder::new(&origin, &asset, materials);
@@ -93,10 +95,9 @@ pub(super) fn load(name: &str, bytes: &[u8], base: Option<&Path>, options: &Load
 /// What [`Scene::pose`] poses a loaded scene from: the file's validated document, its buffers
 /// (decompressed) and its materials as read.
 pub(super) struct Rig {
-    name: String,
-    base: Option<std::path::PathBuf>,
-    document: gltf::Document,
-    buffers: Vec<Vec<u8>>,
+    origin: Origin,
+    /// Its buffers owned, so each pose borrows the document and buffers as they are.
+    asset: Asset<'static>,
     materials: Vec<Material>,
 }
 
@@ -112,15 +113,9 @@ pub(super) fn pose(scene: &mut Scene, at: &super::PoseAt) -> Result<()> {
                     .into(),
         });
     };
-    let rig = &source.0;
-    let origin = Origin::new(&rig.name, rig.base.clone());
-    let asset = Asset {
-        document: rig.document.clone(),
-        buffers: rig.buffers.iter().map(|b| std::borrow::Cow::Borrowed(&b[..])).collect(),
-        ignored_extensions: None,
-    };
-    let mut builder = Builder::new(&origin, &asset, rig.materials.clone());
-    builder.pose = Some(super::animation::pose(&origin, &builder.reader, &asset.document, at)?);
+    let Rig { origin, asset, materials } = &*source.0;
+    let mut builder = Builder::new(origin, asset, materials.clone());
+    builder.pose = Some(super::animation::pose(origin, &builder.reader, &asset.document, at)?);
     builder.walk()?;
     let posed = builder.finish()?;
     if posed.materials.len() != scene.materials.len() {

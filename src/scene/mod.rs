@@ -271,8 +271,14 @@ impl Scene {
             path: path.to_path_buf(),
             message: format!("cannot read the scene file: {e}"),
         })?;
+        Self::load_file_bytes(path, &bytes, options)
+    }
+
+    /// [`Scene::load_with`] of the bytes already read from `path` (its folder resolves the
+    /// file's external URIs): `umbra info` reads a file once for its JSON and its scene.
+    pub(crate) fn load_file_bytes(path: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Scene> {
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        load::load(&path.display().to_string(), &bytes, Some(&base), options)
+        load::load(&path.display().to_string(), bytes, Some(&base), options)
     }
 
     /// Loads a scene from memory (GLB, or glTF JSON whose buffers and images are all embedded).

@@ -60,7 +60,7 @@ pub fn run(ctx: &Context, path: &Path, s: &AnimationBench) -> Result<Value> {
                 let clock = std::time::Instant::now();
                 renderer.update_geometry(&scene, how)?;
                 update.push(clock.elapsed().as_secs_f64() * 1e3);
-                bvh.push(renderer.scene().bvh_ms());
+                bvh.push(renderer.scene().bvh_stats.build_ms);
                 sah.push(renderer.scene().bvh_stats.sah_cost as f64);
                 trace.push(
                     renderer.passes().path_trace(renderer.scene(), &camera, &settings, |_, _| {})?.gpu_ms,

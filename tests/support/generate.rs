@@ -469,19 +469,14 @@ pub fn animated() -> Vec<u8> {
         let data: Vec<[f32; 1]> = t.iter().map(|&t| [t]).collect();
         g.floats(&data, true)
     };
-    let keys = [0.0, 0.5, 1.0, 1.5, 2.0];
-    let bend_in = times(&mut g, &keys);
-    let bend: Vec<[f32; 4]> = [0.0f32, 50.0, 80.0, 50.0, 0.0]
-        .iter()
-        .map(|d| Quat::from_rotation_z(d.to_radians()).to_array())
-        .collect();
-    let bend = g.floats(&bend, false);
-    let turn_in = times(&mut g, &keys);
-    let turn: Vec<[f32; 4]> = [0.0f32, 80.0, 160.0, 80.0, 0.0]
-        .iter()
-        .map(|d| Quat::from_rotation_y(d.to_radians()).to_array())
-        .collect();
-    let turn = g.floats(&turn, false);
+    // "bend" and "turn" share their key times: rotations about an axis, in degrees, per key.
+    let keys = times(&mut g, &[0.0, 0.5, 1.0, 1.5, 2.0]);
+    let rotations = |g: &mut Gltf, about: fn(f32) -> Quat, degrees: [f32; 5]| {
+        let q: Vec<[f32; 4]> = degrees.iter().map(|d| about(d.to_radians()).to_array()).collect();
+        g.floats(&q, false)
+    };
+    let bend = rotations(&mut g, Quat::from_rotation_z, [0.0, 50.0, 80.0, 50.0, 0.0]);
+    let turn = rotations(&mut g, Quat::from_rotation_y, [0.0, 80.0, 160.0, 80.0, 0.0]);
     // CUBICSPLINE: in-tangent, value, out-tangent per key (weights 0, 1, 0 at 0, 1, 2 s).
     let squash_in = times(&mut g, &[0.0, 1.0, 2.0]);
     let squash: Vec<[f32; 1]> = [[0.0], [0.0], [1.5], [0.0], [1.0], [0.0], [-1.5], [0.0], [0.0]].to_vec();
@@ -495,8 +490,8 @@ pub fn animated() -> Vec<u8> {
         json!({ "name": name, "samplers": [{ "input": input, "output": output, "interpolation": interpolation }],
             "channels": [{ "sampler": 0, "target": { "node": node, "path": path } }] })
     };
-    g.push("animations", animation("bend", bend_in, bend, "LINEAR", 3, "rotation"));
-    g.push("animations", animation("turn", turn_in, turn, "LINEAR", 4, "rotation"));
+    g.push("animations", animation("bend", keys, bend, "LINEAR", 3, "rotation"));
+    g.push("animations", animation("turn", keys, turn, "LINEAR", 4, "rotation"));
     g.push("animations", animation("squash", squash_in, squash, "CUBICSPLINE", 5, "weights"));
     g.finish(vec![0, 1, 2, 4, 5, sun, bulb, camera], &["KHR_lights_punctual"])
 }

@@ -9,9 +9,10 @@
 //   N jittered samples exactly, a box filter over the pixel as the path tracer's;
 // - reproject: the point the pixel's centre sees (at the depth its sample found; the environment
 //   by its direction) is projected into the previous camera and the history read there
-//   (bilinear); it is clipped to the box of the frame's 3x3 neighbourhood (mean ± clip_sigma ×
-//   standard deviation, Salvi 2016, intersected with the neighbours' min-max; in YCoCg), and
-//   blended with weight max(1/n, blend) for the frame. Both colours are blended as c / (1 + luma)
+//   (bilinear, or a Catmull-Rom spline with TAA_CATMULL_ROM); it is clipped to the box of the
+//   frame's 3x3 neighbourhood (mean ± clip_sigma × standard deviation, Salvi 2016, intersected
+//   with the neighbours' min-max; in YCoCg), and blended with weight max(1/n, blend) for the
+//   frame. Both colours are blended as c / (1 + luma)
 //   (Karis), so that a bright sample does not dominate the mean of its neighbours.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/taa.glsl"
@@ -45,6 +46,14 @@ vec3 from_ycocg(vec3 c) {
 vec3 current_at(ivec2 pixel) {
     vec3 c = imageLoad(current, pixel).rgb;
     return any(isnan(c)) || any(isinf(c)) ? vec3(0.0) : max(c, vec3(0.0));
+}
+
+// The Catmull-Rom spline's weights of the texels at -1, 0, 1, 2 for a point t (0 to 1) past texel
+// 0: they sum to 1, and the outer two are negative.
+vec4 catmull_rom_weights(float t) {
+    float t2 = t * t;
+    return vec4(t * (-0.5 + t * (1.0 - 0.5 * t)), 1.0 + t2 * (-2.5 + 1.5 * t), t * (0.5 + t * (2.0 - 1.5 * t)),
+                t2 * (-0.5 + 0.5 * t));
 }
 
 // h moved toward the box's centre until it lies within it (Playdead's clip, INSIDE 2016).
@@ -93,7 +102,9 @@ void main() {
     bool front = camera_project(prev_camera.origin, prev_camera.forward, prev_camera.right, prev_camera.up,
                                 prev_ortho, p, params.size, pos, prev_depth);
 
-    // The history there, bilinear over the texels inside the image.
+    // The history there, bilinear over the texels inside the image; its colour by a Catmull-Rom
+    // spline over the 4x4 texels around it where they all lie inside (TAA_CATMULL_ROM), each
+    // texel compressed as the blend is. The history's length stays the bilinear one.
     vec4 h = vec4(0.0);
     float weight = 0.0;
     if (front) {
@@ -108,6 +119,21 @@ void main() {
                 h += w * vec4(compress(texel.rgb), texel.a);
                 weight += w;
             }
+        }
+        if ((params.flags & TAA_CATMULL_ROM) != 0u && all(greaterThanEqual(base, ivec2(1)))
+            && all(lessThan(base + 2, size))) {
+            vec4 wx = catmull_rom_weights(t.x);
+            vec4 wy = catmull_rom_weights(t.y);
+            vec3 spline = vec3(0.0);
+            for (int j = 0; j < 4; ++j) {
+                vec3 row = vec3(0.0);
+                for (int i = 0; i < 4; ++i) {
+                    row += wx[i] * compress(imageLoad(history, base + ivec2(i - 1, j - 1)).rgb);
+                }
+                spline += wy[j] * row;
+            }
+            // All four bilinear texels lie inside: weight is 1.
+            h.rgb = spline * weight;
         }
     }
     vec3 cc = compress(c);

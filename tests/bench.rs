@@ -294,8 +294,9 @@ fn denoise_quick_writes_json_and_a_chart() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `umbra-bench antialias` measures both series (supersampled at each sub-frame count, TAA after
-/// each frame), writes JSON and a chart, and prints its table from the JSON.
+/// `umbra-bench antialias` measures its series (supersampled at each sub-frame count, TAA after
+/// each frame, TAA turning for 1, 2, … frames with each history filter), writes JSON and a chart,
+/// and prints its table from the JSON.
 #[test]
 fn antialias_writes_json_a_chart_and_a_table() {
     let dir = std::env::temp_dir().join(format!("umbra-antialias-bench-{}", std::process::id()));
@@ -313,6 +314,9 @@ fn antialias_writes_json_a_chart_and_a_table() {
     let points = json["points"].as_array().expect("points");
     let series = |m: &str| points.iter().filter(|p| p["method"] == m).count();
     assert_eq!((series("supersampled"), series("TAA, still camera")), (2, 3), "{points:?}");
+    // Runs of 1 and 2 frames (the powers of two up to --taa-frames 3), with either history read.
+    let turning = ["TAA, turning camera", "TAA, turning camera, bilinear history"];
+    assert_eq!(turning.map(series), [2, 2], "{points:?}");
     assert!(points.iter().all(|p| p["ms"].as_f64().unwrap() > 0.0 && p["flip"].as_f64().unwrap() > 0.0));
     let svg = std::fs::read_to_string(dir.join("antialias-spheres.svg")).expect("SVG chart");
     assert!(svg.contains("TAA, still camera"), "the TAA series is charted");
@@ -324,6 +328,7 @@ fn antialias_writes_json_a_chart_and_a_table() {
         .unwrap();
     let table = String::from_utf8(table.stdout).unwrap();
     assert!(table.contains("| supersampled | 4 sub-frames |"), "{table}");
+    assert!(table.contains("| TAA, turning camera, bilinear history | 2 frames |"), "{table}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -10,8 +10,9 @@
 //!   ([`TaaMode::Reproject`], the embedding API's [`crate::render::HybridTargets::taa`]): one
 //!   sample a frame along [`TaaHistory::jitter`]'s Halton (2, 3) sequence; the point each pixel's
 //!   centre sees is projected into the previous frame's camera, the history read there
-//!   (bilinear), clipped to the box of the frame's 3×3 neighbourhood (mean ± [`TaaSettings::clip_sigma`]
-//!   standard deviations, within the neighbours' range, in YCoCg: Salvi 2016's variance clipping)
+//!   ([`HistoryFilter`]: a Catmull-Rom spline by default, or bilinear), clipped to the box of
+//!   the frame's 3×3 neighbourhood (mean ± [`TaaSettings::clip_sigma`] standard deviations,
+//!   within the neighbours' range, in YCoCg: Salvi 2016's variance clipping)
 //!   and blended with weight max(1/n, [`TaaSettings::blend`]) for the frame, n the history's
 //!   length: a still camera's first frames average exactly, then the blend is exponential. The
 //!   colours are blended as c / (1 + luma) (Karis), so one bright sample does not ring.
@@ -25,7 +26,7 @@ use std::cell::Cell;
 use crate::error::{Error, Result};
 use crate::gpu::kernel::GBufferViews;
 use crate::gpu::kernels::taa;
-use crate::gpu::layout::{GpuCamera, TaaParams, TAA_ACCUMULATE, TAA_HISTORY};
+use crate::gpu::layout::{GpuCamera, TaaParams, TAA_ACCUMULATE, TAA_CATMULL_ROM, TAA_HISTORY};
 use crate::gpu::Pipeline;
 use crate::scene::Camera;
 use crate::vk::{raw, Buffer, Context, Image, MemoryLocation, Recorder};
@@ -40,6 +41,19 @@ pub enum TaaMode {
     Reproject,
 }
 
+/// How the reprojected history is read between its texels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum HistoryFilter {
+    /// Bilinear over the 2×2 texels around the point: each frame that moves the view blurs the
+    /// history a little, and the blur adds up over the frames.
+    Bilinear,
+    /// A Catmull-Rom spline over the 4×4 texels around it (Karis 2014; Jimenez 2016's filmic
+    /// SMAA): interpolating and nearly free of that blur; its overshoot is clipped with the rest
+    /// of the history.
+    #[default]
+    CatmullRom,
+}
+
 /// Temporal anti-aliasing's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TaaSettings {
@@ -49,11 +63,13 @@ pub struct TaaSettings {
     /// The neighbourhood box's half width in standard deviations (Salvi's 1): smaller rejects
     /// more of the history (less ghosting, more flicker).
     pub clip_sigma: f32,
+    /// How the reprojected history is read.
+    pub history: HistoryFilter,
 }
 
 impl Default for TaaSettings {
     fn default() -> Self {
-        Self { blend: 0.1, clip_sigma: 1.0 }
+        Self { blend: 0.1, clip_sigma: 1.0, history: HistoryFilter::default() }
     }
 }
 
@@ -223,7 +239,8 @@ impl TaaPass {
         }
         let next = 1 - latest;
         let flags = if frames > 0 { TAA_HISTORY } else { 0 }
-            | if mode == TaaMode::Accumulate { TAA_ACCUMULATE } else { 0 };
+            | if mode == TaaMode::Accumulate { TAA_ACCUMULATE } else { 0 }
+            | if history.settings.history == HistoryFilter::CatmullRom { TAA_CATMULL_ROM } else { 0 };
         let params = TaaParams {
             camera,
             size: [size.0, size.1],

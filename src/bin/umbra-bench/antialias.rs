@@ -3,7 +3,8 @@
 //! counts ([`umbra::render::HybridSettings::samples`]; the time is every sub-frame's, medians of
 //! repeats after a warm-up), and temporal anti-aliasing through the embedding API
 //! ([`umbra::render::HybridTargets::taa`]) on a still camera, read after each frame (the time is
-//! the frames' so far). Every hybrid is the default one (raster G-buffer, SSAO, 4 shadow rays,
+//! the frames' so far), and on a camera turning into the reference's view, read after the last
+//! frame of runs of 1, 2, 4, … frames, with each history filter ([`HistoryFilter`]). Every hybrid is the default one (raster G-buffer, SSAO, 4 shadow rays,
 //! split-sum IBL). The reference's pixels integrate their area (a box filter), what both
 //! anti-aliasing methods converge toward.
 
@@ -18,10 +19,14 @@ use umbra::embed::Renderer;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::gbuffer::GBuffer;
-use umbra::passes::taa::TaaSettings;
+use umbra::passes::taa::{HistoryFilter, TaaHistory, TaaSettings};
 use umbra::render::{HybridSettings, HybridTargets, PathSettings};
-use umbra::scene::Scene;
+use umbra::scene::{Camera, Scene};
 use umbra::vk::{raw, Context, GpuTimer, Image};
+
+/// How far the turning camera of the TAA series turns each frame, in pixels at the image's
+/// centre (tests/antialias.rs' turning view).
+const TURN_PX: f32 = 0.3;
 
 /// What a run measures.
 pub struct AntialiasBench {
@@ -80,15 +85,22 @@ pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench
     let views = gbuffer.views();
     let hdr = Image::storage_2d(ctx, "bench hdr", size.0, size.1, raw::Format::R32G32B32A32_SFLOAT)?;
     let history = renderer.taa_history(size, TaaSettings::default())?;
+    let bilinear = renderer
+        .taa_history(size, TaaSettings { history: HistoryFilter::Bilinear, ..TaaSettings::default() })?;
     let frame_settings = settings(1);
     let mut visibility = renderer.visibility_buffer(size, frame_settings.gbuffer)?;
     ctx.submit(|cmd| {
         hdr.init_general(ctx, cmd);
         history.init_general(ctx, cmd);
+        bilinear.init_general(ctx, cmd);
         Ok(())
     })?;
     let mut timer = GpuTimer::new(ctx, 16)?;
-    let mut record = |timed: bool, visibility: Option<&umbra::render::VisibilityBuffer>| -> Result<f64> {
+    let mut record = |history: &TaaHistory,
+                      camera: &Camera,
+                      timed: bool,
+                      visibility: Option<&umbra::render::VisibilityBuffer>|
+     -> Result<f64> {
         let targets = HybridTargets {
             gbuffer: &views,
             visibility,
@@ -99,18 +111,18 @@ pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench
             probes: None,
             lightmaps: None,
             reservoirs: None,
-            taa: Some(&history),
+            taa: Some(history),
         };
         ctx.submit(|cmd| {
             timer.reset(cmd);
-            renderer.record_hybrid(cmd, &camera, &targets, &frame_settings, timed.then_some(&mut timer))
+            renderer.record_hybrid(cmd, camera, &targets, &frame_settings, timed.then_some(&mut timer))
         })?;
         Ok(timer.read()?.iter().map(|t| t.ms).sum())
     };
     // A warm-up frame (which also grows the visibility buffer's tile lists to the view), then
     // the measured run from a fresh history.
     for _ in 0..3 {
-        record(false, visibility.as_ref())?;
+        record(&history, &camera, false, visibility.as_ref())?;
         match visibility.as_mut().map(|v| v.check(ctx)).transpose()?.flatten() {
             Some(entries) => visibility.as_mut().expect("checked").reserve(ctx, entries)?,
             None => break,
@@ -119,13 +131,41 @@ pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench
     history.reset();
     let (mut total, mut frame_ms) = (0.0, Vec::new());
     for k in 1..=s.taa_frames {
-        let ms = record(true, visibility.as_ref())?;
+        let ms = record(&history, &camera, true, visibility.as_ref())?;
         total += ms;
         frame_ms.push(ms);
         let resolved: Vec<[f32; 4]> = history.read(ctx)?;
         let (_, rel_mse) = suite::errors(&resolved, &reference);
         let flip = suite::flip_mean(&resolved, &reference, size);
         points.push(json!({"method": "TAA, still camera", "unit": "frames", "value": k, "ms": total, "flip": flip, "rel_mse": rel_mse}));
+    }
+
+    // TAA while the camera turns about the vertical by TURN_PX pixels a frame: k frames that end
+    // at the reference's camera (k = 1, 2, 4, … up to the still series' length), each run from a
+    // fresh history, with each history filter; the error of the last resolve.
+    if camera.orthographic.is_none() {
+        let pixel = 2.0 * (camera.yfov / 2.0).tan() / size.1 as f32;
+        for (method, history) in
+            [("TAA, turning camera", &history), ("TAA, turning camera, bilinear history", &bilinear)]
+        {
+            for k in (0..).map(|i| 1u32 << i).take_while(|&k| k <= s.taa_frames.max(1)) {
+                history.reset();
+                let mut total = 0.0;
+                for j in 0..k {
+                    let turn = glam::Quat::from_rotation_y(-((k - 1 - j) as f32) * TURN_PX * pixel);
+                    let cam = Camera {
+                        forward: (turn * glam::Vec3::from(camera.forward)).to_array(),
+                        up: (turn * glam::Vec3::from(camera.up)).to_array(),
+                        ..camera
+                    };
+                    total += record(history, &cam, true, visibility.as_ref())?;
+                }
+                let resolved: Vec<[f32; 4]> = history.read(ctx)?;
+                let (_, rel_mse) = suite::errors(&resolved, &reference);
+                let flip = suite::flip_mean(&resolved, &reference, size);
+                points.push(json!({"method": method, "unit": "frames", "value": k, "ms": total, "flip": flip, "rel_mse": rel_mse}));
+            }
+        }
     }
     Ok(json!({
         "device": ctx.info().name,

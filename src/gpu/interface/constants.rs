@@ -189,6 +189,9 @@ gpu_constants! {
     /// [`TaaParams::flags`]: the running mean of still sub-frames: each pixel's history read at the
     /// pixel, not reprojected nor clipped, weighted by its length (one-shot supersampling).
     TAA_ACCUMULATE: uint = 2;
+    /// [`TaaParams::flags`]: the reprojected history is read by a Catmull-Rom spline over the
+    /// 4x4 texels around it (else bilinear over the 2x2).
+    TAA_CATMULL_ROM: uint = 4;
     /// [`TemporalParams::flags`]: the history holds a previous frame (else every pixel starts
     /// afresh).
     TEMPORAL_HISTORY: uint = 1;

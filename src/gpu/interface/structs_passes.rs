@@ -329,7 +329,7 @@ gpu_structs! {
         camera: GpuCamera,
         /// Width, height.
         size: uvec2,
-        /// [`TAA_HISTORY`] | [`TAA_ACCUMULATE`].
+        /// [`TAA_HISTORY`] | [`TAA_ACCUMULATE`] | [`TAA_CATMULL_ROM`].
         flags: uint,
         /// The least weight of the frame in the blend with the reprojected history (before, the
         /// frame's weight is 1 / the history's length).

@@ -395,6 +395,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         ("material", vk::Format::R32G32B32A32_UINT),
         ("layers", vk::Format::R32G32B32A32_UINT),
         ("layers2", vk::Format::R32G32B32A32_UINT),
+        ("motion", vk::Format::R16G16B16A16_SFLOAT),
     ];
     let mut images = Vec::new();
     for set in ["host", "umbra"] {
@@ -404,7 +405,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
         images.push(host.image(&format!("{set} hdr"), size, vk::Format::R32G32B32A32_SFLOAT)?);
         images.push(host.image(&format!("{set} ldr"), size, vk::Format::R8G8B8A8_UNORM)?);
     }
-    const SET: usize = 9; // images per set: 7 G-buffer, hdr, ldr (SSAO's are umbra's, transient)
+    const SET: usize = 10; // images per set: 8 G-buffer, hdr, ldr (SSAO's are umbra's, transient)
     let views = |set: usize| {
         let v = |i: usize| images[set * SET + i].view;
         GBufferViews {
@@ -416,6 +417,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             material: v(4),
             layers: v(5),
             layers2: v(6),
+            motion: v(7),
         }
     };
     let (host_views, umbra_views) = (views(0), views(1));
@@ -569,8 +571,8 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             gbuffer,
             visibility: None,
             ao: None,
-            hdr: images[set * SET + 7].view,
-            ldr: Some(images[set * SET + 8].view),
+            hdr: images[set * SET + 8].view,
+            ldr: Some(images[set * SET + 9].view),
             shadows: None,
             probes: None,
             lightmaps: None,
@@ -615,7 +617,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
 
         // The host copies its LDR images out: its own barrier from umbra's compute writes, and
         // its own layout change (umbra leaves every image in GENERAL).
-        let to_copy: Vec<_> = [&images[8], &images[SET + 8]]
+        let to_copy: Vec<_> = [&images[9], &images[SET + 9]]
             .iter()
             .map(|i| {
                 vk::ImageMemoryBarrier2::default()
@@ -630,7 +632,7 @@ pub fn run(size: (u32, u32), validation: bool) -> Result<Frames> {
             })
             .collect();
         device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_copy));
-        for (image, buffer) in [&images[8], &images[SET + 8]].into_iter().zip(&readback) {
+        for (image, buffer) in [&images[9], &images[SET + 9]].into_iter().zip(&readback) {
             let region = vk::BufferImageCopy::default()
                 .image_subresource(vk::ImageSubresourceLayers {
                     aspect_mask: vk::ImageAspectFlags::COLOR,

@@ -66,9 +66,23 @@ void main() {
         imageStore(gb_base, pixel, vec4(0.0));
         imageStore(gb_emission, pixel, vec4(0.0));
         imageStore(gb_material, pixel, uvec4(GBUFFER_NO_SURFACE, 0u, 0u, 0u));
+        if (params.motion != 0u) {
+            imageStore(gb_motion, pixel, vec4(0.0));
+        }
         return;
     }
     uint tri = hit.tri;
+    // Where the geometry moved: the point's motion since the previous geometry, its vertices'
+    // at its barycentrics (before parallax moves them: the surface moves, not its texture).
+    if (params.motion != 0u) {
+        vec3 motion = vec3(0.0);
+        if (!bvh_is_implicit(tri)) {
+            uvec3 idx = tri_indices(tri);
+            motion = (1.0 - hit.bary.x - hit.bary.y) * vertex_motion[idx.x].xyz + hit.bary.x * vertex_motion[idx.y].xyz
+                + hit.bary.y * vertex_motion[idx.z].xyz;
+        }
+        imageStore(gb_motion, pixel, vec4(motion, 0.0));
+    }
     vec3 ng = normalize(hit_normal(hit));
     vec3 wo = -dir;
     // Parallax occlusion mapping: the hit's attributes are read where the view ray meets the

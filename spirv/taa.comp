@@ -7,8 +7,9 @@
 // - accumulate (TAA_ACCUMULATE): the camera is still, so the history is read at the pixel and the
 //   blend is the running mean (weight 1/n for the n-th sub-frame): N sub-frames give the mean of
 //   N jittered samples exactly, a box filter over the pixel as the path tracer's;
-// - reproject: the point the pixel's centre sees (at the depth its sample found; the environment
-//   by its direction) is projected into the previous camera and the history read there
+// - reproject: the point the pixel's centre sees (at the depth its sample found, moved back by
+//   the G-buffer's motion where the geometry moved, TAA_MOTION; the environment by its
+//   direction) is projected into the previous camera and the history read there
 //   (bilinear, or a Catmull-Rom spline with TAA_CATMULL_ROM); it is clipped to the box of the
 //   frame's 3x3 neighbourhood (mean ± clip_sigma × standard deviation, Salvi 2016, intersected
 //   with the neighbours' min-max; in YCoCg), and blended with weight max(1/n, blend) for the
@@ -97,6 +98,10 @@ void main() {
     // The environment: by its direction (a pinhole sees it at infinity), or along the ray.
     vec3 p = depth > 0.0 ? origin + dir * (depth / dot(dir, forward))
                          : (prev_ortho ? origin : prev_camera.origin + dir);
+    // Moved geometry (TAA_MOTION): the surface point where it lay in the previous frame.
+    if ((params.flags & TAA_MOTION) != 0u && depth > 0.0) {
+        p -= imageLoad(gb_motion, pixel).xyz;
+    }
     vec2 pos;
     float prev_depth;
     bool front = camera_project(prev_camera.origin, prev_camera.forward, prev_camera.right, prev_camera.up,

@@ -241,10 +241,12 @@ impl Renderer {
     /// Takes `scene`'s moved geometry after [`Scene::pose`] (the same triangles and materials),
     /// its BVH refitted or rebuilt by `how` ([`BvhUpdate`]); lights and cameras move with it.
     /// The pipelines are re-specialised only when the moved tree needs a deeper walk than they
-    /// were made for ([`Passes::for_moved`]). The temporal
-    /// denoiser's history starts afresh, as after [`Renderer::update_scene`] (it has no motion
-    /// vectors for moving geometry). No command buffer using the scene may be pending (wait for
-    /// the host's frame fence first).
+    /// were made for ([`Passes::for_moved`]). Each vertex's motion from the positions before
+    /// (kept for a scene loaded with its animations, else known from the first update on) goes
+    /// into the G-buffer's `motion`, which temporal anti-aliasing ([`HybridTargets::taa`])
+    /// follows across one update a frame. The path tracer's temporal denoiser starts afresh, as
+    /// after [`Renderer::update_scene`] (it reads no motion). No command buffer using the scene
+    /// may be pending (wait for the host's frame fence first).
     pub fn update_geometry(&mut self, scene: &Scene, how: BvhUpdate) -> Result<()> {
         self.scene.update_geometry(&self.ctx, scene, how)?;
         self.generation += 1;

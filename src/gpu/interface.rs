@@ -134,6 +134,9 @@ macro_rules! gbuffer_format {
     (layers2) => {
         "rgba32ui"
     };
+    (motion) => {
+        "rgba16f"
+    };
 }
 
 /// A kernel's feature list spelled out: each set's name ([`FEATURE_SETS`]) replaced by its

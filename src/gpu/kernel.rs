@@ -37,12 +37,24 @@ pub struct GBufferViews {
     /// `R32G32B32A32_UINT` more layer textures' texels (only for scenes with a sheen's or a
     /// diffuse transmission's textures).
     pub layers2: raw::ImageView,
+    /// `R16G16B16A16_SFLOAT` the surface point's world-space motion since the previous geometry
+    /// (only for scenes whose geometry moved: [`crate::gpu::scene::GpuScene::geometry_moved`]).
+    pub motion: raw::ImageView,
 }
 
 impl GBufferViews {
     /// The views in binding order.
-    pub fn in_order(&self) -> [raw::ImageView; 7] {
-        [self.depth, self.normal, self.base, self.emission, self.material, self.layers, self.layers2]
+    pub fn in_order(&self) -> [raw::ImageView; 8] {
+        [
+            self.depth,
+            self.normal,
+            self.base,
+            self.emission,
+            self.material,
+            self.layers,
+            self.layers2,
+            self.motion,
+        ]
     }
 }
 

@@ -11,7 +11,10 @@ use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::gpu::bvh::{register_stack, GpuBvh, GpuBvhNode};
 use crate::scene::{AlphaMode, Material, Scene, Texture, TextureRef};
-use crate::vk::{raw, Context, DeviceInfo, TexelBuffer};
+use crate::vk::{raw, Buffer, Context, DeviceInfo, TexelBuffer};
+
+/// Storage-buffer usage.
+const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::STORAGE_BUFFER;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -109,6 +112,16 @@ pub struct GpuScene {
     /// The host-side BVH, kept for [`GpuScene::update_geometry`]'s refit when the scene was
     /// uploaded with an animation source ([`Scene::animation`]); `None` otherwise.
     host_bvh: Option<Bvh>,
+    /// The vertices' positions, kept where the geometry may move (an animation source, or after
+    /// an update), for the next update's motion.
+    positions: Option<Vec<[f32; 3]>>,
+    /// Each vertex's motion from the previous geometry to this one (xyz, w 0) after an update
+    /// that knew the previous positions; else one zero element, which the kernels do not read.
+    vertex_motion: Buffer,
+    /// Whether `vertex_motion` holds the last update's motion.
+    moved: bool,
+    /// Geometry updates since the upload ([`GpuScene::update_geometry`]).
+    geometry_generation: u64,
 }
 
 /// How [`GpuScene::update_geometry`] brings the BVH to moved triangles.
@@ -690,8 +703,9 @@ impl GpuScene {
         arrays.check_limits(&scene.name, ctx.info())?;
         let bvh = GpuBvh::upload_nodes(ctx, &arrays.bvh, nodes)?;
         let mut uploaded = Self::with_gpu_bvh(ctx, &arrays, bvh)?;
-        // An animated scene keeps its host BVH for refits.
+        // An animated scene keeps its host BVH for refits, and its positions for the motion.
         uploaded.host_bvh = scene.animation.is_some().then_some(arrays.bvh);
+        uploaded.positions = scene.animation.is_some().then(|| scene.positions.clone());
         Ok(uploaded)
     }
 
@@ -740,6 +754,10 @@ impl GpuScene {
             prim_order: arrays.bvh.prim_order.clone(),
             alpha: arrays.alpha.clone(),
             host_bvh: None,
+            positions: None,
+            vertex_motion: Buffer::upload(ctx, "no vertex motion", &[[0.0f32; 4]], STORAGE)?,
+            moved: false,
+            geometry_generation: 0,
         })
     }
 
@@ -778,6 +796,19 @@ impl GpuScene {
         let gpu_bvh = GpuBvh::upload(ctx, &arrays.bvh)?;
         let mut next = Self::with_gpu_bvh(ctx, &arrays, gpu_bvh)?;
         next.bvh_stats.build_ms = ms;
+        // The vertices' motion from the positions this scene had (known where it kept them).
+        if let Some(before) = &self.positions {
+            let motion: Vec<[f32; 4]> = scene
+                .positions
+                .iter()
+                .zip(before)
+                .map(|(p, q)| [p[0] - q[0], p[1] - q[1], p[2] - q[2], 0.0])
+                .collect();
+            next.vertex_motion = Buffer::upload(ctx, "vertex motion", &motion, STORAGE)?;
+            next.moved = true;
+        }
+        next.positions = Some(scene.positions.clone());
+        next.geometry_generation = self.geometry_generation + 1;
         std::mem::swap(&mut next.env_texels, &mut self.env_texels);
         std::mem::swap(&mut next.env_alias, &mut self.env_alias);
         next.env_size = self.env_size;
@@ -785,6 +816,26 @@ impl GpuScene {
         next.host_bvh = Some(arrays.bvh);
         *self = next;
         Ok(())
+    }
+
+    /// Whether the last [`GpuScene::update_geometry`] knew the positions before it: the G-buffer
+    /// then writes each surface point's motion from them (its `motion` image), which temporal
+    /// anti-aliasing follows. A scene uploaded without an animation source learns its positions
+    /// at its first update, so it has motion from the second on.
+    pub fn geometry_moved(&self) -> bool {
+        self.moved
+    }
+
+    /// Geometry updates since the upload: a frame's history made at generation g follows the
+    /// motion of generation g + 1 only.
+    pub fn geometry_generation(&self) -> u64 {
+        self.geometry_generation
+    }
+
+    /// The vertices' motion buffer the G-buffer kernel binds (one unread element when the
+    /// geometry has not moved).
+    pub(crate) fn vertex_motion(&self) -> &Buffer {
+        &self.vertex_motion
     }
 
     /// The checks [`GpuScene::update`] and [`GpuScene::update_geometry`] share: the same

@@ -11,6 +11,8 @@
 //! | `layers` | `R32G32B32A32_UINT` | the texels of the material's layer textures (filtered like the other textures; 1 where a slot is empty), four `packUnorm4x8` values a word (exact for 8-bit linear texels read unfiltered, within 1/510 otherwise): x: `specularColorTexture` rgb, `specularTexture` a; y: `transmissionTexture` r, `clearcoatTexture` r, `clearcoatRoughnessTexture` g, `KHR_materials_volume`'s `thicknessTexture` g; z: the clear coat's normal (octahedral, two snorm16); w: `iridescenceTexture` r and `iridescenceThicknessTexture` g (two `packUnorm2x16` values). Written (and read by the lighting passes) only where the scene has some such texture: a host may leave it unwritten for scenes without |
 //! | `layers2` | `R32G32B32A32_UINT` | more layer textures' texels, as `layers`: x: `KHR_materials_sheen`'s `sheenColorTexture` rgb, `sheenRoughnessTexture` a; y: `KHR_materials_diffuse_transmission`'s `diffuseTransmissionColorTexture` rgb, `diffuseTransmissionTexture` a; z, w: unused (0). Written (and read) only where the scene has such a texture |
 //!
+//! | `motion` | `R16G16B16A16_SFLOAT` | the surface point's world-space motion xyz since the scene's previous geometry (its vertices' motion at the point's barycentrics; [`GpuScene::geometry_moved`]), which temporal anti-aliasing moves the point back by; w 0. Written (and read) only for a scene whose geometry moved: a host may leave it unwritten for still geometry |
+//!
 //! Every image is in `GENERAL` layout, written by compute shader storage writes. Where no surface was hit, `depth`, `normal`, `base` and
 //! `emission` (its a included) are 0.
 //!
@@ -47,6 +49,8 @@ pub struct GBuffer {
     pub layers: Image,
     /// More layer textures' texels (the sheen's, the diffuse transmission's).
     pub layers2: Image,
+    /// The surface point's motion since the previous geometry.
+    pub motion: Image,
 }
 
 impl GBuffer {
@@ -62,6 +66,7 @@ impl GBuffer {
             material: make("gbuffer material", raw::Format::R32G32B32A32_UINT)?,
             layers: make("gbuffer layers", raw::Format::R32G32B32A32_UINT)?,
             layers2: make("gbuffer layers2", raw::Format::R32G32B32A32_UINT)?,
+            motion: make("gbuffer motion", raw::Format::R16G16B16A16_SFLOAT)?,
         };
         ctx.submit(|cmd| {
             for image in gbuffer.images() {
@@ -73,8 +78,17 @@ impl GBuffer {
     }
 
     /// The images in binding order.
-    pub fn images(&self) -> [&Image; 7] {
-        [&self.depth, &self.normal, &self.base, &self.emission, &self.material, &self.layers, &self.layers2]
+    pub fn images(&self) -> [&Image; 8] {
+        [
+            &self.depth,
+            &self.normal,
+            &self.base,
+            &self.emission,
+            &self.material,
+            &self.layers,
+            &self.layers2,
+            &self.motion,
+        ]
     }
 
     /// Views of the images, for the passes that read a G-buffer.
@@ -88,6 +102,7 @@ impl GBuffer {
             material: self.material.view,
             layers: self.layers.view,
             layers2: self.layers2.view,
+            motion: self.motion.view,
         }
     }
 
@@ -116,19 +131,20 @@ pub struct GBufferImages {
     /// Width and height of every image.
     pub size: (u32, u32),
     /// The images in [`GBufferViews::in_order`]'s order.
-    pub images: [GraphImage; 7],
+    pub images: [GraphImage; 8],
 }
 
 impl GBufferImages {
     /// The views of the images while `graph` records.
     pub fn views(&self, views: &GraphViews) -> GBufferViews {
-        let [depth, normal, base, emission, material, layers, layers2] = self.images.map(|i| views[i]);
-        GBufferViews { size: self.size, depth, normal, base, emission, material, layers, layers2 }
+        let [depth, normal, base, emission, material, layers, layers2, motion] =
+            self.images.map(|i| views[i]);
+        GBufferViews { size: self.size, depth, normal, base, emission, material, layers, layers2, motion }
     }
 
     /// Imports the caller's G-buffer `views` into `graph`.
     pub fn import(graph: &mut Graph<'_>, views: &GBufferViews) -> Self {
-        const NAMES: [&str; 7] = [
+        const NAMES: [&str; 8] = [
             "gbuffer depth",
             "gbuffer normal",
             "gbuffer base",
@@ -136,6 +152,7 @@ impl GBufferImages {
             "gbuffer material",
             "gbuffer layers",
             "gbuffer layers2",
+            "gbuffer motion",
         ];
         let in_order = views.in_order();
         Self { size: views.size, images: std::array::from_fn(|i| graph.import(NAMES[i], in_order[i])) }
@@ -231,7 +248,13 @@ impl GBufferPass {
                 return Err(Error::Invalid("the ray-cast G-buffer pass was given a visibility buffer".into()))
             }
         };
-        let resources = gbuffer::Resources { scene, gb: target, visibility: buffer };
+        params.motion = scene.geometry_moved() as u32;
+        let resources = gbuffer::Resources {
+            scene,
+            gb: target,
+            visibility: buffer,
+            vertex_motion: scene.vertex_motion(),
+        };
         self.pipeline.record(rec, &resources, &params, [target.size.0, target.size.1, 1])?;
         Ok(())
     }

@@ -15,7 +15,10 @@
 //!   within the neighbours' range, in YCoCg: Salvi 2016's variance clipping)
 //!   and blended with weight max(1/n, [`TaaSettings::blend`]) for the frame, n the history's
 //!   length: a still camera's first frames average exactly, then the blend is exponential. The
-//!   colours are blended as c / (1 + luma) (Karis), so one bright sample does not ring.
+//!   colours are blended as c / (1 + luma) (Karis), so one bright sample does not ring. Where
+//!   the scene's geometry moved since the history's frame ([`GeometryState`]: one
+//!   [`crate::gpu::scene::GpuScene::update_geometry`] between frames), each point is first moved
+//!   back by the G-buffer's `motion`; a history that missed an update starts afresh.
 //!
 //! The history ([`TaaHistory`]: two `R32G32B32A32_SFLOAT` images the frames alternate between,
 //! and the camera of the last) holds per pixel centre the resolved radiance and the frames it
@@ -26,7 +29,8 @@ use std::cell::Cell;
 use crate::error::{Error, Result};
 use crate::gpu::kernel::GBufferViews;
 use crate::gpu::kernels::taa;
-use crate::gpu::layout::{GpuCamera, TaaParams, TAA_ACCUMULATE, TAA_CATMULL_ROM, TAA_HISTORY};
+use crate::gpu::layout::{GpuCamera, TaaParams, TAA_ACCUMULATE, TAA_CATMULL_ROM, TAA_HISTORY, TAA_MOTION};
+use crate::gpu::scene::GpuScene;
 use crate::gpu::Pipeline;
 use crate::scene::Camera;
 use crate::vk::{raw, Buffer, Context, Image, MemoryLocation, Recorder};
@@ -129,6 +133,28 @@ pub struct TaaHistory {
     prev_camera: Buffer,
     /// The frames resolved since the last reset, the image the last wrote and its camera.
     state: Cell<(u32, usize, GpuCamera)>,
+    /// The scene's geometry generation at the last frame ([`GeometryState`]).
+    geometry: Cell<u64>,
+}
+
+/// Where a frame's scene geometry stands, for the history to follow it: the geometry's
+/// generation ([`GpuScene::geometry_generation`]) and whether the G-buffer wrote the motion that
+/// led to it ([`GpuScene::geometry_moved`]). A history made at generation g follows a frame at
+/// g (nothing moved) or at g + 1 with motion (each point moved back by it); any other frame
+/// starts it afresh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct GeometryState {
+    /// Geometry updates of the scene since its upload.
+    pub generation: u64,
+    /// Whether the G-buffer holds the last update's motion.
+    pub moved: bool,
+}
+
+impl GeometryState {
+    /// Where `scene`'s geometry stands.
+    pub fn of(scene: &GpuScene) -> Self {
+        Self { generation: scene.geometry_generation(), moved: scene.geometry_moved() }
+    }
 }
 
 impl TaaHistory {
@@ -149,6 +175,7 @@ impl TaaHistory {
             images: [make("taa history 0")?, make("taa history 1")?],
             prev_camera,
             state: Cell::new((0, 1, GpuCamera::default())),
+            geometry: Cell::new(0),
         })
     }
 
@@ -219,7 +246,10 @@ impl TaaPass {
 
     /// Records the resolve of `current` (`R32G32B32A32_SFLOAT`, the frame's radiance sampled at
     /// `camera`'s jitter, over `gbuffer`'s pixels) with `history` into its other image, which
-    /// becomes [`TaaHistory::resolved`]. Never submits.
+    /// becomes [`TaaHistory::resolved`]; `geometry` says where the scene's geometry stands (the
+    /// history follows one update by the G-buffer's `motion`, else starts afresh). Never
+    /// submits.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
@@ -228,10 +258,16 @@ impl TaaPass {
         history: &TaaHistory,
         camera: &Camera,
         mode: TaaMode,
+        geometry: GeometryState,
     ) -> Result<()> {
         history.settings.validate()?;
         history.check_size(gbuffer.size)?;
-        let (frames, latest, prev) = history.state.get();
+        let (mut frames, latest, prev) = history.state.get();
+        let last = history.geometry.replace(geometry.generation);
+        let motion = geometry.generation == last + 1 && geometry.moved;
+        if geometry.generation != last && !motion {
+            frames = 0;
+        }
         let size = gbuffer.size;
         let camera = GpuCamera::new(camera, size);
         if frames > 0 {
@@ -240,7 +276,8 @@ impl TaaPass {
         let next = 1 - latest;
         let flags = if frames > 0 { TAA_HISTORY } else { 0 }
             | if mode == TaaMode::Accumulate { TAA_ACCUMULATE } else { 0 }
-            | if history.settings.history == HistoryFilter::CatmullRom { TAA_CATMULL_ROM } else { 0 };
+            | if history.settings.history == HistoryFilter::CatmullRom { TAA_CATMULL_ROM } else { 0 }
+            | if motion { TAA_MOTION } else { 0 };
         let params = TaaParams {
             camera,
             size: [size.0, size.1],

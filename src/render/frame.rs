@@ -148,13 +148,14 @@ impl Passes {
         });
     }
 
-    /// Adds the anti-aliasing resolve of `current` (the frame's radiance, sampled at `camera`'s
-    /// jitter) with `history` into its next image, imported as `resolved` (which
+    /// Adds the anti-aliasing resolve of `current` (the frame's radiance, sampled at the frame
+    /// camera's jitter) with `history`, following the frame scene's moved geometry, into its next
+    /// image, imported as `resolved` (which
     /// [`TaaHistory::resolved`] names once the pass is recorded).
     pub fn add_taa<'g>(
         &'g self,
         graph: &mut Graph<'g>,
-        camera: &'g Camera,
+        frame: Frame<'g>,
         gbuffer: GBufferImages,
         current: GraphImage,
         history: &'g TaaHistory,
@@ -166,7 +167,7 @@ impl Passes {
         graph.add_pass("taa").read_all(gbuffer.images).read(current).write(resolved).record(
             move |rec, views| {
                 let gbuffer = gbuffer.views(views);
-                self.record_taa(rec, &gbuffer, views[current], history, camera, mode)
+                self.record_taa(rec, frame, &gbuffer, views[current], history, mode)
             },
         );
         resolved
@@ -262,7 +263,7 @@ impl Passes {
         let display = match targets.taa {
             Some(history) => {
                 history.check_size(size)?;
-                self.add_taa(graph, camera, gbuffer, hdr, history, TaaMode::Reproject)
+                self.add_taa(graph, frame, gbuffer, hdr, history, TaaMode::Reproject)
             }
             None => hdr,
         };

@@ -35,7 +35,7 @@ use crate::passes::pathtrace::{Integrator, PathOptions, PathTarget, PathTracePas
 use crate::passes::probes::{ProbePass, ProbeVolume};
 use crate::passes::restir::{Reservoirs, RestirPass, RestirSettings};
 use crate::passes::shadow::{ShadowMaps, ShadowMethod, ShadowPass, ShadowPlan, ShadowSettings, ShadowView};
-use crate::passes::taa::{supersample_jitters, TaaHistory, TaaMode, TaaPass};
+use crate::passes::taa::{supersample_jitters, GeometryState, TaaHistory, TaaMode, TaaPass};
 pub use crate::passes::temporal::{TemporalFeedback, TemporalSettings};
 use crate::passes::temporal::{TemporalHistory, TemporalPass};
 use crate::passes::tonemap::{ToneCurve, TonemapPass};

@@ -524,10 +524,10 @@ impl Passes {
                     GpuTimer::time(&mut t, cmd, "taa", || {
                         self.record_taa(
                             rec,
+                            sub_frame,
                             targets.gbuffer,
                             targets.hdr,
                             &history,
-                            camera,
                             TaaMode::Accumulate,
                         )
                     })?;

@@ -257,18 +257,20 @@ impl Passes {
         self.tonemap_pass()?.record(rec, src, dst, size, exposure_stops, curve)
     }
 
-    /// Records the anti-aliasing resolve of `current` (the frame's radiance, sampled at
-    /// `camera`'s jitter over `gbuffer`'s pixels) with `history` ([`crate::passes::taa`]).
+    /// Records the anti-aliasing resolve of `current` (the frame's radiance, sampled at the
+    /// frame camera's jitter over `gbuffer`'s pixels) with `history` ([`crate::passes::taa`]),
+    /// following the frame scene's moved geometry ([`GeometryState`]).
     pub fn record_taa(
         &self,
         rec: &mut Recorder<'_>,
+        frame: Frame<'_>,
         gbuffer: &GBufferViews,
         current: raw::ImageView,
         history: &TaaHistory,
-        camera: &Camera,
         mode: TaaMode,
     ) -> Result<()> {
-        self.taa_pass()?.record(rec, gbuffer, current, history, camera, mode)
+        let geometry = GeometryState::of(frame.scene);
+        self.taa_pass()?.record(rec, gbuffer, current, history, frame.camera, mode, geometry)
     }
 
     /// Records one hybrid frame into `targets`: G-buffer, SSAO and its blur (when

@@ -192,6 +192,9 @@ gpu_constants! {
     /// [`TaaParams::flags`]: the reprojected history is read by a Catmull-Rom spline over the
     /// 4x4 texels around it (else bilinear over the 2x2).
     TAA_CATMULL_ROM: uint = 4;
+    /// [`TaaParams::flags`]: the geometry moved since the history's frame: each surface point is
+    /// moved back by the G-buffer's `motion` before it is projected into the previous camera.
+    TAA_MOTION: uint = 8;
     /// [`TemporalParams::flags`]: the history holds a previous frame (else every pixel starts
     /// afresh).
     TEMPORAL_HISTORY: uint = 1;

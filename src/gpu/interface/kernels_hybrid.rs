@@ -14,11 +14,14 @@ kernels! {
         spec: { raster: bool = false },
         bindings: {
             /// The G-buffer's images written (`gbuffer_format!` in interface.rs).
-            gb: writeonly gbuffer [depth, normal, base, emission, material, layers, layers2],
+            gb: writeonly gbuffer [depth, normal, base, emission, material, layers, layers2, motion],
             /// The visibility buffer (`raster` only; one element otherwise): per pixel, row-major
             /// with [`GBufferParams::vis_stride`] a row, the nearest triangle's BVH index in x
             /// (`u32::MAX`: none) and its depth's bits in y.
             visibility: readonly buffer [uvec2],
+            /// Each vertex's world-space motion since the previous geometry in xyz (read only
+            /// with [`GBufferParams::motion`]; one element otherwise).
+            vertex_motion: readonly buffer [vec4],
         }
     }
 
@@ -237,7 +240,7 @@ kernels! {
             /// The frame's linear radiance (each pixel's sample at the camera's jitter).
             current: readonly image rgba32f,
             /// The G-buffer's images read (`gbuffer_format!` in interface.rs).
-            gb: readonly gbuffer [depth],
+            gb: readonly gbuffer [depth, motion],
             /// The history: the last resolve (rgb) and the frames each pixel holds (a).
             history: readonly image rgba32f,
             /// The resolve (the next frame's history).

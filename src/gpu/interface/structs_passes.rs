@@ -13,8 +13,9 @@ gpu_structs! {
         size: uvec2,
         /// The visibility buffer's row length in pixels (`raster` only).
         vis_stride: uint,
-        /// Padding.
-        pad1: uint,
+        /// 1: the scene's geometry moved; write each surface point's motion (the vertices'
+        /// `vertex_motion` at its barycentrics) into the G-buffer's `motion`.
+        motion: uint,
     }
 
     /// Push constants of `deferred.comp`.
@@ -329,7 +330,7 @@ gpu_structs! {
         camera: GpuCamera,
         /// Width, height.
         size: uvec2,
-        /// [`TAA_HISTORY`] | [`TAA_ACCUMULATE`] | [`TAA_CATMULL_ROM`].
+        /// [`TAA_HISTORY`] | [`TAA_ACCUMULATE`] | [`TAA_CATMULL_ROM`] | [`TAA_MOTION`].
         flags: uint,
         /// The least weight of the frame in the blend with the reprojected history (before, the
         /// frame's weight is 1 / the history's length).

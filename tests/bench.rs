@@ -295,8 +295,8 @@ fn denoise_quick_writes_json_and_a_chart() {
 }
 
 /// `umbra-bench antialias` measures its series (supersampled at each sub-frame count, TAA after
-/// each frame, TAA turning for 1, 2, … frames with each history filter), writes JSON and a chart,
-/// and prints its table from the JSON.
+/// each frame, TAA turning for 1, 2, … frames with each history filter, and for an animated scene
+/// TAA while its geometry moves), writes JSON and a chart, and prints its table from the JSON.
 #[test]
 fn antialias_writes_json_a_chart_and_a_table() {
     let dir = std::env::temp_dir().join(format!("umbra-antialias-bench-{}", std::process::id()));
@@ -329,6 +329,22 @@ fn antialias_writes_json_a_chart_and_a_table() {
     let table = String::from_utf8(table.stdout).unwrap();
     assert!(table.contains("| supersampled | 4 sub-frames |"), "{table}");
     assert!(table.contains("| TAA, turning camera, bilinear history | 2 frames |"), "{table}");
+    assert_eq!(series("TAA, moving geometry"), 0, "the sphere grid does not move");
+    // An animated scene adds the moving-geometry series: runs of 1 and 2 frames.
+    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["antialias", "--scene", "scenes/animated.glb", "--size", "24x16", "--reference-spp", "8"])
+        .args(["--samples", "1", "--taa-frames", "3", "--repeats", "1", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("antialias-animated.json")).expect("JSON written"),
+    )
+    .expect("parses");
+    let moving = json["points"].as_array().unwrap().iter().filter(|p| p["method"] == "TAA, moving geometry");
+    assert_eq!(moving.count(), 2, "{json}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -459,6 +475,7 @@ const GENERATED_TABLES: &[&[&str]] = &[
     &["animation", "--table", "docs/bench/animation.json"],
     &["antialias", "--table", "docs/bench/antialias-helmet.json"],
     &["antialias", "--table", "docs/bench/antialias-spheres.json"],
+    &["antialias", "--table", "docs/bench/antialias-animated.json"],
     &["paths", "--table", "docs/bench/paths.json"],
     &["pipelines", "--table", "docs/bench/pipelines.json"],
     &["suite", "--table", "docs/bench/suite.json"],

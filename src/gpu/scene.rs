@@ -796,8 +796,9 @@ impl GpuScene {
         let gpu_bvh = GpuBvh::upload(ctx, &arrays.bvh)?;
         let mut next = Self::with_gpu_bvh(ctx, &arrays, gpu_bvh)?;
         next.bvh_stats.build_ms = ms;
-        // The vertices' motion from the positions this scene had (known where it kept them).
-        if let Some(before) = &self.positions {
+        // The vertices' motion from the positions this scene had (known where it kept them, and
+        // meaningful for the same vertices only).
+        if let Some(before) = self.positions.as_ref().filter(|p| p.len() == scene.positions.len()) {
             let motion: Vec<[f32; 4]> = scene
                 .positions
                 .iter()

@@ -4,7 +4,8 @@
 //! repeats after a warm-up), and temporal anti-aliasing through the embedding API
 //! ([`umbra::render::HybridTargets::taa`]) on a still camera, read after each frame (the time is
 //! the frames' so far), and on a camera turning into the reference's view, read after the last
-//! frame of runs of 1, 2, 4, … frames, with each history filter ([`HistoryFilter`]). Every hybrid is the default one (raster G-buffer, SSAO, 4 shadow rays,
+//! frame of runs of 1, 2, 4, … frames, with each history filter ([`HistoryFilter`]); for an
+//! animated scene also while its geometry moves (the camera still), read likewise. Every hybrid is the default one (raster G-buffer, SSAO, 4 shadow rays,
 //! split-sum IBL). The reference's pixels integrate their area (a box filter), what both
 //! anti-aliasing methods converge toward.
 
@@ -16,12 +17,13 @@ use super::suite;
 use anyhow::Result;
 use serde_json::{json, Value};
 use umbra::embed::Renderer;
+use umbra::gpu::scene::BvhUpdate;
 use umbra::passes::ao::AoSettings;
 use umbra::passes::deferred::LightingSettings;
 use umbra::passes::gbuffer::GBuffer;
 use umbra::passes::taa::{HistoryFilter, TaaHistory, TaaSettings};
 use umbra::render::{HybridSettings, HybridTargets, PathSettings};
-use umbra::scene::{Camera, Scene};
+use umbra::scene::{AnimationSelect, Camera, PoseAt, Scene};
 use umbra::vk::{raw, Context, GpuTimer, Image};
 
 /// How far the turning camera of the TAA series turns each frame, in pixels at the image's
@@ -44,8 +46,16 @@ pub struct AntialiasBench {
     pub env: [f32; 3],
 }
 
-/// Runs both series on `scene` (its environment map, if any, already set on `renderer`'s scene).
-pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench) -> Result<Value> {
+/// The animated scenes' pose: the still series and the reference at this time (seconds), and
+/// the moving-geometry series' runs end at it.
+pub const ANIMATION_END: f32 = 1.0;
+
+/// The moving-geometry series' time step (seconds a frame).
+const ANIMATION_STEP: f32 = 1.0 / 30.0;
+
+/// Runs the series on `scene` (its environment map, if any, already set on `renderer`'s scene;
+/// an animated scene posed at [`ANIMATION_END`], which the moving-geometry series leaves it at).
+pub fn run(ctx: &Context, renderer: &mut Renderer, scene: &mut Scene, s: &AntialiasBench) -> Result<Value> {
     let camera = scene.camera(None)?;
     let size = s.size;
     let reference_settings =
@@ -96,7 +106,8 @@ pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench
         Ok(())
     })?;
     let mut timer = GpuTimer::new(ctx, 16)?;
-    let mut record = |history: &TaaHistory,
+    let mut record = |renderer: &Renderer,
+                      history: &TaaHistory,
                       camera: &Camera,
                       timed: bool,
                       visibility: Option<&umbra::render::VisibilityBuffer>|
@@ -122,7 +133,7 @@ pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench
     // A warm-up frame (which also grows the visibility buffer's tile lists to the view), then
     // the measured run from a fresh history.
     for _ in 0..3 {
-        record(&history, &camera, false, visibility.as_ref())?;
+        record(renderer, &history, &camera, false, visibility.as_ref())?;
         match visibility.as_mut().map(|v| v.check(ctx)).transpose()?.flatten() {
             Some(entries) => visibility.as_mut().expect("checked").reserve(ctx, entries)?,
             None => break,
@@ -131,7 +142,7 @@ pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench
     history.reset();
     let (mut total, mut frame_ms) = (0.0, Vec::new());
     for k in 1..=s.taa_frames {
-        let ms = record(&history, &camera, true, visibility.as_ref())?;
+        let ms = record(renderer, &history, &camera, true, visibility.as_ref())?;
         total += ms;
         frame_ms.push(ms);
         let resolved: Vec<[f32; 4]> = history.read(ctx)?;
@@ -158,13 +169,35 @@ pub fn run(ctx: &Context, renderer: &Renderer, scene: &Scene, s: &AntialiasBench
                         up: (turn * glam::Vec3::from(camera.up)).to_array(),
                         ..camera
                     };
-                    total += record(history, &cam, true, visibility.as_ref())?;
+                    total += record(renderer, history, &cam, true, visibility.as_ref())?;
                 }
                 let resolved: Vec<[f32; 4]> = history.read(ctx)?;
                 let (_, rel_mse) = suite::errors(&resolved, &reference);
                 let flip = suite::flip_mean(&resolved, &reference, size);
                 points.push(json!({"method": method, "unit": "frames", "value": k, "ms": total, "flip": flip, "rel_mse": rel_mse}));
             }
+        }
+    }
+
+    // TAA while an animated scene's geometry moves (every animation, ANIMATION_STEP a frame,
+    // each frame posed and refitted: `Renderer::update_geometry`), the camera still: k frames
+    // that end at the reference's pose, each run from a fresh history; the time is the frames'
+    // GPU passes (the poses and refits are the host's, not timed here).
+    if scene.animation.is_some() {
+        let powers: Vec<u32> = (0..).map(|i| 1u32 << i).take_while(|&k| k <= s.taa_frames.max(1)).collect();
+        for k in powers {
+            history.reset();
+            let mut total = 0.0;
+            for j in 0..k {
+                let time = ANIMATION_END - (k - 1 - j) as f32 * ANIMATION_STEP;
+                scene.pose(&PoseAt { time, animations: AnimationSelect::All })?;
+                renderer.update_geometry(scene, BvhUpdate::Refit)?;
+                total += record(renderer, &history, &camera, true, visibility.as_ref())?;
+            }
+            let resolved: Vec<[f32; 4]> = history.read(ctx)?;
+            let (_, rel_mse) = suite::errors(&resolved, &reference);
+            let flip = suite::flip_mean(&resolved, &reference, size);
+            points.push(json!({"method": "TAA, moving geometry", "unit": "frames", "value": k, "ms": total, "flip": flip, "rel_mse": rel_mse}));
         }
     }
     Ok(json!({

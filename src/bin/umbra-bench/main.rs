@@ -779,7 +779,11 @@ fn run(cli: Cli) -> Result<()> {
             redraw: _,
         } => {
             let ctx = Context::new(&ContextDesc::default())?;
-            let loaded = umbra::scene::Scene::load(&scene)?;
+            let mut loaded = umbra::scene::Scene::load(&scene)?;
+            if loaded.animation.is_some() {
+                let animations = umbra::scene::AnimationSelect::All;
+                loaded.pose(&umbra::scene::PoseAt { time: antialias::ANIMATION_END, animations })?;
+            }
             let mut gpu_scene = umbra::gpu::scene::GpuScene::upload(&ctx, &loaded)?;
             let env = match &env {
                 Some(path) => {
@@ -788,10 +792,10 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 None => env_color,
             };
-            let renderer = umbra::embed::Renderer::with_gpu_scene(&ctx, gpu_scene)?;
+            let mut renderer = umbra::embed::Renderer::with_gpu_scene(&ctx, gpu_scene)?;
             let settings =
                 antialias::AntialiasBench { size, reference_spp, samples, taa_frames, repeats, env };
-            let mut doc = antialias::run(&ctx, &renderer, &loaded, &settings)?;
+            let mut doc = antialias::run(&ctx, &mut renderer, &mut loaded, &settings)?;
             add_conditions(&mut doc);
             print!("{}", antialias::table(&doc));
             let stem = scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());

@@ -13,8 +13,8 @@
 //   (bilinear, or a Catmull-Rom spline with TAA_CATMULL_ROM); it is clipped to the box of the
 //   frame's 3x3 neighbourhood (mean ± clip_sigma × standard deviation, Salvi 2016, intersected
 //   with the neighbours' min-max; in YCoCg), and blended with weight max(1/n, blend) for the
-//   frame. Both colours are blended as c / (1 + luma)
-//   (Karis), so that a bright sample does not dominate the mean of its neighbours.
+//   frame. Both colours are blended as c / (1 + luma) (Karis), so that a bright sample does not
+//   dominate the mean of its neighbours.
 #extension GL_GOOGLE_include_directive : require
 #include "kernel/taa.glsl"
 #include "camera.glsl"

@@ -12,11 +12,11 @@ use crate::error::{Error, Result};
 use crate::gpu::bvh::{register_stack, GpuBvh, GpuBvhNode};
 use crate::scene::{AlphaMode, Material, Scene, Texture, TextureRef};
 use crate::vk::{raw, Buffer, Context, DeviceInfo, TexelBuffer};
+use glam::Vec3;
+use rayon::prelude::*;
 
 /// Storage-buffer usage.
 const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::STORAGE_BUFFER;
-use glam::Vec3;
-use rayon::prelude::*;
 
 /// Storage buffers for one scene.
 pub struct GpuScene {

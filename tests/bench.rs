@@ -300,17 +300,22 @@ fn denoise_quick_writes_json_and_a_chart() {
 #[test]
 fn antialias_writes_json_a_chart_and_a_table() {
     let dir = std::env::temp_dir().join(format!("umbra-antialias-bench-{}", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(["antialias", "--size", "24x16", "--reference-spp", "8", "--samples", "1,4"])
-        .args(["--taa-frames", "3", "--repeats", "1", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // A run on a tiny image (the scene's flags, the sub-frame counts) and its JSON.
+    let run = |scene: &[&str], samples: &str, json: &str| -> serde_json::Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .arg("antialias")
+            .args(scene)
+            .args(["--size", "24x16", "--reference-spp", "8", "--samples", samples])
+            .args(["--taa-frames", "3", "--repeats", "1", "--out"])
+            .arg(&dir)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_str(&std::fs::read_to_string(dir.join(json)).expect("JSON written")).expect("parses")
+    };
+    let json = run(&[], "1,4", "antialias-spheres.json");
     let path = dir.join("antialias-spheres.json");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&path).expect("JSON written")).expect("parses");
     let points = json["points"].as_array().expect("points");
     let series = |m: &str| points.iter().filter(|p| p["method"] == m).count();
     assert_eq!((series("supersampled"), series("TAA, still camera")), (2, 3), "{points:?}");
@@ -331,18 +336,7 @@ fn antialias_writes_json_a_chart_and_a_table() {
     assert!(table.contains("| TAA, turning camera, bilinear history | 2 frames |"), "{table}");
     assert_eq!(series("TAA, moving geometry"), 0, "the sphere grid does not move");
     // An animated scene adds the moving-geometry series: runs of 1 and 2 frames.
-    let out = Command::new(env!("CARGO_BIN_EXE_umbra-bench"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(["antialias", "--scene", "scenes/animated.glb", "--size", "24x16", "--reference-spp", "8"])
-        .args(["--samples", "1", "--taa-frames", "3", "--repeats", "1", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let json: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("antialias-animated.json")).expect("JSON written"),
-    )
-    .expect("parses");
+    let json = run(&["--scene", "scenes/animated.glb"], "1", "antialias-animated.json");
     let moving = json["points"].as_array().unwrap().iter().filter(|p| p["method"] == "TAA, moving geometry");
     assert_eq!(moving.count(), 2, "{json}");
     let _ = std::fs::remove_dir_all(&dir);

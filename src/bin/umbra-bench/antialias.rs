@@ -139,27 +139,36 @@ pub fn run(ctx: &Context, renderer: &mut Renderer, scene: &mut Scene, s: &Antial
             None => break,
         }
     }
+    // A TAA series' point: `history`'s resolve after `k` frames that took `ms`, against the
+    // reference.
+    let taa_point = |method: &str, history: &TaaHistory, k: u32, ms: f64| -> Result<Value> {
+        let resolved: Vec<[f32; 4]> = history.read(ctx)?;
+        let (_, rel_mse) = suite::errors(&resolved, &reference);
+        let flip = suite::flip_mean(&resolved, &reference, size);
+        Ok(
+            json!({"method": method, "unit": "frames", "value": k, "ms": ms, "flip": flip, "rel_mse": rel_mse}),
+        )
+    };
     history.reset();
     let (mut total, mut frame_ms) = (0.0, Vec::new());
     for k in 1..=s.taa_frames {
         let ms = record(renderer, &history, &camera, true, visibility.as_ref())?;
         total += ms;
         frame_ms.push(ms);
-        let resolved: Vec<[f32; 4]> = history.read(ctx)?;
-        let (_, rel_mse) = suite::errors(&resolved, &reference);
-        let flip = suite::flip_mean(&resolved, &reference, size);
-        points.push(json!({"method": "TAA, still camera", "unit": "frames", "value": k, "ms": total, "flip": flip, "rel_mse": rel_mse}));
+        points.push(taa_point("TAA, still camera", &history, k, total)?);
     }
+    // The runs' lengths of the series below: 1, 2, 4, … up to the still series' length.
+    let runs: Vec<u32> = (0..).map(|i| 1u32 << i).take_while(|&k| k <= s.taa_frames.max(1)).collect();
 
     // TAA while the camera turns about the vertical by TURN_PX pixels a frame: k frames that end
-    // at the reference's camera (k = 1, 2, 4, … up to the still series' length), each run from a
-    // fresh history, with each history filter; the error of the last resolve.
+    // at the reference's camera (k in `runs`), each run from a fresh history, with each history
+    // filter; the error of the last resolve.
     if camera.orthographic.is_none() {
         let pixel = 2.0 * (camera.yfov / 2.0).tan() / size.1 as f32;
         for (method, history) in
             [("TAA, turning camera", &history), ("TAA, turning camera, bilinear history", &bilinear)]
         {
-            for k in (0..).map(|i| 1u32 << i).take_while(|&k| k <= s.taa_frames.max(1)) {
+            for &k in &runs {
                 history.reset();
                 let mut total = 0.0;
                 for j in 0..k {
@@ -171,21 +180,17 @@ pub fn run(ctx: &Context, renderer: &mut Renderer, scene: &mut Scene, s: &Antial
                     };
                     total += record(renderer, history, &cam, true, visibility.as_ref())?;
                 }
-                let resolved: Vec<[f32; 4]> = history.read(ctx)?;
-                let (_, rel_mse) = suite::errors(&resolved, &reference);
-                let flip = suite::flip_mean(&resolved, &reference, size);
-                points.push(json!({"method": method, "unit": "frames", "value": k, "ms": total, "flip": flip, "rel_mse": rel_mse}));
+                points.push(taa_point(method, history, k, total)?);
             }
         }
     }
 
     // TAA while an animated scene's geometry moves (every animation, ANIMATION_STEP a frame,
     // each frame posed and refitted: `Renderer::update_geometry`), the camera still: k frames
-    // that end at the reference's pose, each run from a fresh history; the time is the frames'
-    // GPU passes (the poses and refits are the host's, not timed here).
+    // (k in `runs`) that end at the reference's pose, each run from a fresh history; the time is
+    // the frames' GPU passes (the poses and refits are the host's, not timed here).
     if scene.animation.is_some() {
-        let powers: Vec<u32> = (0..).map(|i| 1u32 << i).take_while(|&k| k <= s.taa_frames.max(1)).collect();
-        for k in powers {
+        for &k in &runs {
             history.reset();
             let mut total = 0.0;
             for j in 0..k {
@@ -194,10 +199,7 @@ pub fn run(ctx: &Context, renderer: &mut Renderer, scene: &mut Scene, s: &Antial
                 renderer.update_geometry(scene, BvhUpdate::Refit)?;
                 total += record(renderer, &history, &camera, true, visibility.as_ref())?;
             }
-            let resolved: Vec<[f32; 4]> = history.read(ctx)?;
-            let (_, rel_mse) = suite::errors(&resolved, &reference);
-            let flip = suite::flip_mean(&resolved, &reference, size);
-            points.push(json!({"method": "TAA, moving geometry", "unit": "frames", "value": k, "ms": total, "flip": flip, "rel_mse": rel_mse}));
+            points.push(taa_point("TAA, moving geometry", &history, k, total)?);
         }
     }
     Ok(json!({
